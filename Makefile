@@ -1,0 +1,45 @@
+# Two commands on a fresh machine: `make demo` and `make test`.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+OUT    ?= demo_output
+export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
+export MPLBACKEND ?= Agg
+
+.PHONY: all demo test test-fast bench venv system-deps clean
+
+all: test
+
+$(STAMP): pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+venv: $(STAMP) system-deps
+
+# Off-screen rendering needs EGL/Mesa; install them from Debian when missing (root, apt only).
+system-deps:
+	@if ! ldconfig -p 2>/dev/null | grep -q 'libEGL.so.1'; then \
+	  if command -v apt-get >/dev/null 2>&1 && [ "$$(id -u)" = 0 ]; then \
+	    echo "installing libegl1 libgl1-mesa-dri libgbm1 for headless rendering"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libegl1 libgl1-mesa-dri libgbm1 >/dev/null; \
+	  else echo "warning: libEGL not found; mesh rendering may fail (install libegl1 libgl1-mesa-dri libgbm1)"; fi; \
+	fi
+
+demo: venv
+	$(BIN)/python -m acousim sweep --out $(OUT)/sweep.csv --plots $(OUT) --coefficients $(OUT)/static_coefficients.json --render $(OUT)/dimer_gorkov.png
+	@echo "demo written to $(OUT)/"
+
+test: venv
+	$(BIN)/python -m pytest -q
+
+test-fast: venv
+	$(BIN)/python -m pytest -q -m "not slow"
+
+bench: venv
+	$(BIN)/python -m benchmarks --out benchmarks/results.md
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache

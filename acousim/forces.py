@@ -1,0 +1,298 @@
+"""Gor'kov force, torque and generalised forces on the meshed cube dimer (PHYSICS.md sections 3-4).
+
+Every quantity is a volume integral over the tetrahedra of the two posed cube meshes, evaluated
+with a tetrahedral quadrature rule (:mod:`acousim.quadrature`).  Quadrature nodes are computed
+once in each cube's body frame; posing is a rigid transform of those nodes (never a re-mesh).
+
+Fast path.  The potential density depends on the lab height only, ``u(Z) = A0 - A2 cos(2kZ)``,
+and a node of cube i sits at ``Z = Z_i + zeta_q(theta)`` where ``zeta_q`` depends on the bend only.
+Hence for every integrand the quadrature sum factorises exactly::
+
+    sum_q w_q cos(2k(Z_i + zeta_q)) = Re[ exp(2ik Z_i) * C_i(theta) ],  C_i = sum_q w_q exp(2ik zeta_q)
+
+so an (N_theta x N_y) sweep costs N_theta x N_nodes complex exponentials plus N_theta x N_y
+products, instead of N_theta x N_y x N_nodes.  This is the same sum in another order, not an
+approximation; :meth:`GorkovDimer.direct_integrals` evaluates it node by node for checking.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
+
+from .dimer import CubeDimer, bend_angle
+from .field import StandingWave, gorkov_potential_density, gorkov_potential_gradient
+from .medium import GRAVITY
+from .mesh import grid_arrays, tetrahedralize_cube
+from .quadrature import tetrahedral_quadrature
+
+__all__ = ["GorkovDimer", "StaticForces", "DEFAULT_MESH_FRACTION", "DEFAULT_QUADRATURE_DEGREE"]
+
+#: Default target tetrahedron edge length as a fraction of the cube side (see docs in README).
+DEFAULT_MESH_FRACTION = 0.2
+#: Default quadrature degree per tetrahedron.
+DEFAULT_QUADRATURE_DEGREE = 2
+
+
+class StaticForces(NamedTuple):
+    """Gor'kov-model values at zero velocity (arrays broadcast over the inputs).
+
+    Attributes
+    ----------
+    potential : acoustic potential energy U_ac [J]
+    force_z : vertical acoustic force F_Z [N]
+    q_y : generalised force F_Z - M g [N]
+    q_theta : generalised force -dU_ac/dtheta at fixed y [N m]
+    yddot : Q_y / M [m/s^2]
+    thetaddot : Q_theta / I(theta) [1/s^2]
+    """
+
+    potential: NDArray[np.float64]
+    force_z: NDArray[np.float64]
+    q_y: NDArray[np.float64]
+    q_theta: NDArray[np.float64]
+    yddot: NDArray[np.float64]
+    thetaddot: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class _CubeNodes:
+    nodes: NDArray[np.float64]  # body-frame quadrature nodes (n, 3) [m]
+    weights: NDArray[np.float64]  # (n,) [m^3]
+    n_tetrahedra: int
+
+
+class GorkovDimer:
+    """The Gor'kov volume-integral model of a hinged cube dimer in a standing wave.
+
+    Parameters
+    ----------
+    dimer : CubeDimer
+        Geometry and material.
+    wave : StandingWave
+        Field (pressure amplitude, medium).  Its material must be the dimer's.
+    mesh_size : float, optional
+        Target tetrahedron edge length [m]; default ``DEFAULT_MESH_FRACTION`` x the smaller side.
+    quadrature_degree : int
+        Polynomial degree integrated exactly on each tetrahedron (>= 2 recommended).
+    mesh_dir : path, optional
+        Mesh cache folder.
+    gravity : float
+        g [m/s^2].
+
+    Examples
+    --------
+    >>> model = GorkovDimer(CubeDimer(500e-6), StandingWave(3000.0))      # doctest: +SKIP
+    >>> model.static_forces(theta=0.2, y=0.0).q_theta                      # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        dimer: CubeDimer | None = None,
+        wave: StandingWave | None = None,
+        mesh_size: float | None = None,
+        quadrature_degree: int = DEFAULT_QUADRATURE_DEGREE,
+        mesh_dir: Path | str | None = None,
+        gravity: float = GRAVITY,
+    ) -> None:
+        self.dimer = dimer if dimer is not None else CubeDimer()
+        self.wave = wave if wave is not None else StandingWave(material=self.dimer.material)
+        if self.wave.material != self.dimer.material:
+            raise ValueError("the wave's particle material must be the dimer's material")
+        self.mesh_size = float(mesh_size) if mesh_size is not None else DEFAULT_MESH_FRACTION * min(self.dimer.sides)
+        self.quadrature_degree = int(quadrature_degree)
+        self.gravity = float(gravity)
+        self._mesh_dir = mesh_dir
+        meshes = {}
+        nodes = []
+        for side in self.dimer.sides:
+            if side not in meshes:
+                grid = tetrahedralize_cube(side, self.mesh_size, mesh_dir=mesh_dir)
+                pts, cells = grid_arrays(grid)
+                x, w = tetrahedral_quadrature(pts, cells, self.quadrature_degree)
+                meshes[side] = (grid, _CubeNodes(x, w, len(cells)))
+            nodes.append(meshes[side][1])
+        self._grids = tuple(meshes[s][0] for s in self.dimer.sides)
+        self._nodes = tuple(nodes)
+
+    # ------------------------------------------------------------------ bookkeeping
+    def with_pressure(self, pressure_amplitude_pa: float) -> "GorkovDimer":
+        """A copy at another pressure amplitude sharing the meshes (cheap)."""
+        new = object.__new__(GorkovDimer)
+        new.__dict__.update({k: v for k, v in self.__dict__.items() if k not in ("equilibrium_height",)})
+        new.wave = self.wave.with_pressure(pressure_amplitude_pa)
+        return new
+
+    @property
+    def cube_meshes(self) -> tuple:
+        """The two cube meshes (pyvista UnstructuredGrid, body frame) for cubes A and B."""
+        return self._grids
+
+    @property
+    def n_tetrahedra(self) -> int:
+        """Total number of tetrahedra in the dimer."""
+        return int(sum(n.n_tetrahedra for n in self._nodes))
+
+    @property
+    def n_quadrature_nodes(self) -> int:
+        """Total number of quadrature nodes in the dimer."""
+        return int(sum(len(n.weights) for n in self._nodes))
+
+    # ------------------------------------------------------------------ orientation sums
+    def _orientation_sums(self, theta: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
+        """Per cube, the complex sums C = sum w e^{2ik zeta}, D = sum w dx e^{2ik zeta}, E = sum w dy e^{2ik zeta}.
+
+        Shapes (theta.size, 2).  dx, dy are lab-frame node offsets from the cube centre.
+        """
+        k2 = 2.0 * self.wave.wavenumber
+        rot = self.dimer.cube_rotations(theta.ravel())  # (n, 2, 3, 3)
+        out_c = np.empty((theta.size, 2), complex)
+        out_d = np.empty_like(out_c)
+        out_e = np.empty_like(out_c)
+        for i, cube in enumerate(self._nodes):
+            r = rot[:, i]
+            x = cube.nodes
+            w = cube.weights
+            zeta = r[:, 2, 0:1] * x[None, :, 0] + r[:, 2, 2:3] * x[None, :, 2]
+            dx = r[:, 0, 0:1] * x[None, :, 0] + r[:, 0, 2:3] * x[None, :, 2]
+            phase = np.exp(1j * k2 * zeta) * w[None, :]
+            out_c[:, i] = phase.sum(axis=1)
+            out_d[:, i] = np.einsum("tq,tq->t", phase, dx)
+            out_e[:, i] = phase @ x[:, 1]
+        shape = theta.shape + (2,)
+        return out_c.reshape(shape), out_d.reshape(shape), out_e.reshape(shape)
+
+    def _cube_integrals(self, theta: NDArray, z_com: NDArray):
+        """Potential, vertical force and Y-torque about its centre for each cube, (..., 2) arrays."""
+        theta, z_com = np.broadcast_arrays(np.asarray(theta, float), np.asarray(z_com, float))
+        # evaluate orientation sums once per distinct theta value
+        uniq, inv = np.unique(theta, return_inverse=True)
+        c, d, _ = self._orientation_sums(uniq)
+        c, d = c[inv.reshape(theta.shape)], d[inv.reshape(theta.shape)]
+        z_i = z_com[..., None] + self.dimer.centre_offsets(theta)[..., 2]
+        a0, a2 = self.wave.harmonic_coefficients
+        k2 = 2.0 * self.wave.wavenumber
+        ph = np.exp(1j * k2 * z_i)
+        w_tot = np.array([n.weights.sum() for n in self._nodes])
+        potential = a0 * w_tot - a2 * np.real(ph * c)
+        # du/dZ = k2 * a2 * sin(k2 Z)
+        force_z = -k2 * a2 * np.imag(ph * c)
+        torque_y = k2 * a2 * np.imag(ph * d)
+        return potential, force_z, torque_y
+
+    # ------------------------------------------------------------------ public physics
+    def integrals_at_height(self, theta: ArrayLike, z_com: ArrayLike) -> StaticForces:
+        """Static forces at lab height ``z_com`` of the centre of mass (metres above the node)."""
+        theta = np.asarray(theta, float)
+        z_com = np.asarray(z_com, float)
+        pot, fz, ty = self._cube_integrals(theta, z_com)
+        theta_b = np.broadcast_to(theta, pot.shape[:-1])
+        # generalised torque on the bend: cube B turns about +Y, cube A about -Y as phi grows,
+        # and (unequal cubes only) the centres move vertically at fixed Z_com.
+        dz = self.dimer.centre_height_derivatives(theta_b)
+        q_theta = (np.pi / 4) * (ty[..., 1] - ty[..., 0] + fz[..., 0] * dz[..., 0] + fz[..., 1] * dz[..., 1])
+        m = self.dimer.total_mass
+        force_z = fz.sum(-1)
+        q_y = force_z - m * self.gravity
+        return StaticForces(
+            potential=pot.sum(-1),
+            force_z=force_z,
+            q_y=q_y,
+            q_theta=q_theta,
+            yddot=q_y / m,
+            thetaddot=q_theta / self.dimer.hinge_inertia(theta_b),
+        )
+
+    def static_forces(self, theta: ArrayLike, y: ArrayLike) -> StaticForces:
+        """Static forces at bend ``theta`` and height ``y`` [m] above the equilibrium height Z_eq."""
+        return self.integrals_at_height(theta, np.asarray(y, float) + self.equilibrium_height)
+
+    def generalized_forces(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray, NDArray]:
+        """(Q_y [N], Q_theta [N m]) at zero velocity."""
+        s = self.static_forces(theta, y)
+        return s.q_y, s.q_theta
+
+    def potential_energy(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Acoustic potential energy U_ac [J] (gravity excluded)."""
+        return self.static_forces(theta, y).potential
+
+    def cube_torques(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Y-component of the acoustic torque on each cube about its own centre, (..., 2) [N m]."""
+        return self._cube_integrals(np.asarray(theta, float), np.asarray(y, float) + self.equilibrium_height)[2]
+
+    def torque(self, theta: float, y: float, about: ArrayLike) -> NDArray[np.float64]:
+        """Total acoustic torque vector [N m] on the dimer about the lab point ``about`` (3,) [m].
+
+        Lab coordinates: origin on the hinge-line axis through the centre of mass, horizontally,
+        and at the pressure node vertically.
+        """
+        about = np.asarray(about, float)
+        nodes, weights = self.posed_nodes(theta, y)
+        force = np.zeros_like(nodes)
+        force[:, 2] = -gorkov_potential_gradient(nodes[:, 2], self.wave) * weights
+        return np.cross(nodes - about, force).sum(axis=0)
+
+    def posed_nodes(self, theta: float, y: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Lab-frame quadrature nodes (n, 3) [m] and weights (n,) [m^3] of the posed dimer."""
+        z_com = float(y) + self.equilibrium_height
+        rot = self.dimer.cube_rotations(float(theta))
+        off = self.dimer.centre_offsets(float(theta))
+        xs, ws = [], []
+        for i, cube in enumerate(self._nodes):
+            xs.append(cube.nodes @ rot[i].T + off[i] + np.array([0.0, 0.0, z_com]))
+            ws.append(cube.weights)
+        return np.concatenate(xs), np.concatenate(ws)
+
+    def direct_integrals(self, theta: float, y: float) -> tuple[float, float, float]:
+        """(U_ac [J], F_Z [N], Q_theta [N m]) summed node by node on the posed mesh (slow reference path)."""
+        nodes, w = self.posed_nodes(theta, y)
+        u = gorkov_potential_density(nodes[:, 2], self.wave)
+        du = gorkov_potential_gradient(nodes[:, 2], self.wave)
+        n_a = len(self._nodes[0].weights)
+        off = self.dimer.centre_offsets(float(theta))
+        dz = self.dimer.centre_height_derivatives(float(theta))
+        fz = np.array([-(w * du)[:n_a].sum(), -(w * du)[n_a:].sum()])
+        z_com = float(y) + self.equilibrium_height
+        dx = nodes[:, 0] - np.where(np.arange(len(w)) < n_a, off[0, 0], off[1, 0])
+        ty = np.array([(w * dx * du)[:n_a].sum(), (w * dx * du)[n_a:].sum()])
+        del z_com
+        q_theta = (np.pi / 4) * (ty[1] - ty[0] + fz[0] * dz[0] + fz[1] * dz[1])
+        return float((w * u).sum()), float(fz.sum()), float(q_theta)
+
+    @cached_property
+    def equilibrium_height(self) -> float:
+        """Z_eq [m] (< 0): where the vertical force on the theta = 0 dimer balances gravity.
+
+        Raises
+        ------
+        ValueError
+            If the field cannot hold the dimer's weight at any height.
+        """
+        weight = self.dimer.total_mass * self.gravity
+        lam4 = np.pi / (2.0 * self.wave.wavenumber)  # quarter wavelength
+
+        def net(z: float) -> float:
+            return float(self.integrals_at_height(0.0, z).force_z) - weight
+
+        # the restoring force grows from 0 at the node to its maximum at -lambda/8
+        z_max = -lam4 / 2.0
+        if net(z_max) < 0:
+            raise ValueError(
+                f"pressure amplitude {self.wave.pressure_amplitude_pa:g} Pa cannot levitate this dimer: "
+                f"maximum acoustic force {net(z_max) + weight:.3g} N < weight {weight:.3g} N"
+            )
+        return float(brentq(net, z_max, 0.0, xtol=1e-15, rtol=1e-13))
+
+    def vertical_stiffness(self) -> float:
+        """k_y = -dF_Z/dZ at (theta = 0, Z_eq) [N/m], from the analytic gradient of the factorised sum."""
+        theta = np.zeros(1)
+        c, _, _ = self._orientation_sums(theta)
+        k2 = 2.0 * self.wave.wavenumber
+        _, a2 = self.wave.harmonic_coefficients
+        ph = np.exp(1j * k2 * self.equilibrium_height)
+        return float(np.sum(k2 * a2 * np.real(1j * k2 * ph * c[0])))
