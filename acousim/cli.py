@@ -6,24 +6,49 @@ function; errors a user can fix (``UserInputError``) print one line and exit wit
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
-__all__ = ["main", "UserInputError"]
+__all__ = ["main", "UserInputError", "OneLineParser"]
+
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf)")
 
 
 class UserInputError(Exception):
     """A problem with the user's arguments or files; printed as one line, exit status 2."""
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse parser whose errors are one line (no usage dump), exit status 2."""
+
+    def error(self, message: str):  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def join_negative_values(argv: list[str]) -> list[str]:
+    """Rewrite ``--opt -1:0.5:3`` as ``--opt=-1:0.5:3`` so negative numbers and ranges parse as values."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a.startswith("--") and "=" not in a and i + 1 < len(argv) and _NEGATIVE_VALUE.match(argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import sweep_cli
 
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="python -m acousim",
         description="Gor'kov acoustic model of a levitated cube dimer: static force/torque sweeps "
         "and synthetic experiments (digital twin).",
     )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     sweep_cli.add_parser(sub)
     try:
         from . import simulate_cli
@@ -36,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     try:
         return int(args.func(args) or 0)
     except UserInputError as exc:

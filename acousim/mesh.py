@@ -104,13 +104,20 @@ def _mesh_unit_cube(rel_edge: float):
     import pyvista as pv
 
     surf = cube_surface(1.0)
-    verts, tets = pytetwild.tetrahedralize(
-        np.asarray(surf.vertices, dtype=float),
-        np.asarray(surf.faces, dtype=np.int32),
-        edge_length_abs=float(rel_edge),
-        vtk_ordering=True,
-        quiet=True,
-    )
+    # fTetWild writes a scratch surface file into the working directory: run it in a temporary one
+    cwd = os.getcwd()
+    with tempfile.TemporaryDirectory(prefix="acousim-tetwild-") as scratch:
+        os.chdir(scratch)
+        try:
+            verts, tets = pytetwild.tetrahedralize(
+                np.asarray(surf.vertices, dtype=float),
+                np.asarray(surf.faces, dtype=np.int32),
+                edge_length_abs=float(rel_edge),
+                vtk_ordering=True,
+                quiet=True,
+            )
+        finally:
+            os.chdir(cwd)
     tets = np.asarray(tets, dtype=np.int64)
     verts = snap_to_cube_faces(np.asarray(verts, dtype=float), tets)
     cells = np.hstack([np.full((len(tets), 1), 4, dtype=np.int64), tets]).ravel()
