@@ -1,0 +1,43 @@
+"""acousim: the Gor'kov acoustic model of a levitated, hinged cube dimer.
+
+Physics follows ``shared/PHYSICS.md``; see the README for a tour.  Public API:
+
+* configuration: :class:`Medium`, :class:`ParticleMaterial`, :class:`StandingWave`, :class:`CubeDimer`
+* potential: :func:`gorkov_potential_density`, :func:`gorkov_potential_gradient`, :func:`contrast_factors`
+* meshes and quadrature: :func:`tetrahedralize_cube`, :func:`tetrahedral_quadrature`
+* the model: :class:`GorkovDimer` (forces, torques, Q_y, Q_theta, Z_eq, stiffness)
+* sweeps: :func:`static_sweep`, :func:`fit_static_coefficients`, :func:`taylor_coefficients`
+* closed-form references: :mod:`acousim.analytic`
+"""
+from .dimer import CubeDimer, bend_angle
+from .field import StandingWave, gorkov_potential_density, gorkov_potential_gradient
+from .forces import GorkovDimer, StaticForces, acoustic_force, acoustic_potential_energy, acoustic_torque
+from .medium import GRAVITY, Medium, ParticleMaterial, contrast_factors
+from .mesh import tetrahedralize_cube
+from .quadrature import tetrahedral_quadrature, tetrahedron_rule
+from .sweep import SweepResult, fit_static_coefficients, read_sweep_csv, static_sweep, taylor_coefficients
+
+__all__ = [
+    "CubeDimer",
+    "bend_angle",
+    "StandingWave",
+    "gorkov_potential_density",
+    "gorkov_potential_gradient",
+    "GorkovDimer",
+    "StaticForces",
+    "acoustic_force",
+    "acoustic_potential_energy",
+    "acoustic_torque",
+    "GRAVITY",
+    "Medium",
+    "ParticleMaterial",
+    "contrast_factors",
+    "tetrahedralize_cube",
+    "tetrahedral_quadrature",
+    "tetrahedron_rule",
+    "SweepResult",
+    "fit_static_coefficients",
+    "read_sweep_csv",
+    "static_sweep",
+    "taylor_coefficients",
+]

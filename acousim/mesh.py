@@ -26,6 +26,7 @@ __all__ = [
     "grid_arrays",
     "default_mesh_dir",
     "snap_to_cube_faces",
+    "tetrahedralize_surface",
 ]
 
 #: Relative tolerance of the snap (fTetWild's default envelope is 1e-3 * sqrt(3) of the side).
@@ -99,25 +100,44 @@ def _cache_path(mesh_dir: Path, rel_edge: float) -> Path:
     return mesh_dir / f"unit_cube_h{rel_edge:.4f}.vtu"
 
 
-def _mesh_unit_cube(rel_edge: float):
-    import pytetwild
-    import pyvista as pv
+def tetrahedralize_surface(vertices: NDArray, faces: NDArray, edge_length: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Tetrahedralise a closed triangle surface with fTetWild (pytetwild), positively oriented tets.
 
-    surf = cube_surface(1.0)
+    Parameters
+    ----------
+    vertices : (n, 3) array, faces : (m, 3) int array
+        The surface (e.g. ``trimesh.Trimesh.vertices`` / ``.faces``).
+    edge_length : float
+        Target edge length, in the units of ``vertices``.
+
+    Returns
+    -------
+    points (N, 3), tetrahedra (M, 4)
+    """
+    import pytetwild
+
     # fTetWild writes a scratch surface file into the working directory: run it in a temporary one
     cwd = os.getcwd()
     with tempfile.TemporaryDirectory(prefix="acousim-tetwild-") as scratch:
         os.chdir(scratch)
         try:
             verts, tets = pytetwild.tetrahedralize(
-                np.asarray(surf.vertices, dtype=float),
-                np.asarray(surf.faces, dtype=np.int32),
-                edge_length_abs=float(rel_edge),
+                np.asarray(vertices, dtype=float),
+                np.asarray(faces, dtype=np.int32),
+                edge_length_abs=float(edge_length),
                 vtk_ordering=True,
                 quiet=True,
             )
         finally:
             os.chdir(cwd)
+    return np.asarray(verts, dtype=float), np.asarray(tets, dtype=np.int64)
+
+
+def _mesh_unit_cube(rel_edge: float):
+    import pyvista as pv
+
+    surf = cube_surface(1.0)
+    verts, tets = tetrahedralize_surface(surf.vertices, surf.faces, rel_edge)
     tets = np.asarray(tets, dtype=np.int64)
     verts = snap_to_cube_faces(np.asarray(verts, dtype=float), tets)
     cells = np.hstack([np.full((len(tets), 1), 4, dtype=np.int64), tets]).ravel()

@@ -159,23 +159,33 @@ def read_sweep_csv(path: str | os.PathLike) -> SweepResult:
     settings: dict = {}
     try:
         with open(path) as fh:
-            for line in fh:
-                if line.startswith("# settings: "):
-                    settings = json.loads(line[len("# settings: ") :])
-                if not line.startswith("#"):
-                    break
-        data = np.genfromtxt(path, delimiter=",", names=True, comments="#")
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{path}: cannot read sweep CSV ({exc})") from None
+            lines = fh.read().splitlines()
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read sweep CSV ({exc.strerror})") from None
+    for line in lines:
+        if line.startswith("# settings: "):
+            try:
+                settings = json.loads(line[len("# settings: ") :])
+            except json.JSONDecodeError:
+                settings = {}
+    rows = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    if not rows:
+        raise ValueError(f"{path}: empty sweep CSV")
+    names = [c.strip() for c in rows[0].split(",")]
     required = ["theta", "y", "potential", "force_z", "q_y", "q_theta", "yddot", "thetaddot"]
-    missing = [c for c in required if c not in (data.dtype.names or ())]
+    missing = [c for c in required if c not in names]
     if missing:
         raise ValueError(f"{path}: missing column(s) {', '.join(missing)}")
+    try:
+        values = np.array([[float(v) for v in r.split(",")] for r in rows[1:]], float).reshape(-1, len(names))
+    except ValueError:
+        raise ValueError(f"{path}: non-numeric or ragged rows") from None
+    data = {n: values[:, i] for i, n in enumerate(names)}
     theta_grid, y_grid = np.unique(data["theta"]), np.unique(data["y"])
-    if len(theta_grid) * len(y_grid) != len(data):
+    if len(theta_grid) * len(y_grid) != len(values) or len(values) == 0:
         raise ValueError(f"{path}: rows do not form a full (theta, y) grid")
     order = np.lexsort((data["y"], data["theta"]))
-    cols = {n: np.asarray(data[n], float)[order].reshape(len(theta_grid), len(y_grid)) for n in data.dtype.names}
+    cols = {n: data[n][order].reshape(len(theta_grid), len(y_grid)) for n in names}
     return SweepResult(theta_grid, y_grid, cols, settings)
 
 

@@ -16,13 +16,12 @@ YS = np.array([-200e-6, -60e-6, 0.0, 90e-6, 200e-6])
 @pytest.fixture(scope="module")
 def sphere_nodes():
     """Unit-radius sphere: trimesh icosphere (2562 vertices) tetrahedralised by pytetwild, degree-2 rule."""
-    import pytetwild
     import trimesh
 
+    from acousim.mesh import tetrahedralize_surface
+
     sp = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
-    v, t = pytetwild.tetrahedralize(np.asarray(sp.vertices), np.asarray(sp.faces, np.int32),
-                                    edge_length_abs=0.15, vtk_ordering=True)
-    return tetrahedral_quadrature(np.asarray(v), np.asarray(t, np.int64), degree=2)
+    return tetrahedral_quadrature(*tetrahedralize_surface(sp.vertices, sp.faces, 0.15), degree=2)
 
 
 @pytest.mark.parametrize("height", [-1.2e-3, -4e-4, 3e-4])

@@ -21,13 +21,12 @@ def test_cube_mesh_is_exact_cube(side):
 
 def test_snap_rejects_a_non_cube():
     import trimesh
-    import pytetwild
+
+    from acousim.mesh import tetrahedralize_surface
 
     sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
-    v, t = pytetwild.tetrahedralize(np.asarray(sphere.vertices), np.asarray(sphere.faces, np.int32),
-                                    edge_length_abs=0.3, vtk_ordering=True)
     with pytest.raises(ValueError, match="not a cube"):
-        snap_to_cube_faces(np.asarray(v), np.asarray(t, np.int64))
+        snap_to_cube_faces(*tetrahedralize_surface(sphere.vertices, sphere.faces, 0.3))
 
 
 def test_mesh_cache_reused(tmp_path):

@@ -1,0 +1,1 @@
+"""Benchmarks: ``python -m benchmarks --out benchmarks/results.md`` (``make bench``)."""

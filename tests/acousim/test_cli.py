@@ -1,0 +1,63 @@
+"""``python -m acousim sweep``: documented columns on good input, one-line errors and no file on bad input."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+COLUMNS = ["theta", "y", "potential", "force_z", "q_y", "q_theta", "yddot", "thetaddot"]
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "acousim", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_sweep_writes_documented_columns(tmp_path):
+    out = tmp_path / "s.csv"
+    r = run("sweep", "--theta", "-0.5:0.5:5", "--y", "-1e-4:1e-4:3", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    rows = [l for l in out.read_text().splitlines() if not l.startswith("#")]
+    header = rows[0].split(",")
+    assert header[: len(COLUMNS)] == COLUMNS
+    data = np.array([[float(v) for v in r.split(",")] for r in rows[1:]])
+    assert data.shape[0] == 15
+    assert np.all(np.isfinite(data))
+    np.testing.assert_allclose(np.unique(data[:, 0]), np.linspace(-0.5, 0.5, 5))
+
+
+def test_sweep_with_all_outputs(tmp_path):
+    r = run("sweep", "--theta", "-0.6:0.6:9", "--y", "-1e-4:1e-4:9", "--out", str(tmp_path / "s.csv"),
+            "--coefficients", str(tmp_path / "c.json"), "--plots", str(tmp_path / "fig"), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "c.json").exists()
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == ["restoring_force.png", "restoring_torque.png", "thetaddot_map.png"]
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--theta", "-1:0.5:3"], "inside (-1, 1)"),
+        (["--theta", "-0.5:1.0:3"], "inside (-1, 1)"),
+        (["--theta", "0.5:-0.5:3"], "greater than STOP"),
+        (["--y", "1e-4:-1e-4:3"], "greater than STOP"),
+        (["--side", "-5e-4"], "must be positive"),
+        (["--theta", "a:b:c"], "must be numbers"),
+        (["--pressure", "100"], "cannot levitate"),
+        (["--nonsense"], "unrecognized"),
+    ],
+)
+def test_bad_arguments_fail_cleanly(tmp_path, args, message):
+    out = tmp_path / "s.csv"
+    cov = tmp_path / "c.json"
+    r = run("sweep", *args, "--out", str(out), "--coefficients", str(cov))
+    assert r.returncode != 0
+    lines = [l for l in r.stderr.strip().splitlines() if l.strip()]
+    assert len(lines) == 1, r.stderr  # one line, no traceback
+    assert message in lines[0]
+    assert not out.exists() and not cov.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_help_explains_units():
+    r = run("sweep", "--help")
+    assert r.returncode == 0 and "q_theta [N m]" in r.stdout
