@@ -1,0 +1,127 @@
+"""Command line of validation: ``python -m validation compare ...``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from acousim.cli import OneLineParser, UserInputError, join_negative_values
+
+__all__ = ["main"]
+
+
+def _add_compare(sub) -> None:
+    p = sub.add_parser(
+        "compare",
+        help="fitted coefficients against the simulated static coefficients",
+        description=(
+            "For every velocity-free library term, the simulated static coefficient (least squares on a Gor'kov "
+            "sweep, with its uncertainty) beside the fitted one (ensemble mean, std, z-score across runs), their "
+            "ratio, whether the signs agree and whether they agree within the combined uncertainty; velocity terms "
+            "are listed as dynamic only. The theta*y^2 term comes first. Simulated coefficients are re-expressed at "
+            "the data's y origin (see --origin-offset). Writes comparison.json and comparison.md into --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--model", required=True, help="model.json written by `python -m fitting fit`")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
+    src.add_argument("--data", help="data set directory: the sweep is computed from its meta.json (nominal pressure)")
+    p.add_argument("--fit-theta-max", type=float, default=None,
+                   help="static fitting box |theta| <= (default: the data range stored in model.json, else 0.3)")
+    p.add_argument("--fit-y-max", type=float, default=None,
+                   help="static fitting box |y| <= [m] (default: the data range stored in model.json, else 150e-6)")
+    p.add_argument("--origin-offset", default="fitted-equilibrium",
+                   help="delta [m] with y_sim = y_data + delta, or 'fitted-equilibrium' (root of the fitted yddot)")
+    p.add_argument("--n-sigma", type=float, default=2.0, help="agreement criterion in combined standard deviations")
+    p.add_argument("--out", required=True, help="output directory")
+    p.set_defaults(func=run_compare)
+
+
+def _read_model(path: Path) -> dict:
+    try:
+        model = json.loads(path.read_text())
+    except OSError as exc:
+        raise UserInputError(f"{path}: cannot read ({exc.strerror})") from None
+    except json.JSONDecodeError as exc:
+        raise UserInputError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    if not isinstance(model, dict) or "equations" not in model or not isinstance(model["equations"], dict):
+        raise UserInputError(f"{path}: not a model.json (no 'equations' object)")
+    for eq, coefs in model["equations"].items():
+        if eq not in ("yddot", "thetaddot") or not isinstance(coefs, dict):
+            raise UserInputError(f"{path}: unknown equation {eq!r}; expected yddot and thetaddot")
+        from fitting.library import parse_term
+
+        for term, v in coefs.items():
+            try:
+                parse_term(term)
+                float(v)
+            except (ValueError, TypeError):
+                raise UserInputError(f"{path}: bad term or value {term!r}: {v!r} in {eq}") from None
+    return model
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    from acousim.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
+
+    from .coefficients import compare_coefficients
+    from .reporting import write_json_atomic, write_text_atomic
+    from .simulation import model_from_meta, read_meta
+
+    model = _read_model(Path(args.model))
+    rng = model.get("data_range", {})
+    theta_max = args.fit_theta_max or rng.get("theta_abs_max") or 0.3
+    y_max = args.fit_y_max or rng.get("y_abs_max_m") or 150e-6
+    if not (0 < theta_max < 1) or not (y_max > 0):
+        raise UserInputError("the static fitting box needs 0 < theta_max < 1 and y_max > 0")
+    if args.origin_offset != "fitted-equilibrium":
+        try:
+            offset: float | str = float(args.origin_offset)
+        except ValueError:
+            raise UserInputError(f"--origin-offset {args.origin_offset!r}: a number in metres or 'fitted-equilibrium'") from None
+    else:
+        offset = args.origin_offset
+    if args.sweep:
+        try:
+            sweep = read_sweep_csv(args.sweep)
+        except ValueError as exc:
+            raise UserInputError(str(exc)) from None
+    else:
+        try:
+            sim = model_from_meta(read_meta(args.data))
+        except ValueError as exc:
+            raise UserInputError(str(exc)) from None
+        sweep = static_sweep(sim, np.linspace(-theta_max, theta_max, 41), np.linspace(-y_max, y_max, 41))
+    static = fit_static_coefficients(sweep, theta_max=theta_max, y_max=y_max)
+    cmp = compare_coefficients(model, static.coefficients, static.std_errors, origin_offset=offset,
+                               n_sigma=args.n_sigma, static_box=static.box)
+    out = Path(args.out)
+    d = cmp.to_dict()
+    d["static_fit"] = {"relative_residual": static.relative_residual, "y_origin_of_sweep": static.y_origin}
+    write_json_atomic(out / "comparison.json", d)
+    text = f"# Fitted model vs simulated static coefficients\n\n{cmp.origin}.\n\n{cmp.table()}\n"
+    write_text_atomic(out / "comparison.md", text)
+    print(cmp.table())
+    print(f"\n{cmp.origin}\nwritten {out / 'comparison.json'} and {out / 'comparison.md'}", file=sys.stderr)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(prog="python -m validation",
+                           description="Bridge between fitted models and the Gor'kov simulation: coefficient comparison.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
+    _add_compare(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
+    try:
+        return int(args.func(args) or 0)
+    except UserInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2

@@ -1,0 +1,259 @@
+"""Fitted model coefficients against the static coefficients of the simulated sweep.
+
+Every velocity-free library term (monomials of y and theta) has a static prediction: the least-
+squares coefficient of the swept accelerations (:func:`acousim.sweep.fit_static_coefficients`).
+Velocity terms have none ("dynamic only").
+
+The y origin.  The simulation measures y from Z_eq, where gravity and the acoustic force on the
+straight dimer balance.  Data measure y from a levitation plane chosen by the experimenter (e.g.
+the mean position).  If the data's origin lies ``delta`` above Z_eq, i.e. ``y_sim = y_data + delta``,
+a term ``c y_sim^a theta^b`` contributes ``c C(a, j) delta^(a-j)`` to the coefficient of
+``y_data^j theta^b`` for every j < a: shifting the origin moves the lower-order coefficients (to first
+order, ``d c[y^j theta^b] / d delta = (j + 1) c[y^(j+1) theta^b]``), and leaves the highest-order ones
+unchanged.  :func:`compare_coefficients` re-expresses the simulated coefficients at the data's
+origin, taking ``delta`` from the fitted model's own equilibrium by default (the root of the fitted
+yddot at theta = 0 and zero velocity, which sits at y_data = -delta).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from math import comb
+
+import numpy as np
+
+from fitting.library import is_velocity_free, library_terms, parse_term, term_name
+
+__all__ = [
+    "TermComparison",
+    "CoefficientComparison",
+    "shift_origin",
+    "origin_sensitivity",
+    "fitted_equilibrium_offset",
+    "ensemble_statistics",
+    "compare_coefficients",
+    "LEAD_TERM",
+]
+
+#: The coupling the source paper is about: thetaddot ~ theta * y^2.
+LEAD_TERM = ("thetaddot", "y^2*theta")
+
+
+def shift_origin(coefficients: dict[str, float], delta: float) -> dict[str, float]:
+    """Re-express a polynomial in y (and other variables) after ``y_old = y_new + delta``.
+
+    Parameters
+    ----------
+    coefficients : dict term -> value
+        Coefficients in the old variable (SI).
+    delta : float
+        Offset [m] of the new origin above the old one.
+
+    Returns
+    -------
+    dict term -> value in the new variable (same terms, plus any lower-order ones created).
+    """
+    out: dict[str, float] = {}
+    for name, c in coefficients.items():
+        e = parse_term(name)
+        a = int(e[0])
+        for j in range(a + 1):
+            ej = e.copy()
+            ej[0] = j
+            key = term_name(ej)
+            out[key] = out.get(key, 0.0) + c * comb(a, j) * delta ** (a - j)
+    return out
+
+
+def origin_sensitivity(coefficients: dict[str, float]) -> dict[str, float]:
+    """First-order change of each coefficient per metre of origin shift: (j+1) c[y^(j+1) ...] [SI/m]."""
+    out = {}
+    for name in coefficients:
+        e = parse_term(name)
+        up = e.copy()
+        up[0] += 1
+        out[name] = (e[0] + 1) * coefficients.get(term_name(up), 0.0)
+    return out
+
+
+def fitted_equilibrium_offset(yddot: dict[str, float], search: float = 5e-4) -> float:
+    """delta [m] such that the fitted yddot(y, theta=0, velocities=0) vanishes at y_data = -delta.
+
+    Returns the root closest to 0 within +-``search``; 0 if the fitted yddot has no root there
+    (then the origins are taken to coincide, which the comparison states).
+    """
+    poly = np.zeros(4)
+    for name, c in yddot.items():
+        e = parse_term(name)
+        if e[1] == 0 and e[2] == 0 and e[3] == 0 and e[0] <= 3:
+            poly[e[0]] += c
+    roots = np.roots(poly[::-1][np.argmax(poly[::-1] != 0):]) if np.any(poly[1:] != 0) else np.array([])
+    real = roots[np.abs(roots.imag) < 1e-12].real if roots.size else np.array([])
+    real = real[np.abs(real) <= search]
+    if real.size == 0:
+        return 0.0
+    return float(-real[np.argmin(np.abs(real))])
+
+
+def ensemble_statistics(model: dict) -> dict[str, dict[str, dict[str, float]]]:
+    """Mean, std and z-score across runs of each term's coefficient (zeros where a run omits a term).
+
+    Uses ``model["per_run"]``; without per-run fits the minimal model's coefficient is the mean and
+    the std is NaN.
+    """
+    per_run = model.get("per_run") or []
+    stats: dict[str, dict[str, dict[str, float]]] = {}
+    for eq in ("yddot", "thetaddot"):
+        terms = set(model.get("equations", {}).get(eq, {}))
+        for r in per_run:
+            terms |= set(r.get("equations", {}).get(eq, {}))
+        stats[eq] = {}
+        for t in terms:
+            vals = np.array([r.get("equations", {}).get(eq, {}).get(t, 0.0) for r in per_run], float)
+            if vals.size >= 2:
+                mean, std = float(vals.mean()), float(vals.std(ddof=1))
+            else:
+                mean, std = float(model["equations"][eq].get(t, 0.0)), float("nan")
+            z = model.get("zscores", {}).get(eq, {}).get(t)
+            if z is None:
+                z = mean / std if std and np.isfinite(std) and std > 0 else float("nan")
+            stats[eq][t] = {"mean": mean, "std": std, "z": float(z), "n_runs": int(vals.size),
+                            "inclusion": float(np.mean(vals != 0)) if vals.size else float("nan")}
+    return stats
+
+
+@dataclass(frozen=True)
+class TermComparison:
+    """One term of one equation, fitted against simulated (SI units)."""
+
+    equation: str
+    term: str
+    kind: str  # "static" or "dynamic only: no static prediction"
+    in_minimal_model: bool
+    fitted: float  # the minimal model's coefficient (0 if not selected)
+    fitted_mean: float  # ensemble mean across runs
+    fitted_std: float  # ensemble std across runs
+    fitted_z: float
+    simulated: float  # static coefficient at the data's origin (NaN for dynamic terms)
+    simulated_std: float
+    ratio: float  # fitted / simulated
+    signs_agree: bool | None
+    within_uncertainty: bool | None  # |fitted - simulated| <= n_sigma * sqrt(std_fit^2 + std_sim^2)
+    origin_shift_per_um: float  # change of the simulated coefficient per micrometre of origin shift
+
+
+@dataclass(frozen=True)
+class CoefficientComparison:
+    rows: list[TermComparison]
+    delta_m: float
+    origin: str
+    n_sigma: float
+    static_box: dict
+
+    def to_dict(self) -> dict:
+        return {
+            "origin": self.origin,
+            "origin_offset_m": self.delta_m,
+            "n_sigma": self.n_sigma,
+            "static_fit_box": self.static_box,
+            "lead_term": {"equation": LEAD_TERM[0], "term": LEAD_TERM[1]},
+            "terms": [asdict(r) for r in self.rows],
+            "units": "SI",
+        }
+
+    def table(self) -> str:
+        """Markdown table, the theta*y^2 term first."""
+        head = ("| equation | term | fitted (minimal) | ensemble mean +- std | z | simulated +- std | ratio | signs agree | "
+                f"within {self.n_sigma:g} sigma | d(sim)/d(origin) per um |")
+        lines = [head, "|" + "---|" * 10]
+        for r in self.rows:
+            if r.kind != "static":
+                lines.append(f"| {r.equation} | {r.term} | {r.fitted:.4g} | {r.fitted_mean:.4g} +- {r.fitted_std:.2g} | {r.fitted_z:.3g} | "
+                             f"dynamic only: no static prediction | | | | |")
+                continue
+            yes = lambda b: "-" if b is None else ("yes" if b else "**no**")  # noqa: E731
+            lines.append(
+                f"| {r.equation} | {r.term} | {r.fitted:.4g} | {r.fitted_mean:.4g} +- {r.fitted_std:.2g} | {r.fitted_z:.3g} | "
+                f"{r.simulated:.4g} +- {r.simulated_std:.2g} | {r.ratio:.3g} | {yes(r.signs_agree)} | {yes(r.within_uncertainty)} | "
+                f"{r.origin_shift_per_um:.3g} |"
+            )
+        return "\n".join(lines)
+
+
+def compare_coefficients(
+    model: dict,
+    static_coefficients: dict[str, dict[str, float]],
+    static_std: dict[str, dict[str, float]],
+    origin_offset: float | str = "fitted-equilibrium",
+    n_sigma: float = 2.0,
+    static_box: dict | None = None,
+) -> CoefficientComparison:
+    """Compare a fitted model (model.json contents) with static coefficients of a sweep.
+
+    Parameters
+    ----------
+    model : dict
+        The fitted model per FORMATS.md (``equations``, ``zscores``, ``per_run``).
+    static_coefficients, static_std : dict equation -> term -> value
+        Static least-squares coefficients and their standard errors (SI, y from Z_eq).
+    origin_offset : float or "fitted-equilibrium"
+        delta [m] with ``y_sim = y_data + delta``; by default from the fitted yddot's root.
+    n_sigma : float
+        Agreement criterion: |fitted mean - simulated| <= n_sigma x combined std, where the combined
+        std is sqrt(std_across_runs^2 + std_static^2) (the across-run spread, not the standard
+        error of the mean: a conservative choice, since runs differ physically as well as by noise).
+    """
+    if origin_offset == "fitted-equilibrium":
+        delta = fitted_equilibrium_offset(model["equations"].get("yddot", {}))
+        origin = (f"data origin placed at the fitted model's equilibrium: y_sim = y_data + delta, delta = {delta * 1e6:.2f} um "
+                  "(simulated coefficients re-expanded about it)")
+    else:
+        delta = float(origin_offset)
+        origin = f"user-given origin offset: y_sim = y_data + delta, delta = {delta * 1e6:.2f} um"
+    stats = ensemble_statistics(model)
+    per_run_given = len(model.get("per_run") or []) >= 2
+    rows: list[TermComparison] = []
+    all_terms = library_terms()
+    for eq in ("yddot", "thetaddot"):
+        sim = shift_origin(static_coefficients[eq], delta)
+        sens = origin_sensitivity(static_coefficients[eq])
+        # standard errors move with the origin too: variances add with squared binomial weights
+        # (covariances between the static coefficients neglected)
+        var = {}
+        for name, sd in static_std[eq].items():
+            e = parse_term(name)
+            for j in range(int(e[0]) + 1):
+                ej = e.copy()
+                ej[0] = j
+                key = term_name(ej)
+                var[key] = var.get(key, 0.0) + (sd * comb(int(e[0]), j) * delta ** (int(e[0]) - j)) ** 2
+        sim_std = {t: float(np.sqrt(v)) for t, v in var.items()}
+        fitted_terms = set(model["equations"].get(eq, {})) | set(stats[eq])
+        for t in all_terms:
+            static = is_velocity_free(t)
+            if not static and t not in fitted_terms:
+                continue
+            if static and t not in sim:
+                continue
+            # a term no run selected: every run's coefficient is 0
+            st = stats[eq].get(t, {"mean": 0.0, "std": 0.0 if per_run_given else float("nan"), "z": float("nan")})
+            fitted = float(model["equations"].get(eq, {}).get(t, 0.0))
+            if static:
+                s, s_std = float(sim[t]), float(sim_std.get(t, 0.0))
+                mean = st["mean"] if np.isfinite(st["std"]) else fitted
+                comb_std = np.sqrt((st["std"] if np.isfinite(st["std"]) else 0.0) ** 2 + s_std**2)
+                ratio = mean / s if s != 0 else float("nan")
+                signs = None if (s == 0 or mean == 0) else bool(np.sign(mean) == np.sign(s))
+                within = bool(abs(mean - s) <= n_sigma * comb_std) if comb_std > 0 else None
+                rows.append(TermComparison(eq, t, "static", t in model["equations"].get(eq, {}), fitted, st["mean"], st["std"],
+                                           st["z"], s, s_std, ratio, signs, within, sens.get(t, 0.0) * 1e-6))
+            else:
+                rows.append(TermComparison(eq, t, "dynamic only: no static prediction", t in model["equations"].get(eq, {}),
+                                           fitted, st["mean"], st["std"], st["z"], float("nan"), float("nan"), float("nan"),
+                                           None, None, float("nan")))
+
+    def order(r: TermComparison):
+        lead = (r.equation, r.term) == LEAD_TERM
+        return (not lead, r.kind != "static", not r.in_minimal_model, r.equation != "thetaddot", all_terms.index(r.term))
+
+    rows.sort(key=order)
+    return CoefficientComparison(rows, delta, origin, n_sigma, static_box or {})
