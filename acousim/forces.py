@@ -248,10 +248,7 @@ class GorkovDimer:
         z_com = np.asarray(z_com, float)
         pot, fz, ty = self._cube_integrals(theta, z_com)
         theta_b = np.broadcast_to(theta, pot.shape[:-1])
-        # generalised torque on the bend: cube B turns about +Y, cube A about -Y as phi grows,
-        # and (unequal cubes only) the centres move vertically at fixed Z_com.
-        dz = self.dimer.centre_height_derivatives(theta_b)
-        q_theta = (np.pi / 4) * (ty[..., 1] - ty[..., 0] + fz[..., 0] * dz[..., 0] + fz[..., 1] * dz[..., 1])
+        q_theta = self._bend_generalized_force(ty, fz, theta_b)
         m = self.dimer.total_mass
         force_z = fz.sum(-1)
         q_y = force_z - m * self.gravity
@@ -290,32 +287,42 @@ class GorkovDimer:
         nodes, weights = self.posed_nodes(theta, y)
         return acoustic_torque(nodes, weights, self.wave, about)
 
-    def posed_nodes(self, theta: float, y: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Lab-frame quadrature nodes (n, 3) [m] and weights (n,) [m^3] of the posed dimer."""
+    def _posed_cube_nodes(self, theta: float, y: float) -> list[tuple[NDArray, NDArray, NDArray]]:
+        """Per cube: lab-frame nodes (n, 3) [m], weights (n,) [m^3] and the cube centre (3,) [m]."""
         z_com = float(y) + self.equilibrium_height
         rot = self.dimer.cube_rotations(float(theta))
         off = self.dimer.centre_offsets(float(theta))
-        xs, ws = [], []
+        out = []
         for i, cube in enumerate(self._nodes):
-            xs.append(cube.nodes @ rot[i].T + off[i] + np.array([0.0, 0.0, z_com]))
-            ws.append(cube.weights)
-        return np.concatenate(xs), np.concatenate(ws)
+            centre = off[i] + np.array([0.0, 0.0, z_com])
+            out.append((cube.nodes @ rot[i].T + centre, cube.weights, centre))
+        return out
+
+    def posed_nodes(self, theta: float, y: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Lab-frame quadrature nodes (n, 3) [m] and weights (n,) [m^3] of the posed dimer."""
+        parts = self._posed_cube_nodes(theta, y)
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+    def _bend_generalized_force(self, torque_y: NDArray, force_z: NDArray, theta: ArrayLike) -> NDArray:
+        """Q_theta from each cube's Y torque about its centre and vertical force, (..., 2) arrays.
+
+        Cube B turns about +Y and cube A about -Y as phi grows; for unequal cubes the centres also
+        move vertically at fixed Z_com (zero for equal cubes).
+        """
+        dz = self.dimer.centre_height_derivatives(theta)
+        return (np.pi / 4) * (torque_y[..., 1] - torque_y[..., 0] + force_z[..., 0] * dz[..., 0] + force_z[..., 1] * dz[..., 1])
 
     def direct_integrals(self, theta: float, y: float) -> tuple[float, float, float]:
-        """(U_ac [J], F_Z [N], Q_theta [N m]) summed node by node on the posed mesh (slow reference path)."""
-        nodes, w = self.posed_nodes(theta, y)
-        u = gorkov_potential_density(nodes[:, 2], self.wave)
-        du = gorkov_potential_gradient(nodes[:, 2], self.wave)
-        n_a = len(self._nodes[0].weights)
-        off = self.dimer.centre_offsets(float(theta))
-        dz = self.dimer.centre_height_derivatives(float(theta))
-        fz = np.array([-(w * du)[:n_a].sum(), -(w * du)[n_a:].sum()])
-        z_com = float(y) + self.equilibrium_height
-        dx = nodes[:, 0] - np.where(np.arange(len(w)) < n_a, off[0, 0], off[1, 0])
-        ty = np.array([(w * dx * du)[:n_a].sum(), (w * dx * du)[n_a:].sum()])
-        del z_com
-        q_theta = (np.pi / 4) * (ty[1] - ty[0] + fz[0] * dz[0] + fz[1] * dz[1])
-        return float((w * u).sum()), float(fz.sum()), float(q_theta)
+        """(U_ac [J], F_Z [N], Q_theta [N m]) summed node by node on the posed mesh (slow reference path).
+
+        Uses the generic :func:`acoustic_potential_energy`, :func:`acoustic_force` and
+        :func:`acoustic_torque` on each posed cube, not the factorised sums.
+        """
+        parts = self._posed_cube_nodes(theta, y)
+        potential = sum(acoustic_potential_energy(x, w, self.wave) for x, w, _ in parts)
+        fz = np.array([acoustic_force(x, w, self.wave)[2] for x, w, _ in parts])
+        ty = np.array([acoustic_torque(x, w, self.wave, c)[1] for x, w, c in parts])
+        return float(potential), float(fz.sum()), float(self._bend_generalized_force(ty, fz, float(theta)))
 
     @cached_property
     def equilibrium_height(self) -> float:
