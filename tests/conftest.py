@@ -36,3 +36,15 @@ def raw_model():
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def chromium_required():
+    """Skip when no Chromium is installed, unless the run promised one (make test sets
+    CUBEDIMER_REQUIRE_BROWSER=1 after installing it), in which case its absence is a failure."""
+    from validation.browser import find_chromium
+
+    if find_chromium() is None:
+        if os.environ.get("CUBEDIMER_REQUIRE_BROWSER") == "1":
+            pytest.fail("Chromium is required for this run but was not found")
+        pytest.skip("Chromium not installed")
