@@ -1,0 +1,199 @@
+"""Compiled, allocation-free fixed-step RK4 integration of polynomial models.
+
+A polynomial model is given by an exponent table ``exps`` (n_terms, 4) over the state
+[y, ydot, theta, thetadot] and a coefficient matrix ``coef`` (2, n_terms) for the accelerations
+[yddot, thetaddot].  The right-hand side is evaluated with per-variable power tables (powers up
+to 3 for the cubic library), so one evaluation costs ~2 multiplications per term and allocates
+nothing.  Everything runs in numba ``@njit`` code; :func:`integrate_batch` integrates many
+(model, initial state) pairs in parallel threads.
+
+Accuracy: classical RK4 has a local error O(h^5); with ``h * omega <= 0.05`` (omega the
+fastest angular frequency) the relative phase error after 100 periods is below 1e-6
+(checked against ``solve_ivp`` at rtol=1e-10 in the tests and the benchmark).
+
+Blow-up: integration stops as soon as any state leaves ``|x_i| <= bound_i`` or becomes
+non-finite; the number of valid output samples is returned (never an exception or NaN in the
+valid part).
+"""
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["integrate", "integrate_batch", "rhs"]
+
+_MAXPOW = 8
+
+
+@nb.njit(cache=True, inline="always")
+def _accel(x0, x1, x2, x3, exps, c0, c1, pw):
+    # power table pw[var, k] = x_var ** k
+    for k in range(1, pw.shape[1]):
+        pw[0, k] = pw[0, k - 1] * x0
+        pw[1, k] = pw[1, k - 1] * x1
+        pw[2, k] = pw[2, k - 1] * x2
+        pw[3, k] = pw[3, k - 1] * x3
+    a = 0.0
+    b = 0.0
+    for j in range(exps.shape[0]):
+        m = pw[0, exps[j, 0]] * pw[1, exps[j, 1]] * pw[2, exps[j, 2]] * pw[3, exps[j, 3]]
+        a += c0[j] * m
+        b += c1[j] * m
+    return a, b
+
+
+@nb.njit(cache=True)
+def _rk4_core(coef, exps, x0, dt, n_out, substeps, bound, out):
+    """Integrate one model; fill ``out[:n_valid]``; return n_valid."""
+    maxp = 1
+    for j in range(exps.shape[0]):
+        for i in range(4):
+            if exps[j, i] > maxp:
+                maxp = exps[j, i]
+    pw = np.ones((4, maxp + 1))
+    c0 = coef[0]
+    c1 = coef[1]
+    h = dt / substeps
+    y, yd, th, thd = x0[0], x0[1], x0[2], x0[3]
+    out[0, 0] = y
+    out[0, 1] = yd
+    out[0, 2] = th
+    out[0, 3] = thd
+    for n in range(1, n_out):
+        for s in range(substeps):
+            a1, b1 = _accel(y, yd, th, thd, exps, c0, c1, pw)
+            k1y, k1yd, k1t, k1td = yd, a1, thd, b1
+            a2, b2 = _accel(y + 0.5 * h * k1y, yd + 0.5 * h * k1yd, th + 0.5 * h * k1t,
+                            thd + 0.5 * h * k1td, exps, c0, c1, pw)
+            k2y, k2yd, k2t, k2td = yd + 0.5 * h * k1yd, a2, thd + 0.5 * h * k1td, b2
+            a3, b3 = _accel(y + 0.5 * h * k2y, yd + 0.5 * h * k2yd, th + 0.5 * h * k2t,
+                            thd + 0.5 * h * k2td, exps, c0, c1, pw)
+            k3y, k3yd, k3t, k3td = yd + 0.5 * h * k2yd, a3, thd + 0.5 * h * k2td, b3
+            a4, b4 = _accel(y + h * k3y, yd + h * k3yd, th + h * k3t, thd + h * k3td,
+                            exps, c0, c1, pw)
+            k4y, k4yd, k4t, k4td = yd + h * k3yd, a4, thd + h * k3td, b4
+            y += h / 6.0 * (k1y + 2.0 * k2y + 2.0 * k3y + k4y)
+            yd += h / 6.0 * (k1yd + 2.0 * k2yd + 2.0 * k3yd + k4yd)
+            th += h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+            thd += h / 6.0 * (k1td + 2.0 * k2td + 2.0 * k3td + k4td)
+        ok = (abs(y) <= bound[0]) and (abs(yd) <= bound[1]) and (abs(th) <= bound[2]) \
+            and (abs(thd) <= bound[3])
+        if not ok:  # also catches NaN (comparisons are False)
+            return n
+        out[n, 0] = y
+        out[n, 1] = yd
+        out[n, 2] = th
+        out[n, 3] = thd
+    return n_out
+
+
+@nb.njit(cache=True, parallel=True)
+def _rk4_batch(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid):
+    for b in nb.prange(coefs.shape[0]):
+        n_valid[b] = _rk4_core(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps,
+                               bounds[b], out[b])
+
+
+def _as_bound(bound, n: int | None = None) -> NDArray[np.float64]:
+    if bound is None:
+        bound = np.inf
+    b = np.broadcast_to(np.asarray(bound, dtype=float), (4,) if n is None else (n, 4))
+    return np.ascontiguousarray(b)
+
+
+def integrate(
+    coef: NDArray[np.float64],
+    exps: NDArray[np.int64],
+    x0: NDArray[np.float64],
+    dt: float,
+    n_out: int,
+    substeps: int = 1,
+    bound: float | NDArray[np.float64] | None = None,
+) -> tuple[NDArray[np.float64], int]:
+    """Integrate ``xddot = coef @ monomials(x)`` with fixed-step RK4.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (2, n_terms)
+        Coefficients of [yddot, thetaddot] (units consistent with the state's).
+    exps : ndarray of int, shape (n_terms, 4)
+        Exponents of each monomial over [y, ydot, theta, thetadot].
+    x0 : ndarray, shape (4,)
+        Initial state.
+    dt : float
+        Output sample interval (time units of the state); the RK4 step is ``dt / substeps``.
+    n_out : int
+        Number of output samples including ``x0``.
+    substeps : int
+        RK4 steps per output interval.
+    bound : float or ndarray (4,), optional
+        Blow-up bound per state component (default: none, only non-finite values stop).
+
+    Returns
+    -------
+    traj : ndarray, shape (n_out, 4)
+        States at ``t = k dt``; rows from ``n_valid`` on are NaN.
+    n_valid : int
+        Number of valid rows (``n_out`` unless the model left the bound).
+    """
+    exps = np.ascontiguousarray(exps, dtype=np.int64)
+    if exps.max(initial=0) > _MAXPOW:
+        raise ValueError(f"monomial powers above {_MAXPOW} are not supported")
+    out = np.full((int(n_out), 4), np.nan)
+    nv = _rk4_core(np.ascontiguousarray(coef, dtype=float), exps,
+                   np.ascontiguousarray(x0, dtype=float), float(dt), int(n_out), int(substeps),
+                   _as_bound(bound), out)
+    return out, int(nv)
+
+
+def integrate_batch(
+    coefs: NDArray[np.float64],
+    exps: NDArray[np.int64],
+    x0s: NDArray[np.float64],
+    dt: NDArray[np.float64] | float,
+    n_out: NDArray[np.int64] | int,
+    substeps: int = 1,
+    bound: NDArray[np.float64] | float | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Integrate B (model, initial state) pairs in parallel threads.
+
+    Parameters
+    ----------
+    coefs : ndarray, shape (B, 2, n_terms) or (2, n_terms)
+        One coefficient matrix per trajectory, or one shared by all.
+    exps : ndarray of int, shape (n_terms, 4)
+    x0s : ndarray, shape (B, 4)
+    dt : float or ndarray (B,)
+        Output interval per trajectory.
+    n_out : int or ndarray of int (B,)
+        Output samples per trajectory; the result is padded with NaN to the longest.
+    substeps : int
+    bound : float, ndarray (4,) or (B, 4), optional
+
+    Returns
+    -------
+    traj : ndarray, shape (B, max(n_out), 4)
+    n_valid : ndarray of int, shape (B,)
+    """
+    x0s = np.ascontiguousarray(np.atleast_2d(x0s), dtype=float)
+    B = x0s.shape[0]
+    coefs = np.asarray(coefs, dtype=float)
+    if coefs.ndim == 2:
+        coefs = np.broadcast_to(coefs, (B,) + coefs.shape)
+    coefs = np.ascontiguousarray(coefs)
+    dts = np.ascontiguousarray(np.broadcast_to(np.asarray(dt, dtype=float), (B,)))
+    n_outs = np.ascontiguousarray(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)))
+    out = np.full((B, int(n_outs.max()), 4), np.nan)
+    n_valid = np.zeros(B, dtype=np.int64)
+    _rk4_batch(coefs, np.ascontiguousarray(exps, dtype=np.int64), x0s, dts, n_outs,
+               int(substeps), _as_bound(bound, B), out, n_valid)
+    return out, n_valid
+
+
+def rhs(coef: NDArray[np.float64], exps: NDArray[np.int64], x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """First-order right-hand side [ydot, yddot, thetadot, thetaddot] at states ``x`` (n, 4) (numpy)."""
+    x = np.atleast_2d(x)
+    mono = np.prod(x[:, None, :] ** exps[None, :, :], axis=2)
+    acc = mono @ np.asarray(coef).T
+    return np.column_stack([x[:, 1], acc[:, 0], x[:, 3], acc[:, 1]])
