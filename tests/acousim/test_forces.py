@@ -195,3 +195,20 @@ def test_mesh_convergence_of_q_theta(tmp_path_factory):
         errors.append(np.abs(q - exact).max() / np.abs(exact).max())
     assert errors[0] > errors[1] > errors[2], errors
     assert errors[0] < 1e-2
+
+
+def test_interpolated_model_matches_exact(default_model, rng):
+    """Chebyshev interpolation of the orientation sums in theta: analytic functions, so 64 nodes reach
+    round-off; height and pressure dependence remain exact."""
+    fast = default_model.interpolated(64)
+    th, y = rng.uniform(-0.99, 0.99, 60), rng.uniform(-3e-4, 3e-4, 60)
+    a, b = fast.static_forces(th, y), default_model.static_forces(th, y)
+    for name in a._fields:
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), atol=1e-10 * np.abs(getattr(b, name)).max())
+    p = fast.with_pressure(3300.0)
+    np.testing.assert_allclose(p.equilibrium_height, default_model.with_pressure(3300.0).equilibrium_height, rtol=1e-12)
+    with pytest.raises(ValueError, match=r"\[-1, 1\]"):
+        fast.static_forces(1.2, 0.0)
+    # too few nodes is visibly worse: the check can fail
+    coarse = default_model.interpolated(6).static_forces(th, y).q_theta
+    assert np.abs(coarse - b.q_theta).max() > 1e-8 * np.abs(b.q_theta).max()
