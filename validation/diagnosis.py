@@ -1,0 +1,417 @@
+"""Diagnose the sim-to-real gap: where it lies, which unmodelled effect causes it, how far it shrinks.
+
+"Sim" is the Gor'kov model of PHYSICS.md section 4 calibrated to the data; "real" is any data set in
+the FORMATS.md format.  Everything here works on accelerations estimated from the data
+(Savitzky-Golay, :mod:`fitting.derivatives`) at the measured states, where every candidate effect of
+PHYSICS.md section 5 is *linear in its parameters*.
+
+Calibration (nothing else is free at this stage)
+    The simulated accelerations at nominal pressure ``p_nom`` are ``a_y = s F_Z(theta, Z)/M - g`` and
+    ``a_theta = (s Q_theta(theta, Z) - I'(theta) thetadot^2 / 2) / I(theta)`` with ``s = (p0/p_nom)^2``
+    (the Gor'kov forces scale exactly with p0^2 at fixed lab height) and ``Z = z0 + y``: ``z0`` is the
+    lab height of the data's y origin.  ``s`` and ``z0`` are fitted to the *y equation only*: the
+    vertical trap is what the acoustic model describes best, while the hinge is where the largest
+    expected gap lies (pair scattering), which must not be absorbed into the pressure.  For fixed
+    ``z0`` the fit is linear (in ``s`` and any y-effect parameters); ``z0`` is found by a bounded scalar
+    search.  Each run's initial state is the smoothed measured state at its first interior frame.
+
+Gap
+    Short-time gap of run r and equation q: ``R_rq = sum (a_data - a_sim)^2 / sum (a_data - mean)^2``,
+    the fraction of the measured acceleration variance the simulation leaves unexplained (1 for a
+    model no better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).
+    ``gap`` = mean over runs of ``(R_ry + R_rtheta) / 2``.  This is the scalar of ``gap_before`` and
+    ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
+    :mod:`fitting.losses`) are reported beside it.
+
+Which effect
+    A candidate is fitted (with the calibration) on all runs but one and scored on the held-out
+    run (leave-one-run-out), giving one held-out gap per run with and without the candidate.  The
+    improvement is significant when a one-sided Wilcoxon signed-rank test across runs gives
+    p < ``alpha`` and the median held-out improvement exceeds ``min_relative_improvement`` of the
+    current gap.  Held-out scoring is the penalty for added parameters: a parameter that only fits
+    noise, or a run-specific disturbance, does not improve other runs.  Candidates are added
+    greedily (largest median held-out improvement first) while a significant one remains.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import minimize_scalar
+from scipy.stats import wilcoxon
+
+__all__ = [
+    "CANDIDATE_EFFECTS",
+    "effect_regressors",
+    "RunAccelerations",
+    "Calibration",
+    "GapFit",
+    "fit_gap_model",
+    "short_time_gaps",
+    "identify_effects",
+    "localize_residuals",
+]
+
+#: Candidate effects and their parameters (PHYSICS.md section 5), in the order of the table there.
+CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = {
+    "linear_damping": ("gamma_y", "gamma_theta"),
+    "quadratic_drag": ("c_y", "c_theta"),
+    "pair_scattering": ("kappa",),
+    "mirror_asymmetry": ("beta0", "beta1"),
+    "velocity_coupling": ("c5", "c6"),
+}
+
+
+def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float) -> NDArray[np.float64]:
+    """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
+
+    Every effect of PHYSICS.md section 5 is linear in its parameters, so its added accelerations
+    are ``regressors @ params``.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the
+    yddot and thetaddot equations.  ``z_com`` is the height above the node [m].
+    """
+    y, yd, th, thd = state.T
+    n = state.shape[0]
+    zero = np.zeros(n)
+    if name == "linear_damping":
+        cols = [(-yd, zero), (zero, -thd)]
+    elif name == "quadratic_drag":
+        cols = [(-np.abs(yd) * yd, zero), (zero, -np.abs(thd) * thd)]
+    elif name == "pair_scattering":
+        cols = [(zero, -np.cos(wavenumber * z_com) ** 2 * th)]
+    elif name == "mirror_asymmetry":
+        cols = [(zero, np.ones(n)), (zero, y)]
+    elif name == "velocity_coupling":
+        cols = [(zero, thd**2 * y), (zero, thd * yd * y)]
+    else:
+        raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
+    return np.stack([np.stack(c, axis=-1) for c in cols], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class RunAccelerations:
+    """One run's smoothed states and measured accelerations (interior frames only, SI)."""
+
+    name: str
+    t: NDArray[np.float64]
+    state: NDArray[np.float64]  # (n, 4) [y, ydot, theta, thetadot]
+    accel: NDArray[np.float64]  # (n, 2) [yddot, thetaddot]
+
+    def subsample(self, step: int) -> "RunAccelerations":
+        return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step])
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Calibrated settings: pressure scale s = (p0 / p_nom)^2 and the lab height z0 [m] of the data's y = 0."""
+
+    pressure_scale: float
+    z_origin_m: float
+    nominal_pressure_pa: float
+
+    @property
+    def pressure_amplitude_pa(self) -> float:
+        return float(self.nominal_pressure_pa * np.sqrt(max(self.pressure_scale, 0.0)))
+
+
+class _Physics:
+    """Static Gor'kov terms at the data states for a fast (interpolated) model at nominal pressure."""
+
+    def __init__(self, model, runs: Sequence[RunAccelerations]):
+        self.model = model
+        self.runs = runs
+        self.mass = model.dimer.total_mass
+        self.g = model.gravity
+        self.k = model.wave.wavenumber
+        self._cache: dict[float, list[tuple[NDArray, NDArray]]] = {}
+
+    def forces(self, z0: float) -> list[tuple[NDArray, NDArray]]:
+        """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
+        key = round(z0, 12)
+        if key not in self._cache:
+            out = []
+            for r in self.runs:
+                s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0])
+                out.append((s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])))
+            if len(self._cache) > 64:
+                self._cache.clear()
+            self._cache[key] = out
+        return self._cache[key]
+
+    def centrifugal(self, r: RunAccelerations) -> NDArray:
+        th, thd = r.state[:, 2], r.state[:, 3]
+        d = self.model.dimer
+        return -0.5 * d.hinge_inertia_derivative(th) * thd**2 / d.hinge_inertia(th)
+
+
+@dataclass(frozen=True, eq=False)
+class GapFit:
+    """A calibrated simulation (plus effects) fitted to runs, and its residuals."""
+
+    calibration: Calibration
+    effects: dict[str, dict[str, float]]
+    residuals: list[NDArray[np.float64]]  # per run (n, 2): a_data - a_sim
+    predicted: list[NDArray[np.float64]]  # per run (n, 2)
+
+    def effect_parameter_vector(self, names: Sequence[str]) -> NDArray:
+        return np.array([self.effects[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
+
+
+def _design(physics: _Physics, runs, z0: float, effects: Sequence[str], eq: int):
+    """Stacked design matrix and target for one equation at origin z0.
+
+    Unknowns for eq 0 (y): [s, y-effect parameters]; for eq 1 (theta): [theta-effect parameters],
+    with s entering the target.  Returns per-run lists.
+    """
+    forces = physics.forces(z0)
+    cols_per_run, target_per_run = [], []
+    for r, (fz, qt) in zip(runs, forces):
+        z = z0 + r.state[:, 0]
+        regs = [effect_regressors(n, r.state, z, physics.k)[:, eq, :] for n in effects]
+        regs = np.concatenate(regs, axis=1) if regs else np.zeros((r.state.shape[0], 0))
+        if eq == 0:
+            cols_per_run.append(np.column_stack([fz, regs]))
+            target_per_run.append(r.accel[:, 0] + physics.g)
+        else:
+            cols_per_run.append(regs)
+            target_per_run.append((r.accel[:, 1] - physics.centrifugal(r), qt))
+    return cols_per_run, target_per_run
+
+
+def _param_slices(effects: Sequence[str], eq: int) -> list[tuple[str, str, int]]:
+    """(effect, parameter, column) of the unknowns that act in equation eq."""
+    out, col = [], (1 if eq == 0 else 0)  # column 0 of the y design is the pressure term
+    for n in effects:
+        probe = effect_regressors(n, np.ones((1, 4)), np.zeros(1), 1.0)[0, eq, :]
+        for p_i, p in enumerate(CANDIDATE_EFFECTS[n]):
+            if probe[p_i] != 0:
+                out.append((n, p, col))
+            col += 1
+    return out
+
+
+def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str] = (),
+                  z0_window: float = 4e-4, fixed: Calibration | None = None) -> GapFit:
+    """Fit the calibration (s, z0) and the parameters of ``effects`` to the runs' accelerations.
+
+    Parameters
+    ----------
+    model : acousim.GorkovDimer
+        The simulation at nominal pressure (use ``model.interpolated()`` for speed).
+    runs : sequence of RunAccelerations
+    effects : names from CANDIDATE_EFFECTS
+    z0_window : float
+        z0 is searched within +-z0_window [m] of the nominal Z_eq (kept below the node).
+    fixed : Calibration, optional
+        Use this calibration instead of fitting one (effects are still fitted).
+    """
+    physics = _Physics(model, runs)
+    y_slots = _param_slices(effects, 0)
+    t_slots = _param_slices(effects, 1)
+    y_effects_cols = [c for _, _, c in y_slots]
+
+    def solve_y(z0: float):
+        cols, tgt = _design(physics, runs, z0, effects, 0)
+        x = np.concatenate(cols)[:, [0] + y_effects_cols]
+        b = np.concatenate(tgt)
+        scale = np.maximum(np.abs(x).max(axis=0), 1e-300)
+        sol, *_ = np.linalg.lstsq(x / scale, b, rcond=None)
+        sol = sol / scale
+        resid = b - x @ sol
+        return sol, float(resid @ resid)
+
+    if fixed is None:
+        z_eq = model.equilibrium_height
+        lo, hi = z_eq - z0_window, min(z_eq + z0_window, -1e-6)
+        res = minimize_scalar(lambda z: solve_y(z)[1], bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9})
+        z0 = float(res.x)
+        sol_y, _ = solve_y(z0)
+        cal = Calibration(float(sol_y[0]), z0, model.wave.pressure_amplitude_pa)
+    else:
+        cal = fixed
+        z0 = cal.z_origin_m
+        cols, tgt = _design(physics, runs, z0, effects, 0)
+        x = np.concatenate(cols)
+        b = np.concatenate(tgt) - cal.pressure_scale * x[:, 0]
+        xe = x[:, y_effects_cols]
+        sol_e = np.linalg.lstsq(xe, b, rcond=None)[0] if xe.shape[1] else np.zeros(0)
+        sol_y = np.concatenate([[cal.pressure_scale], sol_e])
+    # theta equation at the calibrated (s, z0)
+    cols, tgt = _design(physics, runs, z0, effects, 1)
+    xt = np.concatenate(cols)[:, [c for _, _, c in t_slots]] if t_slots else np.zeros((sum(len(r.t) for r in runs), 0))
+    bt = np.concatenate([a - cal.pressure_scale * q for a, q in tgt])
+    if xt.shape[1]:
+        scale = np.maximum(np.abs(xt).max(axis=0), 1e-300)
+        sol_t = np.linalg.lstsq(xt / scale, bt, rcond=None)[0] / scale
+    else:
+        sol_t = np.zeros(0)
+    params = {n: {p: 0.0 for p in CANDIDATE_EFFECTS[n]} for n in effects}
+    for (n, p, _), v in zip(y_slots, sol_y[1:]):
+        params[n][p] = float(v)
+    for (n, p, _), v in zip(t_slots, sol_t):
+        params[n][p] = float(v)
+    residuals, predicted = _residuals(physics, runs, cal, params)
+    return GapFit(cal, params, residuals, predicted)
+
+
+def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple[list, list]:
+    forces = physics.forces(cal.z_origin_m)
+    res, pred = [], []
+    for r, (fz, qt) in zip(runs, forces):
+        a_y = cal.pressure_scale * fz - physics.g
+        a_t = cal.pressure_scale * qt + physics.centrifugal(r)
+        a = np.column_stack([a_y, a_t])
+        z = cal.z_origin_m + r.state[:, 0]
+        for n, pv in params.items():
+            a = a + effect_regressors(n, r.state, z, physics.k) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
+        pred.append(a)
+        res.append(r.accel - a)
+    return res, pred
+
+
+def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray]) -> NDArray[np.float64]:
+    """Per run and equation (n_runs, 2): unexplained fraction of the acceleration variance."""
+    out = np.empty((len(runs), 2))
+    for i, (r, e) in enumerate(zip(runs, residuals)):
+        var = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
+        out[i] = np.sum(e**2, axis=0) / np.maximum(var, 1e-300)
+    return out
+
+
+def scalar_gap(per_run: NDArray) -> float:
+    """The documented scalar: mean over runs of the mean over both equations."""
+    return float(np.mean(per_run))
+
+
+def _held_out_gaps(model, runs, effects: Sequence[str]) -> NDArray[np.float64]:
+    """Leave-one-run-out: per run, the gap of a fit made on all other runs."""
+    out = np.empty(len(runs))
+    for i in range(len(runs)):
+        train = [r for j, r in enumerate(runs) if j != i]
+        fit = fit_gap_model(model, train, effects)
+        physics = _Physics(model, [runs[i]])
+        res, _ = _residuals(physics, [runs[i]], fit.calibration, fit.effects)
+        out[i] = float(np.mean(short_time_gaps([runs[i]], res)))
+    return out
+
+
+@dataclass
+class Identification:
+    identified: list[str]
+    steps: list[dict] = field(default_factory=list)  # one per greedy round: candidates and their tests
+
+
+def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequence[str] = tuple(CANDIDATE_EFFECTS),
+                     alpha: float = 0.01, min_relative_improvement: float = 0.05,
+                     progress: Callable[[str], None] | None = None) -> Identification:
+    """Greedy, held-out identification of the effects present (see module docstring)."""
+    if len(runs) < 3:
+        raise ValueError("identification needs at least 3 runs (held-out runs are the significance test)")
+    chosen: list[str] = []
+    result = Identification([])
+    current = _held_out_gaps(model, runs, chosen)
+    remaining = [c for c in candidates]
+    while remaining:
+        round_info = {"base": list(chosen), "base_held_out_gap": float(np.mean(current)), "candidates": {}}
+        best, best_gain = None, 0.0
+        for c in remaining:
+            if progress:
+                progress(f"testing {c} on top of {chosen or 'calibration'}")
+            trial = _held_out_gaps(model, runs, chosen + [c])
+            diff = current - trial  # > 0: the candidate helps the held-out run
+            try:
+                p = float(wilcoxon(diff, alternative="greater", zero_method="zsplit").pvalue) if np.any(diff != 0) else 1.0
+            except ValueError:
+                p = 1.0
+            rel = float(np.median(diff) / max(np.mean(current), 1e-300))
+            significant = bool(p < alpha and rel > min_relative_improvement)
+            round_info["candidates"][c] = {"held_out_gap": float(np.mean(trial)), "median_improvement_fraction": rel,
+                                           "wilcoxon_p": p, "significant": significant, "per_run_held_out": trial.tolist()}
+            if significant and rel > best_gain:
+                best, best_gain, best_trial = c, rel, trial
+        result.steps.append(round_info)
+        if best is None:
+            break
+        chosen.append(best)
+        remaining.remove(best)
+        current = best_trial
+    result.identified = chosen
+    return result
+
+
+def localize_residuals(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray], n_bins: int = 8) -> dict:
+    """Where the residual lies: library terms (z-scores across runs), state-space bins, time scales.
+
+    * ``terms``: per equation, each library term's coefficient from a per-run least-squares fit of
+      the residual on the 35-term library (variables scaled), its mean, std and z-score across runs,
+      and the fraction of residual variance each term explains when fitted alone.
+    * ``regions``: RMS residual per equation on an (theta, y) grid and an (thetadot, ydot) grid.
+    * ``time_scales``: fraction of the residual variance per frequency band, relative to the
+      dominant y frequency of the data.
+    """
+    from fitting.library import evaluate_library, library_terms
+
+    terms = library_terms()
+    allstate = np.concatenate([r.state for r in runs])
+    scale = np.maximum(np.abs(allstate).max(axis=0), 1e-300)
+    coefs = []
+    for r, e in zip(runs, residuals):
+        lib = evaluate_library(r.state / scale)
+        c, *_ = np.linalg.lstsq(lib, e, rcond=None)
+        coefs.append(c)
+    coefs = np.array(coefs)  # (n_runs, 35, 2)
+    libs = [evaluate_library(r.state / scale) for r in runs]
+    terms_out = {}
+    for q, eq in enumerate(("yddot", "thetaddot")):
+        mean, std = coefs[:, :, q].mean(axis=0), coefs[:, :, q].std(axis=0, ddof=1) if len(runs) > 1 else np.full(35, np.nan)
+        explained = []
+        tot = sum(float(np.sum(e[:, q] ** 2)) for e in residuals)
+        for j in range(len(terms)):
+            num = 0.0
+            for lib, e in zip(libs, residuals):
+                col = lib[:, j]
+                den = col @ col
+                if den > 0:
+                    num += (col @ e[:, q]) ** 2 / den
+            explained.append(num / max(tot, 1e-300))
+        rows = []
+        for j, t in enumerate(terms):
+            z = mean[j] / std[j] if std[j] > 0 else float("nan")
+            rows.append({"term": t, "mean_scaled": float(mean[j]), "std_scaled": float(std[j]), "z": float(z),
+                         "explained_fraction_alone": float(explained[j])})
+        rows.sort(key=lambda d: -abs(d["z"]) if np.isfinite(d["z"]) else 0)
+        terms_out[eq] = rows
+    # regions
+    res_all = np.concatenate(residuals)
+    regions = {}
+    for label, (i, j) in (("theta_y", (2, 0)), ("thetadot_ydot", (3, 1))):
+        xe = np.quantile(allstate[:, i], np.linspace(0, 1, n_bins + 1))
+        ye = np.quantile(allstate[:, j], np.linspace(0, 1, n_bins + 1))
+        xi = np.clip(np.searchsorted(xe, allstate[:, i]) - 1, 0, n_bins - 1)
+        yi = np.clip(np.searchsorted(ye, allstate[:, j]) - 1, 0, n_bins - 1)
+        rms = np.full((2, n_bins, n_bins), np.nan)
+        for a in range(n_bins):
+            for b in range(n_bins):
+                m = (xi == a) & (yi == b)
+                if m.sum() >= 5:
+                    rms[:, a, b] = np.sqrt(np.mean(res_all[m] ** 2, axis=0))
+        regions[label] = {"x_edges": xe.tolist(), "y_edges": ye.tolist(), "rms_yddot": rms[0].tolist(), "rms_thetaddot": rms[1].tolist()}
+    # time scales
+    from fitting.spectra import dominant_frequency
+
+    bands = [(0.0, 0.25), (0.25, 0.75), (0.75, 1.5), (1.5, 2.5), (2.5, np.inf)]
+    power = np.zeros((len(bands), 2))
+    for r, e in zip(runs, residuals):
+        dt = float(np.median(np.diff(r.t)))
+        fy = dominant_frequency(r.state[:, 0], dt)
+        f = np.fft.rfftfreq(len(e), dt) / max(fy, 1e-12)
+        spec = np.abs(np.fft.rfft(e - e.mean(axis=0), axis=0)) ** 2
+        for b, (lo, hi) in enumerate(bands):
+            m = (f >= lo) & (f < hi)
+            power[b] += spec[m].sum(axis=0)
+    power /= np.maximum(power.sum(axis=0), 1e-300)
+    time_scales = {"bands_in_units_of_f_y": [[lo, hi if np.isfinite(hi) else None] for lo, hi in bands],
+                   "fraction_yddot": power[:, 0].tolist(), "fraction_thetaddot": power[:, 1].tolist()}
+    return {"terms": terms_out, "regions": regions, "time_scales": time_scales}
