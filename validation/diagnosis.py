@@ -52,6 +52,9 @@ __all__ = [
     "short_time_gaps",
     "identify_effects",
     "localize_residuals",
+    "simulate_runs",
+    "long_time_gaps",
+    "scalar_gap",
 ]
 
 #: Candidate effects and their parameters (PHYSICS.md section 5), in the order of the table there.
@@ -415,3 +418,79 @@ def localize_residuals(runs: Sequence[RunAccelerations], residuals: Sequence[NDA
     time_scales = {"bands_in_units_of_f_y": [[lo, hi if np.isfinite(hi) else None] for lo, hi in bands],
                    "fraction_yddot": power[:, 0].tolist(), "fraction_thetaddot": power[:, 1].tolist()}
     return {"terms": terms_out, "regions": regions, "time_scales": time_scales}
+
+
+def simulate_runs(model, cal: Calibration, effects: dict, x0: NDArray, t: NDArray, substeps: int = 2,
+                  bound: float = 2e-3) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Integrate the calibrated simulation model (+ effects) from each run's initial state.
+
+    Classical RK4 with step ``dt / substeps`` on a uniform output grid ``t``, batched over runs (all
+    runs advance together; the model is evaluated once per stage for the whole batch).  A run whose
+    |y| exceeds ``bound`` [m] (it left the trap) or turns non-finite is frozen and reported through
+    ``n_valid``.
+
+    Parameters
+    ----------
+    model : acousim.GorkovDimer (interpolated), at nominal pressure
+    x0 : (n_runs, 4) initial states; t : (n,) uniform times [s]
+
+    Returns
+    -------
+    states (n_runs, n, 4), n_valid (n_runs,)
+    """
+    x = np.array(x0, float)
+    n_runs, n = x.shape[0], len(t)
+    h = float(t[1] - t[0]) / substeps
+    out = np.empty((n_runs, n, 4))
+    out[:, 0] = x
+    n_valid = np.full(n_runs, n, dtype=np.int64)
+    alive = np.ones(n_runs, bool)
+    dimer, g, k = model.dimer, model.gravity, model.wave.wavenumber
+    mass = dimer.total_mass
+    names = list(effects)
+    pvec = [np.array([effects[e][p] for p in CANDIDATE_EFFECTS[e]]) for e in names]
+
+    def rhs(s: NDArray) -> NDArray:
+        th = np.clip(s[:, 2], -1.0, 1.0)
+        z = cal.z_origin_m + s[:, 0]
+        st = model.integrals_at_height(th, z)
+        inertia = dimer.hinge_inertia(th)
+        a = np.column_stack([cal.pressure_scale * st.force_z / mass - g,
+                             (cal.pressure_scale * st.q_theta - 0.5 * dimer.hinge_inertia_derivative(th) * s[:, 3] ** 2) / inertia])
+        for e, pv in zip(names, pvec):
+            a = a + effect_regressors(e, s, z, k) @ pv
+        return np.column_stack([s[:, 1], a[:, 0], s[:, 3], a[:, 1]])
+
+    for i in range(1, n):
+        for _ in range(substeps):
+            k1 = rhs(x)
+            k2 = rhs(x + 0.5 * h * k1)
+            k3 = rhs(x + 0.5 * h * k2)
+            k4 = rhs(x + h * k3)
+            x = np.where(alive[:, None], x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), x)
+        bad = alive & (~np.all(np.isfinite(x), axis=1) | (np.abs(x[:, 0]) > bound) | (np.abs(x[:, 2]) >= 1.0))
+        if np.any(bad):
+            n_valid[bad] = i
+            alive &= ~bad
+            x[bad] = out[bad, i - 1]
+        out[:, i] = x
+    return out, n_valid
+
+
+def long_time_gaps(model, runs: Sequence[RunAccelerations], fit: GapFit, max_duration: float | None = None) -> list[dict]:
+    """Per run: the fitting package's long-time loss terms (shape, Poincare, frequency) of the simulation
+    started from the run's first smoothed state, sampled on the run's own frames."""
+    from fitting.losses import loss_terms, make_reference
+
+    ends = [len(r.t) if max_duration is None else int(np.searchsorted(r.t - r.t[0], max_duration)) for r in runs]
+    n = min(ends)
+    t = runs[0].t[:n] - runs[0].t[0]
+    x0 = np.array([r.state[0] for r in runs])
+    sims, n_valid = simulate_runs(model, fit.calibration, fit.effects, x0, t)
+    out = []
+    for r, sim, nv in zip(runs, sims, n_valid):
+        ref = make_reference(r.t[:n] - r.t[0], r.state[:n])
+        lt = loss_terms(sim, int(nv), ref)
+        out.append({"shape": lt.shape, "poincare": lt.poincare, "frequency": lt.frequency, "total": lt.total,
+                    "diverged": bool(nv < n)})
+    return out
