@@ -254,10 +254,28 @@ class GorkovDimer:
         shape = theta.shape + (2,)
         return out_c.reshape(shape), out_d.reshape(shape), out_e.reshape(shape)
 
-    def _cube_integrals(self, theta: NDArray, z_com: NDArray):
+    def orientation_sums(self, theta: ArrayLike) -> tuple[NDArray, NDArray]:
+        """The bend-only factors (C, D) of every integral, shape theta.shape + (2,) (cubes A, B).
+
+        ``C = sum_q w_q exp(2ik zeta_q)`` [m^3] and ``D = sum_q w_q dx_q exp(2ik zeta_q)`` [m^4]; pass them
+        to :meth:`integrals_at_height` to evaluate many heights at fixed bends without recomputing.
+        """
+        theta = np.asarray(theta, float)
+        c, d, _ = self._orientation_sums(theta) if "_interpolant" in self.__dict__ else self._unique_sums(theta)
+        return c, d
+
+    def _unique_sums(self, theta: NDArray):
+        uniq, inv = np.unique(theta, return_inverse=True)
+        c, d, e = self._orientation_sums(uniq)
+        inv = inv.reshape(theta.shape)
+        return c[inv], d[inv], e[inv]
+
+    def _cube_integrals(self, theta: NDArray, z_com: NDArray, sums: tuple | None = None):
         """Potential, vertical force and Y-torque about its centre for each cube, (..., 2) arrays."""
         theta, z_com = np.broadcast_arrays(np.asarray(theta, float), np.asarray(z_com, float))
-        if "_interpolant" in self.__dict__:
+        if sums is not None:
+            c, d = (np.broadcast_to(x, theta.shape + (2,)) for x in sums)
+        elif "_interpolant" in self.__dict__:
             c, d, _ = self._orientation_sums(theta)
         else:
             # evaluate the (expensive) exact orientation sums once per distinct theta value
@@ -276,11 +294,15 @@ class GorkovDimer:
         return potential, force_z, torque_y
 
     # ------------------------------------------------------------------ public physics
-    def integrals_at_height(self, theta: ArrayLike, z_com: ArrayLike) -> StaticForces:
-        """Static forces at lab height ``z_com`` of the centre of mass (metres above the node)."""
+    def integrals_at_height(self, theta: ArrayLike, z_com: ArrayLike, orientation_sums: tuple | None = None) -> StaticForces:
+        """Static forces at lab height ``z_com`` of the centre of mass (metres above the node).
+
+        ``orientation_sums`` (from :meth:`orientation_sums` for the same ``theta``) skips their
+        evaluation.
+        """
         theta = np.asarray(theta, float)
         z_com = np.asarray(z_com, float)
-        pot, fz, ty = self._cube_integrals(theta, z_com)
+        pot, fz, ty = self._cube_integrals(theta, z_com, orientation_sums)
         theta_b = np.broadcast_to(theta, pot.shape[:-1])
         q_theta = self._bend_generalized_force(ty, fz, theta_b)
         m = self.dimer.total_mass

@@ -109,11 +109,68 @@ def run_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_diagnose(sub) -> None:
+    p = sub.add_parser(
+        "diagnose",
+        help="diagnose the sim-to-real gap of a data set",
+        description=(
+            "Calibrate the Gor'kov simulation (pressure amplitude and y origin) to a data set, measure the gap "
+            "between simulated and measured accelerations (and the long-time attractor, Poincare and frequency "
+            "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
+            "effects of PHYSICS.md section 5 cause it, adding them greedily while a held-out improvement across runs "
+            "is significant (one-sided Wilcoxon). Writes diagnosis.json, figures and report.html into --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--alpha", type=float, default=0.01, help="significance level of the held-out Wilcoxon test")
+    p.add_argument("--min-improvement", type=float, default=0.05,
+                   help="smallest median held-out improvement counted, as a fraction of the current gap")
+    p.add_argument("--candidates", default=",".join(_candidate_names()),
+                   help="comma-separated candidate effects")
+    p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
+    p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
+    p.set_defaults(func=run_diagnose)
+
+
+def _candidate_names() -> list[str]:
+    from .diagnosis import CANDIDATE_EFFECTS
+
+    return list(CANDIDATE_EFFECTS)
+
+
+def run_diagnose(args: argparse.Namespace) -> int:
+    from fitting.dataset import DatasetError
+
+    from .diagnose import DiagnoseConfig, diagnose_dataset, write_diagnosis
+
+    cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
+    unknown = [c for c in cands if c not in _candidate_names()]
+    if unknown:
+        raise UserInputError(f"unknown effect(s) {', '.join(unknown)}; candidates are {', '.join(_candidate_names())}")
+    if not 0 < args.alpha < 1:
+        raise UserInputError("--alpha must lie in (0, 1)")
+    config = DiagnoseConfig(candidates=cands, alpha=args.alpha, min_relative_improvement=args.min_improvement,
+                            long_time=not args.no_long_time)
+    try:
+        diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet)
+    except (DatasetError, ValueError) as exc:
+        raise UserInputError(str(exc)) from None
+    paths = write_diagnosis(diagnosis, internals, args.out)
+    if not args.quiet:
+        print(f"identified: {diagnosis['identified'] or 'none'}; gap {diagnosis['gap_before']:.3g} -> "
+              f"{diagnosis['gap_after']:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="python -m validation",
                            description="Bridge between fitted models and the Gor'kov simulation: coefficient comparison.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     _add_compare(sub)
+    _add_diagnose(sub)
     return parser
 
 

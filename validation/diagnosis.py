@@ -15,12 +15,22 @@ Calibration (nothing else is free at this stage)
     ``z0`` the fit is linear (in ``s`` and any y-effect parameters); ``z0`` is found by a bounded scalar
     search.  Each run's initial state is the smoothed measured state at its first interior frame.
 
+Energy balance
+    Weak dissipation is invisible in instantaneous accelerations (gamma ydot is ~1e-2 of the trap
+    acceleration) but dominates the long-time behaviour.  Over windows of ``energy_window`` seconds
+    (about ten periods) the change of the calibrated mechanical energy
+    ``E = M ydot^2/2 + I(theta) thetadot^2/2 + s U_ac(theta, z0 + y) + M g y`` must equal the work of the
+    non-conservative effect terms, ``integral (M ydot a_y,eff + I thetadot a_theta,eff) dt``, which is
+    again linear in every effect parameter (and in s).  This is the third equation of every fit.
+
 Gap
     Short-time gap of run r and equation q: ``R_rq = sum (a_data - a_sim)^2 / sum (a_data - mean)^2``,
     the fraction of the measured acceleration variance the simulation leaves unexplained (1 for a
-    model no better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).
-    ``gap`` = mean over runs of ``(R_ry + R_rtheta) / 2``.  This is the scalar of ``gap_before`` and
-    ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
+    model no better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).  The
+    energy component is ``R_rE = sum_k (dE_k,data - W_k,sim)^2 / sum_k (E_k - E_rest)^2``: the
+    unexplained energy change per window relative to the oscillation energy.
+    ``gap`` = mean over runs of ``(R_ry + R_rtheta + R_rE) / 3``.  This is the scalar of ``gap_before``
+    and ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
     :mod:`fitting.losses`) are reported beside it.
 
 Which effect
@@ -55,6 +65,7 @@ __all__ = [
     "simulate_runs",
     "long_time_gaps",
     "scalar_gap",
+    "fit_gaps",
 ]
 
 #: Candidate effects and their parameters (PHYSICS.md section 5), in the order of the table there.
@@ -121,7 +132,8 @@ class Calibration:
 class _Physics:
     """Static Gor'kov terms at the data states for a fast (interpolated) model at nominal pressure."""
 
-    def __init__(self, model, runs: Sequence[RunAccelerations]):
+    def __init__(self, model, runs: Sequence[RunAccelerations], energy_window: float = 0.4):
+        self.energy_window = float(energy_window)
         self.model = model
         self.runs = runs
         self.mass = model.dimer.total_mass
@@ -131,16 +143,58 @@ class _Physics:
 
     def forces(self, z0: float) -> list[tuple[NDArray, NDArray]]:
         """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
+        return [(f, q) for f, q, _ in self._static(z0)]
+
+    def _static(self, z0: float) -> list[tuple[NDArray, NDArray, NDArray]]:
         key = round(z0, 12)
         if key not in self._cache:
             out = []
-            for r in self.runs:
-                s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0])
-                out.append((s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])))
+            if not hasattr(self, "_sums"):
+                self._sums = [self.model.orientation_sums(r.state[:, 2]) for r in self.runs]
+            for r, sums in zip(self.runs, self._sums):
+                s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
+                out.append((s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2]), s.potential))
             if len(self._cache) > 64:
                 self._cache.clear()
             self._cache[key] = out
         return self._cache[key]
+
+    def energy_terms(self, z0: float, effects: Sequence[str]) -> list[dict]:
+        """Per run, per energy window: the data side of the energy balance and the effect work columns.
+
+        Keys: ``dk`` (change of M ydot^2/2 + I thetadot^2/2 + M g y) [J], ``du`` (change of U_ac at
+        nominal pressure) [J], ``work`` (n_windows, n_params) work of each effect parameter's unit
+        term [J per unit parameter], ``e_osc`` (n_windows,) oscillation energy at the window start
+        without the acoustic part, ``u_osc`` its acoustic part at nominal pressure [J].
+        """
+        d = self.model.dimer
+        rest_u = float(self.model.integrals_at_height(0.0, z0).potential)
+        out = []
+        for r, (_, _, pot) in zip(self.runs, self._static(z0)):
+            y, yd, th, thd = r.state.T
+            inertia = d.hinge_inertia(th)
+            kin = 0.5 * self.mass * yd**2 + 0.5 * inertia * thd**2 + self.mass * self.g * y
+            dt = float(np.median(np.diff(r.t)))
+            step = max(2, int(round(self.energy_window / dt)))
+            idx = np.arange(0, len(r.t), step)
+            if idx[-1] != len(r.t) - 1:
+                idx = np.append(idx, len(r.t) - 1)
+            regs = [effect_regressors(n, r.state, z0 + y, self.k) for n in effects]
+            regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
+            power = self.mass * yd[:, None] * regs[:, 0, :] + inertia[:, None] * thd[:, None] * regs[:, 1, :]
+            cum = np.concatenate([np.zeros((1, power.shape[1])), np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
+            a, b = idx[:-1], idx[1:]
+            out.append({"dk": kin[b] - kin[a], "du": pot[b] - pot[a], "work": cum[b] - cum[a],
+                        "k0": kin[a], "u0": pot[a]})
+        return out
+
+    def rest_energy(self, s: float, z0: float) -> float:
+        """Minimum of M g y + s U_ac(0, z0 + y): the energy of the dimer at rest at its equilibrium [J]."""
+        from scipy.optimize import minimize_scalar
+
+        f = lambda y: self.mass * self.g * y + s * float(self.model.integrals_at_height(0.0, z0 + y).potential)  # noqa: E731
+        res = minimize_scalar(f, bounds=(-4e-4, min(4e-4, -z0 - 1e-6)), method="bounded", options={"xatol": 1e-10})
+        return float(res.fun)
 
     def centrifugal(self, r: RunAccelerations) -> NDArray:
         th, thd = r.state[:, 2], r.state[:, 3]
@@ -156,6 +210,7 @@ class GapFit:
     effects: dict[str, dict[str, float]]
     residuals: list[NDArray[np.float64]]  # per run (n, 2): a_data - a_sim
     predicted: list[NDArray[np.float64]]  # per run (n, 2)
+    energy: list[tuple[NDArray[np.float64], NDArray[np.float64]]]  # per run: (energy residual per window, oscillation energy) [J]
 
     def effect_parameter_vector(self, names: Sequence[str]) -> NDArray:
         return np.array([self.effects[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
@@ -241,22 +296,53 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
         xe = x[:, y_effects_cols]
         sol_e = np.linalg.lstsq(xe, b, rcond=None)[0] if xe.shape[1] else np.zeros(0)
         sol_y = np.concatenate([[cal.pressure_scale], sol_e])
-    # theta equation at the calibrated (s, z0)
-    cols, tgt = _design(physics, runs, z0, effects, 1)
-    xt = np.concatenate(cols)[:, [c for _, _, c in t_slots]] if t_slots else np.zeros((sum(len(r.t) for r in runs), 0))
-    bt = np.concatenate([a - cal.pressure_scale * q for a, q in tgt])
-    if xt.shape[1]:
-        scale = np.maximum(np.abs(xt).max(axis=0), 1e-300)
-        sol_t = np.linalg.lstsq(xt / scale, bt, rcond=None)[0] / scale
-    else:
-        sol_t = np.zeros(0)
+    # all effect parameters jointly at the calibrated (s, z0): y and theta accelerations and the
+    # energy balance, each weighted by its normalisation so that the fit minimises R_y + R_theta + R_E
     params = {n: {p: 0.0 for p in CANDIDATE_EFFECTS[n]} for n in effects}
-    for (n, p, _), v in zip(y_slots, sol_y[1:]):
-        params[n][p] = float(v)
-    for (n, p, _), v in zip(t_slots, sol_t):
-        params[n][p] = float(v)
+    n_par = sum(len(CANDIDATE_EFFECTS[n]) for n in effects)
+    if n_par:
+        s_cal = cal.pressure_scale
+        rows, rhs = [], []
+        forces = physics.forces(z0)
+        ay_all = np.concatenate([r.accel[:, 0] for r in runs])
+        at_all = np.concatenate([r.accel[:, 1] for r in runs])
+        w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
+        w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
+        for r, (fz, qt) in zip(runs, forces):
+            z = z0 + r.state[:, 0]
+            regs = np.concatenate([effect_regressors(n, r.state, z, physics.k) for n in effects], axis=2)
+            rows.append(w_y * regs[:, 0, :])
+            rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
+            rows.append(w_t * regs[:, 1, :])
+            rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
+        en = physics.energy_terms(z0, effects)
+        e_rest = physics.rest_energy(s_cal, z0)
+        e_scale = np.concatenate([e["k0"] + s_cal * e["u0"] - e_rest for e in en])
+        w_e = 1.0 / np.sqrt(max(np.sum(e_scale**2), 1e-300))
+        for e in en:
+            rows.append(w_e * e["work"])
+            rhs.append(w_e * (e["dk"] + s_cal * e["du"]))
+        x, b = np.concatenate(rows), np.concatenate(rhs)
+        scale = np.maximum(np.abs(x).max(axis=0), 1e-300)
+        sol = np.linalg.lstsq(x / scale, b, rcond=None)[0] / scale
+        i = 0
+        for n in effects:
+            for p in CANDIDATE_EFFECTS[n]:
+                params[n][p] = float(sol[i])
+                i += 1
     residuals, predicted = _residuals(physics, runs, cal, params)
-    return GapFit(cal, params, residuals, predicted)
+    return GapFit(cal, params, residuals, predicted, _energy_residuals(physics, cal, params))
+
+
+def _energy_residuals(physics: _Physics, cal: Calibration, params: dict) -> list[tuple[NDArray, NDArray]]:
+    names = list(params)
+    pv = np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
+    out = []
+    e_rest = physics.rest_energy(cal.pressure_scale, cal.z_origin_m)
+    for e in physics.energy_terms(cal.z_origin_m, names):
+        res = e["dk"] + cal.pressure_scale * e["du"] - (e["work"] @ pv if pv.size else 0.0)
+        out.append((res, e["k0"] + cal.pressure_scale * e["u0"] - e_rest))
+    return out
 
 
 def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple[list, list]:
@@ -274,17 +360,27 @@ def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple
     return res, pred
 
 
-def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray]) -> NDArray[np.float64]:
-    """Per run and equation (n_runs, 2): unexplained fraction of the acceleration variance."""
-    out = np.empty((len(runs), 2))
+def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray],
+                    energy: Sequence[tuple[NDArray, NDArray]] | None = None) -> NDArray[np.float64]:
+    """Per run (n_runs, 3): unexplained fraction of the yddot and thetaddot variance and of the energy
+    balance (R_E, see the module docstring; NaN-free, 0 when ``energy`` is not given)."""
+    out = np.zeros((len(runs), 3))
     for i, (r, e) in enumerate(zip(runs, residuals)):
         var = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
-        out[i] = np.sum(e**2, axis=0) / np.maximum(var, 1e-300)
+        out[i, :2] = np.sum(e**2, axis=0) / np.maximum(var, 1e-300)
+        if energy is not None:
+            res, eosc = energy[i]
+            out[i, 2] = float(np.sum(res**2) / max(np.sum(eosc**2), 1e-300))
     return out
 
 
+def fit_gaps(runs: Sequence[RunAccelerations], fit: "GapFit") -> NDArray[np.float64]:
+    """Per-run gap components (n_runs, 3) of a fit on these runs."""
+    return short_time_gaps(runs, fit.residuals, fit.energy)
+
+
 def scalar_gap(per_run: NDArray) -> float:
-    """The documented scalar: mean over runs of the mean over both equations."""
+    """The documented scalar: mean over runs of the mean over the three components (y, theta, energy)."""
     return float(np.mean(per_run))
 
 
@@ -296,7 +392,8 @@ def _held_out_gaps(model, runs, effects: Sequence[str]) -> NDArray[np.float64]:
         fit = fit_gap_model(model, train, effects)
         physics = _Physics(model, [runs[i]])
         res, _ = _residuals(physics, [runs[i]], fit.calibration, fit.effects)
-        out[i] = float(np.mean(short_time_gaps([runs[i]], res)))
+        en = _energy_residuals(physics, fit.calibration, fit.effects)
+        out[i] = float(np.mean(short_time_gaps([runs[i]], res, en)))
     return out
 
 
@@ -384,7 +481,9 @@ def localize_residuals(runs: Sequence[RunAccelerations], residuals: Sequence[NDA
             z = mean[j] / std[j] if std[j] > 0 else float("nan")
             rows.append({"term": t, "mean_scaled": float(mean[j]), "std_scaled": float(std[j]), "z": float(z),
                          "explained_fraction_alone": float(explained[j])})
-        rows.sort(key=lambda d: -abs(d["z"]) if np.isfinite(d["z"]) else 0)
+        # rank by the share each term explains alone: along trajectories the library columns are
+        # strongly correlated, so multivariate coefficients (and their z-scores) spread over them
+        rows.sort(key=lambda d: -d["explained_fraction_alone"])
         terms_out[eq] = rows
     # regions
     res_all = np.concatenate(residuals)

@@ -1,0 +1,146 @@
+"""``python -m acousim simulate``: synthetic field-drop experiments from the digital twin.
+
+Writes a trajectory data set (FORMATS.md: one ``runNN.csv`` per run with ``t, y, theta``, and
+``meta.json`` with the nominal settings) plus ``truth.json`` (true pressure amplitude, effects,
+seed and every other setting) and ``truth_states.npz`` (exact states), atomically.  See
+:mod:`acousim.twin` and ``docs/twin.md``.
+
+Examples
+--------
+::
+
+    python -m acousim simulate --runs 12 --seed 1 --out data/twin
+    python -m acousim simulate --preset paper-like --runs 20 --pressure-error 0.08 --out data/paper_like
+    python -m acousim simulate --effect pair_scattering:kappa=12000 \\
+        --effect linear_damping:gamma_y=0.3,gamma_theta=0.8 --duration 4 --fps 2000 \\
+        --noise-y 1e-6 --noise-theta 0.005 --out data/two_effects
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .cli import UserInputError
+
+__all__ = ["add_parser", "run"]
+
+
+def _range(text: str) -> tuple[float, float]:
+    parts = text.split(":")
+    try:
+        if len(parts) == 1:
+            v = float(parts[0])
+            return v, v
+        if len(parts) == 2:
+            return float(parts[0]), float(parts[1])
+    except ValueError:
+        pass
+    raise argparse.ArgumentTypeError(f"expected MIN:MAX (or one value), got {text!r}")
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register the ``simulate`` subcommand."""
+    from .twin import PRESETS
+
+    p = subparsers.add_parser(
+        "simulate",
+        help="synthetic field-drop experiments (digital twin) written as a trajectory data set",
+        description="Simulate field-drop experiments of the cube dimer (Gor'kov model plus any of the "
+        "PHYSICS.md section 5 effects) and write them as a FORMATS.md data set with truth.json. "
+        "Without --effect (and --preset) no effect is on; noise options of 0 give exact samples.",
+    )
+    p.add_argument("--out", required=True, metavar="DIR", help="output data set folder (must be empty or absent)")
+    p.add_argument("--runs", type=int, default=10, metavar="N", help="number of runs (default 10)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="master random seed (default 0)")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME:param=value,...",
+                   help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
+                   "parameters of PHYSICS.md section 5; parameters not given are 0")
+    p.add_argument("--preset", choices=sorted(PRESETS), default=None,
+                   help="start from a documented preset (effects, pressure, drop ranges); --effect "
+                   "entries then add to or replace its effects")
+    p.add_argument("--duration", type=float, default=4.0, metavar="SEC", help="recorded time per run [s] (default 4)")
+    p.add_argument("--fps", type=float, default=2000.0, help="camera frame rate [1/s] (default 2000)")
+    p.add_argument("--noise-y", type=float, default=1e-6, metavar="METRES",
+                   help="Gaussian tracking noise on y, standard deviation [m] (default 1e-6)")
+    p.add_argument("--noise-theta", type=float, default=0.005, metavar="VALUE",
+                   help="Gaussian tracking noise on theta, standard deviation (default 0.005)")
+    p.add_argument("--missing-frames", type=int, default=3, metavar="K", help="missing frames per run (default 3)")
+    p.add_argument("--t-off", type=_range, default=None, metavar="MIN:MAX",
+                   help="field-off time range [s] (default 0.002:0.004)")
+    p.add_argument("--theta-drop", type=_range, default=None, metavar="MIN:MAX",
+                   help="hinge angle range when the field drops (default -0.3:0.3)")
+    p.add_argument("--thetadot-drop", type=_range, default=None, metavar="MIN:MAX",
+                   help="hinge rate range when the field drops [1/s] (default -3:3)")
+    p.add_argument("--side", type=float, default=500e-6, help="cube side [m] (default 500e-6)")
+    p.add_argument("--pressure", type=float, default=None, metavar="PA",
+                   help="nominal pressure amplitude [Pa] written to meta.json (default 3000 or the preset's)")
+    p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
+                   help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
+                   "(default 0; real data may be off by up to 0.1)")
+    p.add_argument("--mesh-size", type=float, default=None, metavar="M",
+                   help="tetrahedron edge of the Gor'kov mesh model [m] (default 0.2 x side)")
+    p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    p.add_argument("--force", action="store_true", help="replace a non-empty output folder")
+    p.add_argument("--figures", default=None, metavar="DIR",
+                   help="also write the twin figures (time series and spectra, phase portraits, Poincare "
+                   "map, phase-difference histogram) of this data set to DIR")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def build_config(args: argparse.Namespace):
+    """The :class:`~acousim.twin.TwinConfig` of parsed arguments (raises UserInputError)."""
+    from .effects import EffectError, EffectSet
+    from .twin import PRESETS, Camera, DropProtocol, TwinConfig, TwinError
+
+    try:
+        effects = EffectSet.parse(args.effect)
+        preset = PRESETS[args.preset] if args.preset else None
+        if preset is not None:
+            effects = preset.effects.merged(effects)
+        proto0 = preset.protocol if preset is not None else DropProtocol()
+        protocol = DropProtocol(
+            t_off=args.t_off if args.t_off is not None else proto0.t_off,
+            theta_drop=args.theta_drop if args.theta_drop is not None else proto0.theta_drop,
+            thetadot_drop=args.thetadot_drop if args.thetadot_drop is not None else proto0.thetadot_drop,
+        )
+        camera = Camera(fps=args.fps, noise_y=args.noise_y, noise_theta=args.noise_theta,
+                        missing_frames=args.missing_frames)
+        pressure = args.pressure if args.pressure is not None else (
+            preset.pressure_amplitude_pa if preset is not None else 3000.0)
+        return TwinConfig(
+            runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
+            pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
+            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset,
+        )
+    except (EffectError, TwinError) as exc:
+        raise UserInputError(str(exc)) from None
+
+
+def run(args: argparse.Namespace) -> int:
+    """Entry point of ``python -m acousim simulate``; returns the exit code."""
+    from fitting.executor import ExecutorConfig
+
+    from .twin import TwinError, check_output_dir, simulate_dataset
+
+    config = build_config(args)
+    if args.workers is not None and args.workers < 1:
+        raise UserInputError(f"--workers must be >= 1, got {args.workers}")
+    try:
+        check_output_dir(args.out, args.force)
+        if args.figures:
+            check_output_dir(args.figures, True)
+        truth = simulate_dataset(config, args.out, ExecutorConfig(workers=args.workers), force=args.force,
+                                 progress=not args.no_progress)
+    except TwinError as exc:
+        raise UserInputError(str(exc)) from None
+    print(f"wrote {config.runs} runs to {args.out} (true pressure amplitude {truth['pressure_amplitude_pa']:.1f} Pa, "
+          f"effects: {config.effects.describe()})", file=sys.stderr)
+    if args.figures:
+        from .twin import write_twin_figures
+
+        paths = write_twin_figures(args.out, args.figures)
+        print(f"wrote {len(paths)} figures to {args.figures}", file=sys.stderr)
+    return 0

@@ -1,0 +1,139 @@
+"""The unmodelled effects of PHYSICS.md section 5: names, parameters, formulas, parsing, composition."""
+import numpy as np
+import pytest
+
+from acousim.dynamics import DimerDynamics
+from acousim.effects import (EFFECT_TYPES, PACKED_PARAMETERS, EffectError, EffectSet, LinearDamping,
+                             MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling, parse_effect)
+from acousim.surrogate import cached_surrogate
+
+K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
+Z_EQ = -4.2888847763325813e-4  # default equilibrium height [m]
+
+# PHYSICS.md section 5, verbatim: names and parameter names are part of the file formats
+PHYSICS_TABLE = {
+    "linear_damping": ("gamma_y", "gamma_theta"),
+    "quadratic_drag": ("c_y", "c_theta"),
+    "pair_scattering": ("kappa",),
+    "mirror_asymmetry": ("beta0", "beta1"),
+    "velocity_coupling": ("c5", "c6"),
+}
+
+
+def test_names_and_parameters_are_those_of_physics_md():
+    assert {n: c.parameter_names() for n, c in EFFECT_TYPES.items()} == PHYSICS_TABLE
+    assert [n for n, _ in PACKED_PARAMETERS] == [n for n, ps in PHYSICS_TABLE.items() for _ in ps]
+
+
+def _expected(name, p, y, yd, th, thd):
+    """The PHYSICS.md formulas written out independently."""
+    zero = 0.0 * y
+    if name == "linear_damping":
+        return -p["gamma_y"] * yd, -p["gamma_theta"] * thd
+    if name == "quadratic_drag":
+        return -p["c_y"] * abs(yd) * yd, -p["c_theta"] * abs(thd) * thd
+    if name == "pair_scattering":
+        return zero, -p["kappa"] * np.cos(K * (Z_EQ + y)) ** 2 * th
+    if name == "mirror_asymmetry":
+        return zero, p["beta0"] + p["beta1"] * y
+    if name == "velocity_coupling":
+        return zero, p["c5"] * thd**2 * y + p["c6"] * thd * yd * y
+    raise AssertionError(name)
+
+
+EXAMPLES = [
+    LinearDamping(gamma_y=0.3, gamma_theta=0.8),
+    QuadraticDrag(c_y=40.0, c_theta=0.05),
+    PairScattering(kappa=12000.0),
+    MirrorAsymmetry(beta0=60.0, beta1=1.5e6),
+    VelocityCoupling(c5=5.0e3, c6=8.0e6),
+]
+
+
+@pytest.mark.parametrize("effect", EXAMPLES, ids=lambda e: e.name)
+def test_effect_terms_follow_physics_md(effect):
+    rng = np.random.default_rng(1)
+    y, yd, th, thd = rng.uniform(-3e-4, 3e-4, 20), rng.uniform(-0.05, 0.05, 20), rng.uniform(-0.8, 0.8, 20), rng.uniform(-20, 20, 20)
+    got = effect.accelerations(y, yd, th, thd, K, Z_EQ)
+    exp = _expected(effect.name, effect.params(), y, yd, th, thd)
+    np.testing.assert_allclose(got[0], exp[0], rtol=1e-14, atol=0)
+    np.testing.assert_allclose(got[1], exp[1], rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("effect", EXAMPLES, ids=lambda e: e.name)
+def test_compiled_rhs_adds_exactly_the_effect(effect):
+    """The compiled integrator's right-hand side differs from the bare model by the effect's terms."""
+    sur = cached_surrogate()
+    bare = DimerDynamics(sur)
+    dyn = DimerDynamics(sur, EffectSet((effect,)))
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        x = np.array([rng.uniform(-3e-4, 3e-4), rng.uniform(-0.05, 0.05), rng.uniform(-0.8, 0.8), rng.uniform(-20, 20)])
+        d = dyn.rhs(0.0, x) - bare.rhs(0.0, x)
+        ey, et = _expected(effect.name, effect.params(), *x)
+        # the difference of two accelerations of size ~|Q/M| ~ 20 m/s^2 loses ~1e-15 of them
+        assert d[1] == pytest.approx(ey, abs=1e-12)
+        assert d[3] == pytest.approx(et, rel=1e-9, abs=1e-9)
+        assert d[0] == 0.0 and d[2] == 0.0  # dy/dt = ydot, dtheta/dt = thetadot untouched
+
+
+def test_any_subset_composes_additively():
+    rng = np.random.default_rng(4)
+    x = (rng.uniform(-3e-4, 3e-4, 8), rng.uniform(-0.05, 0.05, 8), rng.uniform(-0.8, 0.8, 8), rng.uniform(-20, 20, 8))
+    for mask in range(1 << len(EXAMPLES)):
+        subset = tuple(e for i, e in enumerate(EXAMPLES) if mask >> i & 1)
+        total = EffectSet(subset).accelerations(*x, K, Z_EQ)
+        parts = [e.accelerations(*x, K, Z_EQ) for e in subset]
+        for j in (0, 1):
+            np.testing.assert_allclose(total[j], sum((p[j] for p in parts), np.zeros(8)), rtol=1e-13, atol=1e-300)
+
+
+def test_parse_round_trip_and_order():
+    s = EffectSet.parse(["velocity_coupling:c6=8e6", "pair_scattering:kappa=12000",
+                         "linear_damping:gamma_y=0.3,gamma_theta=0.8"])
+    # stored in PHYSICS.md order; missing parameters are 0
+    assert s.names == ("linear_damping", "pair_scattering", "velocity_coupling")
+    assert s.to_dict() == {"linear_damping": {"gamma_y": 0.3, "gamma_theta": 0.8},
+                           "pair_scattering": {"kappa": 12000.0},
+                           "velocity_coupling": {"c5": 0.0, "c6": 8e6}}
+    assert EffectSet.from_dict(s.to_dict()) == s
+    assert s.packed().tolist() == [0.3, 0.8, 0, 0, 12000.0, 0, 0, 0.0, 8e6]
+    assert EffectSet().packed().tolist() == [0.0] * 9
+    assert "pair_scattering" in s and s["pair_scattering"].kappa == 12000.0
+
+
+def test_merge_replaces_same_name():
+    a = EffectSet.parse(["pair_scattering:kappa=1", "linear_damping:gamma_y=1"])
+    b = EffectSet.parse(["pair_scattering:kappa=2"])
+    assert a.merged(b).to_dict() == {"linear_damping": {"gamma_y": 1.0, "gamma_theta": 0.0},
+                                     "pair_scattering": {"kappa": 2.0}}
+
+
+@pytest.mark.parametrize(
+    "spec, fragment",
+    [
+        ("pair_scatering:kappa=1", "unknown effect 'pair_scatering'"),
+        ("pair_scattering:k=1", "unknown parameter 'k'"),
+        ("linear_damping:gamma_y=fast", "must be a number"),
+        ("linear_damping:gamma_y", "expected param=value"),
+        ("linear_damping:gamma_y=-0.1", "must be >= 0"),
+        ("quadratic_drag:c_y=nan", "must be finite"),
+        ("mirror_asymmetry:beta0=1,beta0=2", "given twice"),
+    ],
+)
+def test_bad_specs_give_one_line_errors(spec, fragment):
+    with pytest.raises(EffectError) as err:
+        parse_effect(spec)
+    assert fragment in str(err.value) and "\n" not in str(err.value)
+
+
+def test_duplicate_effect_in_a_set_is_rejected():
+    with pytest.raises(EffectError, match="more than once"):
+        EffectSet.parse(["pair_scattering:kappa=1", "pair_scattering:kappa=2"])
+
+
+def test_effects_are_frozen_and_hashable():
+    e = PairScattering(kappa=1.0)
+    with pytest.raises(Exception):
+        e.kappa = 2.0
+    assert hash(EffectSet((e,))) == hash(EffectSet((PairScattering(kappa=1.0),)))

@@ -1,0 +1,94 @@
+"""``python -m acousim simulate``: the command contract of FORMATS.md."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from acousim.cli import main
+from fitting.dataset import load_dataset
+
+REPO = Path(__file__).resolve().parents[2]
+FAST = ["--workers", "1", "--no-progress", "--duration", "1", "--fps", "500"]
+
+
+def test_simulate_writes_a_loadable_dataset_with_truth(tmp_path, capsys):
+    out = tmp_path / "d"
+    rc = main(["simulate", "--runs", "3", "--seed", "7", "--out", str(out), *FAST,
+               "--effect", "pair_scattering:kappa=12000", "--effect", "linear_damping:gamma_y=0.3,gamma_theta=0.8",
+               "--noise-y", "2e-6", "--noise-theta", "0.01", "--pressure-error", "0.1",
+               "--t-off", "0.002:0.003", "--theta-drop", "-0.2:0.2"])
+    assert rc == 0
+    ds = load_dataset(out, strict=True)
+    assert len(ds.runs) == 3 and ds.meta["pressure_amplitude_pa"] == 3000.0
+    truth = json.loads((out / "truth.json").read_text())
+    assert truth["effects"] == {"linear_damping": {"gamma_y": 0.3, "gamma_theta": 0.8},
+                                "pair_scattering": {"kappa": 12000.0}}
+    assert truth["seed"] == 7 and truth["camera"]["noise_y_m"] == 2e-6 and truth["camera"]["noise_theta"] == 0.01
+    assert truth["protocol"]["t_off"] == [0.002, 0.003] and truth["protocol"]["theta_drop"] == [-0.2, 0.2]
+    assert 2700 <= truth["pressure_amplitude_pa"] <= 3300 and truth["pressure_amplitude_pa"] != 3000.0
+    assert all(0.002 <= r["t_off_s"] <= 0.003 for r in truth["runs_detail"])
+    assert "wrote 3 runs" in capsys.readouterr().err
+
+
+def test_without_effect_no_effect_is_on(tmp_path):
+    assert main(["simulate", "--runs", "1", "--out", str(tmp_path / "d"), *FAST]) == 0
+    assert json.loads((tmp_path / "d" / "truth.json").read_text())["effects"] == {}
+
+
+def test_preset_and_override(tmp_path):
+    from acousim.twin import PAPER_LIKE
+
+    assert main(["simulate", "--preset", "paper-like", "--runs", "1", "--out", str(tmp_path / "d"), *FAST,
+                 "--effect", "linear_damping:gamma_y=1"]) == 0
+    truth = json.loads((tmp_path / "d" / "truth.json").read_text())
+    expected = PAPER_LIKE.effects.to_dict()
+    expected["linear_damping"] = {"gamma_y": 1.0, "gamma_theta": 0.0}
+    assert truth["effects"] == expected and truth["preset"] == "paper-like"
+
+
+@pytest.mark.parametrize(
+    "extra, fragment",
+    [
+        (["--effect", "pair_scattering:kapa=1"], "unknown parameter 'kapa'"),
+        (["--effect", "wind:speed=3"], "unknown effect 'wind'"),
+        (["--runs", "0"], "runs must be"),
+        (["--noise-y", "-1e-6"], "noise_y"),
+        (["--pressure-error", "0.9"], "pressure error"),
+        (["--t-off", "0.02:0.03"], "fell out of the trap"),
+        (["--fps", "0"], "fps"),
+    ],
+)
+def test_user_errors_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, extra, fragment):
+    out = tmp_path / "d"
+    rc = main(["simulate", "--runs", "2", "--out", str(out), *FAST, *extra])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2
+    assert len(err) == 1 and fragment in err[0] and err[0].startswith("error:")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_refuses_non_empty_output_without_force(tmp_path, capsys):
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / "keep.csv").write_text("t,y,theta\n")
+    assert main(["simulate", "--runs", "1", "--out", str(out), *FAST]) == 2
+    assert "not empty" in capsys.readouterr().err
+    assert (out / "keep.csv").exists()
+    assert main(["simulate", "--runs", "1", "--out", str(out), *FAST, "--force"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["meta.json", "run01.csv", "truth.json", "truth_states.npz"]
+
+
+@pytest.mark.slow
+def test_python_dash_m_entry_point(tmp_path):
+    out = tmp_path / "d"
+    proc = subprocess.run([sys.executable, "-m", "acousim", "simulate", "--runs", "2", "--seed", "3", "--out", str(out),
+                           "--duration", "1", "--workers", "2"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    ds = load_dataset(out, strict=True)
+    assert len(ds.runs) == 2 and ds.runs[0].t.size == 2000
+    # default noise: 1 um on y, 0.005 on theta, 3 missing frames per run
+    assert all(r.n_filled == 3 for r in ds.runs)
+    assert np.all(np.abs(ds.runs[0].theta) < 1)

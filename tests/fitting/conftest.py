@@ -1,0 +1,46 @@
+"""Shared fixtures for the fitting tests: the truth model and small synthetic data sets."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model, write_dataset
+
+
+@pytest.fixture(scope="session")
+def truth():
+    return paper_reduced_model()
+
+
+@pytest.fixture(scope="session")
+def small_dataset(tmp_path_factory, truth):
+    """Three noisy 2-s runs written as CSV (with a few missing frames)."""
+    d = tmp_path_factory.mktemp("small_ds")
+    write_dataset(d, truth, SyntheticConfig(n_runs=3, duration=2.0, seed=7))
+    return d
+
+
+@pytest.fixture(scope="session")
+def clean_runs(truth):
+    """Four noise-free 3-s runs (dicts with t, y, theta, exact state)."""
+    return generate_runs(truth, SyntheticConfig(n_runs=4, noise_y=0.0, noise_theta=0.0, missing_frames=0, seed=3))
+
+
+def _write_csv(path, t, y, theta, header="t,y,theta", comment=True):
+    lines = (["# test file"] if comment else []) + [header]
+    lines += [f"{a!r},{b!r},{c!r}" for a, b, c in zip(t, y, theta)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture
+def write_csv():
+    """Writer of a CSV run: ``write_csv(path, t, y, theta, header=...)``."""
+    return _write_csv
+
+
+@pytest.fixture
+def sine_run():
+    """A clean 22-Hz y / 9-Hz theta signal, 2 s at 1000 fps."""
+    t = np.arange(2000) / 1000.0
+    return t, 1e-4 * np.cos(2 * np.pi * 22 * t), 0.2 * np.sin(2 * np.pi * 9 * t)

@@ -1,0 +1,243 @@
+"""The ``diagnose`` pipeline: data set -> diagnosis.json, figures and a report section.
+
+See :mod:`validation.diagnosis` for the method.  Output (FORMATS.md, extended)::
+
+    {"identified": [...], "calibration": {...}, "gap_before": g0, "gap_after": g1,
+     "effects": [every candidate, ranked], "localization": {"before": ..., "after": ...},
+     "long_time": {...}, "remaining_gap": {...}, "noise_floor": ..., "skipped_files": [...]}
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .diagnosis import (CANDIDATE_EFFECTS, RunAccelerations, fit_gap_model, fit_gaps, identify_effects,
+                        localize_residuals, long_time_gaps, scalar_gap)
+
+__all__ = ["DiagnoseConfig", "prepare_runs", "noise_floor", "diagnose_dataset", "write_diagnosis"]
+
+
+@dataclass(frozen=True)
+class DiagnoseConfig:
+    """Settings of a diagnosis.
+
+    Parameters
+    ----------
+    candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
+    alpha : significance level of the one-sided Wilcoxon test of held-out improvement
+    min_relative_improvement : practical significance, as a fraction of the current gap
+    max_frames_per_run : runs are thinned to at most this many frames for the fits (speed)
+    long_time : also compute the long-time (shape, Poincare, frequency) gaps
+    """
+
+    candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
+    alpha: float = 0.01
+    min_relative_improvement: float = 0.05
+    max_frames_per_run: int = 1500
+    long_time: bool = True
+    long_time_duration: float | None = 2.0
+
+
+def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[float]]:
+    """Smoothed states and accelerations of every run (interior frames), and each run's tracking-noise
+    estimate of the acceleration [(m/s^2)^2, (1/s^2)^2 variances]."""
+    from fitting.derivatives import run_derivatives
+    from fitting.spectra import dominant_frequency
+
+    runs, noise = [], []
+    for run in dataset.runs:
+        f_y = dominant_frequency(run.y - run.y.mean(), run.dt)
+        d = run_derivatives(run.t, run.y, run.theta, f_y)
+        sl = slice(d.trim, len(d.t) - d.trim)
+        runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl]))
+        noise.append(_acceleration_noise(run, d))
+    return runs, noise
+
+
+def _acceleration_noise(run, d) -> np.ndarray:
+    """Variance of the Savitzky-Golay acceleration due to tracking noise, per equation.
+
+    Tracking noise sigma is estimated from raw minus smoothed position (its variance is
+    sigma^2 (1 - c0), c0 the filter's central weight); the acceleration noise is then
+    sigma * ||c_2|| (fitting.derivatives.noise_gain).
+    """
+    from scipy.signal import savgol_coeffs
+
+    from fitting.derivatives import SmoothingConfig, noise_gain
+
+    p = SmoothingConfig().polyorder
+    c0 = savgol_coeffs(d.window, p, deriv=0, use="dot")[d.window // 2]
+    sl = slice(d.trim, len(d.t) - d.trim)
+    out = []
+    for raw, col in ((run.y, 0), (run.theta, 2)):
+        resid = raw[sl] - d.state[sl, col]
+        sigma2 = float(np.var(resid)) / max(1.0 - c0, 1e-6)
+        out.append(sigma2 * noise_gain(d.window, p, 2, run.dt) ** 2)
+    return np.array(out)
+
+
+def noise_floor(runs: Sequence[RunAccelerations], noise: Sequence[np.ndarray]) -> float:
+    """The gap a perfect model would still show: derivative-noise variance / acceleration variance."""
+    per = [n / np.maximum(np.var(r.accel, axis=0), 1e-300) for r, n in zip(runs, noise)]
+    return float(np.mean(per))
+
+
+def _thin(runs: Sequence[RunAccelerations], max_frames: int) -> list[RunAccelerations]:
+    return [r.subsample(max(1, int(np.ceil(len(r.t) / max_frames)))) for r in runs]
+
+
+def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
+                     progress: bool = True, mesh_size: float | None = None) -> tuple[dict, dict]:
+    """Diagnose a data set.  Returns (diagnosis dict per FORMATS.md, internals for figures)."""
+    from fitting.dataset import load_dataset
+
+    from .simulation import model_from_meta, read_meta
+
+    say = (lambda m: print(f"[diagnose] {m}", file=sys.stderr, flush=True)) if progress else (lambda m: None)
+    dataset = load_dataset(data_dir, strict=strict, report=lambda m: say(f"skipping {m}"))
+    meta = read_meta(data_dir)
+    model = model_from_meta(meta, mesh_size=mesh_size).interpolated()
+    runs_full, noise = prepare_runs(dataset)
+    runs = _thin(runs_full, config.max_frames_per_run)
+    floor = noise_floor(runs_full, noise)
+    say(f"{len(runs)} runs; calibrating pressure and height origin")
+    base = fit_gap_model(model, runs, [])
+    per_before = fit_gaps(runs, base)
+    gap_before = scalar_gap(per_before)
+    say(f"gap before = {gap_before:.3g} (noise floor {floor:.3g}); identifying effects")
+    ident = identify_effects(model, runs, config.candidates, alpha=config.alpha,
+                             min_relative_improvement=config.min_relative_improvement,
+                             progress=(lambda m: say(m)) if progress else None)
+    identified = ident.identified
+    final = fit_gap_model(model, runs, identified)
+    per_after = fit_gaps(runs, final)
+    gap_after = scalar_gap(per_after)
+    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
+    # the others fitted on top of the identified set
+    effects = []
+    sig_round = {}
+    for step in ident.steps:
+        for c, info in step["candidates"].items():
+            sig_round[c] = info  # the last round each candidate was tested in
+    for i, name in enumerate(identified):
+        fit = fit_gap_model(model, runs, identified[: i + 1])
+        g = scalar_gap(fit_gaps(runs, fit))
+        info = ident.steps[i]["candidates"][name]
+        effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                        "significant": True, "wilcoxon_p": info["wilcoxon_p"],
+                        "held_out_improvement_fraction": info["median_improvement_fraction"], "added_in_round": i + 1})
+    others = []
+    for name in config.candidates:
+        if name in identified:
+            continue
+        fit = fit_gap_model(model, runs, identified + [name])
+        g = scalar_gap(fit_gaps(runs, fit))
+        info = sig_round.get(name, {})
+        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                       "significant": False, "wilcoxon_p": info.get("wilcoxon_p"),
+                       "held_out_improvement_fraction": info.get("median_improvement_fraction"),
+                       "note": "fitted on top of the identified effects; not a significant held-out improvement"})
+    effects += sorted(others, key=lambda e: e["gap_after"])
+    loc_before = localize_residuals(runs, base.residuals)
+    loc_after = localize_residuals(runs, final.residuals)
+    long_time = {}
+    if config.long_time:
+        say("long-time gaps (simulating every run from its first state)")
+        lt_runs = [r for r in runs_full]
+        lt_before = long_time_gaps(model, lt_runs, base, config.long_time_duration)
+        lt_after = long_time_gaps(model, lt_runs, final, config.long_time_duration) if identified else lt_before
+        long_time = {"before": {"mean": _mean_terms(lt_before), "per_run": lt_before},
+                     "after": {"mean": _mean_terms(lt_after), "per_run": lt_after}}
+    explained = bool(gap_after <= 1.5 * floor + 0.01)
+    remaining = {
+        "gap": gap_after,
+        "noise_floor": floor,
+        "explained_within_noise": explained,
+        "statement": (
+            "the calibrated simulation with the identified effects explains the data within its derivative noise"
+            if explained else
+            "a gap remains that no candidate effect explains: see localization.after for the terms, state-space "
+            "regions and time scales that carry it"),
+        "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
+    }
+    cal = final.calibration
+    diagnosis = {
+        "identified": identified,
+        "calibration": {
+            "pressure_amplitude_pa": cal.pressure_amplitude_pa,
+            "nominal_pressure_amplitude_pa": cal.nominal_pressure_pa,
+            "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
+            "y_origin_height_m": cal.z_origin_m,
+            "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
+            "initial_states": {r.name: r.state[0].tolist() for r in runs_full},
+            "calibrated_on": "yddot equation only (pressure and origin); see validation.diagnosis",
+        },
+        "gap_before": gap_before,
+        "gap_after": gap_after,
+        "gap_definition": "mean over runs of the mean of three unexplained fractions: of the measured yddot and "
+                          "thetaddot variance, sum(a_data - a_sim)^2 / sum(a_data - mean)^2, and of the energy balance "
+                          "over windows, sum(dE_data - W_sim)^2 / sum(E_osc)^2 (validation.diagnosis)",
+        "gap_components": ["yddot", "thetaddot", "energy"],
+        "gap_per_run": {"before": per_before.tolist(), "after": per_after.tolist(), "runs": [r.name for r in runs]},
+        "noise_floor": floor,
+        "effects": effects,
+        "localization": {"before": loc_before, "after": loc_after},
+        "long_time": long_time,
+        "remaining_gap": remaining,
+        "identification_rounds": ident.steps,
+        "skipped_files": list(dataset.skipped),
+        "settings": {"alpha": config.alpha, "min_relative_improvement": config.min_relative_improvement,
+                     "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
+    }
+    internals = {"runs": runs, "base": base, "final": final, "model": model}
+    return diagnosis, internals
+
+
+def _mean_terms(per_run: list[dict]) -> dict:
+    return {k: float(np.mean([d[k] for d in per_run])) for k in ("shape", "poincare", "frequency", "total")}
+
+
+def write_diagnosis(diagnosis: dict, internals: dict, out_dir: str | Path) -> list[Path]:
+    """diagnosis.json, the figures and diagnosis.html (a report section) into ``out_dir``."""
+    from .diagnosis_plots import diagnosis_figures
+    from .report import Section, Table, write_report
+    from .reporting import write_json_atomic
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / "diagnosis.json", diagnosis)
+    figs = diagnosis_figures(diagnosis, internals, out / "figures")
+    section = diagnosis_section(diagnosis, figs)
+    write_report([section], out, "Sim-to-real gap diagnosis")
+    return [out / "diagnosis.json", out / "report.html"]
+
+
+def diagnosis_section(diagnosis: dict, figures) -> "Section":
+    from .report import Section, Table
+
+    cal = diagnosis["calibration"]
+    ident = diagnosis["identified"]
+    rem = diagnosis["remaining_gap"]
+    if ident:
+        cause = ", then ".join(f"{e['name']} ({', '.join(f'{k} = {v:.3g}' for k, v in e['params'].items())})"
+                               for e in diagnosis["effects"] if e["significant"])
+        what = f"The gap is caused by {cause}."
+    else:
+        what = "No candidate effect improves held-out runs significantly."
+    reading = (
+        f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
+        f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
+        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
+        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} With them the gap is {100 * diagnosis['gap_after']:.1f} %: "
+        f"{rem['statement']}."
+    )
+    rows = [[e["name"], "yes" if e["significant"] else "no",
+             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("wilcoxon_p")]
+            for e in diagnosis["effects"]]
+    return Section("diagnosis", "Sim-to-real gap", reading, figures,
+                   [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "Wilcoxon p"], rows)],
+                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident})

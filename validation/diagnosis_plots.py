@@ -1,0 +1,72 @@
+"""Figures of a diagnosis: gap by candidate, residual maps before/after, residual by library term."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .report import Figure
+
+__all__ = ["diagnosis_figures"]
+
+
+def _save(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=130)
+    plt.close(fig)
+    os.replace(tmp, path)
+    return path
+
+
+def diagnosis_figures(diagnosis: dict, internals: dict, out_dir: str | Path) -> list[Figure]:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    figs = []
+    # 1. gap by candidate
+    fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
+    names = ["calibrated\nsimulation"] + [e["name"].replace("_", "\n") for e in diagnosis["effects"]]
+    vals = [diagnosis["gap_before"]] + [e["gap_after"] for e in diagnosis["effects"]]
+    colors = ["0.5"] + ["tab:green" if e["significant"] else "tab:gray" for e in diagnosis["effects"]]
+    ax.bar(range(len(vals)), vals, color=colors)
+    ax.axhline(diagnosis["noise_floor"], color="k", ls="--", lw=0.8, label="derivative-noise floor")
+    ax.set_xticks(range(len(vals)), names, fontsize=7)
+    ax.set_ylabel("gap (unexplained acceleration variance)")
+    ax.set_yscale("log")
+    ax.set_title("Gap before and after adding each effect (green: identified)")
+    ax.legend(fontsize=7)
+    figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
+                       "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
+                       "others on top of the identified set); dashed: the gap a perfect model would show from derivative noise."))
+    # 2. residual maps over (theta, y), before and after, thetaddot and yddot
+    fig, axes = plt.subplots(2, 2, figsize=(8, 6), constrained_layout=True)
+    for col, key in enumerate(("before", "after")):
+        reg = diagnosis["localization"][key]["regions"]["theta_y"]
+        xe, ye = np.array(reg["x_edges"]), np.array(reg["y_edges"]) * 1e6
+        for row, (eq, unit) in enumerate((("rms_yddot", "m/s$^2$"), ("rms_thetaddot", "1/s$^2$"))):
+            ax = axes[row, col]
+            m = ax.pcolormesh(xe, ye, np.array(reg[eq], float).T, shading="flat", cmap="magma")
+            fig.colorbar(m, ax=ax, label=f"RMS residual [{unit}]")
+            ax.set_xlabel(r"$\theta$")
+            ax.set_ylabel(r"$y$ [$\mu$m]")
+            ax.set_title(f"{eq.replace('rms_', '')} residual, {key}", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_maps.png"),
+                       "Where the gap lies in state space: RMS acceleration residual over (theta, y) bins (quantile bins), "
+                       "before and after the identified effects."))
+    # 3. residual explained by single library terms
+    fig, axes = plt.subplots(1, 2, figsize=(8, 3.4), constrained_layout=True)
+    for ax, eq in zip(axes, ("yddot", "thetaddot")):
+        rows = sorted(diagnosis["localization"]["before"]["terms"][eq], key=lambda d: -d["explained_fraction_alone"])[:8]
+        ax.barh([r["term"] for r in rows][::-1], [r["explained_fraction_alone"] for r in rows][::-1], color="tab:blue")
+        ax.set_xlabel("fraction of residual variance explained alone")
+        ax.set_title(f"{eq} residual of the calibrated simulation", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_terms.png"),
+                       "Which library terms carry the gap: each term's share of the residual variance when fitted alone."))
+    return figs
