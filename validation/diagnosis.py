@@ -68,39 +68,39 @@ __all__ = [
     "fit_gaps",
 ]
 
-#: Candidate effects and their parameters (PHYSICS.md section 5), in the order of the table there.
-CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = {
-    "linear_damping": ("gamma_y", "gamma_theta"),
-    "quadratic_drag": ("c_y", "c_theta"),
-    "pair_scattering": ("kappa",),
-    "mirror_asymmetry": ("beta0", "beta1"),
-    "velocity_coupling": ("c5", "c6"),
-}
+def _candidates() -> dict[str, tuple[str, ...]]:
+    from acousim.effects import EFFECT_TYPES
+
+    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
+
+
+#: Candidate effects and their parameters (PHYSICS.md section 5, as defined in :mod:`acousim.effects`).
+CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 
 
 def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float) -> NDArray[np.float64]:
     """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
 
-    Every effect of PHYSICS.md section 5 is linear in its parameters, so its added accelerations
-    are ``regressors @ params``.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the
-    yddot and thetaddot equations.  ``z_com`` is the height above the node [m].
+    Every effect of PHYSICS.md section 5 is linear in its parameters, so its added accelerations are
+    ``regressors @ params``; column j is the effect of :mod:`acousim.effects` evaluated with parameter j
+    set to 1 and the others to 0 (one definition of the physics).  Columns follow
+    ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot and thetaddot equations.  ``z_com`` is the
+    height above the node [m].
     """
-    y, yd, th, thd = state.T
-    n = state.shape[0]
-    zero = np.zeros(n)
-    if name == "linear_damping":
-        cols = [(-yd, zero), (zero, -thd)]
-    elif name == "quadratic_drag":
-        cols = [(-np.abs(yd) * yd, zero), (zero, -np.abs(thd) * thd)]
-    elif name == "pair_scattering":
-        cols = [(zero, -np.cos(wavenumber * z_com) ** 2 * th)]
-    elif name == "mirror_asymmetry":
-        cols = [(zero, np.ones(n)), (zero, y)]
-    elif name == "velocity_coupling":
-        cols = [(zero, thd**2 * y), (zero, thd * yd * y)]
-    else:
+    from acousim.effects import EFFECT_TYPES
+
+    if name not in EFFECT_TYPES:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
-    return np.stack([np.stack(c, axis=-1) for c in cols], axis=-1)
+    cls = EFFECT_TYPES[name]
+    y, yd, th, thd = np.asarray(state, float).T
+    z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
+    cols = []
+    for p in cls.parameter_names():
+        unit = cls(**{q: (1.0 if q == p else 0.0) for q in cls.parameter_names()})
+        # the effect's height argument is Z_eq with Z_com = Z_eq + y; pass Z_com - y
+        ay, at = unit.accelerations(y, yd, th, thd, wavenumber, z_com - y)
+        cols.append(np.stack([np.broadcast_to(ay, y.shape), np.broadcast_to(at, y.shape)], axis=-1))
+    return np.stack(cols, axis=-1).astype(float)
 
 
 @dataclass(frozen=True, eq=False)
