@@ -78,14 +78,16 @@ def _candidates() -> dict[str, tuple[str, ...]]:
 CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 
 
-def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float) -> NDArray[np.float64]:
+def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,
+                      z_eq: float | None = None) -> NDArray[np.float64]:
     """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
 
     Every effect of PHYSICS.md section 5 is linear in its parameters, so its added accelerations are
     ``regressors @ params``; column j is the effect of :mod:`acousim.effects` evaluated with parameter j
     set to 1 and the others to 0 (one definition of the physics).  Columns follow
     ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot and thetaddot equations.  ``z_com`` is the
-    height above the node [m].
+    height above the node [m]; ``z_eq`` the equilibrium height of the (calibrated) simulation: the
+    effects' y is ``Z_com - Z_eq`` as in PHYSICS.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
     from acousim.effects import EFFECT_TYPES
 
@@ -94,11 +96,14 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
     cls = EFFECT_TYPES[name]
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
+    if z_eq is None:
+        y_eff, z_ref = y, z_com - y
+    else:
+        y_eff, z_ref = z_com - z_eq, z_eq
     cols = []
     for p in cls.parameter_names():
         unit = cls(**{q: (1.0 if q == p else 0.0) for q in cls.parameter_names()})
-        # the effect's height argument is Z_eq with Z_com = Z_eq + y; pass Z_com - y
-        ay, at = unit.accelerations(y, yd, th, thd, wavenumber, z_com - y)
+        ay, at = unit.accelerations(y_eff, yd, th, thd, wavenumber, z_ref)
         cols.append(np.stack([np.broadcast_to(ay, y.shape), np.broadcast_to(at, y.shape)], axis=-1))
     return np.stack(cols, axis=-1).astype(float)
 
@@ -118,15 +123,50 @@ class RunAccelerations:
 
 @dataclass(frozen=True)
 class Calibration:
-    """Calibrated settings: pressure scale s = (p0 / p_nom)^2 and the lab height z0 [m] of the data's y = 0."""
+    """Calibrated settings: pressure scale s = (p0 / p_nom)^2, the lab height z0 [m] of the data's y = 0,
+    and the equilibrium height Z_eq [m] of the simulation at the calibrated pressure (the origin of
+    the effects' y, PHYSICS.md section 5)."""
 
     pressure_scale: float
     z_origin_m: float
     nominal_pressure_pa: float
+    equilibrium_height_m: float = float("nan")
+
+    @classmethod
+    def at(cls, model, pressure_scale: float, z_origin_m: float) -> "Calibration":
+        """Calibration with the equilibrium height of ``model`` (nominal pressure) rescaled to ``s``."""
+        p_nom = model.wave.pressure_amplitude_pa
+        try:
+            z_eq = model.with_pressure(p_nom * np.sqrt(pressure_scale)).equilibrium_height if pressure_scale > 0 else float("nan")
+        except ValueError:
+            z_eq = float("nan")  # the calibrated pressure cannot levitate the dimer: reported by the caller
+        return cls(float(pressure_scale), float(z_origin_m), p_nom, float(z_eq))
+
+    @property
+    def origin_offset_m(self) -> float:
+        """delta = z0 - Z_eq(calibrated): the simulation's y is the data's y + delta [m]."""
+        return self.z_origin_m - self.equilibrium_height_m
 
     @property
     def pressure_amplitude_pa(self) -> float:
         return float(self.nominal_pressure_pa * np.sqrt(max(self.pressure_scale, 0.0)))
+
+
+_SUMS_CACHE: "weakref.WeakKeyDictionary" = None  # RunAccelerations -> {id(model): sums}
+
+
+def _cached_sums(model, run: "RunAccelerations"):
+    """The model's orientation sums at the run's bends, computed once per (run, model)."""
+    import weakref
+
+    global _SUMS_CACHE
+    if _SUMS_CACHE is None:
+        _SUMS_CACHE = weakref.WeakKeyDictionary()
+    per_run = _SUMS_CACHE.setdefault(run, {})
+    key = id(model)
+    if key not in per_run:
+        per_run[key] = (model, model.orientation_sums(run.state[:, 2]))
+    return per_run[key][1]
 
 
 class _Physics:
@@ -150,7 +190,7 @@ class _Physics:
         if key not in self._cache:
             out = []
             if not hasattr(self, "_sums"):
-                self._sums = [self.model.orientation_sums(r.state[:, 2]) for r in self.runs]
+                self._sums = [_cached_sums(self.model, r) for r in self.runs]
             for r, sums in zip(self.runs, self._sums):
                 s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
                 out.append((s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2]), s.potential))
@@ -159,7 +199,7 @@ class _Physics:
             self._cache[key] = out
         return self._cache[key]
 
-    def energy_terms(self, z0: float, effects: Sequence[str]) -> list[dict]:
+    def energy_terms(self, z0: float, effects: Sequence[str], z_eq: float | None = None) -> list[dict]:
         """Per run, per energy window: the data side of the energy balance and the effect work columns.
 
         Keys: ``dk`` (change of M ydot^2/2 + I thetadot^2/2 + M g y) [J], ``du`` (change of U_ac at
@@ -179,7 +219,7 @@ class _Physics:
             idx = np.arange(0, len(r.t), step)
             if idx[-1] != len(r.t) - 1:
                 idx = np.append(idx, len(r.t) - 1)
-            regs = [effect_regressors(n, r.state, z0 + y, self.k) for n in effects]
+            regs = [effect_regressors(n, r.state, z0 + y, self.k, z_eq) for n in effects]
             regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
             power = self.mass * yd[:, None] * regs[:, 0, :] + inertia[:, None] * thd[:, None] * regs[:, 1, :]
             cum = np.concatenate([np.zeros((1, power.shape[1])), np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
@@ -286,7 +326,10 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
                               options={"xatol": 1e-9})
         z0 = float(res.x)
         sol_y, _ = solve_y(z0)
-        cal = Calibration(float(sol_y[0]), z0, model.wave.pressure_amplitude_pa)
+        cal = Calibration.at(model, float(sol_y[0]), z0)
+        if not np.isfinite(cal.equilibrium_height_m):
+            raise ValueError(f"the calibrated pressure ({cal.pressure_amplitude_pa:.0f} Pa) cannot levitate the dimer: "
+                             "the data do not look like a levitated dimer of the meta.json size and material")
     else:
         cal = fixed
         z0 = cal.z_origin_m
@@ -310,12 +353,12 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
         w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
         for r, (fz, qt) in zip(runs, forces):
             z = z0 + r.state[:, 0]
-            regs = np.concatenate([effect_regressors(n, r.state, z, physics.k) for n in effects], axis=2)
+            regs = np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2)
             rows.append(w_y * regs[:, 0, :])
             rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
             rows.append(w_t * regs[:, 1, :])
             rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
-        en = physics.energy_terms(z0, effects)
+        en = physics.energy_terms(z0, effects, cal.equilibrium_height_m)
         e_rest = physics.rest_energy(s_cal, z0)
         e_scale = np.concatenate([e["k0"] + s_cal * e["u0"] - e_rest for e in en])
         w_e = 1.0 / np.sqrt(max(np.sum(e_scale**2), 1e-300))
@@ -339,7 +382,7 @@ def _energy_residuals(physics: _Physics, cal: Calibration, params: dict) -> list
     pv = np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
     out = []
     e_rest = physics.rest_energy(cal.pressure_scale, cal.z_origin_m)
-    for e in physics.energy_terms(cal.z_origin_m, names):
+    for e in physics.energy_terms(cal.z_origin_m, names, cal.equilibrium_height_m):
         res = e["dk"] + cal.pressure_scale * e["du"] - (e["work"] @ pv if pv.size else 0.0)
         out.append((res, e["k0"] + cal.pressure_scale * e["u0"] - e_rest))
     return out
@@ -354,7 +397,7 @@ def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple
         a = np.column_stack([a_y, a_t])
         z = cal.z_origin_m + r.state[:, 0]
         for n, pv in params.items():
-            a = a + effect_regressors(n, r.state, z, physics.k) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
+            a = a + effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
         pred.append(a)
         res.append(r.accel - a)
     return res, pred
@@ -384,16 +427,23 @@ def scalar_gap(per_run: NDArray) -> float:
     return float(np.mean(per_run))
 
 
-def _held_out_gaps(model, runs, effects: Sequence[str]) -> NDArray[np.float64]:
-    """Leave-one-run-out: per run, the gap of a fit made on all other runs."""
-    out = np.empty(len(runs))
-    for i in range(len(runs)):
-        train = [r for j, r in enumerate(runs) if j != i]
+def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArray[np.float64]:
+    """K-fold over runs (run i is in fold i mod K): per run, the gap of a fit made on the other folds.
+
+    Every run is held out exactly once, so each run gets one held-out score (leave-one-run-out when
+    K >= the number of runs)."""
+    n = len(runs)
+    k = min(folds, n)
+    out = np.empty(n)
+    for f in range(k):
+        test = [i for i in range(n) if i % k == f]
+        train = [r for i, r in enumerate(runs) if i % k != f]
         fit = fit_gap_model(model, train, effects)
-        physics = _Physics(model, [runs[i]])
-        res, _ = _residuals(physics, [runs[i]], fit.calibration, fit.effects)
+        held = [runs[i] for i in test]
+        physics = _Physics(model, held)
+        res, _ = _residuals(physics, held, fit.calibration, fit.effects)
         en = _energy_residuals(physics, fit.calibration, fit.effects)
-        out[i] = float(np.mean(short_time_gaps([runs[i]], res, en)))
+        out[test] = short_time_gaps(held, res, en).mean(axis=1)
     return out
 
 
@@ -557,7 +607,7 @@ def simulate_runs(model, cal: Calibration, effects: dict, x0: NDArray, t: NDArra
         a = np.column_stack([cal.pressure_scale * st.force_z / mass - g,
                              (cal.pressure_scale * st.q_theta - 0.5 * dimer.hinge_inertia_derivative(th) * s[:, 3] ** 2) / inertia])
         for e, pv in zip(names, pvec):
-            a = a + effect_regressors(e, s, z, k) @ pv
+            a = a + effect_regressors(e, s, z, k, cal.equilibrium_height_m) @ pv
         return np.column_stack([s[:, 1], a[:, 0], s[:, 3], a[:, 1]])
 
     for i in range(1, n):
@@ -578,18 +628,43 @@ def simulate_runs(model, cal: Calibration, effects: dict, x0: NDArray, t: NDArra
 
 def long_time_gaps(model, runs: Sequence[RunAccelerations], fit: GapFit, max_duration: float | None = None) -> list[dict]:
     """Per run: the fitting package's long-time loss terms (shape, Poincare, frequency) of the simulation
-    started from the run's first smoothed state, sampled on the run's own frames."""
+    started from the run's first smoothed state, sampled on the run's own frames.
+
+    Integrated with the compiled RK4 of :class:`acousim.dynamics.DimerDynamics` on the surrogate of
+    ``model`` rescaled to the calibrated pressure (its y is measured from the calibrated Z_eq, i.e. the
+    data's y + ``calibration.origin_offset_m``), with the fitted effects.
+    """
+    from acousim.dynamics import DimerDynamics
+    from acousim.effects import EffectSet
+    from acousim.surrogate import build_surrogate
     from fitting.losses import loss_terms, make_reference
 
-    ends = [len(r.t) if max_duration is None else int(np.searchsorted(r.t - r.t[0], max_duration)) for r in runs]
-    n = min(ends)
-    t = runs[0].t[:n] - runs[0].t[0]
-    x0 = np.array([r.state[0] for r in runs])
-    sims, n_valid = simulate_runs(model, fit.calibration, fit.effects, x0, t)
+    cal = fit.calibration
+    key = id(model)
+    if _SURROGATES.get(key, (None,))[0] is not model:
+        _SURROGATES.clear()
+        _SURROGATES[key] = (model, build_surrogate(model))
+    surrogate = _SURROGATES[key][1].with_pressure(cal.pressure_amplitude_pa)
+    dynamics = DimerDynamics(surrogate, EffectSet.from_dict(fit.effects))
+    delta = cal.z_origin_m - surrogate.z_eq
     out = []
-    for r, sim, nv in zip(runs, sims, n_valid):
-        ref = make_reference(r.t[:n] - r.t[0], r.state[:n])
-        lt = loss_terms(sim, int(nv), ref)
+    for r in runs:
+        n = len(r.t) if max_duration is None else int(np.searchsorted(r.t - r.t[0], max_duration))
+        t = r.t[:n] - r.t[0]
+        x0 = r.state[0].copy()
+        x0[0] += delta
+        x0[2] = float(np.clip(x0[2], -0.999, 0.999))
+        dt = float(np.median(np.diff(t)))
+        traj = dynamics.integrate(x0, duration=t[-1], dt_out=dt)
+        sim = np.zeros((n, 4))
+        m = min(n, len(traj.t))
+        sim[:m] = traj.state[:m]
+        sim[:m, 0] -= delta
+        ref = make_reference(t, r.state[:n])
+        lt = loss_terms(sim, int(m), ref)
         out.append({"shape": lt.shape, "poincare": lt.poincare, "frequency": lt.frequency, "total": lt.total,
-                    "diverged": bool(nv < n)})
+                    "diverged": bool(m < n), "status": traj.message})
     return out
+
+
+_SURROGATES: dict = {}

@@ -44,7 +44,7 @@ def test_regressors_are_linear_in_parameters(name, rng):
 
 
 def test_calibration_and_effects_recovered(fast_model):
-    truth = Calibration(1.08**2, fast_model.equilibrium_height + 15e-6, 3000.0)
+    truth = Calibration.at(fast_model, 1.08**2, fast_model.equilibrium_height + 15e-6)
     effects = {"pair_scattering": {"kappa": 1.2e4}, "linear_damping": {"gamma_y": 1.5, "gamma_theta": 0.8}}
     runs = _synthetic_runs(fast_model, truth, effects)
     fit = fit_gap_model(fast_model, runs, ["pair_scattering", "linear_damping"])
@@ -64,7 +64,7 @@ def test_calibration_and_effects_recovered(fast_model):
 
 def test_energy_balance_finds_weak_damping(fast_model):
     """gamma = 0.5 1/s changes accelerations by < 1e-4 of their variance but the energy by ~20 % per window."""
-    truth = Calibration(1.0, fast_model.equilibrium_height, 3000.0)
+    truth = Calibration.at(fast_model, 1.0, fast_model.equilibrium_height)
     effects = {"pair_scattering": {"kappa": 1.2e4}, "linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}}
     runs = _synthetic_runs(fast_model, truth, effects, duration=2.5, seed=4)
     fit = fit_gap_model(fast_model, runs, ["pair_scattering", "linear_damping"])
@@ -76,7 +76,7 @@ def test_energy_balance_finds_weak_damping(fast_model):
 
 
 def test_identification_finds_exactly_the_effects(fast_model):
-    truth = Calibration(0.95**2, fast_model.equilibrium_height - 10e-6, 3000.0)
+    truth = Calibration.at(fast_model, 0.95**2, fast_model.equilibrium_height - 10e-6)
     # beta0 = 60 1/s^2: ~2 % of the hinge acceleration scale, above the 50 1/s^2 derivative noise
     effects = {"pair_scattering": {"kappa": 8e3}, "mirror_asymmetry": {"beta0": 60.0, "beta1": 0.0}}
     runs = _synthetic_runs(fast_model, truth, effects, seed=1)
@@ -86,13 +86,13 @@ def test_identification_finds_exactly_the_effects(fast_model):
 
 
 def test_no_effect_names_nothing(fast_model):
-    truth = Calibration(1.05**2, fast_model.equilibrium_height, 3000.0)
+    truth = Calibration.at(fast_model, 1.05**2, fast_model.equilibrium_height)
     runs = _synthetic_runs(fast_model, truth, {}, seed=2)
     assert identify_effects(fast_model, runs).identified == []
 
 
 def test_localization_points_at_the_missing_term(fast_model):
-    truth = Calibration(1.0, fast_model.equilibrium_height, 3000.0)
+    truth = Calibration.at(fast_model, 1.0, fast_model.equilibrium_height)
     runs = _synthetic_runs(fast_model, truth, {"mirror_asymmetry": {"beta0": 0.0, "beta1": 5e4}}, seed=3, noise=(0.05, 1.0))
     base = fit_gap_model(fast_model, runs, [])
     loc = localize_residuals(runs, base.residuals)
