@@ -1,0 +1,261 @@
+"""Blind check of the gap diagnosis on twin data sets with hidden effects.
+
+Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilities
+``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
+ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
+within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
+directory before :func:`validation.diagnose.diagnose_dataset` runs, so the diagnosis never sees it.
+Each finished case is saved as ``cases/caseNNN/result.json`` and not recomputed on a rerun.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .reporting import write_json_atomic, write_text_atomic
+
+__all__ = ["STRENGTHS", "BlindConfig", "draw_case", "run_case", "run_blind", "summarize"]
+
+#: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.
+STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
+    "linear_damping": {"gamma_y": (0.2, 3.0, False), "gamma_theta": (0.2, 3.0, False)},
+    "quadratic_drag": {"c_y": (20.0, 300.0, False), "c_theta": (0.02, 0.5, False)},
+    "pair_scattering": {"kappa": (2.0e3, 3.0e4, False)},
+    "mirror_asymmetry": {"beta0": (5.0, 80.0, True), "beta1": (1.0e4, 1.0e5, True)},
+    "velocity_coupling": {"c5": (5.0e2, 1.0e4, True), "c6": (1.0e5, 2.0e6, True)},
+}
+N_EFFECT_PROBABILITIES = (0.2, 0.4, 0.4)
+
+
+@dataclass(frozen=True)
+class BlindConfig:
+    """Settings of a blind study (twin runs per case, duration, noise as the twin's defaults)."""
+
+    cases: int = 50
+    seed: int = 0
+    runs: int = 10
+    duration: float = 3.0
+    pressure_error: float = 0.10
+    long_time: bool = False
+
+
+def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
+    """The hidden truth of case ``index``: effects with parameters, pressure error, twin seed."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
+    n = int(rng.choice(3, p=N_EFFECT_PROBABILITIES))
+    names = list(rng.choice(list(STRENGTHS), size=n, replace=False)) if n else []
+    effects = {}
+    for name in sorted(names, key=list(STRENGTHS).index):
+        params = {}
+        for p, (lo, hi, signed) in STRENGTHS[name].items():
+            v = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+            if signed and rng.random() < 0.5:
+                v = -v
+            params[p] = v
+        effects[name] = params
+    return {"index": index, "effects": effects, "pressure_error": float(rng.uniform(-pressure_error, pressure_error)),
+            "twin_seed": int(rng.integers(2**31))}
+
+
+def _case_task(item: tuple) -> dict:
+    case, config, out_dir = item
+    return run_case(case, config, Path(out_dir))
+
+
+def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
+    """Generate, diagnose blind, score one case; writes ``result.json`` in ``out_dir``."""
+    from acousim.effects import EffectSet
+    from acousim.twin import TwinConfig, TwinError, simulate_dataset
+
+    from .diagnose import DiagnoseConfig, diagnose_dataset
+
+    data = out_dir / "data"
+    if data.exists():
+        shutil.rmtree(data)
+    # a drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs):
+    # redraw the twin's seed (same effects and pressure) up to 5 times, and count the redraws
+    generation_error, retries = None, 0
+    for retries in range(5):
+        twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
+                          pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]),
+                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]))
+        try:
+            simulate_dataset(twin, data, progress=False, force=True)
+            generation_error = None
+            break
+        except TwinError as exc:
+            generation_error = str(exc)
+    if generation_error is not None:
+        result = {"index": case["index"], "true_effects": case["effects"], "true_set": sorted(case["effects"]),
+                  "identified": [], "exact": False, "n_true": len(case["effects"]), "parameter_relative_error": {},
+                  "gap_before": None, "gap_after": None, "shrink": None, "pressure_true_pa": None,
+                  "pressure_calibrated_pa": None, "error": f"generation: {generation_error}", "twin_redraws": retries,
+                  "scored": False}
+        write_json_atomic(out_dir / "result.json", result)
+        return result
+    truth_path = out_dir / "truth.json"
+    os.replace(data / "truth.json", truth_path)  # hidden from the diagnosis
+    # the nominal pressure the experimenter believes in is 3 kPa; the truth is off by pressure_error
+    meta = json.loads((data / "meta.json").read_text())
+    meta["pressure_amplitude_pa"] = 3000.0
+    (data / "meta.json").write_text(json.dumps(meta))
+    try:
+        diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
+        error = None
+    except Exception as exc:  # a failed diagnosis is a result of the study, not a crash of it
+        diag, error = None, f"{type(exc).__name__}: {exc}"
+    truth = json.loads(truth_path.read_text())
+    result = score_case(case, truth, diag, error)
+    result["twin_redraws"] = retries
+    write_json_atomic(out_dir / "result.json", result)
+    shutil.rmtree(data, ignore_errors=True)  # keep the study small on disk; truth and result stay
+    return result
+
+
+def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+    true_set = sorted(case["effects"])
+    found = [] if diag is None else list(diag["identified"])
+    params_err = {}
+    if diag is not None:
+        fitted = {e["name"]: e["params"] for e in diag["effects"]}
+        for name in set(true_set) & set(found):
+            errs = {p: abs(fitted[name][p] - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
+            params_err[name] = errs
+    return {
+        "index": case["index"],
+        "true_effects": case["effects"],
+        "true_set": true_set,
+        "identified": found,
+        "exact": sorted(found) == true_set,
+        "n_true": len(true_set),
+        "parameter_relative_error": params_err,
+        "gap_before": None if diag is None else diag["gap_before"],
+        "gap_after": None if diag is None else diag["gap_after"],
+        "shrink": None if diag is None else 1 - diag["gap_after"] / diag["gap_before"],
+        "pressure_true_pa": truth["pressure_amplitude_pa"],
+        "pressure_calibrated_pa": None if diag is None else diag["calibration"]["pressure_amplitude_pa"],
+        "error": error,
+        "scored": True,
+    }
+
+
+def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress: bool = True) -> dict:
+    """Run (or resume) a blind study and write ``summary.json``, ``blind_table.md`` and the confusion matrix."""
+    from fitting.executor import ExecutorConfig, map_ordered
+
+    out = Path(out_dir)
+    (out / "cases").mkdir(parents=True, exist_ok=True)
+    results: dict[int, dict] = {}
+    todo = []
+    for i in range(config.cases):
+        case = draw_case(config.seed, i, config.pressure_error)
+        path = out / "cases" / f"case{i:03d}" / "result.json"
+        if path.exists():
+            results[i] = json.loads(path.read_text())
+        else:
+            todo.append((case, config, str(path.parent)))
+    if progress and results:
+        print(f"[blind] resuming: {len(results)} cases done, {len(todo)} to run", file=sys.stderr)
+    for item in todo:
+        Path(item[2]).mkdir(parents=True, exist_ok=True)
+    done = map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress)
+    for r in done:
+        results[r["index"]] = r
+    ordered = [results[i] for i in sorted(results)]
+    summary = summarize(ordered)
+    write_json_atomic(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
+    write_text_atomic(out / "blind_table.md", blind_table(summary, config))
+    confusion_figure(ordered, out / "confusion_matrix.png")
+    return summary
+
+
+def summarize(results: list[dict]) -> dict:
+    """Identification rates, per-effect precision/recall, parameter errors, shrink, false positives."""
+    names = list(STRENGTHS)
+    out: dict = {"n_cases": len(results), "failed": sum(r["error"] is not None for r in results),
+                 "not_generated": sum(not r.get("scored", True) for r in results)}
+    results = [r for r in results if r.get("scored", True)]
+    for k in (0, 1, 2):
+        sub = [r for r in results if r["n_true"] == k]
+        out[f"exact_rate_{k}_effects"] = float(np.mean([r["exact"] for r in sub])) if sub else None
+        out[f"n_{k}_effects"] = len(sub)
+    none_sets = [r for r in results if r["n_true"] == 0]
+    out["false_positive_sets_on_no_effect"] = int(sum(bool(r["identified"]) for r in none_sets))
+    per = {}
+    for n in names:
+        tp = sum(n in r["identified"] and n in r["true_set"] for r in results)
+        fp = sum(n in r["identified"] and n not in r["true_set"] for r in results)
+        fn = sum(n not in r["identified"] and n in r["true_set"] for r in results)
+        errs = [max(r["parameter_relative_error"][n].values()) for r in results if n in r["parameter_relative_error"]]
+        per[n] = {"tp": tp, "fp": fp, "fn": fn,
+                  "precision": tp / (tp + fp) if tp + fp else None, "recall": tp / (tp + fn) if tp + fn else None,
+                  "median_max_parameter_error": float(np.median(errs)) if errs else None,
+                  "fraction_parameters_within_25pct": float(np.mean([e <= 0.25 for e in errs])) if errs else None}
+    out["per_effect"] = per
+    shr = [r["shrink"] for r in results if r["n_true"] > 0 and r["shrink"] is not None]
+    out["median_shrink_with_effect"] = float(np.median(shr)) if shr else None
+    pe = [abs(r["pressure_calibrated_pa"] / r["pressure_true_pa"] - 1) for r in results if r["pressure_calibrated_pa"]]
+    out["median_pressure_error"] = float(np.median(pe)) if pe else None
+    return out
+
+
+def blind_table(summary: dict, config: BlindConfig) -> str:
+    def pct(v):
+        return "-" if v is None else f"{100 * v:.0f} %"
+
+    lines = [f"# Blind check: {summary['n_cases']} cases (seed {config.seed}, {config.runs} runs x {config.duration:g} s each)", "",
+             "| quantity | value | target |", "|---|---|---|",
+             f"| exact identification, no effect ({summary['n_0_effects']} sets) | {pct(summary['exact_rate_0_effects'])} | no effect named |",
+             f"| exact identification, one effect ({summary['n_1_effects']} sets) | {pct(summary['exact_rate_1_effects'])} | >= 90 % |",
+             f"| exact identification, two effects ({summary['n_2_effects']} sets) | {pct(summary['exact_rate_2_effects'])} | >= 80 % |",
+             f"| no-effect sets with an effect named | {summary['false_positive_sets_on_no_effect']} | 0 |",
+             f"| median shrink where an effect is present | {pct(summary['median_shrink_with_effect'])} | >= 70 % |",
+             f"| median calibrated-pressure error | {pct(summary['median_pressure_error'])} | |",
+             f"| failed cases (of which the twin could not generate) | {summary['failed']} ({summary['not_generated']}) | 0 |", "",
+             "| effect | TP | FP | FN | precision | recall | median max parameter error | parameters within 25 % |",
+             "|---|---|---|---|---|---|---|---|"]
+    for n, d in summary["per_effect"].items():
+        lines.append(f"| {n} | {d['tp']} | {d['fp']} | {d['fn']} | {pct(d['precision'])} | {pct(d['recall'])} | "
+                     f"{pct(d['median_max_parameter_error'])} | {pct(d['fraction_parameters_within_25pct'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def confusion_figure(results: list[dict], path: Path) -> Path:
+    """Counts of (true effect, identified effect) pairs; 'none' row/column for empty sets."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    labels = list(STRENGTHS) + ["none"]
+    m = np.zeros((len(labels), len(labels)), int)
+    for r in results:
+        trues = r["true_set"] or ["none"]
+        found = r["identified"] or ["none"]
+        for t in trues:
+            for f in found:
+                m[labels.index(t), labels.index(f)] += 1
+    fig, ax = plt.subplots(figsize=(6.4, 5.4), constrained_layout=True)
+    im = ax.imshow(m, cmap="Blues")
+    for i in range(len(labels)):
+        for j in range(len(labels)):
+            if m[i, j]:
+                ax.text(j, i, str(m[i, j]), ha="center", va="center", color="white" if m[i, j] > m.max() / 2 else "black")
+    ax.set_xticks(range(len(labels)), [l.replace("_", "\n") for l in labels], fontsize=7)
+    ax.set_yticks(range(len(labels)), labels, fontsize=7)
+    ax.set_xlabel("identified by the diagnosis")
+    ax.set_ylabel("present in the data (hidden truth)")
+    ax.set_title("Blind check: true vs identified effects (pair counts)")
+    fig.colorbar(im, ax=ax, label="count")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=130)
+    plt.close(fig)
+    os.replace(tmp, path)
+    return path
