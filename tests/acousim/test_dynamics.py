@@ -103,8 +103,6 @@ def test_energy_is_conserved_without_effects(bare, x0):
 
 def test_energy_check_detects_a_wrong_force(bare):
     """A 1 % error in the hinge force breaks T + V conservation visibly: the check can fail."""
-    from acousim.dynamics import DimerDynamics
-    from acousim.surrogate import ForceSurrogate
     import dataclasses
 
     s = bare.surrogate

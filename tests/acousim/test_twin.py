@@ -202,3 +202,43 @@ def test_paper_like_preset_is_documented_and_simulates():
     assert p == PAPER_LIKE.pressure_amplitude_pa and cfg.preset == "paper-like"
     assert "pair_scattering" in PAPER_LIKE.effects and PAPER_LIKE.description
     assert all(np.all(np.isfinite(r.state)) for r in runs)
+
+
+# ---------------------------------------------------------------------- analysis helpers
+def _signals(phase_deg, f_theta=21.5, amp=0.2):
+    t = np.arange(0, 4, 1e-3)
+    w, wt = 2 * np.pi * 21.5, 2 * np.pi * f_theta
+    p = np.radians(phase_deg)
+    state = np.column_stack([1e-4 * np.cos(w * t), -1e-4 * w * np.sin(w * t),
+                             amp * np.cos(wt * t + p), -amp * wt * np.sin(wt * t + p)])
+    return t, state
+
+
+@pytest.mark.parametrize("phase, label", [(0.0, "in-phase"), (-20.0, "in-phase"), (180.0, "anti-phase"),
+                                          (90.0, "quadrature")])
+def test_lock_state_reads_the_phase(phase, label):
+    from acousim.twin import lock_state
+
+    ls = lock_state(*_signals(phase))
+    assert ls.label == label and ls.coherence > 0.999
+    # phase from the section crossings: exact up to the linear interpolation between frames
+    assert np.cos(np.radians(ls.phase_deg - phase)) > np.cos(np.radians(1.0))
+
+
+def test_lock_state_detects_drift_and_rest():
+    from acousim.twin import lock_state
+
+    assert lock_state(*_signals(0.0, f_theta=23.0)).label == "unlocked"
+    assert lock_state(*_signals(0.0, amp=0.005)).label == "at-rest"
+
+
+@pytest.mark.slow
+def test_figures_are_written(tmp_path):
+    from acousim.twin import write_twin_figures
+
+    cfg = TwinConfig.from_preset(PAPER_LIKE, runs=3, duration=1.0, seed=1, camera=Camera(fps=500.0))
+    simulate_dataset(cfg, tmp_path / "d", SERIAL, progress=False)
+    paths = write_twin_figures(tmp_path / "d", tmp_path / "f")
+    assert sorted(p.name for p in paths) == ["twin_phase_hist.png", "twin_phase_portraits.png",
+                                             "twin_poincare.png", "twin_timeseries.png"]
+    assert all(p.stat().st_size > 10_000 for p in paths)
