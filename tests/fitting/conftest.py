@@ -28,7 +28,7 @@ def clean_runs(truth):
 
 def _write_csv(path, t, y, theta, header="t,y,theta", comment=True):
     lines = (["# test file"] if comment else []) + [header]
-    lines += [f"{a!r},{b!r},{c!r}" for a, b, c in zip(t, y, theta)]
+    lines += [f"{a:.10g},{b:.10g},{c:.10g}" for a, b, c in zip(t, y, theta)]
     path.write_text("\n".join(lines) + "\n")
     return path
 

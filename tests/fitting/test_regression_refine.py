@@ -43,9 +43,16 @@ def test_refinement_removes_coefficient_bias(clean_derivs, truth):
     c = truth.coef.copy()
     c[0, TERMS.index("y")] *= 0.97  # the kind of bias SG smoothing leaves in C0
     c[1, TERMS.index("theta")] *= 1.05
-    res = refine(PolynomialModel(c), d[:2], sc, RefineConfig(max_evals=250))
-    assert res.loss_end.total < 0.2 * res.loss_start.total
-    # the long-time loss pins the frequencies: a1 back to within 0.3 %, b1 within 1 %
-    np.testing.assert_allclose(res.model.coef[0, TERMS.index("y")], truth.coef[0, TERMS.index("y")], rtol=3e-3)
+    res = refine(PolynomialModel(c), d[:2], sc, RefineConfig(max_evals=600))
+    assert res.loss_end.total < 0.01 * res.loss_start.total  # measured: 0.585 -> 0.0007
+    # the long-time loss pins the stiffnesses: a1 from 3 % off to within 1 %, b1 from 5 % to 1 %
+    np.testing.assert_allclose(res.model.coef[0, TERMS.index("y")], truth.coef[0, TERMS.index("y")], rtol=1e-2)
     np.testing.assert_allclose(res.model.coef[1, TERMS.index("theta")], truth.coef[1, TERMS.index("theta")], rtol=1e-2)
-    assert len(res.history) == res.n_evals <= 250
+    # and the refined model's y frequency matches the truth's to 0.2 % (start: 1.5 %)
+    from fitting.spectra import dominant_frequency
+    t = np.arange(4500) / 1500
+    x0 = d[0].state[d[0].trim]
+    f = [dominant_frequency(m.simulate(x0, t)[0][:, 0], 1 / 1500) for m in (truth, res.model, PolynomialModel(c))]
+    assert abs(f[2] / f[0] - 1) > 0.01
+    np.testing.assert_allclose(f[1], f[0], rtol=2e-3)
+    assert len(res.history) == res.n_evals <= 600

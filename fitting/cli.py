@@ -1,0 +1,141 @@
+"""Command line: ``python -m fitting fit|compare|synth``.
+
+* ``fit DATA_DIR --out OUT_DIR [--workers N] [--strict] [--no-plots] [--max-evals N]``:
+  steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
+  (resume) and plots.
+* ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
+  [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
+  Wilcoxon tests).  Without ``--drop`` the variant is the minimal model without its
+  cross-coupling terms.
+* ``synth OUT_DIR [--runs N] [--seed S] ...``: a synthetic data set from the paper's reduced
+  model (``truth.json`` beside the CSVs).
+
+Bad input: one line ``error: <file>: <problem>`` on stderr, exit status 2, nothing written.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+__all__ = ["main"]
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _cmd_fit(a: argparse.Namespace) -> int:
+    from .executor import ExecutorConfig
+    from .pipeline import FitConfig, fit_dataset
+
+    cfg = FitConfig()
+    if a.max_evals:
+        cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
+    if a.joint_max_evals:
+        cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
+    t0 = time.perf_counter()
+    res = fit_dataset(a.data_dir, a.out, cfg, ExecutorConfig(workers=a.workers), strict=a.strict,
+                      plots=not a.no_plots, progress=not a.quiet, log=_log)
+    _log(f"wrote {Path(a.out) / 'model.json'} in {time.perf_counter() - t0:.1f} s")
+    for eq, terms in res.model.equations().items():
+        print(f"{eq} = " + " + ".join(f"({v:.6g}) {t}" for t, v in terms.items()))
+    return 0
+
+
+def _cmd_compare(a: argparse.Namespace) -> int:
+    from .atomic import atomic_write_json
+    from .compare import compare_models, cross_coupling_mask, drop_terms
+    from .dataset import DatasetError, load_dataset
+    from .model import PolynomialModel, Scales
+    from .pipeline import FitConfig, prepare_runs
+
+    try:
+        data = json.loads(Path(a.model).read_text())
+        ref = PolynomialModel.from_json(data)
+    except (OSError, ValueError, KeyError) as exc:
+        raise DatasetError(f"{a.model}: not a readable model.json ({exc})") from None
+    ds = load_dataset(a.data_dir, strict=a.strict)
+    prepared, scales = prepare_runs(ds.runs)
+    if "scales" in data:
+        s = data["scales"]
+        scales = Scales(s["length_y_m"], s["length_theta"], s["time_s"])
+    if a.drop:
+        variant = drop_terms(ref, a.drop)
+        label = "without " + ", ".join(a.drop)
+    else:
+        variant = ref.with_mask(ref.support & ~cross_coupling_mask(ref))
+        label = "without cross-coupling terms"
+    _log(f"comparing the minimal model with the variant {label} on {len(prepared)} runs")
+    cmp = compare_models(ref, variant, [p.derivs for p in prepared], scales,
+                         names=[p.run.name for p in prepared], reoptimise=not a.no_reoptimise)
+    out = {"variant_label": label, **cmp.to_json()}
+    atomic_write_json(Path(a.out) / "compare.json", out)
+    for name, t in (("shape", cmp.shape_test), ("Poincare", cmp.poincare_test)):
+        print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
+              f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")
+    if not a.no_plots:
+        from .plots import plot_comparison
+        plot_comparison(cmp, Path(a.out))
+    return 0
+
+
+def _cmd_synth(a: argparse.Namespace) -> int:
+    from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
+
+    cfg = SyntheticConfig(n_runs=a.runs, duration=a.duration, fps=a.fps, noise_y=a.noise_y,
+                          noise_theta=a.noise_theta, seed=a.seed)
+    write_dataset(a.out_dir, paper_reduced_model(), cfg)
+    _log(f"wrote {a.runs} runs and truth.json to {a.out_dir}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
+    sub = p.add_subparsers(dest="command", required=True)
+    f = sub.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
+    f.add_argument("data_dir")
+    f.add_argument("--out", required=True, help="output directory (model.json, plots, runs/ cache)")
+    f.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
+    f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
+    f.add_argument("--no-plots", action="store_true")
+    f.add_argument("--quiet", action="store_true", help="no progress bar")
+    f.add_argument("--max-evals", type=int, default=None, help="objective evaluations per run refinement")
+    f.add_argument("--joint-max-evals", type=int, default=None, help="evaluations of the joint re-optimisation")
+    f.set_defaults(func=_cmd_fit)
+    c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
+    c.add_argument("data_dir")
+    c.add_argument("--model", required=True, help="model.json written by `fit`")
+    c.add_argument("--out", required=True)
+    c.add_argument("--drop", nargs="*", default=None, help="terms to drop, as eq:term (default: cross-coupling terms)")
+    c.add_argument("--no-reoptimise", action="store_true", help="compare the variant without re-optimising it")
+    c.add_argument("--strict", action="store_true")
+    c.add_argument("--no-plots", action="store_true")
+    c.set_defaults(func=_cmd_compare)
+    s = sub.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
+    s.add_argument("out_dir")
+    s.add_argument("--runs", type=int, default=15)
+    s.add_argument("--duration", type=float, default=3.0, help="[s]")
+    s.add_argument("--fps", type=float, default=1500.0)
+    s.add_argument("--noise-y", type=float, default=1e-6, help="[m]")
+    s.add_argument("--noise-theta", type=float, default=0.005)
+    s.add_argument("--seed", type=int, default=0)
+    s.set_defaults(func=_cmd_synth)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .dataset import DatasetError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except DatasetError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("error: interrupted (finished run refinements are kept; rerun the same command to resume)", file=sys.stderr)
+        return 130

@@ -1,0 +1,265 @@
+"""The model-discovery pipeline (steps 1-4 of issue #4): data -> C0 -> refined runs -> minimal model.
+
+:func:`fit_dataset` loads a data set, smooths and differentiates every run, classifies its
+attractor, fits the regression model C0 (per run, and once jointly for reference), refines
+every run's C0 against its long-time features in parallel (through
+:func:`fitting.executor.map_ordered`), computes z-scores and inclusion frequencies, selects
+the minimal model and re-optimises it jointly on all runs.  Each finished per-run refinement is
+saved to ``OUT_DIR/runs/<file stem>.json`` together with a fingerprint of its input and settings,
+so an interrupted fit resumes without recomputing it.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .atomic import atomic_write_json
+from .attractors import AttractorClass, ClassifyConfig, classify_signal
+from .dataset import Dataset, LoadConfig, Run, load_dataset
+from .derivatives import Derivatives, SmoothingConfig, run_derivatives
+from .ensemble import EnsembleConfig, TermStatistics, least_squares_on_support, select_terms, term_statistics
+from .executor import ExecutorConfig, map_ordered
+from .library import EQUATION_NAMES, STATE_NAMES
+from .losses import LossTerms
+from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
+from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
+from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data
+from .spectra import dominant_frequency
+
+__all__ = ["FitConfig", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
+           "fit_dataset", "model_json"]
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """All settings of the pipeline (every stage has its own frozen config)."""
+
+    load: LoadConfig = field(default_factory=LoadConfig)
+    smoothing: SmoothingConfig = field(default_factory=SmoothingConfig)
+    regression: RegressionConfig = field(default_factory=RegressionConfig)
+    refine: RefineConfig = field(default_factory=RefineConfig)
+    joint: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005))
+    ensemble: EnsembleConfig = field(default_factory=EnsembleConfig)
+    classify: ClassifyConfig = field(default_factory=ClassifyConfig)
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedRun:
+    """A loaded run with its derivatives and attractor class."""
+
+    run: Run
+    derivs: Derivatives
+    f_y: float
+    attractor: AttractorClass
+
+
+@dataclass(frozen=True, eq=False)
+class RunFit:
+    """Per-run result: regression model C0 and its long-time refinement."""
+
+    name: str
+    c0: PolynomialModel
+    refined: PolynomialModel
+    loss_c0: LossTerms
+    loss_refined: LossTerms
+    history: np.ndarray
+    n_evals: int
+    status: int
+
+    def to_json(self) -> dict:
+        return {"file": self.name, "equations": self.refined.equations(), "c0": self.c0.equations(),
+                "loss_c0": self.loss_c0.to_dict(), "loss_refined": self.loss_refined.to_dict(),
+                "n_evals": self.n_evals, "nlopt_status": self.status, "history": self.history.tolist()}
+
+    @classmethod
+    def from_json(cls, d: dict) -> "RunFit":
+        return cls(name=d["file"], c0=PolynomialModel.from_equations(d["c0"]),
+                   refined=PolynomialModel.from_equations(d["equations"]),
+                   loss_c0=LossTerms(**d["loss_c0"]), loss_refined=LossTerms(**d["loss_refined"]),
+                   history=np.asarray(d["history"], float), n_evals=int(d["n_evals"]),
+                   status=int(d["nlopt_status"]))
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """Everything the pipeline produced."""
+
+    runs: list[PreparedRun]
+    scales: Scales
+    c0_joint: PolynomialModel
+    run_fits: list[RunFit]
+    stats: TermStatistics
+    mask: np.ndarray
+    joint_start: PolynomialModel
+    joint: RefineResult
+    config: FitConfig
+    skipped: tuple[str, ...] = ()
+
+    @property
+    def model(self) -> PolynomialModel:
+        """The minimal model, jointly re-optimised (SI)."""
+        return self.joint.model
+
+
+def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[list[PreparedRun], Scales]:
+    """Smooth/differentiate and classify every run; common scales of the data set."""
+    out = []
+    for r in runs:
+        fy = dominant_frequency(r.y, r.dt)
+        d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
+        att = classify_signal(d.state[:, 0], d.state[:, 2], r.dt, config.classify)
+        out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att))
+    scales = dataset_scales([p.derivs for p in out], [p.f_y for p in out])
+    return out, scales
+
+
+def candidate_terms(c0_joint: PolynomialModel) -> np.ndarray:
+    """Candidate terms for the per-run fits: the pooled regression's support plus the damping terms."""
+    mask = c0_joint.support.copy()
+    for q, eq in enumerate(EQUATION_NAMES):
+        mask[q, TERMS.index(DAMPING_TERMS[eq])] = True
+    return mask
+
+
+def refine_run(task: tuple[str, Derivatives, Scales, FitConfig, np.ndarray | None]) -> RunFit:
+    """Per-run regression (C0) and long-time refinement; module-level so it can be pickled."""
+    name, d, scales, config, candidates = task
+    c0 = fit_regression([d], scales, config.regression, candidates=candidates)
+    mask = c0.support.copy()
+    for q, eq in enumerate(EQUATION_NAMES):  # damping terms are always refined (and always kept)
+        mask[q, TERMS.index(DAMPING_TERMS[eq])] = True
+    res = refine(c0, [d], scales, config.refine, mask=mask)
+    return RunFit(name=name, c0=c0, refined=res.model, loss_c0=res.loss_start, loss_refined=res.loss_end,
+                  history=res.history, n_evals=res.n_evals, status=res.status)
+
+
+def _fingerprint(p: PreparedRun, scales: Scales, config: FitConfig, candidates: np.ndarray) -> str:
+    h = hashlib.sha256()
+    for a in (p.run.t, p.run.y, p.run.theta):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(repr((scales, config.smoothing, config.regression, config.refine)).encode())
+    h.update(np.packbits(candidates).tobytes())
+    return h.hexdigest()[:32]
+
+
+def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig = FitConfig(),
+             executor: ExecutorConfig | None = None, cache_dir: str | os.PathLike | None = None,
+             progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
+    """Steps 2-4 on prepared runs (see :func:`fit_dataset`)."""
+    log = log or (lambda m: None)
+    derivs = [p.derivs for p in prepared]
+    c0_joint = fit_regression(derivs, scales, config.regression)
+    candidates = candidate_terms(c0_joint)
+    # ---- per-run refinement, resumable -----------------------------------------------
+    fits: list[RunFit | None] = [None] * len(prepared)
+    fps = [_fingerprint(p, scales, config, candidates) for p in prepared]
+    cache = Path(cache_dir) if cache_dir is not None else None
+    todo = []
+    for i, p in enumerate(prepared):
+        if cache is not None:
+            f = cache / f"{Path(p.run.name).stem}.json"
+            if f.exists():
+                try:
+                    d = json.loads(f.read_text())
+                    if d.get("fingerprint") == fps[i]:
+                        fits[i] = RunFit.from_json(d)
+                        continue
+                except (ValueError, KeyError, TypeError):
+                    pass  # unreadable cache: recompute
+        todo.append(i)
+    if len(todo) < len(prepared):
+        log(f"resuming: {len(prepared) - len(todo)} of {len(prepared)} run refinements loaded from {cache}")
+
+    def save(k: int, rf: RunFit) -> None:
+        i = todo[k]
+        fits[i] = rf
+        if cache is not None:
+            atomic_write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
+
+    map_ordered(refine_run, [(prepared[i].run.name, derivs[i], scales, config, candidates) for i in todo],
+                config=executor, desc="refining runs", progress=progress, on_result=save)
+    run_fits: list[RunFit] = list(fits)  # type: ignore[arg-type]
+    # ---- ensemble ------------------------------------------------------------------
+    stats = term_statistics([f.refined for f in run_fits])
+    mask = select_terms(stats, config.ensemble)
+    log(f"selected {int(mask.sum())} terms: " + "; ".join(
+        f"{eq}: " + ", ".join(t for t, m in zip(TERMS, mask[q]) if m) for q, eq in enumerate(EQUATION_NAMES)))
+    # ---- joint re-optimisation of the minimal model -----------------------------------
+    X, A = scaled_data(derivs, scales)
+    c_med = np.where(mask, np.median(np.array([scales.to_scaled(f.refined.coef) for f in run_fits]), axis=0), 0.0)
+    c_ls = least_squares_on_support(X, A, mask)
+    refs = [scaled_reference(d, scales) for d in derivs]
+    best = None
+    for c in (c_med, c_ls):
+        obj = Objective(refs, mask, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
+        val = obj(c[mask])
+        if best is None or val < best[0]:
+            best = (val, c)
+    joint_start = PolynomialModel(scales.to_si(best[1]))
+    log(f"joint re-optimisation of the minimal model on {len(derivs)} runs (start loss {best[0]:.4g})")
+    joint = refine(joint_start, derivs, scales, config.joint, mask=mask)
+    log(f"final mean loss {joint.loss_end.total:.4g} (shape {joint.loss_end.shape:.3g}, "
+        f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
+    return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
+                     mask=mask, joint_start=joint_start, joint=joint, config=config)
+
+
+def model_json(res: FitResult) -> dict:
+    """The FORMATS.md ``model.json`` content (plus extra keys)."""
+    eq_mask = {eq: [t for t, m in zip(TERMS, res.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
+    per_run = []
+    for p, f, lt in zip(res.runs, res.run_fits, res.joint.per_run_end):
+        d = f.to_json()
+        d.pop("history")
+        d["attractor"] = p.attractor.to_dict()
+        d["loss_minimal_model"] = lt.to_dict()
+        per_run.append(d)
+    return {
+        "state": list(STATE_NAMES),
+        "equations": res.model.equations(),
+        "zscores": res.stats.as_dict(res.stats.zscore),
+        "per_run": per_run,
+        "units": "SI",
+        "inclusion_frequency": res.stats.as_dict(res.stats.inclusion),
+        "coefficient_mean": res.stats.as_dict(res.stats.mean),
+        "coefficient_std": res.stats.as_dict(res.stats.std),
+        "selected_terms": eq_mask,
+        "regression_c0": res.c0_joint.equations(),
+        "joint_start": res.joint_start.equations(),
+        "loss": {"joint_start": res.joint.loss_start.to_dict(), "final": res.joint.loss_end.to_dict(),
+                 "n_evals": res.joint.n_evals, "nlopt_status": res.joint.status},
+        "scales": res.scales.to_dict(),
+        "settings": json.loads(json.dumps(asdict(res.config), default=float)),
+        "skipped_files": list(res.skipped),
+    }
+
+
+def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config: FitConfig = FitConfig(),
+                executor: ExecutorConfig | None = None, strict: bool = False, plots: bool = True,
+                progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
+    """Run steps 1-4 on ``data_dir`` and write ``out_dir/model.json`` (and plots).
+
+    Bad input raises :class:`~fitting.dataset.DatasetError` before anything is written.
+    """
+    log = log or (lambda m: None)
+    ds: Dataset = load_dataset(data_dir, strict=strict, config=config.load)
+    if len(ds.runs) < 2:
+        from .dataset import DatasetError
+        raise DatasetError(f"{data_dir}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
+    prepared, scales = prepare_runs(ds.runs, config)
+    log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped); scales: y {scales.length_y:.3g} m, "
+        f"theta {scales.length_theta:.3g}, time {scales.time:.3g} s")
+    out = Path(out_dir)
+    res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log)
+    res = FitResult(**{**res.__dict__, "skipped": ds.skipped})
+    atomic_write_json(out / "model.json", model_json(res))
+    if plots:
+        from .plots import plot_fit
+        plot_fit(res, out)
+    return res

@@ -1,0 +1,150 @@
+"""Sparse regression of accelerations on the cubic library with pysindy (the initial model C0).
+
+Variables are scaled for conditioning (:class:`~fitting.model.Scales`: y / L_y,
+theta / L_theta, t / T with T = 1 / (2 pi f_y)), so every library column and both targets are
+O(1); the sequentially thresholded least squares (STLSQ) threshold is therefore a dimensionless
+coefficient size.  Coefficients are converted back and reported in SI.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .derivatives import Derivatives
+from .library import STATE_NAMES, parse_term
+from .model import EXPONENTS, TERMS, PolynomialModel, Scales
+
+__all__ = ["RegressionConfig", "dataset_scales", "fit_regression", "fit_ensemble_regression",
+           "scaled_data"]
+
+
+@dataclass(frozen=True)
+class RegressionConfig:
+    """STLSQ settings (dimensionless, in scaled variables).
+
+    Parameters
+    ----------
+    threshold : float
+        Coefficients below this size (scaled) are cut.
+    alpha : float
+        Ridge regularisation.
+    max_iter : int
+    """
+
+    threshold: float = 0.003
+    alpha: float = 0.3
+    max_iter: int = 20
+
+
+def dataset_scales(derivs: Sequence[Derivatives], f_y: Sequence[float]) -> Scales:
+    """Common scales of a data set: median over runs of max|y|, max|theta| and 1/(2 pi f_y)."""
+    ly = float(np.median([np.max(np.abs(d.state[:, 0])) for d in derivs]))
+    lt = float(np.median([np.max(np.abs(d.state[:, 2])) for d in derivs]))
+    return Scales(length_y=ly, length_theta=max(lt, 1e-6), time=1.0 / (2 * np.pi * float(np.median(f_y))))
+
+
+def scaled_data(derivs: Sequence[Derivatives], scales: Scales) -> tuple[list[NDArray], list[NDArray]]:
+    """Interior states and accelerations of every run in scaled variables."""
+    X, A = [], []
+    for d in derivs:
+        s, a = d.interior()
+        X.append(s / scales.state)
+        A.append(a / scales.accel)
+    return X, A
+
+
+def _pysindy_to_canonical(names: list[str], coef: NDArray) -> NDArray:
+    """Reorder pysindy's feature columns (names like ``y ydot^2``) to the canonical library."""
+    index = {tuple(e): j for j, e in enumerate(EXPONENTS)}
+    out = np.zeros((coef.shape[0], len(TERMS)))
+    for k, nm in enumerate(names):
+        canon = "*".join(nm.split()) if nm != "1" else "1"
+        out[:, index[tuple(parse_term(canon))]] = coef[:, k]
+    return out
+
+
+def _sindy(optimizer, X: list[NDArray], A: list[NDArray], dt: float) -> tuple[list[str], NDArray]:
+    import pysindy as ps
+
+    model = ps.SINDy(optimizer=optimizer, feature_library=ps.PolynomialLibrary(degree=3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model.fit(X if len(X) > 1 else X[0], t=dt, x_dot=A if len(A) > 1 else A[0],
+                  feature_names=list(STATE_NAMES))
+    return model.get_feature_names(), model
+
+
+def fit_regression(derivs: Sequence[Derivatives], scales: Scales,
+                   config: RegressionConfig = RegressionConfig(),
+                   candidates: NDArray[np.bool_] | None = None) -> PolynomialModel:
+    """STLSQ fit of [yddot, thetaddot] on the 35-term library (several runs fitted jointly).
+
+    Parameters
+    ----------
+    derivs : list of Derivatives
+    scales : Scales
+    config : RegressionConfig
+    candidates : ndarray of bool (2, 35), optional
+        Restrict each equation to these library terms (pysindy ``STLSQ`` is then applied to the
+        candidate columns of the precomputed library).
+
+    Returns
+    -------
+    PolynomialModel
+        SI coefficients (C0).
+    """
+    import pysindy as ps
+
+    X, A = scaled_data(derivs, scales)
+    if candidates is None:
+        dt = float(derivs[0].t[1] - derivs[0].t[0]) / scales.time
+        opt = ps.STLSQ(threshold=config.threshold, alpha=config.alpha, max_iter=config.max_iter)
+        names, model = _sindy(opt, X, A, dt)
+        coef = _pysindy_to_canonical(names, model.coefficients())
+        return PolynomialModel(scales.to_si(coef))
+    from .library import evaluate_library
+
+    Theta = np.vstack([evaluate_library(x) for x in X])
+    acc = np.vstack(A)
+    coef = np.zeros((2, len(TERMS)))
+    for q in range(2):
+        cols = np.flatnonzero(candidates[q])
+        if cols.size == 0:
+            continue
+        opt = ps.STLSQ(threshold=config.threshold, alpha=config.alpha, max_iter=config.max_iter)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            opt.fit(Theta[:, cols], acc[:, q:q + 1])
+        coef[q, cols] = np.asarray(opt.coef_).reshape(-1)
+    return PolynomialModel(scales.to_si(coef))
+
+
+def fit_ensemble_regression(derivs: Sequence[Derivatives], scales: Scales,
+                            config: RegressionConfig = RegressionConfig(), n_models: int = 50,
+                            inclusion: float = 0.5, seed: int = 0) -> tuple[PolynomialModel, NDArray]:
+    """pysindy ``EnsembleOptimizer`` baseline (bagged STLSQ, E-SINDy).
+
+    A term is kept when its inclusion probability over the bagged fits is at least
+    ``inclusion``; kept coefficients are the median over the bags.
+
+    Returns
+    -------
+    model : PolynomialModel (SI)
+    inclusion_probability : ndarray (2, 35)
+    """
+    import pysindy as ps
+
+    X, A = scaled_data(derivs, scales)
+    dt = float(derivs[0].t[1] - derivs[0].t[0]) / scales.time
+    np.random.seed(seed)  # EnsembleOptimizer draws from numpy's global generator
+    opt = ps.EnsembleOptimizer(ps.STLSQ(threshold=config.threshold, alpha=config.alpha,
+                                        max_iter=config.max_iter), bagging=True, n_models=n_models)
+    names, model = _sindy(opt, X, A, dt)
+    coefs = np.array([_pysindy_to_canonical(names, c) for c in opt.coef_list])
+    p = np.mean(coefs != 0, axis=0)
+    med = np.where(p >= inclusion, np.median(coefs, axis=0), 0.0)
+    return PolynomialModel(scales.to_si(med)), p
