@@ -8,6 +8,9 @@ Physics follows ``shared/PHYSICS.md``; see the README for a tour.  Public API:
 * the model: :class:`GorkovDimer` (forces, torques, Q_y, Q_theta, Z_eq, stiffness)
 * sweeps: :func:`static_sweep`, :func:`fit_static_coefficients`, :func:`taylor_coefficients`
 * closed-form references: :mod:`acousim.analytic`
+* dynamics and the digital twin: :class:`ForceSurrogate`, :func:`build_surrogate`, :class:`DimerDynamics`,
+  the effects of PHYSICS.md section 5 (:class:`EffectSet` and one class per effect), :class:`TwinConfig`,
+  :func:`simulate_dataset` and the ``PAPER_LIKE`` preset
 """
 from .dimer import CubeDimer, bend_angle
 from .field import StandingWave, gorkov_potential_density, gorkov_potential_gradient
@@ -16,6 +19,11 @@ from .medium import GRAVITY, Medium, ParticleMaterial, contrast_factors
 from .mesh import tetrahedralize_cube
 from .quadrature import tetrahedral_quadrature, tetrahedron_rule
 from .sweep import SweepResult, fit_static_coefficients, read_sweep_csv, static_sweep, taylor_coefficients
+from .surrogate import ForceSurrogate, SurrogateBox, build_surrogate, cached_surrogate
+from .dynamics import DimerDynamics, Trajectory
+from .effects import (EFFECT_TYPES, EffectSet, LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag,
+                      VelocityCoupling, parse_effect)
+from .twin import PAPER_LIKE, Camera, DropProtocol, TwinConfig, simulate_dataset, simulate_run
 
 __all__ = [
     "CubeDimer",
@@ -40,4 +48,24 @@ __all__ = [
     "read_sweep_csv",
     "static_sweep",
     "taylor_coefficients",
+    "ForceSurrogate",
+    "SurrogateBox",
+    "build_surrogate",
+    "cached_surrogate",
+    "DimerDynamics",
+    "Trajectory",
+    "EFFECT_TYPES",
+    "EffectSet",
+    "LinearDamping",
+    "QuadraticDrag",
+    "PairScattering",
+    "MirrorAsymmetry",
+    "VelocityCoupling",
+    "parse_effect",
+    "PAPER_LIKE",
+    "Camera",
+    "DropProtocol",
+    "TwinConfig",
+    "simulate_dataset",
+    "simulate_run",
 ]

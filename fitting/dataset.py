@@ -116,12 +116,14 @@ def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tup
     return out, int(bad.sum())
 
 
-def _dominant_frequency(t: NDArray, x: NDArray) -> float:
+def _dominant_frequency(t: NDArray, x: NDArray, fmin: float = 0.0) -> float:
+    """Frequency [Hz] of the largest spectral peak at or above ``fmin`` (a slow drift of the levitation
+    height, e.g. from a drifting pressure, must not be taken for the oscillation)."""
     x = x - x.mean()
     n = x.size
     spec = np.abs(np.fft.rfft(x * np.hanning(n)))
     f = np.fft.rfftfreq(n, (t[-1] - t[0]) / (n - 1))
-    spec[0] = 0.0
+    spec[f < max(fmin, f[1] if f.size > 1 else 0.0)] = 0.0
     return float(f[int(np.argmax(spec))])
 
 
@@ -183,8 +185,8 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
     y, ny = fill_gaps(t, y, config.max_gap, "y", str(path))
     th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
-    f = _dominant_frequency(t, y)
     duration = t[-1] - t[0]
+    f = _dominant_frequency(t, y, config.min_periods / duration if duration > 0 else 0.0)
     if f <= 0 or duration * f < config.min_periods:
         raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
                            f"({duration:.3g} s at a dominant y frequency of {f:.3g} Hz)")

@@ -29,8 +29,13 @@ Gap
     model no better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).  The
     energy component is ``R_rE = sum_k (dE_k,data - W_k,sim)^2 / sum_k (E_k - E_rest)^2``: the
     unexplained energy change per window relative to the oscillation energy.
-    ``gap`` = mean over runs of ``(R_ry + R_rtheta + R_rE) / 3``.  This is the scalar of ``gap_before``
-    and ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
+    Each component has a noise floor, the value a perfect model would show because the data's
+    accelerations and velocities carry derivative noise: the tracking-noise variance (raw minus
+    smoothed positions) times the Savitzky-Golay gain, over the same normalisation.  ``gap`` = mean
+    over runs of the mean over the three components of ``R - floor``: the unexplained fraction *in
+    excess of measurement noise* (about 0 for a model that explains the data within its noise; it can
+    be slightly negative because the floor is an estimate).  This is the scalar of ``gap_before`` and
+    ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
     :mod:`fitting.losses`) are reported beside it.
 
 Which effect
@@ -66,6 +71,7 @@ __all__ = [
     "long_time_gaps",
     "scalar_gap",
     "fit_gaps",
+    "noise_floors",
 ]
 
 def _candidates() -> dict[str, tuple[str, ...]]:
@@ -116,9 +122,31 @@ class RunAccelerations:
     t: NDArray[np.float64]
     state: NDArray[np.float64]  # (n, 4) [y, ydot, theta, thetadot]
     accel: NDArray[np.float64]  # (n, 2) [yddot, thetaddot]
+    #: derivative-noise variances [yddot, thetaddot, ydot, thetadot] (SI^2); None: noise-free data
+    noise: NDArray[np.float64] | None = None
+    #: (duration [s], polynomial order) of the Savitzky-Golay window that produced ``accel``; the model's
+    #: accelerations are smoothed with the same kernel before comparison, so that the filter's
+    #: attenuation (strong at 2 f_y for a window of 0.75 y periods) cancels.  None: no smoothing.
+    smoothing: tuple[float, int] | None = None
 
     def subsample(self, step: int) -> "RunAccelerations":
-        return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step])
+        return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step], self.noise,
+                                self.smoothing)
+
+    def smooth(self, x: NDArray) -> NDArray:
+        """Apply the data's Savitzky-Golay smoothing (same duration and order) along time (axis 0)."""
+        if self.smoothing is None or len(self.t) < 3:
+            return x
+        from scipy.signal import savgol_filter
+
+        duration, order = self.smoothing
+        dt = float(np.median(np.diff(self.t)))
+        w = int(round(duration / dt))
+        w = w if w % 2 else w + 1
+        if w <= order + 1:
+            return x
+        w = min(w, len(self.t) - (1 - len(self.t) % 2))
+        return savgol_filter(x, w, order, axis=0, mode="interp")
 
 
 @dataclass(frozen=True)
@@ -193,7 +221,9 @@ class _Physics:
                 self._sums = [_cached_sums(self.model, r) for r in self.runs]
             for r, sums in zip(self.runs, self._sums):
                 s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
-                out.append((s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2]), s.potential))
+                # accelerations as the data see them (same smoothing); the potential is used raw
+                out.append((r.smooth(s.force_z / self.mass), r.smooth(s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])),
+                            s.potential))
             if len(self._cache) > 64:
                 self._cache.clear()
             self._cache[key] = out
@@ -239,7 +269,7 @@ class _Physics:
     def centrifugal(self, r: RunAccelerations) -> NDArray:
         th, thd = r.state[:, 2], r.state[:, 3]
         d = self.model.dimer
-        return -0.5 * d.hinge_inertia_derivative(th) * thd**2 / d.hinge_inertia(th)
+        return r.smooth(-0.5 * d.hinge_inertia_derivative(th) * thd**2 / d.hinge_inertia(th))
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,7 +280,7 @@ class GapFit:
     effects: dict[str, dict[str, float]]
     residuals: list[NDArray[np.float64]]  # per run (n, 2): a_data - a_sim
     predicted: list[NDArray[np.float64]]  # per run (n, 2)
-    energy: list[tuple[NDArray[np.float64], NDArray[np.float64]]]  # per run: (energy residual per window, oscillation energy) [J]
+    energy: list[tuple]  # per run: (energy residual per window [J], oscillation energy [J], noise variance of dE [J^2])
 
     def effect_parameter_vector(self, names: Sequence[str]) -> NDArray:
         return np.array([self.effects[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
@@ -266,7 +296,7 @@ def _design(physics: _Physics, runs, z0: float, effects: Sequence[str], eq: int)
     cols_per_run, target_per_run = [], []
     for r, (fz, qt) in zip(runs, forces):
         z = z0 + r.state[:, 0]
-        regs = [effect_regressors(n, r.state, z, physics.k)[:, eq, :] for n in effects]
+        regs = [r.smooth(effect_regressors(n, r.state, z, physics.k)[:, eq, :]) for n in effects]
         regs = np.concatenate(regs, axis=1) if regs else np.zeros((r.state.shape[0], 0))
         if eq == 0:
             cols_per_run.append(np.column_stack([fz, regs]))
@@ -353,7 +383,7 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
         w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
         for r, (fz, qt) in zip(runs, forces):
             z = z0 + r.state[:, 0]
-            regs = np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2)
+            regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2))
             rows.append(w_y * regs[:, 0, :])
             rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
             rows.append(w_t * regs[:, 1, :])
@@ -382,9 +412,17 @@ def _energy_residuals(physics: _Physics, cal: Calibration, params: dict) -> list
     pv = np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
     out = []
     e_rest = physics.rest_energy(cal.pressure_scale, cal.z_origin_m)
-    for e in physics.energy_terms(cal.z_origin_m, names, cal.equilibrium_height_m):
+    d = physics.model.dimer
+    for r, e in zip(physics.runs, physics.energy_terms(cal.z_origin_m, names, cal.equilibrium_height_m)):
         res = e["dk"] + cal.pressure_scale * e["du"] - (e["work"] @ pv if pv.size else 0.0)
-        out.append((res, e["k0"] + cal.pressure_scale * e["u0"] - e_rest))
+        # noise of dE over a window: two independent endpoint energies, each with velocity noise
+        # through the kinetic energy (M ydot sigma_vy)^2 + (I thetadot sigma_vtheta)^2
+        if r.noise is not None:
+            ke_var = (physics.mass * r.state[:, 1]) ** 2 * r.noise[2] + (d.hinge_inertia(r.state[:, 2]) * r.state[:, 3]) ** 2 * r.noise[3]
+            floor_var = 2.0 * float(np.mean(ke_var))
+        else:
+            floor_var = 0.0
+        out.append((res, e["k0"] + cal.pressure_scale * e["u0"] - e_rest, floor_var))
     return out
 
 
@@ -397,24 +435,33 @@ def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple
         a = np.column_stack([a_y, a_t])
         z = cal.z_origin_m + r.state[:, 0]
         for n, pv in params.items():
-            a = a + effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
+            a = a + r.smooth(effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m)) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
         pred.append(a)
         res.append(r.accel - a)
     return res, pred
 
 
 def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray],
-                    energy: Sequence[tuple[NDArray, NDArray]] | None = None) -> NDArray[np.float64]:
+                    energy: Sequence[tuple] | None = None, subtract_floor: bool = True) -> NDArray[np.float64]:
     """Per run (n_runs, 3): unexplained fraction of the yddot and thetaddot variance and of the energy
-    balance (R_E, see the module docstring; NaN-free, 0 when ``energy`` is not given)."""
+    balance (R_E), each minus its noise floor unless ``subtract_floor`` is False (module docstring)."""
     out = np.zeros((len(runs), 3))
     for i, (r, e) in enumerate(zip(runs, residuals)):
         var = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
         out[i, :2] = np.sum(e**2, axis=0) / np.maximum(var, 1e-300)
+        if subtract_floor and r.noise is not None:
+            out[i, :2] -= len(r.t) * r.noise[:2] / np.maximum(var, 1e-300)
         if energy is not None:
-            res, eosc = energy[i]
-            out[i, 2] = float(np.sum(res**2) / max(np.sum(eosc**2), 1e-300))
+            res, eosc, floor_var = energy[i]
+            norm = max(float(np.sum(eosc**2)), 1e-300)
+            out[i, 2] = float(np.sum(res**2)) / norm - (len(res) * floor_var / norm if subtract_floor else 0.0)
     return out
+
+
+def noise_floors(runs: Sequence[RunAccelerations], fit: "GapFit") -> NDArray[np.float64]:
+    """Per run (n_runs, 3): the floors subtracted by :func:`short_time_gaps`."""
+    raw = short_time_gaps(runs, fit.residuals, fit.energy, subtract_floor=False)
+    return raw - short_time_gaps(runs, fit.residuals, fit.energy)
 
 
 def fit_gaps(runs: Sequence[RunAccelerations], fit: "GapFit") -> NDArray[np.float64]:
@@ -427,14 +474,15 @@ def scalar_gap(per_run: NDArray) -> float:
     return float(np.mean(per_run))
 
 
-def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArray[np.float64]:
+def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """K-fold over runs (run i is in fold i mod K): per run, the gap of a fit made on the other folds.
 
     Every run is held out exactly once, so each run gets one held-out score (leave-one-run-out when
-    K >= the number of runs)."""
+    K >= the number of runs).  Returns (gap beyond the noise floor, raw unexplained fraction)."""
     n = len(runs)
     k = min(folds, n)
     out = np.empty(n)
+    raw = np.empty(n)
     for f in range(k):
         test = [i for i in range(n) if i % k == f]
         train = [r for i, r in enumerate(runs) if i % k != f]
@@ -444,7 +492,8 @@ def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArr
         res, _ = _residuals(physics, held, fit.calibration, fit.effects)
         en = _energy_residuals(physics, fit.calibration, fit.effects)
         out[test] = short_time_gaps(held, res, en).mean(axis=1)
-    return out
+        raw[test] = short_time_gaps(held, res, en, subtract_floor=False).mean(axis=1)
+    return out, raw
 
 
 @dataclass
@@ -455,13 +504,14 @@ class Identification:
 
 def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequence[str] = tuple(CANDIDATE_EFFECTS),
                      alpha: float = 0.01, min_relative_improvement: float = 0.05,
-                     progress: Callable[[str], None] | None = None) -> Identification:
+                     progress: Callable[[str], None] | None = None,
+                     min_absolute_improvement: float = 5e-4) -> Identification:
     """Greedy, held-out identification of the effects present (see module docstring)."""
     if len(runs) < 3:
         raise ValueError("identification needs at least 3 runs (held-out runs are the significance test)")
     chosen: list[str] = []
     result = Identification([])
-    current = _held_out_gaps(model, runs, chosen)
+    current, current_raw = _held_out_gaps(model, runs, chosen)
     remaining = [c for c in candidates]
     while remaining:
         round_info = {"base": list(chosen), "base_held_out_gap": float(np.mean(current)), "candidates": {}}
@@ -469,24 +519,30 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
         for c in remaining:
             if progress:
                 progress(f"testing {c} on top of {chosen or 'calibration'}")
-            trial = _held_out_gaps(model, runs, chosen + [c])
-            diff = current - trial  # > 0: the candidate helps the held-out run
+            trial, trial_raw = _held_out_gaps(model, runs, chosen + [c])
+            diff = current - trial  # > 0: the candidate helps the held-out run (the floor cancels)
             try:
                 p = float(wilcoxon(diff, alternative="greater", zero_method="zsplit").pvalue) if np.any(diff != 0) else 1.0
             except ValueError:
                 p = 1.0
-            rel = float(np.median(diff) / max(np.mean(current), 1e-300))
-            significant = bool(p < alpha and rel > min_relative_improvement)
-            round_info["candidates"][c] = {"held_out_gap": float(np.mean(trial)), "median_improvement_fraction": rel,
+            # practical significance: the median held-out improvement (in gap units, the noise floor
+            # cancels) must exceed min_absolute_improvement of the variance and
+            # min_relative_improvement of the remaining excess gap
+            gain = float(np.median(diff))
+            threshold = max(min_absolute_improvement, min_relative_improvement * max(float(np.mean(current)), 0.0))
+            rel = gain / max(float(np.mean(current)), min_absolute_improvement)
+            significant = bool(p < alpha and gain > threshold)
+            round_info["candidates"][c] = {"held_out_gap": float(np.mean(trial)), "median_improvement": gain,
+                                           "median_improvement_fraction": rel, "threshold": threshold,
                                            "wilcoxon_p": p, "significant": significant, "per_run_held_out": trial.tolist()}
             if significant and rel > best_gain:
-                best, best_gain, best_trial = c, rel, trial
+                best, best_gain, best_trial, best_raw = c, rel, trial, trial_raw
         result.steps.append(round_info)
         if best is None:
             break
         chosen.append(best)
         remaining.remove(best)
-        current = best_trial
+        current, current_raw = best_trial, best_raw
     result.identified = chosen
     return result
 

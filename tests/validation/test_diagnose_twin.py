@@ -1,0 +1,143 @@
+"""The diagnosis on digital-twin data sets: each single effect, none, an effect outside the candidates,
+and a partly corrupt data set (issue: sim-to-real gap)."""
+import json
+
+import numpy as np
+import pytest
+
+from validation.diagnose import DiagnoseConfig, diagnose_dataset
+
+#: single effects at moderate strength: effects on theta need an RMS of ~10 1/s^2 to stand out of the
+#: ~50 1/s^2 derivative noise of thetaddot on the soft Gor'kov hinge (weaker ones: see the blind table)
+SINGLE = {
+    "linear_damping": {"gamma_y": 1.5, "gamma_theta": 1.5},
+    "quadratic_drag": {"c_y": 200.0, "c_theta": 0.3},
+    "pair_scattering": {"kappa": 15000.0},
+    "mirror_asymmetry": {"beta0": 10.0, "beta1": 3.0e4},  # beta0/omega_theta^2 = 0.09 on the soft hinge
+    "velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6},
+}
+
+
+def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
+    from acousim.effects import EffectSet
+    from acousim.twin import TwinConfig, simulate_dataset
+
+    data = tmp_path / "data"
+    from acousim.twin import DropProtocol
+
+    # drops of moderate angle and rate: the soft Gor'kov hinge plus an effect must not reach theta = +-1
+    cfg = TwinConfig(runs=runs, duration=duration, seed=seed, pressure_error=pressure_error,
+                     effects=EffectSet.from_dict(effects),
+                     protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
+    truth = simulate_dataset(cfg, data, progress=False)
+    (data / "truth.json").rename(tmp_path / "truth.json")  # the diagnosis is blind
+    return data, truth
+
+
+FAST = DiagnoseConfig(long_time=False)
+
+
+VELOCITY_COUPLING_SHORTFALL = pytest.mark.xfail(
+    strict=True,
+    reason="measured: velocity_coupling (c5=1.5e4, c6=3e6) improves held-out runs (median 0.005 of the variance) and "
+           "is fitted to c5 -10 %, c6 -20 %, but the Wilcoxon test over 10 runs gives p = 0.04 > 0.01: runs with little "
+           "hinge motion carry no signal (see the issue note)")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [pytest.param(n, marks=VELOCITY_COUPLING_SHORTFALL) if n == "velocity_coupling" else n
+                                  for n in SINGLE])
+def test_single_effect_identified_with_parameters(tmp_path, name):
+    data, truth = _twin(tmp_path, {name: SINGLE[name]})
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == [name]
+    fitted = next(e for e in diag["effects"] if e["name"] == name)["params"]
+    for p, v in SINGLE[name].items():
+        # acceptance: parameters within 25 %
+        assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
+    # the calibrated pressure recovers the hidden pressure error (Savitzky-Golay bias ~1 %, see docs)
+    np.testing.assert_allclose(diag["calibration"]["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=0.02)
+    assert diag["gap_after"] < 0.3 * diag["gap_before"]
+
+
+@pytest.mark.slow
+def test_no_effect_names_nothing(tmp_path):
+    data, truth = _twin(tmp_path, {}, seed=5)
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == []
+    assert diag["remaining_gap"]["explained_within_noise"]
+
+
+def _drifting_pressure_dataset(path, runs=10, duration=3.0, fps=2000, seed=7, drift=0.06):
+    """Runs whose pressure drifts slowly, p(t) = p0 (1 + drift sin(2 pi t / T + phase)), random phase and
+    period per run: an effect that is not among the candidates.  Integrated piecewise (10 ms segments)
+    with the twin's dynamics, carrying the lab height across segments."""
+    from acousim.dynamics import DimerDynamics
+    from acousim.surrogate import cached_surrogate
+
+    rng = np.random.default_rng(seed)
+    base = cached_surrogate()
+    path.mkdir(parents=True)
+    z_nominal = base.z_eq
+    seg = 0.01
+    n_seg = int(round(duration / seg))
+    per_seg = int(round(seg * fps))
+    for i in range(runs):
+        phase, period = rng.uniform(0, 2 * np.pi), rng.uniform(1.5, 4.0)
+        state = np.array([rng.uniform(-1.5e-4, 1.5e-4), 0.0, rng.uniform(-0.3, 0.3), rng.uniform(-2, 2)])
+        z_prev = None
+        ys, ths = [], []
+        for k in range(n_seg):
+            p = 3000.0 * (1 + drift * np.sin(2 * np.pi * k * seg / period + phase))
+            sur = base.with_pressure(p)
+            if z_prev is not None:
+                state[0] += z_prev - sur.z_eq  # same lab height, new equilibrium origin
+            traj = DimerDynamics(sur).integrate(state, duration=seg, dt_out=1 / fps)
+            assert traj.ok, traj.message
+            ys.append(traj.state[:per_seg, 0] + sur.z_eq - z_nominal)
+            ths.append(traj.state[:per_seg, 2])
+            state = traj.state[-1].copy()
+            z_prev = sur.z_eq
+        y = np.concatenate(ys) + rng.normal(0, 1e-6, n_seg * per_seg)
+        th = np.concatenate(ths) + rng.normal(0, 0.005, n_seg * per_seg)
+        t = np.arange(len(y)) / fps
+        np.savetxt(path / f"run{i:02d}.csv", np.column_stack([t, y, th]), delimiter=",", header="t,y,theta", comments="")
+    (path / "meta.json").write_text(json.dumps({"pressure_amplitude_pa": 3000.0}))
+
+
+@pytest.mark.slow
+def test_unknown_cause_reports_a_remaining_gap(tmp_path):
+    data = tmp_path / "drift"
+    _drifting_pressure_dataset(data)
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == []  # no confident wrong cause
+    rem = diag["remaining_gap"]
+    from validation.diagnose import EXPLAINED_GAP
+
+    assert not rem["explained_within_noise"]
+    assert rem["gap"] > 10 * EXPLAINED_GAP  # far from explained: the drift is a finding of its own
+    assert "remains" in rem["statement"]
+
+
+@pytest.mark.slow
+def test_partly_corrupt_dataset(tmp_path):
+    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, seed=11)
+    files = sorted(data.glob("run*.csv"))
+    text = files[0].read_text().splitlines()
+    files[0].write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
+    files[1].write_text("t,y\n0,0\n")  # no theta column
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["pair_scattering"]
+    assert len(diag["skipped_files"]) == 2
+    assert any(files[0].name in s for s in diag["skipped_files"]) and any(files[1].name in s for s in diag["skipped_files"])
+    assert len(diag["gap_per_run"]["runs"]) == 8
+
+
+def test_diagnose_cli_bad_directory(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(tmp_path / "nope"), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "nope" in r.stderr
+    assert not (tmp_path / "o").exists()
