@@ -201,6 +201,38 @@ def run_blind_cli(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_report(sub) -> None:
+    p = sub.add_parser(
+        "report",
+        help="the model-vs-simulation report of a data set (HTML with embedded figures)",
+        description=(
+            "Fit the data (fitting pipeline), compare the minimal model with its variant without cross-coupling terms, "
+            "diagnose the sim-to-real gap (calibrating the Gor'kov simulation), sweep the calibrated simulation, compare "
+            "coefficients, and write REPORT_DIR/report.html (self-contained), figures/*.png and numbers.json."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("--out", required=True, help="report directory")
+    p.add_argument("--workers", type=int, default=None, help="parallel worker processes (default: all cores)")
+    p.add_argument("--scheduler", default=None, help="dask.distributed scheduler address")
+    p.add_argument("--max-evals", type=int, default=None, help="refinement evaluations per run (default: the fitting default)")
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
+    p.set_defaults(func=run_report)
+
+
+def run_report(args: argparse.Namespace) -> int:
+    from fitting.dataset import DatasetError
+
+    from .report_builder import build_report
+
+    try:
+        build_report(args.data, args.out, args.workers, args.scheduler, progress=not args.quiet, max_evals=args.max_evals)
+    except DatasetError as exc:
+        raise UserInputError(str(exc)) from None
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="python -m validation",
                            description="Bridge between fitted models and the Gor'kov simulation: coefficient comparison.")
@@ -208,6 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_compare(sub)
     _add_diagnose(sub)
     _add_blind(sub)
+    _add_report(sub)
     return parser
 
 
