@@ -38,13 +38,13 @@ browser:
 	fi
 
 demo: venv
-	@echo "[demo 1/3] static Gor'kov sweep, static coefficients, figures, rendered mesh"
-	$(BIN)/python -m acousim sweep --out $(OUT)/sweep.csv --plots $(OUT) --coefficients $(OUT)/static_coefficients.json --render $(OUT)/dimer_gorkov.png
-	@echo "[demo 2/3] digital twin: the paper-like data set (20 runs)"
-	$(BIN)/python -m acousim simulate --preset paper-like --runs 20 --seed 1 --out $(OUT)/twin --figures $(OUT)/twin_figures --force --no-progress
-	@echo "[demo 3/3] sim-to-real gap diagnosis of that data set"
-	$(BIN)/python -m validation diagnose $(OUT)/twin --out $(OUT)/diagnosis
-	@echo "demo written to $(OUT)/ (open $(OUT)/diagnosis/report.html)"
+	@echo "[demo 1/3] static Gor'kov sweep at the defaults: CSV, static coefficients, figures, rendered mesh"
+	$(BIN)/python -m acousim sweep --out $(OUT)/sweep.csv --plots $(OUT)/sweep_figures --coefficients $(OUT)/static_coefficients.json --render $(OUT)/dimer_gorkov.png
+	@echo "[demo 2/3] digital twin: the paper-like data set (12 runs of 4 s)"
+	$(BIN)/python -m acousim simulate --preset paper-like --runs 12 --seed 1 --out $(OUT)/twin --figures $(OUT)/twin_figures --force --no-progress
+	@echo "[demo 3/3] fit, compare, diagnose and report"
+	$(BIN)/python -m validation report $(OUT)/twin --out $(OUT)/report
+	@echo "demo written to $(OUT)/: open $(OUT)/report/report.html"
 
 test: venv browser
 	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) $(BIN)/python -m pytest -q

@@ -227,31 +227,39 @@ def blind_table(summary: dict, config: BlindConfig) -> str:
 
 
 def confusion_figure(results: list[dict], path: Path) -> Path:
-    """Counts of (true effect, identified effect) pairs; 'none' row/column for empty sets."""
+    """Per true effect: identified (diagonal) or missed; false positives in the row of the case's true
+    effects (or 'none').  Cases the twin could not generate are left out."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    labels = list(STRENGTHS) + ["none"]
-    m = np.zeros((len(labels), len(labels)), int)
+    rows = list(STRENGTHS) + ["none"]
+    cols = list(STRENGTHS) + ["missed", "nothing named"]
+    m = np.zeros((len(rows), len(cols)), int)
     for r in results:
-        trues = r["true_set"] or ["none"]
-        found = r["identified"] or ["none"]
+        if not r.get("scored", True):
+            continue
+        trues, found = r["true_set"], r["identified"]
         for t in trues:
-            for f in found:
-                m[labels.index(t), labels.index(f)] += 1
-    fig, ax = plt.subplots(figsize=(6.4, 5.4), constrained_layout=True)
+            m[rows.index(t), cols.index(t) if t in found else cols.index("missed")] += 1
+        for f in found:
+            if f not in trues:
+                for t in trues or ["none"]:
+                    m[rows.index(t), cols.index(f)] += 1  # a false positive, charged to the true effects present
+        if not trues and not found:
+            m[rows.index("none"), cols.index("nothing named")] += 1
+    fig, ax = plt.subplots(figsize=(6.8, 5.4), constrained_layout=True)
     im = ax.imshow(m, cmap="Blues")
-    for i in range(len(labels)):
-        for j in range(len(labels)):
+    for i in range(len(rows)):
+        for j in range(len(cols)):
             if m[i, j]:
                 ax.text(j, i, str(m[i, j]), ha="center", va="center", color="white" if m[i, j] > m.max() / 2 else "black")
-    ax.set_xticks(range(len(labels)), [l.replace("_", "\n") for l in labels], fontsize=7)
-    ax.set_yticks(range(len(labels)), labels, fontsize=7)
-    ax.set_xlabel("identified by the diagnosis")
+    ax.set_xticks(range(len(cols)), [c.replace("_", "\n").replace(" ", "\n") for c in cols], fontsize=7)
+    ax.set_yticks(range(len(rows)), rows, fontsize=7)
+    ax.set_xlabel("identified by the diagnosis (off-diagonal effect columns: false positives)")
     ax.set_ylabel("present in the data (hidden truth)")
-    ax.set_title("Blind check: true vs identified effects (pair counts)")
+    ax.set_title("Blind check: effects present vs identified")
     fig.colorbar(im, ax=ax, label="count")
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.stem}.tmp.png")
