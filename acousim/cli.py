@@ -9,7 +9,7 @@ import argparse
 import re
 import sys
 
-__all__ = ["main", "UserInputError", "OneLineParser"]
+__all__ = ["main", "run_cli", "UserInputError", "OneLineParser"]
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf)")
 
@@ -59,8 +59,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and run the chosen subcommand's ``func``: user errors become one line and exit 2."""
     args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     try:
         return int(args.func(args) or 0)
@@ -70,3 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_cli(build_parser(), argv)

@@ -87,7 +87,7 @@ def plot_thetaddot_map(sweep: SweepResult, ax=None):
 
 def save_sweep_figures(sweep: SweepResult, out_dir: str | os.PathLike) -> list[Path]:
     """Write restoring_force.png, restoring_torque.png and thetaddot_map.png into ``out_dir``."""
-    import matplotlib.pyplot as plt
+    from fitting.atomic import save_figure
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -97,11 +97,5 @@ def save_sweep_figures(sweep: SweepResult, out_dir: str | os.PathLike) -> list[P
         ("restoring_torque.png", plot_restoring_torque),
         ("thetaddot_map.png", plot_thetaddot_map),
     ):
-        fig = fn(sweep)
-        path = out_dir / name
-        tmp = out_dir / f".{name}.tmp.png"
-        fig.savefig(tmp, dpi=150)
-        plt.close(fig)
-        os.replace(tmp, path)
-        paths.append(path)
+        paths.append(save_figure(fn(sweep), out_dir / name, dpi=150))
     return paths

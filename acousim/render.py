@@ -77,10 +77,9 @@ def render_dimer(model: GorkovDimer, theta: float, y: float, path: str | os.Path
     plotter.camera.up = (0.0, 0.0, 1.0)
     plotter.camera.parallel_projection = True
     plotter.reset_camera()
+    from fitting.atomic import atomic_save
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    plotter.screenshot(str(tmp))
+    atomic_save(path, lambda tmp: plotter.screenshot(str(tmp)))
     plotter.close()
-    os.replace(tmp, path)
     return path

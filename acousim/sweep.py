@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from fitting.atomic import atomic_write_text
 from fitting.library import library_exponents, term_name
 
 from .forces import GorkovDimer
@@ -36,7 +36,6 @@ __all__ = [
     "fit_static_coefficients",
     "taylor_coefficients",
     "SWEEP_COLUMNS",
-    "atomic_write_text",
 ]
 
 #: Columns written by :meth:`SweepResult.to_csv`, in order, with units.
@@ -51,21 +50,6 @@ SWEEP_COLUMNS: tuple[tuple[str, str], ...] = (
     ("thetaddot", "1/s^2"),
     ("z_com", "m"),
 )
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder and ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable
 
-__all__ = ["atomic_write_text", "atomic_write_json", "atomic_save"]
+__all__ = ["atomic_write_text", "atomic_write_json", "atomic_save", "save_figure"]
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
@@ -33,3 +33,12 @@ def atomic_save(path: str | os.PathLike, writer: Callable[[str], Any]) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def save_figure(fig, path: str | os.PathLike, dpi: int = 130) -> Path:
+    """Save a matplotlib figure atomically (format from the suffix), close it, return the path."""
+    import matplotlib.pyplot as plt
+
+    atomic_save(path, lambda tmp: fig.savefig(tmp, dpi=dpi))
+    plt.close(fig)
+    return Path(path)

@@ -261,9 +261,6 @@ def confusion_figure(results: list[dict], path: Path) -> Path:
     ax.set_ylabel("present in the data (hidden truth)")
     ax.set_title("Blind check: effects present vs identified")
     fig.colorbar(im, ax=ax, label="count")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=130)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+    from fitting.atomic import save_figure
+
+    return save_figure(fig, path)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.cli import OneLineParser, UserInputError, join_negative_values
+from acousim.cli import OneLineParser, UserInputError, run_cli
 
 __all__ = ["main"]
 
@@ -245,10 +245,4 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
-    try:
-        return int(args.func(args) or 0)
-    except UserInputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    return run_cli(build_parser(), argv)

@@ -1,7 +1,6 @@
 """Figures of a diagnosis: gap by candidate, residual maps before/after, residual by library term."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -11,15 +10,7 @@ from .report import Figure
 __all__ = ["diagnosis_figures"]
 
 
-def _save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=130)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+from fitting.atomic import save_figure as _save
 
 
 def diagnosis_figures(diagnosis: dict, internals: dict, out_dir: str | Path) -> list[Figure]:

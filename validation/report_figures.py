@@ -1,7 +1,6 @@
 """Figures of the model-vs-simulation report (matplotlib, Agg).  Every axis is labelled with units."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Sequence
 
@@ -22,13 +21,9 @@ def _plt():
 
 
 def _save(fig, path: Path) -> Path:
-    plt = _plt()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+    from fitting.atomic import save_figure
+
+    return save_figure(fig, path, dpi=120)
 
 
 CLASS_COLORS = {"locked-in-phase": "tab:blue", "locked-anti-phase": "tab:red", "locked-quadrature": "tab:purple",

@@ -5,7 +5,7 @@ import json
 import math
 from pathlib import Path
 
-from acousim.sweep import atomic_write_text
+from fitting.atomic import atomic_write_text
 
 __all__ = ["write_json_atomic", "write_text_atomic", "json_safe"]
 
