@@ -117,14 +117,22 @@ def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tup
 
 
 def _dominant_frequency(t: NDArray, x: NDArray, fmin: float = 0.0) -> float:
-    """Frequency [Hz] of the largest spectral peak at or above ``fmin`` (a slow drift of the levitation
-    height, e.g. from a drifting pressure, must not be taken for the oscillation)."""
+    """Frequency [Hz] of the largest spectral peak; if that lies below ``fmin`` (e.g. a slow drift of
+    the levitation height from a drifting pressure), the largest peak at or above ``fmin`` instead,
+    provided it is prominent (at least 30 % of the largest), so that noise is never taken for it."""
     x = x - x.mean()
     n = x.size
     spec = np.abs(np.fft.rfft(x * np.hanning(n)))
     f = np.fft.rfftfreq(n, (t[-1] - t[0]) / (n - 1))
-    spec[f < max(fmin, f[1] if f.size > 1 else 0.0)] = 0.0
-    return float(f[int(np.argmax(spec))])
+    spec[0] = 0.0
+    j = int(np.argmax(spec))
+    if fmin > 0 and f[j] < fmin:
+        above = f >= fmin
+        if above.any():
+            k = int(np.argmax(np.where(above, spec, 0.0)))
+            if spec[k] >= 0.3 * spec[j]:
+                return float(f[k])
+    return float(f[j])
 
 
 def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
