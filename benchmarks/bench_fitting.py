@@ -111,6 +111,10 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
               f"{np.median([f.loss_c0.shape for f in res.run_fits]):.4f} -> "
               f"{np.median([f.loss_refined.shape for f in res.run_fits]):.4f}; Wilcoxon p(C0 worse) = "
               f"{paired_wilcoxon([f.loss_c0.shape for f in res.run_fits], [f.loss_refined.shape for f in res.run_fits]).p_greater:.2g}",
+              f"* selection rule producing the model: {'backward elimination (joint loss, Wilcoxon)' if res.selection is not None else 'z-score'}; "
+              f"paper's z-rule support: " + "; ".join(
+                  f"{eq}: " + ", ".join(t for t, k in zip(TERMS, res.mask_zscore[q]) if k)
+                  for q, eq in enumerate(("yddot", "thetaddot"))),
               "", "### Baselines vs this pipeline (truth: PHYSICS.md section 6 reduced model, 11 terms)", "",
               "| method | missing true terms | spurious terms | median / max coefficient error on true terms | median shape error | median Poincare error | blown-up runs |",
               "|---|---|---|---|---|---|---|"]

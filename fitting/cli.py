@@ -37,6 +37,8 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
     if a.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
+    if getattr(a, "selection", None):
+        cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
     t0 = time.perf_counter()
     res = fit_dataset(a.data_dir, a.out, cfg, ExecutorConfig(workers=a.workers), strict=a.strict,
                       plots=not a.no_plots, progress=not a.quiet, log=_log)
@@ -105,6 +107,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--quiet", action="store_true", help="no progress bar")
     f.add_argument("--max-evals", type=int, default=None, help="objective evaluations per run refinement")
     f.add_argument("--joint-max-evals", type=int, default=None, help="evaluations of the joint re-optimisation")
+    f.add_argument("--selection", choices=("zscore", "backward"), default=None,
+                   help="term selection: the paper's z > 3 rule (default) or backward elimination on the joint "
+                        "long-time loss with a Wilcoxon test (recovers weak terms; slower)")
     f.set_defaults(func=_cmd_fit)
     c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
     c.add_argument("data_dir")

@@ -30,6 +30,7 @@ from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data
+from .selection import SelectionConfig, SelectionResult, backward_elimination
 from .spectra import dominant_frequency
 
 __all__ = ["FitConfig", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
@@ -46,6 +47,10 @@ class FitConfig:
     refine: RefineConfig = field(default_factory=RefineConfig)
     joint: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005))
     ensemble: EnsembleConfig = field(default_factory=EnsembleConfig)
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
+    #: joint refinement of the whole candidate support (start of the backward elimination)
+    candidate_joint: RefineConfig = field(default_factory=lambda: RefineConfig(
+        max_evals=300, rel_bound=0.3, abs_bound=0.005, horizons=(0.5, 1.0)))
     classify: ClassifyConfig = field(default_factory=ClassifyConfig)
 
 
@@ -100,6 +105,12 @@ class FitResult:
     joint: RefineResult
     config: FitConfig
     skipped: tuple[str, ...] = ()
+    #: the paper's rule (z > threshold plus damping terms) on the per-run refinements; equals
+    #: ``mask`` when ``config.selection.rule == "zscore"``
+    mask_zscore: np.ndarray | None = None
+    #: backward elimination on the joint loss (``rule == "backward"``), else None
+    selection: SelectionResult | None = None
+    candidate_fit: RefineResult | None = None
 
     @property
     def model(self) -> PolynomialModel:
@@ -187,27 +198,56 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     run_fits: list[RunFit] = list(fits)  # type: ignore[arg-type]
     # ---- ensemble ------------------------------------------------------------------
     stats = term_statistics([f.refined for f in run_fits])
-    mask = select_terms(stats, config.ensemble)
-    log(f"selected {int(mask.sum())} terms: " + "; ".join(
-        f"{eq}: " + ", ".join(t for t, m in zip(TERMS, mask[q]) if m) for q, eq in enumerate(EQUATION_NAMES)))
-    # ---- joint re-optimisation of the minimal model -----------------------------------
+    mask_z = select_terms(stats, config.ensemble)
+    fmt = lambda m: "; ".join(f"{eq}: " + ", ".join(t for t, k in zip(TERMS, m[q]) if k)  # noqa: E731
+                              for q, eq in enumerate(EQUATION_NAMES))
+    log(f"z-score rule (z > {config.ensemble.z_threshold:g} plus damping): {int(mask_z.sum())} terms: {fmt(mask_z)}")
     X, A = scaled_data(derivs, scales)
-    c_med = np.where(mask, np.median(np.array([scales.to_scaled(f.refined.coef) for f in run_fits]), axis=0), 0.0)
-    c_ls = least_squares_on_support(X, A, mask)
     refs = [scaled_reference(d, scales) for d in derivs]
-    best = None
-    for c in (c_med, c_ls):
-        obj = Objective(refs, mask, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
-        val = obj(c[mask])
-        if best is None or val < best[0]:
-            best = (val, c)
-    joint_start = PolynomialModel(scales.to_si(best[1]))
-    log(f"joint re-optimisation of the minimal model on {len(derivs)} runs (start loss {best[0]:.4g})")
+    per_run_scaled = np.array([scales.to_scaled(f.refined.coef) for f in run_fits])
+
+    def best_start(mask: np.ndarray, jcfg: RefineConfig) -> tuple[float, np.ndarray]:
+        """The better (lower joint loss) of the per-run median and least squares on ``mask``."""
+        best = None
+        for c in (np.where(mask, np.median(per_run_scaled, axis=0), 0.0), least_squares_on_support(X, A, mask)):
+            obj = Objective(refs, mask, default_substeps(c, refs[0].dt, jcfg.h_omega), jcfg.weights)
+            val = obj(c[mask])
+            if best is None or val < best[0]:
+                best = (val, c)
+        return best
+
+    selection = cand_fit = None
+    rule = config.selection.rule
+    if rule == "backward" and 0.5 ** len(derivs) >= config.selection.alpha:
+        # the one-sided paired Wilcoxon test on R runs cannot reach p < alpha (min p = 2^-R)
+        log(f"{len(derivs)} runs are too few for the Wilcoxon test at alpha = {config.selection.alpha:g}: "
+            "using the z-score rule")
+        rule = "zscore"
+    if rule == "zscore":
+        mask = mask_z
+        val, c = best_start(mask, config.joint)
+    elif rule == "backward":
+        cand = candidates | mask_z
+        val, c = best_start(cand, config.candidate_joint)
+        log(f"joint refinement of the {int(cand.sum())} candidate terms (start loss {val:.4g})")
+        cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=cand)
+        log(f"backward elimination on the joint loss (start loss {cand_fit.loss_end.total:.4g})")
+        selection = backward_elimination(cand_fit.model, cand, derivs, scales, config.selection, executor, log=log)
+        mask = selection.mask
+        c = scales.to_scaled(selection.model.coef)
+        val = float(np.mean(selection.per_run))
+    else:
+        raise ValueError(f"unknown selection rule {config.selection.rule!r} (use 'backward' or 'zscore')")
+    log(f"selected ({rule}) {int(mask.sum())} terms: {fmt(mask)}")
+    # ---- joint re-optimisation of the minimal model -----------------------------------
+    joint_start = PolynomialModel(scales.to_si(c))
+    log(f"joint re-optimisation of the minimal model on {len(derivs)} runs (start loss {val:.4g})")
     joint = refine(joint_start, derivs, scales, config.joint, mask=mask)
     log(f"final mean loss {joint.loss_end.total:.4g} (shape {joint.loss_end.shape:.3g}, "
         f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
     return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
-                     mask=mask, joint_start=joint_start, joint=joint, config=config)
+                     mask=mask, joint_start=joint_start, joint=joint, config=config, mask_zscore=mask_z,
+                     selection=selection, candidate_fit=cand_fit)
 
 
 def model_json(res: FitResult) -> dict:
@@ -237,7 +277,23 @@ def model_json(res: FitResult) -> dict:
         "scales": res.scales.to_dict(),
         "settings": json.loads(json.dumps(asdict(res.config), default=float)),
         "skipped_files": list(res.skipped),
+        "selection": _selection_json(res),
     }
+
+
+def _selection_json(res: FitResult) -> dict:
+    """Which rule produced ``equations`` and what the other rule gives."""
+    terms = lambda m: {eq: [t for t, k in zip(TERMS, m[q]) if k] for q, eq in enumerate(EQUATION_NAMES)}  # noqa: E731
+    out: dict = {"rule": "backward" if res.selection is not None else "zscore"}
+    if res.mask_zscore is not None:
+        out["zscore_rule"] = {"z_threshold": res.config.ensemble.z_threshold, "selected_terms": terms(res.mask_zscore)}
+    if res.selection is not None:
+        out["backward"] = {"alpha": res.config.selection.alpha, "selected_terms": terms(res.selection.mask),
+                           "steps": [s.to_dict() for s in res.selection.steps]}
+    if res.candidate_fit is not None:
+        out["candidate_fit"] = {"equations": res.candidate_fit.model.equations(),
+                                "loss": res.candidate_fit.loss_end.to_dict()}
+    return out
 
 
 def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config: FitConfig = FitConfig(),
