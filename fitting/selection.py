@@ -40,6 +40,14 @@ from .library import EQUATION_NAMES
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
 
+def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """Copies of ``coef`` and ``mask`` with term j of equation q removed."""
+    c, m = coef.copy(), mask.copy()
+    c[q, j] = 0.0
+    m[q, j] = False
+    return c, m
+
+
 __all__ = ["SelectionConfig", "SelectionStep", "SelectionResult", "backward_elimination", "damping_mask"]
 
 
@@ -148,19 +156,10 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
         # rank by the joint-loss increase of simply zeroing the term
         inc = []
         for q, j in removable:
-            c = cur.copy()
-            c[q, j] = 0.0
-            m = cur_mask.copy()
-            m[q, j] = False
+            c, m = _without_term(cur, cur_mask, q, j)
             inc.append(np.mean(_per_run(cache, c, m, derivs, scales, config.screen)) - np.mean(cur_loss))
         order = [removable[k] for k in np.argsort(inc)[: config.n_try]]
-        tasks = []
-        for q, j in order:
-            c = cur.copy()
-            c[q, j] = 0.0
-            m = cur_mask.copy()
-            m[q, j] = False
-            tasks.append((c, m, derivs, scales, config.screen))
+        tasks = [(*_without_term(cur, cur_mask, q, j), derivs, scales, config.screen) for q, j in order]
         outs = map_ordered(_reopt_task, tasks, config=executor, desc="backward step", progress=False)
         best = None
         for (q, j), (c, loss) in zip(order, outs):
