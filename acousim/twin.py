@@ -583,6 +583,8 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from fitting.atomic import save_figure
+
     from fitting.poincare import poincare_section
     from fitting.spectra import amplitude_spectrum
 
@@ -639,8 +641,7 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     out.append(fig_dir / f"{prefix}timeseries.png")
-    fig.savefig(out[-1], dpi=110)
-    plt.close(fig)
+    save_figure(fig, out[-1], dpi=110)
 
     # 2. phase portraits
     fig = plt.figure(figsize=(12, 5))
@@ -662,8 +663,7 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     out.append(fig_dir / f"{prefix}phase_portraits.png")
-    fig.savefig(out[-1], dpi=110)
-    plt.close(fig)
+    save_figure(fig, out[-1], dpi=110)
 
     # 3. Poincare section and map
     fig, axes = plt.subplots(1, 2, figsize=(12, 5))
@@ -686,8 +686,7 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     out.append(fig_dir / f"{prefix}poincare.png")
-    fig.savefig(out[-1], dpi=110)
-    plt.close(fig)
+    save_figure(fig, out[-1], dpi=110)
 
     # 4. phase-difference distribution
     fig, axes = plt.subplots(1, 2, figsize=(12, 4))
@@ -712,8 +711,7 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     out.append(fig_dir / f"{prefix}phase_hist.png")
-    fig.savefig(out[-1], dpi=110)
-    plt.close(fig)
+    save_figure(fig, out[-1], dpi=110)
     return out
 
 

@@ -7,18 +7,10 @@ point (``GorkovDimer.direct_integrals``), is timed on a subset of points in the 
 """
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
-
-def _time(fn, repeat=3):
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from benchmarks import best_time
 
 
 def main() -> str:
@@ -35,7 +27,7 @@ def main() -> str:
                 continue  # 27 nodes per tet x 16 images: memory-bound, adds nothing
             model = GorkovDimer(mesh_size=frac * 500e-6, quadrature_degree=degree, symmetrize=sym)
             z = model.equilibrium_height
-            sweep_s = _time(lambda: static_sweep(model, theta, y))
+            sweep_s = best_time(lambda: static_sweep(model, theta, y), 3)
             sw = static_sweep(model, theta, y)
             _, _, exact = analytic.dimer_generalized_forces(500e-6, sw["theta"], sw["z_com"], model.wave)
             f_exact, _, _ = analytic.dimer_generalized_forces(500e-6, sw["theta"], sw["z_com"], model.wave)
@@ -45,7 +37,7 @@ def main() -> str:
             direct_s = np.nan
             if degree == 2 and frac in (0.2,):
                 sub = [(t, yy) for t in theta[::8] for yy in y[::8]]
-                per = _time(lambda: [model.direct_integrals(t, yy) for t, yy in sub], repeat=1) / len(sub)
+                per = best_time(lambda: [model.direct_integrals(t, yy) for t, yy in sub], repeat=1) / len(sub)
                 direct_s = per * n_pts
             rows.append((frac, degree, sym, model.n_tetrahedra, model.n_quadrature_nodes, err_f, err_q, sweep_s,
                          n_pts * model.n_tetrahedra / sweep_s, direct_s, z))

@@ -13,14 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def _best(fn, repeat=5):
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from benchmarks import best_time
 
 
 def main() -> str:
@@ -48,20 +41,20 @@ def main() -> str:
 
     rows = []
     for rate in (20_000, 50_000):
-        wall = _best(lambda: dyn.integrate(x0, 4.0, 1 / 2000, max_step=1 / rate))
+        wall = best_time(lambda: dyn.integrate(x0, 4.0, 1 / 2000, max_step=1 / rate), 5)
         tr = dyn.integrate(x0, span_ref, 1 / 2000, max_step=1 / rate)
         err = np.max(np.abs(tr.y - ref.y)) / amp
         rows.append((f"twin RK4 (numba), {rate / 1000:.0f} kHz fixed step", 4.0, wall, err))
     for method, rtol in (("DOP853", 1e-10), ("RK45", 1e-8)):
         span = 0.5
         te = t_eval[t_eval <= span + 1e-12]
-        wall = _best(lambda: dyn.integrate_scipy(x0, te, method=method, rtol=rtol), repeat=2)
+        wall = best_time(lambda: dyn.integrate_scipy(x0, te, method=method, rtol=rtol), repeat=2)
         tr = dyn.integrate_scipy(x0, te, method=method, rtol=rtol)
         err = np.max(np.abs(tr.y - ref.y[: te.size])) / amp
         rows.append((f"scipy solve_ivp {method} rtol={rtol:g}, same compiled RHS", span, wall, err))
 
     cam = Camera(fps=2000.0)
-    run_wall = _best(lambda: simulate_run(dyn, PAPER_LIKE.protocol, cam, 4.0, 1))
+    run_wall = best_time(lambda: simulate_run(dyn, PAPER_LIKE.protocol, cam, 4.0, 1), 5)
     cfg = TwinConfig.from_preset(PAPER_LIKE, runs=10, duration=4.0, seed=0)
     with tempfile.TemporaryDirectory() as tmp:
         simulate_dataset(cfg, Path(tmp) / "warm", ExecutorConfig(workers=1), progress=False)  # warm caches

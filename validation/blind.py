@@ -18,7 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .reporting import write_json_atomic, write_text_atomic
+from fitting.atomic import atomic_write_text
+
+from .reporting import write_json_atomic
 
 __all__ = ["STRENGTHS", "BlindConfig", "draw_case", "run_case", "run_blind", "summarize"]
 
@@ -170,7 +172,7 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
     ordered = [results[i] for i in sorted(results)]
     summary = summarize(ordered)
     write_json_atomic(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
-    write_text_atomic(out / "blind_table.md", blind_table(summary, config))
+    atomic_write_text(out / "blind_table.md", blind_table(summary, config))
     confusion_figure(ordered, out / "confusion_matrix.png")
     return summary
 

@@ -67,8 +67,10 @@ def _read_model(path: Path) -> dict:
 def run_compare(args: argparse.Namespace) -> int:
     from acousim.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 
+    from fitting.atomic import atomic_write_text
+
     from .coefficients import compare_coefficients
-    from .reporting import write_json_atomic, write_text_atomic
+    from .reporting import write_json_atomic
     from .simulation import model_from_meta, read_meta
 
     model = _read_model(Path(args.model))
@@ -103,7 +105,7 @@ def run_compare(args: argparse.Namespace) -> int:
     d["static_fit"] = {"relative_residual": static.relative_residual, "y_origin_of_sweep": static.y_origin}
     write_json_atomic(out / "comparison.json", d)
     text = f"# Fitted model vs simulated static coefficients\n\n{cmp.origin}.\n\n{cmp.table()}\n"
-    write_text_atomic(out / "comparison.md", text)
+    atomic_write_text(out / "comparison.md", text)
     print(cmp.table())
     print(f"\n{cmp.origin}\nwritten {out / 'comparison.json'} and {out / 'comparison.md'}", file=sys.stderr)
     return 0

@@ -12,7 +12,9 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .reporting import write_json_atomic, write_text_atomic
+from fitting.atomic import atomic_write_text
+
+from .reporting import write_json_atomic
 
 __all__ = ["Figure", "Table", "Section", "write_report", "format_number"]
 
@@ -112,6 +114,6 @@ def write_report(sections: list[Section], out_dir: str | Path, title: str, subti
         numbers[s.id] = s.numbers
     parts.append("</body></html>")
     path = out / "report.html"
-    write_text_atomic(path, "\n".join(p for p in parts if p))
+    atomic_write_text(path, "\n".join(p for p in parts if p))
     write_json_atomic(out / "numbers.json", numbers)
     return path

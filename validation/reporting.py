@@ -7,7 +7,7 @@ from pathlib import Path
 
 from fitting.atomic import atomic_write_text
 
-__all__ = ["write_json_atomic", "write_text_atomic", "json_safe"]
+__all__ = ["write_json_atomic", "json_safe"]
 
 
 def json_safe(obj):
@@ -24,6 +24,3 @@ def json_safe(obj):
 def write_json_atomic(path: str | Path, obj) -> None:
     atomic_write_text(path, json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
 
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    atomic_write_text(path, text)
