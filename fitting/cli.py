@@ -107,9 +107,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--quiet", action="store_true", help="no progress bar")
     f.add_argument("--max-evals", type=int, default=None, help="objective evaluations per run refinement")
     f.add_argument("--joint-max-evals", type=int, default=None, help="evaluations of the joint re-optimisation")
-    f.add_argument("--selection", choices=("zscore", "backward"), default=None,
-                   help="term selection: the paper's z > 3 rule (default) or backward elimination on the joint "
-                        "long-time loss with a Wilcoxon test (recovers weak terms; slower)")
+    f.add_argument("--selection", choices=("significance", "zscore", "backward"), default=None,
+                   help="term selection: 'significance' (default: the mean coefficient across runs is "
+                        "significantly non-zero, t-test with Holm correction at 0.01), 'zscore' (the paper's "
+                        "z > 3 rule; always reported) or 'backward' (elimination on the joint long-time loss; slow)")
     f.set_defaults(func=_cmd_fit)
     c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
     c.add_argument("data_dir")

@@ -18,6 +18,19 @@ and its theta equation is noisy: this is the local bias that the long-time refin
 remove (see docs/fitting.md).  The paper uses Savitzky-Golay for the same reason: it preserves
 peak shapes (and so the Poincare section) better than a moving average at equal noise.
 
+Matched filter (removing the bias exactly)
+------------------------------------------
+The Savitzky-Golay second-derivative weights ``c2`` annihilate constants and straight lines, so they
+are the second difference of a compact kernel ``G`` (the double cumulative sum of ``c2`` times
+dt^2, :func:`acceleration_kernel`): ``sum_k c2_k x_{t+k} = sum_k G_k (x_{t+k+1} - 2 x_{t+k} +
+x_{t+k-1}) / dt^2``.  The filtered acceleration of the data is therefore ``G`` applied to the true
+acceleration, up to the second-difference error (omega dt)^2 / 12 (0.07 % at 22 Hz and 1500 fps).
+Comparing it with ``G`` applied to a model's accelerations (``Derivatives.matched``), instead of
+with the raw model accelerations, removes the attenuation bias: measured on a 22 Hz + 51 Hz test
+signal at the default window (51 frames at 1500 fps), the maximum mismatch is 24 % against the raw
+model accelerations, 9.6 % against the same smoothing filter applied to them, and 0.1 % against ``G``
+(tests/fitting/test_signal_features.py).  The regression uses it (``RegressionConfig.matched_filter``).
+
 Edges are handled with ``mode="interp"`` (polynomial fit to the first/last window); their noise
 is larger, so regression drops ``w // 2`` frames at each end (:attr:`Derivatives.trim`).
 """
@@ -30,7 +43,7 @@ from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs, savgol_filter
 
 __all__ = ["SmoothingConfig", "Derivatives", "savgol_window", "differentiate", "noise_gain",
-           "run_derivatives"]
+           "run_derivatives", "acceleration_kernel", "apply_acceleration_kernel"]
 
 
 @dataclass(frozen=True)
@@ -74,6 +87,14 @@ class Derivatives:
     accel: NDArray[np.float64]
     window: int
     trim: int
+    polyorder: int = 5
+
+    def matched(self, x: NDArray) -> NDArray[np.float64]:
+        """``x`` (n, ...) sampled at ``t``, filtered by the kernel that the Savitzky-Golay second
+        derivative applies to the true acceleration (:func:`acceleration_kernel`): a model's
+        accelerations filtered so that they compare with ``accel`` without attenuation bias."""
+        dt = float((self.t[-1] - self.t[0]) / (self.t.size - 1))
+        return apply_acceleration_kernel(x, acceleration_kernel(self.window, self.polyorder, dt))
 
     def interior(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """State and accelerations without the ``trim`` edge frames."""
@@ -89,6 +110,24 @@ def savgol_window(dt: float, period: float, config: SmoothingConfig = SmoothingC
         w = int(round(config.window_periods * period / dt))
     w = max(w, config.polyorder + 3)
     return w if w % 2 else w + 1
+
+
+def acceleration_kernel(window: int, polyorder: int, dt: float) -> NDArray[np.float64]:
+    """The kernel ``K`` (length ``window``, centred, sum 1) with ``savgol(x, deriv=2) = K * x''``.
+
+    ``G = cumsum(cumsum(c2)) dt^2`` of the second-derivative weights ``c2`` ends in two zeros (``c2``
+    annihilates constants and lines); ``K`` is ``G`` without them, centred (module docstring).
+    """
+    c2 = savgol_coeffs(window, polyorder, deriv=2, delta=dt, use="conv")
+    g = np.cumsum(np.cumsum(c2)) * dt * dt
+    return np.concatenate([[0.0], g[:-2], [0.0]])
+
+
+def apply_acceleration_kernel(x: NDArray, kernel: NDArray) -> NDArray[np.float64]:
+    """Convolve ``x`` (n, ...) with ``kernel`` along axis 0 (edges: nearest value, as trimmed anyway)."""
+    from scipy.ndimage import convolve1d
+
+    return convolve1d(np.asarray(x, float), kernel[::-1], axis=0, mode="nearest")
 
 
 def noise_gain(window: int, polyorder: int, deriv: int, dt: float) -> float:
@@ -122,4 +161,4 @@ def run_derivatives(t: NDArray, y: NDArray, theta: NDArray, f_y: float,
     ys, yd, ydd = differentiate(y, dt, w, config.polyorder)
     ts, td, tdd = differentiate(theta, dt, w, config.polyorder)
     return Derivatives(t=t, state=np.column_stack([ys, yd, ts, td]),
-                       accel=np.column_stack([ydd, tdd]), window=w, trim=w // 2)
+                       accel=np.column_stack([ydd, tdd]), window=w, trim=w // 2, polyorder=config.polyorder)

@@ -23,13 +23,14 @@ from .atomic import atomic_write_json
 from .attractors import AttractorClass, ClassifyConfig, classify_signal
 from .dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
-from .ensemble import EnsembleConfig, TermStatistics, least_squares_on_support, select_terms, term_statistics
+from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
+                       term_statistics)
 from .executor import ExecutorConfig, map_ordered
 from .library import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
-from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data
+from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
 from .selection import SelectionConfig, SelectionResult, backward_elimination
 from .spectra import dominant_frequency
 
@@ -111,6 +112,8 @@ class FitResult:
     #: backward elimination on the joint loss (``rule == "backward"``), else None
     selection: SelectionResult | None = None
     candidate_fit: RefineResult | None = None
+    #: the selection rule that produced ``mask`` ("zscore", "significance" or "backward")
+    rule: str = "zscore"
 
     @property
     def model(self) -> PolynomialModel:
@@ -203,13 +206,14 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
                               for q, eq in enumerate(EQUATION_NAMES))
     log(f"z-score rule (z > {config.ensemble.z_threshold:g} plus damping): {int(mask_z.sum())} terms: {fmt(mask_z)}")
     X, A = scaled_data(derivs, scales)
+    lib = scaled_library(derivs, scales, config.regression.matched_filter)
     refs = [scaled_reference(d, scales) for d in derivs]
     per_run_scaled = np.array([scales.to_scaled(f.refined.coef) for f in run_fits])
 
     def best_start(mask: np.ndarray, jcfg: RefineConfig) -> tuple[float, np.ndarray]:
         """The better (lower joint loss) of the per-run median and least squares on ``mask``."""
         best = None
-        for c in (np.where(mask, np.median(per_run_scaled, axis=0), 0.0), least_squares_on_support(X, A, mask)):
+        for c in (np.where(mask, np.median(per_run_scaled, axis=0), 0.0), least_squares_on_support(X, A, mask, lib)):
             obj = Objective(refs, mask, default_substeps(c, refs[0].dt, jcfg.h_omega), jcfg.weights)
             val = obj(c[mask])
             if best is None or val < best[0]:
@@ -218,7 +222,8 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
 
     selection = cand_fit = None
     rule = config.selection.rule
-    if rule == "backward" and 0.5 ** len(derivs) >= config.selection.alpha:
+    needs_wilcoxon = rule == "backward" or (rule == "significance" and config.selection.prune)
+    if needs_wilcoxon and 0.5 ** len(derivs) >= config.selection.alpha:
         # the one-sided paired Wilcoxon test on R runs cannot reach p < alpha (min p = 2^-R)
         log(f"{len(derivs)} runs are too few for the Wilcoxon test at alpha = {config.selection.alpha:g}: "
             "using the z-score rule")
@@ -226,18 +231,27 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     if rule == "zscore":
         mask = mask_z
         val, c = best_start(mask, config.joint)
-    elif rule == "backward":
-        cand = candidates | mask_z
-        val, c = best_start(cand, config.candidate_joint)
-        log(f"joint refinement of the {int(cand.sum())} candidate terms (start loss {val:.4g})")
-        cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=cand)
-        log(f"backward elimination on the joint loss (start loss {cand_fit.loss_end.total:.4g})")
-        selection = backward_elimination(cand_fit.model, cand, derivs, scales, config.selection, executor, log=log)
-        mask = selection.mask
-        c = scales.to_scaled(selection.model.coef)
-        val = float(np.mean(selection.per_run))
+    elif rule in ("backward", "significance"):
+        if rule == "backward":
+            cand = candidates | mask_z
+        else:
+            cand = select_significant_terms(stats, config.selection.alpha, config.ensemble.keep_damping)
+            log(f"significant ensemble means (t-test, Holm, alpha = {config.selection.alpha:g}): "
+                f"{int(cand.sum())} terms: {fmt(cand)}")
+        if rule == "significance" and not config.selection.prune:
+            mask = cand
+            val, c = best_start(mask, config.joint)
+        else:
+            val, c = best_start(cand, config.candidate_joint)
+            log(f"joint refinement of the {int(cand.sum())} candidate terms (start loss {val:.4g})")
+            cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=cand)
+            log(f"backward elimination on the joint loss (start loss {cand_fit.loss_end.total:.4g})")
+            selection = backward_elimination(cand_fit.model, cand, derivs, scales, config.selection, executor, log=log)
+            mask = selection.mask
+            c = scales.to_scaled(selection.model.coef)
+            val = float(np.mean(selection.per_run))
     else:
-        raise ValueError(f"unknown selection rule {config.selection.rule!r} (use 'backward' or 'zscore')")
+        raise ValueError(f"unknown selection rule {config.selection.rule!r} (use 'significance', 'backward' or 'zscore')")
     log(f"selected ({rule}) {int(mask.sum())} terms: {fmt(mask)}")
     # ---- joint re-optimisation of the minimal model -----------------------------------
     joint_start = PolynomialModel(scales.to_si(c))
@@ -247,7 +261,7 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
         f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
     return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
                      mask=mask, joint_start=joint_start, joint=joint, config=config, mask_zscore=mask_z,
-                     selection=selection, candidate_fit=cand_fit)
+                     selection=selection, candidate_fit=cand_fit, rule=rule)
 
 
 def model_json(res: FitResult) -> dict:
@@ -284,7 +298,7 @@ def model_json(res: FitResult) -> dict:
 def _selection_json(res: FitResult) -> dict:
     """Which rule produced ``equations`` and what the other rule gives."""
     terms = lambda m: {eq: [t for t, k in zip(TERMS, m[q]) if k] for q, eq in enumerate(EQUATION_NAMES)}  # noqa: E731
-    out: dict = {"rule": "backward" if res.selection is not None else "zscore"}
+    out: dict = {"rule": res.rule, "mean_pvalues": res.stats.as_dict(mean_pvalues(res.stats))}
     if res.mask_zscore is not None:
         out["zscore_rule"] = {"z_threshold": res.config.ensemble.z_threshold, "selected_terms": terms(res.mask_zscore)}
     if res.selection is not None:

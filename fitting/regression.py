@@ -19,7 +19,7 @@ from .library import STATE_NAMES, parse_term
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 
 __all__ = ["RegressionConfig", "dataset_scales", "fit_regression", "fit_ensemble_regression",
-           "scaled_data"]
+           "scaled_data", "scaled_library"]
 
 
 @dataclass(frozen=True)
@@ -33,11 +33,17 @@ class RegressionConfig:
     alpha : float
         Ridge regularisation.
     max_iter : int
+    matched_filter : bool
+        Regress the Savitzky-Golay accelerations on library columns filtered by the same kernel
+        (:meth:`~fitting.derivatives.Derivatives.matched`), which removes the filter's attenuation
+        bias (y^2 and y*ydot*thetadot live at 2 f_y, where it is strongest); pysindy's STLSQ is then
+        applied to the precomputed library.  False: plain ``pysindy.SINDy`` on the smoothed states.
     """
 
     threshold: float = 0.003
     alpha: float = 0.3
     max_iter: int = 20
+    matched_filter: bool = True
 
 
 def dataset_scales(derivs: Sequence[Derivatives], f_y: Sequence[float]) -> Scales:
@@ -55,6 +61,20 @@ def scaled_data(derivs: Sequence[Derivatives], scales: Scales) -> tuple[list[NDA
         X.append(s / scales.state)
         A.append(a / scales.accel)
     return X, A
+
+
+def scaled_library(derivs: Sequence[Derivatives], scales: Scales, matched_filter: bool = True) -> list[NDArray]:
+    """Per run: the 35-term library of the scaled smoothed states on the interior frames, its columns
+    filtered by the acceleration kernel when ``matched_filter`` (see :class:`RegressionConfig`)."""
+    from .library import evaluate_library
+
+    out = []
+    for d in derivs:
+        lib = evaluate_library(d.state / scales.state)
+        if matched_filter:
+            lib = d.matched(lib)
+        out.append(lib[d.trim: d.state.shape[0] - d.trim])
+    return out
 
 
 def _pysindy_to_canonical(names: list[str], coef: NDArray) -> NDArray:
@@ -100,15 +120,15 @@ def fit_regression(derivs: Sequence[Derivatives], scales: Scales,
     import pysindy as ps
 
     X, A = scaled_data(derivs, scales)
-    if candidates is None:
+    if candidates is None and not config.matched_filter:
         dt = float(derivs[0].t[1] - derivs[0].t[0]) / scales.time
         opt = ps.STLSQ(threshold=config.threshold, alpha=config.alpha, max_iter=config.max_iter)
         names, model = _sindy(opt, X, A, dt)
         coef = _pysindy_to_canonical(names, model.coefficients())
         return PolynomialModel(scales.to_si(coef))
-    from .library import evaluate_library
-
-    Theta = np.vstack([evaluate_library(x) for x in X])
+    if candidates is None:
+        candidates = np.ones((2, len(TERMS)), bool)
+    Theta = np.vstack(scaled_library(derivs, scales, config.matched_filter))
     acc = np.vstack(A)
     coef = np.zeros((2, len(TERMS)))
     for q in range(2):

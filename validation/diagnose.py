@@ -31,7 +31,7 @@ class DiagnoseConfig:
     Parameters
     ----------
     candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
-    alpha : significance level of the one-sided Wilcoxon test of held-out improvement
+    alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
     max_frames_per_run : runs are thinned to at most this many frames for the fits (speed)
@@ -53,19 +53,20 @@ def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[np.ndarray]]:
     from fitting.derivatives import SmoothingConfig, run_derivatives
     from fitting.spectra import dominant_frequency
 
+    smoothing = SmoothingConfig()
     runs, noise = [], []
     for run in dataset.runs:
         f_y = dominant_frequency(run.y - run.y.mean(), run.dt, fmin=5.0 / max(run.duration, 1e-9))
-        d = run_derivatives(run.t, run.y, run.theta, f_y)
+        d = run_derivatives(run.t, run.y, run.theta, f_y, smoothing)
         sl = slice(d.trim, len(d.t) - d.trim)
-        nv = _derivative_noise(run, d)
+        nv = _derivative_noise(run, d, smoothing.polyorder)
         runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv,
-                                     (d.window * run.dt, SmoothingConfig().polyorder)))
+                                     (d.window * run.dt, smoothing.polyorder), float(run.dt)))
         noise.append(nv)
     return runs, noise
 
 
-def _derivative_noise(run, d) -> np.ndarray:
+def _derivative_noise(run, d, polyorder: int = 5) -> np.ndarray:
     """Variances of the Savitzky-Golay accelerations and velocities due to tracking noise:
     [yddot, thetaddot, ydot, thetadot].
 
@@ -75,9 +76,9 @@ def _derivative_noise(run, d) -> np.ndarray:
     """
     from scipy.signal import savgol_coeffs
 
-    from fitting.derivatives import SmoothingConfig, noise_gain
+    from fitting.derivatives import noise_gain
 
-    p = SmoothingConfig().polyorder
+    p = polyorder
     c0 = savgol_coeffs(d.window, p, deriv=0, use="dot")[d.window // 2]
     sl = slice(d.trim, len(d.t) - d.trim)
     sig2 = []
@@ -131,7 +132,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         g = scalar_gap(fit_gaps(runs, fit))
         info = ident.steps[i]["candidates"][name]
         effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                        "significant": True, "wilcoxon_p": info["wilcoxon_p"],
+                        "significant": True, "p_value": info["p_value"], "wilcoxon_p": info["wilcoxon_p"],
                         "held_out_improvement_fraction": info["median_improvement_fraction"], "added_in_round": i + 1})
     others = []
     for name in config.candidates:
@@ -141,7 +142,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         g = scalar_gap(fit_gaps(runs, fit))
         info = sig_round.get(name, {})
         others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                       "significant": False, "wilcoxon_p": info.get("wilcoxon_p"),
+                       "significant": False, "p_value": info.get("p_value"), "wilcoxon_p": info.get("wilcoxon_p"),
                        "held_out_improvement_fraction": info.get("median_improvement_fraction"),
                        "note": "fitted on top of the identified effects; not a significant held-out improvement"})
     effects += sorted(others, key=lambda e: e["gap_after"])
@@ -241,8 +242,8 @@ def diagnosis_section(diagnosis: dict, figures) -> "Section":
         f"{rem['statement']}."
     )
     rows = [[e["name"], "yes" if e["significant"] else "no",
-             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("wilcoxon_p")]
+             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
             for e in diagnosis["effects"]]
     return Section("diagnosis", "Sim-to-real gap", reading, figures,
-                   [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "Wilcoxon p"], rows)],
+                   [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)],
                    {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident})

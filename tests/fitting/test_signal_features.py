@@ -74,3 +74,31 @@ def test_phase_difference(lag):
 def test_attractor_classes(theta_fn, label):
     t = np.arange(4000) / 1000
     assert classify_signal(1e-4 * np.cos(2 * np.pi * 22 * t), theta_fn(t), 1e-3).label == label
+
+
+@pytest.mark.parametrize("fps,window", [(1500.0, 51), (2000.0, 71)])
+def test_acceleration_kernel_matches_the_savgol_second_derivative(fps, window):
+    """savgol(x, deriv=2) = K * x'' exactly up to the second-difference error (omega dt)^2 / 12; the smoothing
+    filter itself (or nothing) leaves a large attenuation bias at 2.3 f_y."""
+    from scipy.signal import savgol_filter
+
+    from fitting.derivatives import acceleration_kernel, apply_acceleration_kernel
+
+    dt = 1.0 / fps
+    t = np.arange(6000) * dt
+    w1, w2 = 2 * np.pi * 22.0, 2 * np.pi * 22.0 * 2.3
+    x = np.sin(w1 * t) + 0.3 * np.cos(w2 * t)
+    xdd = -w1**2 * np.sin(w1 * t) - 0.3 * w2**2 * np.cos(w2 * t)
+    data = savgol_filter(x, window, 5, deriv=2, delta=dt)
+    kernel = acceleration_kernel(window, 5, dt)
+    np.testing.assert_allclose(kernel.sum(), 1.0, rtol=1e-8)  # the kernel passes constants
+    np.testing.assert_allclose(kernel, kernel[::-1], atol=1e-15)
+    interior = slice(window, -window)
+    scale = np.max(np.abs(data))
+    matched = np.max(np.abs(data - apply_acceleration_kernel(xdd, kernel))[interior]) / scale
+    smoothed = np.max(np.abs(data - savgol_filter(xdd, window, 5))[interior]) / scale
+    # second-difference error at 51 Hz: (w2 dt)^2 / 12 = 0.4 % (1500 fps) of that component (0.3 of the signal);
+    # measured 1.0e-3 (1500 fps) and 2.6e-4 (2000 fps)
+    assert matched < 3e-3
+    # the attenuation bias it removes (measured 9.6 % and 4.7 %) is over an order of magnitude larger
+    assert smoothed > 20 * matched
