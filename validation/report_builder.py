@@ -124,7 +124,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     if cmp is not None:
         rows = [["attractor shape", cmp.shape_test.median_difference, cmp.shape_test.p_greater, cmp.shape_test.n],
                 ["Poincare map", cmp.poincare_test.median_difference, cmp.poincare_test.p_greater, cmp.poincare_test.n]]
-    fit_figs = [Figure(fit_dir / "zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; red: selected."),
+    rule = model_json.get("selection", {}).get("rule", "zscore")
+    rule_text = {"significance": "terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
+                                 "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)",
+                 "zscore": "the paper's rule (terms with z > 3 across runs)",
+                 "backward": "backward elimination on the joint long-time loss"}.get(rule, rule)
+    fit_figs = [Figure(fit_dir / "zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; "
+                                                "red: selected, dashed: the paper's z = 3."),
                 Figure(fit_dir / "coefficients.png", "Distribution across runs of the refined coefficients of the selected terms."),
                 Figure(fit_dir / "optimisation.png", "Optimisation trajectory of the long-time refinement.")]
     if cmp is not None and (fit_dir / "compare.png").exists():
@@ -134,11 +140,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                 f"p = {cmp.shape_test.p_greater:.3g} (attractor shape) and p = {cmp.poincare_test.p_greater:.3g} (Poincare map).")
     sections.append(Section(
         "fit", "3. The fit",
-        "Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble rule "
-        "(terms with z > 3 across runs plus viscous damping) give the minimal model: " + "; ".join(eqs) + "." + cmp_text,
+        "Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble rule, "
+        + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + "." + cmp_text,
         fit_figs,
-        [Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score"],
-               [[eq, t, c, model_json["zscores"][eq].get(t)] for eq in ("yddot", "thetaddot") for t, c in model_json["equations"][eq].items()])]
+        [Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score", "p (ensemble mean = 0)"],
+               [[eq, t, c, model_json["zscores"][eq].get(t),
+                 model_json.get("selection", {}).get("mean_pvalues", {}).get(eq, {}).get(t)]
+                for eq in ("yddot", "thetaddot") for t, c in model_json["equations"][eq].items()])]
         + ([Table("Variant without cross-coupling terms vs the minimal model (per-run errors)",
                   ["error", "median difference (variant - minimal)", "Wilcoxon p (variant worse)", "runs"], rows)] if rows else []),
         {"equations": model_json["equations"], "wilcoxon_shape_p": None if cmp is None else cmp.shape_test.p_greater,
