@@ -53,9 +53,9 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
         ax.set_yscale("symlog", linthresh=1)
         ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
     axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
-    rule = {"significance": "ensemble mean significant (t-test, Holm)", "zscore": "z > threshold",
-            "backward": "backward elimination"}.get(getattr(res, "rule", "zscore"), "selected")
-    axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected ({rule}); dashed: the paper's z = {thr:g}")
+    rule = {"significance": "by the ensemble-mean t-test, Holm", "zscore": "by z > threshold",
+            "backward": "by backward elimination"}.get(getattr(res, "rule", "zscore"), "")
+    axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
     paths.append(out / "zscores.png")
     _save(fig, paths[-1])
     # coefficient distributions
