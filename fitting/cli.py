@@ -37,6 +37,8 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
     if a.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
+    if getattr(a, "relative_threshold", False):
+        cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
     if getattr(a, "selection", None):
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
     t0 = time.perf_counter()
@@ -111,6 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="term selection: 'significance' (default: the mean coefficient across runs is "
                         "significantly non-zero, t-test with Holm correction at 0.01), 'zscore' (the paper's "
                         "z > 3 rule; always reported) or 'backward' (elimination on the joint long-time loss; slow)")
+    f.add_argument("--relative-threshold", action="store_true",
+                   help="apply the regression threshold to each equation relative to its signal size (for a hinge "
+                        "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
     f.set_defaults(func=_cmd_fit)
     c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
     c.add_argument("data_dir")

@@ -56,3 +56,29 @@ def test_refinement_removes_coefficient_bias(clean_derivs, truth):
     assert abs(f[2] / f[0] - 1) > 0.01
     np.testing.assert_allclose(f[1], f[0], rtol=2e-3)
     assert len(res.history) == res.n_evals <= 600
+
+
+def test_relative_threshold_keeps_a_small_term_of_the_slow_equation():
+    """A theta equation whose scaled coefficients are all ~100x smaller than the y equation's: the absolute STLSQ
+    threshold cuts its 0.002 cross term, the per-equation relative threshold keeps it (exact data, so the
+    recovered coefficients are exact up to the ridge shrinkage)."""
+    from fitting.derivatives import Derivatives
+    from fitting.model import TERMS, Scales
+    from fitting.regression import RegressionConfig, fit_regression
+    from fitting.library import evaluate_library
+
+    rng = np.random.default_rng(0)
+    x = rng.uniform(-1, 1, (3000, 4))
+    truth = np.zeros((2, len(TERMS)))
+    truth[0, TERMS.index("y")], truth[0, TERMS.index("y^2")] = -1.0, 0.5
+    truth[1, TERMS.index("theta")], truth[1, TERMS.index("y*theta")] = -0.01, 0.002
+    acc = evaluate_library(x) @ truth.T
+    d = Derivatives(t=np.arange(3000) * 1e-3, state=x, accel=acc, window=7, trim=0)
+    sc = Scales(length_y=1.0, length_theta=1.0, time=1.0)
+    all_terms = np.ones((2, len(TERMS)), bool)
+    absolute = fit_regression([d], sc, RegressionConfig(matched_filter=False), candidates=all_terms)
+    relative = fit_regression([d], sc, RegressionConfig(matched_filter=False, relative_threshold=True), candidates=all_terms)
+    j = TERMS.index("y*theta")
+    assert absolute.coef[1, j] == 0.0
+    np.testing.assert_allclose(relative.coef[1, j], 0.002, rtol=0.05)  # ridge alpha = 0.3 shrinks by < 5 % here
+    np.testing.assert_array_equal(relative.support[0], absolute.support[0])  # the y equation is unchanged
