@@ -142,3 +142,17 @@ def test_diagnose_cli_bad_directory(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "nope" in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_velocity_coupling_above_its_detection_limit(tmp_path):
+    """At twice the strength of the single-effect case (c5 = 3e4, c6 = 6e6) velocity_coupling is identified
+    (measured for twin seeds 3, 5, 6: p = 0.007, 0.005, 0.001) with its parameters within 10 % (asserted at the
+    issue's 25 %); at 1.5e4 / 3e6 it sits at the detection limit of 10 runs of 3 s (see the xfail above)."""
+    effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
+    data, _ = _twin(tmp_path, effects)
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["velocity_coupling"]
+    fitted = diag["effects"][0]["params"]
+    for p, v in effects["velocity_coupling"].items():
+        assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
