@@ -222,36 +222,33 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
 
     selection = cand_fit = None
     rule = config.selection.rule
-    needs_wilcoxon = rule == "backward" or (rule == "significance" and config.selection.prune)
-    if needs_wilcoxon and 0.5 ** len(derivs) >= config.selection.alpha:
+    if rule not in ("zscore", "significance", "backward"):
+        raise ValueError(f"unknown selection rule {rule!r} (use 'significance', 'backward' or 'zscore')")
+    eliminate = rule == "backward" or (rule == "significance" and config.selection.prune)
+    if eliminate and 0.5 ** len(derivs) >= config.selection.alpha:
         # the one-sided paired Wilcoxon test on R runs cannot reach p < alpha (min p = 2^-R)
         log(f"{len(derivs)} runs are too few for the Wilcoxon test at alpha = {config.selection.alpha:g}: "
             "using the z-score rule")
-        rule = "zscore"
+        rule, eliminate = "zscore", False
     if rule == "zscore":
         mask = mask_z
-        val, c = best_start(mask, config.joint)
-    elif rule in ("backward", "significance"):
-        if rule == "backward":
-            cand = candidates | mask_z
-        else:
-            cand = select_significant_terms(stats, config.selection.alpha, config.ensemble.keep_damping)
-            log(f"significant ensemble means (t-test, Holm, alpha = {config.selection.alpha:g}): "
-                f"{int(cand.sum())} terms: {fmt(cand)}")
-        if rule == "significance" and not config.selection.prune:
-            mask = cand
-            val, c = best_start(mask, config.joint)
-        else:
-            val, c = best_start(cand, config.candidate_joint)
-            log(f"joint refinement of the {int(cand.sum())} candidate terms (start loss {val:.4g})")
-            cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=cand)
-            log(f"backward elimination on the joint loss (start loss {cand_fit.loss_end.total:.4g})")
-            selection = backward_elimination(cand_fit.model, cand, derivs, scales, config.selection, executor, log=log)
-            mask = selection.mask
-            c = scales.to_scaled(selection.model.coef)
-            val = float(np.mean(selection.per_run))
+    elif rule == "significance":
+        mask = select_significant_terms(stats, config.selection.alpha, config.ensemble.keep_damping)
+        log(f"significant ensemble means (t-test, Holm, alpha = {config.selection.alpha:g}): "
+            f"{int(mask.sum())} terms: {fmt(mask)}")
     else:
-        raise ValueError(f"unknown selection rule {config.selection.rule!r} (use 'significance', 'backward' or 'zscore')")
+        mask = candidates | mask_z
+    if eliminate:
+        val, c = best_start(mask, config.candidate_joint)
+        log(f"joint refinement of the {int(mask.sum())} candidate terms (start loss {val:.4g})")
+        cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=mask)
+        log(f"backward elimination on the joint loss (start loss {cand_fit.loss_end.total:.4g})")
+        selection = backward_elimination(cand_fit.model, mask, derivs, scales, config.selection, executor, log=log)
+        mask = selection.mask
+        c = scales.to_scaled(selection.model.coef)
+        val = float(np.mean(selection.per_run))
+    else:
+        val, c = best_start(mask, config.joint)
     log(f"selected ({rule}) {int(mask.sum())} terms: {fmt(mask)}")
     # ---- joint re-optimisation of the minimal model -----------------------------------
     joint_start = PolynomialModel(scales.to_si(c))

@@ -66,7 +66,7 @@ def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[np.ndarray]]:
     return runs, noise
 
 
-def _derivative_noise(run, d, polyorder: int = 5) -> np.ndarray:
+def _derivative_noise(run, d, polyorder: int) -> np.ndarray:
     """Variances of the Savitzky-Golay accelerations and velocities due to tracking noise:
     [yddot, thetaddot, ydot, thetadot].
 

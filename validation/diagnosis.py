@@ -512,25 +512,15 @@ def scalar_gap(per_run: NDArray) -> float:
     return float(np.mean(per_run))
 
 
-def _gap_normalisers(runs: Sequence[RunAccelerations], energy: Sequence[tuple]) -> NDArray[np.float64]:
-    """Per run (n_runs, 3): the denominators of the three gap components (:func:`short_time_gaps`)."""
-    out = np.zeros((len(runs), 3))
-    for i, (r, e) in enumerate(zip(runs, energy)):
-        out[i, :2] = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
-        out[i, 2] = float(np.sum(e[1] ** 2))
-    return np.maximum(out, 1e-300)
-
-
-def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """K-fold over runs (run i is in fold i mod K): per run, the gap of a fit made on the other folds.
+def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArray[np.float64]:
+    """K-fold over runs (run i is in fold i mod K): per run, the gap (beyond the noise floor) of a fit made
+    on the other folds.
 
     Every run is held out exactly once, so each run gets one held-out score (leave-one-run-out when
-    K >= the number of runs).  Returns the held-out gap components beyond the noise floor (n_runs, 3)
-    and their denominators (n_runs, 3)."""
+    K >= the number of runs)."""
     n = len(runs)
     k = min(folds, n)
-    comp = np.empty((n, 3))
-    norm = np.empty((n, 3))
+    out = np.empty(n)
     for f in range(k):
         test = [i for i in range(n) if i % k == f]
         train = [r for i, r in enumerate(runs) if i % k != f]
@@ -539,9 +529,8 @@ def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> tuple
         physics = _Physics(model, held)
         res, _ = _residuals(physics, held, fit.calibration, fit.effects)
         en = _energy_residuals(physics, fit.calibration, fit.effects)
-        comp[test] = short_time_gaps(held, res, en)
-        norm[test] = _gap_normalisers(held, en)
-    return comp, norm
+        out[test] = short_time_gaps(held, res, en).mean(axis=1)
+    return out
 
 
 @dataclass
@@ -563,8 +552,7 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
     # Weighing runs by their share of the pooled variance instead was measured to lose a constant
     # hinge torque (mirror_asymmetry, beta0 = 60 1/s^2, tests/validation/test_diagnosis.py), whose
     # signal is the same in every run while the energy residual's noise grows with the run's energy.
-    current_comp, _ = _held_out_gaps(model, runs, chosen)
-    current = current_comp.mean(axis=1)
+    current = _held_out_gaps(model, runs, chosen)
     remaining = [c for c in candidates]
     while remaining:
         round_info = {"base": list(chosen), "base_held_out_gap": float(np.mean(current)), "candidates": {}}
@@ -572,8 +560,7 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
         for c in remaining:
             if progress:
                 progress(f"testing {c} on top of {chosen or 'calibration'}")
-            trial_comp, _ = _held_out_gaps(model, runs, chosen + [c])
-            trial = trial_comp.mean(axis=1)
+            trial = _held_out_gaps(model, runs, chosen + [c])
             diff = current - trial  # > 0: the candidate helps the held-out run (the floor cancels)
             try:
                 p_w = float(wilcoxon(diff, alternative="greater", zero_method="zsplit").pvalue) if np.any(diff != 0) else 1.0
@@ -591,14 +578,13 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
                                            "median_improvement_fraction": rel, "threshold": threshold,
                                            "p_value": p, "wilcoxon_p": p_w, "significant": significant, "per_run_held_out": trial.tolist()}
             if significant and rel > best_gain:
-                best, best_gain, best_comp = c, rel, trial_comp
+                best, best_gain, best_trial = c, rel, trial
         result.steps.append(round_info)
         if best is None:
             break
         chosen.append(best)
         remaining.remove(best)
-        current_comp = best_comp
-        current = current_comp.mean(axis=1)
+        current = best_trial
     result.identified = chosen
     return result
 
