@@ -39,13 +39,18 @@ on the soft hinge (8 runs) theta*y^2 = (1.39 +- 0.28) x 10^8 1/(m^2 s^2) against
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+if TYPE_CHECKING:
+    from .dataset import Run
+    from .derivatives import Derivatives
+
 __all__ = ["double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
-           "IntegralFit", "fit_integral_form"]
+           "IntegralFit", "fit_integral_form", "significance_threshold", "IntegralSelection",
+           "select_integral_form", "integral_form_selection", "METHOD"]
 
 
 def double_integral(f: NDArray, dt: float) -> NDArray[np.float64]:
@@ -129,6 +134,41 @@ class IntegralFit:
             return self.coefficients / self.std_errors
 
 
+def _design(positions: Sequence[NDArray], columns: Sequence[NDArray], dts: Sequence[float],
+            windows: Sequence[int], known: Sequence[NDArray] | None,
+            trim: Sequence[int] | int) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+    """Stacked detrended design ``X`` (rows, P), target ``b`` (rows,) and the number of windows."""
+    trims = [trim] * len(positions) if np.isscalar(trim) else list(trim)
+    rows, rhs, n_win = [], [], 0
+    for i, (x, f, dt, w) in enumerate(zip(positions, columns, dts, windows)):
+        starts = window_starts(len(x), int(w), int(trims[i]))
+        if starts.size == 0:
+            continue
+        target = detrend_windows(x, starts, int(w))
+        if known is not None:
+            target = target - integral_columns(known[i], dt, starts, int(w))
+        rows.append(integral_columns(f, dt, starts, int(w)))
+        rhs.append(target)
+        n_win += starts.size
+    if not rows:
+        raise ValueError("no run is long enough for one integral-form window")
+    return np.concatenate(rows), np.concatenate(rhs), n_win
+
+
+def _ols(X: NDArray, b: NDArray, n_win: int, window: int) -> IntegralFit:
+    """Column-scaled least squares with white-noise standard errors (dof: rows - 2 per window - P)."""
+    p = X.shape[1]
+    scale = np.maximum(np.sqrt(np.sum(X * X, axis=0)), 1e-300)
+    Xs = X / scale
+    coef_s, *_ = np.linalg.lstsq(Xs, b, rcond=None)
+    resid = b - Xs @ coef_s
+    dof = max(len(b) - 2 * n_win - p, 1)
+    s2 = float(resid @ resid) / dof
+    cov = np.linalg.pinv(Xs.T @ Xs) * s2
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) / scale
+    return IntegralFit(coef_s / scale, se, float(np.sqrt(s2)), int(dof), int(n_win), int(window))
+
+
 def fit_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], dts: Sequence[float],
                       windows: Sequence[int], known: Sequence[NDArray] | None = None,
                       trim: Sequence[int] | int = 0) -> IntegralFit:
@@ -147,28 +187,160 @@ def fit_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], 
     -------
     IntegralFit
     """
-    trims = [trim] * len(positions) if np.isscalar(trim) else list(trim)
-    rows, rhs, n_win = [], [], 0
-    for i, (x, f, dt, w) in enumerate(zip(positions, columns, dts, windows)):
-        starts = window_starts(len(x), int(w), int(trims[i]))
-        if starts.size == 0:
-            continue
-        target = detrend_windows(x, starts, int(w))
-        if known is not None:
-            target = target - integral_columns(known[i], dt, starts, int(w))
-        rows.append(integral_columns(f, dt, starts, int(w)))
-        rhs.append(target)
-        n_win += starts.size
-    if not rows:
-        raise ValueError("no run is long enough for one integral-form window")
-    X, b = np.concatenate(rows), np.concatenate(rhs)
-    p = X.shape[1]
-    scale = np.maximum(np.sqrt(np.sum(X * X, axis=0)), 1e-300)
-    Xs = X / scale
-    coef_s, *_ = np.linalg.lstsq(Xs, b, rcond=None)
-    resid = b - Xs @ coef_s
-    dof = max(len(b) - 2 * n_win - p, 1)
-    s2 = float(resid @ resid) / dof
-    cov = np.linalg.pinv(Xs.T @ Xs) * s2
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) / scale
-    return IntegralFit(coef_s / scale, se, float(np.sqrt(s2)), int(dof), int(n_win), int(max(windows)))
+    X, b, n_win = _design(positions, columns, dts, windows, known, trim)
+    return _ols(X, b, n_win, int(max(windows)))
+
+
+def significance_threshold(alpha: float, n_library: int, n_kept: int) -> float:
+    """|z| a term needs to stay in :func:`select_integral_form` when ``n_kept`` terms are left.
+
+    Holm's step-down rule read along the backward path: the least significant of ``n_kept`` remaining
+    terms is the ``n_kept``-th smallest p-value of the ``n_library`` tested, and is kept if its
+    two-sided normal p <= alpha / (n_library - n_kept + 1).  With every term left this is Bonferroni
+    (alpha / n_library); it relaxes to alpha for the last term.  Family-wise error rate ``alpha``.
+    """
+    from scipy.special import ndtri
+
+    p = alpha / max(n_library - n_kept + 1, 1)
+    return float(ndtri(1.0 - 0.5 * p))
+
+
+@dataclass(frozen=True)
+class IntegralSelection:
+    """Sparse pooled fit of the integral form (:func:`select_integral_form`).
+
+    Attributes
+    ----------
+    terms : tuple of str
+        Selected terms, in library order.
+    coefficients, std_errors : ndarray (len(terms),)
+        Least squares on the selected terms (SI units of the coefficients).
+    residual_std : float
+        Residual standard deviation per frame (units of the coordinate: m or rad).
+    window_s : float
+        Median window length over runs [s].
+    n_windows, dof : int
+    alpha : float
+        Family-wise significance level of the rule.
+    n_library : int
+        Number of candidate terms the rule was applied to.
+    dropped : tuple of str
+        Terms in the order they were eliminated.
+    """
+
+    terms: tuple[str, ...]
+    coefficients: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+    residual_std: float
+    window_s: float
+    n_windows: int
+    dof: int
+    alpha: float
+    n_library: int
+    dropped: tuple[str, ...]
+
+    @property
+    def z(self) -> NDArray[np.float64]:
+        """coefficient / standard error."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.coefficients / self.std_errors
+
+    def get(self, term: str) -> tuple[float, float]:
+        """(value, standard error) of ``term``; (NaN, NaN) if it was not selected."""
+        if term in self.terms:
+            i = self.terms.index(term)
+            return float(self.coefficients[i]), float(self.std_errors[i])
+        return float("nan"), float("nan")
+
+    def to_json(self) -> dict:
+        """``{"terms": {term: {"value", "std_error", "z"}}, "window_s", "residual_std", ...}``."""
+        return {"terms": {t: {"value": float(c), "std_error": float(e), "z": float(z)}
+                          for t, c, e, z in zip(self.terms, self.coefficients, self.std_errors, self.z)},
+                "window_s": self.window_s, "residual_std": self.residual_std, "n_windows": self.n_windows,
+                "alpha": self.alpha, "n_library": self.n_library, "dropped": list(self.dropped)}
+
+
+def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], dts: Sequence[float],
+                         windows: Sequence[int], term_names: Sequence[str],
+                         known: Sequence[NDArray] | None = None, trim: Sequence[int] | int = 0,
+                         alpha: float = 0.01) -> IntegralSelection:
+    """Backward elimination on the pooled integral form.
+
+    Starting from all ``term_names``, refit (one least squares) and drop the least significant term
+    (largest two-sided normal p of its z) while its |z| is below :func:`significance_threshold`
+    (Holm along the backward path, family-wise ``alpha`` over the ``len(term_names)`` library terms).
+
+    Parameters
+    ----------
+    positions, columns, dts, windows, known, trim
+        As :func:`fit_integral_form`; ``columns`` (n, len(term_names)) per run.
+    term_names : sequence of str
+        Names of the columns.
+    alpha : float
+        Family-wise significance level.
+
+    Returns
+    -------
+    IntegralSelection
+    """
+    names = list(term_names)
+    X, b, n_win = _design(positions, columns, dts, windows, known, trim)
+    if X.shape[1] != len(names):
+        raise ValueError(f"{X.shape[1]} columns but {len(names)} term names")
+    keep = list(range(len(names)))
+    dropped: list[str] = []
+    fit = None
+    while keep:
+        fit = _ols(X[:, keep], b, n_win, int(max(windows)))
+        az = np.abs(np.nan_to_num(fit.z, nan=0.0))
+        worst = int(np.argmin(az))
+        if az[worst] >= significance_threshold(alpha, len(names), len(keep)):
+            break
+        dropped.append(names[keep.pop(worst)])
+    window_s = float(np.median([w * dt for w, dt in zip(windows, dts)]))
+    if not keep:
+        dof = max(len(b) - 2 * n_win, 1)
+        return IntegralSelection((), np.zeros(0), np.zeros(0), float(np.sqrt(b @ b / dof)), window_s, n_win, dof,
+                                 alpha, len(names), tuple(dropped))
+    return IntegralSelection(tuple(names[k] for k in keep), fit.coefficients, fit.std_errors, fit.residual_std,
+                             window_s, fit.n_windows, fit.dof, alpha, len(names), tuple(dropped))
+
+
+#: One-line description written next to the result in model.json.
+METHOD = ("pooled integral form: measured position minus each window's straight line regressed on the detrended double "
+          "integrals of the cubic library at the Savitzky-Golay states (windows of 0.75 of the coordinate's dominant "
+          "period, 30-500 ms; coefficients shared by all runs); ordinary least squares, backward elimination with "
+          "Holm's rule at family-wise alpha over the library terms")
+
+
+def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives"], alpha: float = 0.01,
+                            periods: float = 0.75) -> dict[str, IntegralSelection]:
+    """:func:`select_integral_form` of both equations on a data set's runs.
+
+    Parameters
+    ----------
+    runs : per run :class:`fitting.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
+    derivs : per run :class:`fitting.derivatives.Derivatives` of the same run (the smoothed states the
+        library is evaluated on; their ``trim`` edge frames are dropped)
+    alpha : float
+        Family-wise significance level of the selection.
+    periods : float
+        Window in periods of the coordinate's dominant frequency (:func:`integral_window`).
+
+    Returns
+    -------
+    dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the dominant y
+    frequency, theta windows from the dominant theta frequency of each run).
+    """
+    from .library import EQUATION_NAMES, evaluate_library, library_terms
+    from .spectra import dominant_frequency
+
+    columns = [evaluate_library(d.state) for d in derivs]
+    dts = [float(r.dt) for r in runs]
+    trims = [int(d.trim) for d in derivs]
+    out = {}
+    for eq, coord in zip(EQUATION_NAMES, ("y", "theta")):
+        pos = [np.asarray(getattr(r, coord), float) for r in runs]
+        windows = [integral_window(dt, dominant_frequency(x, dt), periods) for x, dt in zip(pos, dts)]
+        out[eq] = select_integral_form(pos, columns, dts, windows, library_terms(), trim=trims, alpha=alpha)
+    return out

@@ -26,6 +26,7 @@ from .derivatives import Derivatives, SmoothingConfig, run_derivatives
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
                        term_statistics)
 from .executor import ExecutorConfig, map_ordered
+from .integral_form import METHOD as INTEGRAL_METHOD, IntegralSelection, integral_form_selection
 from .library import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
@@ -114,6 +115,9 @@ class FitResult:
     candidate_fit: RefineResult | None = None
     #: the selection rule that produced ``mask`` ("zscore", "significance" or "backward")
     rule: str = "zscore"
+    #: the pooled integral-form selection per equation (:func:`fitting.integral_form.integral_form_selection`),
+    #: a cross-check reported next to the minimal model; None if the runs are too short for its windows
+    integral_form: dict[str, IntegralSelection] | None = None
 
     @property
     def model(self) -> PolynomialModel:
@@ -168,6 +172,14 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     """Steps 2-4 on prepared runs (see :func:`fit_dataset`)."""
     log = log or (lambda m: None)
     derivs = [p.derivs for p in prepared]
+    try:
+        integral = integral_form_selection([p.run for p in prepared], derivs, alpha=config.selection.alpha)
+        log("pooled integral form (cross-check): " + "; ".join(
+            f"{eq}: " + ", ".join(f"{t} {c:.3g} +- {e:.2g}" for t, c, e in zip(s.terms, s.coefficients, s.std_errors))
+            for eq, s in integral.items()))
+    except ValueError as err:  # runs shorter than one window
+        log(f"pooled integral form skipped: {err}")
+        integral = None
     c0_joint = fit_regression(derivs, scales, config.regression)
     candidates = candidate_terms(c0_joint)
     # ---- per-run refinement, resumable -----------------------------------------------
@@ -258,7 +270,7 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
         f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
     return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
                      mask=mask, joint_start=joint_start, joint=joint, config=config, mask_zscore=mask_z,
-                     selection=selection, candidate_fit=cand_fit, rule=rule)
+                     selection=selection, candidate_fit=cand_fit, rule=rule, integral_form=integral)
 
 
 def model_json(res: FitResult) -> dict:
@@ -289,7 +301,15 @@ def model_json(res: FitResult) -> dict:
         "settings": json.loads(json.dumps(asdict(res.config), default=float)),
         "skipped_files": list(res.skipped),
         "selection": _selection_json(res),
+        "integral_form": _integral_form_json(res),
     }
+
+
+def _integral_form_json(res: FitResult) -> dict | None:
+    """The pooled integral-form selection per equation (a cross-check; not the minimal model)."""
+    if res.integral_form is None:
+        return None
+    return {"method": INTEGRAL_METHOD, **{eq: s.to_json() for eq, s in res.integral_form.items()}}
 
 
 def _selection_json(res: FitResult) -> dict:
