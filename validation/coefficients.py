@@ -13,6 +13,15 @@ order, ``d c[y^j theta^b] / d delta = (j + 1) c[y^(j+1) theta^b]``), and leaves 
 unchanged.  :func:`compare_coefficients` re-expresses the simulated coefficients at the data's
 origin, taking ``delta`` from the fitted model's own equilibrium by default (the root of the fitted
 yddot at theta = 0 and zero velocity, which sits at y_data = -delta).
+
+Two fitted estimates.  The ensemble statistics of the runs' refined models (mean and spread across
+runs) and, when model.json carries it (key ``integral_form``, written by ``fitting fit``), the pooled
+integral-form estimate with its standard error (:mod:`fitting.integral_form`: coefficients shared by
+all runs, fitted in position space where the tracking noise is white).  A term in the integral form's
+selected support is judged on that estimate (combined uncertainty sqrt(SE^2 + static std^2)); the
+others on the ensemble statistics.  The per-run fits are at an information limit for weak hinge terms
+(theta*y^2 on a soft Gor'kov hinge scatters by ~4e9 across runs against a static ~1.4e8), which the
+pooled estimate is not.
 """
 from __future__ import annotations
 
@@ -139,6 +148,11 @@ class TermComparison:
     signs_agree: bool | None
     within_uncertainty: bool | None  # |fitted - simulated| <= n_sigma * sqrt(std_fit^2 + std_sim^2)
     origin_shift_per_um: float  # change of the simulated coefficient per micrometre of origin shift
+    integral: float = float("nan")  # pooled integral-form estimate (NaN where that selection dropped the term)
+    integral_std_error: float = float("nan")  # its standard error
+    #: which estimate ``signs_agree``, ``within_uncertainty`` and ``ratio`` use: "integral form" (the term is in
+    #: the integral form's selected support), "ensemble" (ensemble mean and across-run std) or "none" (no verdict)
+    verdict_from: str = "ensemble"
 
 
 @dataclass(frozen=True)
@@ -161,20 +175,21 @@ class CoefficientComparison:
         }
 
     def table(self) -> str:
-        """Markdown table, the theta*y^2 term first."""
-        head = ("| equation | term | fitted (minimal) | ensemble mean +- std | z | simulated +- std | ratio | signs agree | "
-                f"within {self.n_sigma:g} sigma | d(sim)/d(origin) per um |")
-        lines = [head, "|" + "---|" * 10]
+        """Markdown table, the theta*y^2 term first; the verdict columns use the estimate named in "verdict from"."""
+        head = ("| equation | term | fitted (minimal) | ensemble mean +- std | z | integral form +- SE | simulated +- std | "
+                f"verdict from | ratio | signs agree | within {self.n_sigma:g} sigma | d(sim)/d(origin) per um |")
+        lines = [head, "|" + "---|" * 12]
         for r in self.rows:
+            ig = "not selected" if not np.isfinite(r.integral) else f"{r.integral:.4g} +- {r.integral_std_error:.2g}"
+            common = (f"| {r.equation} | {r.term} | {r.fitted:.4g} | {r.fitted_mean:.4g} +- {r.fitted_std:.2g} | "
+                      f"{r.fitted_z:.3g} | {ig} | ")
             if r.kind != "static":
-                lines.append(f"| {r.equation} | {r.term} | {r.fitted:.4g} | {r.fitted_mean:.4g} +- {r.fitted_std:.2g} | {r.fitted_z:.3g} | "
-                             f"dynamic only: no static prediction | | | | |")
+                lines.append(common + "dynamic only: no static prediction | | | | | |")
                 continue
             yes = lambda b: "-" if b is None else ("yes" if b else "**no**")  # noqa: E731
             lines.append(
-                f"| {r.equation} | {r.term} | {r.fitted:.4g} | {r.fitted_mean:.4g} +- {r.fitted_std:.2g} | {r.fitted_z:.3g} | "
-                f"{r.simulated:.4g} +- {r.simulated_std:.2g} | {r.ratio:.3g} | {yes(r.signs_agree)} | {yes(r.within_uncertainty)} | "
-                f"{r.origin_shift_per_um:.3g} |"
+                common + f"{r.simulated:.4g} +- {r.simulated_std:.2g} | {r.verdict_from} | {r.ratio:.3g} | "
+                f"{yes(r.signs_agree)} | {yes(r.within_uncertainty)} | {r.origin_shift_per_um:.3g} |"
             )
         return "\n".join(lines)
 
@@ -198,9 +213,12 @@ def compare_coefficients(
     origin_offset : float or "fitted-equilibrium"
         delta [m] with ``y_sim = y_data + delta``; by default from the fitted yddot's root.
     n_sigma : float
-        Agreement criterion: |fitted mean - simulated| <= n_sigma x combined std, where the combined
-        std is sqrt(std_across_runs^2 + std_static^2) (the across-run spread, not the standard
-        error of the mean: a conservative choice, since runs differ physically as well as by noise).
+        Agreement criterion: |fitted - simulated| <= n_sigma x combined std.  For a term in the
+        selected support of the pooled integral form (``model["integral_form"]``), fitted is that
+        estimate and the combined std sqrt(SE^2 + std_static^2); otherwise fitted is the ensemble
+        mean and the combined std sqrt(std_across_runs^2 + std_static^2) (the across-run spread, not
+        the standard error of the mean: a conservative choice, since runs differ physically as well
+        as by noise).  ``TermComparison.verdict_from`` names the estimate used.
     """
     if origin_offset == "fitted-equilibrium":
         delta = fitted_equilibrium_offset(model["equations"].get("yddot", {}))
@@ -210,6 +228,7 @@ def compare_coefficients(
         delta = float(origin_offset)
         origin = f"user-given origin offset: y_sim = y_data + delta, delta = {delta * 1e6:.2f} um"
     stats = ensemble_statistics(model)
+    integral = model.get("integral_form") or {}
     per_run_given = len(model.get("per_run") or []) >= 2
     rows: list[TermComparison] = []
     all_terms = library_terms()
@@ -228,6 +247,7 @@ def compare_coefficients(
                 var[key] = var.get(key, 0.0) + (sd * comb(int(e[0]), j) * delta ** (int(e[0]) - j)) ** 2
         sim_std = {t: float(np.sqrt(v)) for t, v in var.items()}
         fitted_terms = set(model["equations"].get(eq, {})) | set(stats[eq])
+        ig_terms = (integral.get(eq) or {}).get("terms", {})
         for t in all_terms:
             static = is_velocity_free(t)
             if not static and t not in fitted_terms:
@@ -237,19 +257,27 @@ def compare_coefficients(
             # a term no run selected: every run's coefficient is 0
             st = stats[eq].get(t, {"mean": 0.0, "std": 0.0 if per_run_given else float("nan"), "z": float("nan")})
             fitted = float(model["equations"].get(eq, {}).get(t, 0.0))
+            ig = ig_terms.get(t) or {}
+            ig_val, ig_se = float(ig.get("value", np.nan)), float(ig.get("std_error", np.nan))
             if static:
                 s, s_std = float(sim[t]), float(sim_std.get(t, 0.0))
-                mean = st["mean"] if np.isfinite(st["std"]) else fitted
-                comb_std = np.sqrt((st["std"] if np.isfinite(st["std"]) else 0.0) ** 2 + s_std**2)
-                ratio = mean / s if s != 0 else float("nan")
-                signs = None if (s == 0 or mean == 0) else bool(np.sign(mean) == np.sign(s))
-                within = bool(abs(mean - s) <= n_sigma * comb_std) if comb_std > 0 else None
+                if np.isfinite(ig_val) and np.isfinite(ig_se) and ig_se > 0:
+                    basis, est, est_std = "integral form", ig_val, ig_se
+                else:
+                    basis = "ensemble"
+                    est = st["mean"] if np.isfinite(st["std"]) else fitted
+                    est_std = st["std"] if np.isfinite(st["std"]) else 0.0
+                comb_std = np.sqrt(est_std**2 + s_std**2)
+                ratio = est / s if s != 0 else float("nan")
+                signs = None if (s == 0 or est == 0) else bool(np.sign(est) == np.sign(s))
+                within = bool(abs(est - s) <= n_sigma * comb_std) if comb_std > 0 else None
                 rows.append(TermComparison(eq, t, "static", t in model["equations"].get(eq, {}), fitted, st["mean"], st["std"],
-                                           st["z"], s, s_std, ratio, signs, within, sens.get(t, 0.0) * 1e-6))
+                                           st["z"], s, s_std, ratio, signs, within, sens.get(t, 0.0) * 1e-6,
+                                           ig_val, ig_se, basis))
             else:
                 rows.append(TermComparison(eq, t, "dynamic only: no static prediction", t in model["equations"].get(eq, {}),
                                            fitted, st["mean"], st["std"], st["z"], float("nan"), float("nan"), float("nan"),
-                                           None, None, float("nan")))
+                                           None, None, float("nan"), ig_val, ig_se, "none"))
 
     def order(r: TermComparison):
         lead = (r.equation, r.term) == LEAD_TERM

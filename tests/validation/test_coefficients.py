@@ -91,6 +91,28 @@ def test_comparison_flags_a_wrong_sign(static, rng):
     assert lead.term == "y^2*theta" and lead.signs_agree is False and lead.within_uncertainty is False
 
 
+def test_verdict_uses_the_integral_form_where_it_selected_the_term(static, rng):
+    """A pooled integral-form estimate decides the verdict for the terms in its support; the others keep the ensemble."""
+    model = _fake_model(static.coefficients, 0.0, 0.05, rng, flip=("thetaddot", "y^2*theta"))  # ensemble: wrong sign
+    s_lead = static.coefficients["thetaddot"]["y^2*theta"]
+    se = 0.2 * abs(s_lead)
+    model["integral_form"] = {"method": "test", "thetaddot": {"terms": {
+        "y^2*theta": {"value": 0.9 * s_lead, "std_error": se, "z": 0.9 * s_lead / se}}}}
+    c = compare_coefficients(model, static.coefficients, static.std_errors, origin_offset=0.0)
+    lead = c.rows[0]
+    assert lead.term == "y^2*theta" and lead.verdict_from == "integral form"
+    assert lead.integral == 0.9 * s_lead and lead.integral_std_error == se
+    assert lead.signs_agree is True and lead.within_uncertainty is True
+    np.testing.assert_allclose(lead.ratio, 0.9, rtol=1e-12)
+    other = next(r for r in c.rows if r.term == "y*theta" and r.equation == "thetaddot")
+    assert other.verdict_from == "ensemble" and np.isnan(other.integral)
+    # 3 combined sigma away (SE dominates the static std): not within 2 sigma, same sign
+    model["integral_form"]["thetaddot"]["terms"]["y^2*theta"]["value"] = s_lead + 3.0 * np.hypot(se, static.std_errors["thetaddot"]["y^2*theta"])
+    lead = compare_coefficients(model, static.coefficients, static.std_errors, origin_offset=0.0).rows[0]
+    assert lead.signs_agree is True and lead.within_uncertainty is False
+    assert "integral form" in c.table().splitlines()[2]
+
+
 def test_compare_cli(static, rng, tmp_path, default_model):
     from acousim import static_sweep
 
