@@ -191,18 +191,24 @@ def fit_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], 
     return _ols(X, b, n_win, int(max(windows)))
 
 
-def significance_threshold(alpha: float, n_library: int, n_kept: int) -> float:
-    """|z| a term needs to stay in :func:`select_integral_form` when ``n_kept`` terms are left.
+def significance_threshold(alpha: float, n_library: int, rank: int) -> float:
+    """|z| Holm's step-down rule asks of the ``rank``-th most significant of ``n_library`` terms.
 
-    Holm's step-down rule read along the backward path: the least significant of ``n_kept`` remaining
-    terms is the ``n_kept``-th smallest p-value of the ``n_library`` tested, and is kept if its
-    two-sided normal p <= alpha / (n_library - n_kept + 1).  With every term left this is Bonferroni
-    (alpha / n_library); it relaxes to alpha for the last term.  Family-wise error rate ``alpha``.
+    Two-sided normal p <= alpha / (n_library - rank + 1): Bonferroni (alpha / n_library) for the most
+    significant term, alpha for the ``n_library``-th.  Family-wise error rate ``alpha``.
     """
     from scipy.special import ndtri
 
-    p = alpha / max(n_library - n_kept + 1, 1)
+    p = alpha / max(n_library - rank + 1, 1)
     return float(ndtri(1.0 - 0.5 * p))
+
+
+def _holm_rejects_all(z: NDArray, alpha: float, n_library: int) -> bool:
+    """True if Holm's rule over ``n_library`` hypotheses declares every one of the terms with ``z`` significant
+    (the terms not in ``z``, dropped before, count as the least significant ones)."""
+    az = np.sort(np.abs(np.nan_to_num(z, nan=0.0)))[::-1]
+    thr = np.array([significance_threshold(alpha, n_library, k + 1) for k in range(az.size)])
+    return bool(np.all(az >= thr))
 
 
 @dataclass(frozen=True)
@@ -267,8 +273,11 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     """Backward elimination on the pooled integral form.
 
     Starting from all ``term_names``, refit (one least squares) and drop the least significant term
-    (largest two-sided normal p of its z) while its |z| is below :func:`significance_threshold`
-    (Holm along the backward path, family-wise ``alpha`` over the ``len(term_names)`` library terms).
+    (smallest |z|) while Holm's step-down rule at family-wise ``alpha`` over the ``L = len(term_names)``
+    library terms does not declare every remaining term significant: the k-th most significant
+    remaining term needs a two-sided normal p <= alpha / (L - k + 1) (:func:`significance_threshold`;
+    the dropped terms count as the least significant ones).  The z are those of the current refit, so
+    this is Holm read along the backward path (each step's p-values are conditional on the support).
 
     Parameters
     ----------
@@ -292,10 +301,9 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     fit = None
     while keep:
         fit = _ols(X[:, keep], b, n_win, int(max(windows)))
-        az = np.abs(np.nan_to_num(fit.z, nan=0.0))
-        worst = int(np.argmin(az))
-        if az[worst] >= significance_threshold(alpha, len(names), len(keep)):
+        if _holm_rejects_all(fit.z, alpha, len(names)):
             break
+        worst = int(np.argmin(np.abs(np.nan_to_num(fit.z, nan=0.0))))
         dropped.append(names[keep.pop(worst)])
     window_s = float(np.median([w * dt for w, dt in zip(windows, dts)]))
     if not keep:
@@ -309,8 +317,8 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
 #: One-line description written next to the result in model.json.
 METHOD = ("pooled integral form: measured position minus each window's straight line regressed on the detrended double "
           "integrals of the cubic library at the Savitzky-Golay states (windows of 0.75 of the coordinate's dominant "
-          "period, 30-500 ms; coefficients shared by all runs); ordinary least squares, backward elimination with "
-          "Holm's rule at family-wise alpha over the library terms")
+          "period, 30-500 ms; coefficients shared by all runs); ordinary least squares, backward elimination until "
+          "Holm's rule at family-wise alpha over the 35 library terms declares every remaining term significant")
 
 
 def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives"], alpha: float = 0.01,
