@@ -21,7 +21,9 @@ def _add_compare(sub) -> None:
             "For every velocity-free library term, the simulated static coefficient (least squares on a Gor'kov "
             "sweep, with its uncertainty) beside the fitted one (ensemble mean, std, z-score across runs), their "
             "ratio, whether the signs agree and whether they agree within the combined uncertainty; velocity terms "
-            "are listed as dynamic only. The theta*y^2 term comes first. Simulated coefficients are re-expressed at "
+            "are listed as dynamic only. Where model.json carries the pooled integral-form fit (key integral_form) and it "
+            "selected a term, the verdict uses that estimate and its standard error instead of the ensemble "
+            "(column 'verdict from'). The theta*y^2 term comes first. Simulated coefficients are re-expressed at "
             "the data's y origin (see --origin-offset). Writes comparison.json and comparison.md into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
