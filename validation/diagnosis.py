@@ -140,6 +140,50 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
 
 
 @dataclass(frozen=True, eq=False)
+class PositionIntegrals:
+    """One run's data for the integral form of both equations (:mod:`fitting.integral_form`), at every
+    recorded frame (interior frames only, never thinned).
+
+    Each gap component of an equation compares the *measured* coordinate (raw, its tracking noise
+    white) with the double integral of the model's accelerations over windows, each window's initial
+    position and rate eliminated by removing its straight-line trend.  For a model that explains the
+    data the residual is the tracking noise itself, so the noise floor is known:
+    ``(frames - 2 per window) sigma^2``.  Coordinate index q: 0 for y, 1 for theta.
+    """
+
+    dt: float
+    positions: NDArray[np.float64]  # (n, 2) raw measured [y, theta], gaps filled
+    state: NDArray[np.float64]  # (n, 4) smoothed states at the same frames
+    windows: tuple[int, int]  # frames per window for y and theta (fitting.integral_form.integral_window)
+    noise_var: tuple[float, float]  # tracking-noise variances of y [m^2] and theta [-]
+
+    def starts(self, q: int) -> NDArray[np.int64]:
+        from fitting.integral_form import window_starts
+
+        return window_starts(self.positions.shape[0], self.windows[q])
+
+    def target(self, q: int) -> NDArray[np.float64]:
+        """Detrended measured coordinate q, window by window."""
+        from fitting.integral_form import detrend_windows
+
+        return detrend_windows(self.positions[:, q], self.starts(q), self.windows[q])
+
+    def columns(self, q: int, accel: NDArray) -> NDArray[np.float64]:
+        """Detrended double integrals of accelerations (n, ...) of coordinate q, sampled at every frame."""
+        from fitting.integral_form import integral_columns
+
+        return integral_columns(accel, self.dt, self.starts(q), self.windows[q])
+
+    def floor(self, q: int) -> float:
+        """Expected residual sum of squares of a perfect model: (rows - 2 per window) sigma^2."""
+        return float(self.starts(q).size * (self.windows[q] - 2) * self.noise_var[q])
+
+    @property
+    def usable(self) -> bool:
+        return all(self.starts(q).size > 0 for q in (0, 1))
+
+
+@dataclass(frozen=True, eq=False)
 class RunAccelerations:
     """One run's smoothed states and measured accelerations (interior frames only, SI)."""
 
@@ -155,10 +199,13 @@ class RunAccelerations:
     smoothing: tuple[float, int] | None = None
     #: frame interval of the recording [s] (``t`` may be thinned); None: ``t``'s own spacing
     frame_dt: float | None = None
+    #: positions and states at every frame for the integral form of both equations; None: the gap
+    #: components of the equations use the accelerations instead
+    integral: PositionIntegrals | None = None
 
     def subsample(self, step: int) -> "RunAccelerations":
         return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step], self.noise,
-                                self.smoothing, self.frame_dt)
+                                self.smoothing, self.frame_dt, self.integral)
 
     def smooth(self, x: NDArray) -> NDArray:
         """Filter a model's accelerations (axis 0 along ``t``) as the data's Savitzky-Golay second derivative
@@ -304,6 +351,35 @@ class _Physics:
         res = minimize_scalar(f, bounds=(-4e-4, min(4e-4, -z0 - 1e-6)), method="bounded", options={"xatol": 1e-10})
         return float(res.fun)
 
+    def integral_known(self, z0: float) -> list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]]:
+        """Per run (runs must carry integral data): for y and for theta, the integral-form columns of
+        (the acoustic acceleration at nominal pressure, to be scaled by s; the rest of the simulation's
+        acceleration): (F_Z / M, -g) and (Q_theta / I, -I' thetadot^2 / (2 I)), at every frame."""
+        key = ("integral", round(z0, 12))
+        if key not in self._cache:
+            d = self.model.dimer
+            out = []
+            for r in self.runs:
+                pi = r.integral
+                y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
+                st = self.model.integrals_at_height(th, z0 + y, _cached_sums(self.model, pi))
+                inertia = d.hinge_inertia(th)
+                out.append(((pi.columns(0, st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))),
+                            (pi.columns(1, st.q_theta / inertia),
+                             pi.columns(1, -0.5 * d.hinge_inertia_derivative(th) * thd**2 / inertia))))
+            self._cache[key] = out
+        return self._cache[key]
+
+    def integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None) -> list[tuple[NDArray, NDArray]]:
+        """Per run: integral-form columns (rows, n_params) of the effects' y and theta accelerations."""
+        out = []
+        for r in self.runs:
+            pi = r.integral
+            regs = [effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq) for n in effects]
+            regs = np.concatenate(regs, axis=2) if regs else np.zeros((pi.state.shape[0], 2, 0))
+            out.append((pi.columns(0, regs[:, 0, :]), pi.columns(1, regs[:, 1, :])))
+        return out
+
     def centrifugal(self, r: RunAccelerations) -> NDArray:
         th, thd = r.state[:, 2], r.state[:, 3]
         d = self.model.dimer
@@ -319,6 +395,9 @@ class GapFit:
     residuals: list[NDArray[np.float64]]  # per run (n, 2): a_data - a_sim
     predicted: list[NDArray[np.float64]]  # per run (n, 2)
     energy: list[tuple]  # per run: (energy residual per window [J], oscillation energy [J], noise variance of dE [J^2])
+    #: per run, per coordinate (y, theta): (integral-form residual, sum of the detrended measured coordinate
+    #: squared, noise floor); None: the accelerations were used
+    integral: list | None = None
 
     def effect_parameter_vector(self, names: Sequence[str]) -> NDArray:
         return np.array([self.effects[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
@@ -359,7 +438,11 @@ def _param_slices(effects: Sequence[str], eq: int) -> list[tuple[str, str, int]]
 
 def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str] = (),
                   z0_window: float = 4e-4, fixed: Calibration | None = None) -> GapFit:
-    """Fit the calibration (s, z0) and the parameters of ``effects`` to the runs' accelerations.
+    """Fit the calibration (s, z0) and the parameters of ``effects`` to the runs.
+
+    With integral data on every run (:class:`PositionIntegrals`, what :func:`validation.diagnose.prepare_runs`
+    gives) both equations are fitted in their integral form, against the measured positions; otherwise
+    against the Savitzky-Golay accelerations (matched kernel).
 
     Parameters
     ----------
@@ -374,13 +457,23 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
     """
     physics = _Physics(model, runs)
     y_slots = _param_slices(effects, 0)
-    t_slots = _param_slices(effects, 1)
     y_effects_cols = [c for _, _, c in y_slots]
+    integral = _uses_integral(runs)
+
+    def y_system(z0: float) -> tuple[NDArray, NDArray]:
+        """Stacked y-equation design [s column, all effect columns] and target at origin z0."""
+        if integral:
+            known = physics.integral_known(z0)
+            cols = physics.integral_effect_columns(z0, effects, None)
+            x = np.concatenate([np.column_stack([kn[0][0], c[0]]) for kn, c in zip(known, cols)])
+            b = np.concatenate([r.integral.target(0) - kn[0][1] for r, kn in zip(runs, known)])
+            return x, b
+        cols, tgt = _design(physics, runs, z0, effects, 0)
+        return np.concatenate(cols), np.concatenate(tgt)
 
     def solve_y(z0: float):
-        cols, tgt = _design(physics, runs, z0, effects, 0)
-        x = np.concatenate(cols)[:, [0] + y_effects_cols]
-        b = np.concatenate(tgt)
+        x, b = y_system(z0)
+        x = x[:, [0] + y_effects_cols]
         scale = np.maximum(np.abs(x).max(axis=0), 1e-300)
         sol, *_ = np.linalg.lstsq(x / scale, b, rcond=None)
         sol = sol / scale
@@ -401,31 +494,34 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
     else:
         cal = fixed
         z0 = cal.z_origin_m
-        cols, tgt = _design(physics, runs, z0, effects, 0)
-        x = np.concatenate(cols)
-        b = np.concatenate(tgt) - cal.pressure_scale * x[:, 0]
-        xe = x[:, y_effects_cols]
-        sol_e = np.linalg.lstsq(xe, b, rcond=None)[0] if xe.shape[1] else np.zeros(0)
-        sol_y = np.concatenate([[cal.pressure_scale], sol_e])
-    # all effect parameters jointly at the calibrated (s, z0): y and theta accelerations and the
-    # energy balance, each weighted by its normalisation so that the fit minimises R_y + R_theta + R_E
+    # all effect parameters jointly at the calibrated (s, z0): y and theta equations and the energy
+    # balance, each weighted by its normalisation so that the fit minimises R_y + R_theta + R_E
     params = {n: {p: 0.0 for p in CANDIDATE_EFFECTS[n]} for n in effects}
     n_par = sum(len(CANDIDATE_EFFECTS[n]) for n in effects)
     if n_par:
         s_cal = cal.pressure_scale
         rows, rhs = [], []
-        forces = physics.forces(z0)
-        ay_all = np.concatenate([r.accel[:, 0] for r in runs])
-        at_all = np.concatenate([r.accel[:, 1] for r in runs])
-        w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
-        w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
-        for r, (fz, qt) in zip(runs, forces):
-            z = z0 + r.state[:, 0]
-            regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2))
-            rows.append(w_y * regs[:, 0, :])
-            rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
-            rows.append(w_t * regs[:, 1, :])
-            rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
+        if integral:
+            known = physics.integral_known(z0)
+            cols = physics.integral_effect_columns(z0, effects, cal.equilibrium_height_m)
+            for q in (0, 1):
+                w = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(q) ** 2)) for r in runs), 1e-300))
+                for r, kn, c in zip(runs, known, cols):
+                    rows.append(w * c[q])
+                    rhs.append(w * (r.integral.target(q) - s_cal * kn[q][0] - kn[q][1]))
+        else:
+            forces = physics.forces(z0)
+            ay_all = np.concatenate([r.accel[:, 0] for r in runs])
+            at_all = np.concatenate([r.accel[:, 1] for r in runs])
+            w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
+            w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
+            for r, (fz, qt) in zip(runs, forces):
+                z = z0 + r.state[:, 0]
+                regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2))
+                rows.append(w_y * regs[:, 0, :])
+                rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
+                rows.append(w_t * regs[:, 1, :])
+                rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
         en = physics.energy_terms(z0, effects, cal.equilibrium_height_m)
         e_rest = physics.rest_energy(s_cal, z0)
         e_scale = np.concatenate([e["k0"] + s_cal * e["u0"] - e_rest for e in en])
@@ -442,7 +538,33 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
                 params[n][p] = float(sol[i])
                 i += 1
     residuals, predicted = _residuals(physics, runs, cal, params)
-    return GapFit(cal, params, residuals, predicted, _energy_residuals(physics, cal, params))
+    return GapFit(cal, params, residuals, predicted, _energy_residuals(physics, cal, params),
+                  _integral_residuals(physics, cal, params))
+
+
+def _uses_integral(runs: Sequence[RunAccelerations]) -> bool:
+    """Both equations use the integral form when every run carries usable integral data."""
+    return bool(runs) and all(r.integral is not None and r.integral.usable for r in runs)
+
+
+def _integral_residuals(physics: _Physics, cal: Calibration, params: dict) -> list[list[tuple[NDArray, float, float]]] | None:
+    """Per run, per coordinate (y, theta): (integral-form residual, sum of the detrended measured
+    coordinate squared, noise floor of the residual sum of squares); None without integral data."""
+    if not _uses_integral(physics.runs):
+        return None
+    names = list(params)
+    pv = np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
+    known = physics.integral_known(cal.z_origin_m)
+    cols = physics.integral_effect_columns(cal.z_origin_m, names, cal.equilibrium_height_m)
+    out = []
+    for r, kn, c in zip(physics.runs, known, cols):
+        per = []
+        for q in (0, 1):
+            target = r.integral.target(q)
+            res = target - cal.pressure_scale * kn[q][0] - kn[q][1] - (c[q] @ pv if pv.size else 0.0)
+            per.append((res, float(np.sum(target**2)), r.integral.floor(q)))
+        out.append(per)
+    return out
 
 
 def _energy_residuals(physics: _Physics, cal: Calibration, params: dict) -> list[tuple[NDArray, NDArray]]:
@@ -480,15 +602,24 @@ def _residuals(physics: _Physics, runs, cal: Calibration, params: dict) -> tuple
 
 
 def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArray],
-                    energy: Sequence[tuple] | None = None, subtract_floor: bool = True) -> NDArray[np.float64]:
-    """Per run (n_runs, 3): unexplained fraction of the yddot and thetaddot variance and of the energy
-    balance (R_E), each minus its noise floor unless ``subtract_floor`` is False (module docstring)."""
+                    energy: Sequence[tuple] | None = None, subtract_floor: bool = True,
+                    integral: Sequence | None = None) -> NDArray[np.float64]:
+    """Per run (n_runs, 3): unexplained fraction of the y and theta equations and of the energy balance
+    (R_E), each minus its noise floor unless ``subtract_floor`` is False (module docstring).
+
+    With ``integral`` (integral-form residuals, :class:`PositionIntegrals`) the y and theta components are
+    the unexplained fractions of the detrended measured coordinates, ``sum r^2 / sum (P x)^2``, whose
+    floors are ``(frames - 2 per window) sigma^2 / sum (P x)^2``; without, those of the Savitzky-Golay
+    acceleration variances."""
     out = np.zeros((len(runs), 3))
     for i, (r, e) in enumerate(zip(runs, residuals)):
         var = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
         out[i, :2] = np.sum(e**2, axis=0) / np.maximum(var, 1e-300)
         if subtract_floor and r.noise is not None:
             out[i, :2] -= len(r.t) * r.noise[:2] / np.maximum(var, 1e-300)
+        if integral is not None:
+            for q, (res, norm, floor) in enumerate(integral[i]):
+                out[i, q] = (float(np.sum(res**2)) - (floor if subtract_floor else 0.0)) / max(norm, 1e-300)
         if energy is not None:
             res, eosc, floor_var = energy[i]
             norm = max(float(np.sum(eosc**2)), 1e-300)
@@ -498,13 +629,13 @@ def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArra
 
 def noise_floors(runs: Sequence[RunAccelerations], fit: "GapFit") -> NDArray[np.float64]:
     """Per run (n_runs, 3): the floors subtracted by :func:`short_time_gaps`."""
-    raw = short_time_gaps(runs, fit.residuals, fit.energy, subtract_floor=False)
-    return raw - short_time_gaps(runs, fit.residuals, fit.energy)
+    raw = short_time_gaps(runs, fit.residuals, fit.energy, subtract_floor=False, integral=fit.integral)
+    return raw - short_time_gaps(runs, fit.residuals, fit.energy, integral=fit.integral)
 
 
 def fit_gaps(runs: Sequence[RunAccelerations], fit: "GapFit") -> NDArray[np.float64]:
     """Per-run gap components (n_runs, 3) of a fit on these runs."""
-    return short_time_gaps(runs, fit.residuals, fit.energy)
+    return short_time_gaps(runs, fit.residuals, fit.energy, integral=fit.integral)
 
 
 def scalar_gap(per_run: NDArray) -> float:
@@ -529,7 +660,8 @@ def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArr
         physics = _Physics(model, held)
         res, _ = _residuals(physics, held, fit.calibration, fit.effects)
         en = _energy_residuals(physics, fit.calibration, fit.effects)
-        out[test] = short_time_gaps(held, res, en).mean(axis=1)
+        integral = _integral_residuals(physics, fit.calibration, fit.effects)
+        out[test] = short_time_gaps(held, res, en, integral=integral).mean(axis=1)
     return out
 
 
@@ -542,7 +674,7 @@ class Identification:
 def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequence[str] = tuple(CANDIDATE_EFFECTS),
                      alpha: float = 0.01, min_relative_improvement: float = 0.05,
                      progress: Callable[[str], None] | None = None,
-                     min_absolute_improvement: float = 5e-4) -> Identification:
+                     min_absolute_improvement: float = 2e-5) -> Identification:
     """Greedy, held-out identification of the effects present (see module docstring)."""
     if len(runs) < 3:
         raise ValueError("identification needs at least 3 runs (held-out runs are the significance test)")
