@@ -85,20 +85,29 @@ def detrend_windows(x: NDArray, starts: NDArray, window: int) -> NDArray[np.floa
     ``[1, t]`` (uniform sampling), which eliminates the windows' initial positions and rates."""
     x = np.asarray(x, float)
     idx = np.asarray(starts)[:, None] + np.arange(window)[None, :]
-    seg = x[idx]  # (n_win, window, ...)
+    return _detrend_stacked(x[idx]).reshape((idx.size,) + x.shape[1:])
+
+
+def _detrend_stacked(seg: NDArray) -> NDArray[np.float64]:
+    """Remove the straight line along axis 1 of stacked windows (n_win, window, ...)."""
+    window = seg.shape[1]
     u = np.arange(window) - 0.5 * (window - 1)
     u = u.reshape((1, window) + (1,) * (seg.ndim - 2))
     seg = seg - seg.mean(axis=1, keepdims=True)
     slope = np.sum(seg * u, axis=1, keepdims=True) / np.sum(u * u)
-    return (seg - slope * u).reshape((-1,) + x.shape[1:])
+    return seg - slope * u
 
 
 def integral_columns(f: NDArray, dt: float, starts: NDArray, window: int) -> NDArray[np.float64]:
     """Detrended ``K[f]`` per window (f: (n, ...) sampled at every frame): the design columns of the
-    integral form.  Each window is integrated from its own first frame."""
+    integral form.  Each window is integrated from its own first frame (trapezoid rule twice)."""
     f = np.asarray(f, float)
-    out = [detrend_windows(double_integral(f[s:s + window], dt), np.array([0]), window) for s in starts]
-    return np.concatenate(out) if out else np.zeros((0,) + f.shape[1:])
+    idx = np.asarray(starts)[:, None] + np.arange(window)[None, :]
+    seg = f[idx]  # (n_win, window, ...)
+    zero = np.zeros(seg.shape[:1] + (1,) + seg.shape[2:])
+    c1 = np.concatenate([zero, np.cumsum(0.5 * (seg[:, 1:] + seg[:, :-1]), axis=1) * dt], axis=1)
+    c2 = np.concatenate([zero, np.cumsum(0.5 * (c1[:, 1:] + c1[:, :-1]), axis=1) * dt], axis=1)
+    return _detrend_stacked(c2).reshape((idx.size,) + f.shape[1:])
 
 
 @dataclass(frozen=True)
