@@ -395,8 +395,8 @@ class GapFit:
     residuals: list[NDArray[np.float64]]  # per run (n, 2): a_data - a_sim
     predicted: list[NDArray[np.float64]]  # per run (n, 2)
     energy: list[tuple]  # per run: (energy residual per window [J], oscillation energy [J], noise variance of dE [J^2])
-    #: per run, per coordinate (y, theta): (integral-form residual, sum of the detrended measured coordinate
-    #: squared, noise floor); None: the accelerations were used
+    #: per run: (integral-form theta residual, sum of the detrended measured theta squared, noise floor);
+    #: None: the thetaddot accelerations were used
     integral: list | None = None
 
     def effect_parameter_vector(self, names: Sequence[str]) -> NDArray:
@@ -461,13 +461,8 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
     integral = _uses_integral(runs)
 
     def y_system(z0: float) -> tuple[NDArray, NDArray]:
-        """Stacked y-equation design [s column, all effect columns] and target at origin z0."""
-        if integral:
-            known = physics.integral_known(z0)
-            cols = physics.integral_effect_columns(z0, effects, None)
-            x = np.concatenate([np.column_stack([kn[0][0], c[0]]) for kn, c in zip(known, cols)])
-            b = np.concatenate([r.integral.target(0) - kn[0][1] for r, kn in zip(runs, known)])
-            return x, b
+        """Stacked y-equation design [s column, all effect columns] and target at origin z0 (accelerations:
+        the calibration stays on the Savitzky-Golay accelerations, see the module docstring)."""
         cols, tgt = _design(physics, runs, z0, effects, 0)
         return np.concatenate(cols), np.concatenate(tgt)
 
@@ -501,25 +496,24 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
     if n_par:
         s_cal = cal.pressure_scale
         rows, rhs = [], []
-        if integral:
+        forces = physics.forces(z0)
+        ay_all = np.concatenate([r.accel[:, 0] for r in runs])
+        at_all = np.concatenate([r.accel[:, 1] for r in runs])
+        w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
+        w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
+        if integral:  # the theta equation in its integral form, against the measured theta
             known = physics.integral_known(z0)
             cols = physics.integral_effect_columns(z0, effects, cal.equilibrium_height_m)
-            for q in (0, 1):
-                w = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(q) ** 2)) for r in runs), 1e-300))
-                for r, kn, c in zip(runs, known, cols):
-                    rows.append(w * c[q])
-                    rhs.append(w * (r.integral.target(q) - s_cal * kn[q][0] - kn[q][1]))
-        else:
-            forces = physics.forces(z0)
-            ay_all = np.concatenate([r.accel[:, 0] for r in runs])
-            at_all = np.concatenate([r.accel[:, 1] for r in runs])
-            w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
-            w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
-            for r, (fz, qt) in zip(runs, forces):
-                z = z0 + r.state[:, 0]
-                regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2))
-                rows.append(w_y * regs[:, 0, :])
-                rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
+            w_t = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(1) ** 2)) for r in runs), 1e-300))
+        for i, (r, (fz, qt)) in enumerate(zip(runs, forces)):
+            z = z0 + r.state[:, 0]
+            regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, physics.k, cal.equilibrium_height_m) for n in effects], axis=2))
+            rows.append(w_y * regs[:, 0, :])
+            rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
+            if integral:
+                rows.append(w_t * cols[i][1])
+                rhs.append(w_t * (r.integral.target(1) - s_cal * known[i][1][0] - known[i][1][1]))
+            else:
                 rows.append(w_t * regs[:, 1, :])
                 rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
         en = physics.energy_terms(z0, effects, cal.equilibrium_height_m)
@@ -547,9 +541,9 @@ def _uses_integral(runs: Sequence[RunAccelerations]) -> bool:
     return bool(runs) and all(r.integral is not None and r.integral.usable for r in runs)
 
 
-def _integral_residuals(physics: _Physics, cal: Calibration, params: dict) -> list[list[tuple[NDArray, float, float]]] | None:
-    """Per run, per coordinate (y, theta): (integral-form residual, sum of the detrended measured
-    coordinate squared, noise floor of the residual sum of squares); None without integral data."""
+def _integral_residuals(physics: _Physics, cal: Calibration, params: dict) -> list[tuple[NDArray, float, float]] | None:
+    """Per run: (integral-form theta residual, sum of the detrended measured theta squared, noise floor of
+    the residual sum of squares); None without integral data."""
     if not _uses_integral(physics.runs):
         return None
     names = list(params)
@@ -558,12 +552,9 @@ def _integral_residuals(physics: _Physics, cal: Calibration, params: dict) -> li
     cols = physics.integral_effect_columns(cal.z_origin_m, names, cal.equilibrium_height_m)
     out = []
     for r, kn, c in zip(physics.runs, known, cols):
-        per = []
-        for q in (0, 1):
-            target = r.integral.target(q)
-            res = target - cal.pressure_scale * kn[q][0] - kn[q][1] - (c[q] @ pv if pv.size else 0.0)
-            per.append((res, float(np.sum(target**2)), r.integral.floor(q)))
-        out.append(per)
+        target = r.integral.target(1)
+        res = target - cal.pressure_scale * kn[1][0] - kn[1][1] - (c[1] @ pv if pv.size else 0.0)
+        out.append((res, float(np.sum(target**2)), r.integral.floor(1)))
     return out
 
 
@@ -607,10 +598,10 @@ def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArra
     """Per run (n_runs, 3): unexplained fraction of the y and theta equations and of the energy balance
     (R_E), each minus its noise floor unless ``subtract_floor`` is False (module docstring).
 
-    With ``integral`` (integral-form residuals, :class:`PositionIntegrals`) the y and theta components are
-    the unexplained fractions of the detrended measured coordinates, ``sum r^2 / sum (P x)^2``, whose
-    floors are ``(frames - 2 per window) sigma^2 / sum (P x)^2``; without, those of the Savitzky-Golay
-    acceleration variances."""
+    The y component is the unexplained fraction of the Savitzky-Golay yddot variance.  With ``integral``
+    (integral-form residuals, :class:`PositionIntegrals`) the theta component is the unexplained fraction
+    of the detrended measured theta, ``sum r^2 / sum (P theta)^2``, whose floor is
+    ``(frames - 2 per window) sigma_theta^2 / sum (P theta)^2``; without, that of the thetaddot variance."""
     out = np.zeros((len(runs), 3))
     for i, (r, e) in enumerate(zip(runs, residuals)):
         var = np.sum((r.accel - r.accel.mean(axis=0)) ** 2, axis=0)
@@ -618,8 +609,8 @@ def short_time_gaps(runs: Sequence[RunAccelerations], residuals: Sequence[NDArra
         if subtract_floor and r.noise is not None:
             out[i, :2] -= len(r.t) * r.noise[:2] / np.maximum(var, 1e-300)
         if integral is not None:
-            for q, (res, norm, floor) in enumerate(integral[i]):
-                out[i, q] = (float(np.sum(res**2)) - (floor if subtract_floor else 0.0)) / max(norm, 1e-300)
+            res, norm, floor = integral[i]
+            out[i, 1] = (float(np.sum(res**2)) - (floor if subtract_floor else 0.0)) / max(norm, 1e-300)
         if energy is not None:
             res, eosc, floor_var = energy[i]
             norm = max(float(np.sum(eosc**2)), 1e-300)
@@ -672,7 +663,7 @@ class Identification:
 
 
 def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequence[str] = tuple(CANDIDATE_EFFECTS),
-                     alpha: float = 0.01, min_relative_improvement: float = 0.05,
+                     alpha: float = 0.01, min_relative_improvement: float = 0.2,
                      progress: Callable[[str], None] | None = None,
                      min_absolute_improvement: float = 2e-5) -> Identification:
     """Greedy, held-out identification of the effects present (see module docstring)."""
