@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs, savgol_filter
 
-__all__ = ["SmoothingConfig", "Derivatives", "savgol_window", "differentiate", "noise_gain",
+__all__ = ["SmoothingConfig", "Derivatives", "savgol_window", "differentiate", "smooth_long_window", "noise_gain",
            "run_derivatives", "acceleration_kernel", "apply_acceleration_kernel"]
 
 
@@ -141,6 +141,35 @@ def differentiate(x: NDArray, dt: float, window: int, polyorder: int) -> tuple[N
     kw = dict(window_length=window, polyorder=polyorder, delta=dt, mode="interp")
     return (savgol_filter(x, deriv=0, **kw), savgol_filter(x, deriv=1, **kw),
             savgol_filter(x, deriv=2, **kw))
+
+
+def smooth_long_window(x: NDArray, dt: float, window: int, polyorder: int) -> tuple[NDArray, NDArray]:
+    """Savitzky-Golay smoothed signal and first derivative [units of x, per s] for long windows.
+
+    ``scipy.signal.savgol_coeffs`` fits powers of the raw frame offset (up to ``(window/2)^polyorder``), which
+    is ill-conditioned for long windows: measured on a pure sinusoid at 0.75 periods per window and order
+    5, the smoothed RMS error is 6e-11 for 71 frames but 0.64 of the amplitude for 979 frames.  Here the
+    offsets are scaled to [-1, 1] first (the fit is then well conditioned for any window); the edges
+    (half a window at each end) use the polynomial fitted to the first and last window, as
+    ``mode="interp"`` does.
+    """
+    from math import factorial
+
+    x = np.asarray(x, float)
+    n, m = x.size, window // 2
+    if window % 2 == 0 or window > n or window <= polyorder:
+        raise ValueError(f"window must be odd, longer than polyorder and at most the signal length, got {window}")
+    u = np.arange(-m, m + 1) / m
+    pinv = np.linalg.pinv(np.vander(u, polyorder + 1, increasing=True))  # (p+1, window)
+    out = []
+    for deriv in (0, 1):
+        w = pinv[deriv] * factorial(deriv) / (m * dt) ** deriv
+        y = np.convolve(x, w[::-1], mode="same")
+        for seg, pos in ((slice(0, window), np.arange(m)), (slice(n - window, n), np.arange(window - m, window))):
+            c = np.polynomial.polynomial.polyder(pinv @ x[seg], deriv) if deriv else pinv @ x[seg]
+            y[seg][pos] = np.polynomial.polynomial.polyval(u[pos], c) / (m * dt) ** deriv
+        out.append(y)
+    return out[0], out[1]
 
 
 def run_derivatives(t: NDArray, y: NDArray, theta: NDArray, f_y: float,

@@ -37,17 +37,8 @@ def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0)
 FAST = DiagnoseConfig(long_time=False)
 
 
-VELOCITY_COUPLING_SHORTFALL = pytest.mark.xfail(
-    strict=True,
-    reason="measured: velocity_coupling (c5=1.5e4, c6=3e6) is fitted to c5 -6 %, c6 -4 % (matched filter; it was -10 %, "
-           "-20 % against the smoothed model) and improves held-out runs (median 0.0045 of the variance), but the one-sided "
-           "sign-flip test over 10 runs gives p = 0.022 > 0.01 (Wilcoxon: 0.03): 2 of the 10 runs, with little hinge "
-           "motion, get slightly worse; with twin seed 4 the same effect is identified (p = 0.007)")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [pytest.param(n, marks=VELOCITY_COUPLING_SHORTFALL) if n == "velocity_coupling" else n
-                                  for n in SINGLE])
+@pytest.mark.parametrize("name", list(SINGLE))
 def test_single_effect_identified_with_parameters(tmp_path, name):
     data, truth = _twin(tmp_path, {name: SINGLE[name]})
     diag, _ = diagnose_dataset(data, FAST, progress=False)

@@ -14,10 +14,11 @@ def fast_model():
     return GorkovDimer().interpolated()
 
 
-def _synthetic_runs(model, cal, effects, n_runs=8, duration=1.6, fps=500, noise=(0.05, 50.0), seed=0):
+def _synthetic_runs(model, cal, effects, n_runs=8, duration=1.6, fps=500, noise=(0.05, 50.0), seed=0, known_noise=False):
     """Trajectories of the calibrated model + effects from random starts (|y| <= 150 um, |theta| <= 0.4);
     exact accelerations plus noise of the size Savitzky-Golay differentiation leaves on realistic
-    tracking (0.05 m/s^2 and 50 1/s^2)."""
+    tracking (0.05 m/s^2 and 50 1/s^2).  ``known_noise``: the runs carry the noise variances, as
+    :func:`validation.diagnose.prepare_runs` gives them, so that the gaps are in excess of the noise."""
     from validation.diagnosis import simulate_runs
 
     rng = np.random.default_rng(seed)
@@ -28,7 +29,8 @@ def _synthetic_runs(model, cal, effects, n_runs=8, duration=1.6, fps=500, noise=
     assert np.all(n_valid == len(t))
     runs = [RunAccelerations(f"run{i:02d}.csv", t, states[i], np.zeros((len(t), 2))) for i in range(n_runs)]
     _, pred = _residuals(_Physics(model, runs), runs, cal, effects)
-    return [RunAccelerations(r.name, r.t, r.state, p + rng.normal(0, noise, p.shape)) for r, p in zip(runs, pred)]
+    nv = np.array([noise[0] ** 2, noise[1] ** 2, 0.0, 0.0]) if known_noise else None
+    return [RunAccelerations(r.name, r.t, r.state, p + rng.normal(0, noise, p.shape), nv) for r, p in zip(runs, pred)]
 
 
 @pytest.mark.parametrize("name", list(CANDIDATE_EFFECTS))
@@ -79,7 +81,7 @@ def test_identification_finds_exactly_the_effects(fast_model):
     truth = Calibration.at(fast_model, 0.95**2, fast_model.equilibrium_height - 10e-6)
     # beta0 = 60 1/s^2: ~2 % of the hinge acceleration scale, above the 50 1/s^2 derivative noise
     effects = {"pair_scattering": {"kappa": 8e3}, "mirror_asymmetry": {"beta0": 60.0, "beta1": 0.0}}
-    runs = _synthetic_runs(fast_model, truth, effects, seed=1)
+    runs = _synthetic_runs(fast_model, truth, effects, seed=1, known_noise=True)
     result = identify_effects(fast_model, runs)
     assert set(result.identified) == {"pair_scattering", "mirror_asymmetry"}
     assert result.identified[0] == "pair_scattering"  # the larger gap goes first
@@ -87,7 +89,7 @@ def test_identification_finds_exactly_the_effects(fast_model):
 
 def test_no_effect_names_nothing(fast_model):
     truth = Calibration.at(fast_model, 1.05**2, fast_model.equilibrium_height)
-    runs = _synthetic_runs(fast_model, truth, {}, seed=2)
+    runs = _synthetic_runs(fast_model, truth, {}, seed=2, known_noise=True)
     assert identify_effects(fast_model, runs).identified == []
 
 
