@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     from .dataset import Run
     from .derivatives import Derivatives
 
-__all__ = ["double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
+__all__ = ["column_states", "double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
            "IntegralFit", "fit_integral_form", "significance_threshold", "IntegralSelection",
            "select_integral_form", "integral_form_selection", "METHOD"]
 
@@ -282,7 +282,8 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     """Backward elimination on the pooled integral form.
 
     Starting from all ``term_names``, refit (one least squares) and drop the least significant term
-    (smallest |z|) while Holm's step-down rule at family-wise ``alpha`` over the ``L = len(term_names)``
+    (smallest |z|; velocity-dependent terms first while any of them is not significant at alpha / L)
+    while Holm's step-down rule at family-wise ``alpha`` over the ``L = len(term_names)``
     library terms does not declare every remaining term significant: the k-th most significant
     remaining term needs a two-sided normal p <= alpha / (L - k + 1) (:func:`significance_threshold`;
     the dropped terms count as the least significant ones).  The z are those of the current refit, so
@@ -301,6 +302,8 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     -------
     IntegralSelection
     """
+    from .library import is_velocity_free
+
     names = list(term_names)
     X, b, n_win = _design(positions, columns, dts, windows, known, trim)
     if X.shape[1] != len(names):
@@ -312,7 +315,15 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
         fit = _ols(X[:, keep], b, n_win, int(max(windows)))
         if _holm_rejects_all(fit.z, alpha, len(names)):
             break
-        worst = int(np.argmin(np.abs(np.nan_to_num(fit.z, nan=0.0))))
+        absz = np.abs(np.nan_to_num(fit.z, nan=0.0))
+        # velocity terms earn their place first: while one is not significant even at the Bonferroni level,
+        # the least significant velocity term goes (a conservative field is the default hypothesis; on
+        # harmonic y motion y^2*theta and ydot^2*theta are nearly collinear and would otherwise be chosen
+        # between by noise)
+        velocity = np.array([not is_velocity_free(names[k]) for k in keep])
+        weak_velocity = velocity & (absz < significance_threshold(alpha, len(names), 1))
+        pool = np.flatnonzero(weak_velocity) if weak_velocity.any() else np.arange(len(keep))
+        worst = int(pool[np.argmin(absz[pool])])
         dropped.append(names[keep.pop(worst)])
     window_s = float(np.median([w * dt for w, dt in zip(windows, dts)]))
     if not keep:
@@ -325,9 +336,48 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
 
 #: One-line description written next to the result in model.json.
 METHOD = ("pooled integral form: measured position minus each window's straight line regressed on the detrended double "
-          "integrals of the cubic library at the Savitzky-Golay states (windows of 0.75 of the coordinate's dominant "
+          "integrals of the cubic library at raw y, smoothed ydot and theta smoothed over half a hinge period (windows of 0.75 of the coordinate's dominant "
           "period, 30-500 ms; coefficients shared by all runs); ordinary least squares, backward elimination until "
-          "Holm's rule at family-wise alpha over the 35 library terms declares every remaining term significant")
+          "Holm's rule at family-wise alpha over the 35 library terms declares every remaining term significant "
+          "(velocity terms dropped first while one is not significant at alpha/35)")
+
+
+def column_states(dt: float, y: NDArray, theta: NDArray, ydot: NDArray, f_y: float, f_theta: float,
+                  trim: int = 0, polyorder: int = 5) -> tuple[NDArray[np.float64], int]:
+    """The states at which the integral form evaluates its library or model columns, and the frames to
+    leave out at each end.
+
+    * y is the *raw* measurement: 1 um of tracking noise on ~100 um of motion costs nothing, while a
+      Savitzky-Golay window of 0.75 y periods attenuates y by ~0.3 % at f_y (measured: it biased the
+      calibrated pressure by +0.16 %); ydot is the given (smoothed) one.
+    * theta and thetadot are smoothed over half a period of the dominant theta frequency (at most 20 y
+      periods), not 0.75 y periods: the derivative noise of a y-period window sits near f_y - 2 f_y,
+      where products with y and ydot (velocity coupling) demodulate it to low frequencies that the
+      double integral amplifies (measured on a 1.7-Hz hinge: c5 26 % low and c6 lost; on a 15-Hz hinge
+      with short windows, within 1 %).  The long window uses
+      :func:`fitting.derivatives.smooth_long_window`; its edges (half a window) are left out.
+
+    Parameters
+    ----------
+    dt : frame interval [s]; y [m], theta [-]: raw, gap-filled, every frame; ydot [m/s] smoothed
+    f_y, f_theta : dominant frequencies [Hz]
+    trim : frames the caller leaves out anyway (e.g. the y smoothing's edges)
+
+    Returns
+    -------
+    states (n, 4) [y, ydot, theta, thetadot]; edge: frames to leave out at each end
+    """
+    from .derivatives import SmoothingConfig, savgol_window, smooth_long_window
+
+    y, theta = np.asarray(y, float), np.asarray(theta, float)
+    n = y.size
+    f_hinge = max(float(f_theta), float(f_y) / 20.0) if np.isfinite(f_theta) else float(f_y)
+    w = savgol_window(dt, 1.0 / f_hinge, SmoothingConfig(window_periods=0.5, polyorder=polyorder))
+    edge = max(int(trim), w // 2)
+    if w >= n or n - 2 * edge <= 0:
+        raise ValueError(f"a run of {n} frames is shorter than the hinge smoothing window ({w} frames)")
+    ts, td = smooth_long_window(theta, dt, w, polyorder)
+    return np.column_stack([y, np.asarray(ydot, float), ts, td]), edge
 
 
 def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives"], alpha: float = 0.01,
@@ -352,12 +402,17 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
     from .library import EQUATION_NAMES, evaluate_library, library_terms
     from .spectra import dominant_frequency
 
-    columns = [evaluate_library(d.state) for d in derivs]
     dts = [float(r.dt) for r in runs]
-    trims = [int(d.trim) for d in derivs]
+    freqs = [(dominant_frequency(np.asarray(r.y, float), dt), dominant_frequency(np.asarray(r.theta, float), dt))
+             for r, dt in zip(runs, dts)]
+    columns, trims = [], []
+    for r, d, dt, (f_y, f_theta) in zip(runs, derivs, dts, freqs):
+        states, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
+        columns.append(evaluate_library(states))
+        trims.append(edge)
     out = {}
-    for eq, coord in zip(EQUATION_NAMES, ("y", "theta")):
+    for q, (eq, coord) in enumerate(zip(EQUATION_NAMES, ("y", "theta"))):
         pos = [np.asarray(getattr(r, coord), float) for r in runs]
-        windows = [integral_window(dt, dominant_frequency(x, dt), periods) for x, dt in zip(pos, dts)]
+        windows = [integral_window(dt, f[q], periods) for f, dt in zip(freqs, dts)]
         out[eq] = select_integral_form(pos, columns, dts, windows, library_terms(), trim=trims, alpha=alpha)
     return out

@@ -53,10 +53,10 @@ class DiagnoseConfig:
 def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[np.ndarray]]:
     """Smoothed states and accelerations of every run (interior frames) with their derivative-noise
     variances [yddot, thetaddot, ydot, thetadot] (also returned separately)."""
-    from fitting.derivatives import SmoothingConfig, run_derivatives, savgol_window, smooth_long_window
+    from fitting.derivatives import SmoothingConfig, run_derivatives
     from fitting.spectra import dominant_frequency
 
-    from fitting.integral_form import integral_window
+    from fitting.integral_form import column_states, integral_window
 
     smoothing = SmoothingConfig()
     runs, noise = [], []
@@ -66,23 +66,15 @@ def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[np.ndarray]]:
         sl = slice(d.trim, len(d.t) - d.trim)
         nv, sigma2 = _derivative_noise(run, d, smoothing.polyorder)
         f_theta = dominant_frequency(run.theta[sl] - run.theta[sl].mean(), run.dt, fmin=2.0 / max(run.duration, 1e-9))
-        # the integral form of the theta equation (fitting.integral_form): windows of 0.75 hinge periods.
-        # The model's columns are evaluated at the *raw* y (1 um of noise on ~100 um of motion is negligible,
-        # while the smoothing attenuates y by ~0.3 % at f_y) and at theta, thetadot smoothed over half a
-        # hinge period, not 0.75 y periods: that window's derivative noise sits near f_y - 2 f_y, where
-        # products with y and ydot (velocity coupling) demodulate it to low frequencies that the double
-        # integral amplifies (measured on a 1.7-Hz hinge: c5 26 % low and c6 lost; on a 15-Hz hinge, where
-        # the windows are short, within 1 %).  The edges of the long theta window are left out.
-        w_theta = savgol_window(run.dt, 1.0 / max(f_theta, f_y / 20.0), SmoothingConfig(window_periods=0.5))
-        edge = max(d.trim, w_theta // 2)
-        if w_theta < len(run.t) and len(run.t) - 2 * edge > 0:
+        # the integral form of the theta equation (fitting.integral_form): windows of 0.75 hinge periods,
+        # columns at raw y and at theta smoothed over half a hinge period (fitting.integral_form.column_states)
+        try:
+            cols_state, edge = column_states(run.dt, run.y, run.theta, d.state[:, 1], f_y, f_theta, d.trim, smoothing.polyorder)
             si = slice(edge, len(run.t) - edge)
-            ts, td = smooth_long_window(run.theta, run.dt, w_theta, smoothing.polyorder)
-            cols_state = np.column_stack([run.y[si], d.state[si, 1], ts[si], td[si]])
-            integral = PositionIntegrals(float(run.dt), np.column_stack([run.y[si], run.theta[si]]).astype(float), cols_state,
+            integral = PositionIntegrals(float(run.dt), np.column_stack([run.y[si], run.theta[si]]).astype(float), cols_state[si],
                                          (integral_window(run.dt, f_y), integral_window(run.dt, f_theta)),
                                          (float(sigma2[0]), float(sigma2[1])))
-        else:
+        except ValueError:  # too short for the hinge window: the theta component uses the accelerations
             integral = None
         runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv,
                                      (d.window * run.dt, smoothing.polyorder), float(run.dt), integral))
