@@ -212,6 +212,16 @@ def significance_threshold(alpha: float, n_library: int, rank: int) -> float:
     return float(ndtri(1.0 - 0.5 * p))
 
 
+def _is_velocity_term(name: str) -> bool:
+    """A library term with a velocity factor (FORMATS.md names); other names: contains "dot"."""
+    from .library import is_velocity_free
+
+    try:
+        return not is_velocity_free(name)
+    except ValueError:
+        return "dot" in name
+
+
 def _holm_rejects_all(z: NDArray, alpha: float, n_library: int) -> bool:
     """True if Holm's rule over ``n_library`` hypotheses declares every one of the terms with ``z`` significant
     (the terms not in ``z``, dropped before, count as the least significant ones)."""
@@ -302,8 +312,6 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     -------
     IntegralSelection
     """
-    from .library import is_velocity_free
-
     names = list(term_names)
     X, b, n_win = _design(positions, columns, dts, windows, known, trim)
     if X.shape[1] != len(names):
@@ -320,7 +328,7 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
         # the least significant velocity term goes (a conservative field is the default hypothesis; on
         # harmonic y motion y^2*theta and ydot^2*theta are nearly collinear and would otherwise be chosen
         # between by noise)
-        velocity = np.array([not is_velocity_free(names[k]) for k in keep])
+        velocity = np.array([_is_velocity_term(names[k]) for k in keep])
         weak_velocity = velocity & (absz < significance_threshold(alpha, len(names), 1))
         pool = np.flatnonzero(weak_velocity) if weak_velocity.any() else np.arange(len(keep))
         worst = int(pool[np.argmin(absz[pool])])
