@@ -133,3 +133,48 @@ def test_significance_threshold_is_holm_along_the_path():
     # the most significant of 35: Bonferroni, two-sided p = alpha / 35; the 35th: p = alpha
     np.testing.assert_allclose(2 * norm.sf(significance_threshold(0.01, 35, 1)), 0.01 / 35, rtol=1e-10)
     np.testing.assert_allclose(2 * norm.sf(significance_threshold(0.01, 35, 35)), 0.01, rtol=1e-10)
+
+
+@pytest.mark.parametrize("window", [71, 979, 2001])
+def test_long_window_savgol_is_exact_for_polynomials(window):
+    """A Savitzky-Golay filter of order p reproduces polynomials of degree <= p exactly, edges included;
+    scipy's unscaled fit loses that for long windows (0.64 of the amplitude at 979 frames on a sinusoid)."""
+    from fitting.derivatives import smooth_long_window
+
+    dt = 5e-4
+    t = np.arange(6000) * dt
+    x = 0.2 - 1.5 * t + 0.7 * t**2 - 0.4 * t**3 + 0.05 * t**5
+    dx = -1.5 + 1.4 * t - 1.2 * t**2 + 0.25 * t**4
+    s, d = smooth_long_window(x, dt, window, 5)
+    # round-off only: the scaled Vandermonde of order 5 is well conditioned at any window
+    np.testing.assert_allclose(s, x, atol=1e-9)
+    np.testing.assert_allclose(d, dx, atol=1e-6)
+
+
+def test_long_window_savgol_matches_scipy_on_short_windows():
+    from fitting.derivatives import differentiate, smooth_long_window
+
+    rng = np.random.default_rng(3)
+    x = np.cumsum(rng.normal(size=3000))
+    a, b, _ = differentiate(x, 1e-3, 51, 5)
+    s, d = smooth_long_window(x, 1e-3, 51, 5)
+    # the same least-squares filter; scipy's raw offsets are well conditioned at 51 frames
+    np.testing.assert_allclose(s, a, atol=1e-8 * np.abs(x).max())
+    np.testing.assert_allclose(d, b, atol=1e-8 * np.abs(b).max())
+
+
+def test_column_states_use_raw_y_and_a_hinge_period_window():
+    from fitting.integral_form import column_states
+
+    dt, n = 5e-4, 6000
+    t = np.arange(n) * dt
+    y = 2e-4 * np.sin(2 * np.pi * 22 * t)
+    theta = 0.2 * np.sin(2 * np.pi * 1.7 * t)
+    states, edge = column_states(dt, y, theta, np.gradient(y, dt), 22.0, 1.7, trim=30)
+    np.testing.assert_array_equal(states[:, 0], y)  # raw y, no smoothing attenuation
+    # half a hinge period: 0.5 / 1.7 s = 0.294 s = 588 frames (odd: 589), its half left out at each end
+    assert edge == 294
+    sl = slice(edge, n - edge)
+    # a 5th-order fit over half a period follows a sinusoid to ~1e-4 of its amplitude
+    np.testing.assert_allclose(states[sl, 2], theta[sl], atol=1e-4 * 0.2)
+    np.testing.assert_allclose(states[sl, 3], 0.2 * 2 * np.pi * 1.7 * np.cos(2 * np.pi * 1.7 * t[sl]), atol=1e-3 * 2.1)
