@@ -175,6 +175,7 @@ def test_column_states_use_raw_y_and_a_hinge_period_window():
     # half a hinge period: 0.5 / 1.7 s = 0.294 s = 588 frames (odd: 589), its half left out at each end
     assert edge == 294
     sl = slice(edge, n - edge)
-    # a 5th-order fit over half a period follows a sinusoid to ~1e-4 of its amplitude
-    np.testing.assert_allclose(states[sl, 2], theta[sl], atol=1e-4 * 0.2)
-    np.testing.assert_allclose(states[sl, 3], 0.2 * 2 * np.pi * 1.7 * np.cos(2 * np.pi * 1.7 * t[sl]), atol=1e-3 * 2.1)
+    # a 5th-order fit over half a period attenuates a sinusoid by ~4e-4 of its amplitude (the Taylor
+    # remainder of order 6 over +-pi/2); bound it at 1e-3 of the amplitude, for angle and rate
+    np.testing.assert_allclose(states[sl, 2], theta[sl], atol=1e-3 * 0.2)
+    np.testing.assert_allclose(states[sl, 3], 0.2 * 2 * np.pi * 1.7 * np.cos(2 * np.pi * 1.7 * t[sl]), atol=1e-3 * 2.14)
