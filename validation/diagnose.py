@@ -43,7 +43,7 @@ class DiagnoseConfig:
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
     alpha: float = 0.01
     min_relative_improvement: float = 0.05
-    min_absolute_improvement: float = 2e-5
+    min_absolute_improvement: float = 5e-6
     max_frames_per_run: int = 1500
     max_vertical_gap: float = 0.05
     long_time: bool = True
