@@ -1,19 +1,32 @@
 """Diagnose the sim-to-real gap: where it lies, which unmodelled effect causes it, how far it shrinks.
 
 "Sim" is the Gor'kov model of PHYSICS.md section 4 calibrated to the data; "real" is any data set in
-the FORMATS.md format.  Everything here works on accelerations estimated from the data
-(Savitzky-Golay, :mod:`fitting.derivatives`) at the measured states, where every candidate effect of
-PHYSICS.md section 5 is *linear in its parameters*.
+the FORMATS.md format.  Every candidate effect of PHYSICS.md section 5 is *linear in its parameters*,
+so every fit here is a linear least-squares problem at the measured states.
+
+Two forms of the equations of motion
+    *Accelerations*: Savitzky-Golay second derivatives of the data (:mod:`fitting.derivatives`) against
+    the model's accelerations passed through the filter's matched kernel.  *Integral form*
+    (:mod:`fitting.integral_form`, data in :class:`PositionIntegrals`): the measured coordinate minus each
+    window's straight line against the detrended double integral of the model's accelerations.  Its
+    residual is the white tracking noise itself for a model that explains the data, where the
+    accelerations carry that noise times the filter's derivative gain (thetaddot on the soft Gor'kov
+    hinge is ~95 % noise).  The model's columns are evaluated at the raw y and at theta smoothed over
+    half a hinge period (:func:`fitting.integral_form.column_states`).  With integral data (what
+    :func:`validation.diagnose.prepare_runs` gives) the calibration and the theta equation use the
+    integral form; the y component of the gap and the y rows of the effect fits use the accelerations.
 
 Calibration (nothing else is free at this stage)
     The simulated accelerations at nominal pressure ``p_nom`` are ``a_y = s F_Z(theta, Z)/M - g`` and
     ``a_theta = (s Q_theta(theta, Z) - I'(theta) thetadot^2 / 2) / I(theta)`` with ``s = (p0/p_nom)^2``
     (the Gor'kov forces scale exactly with p0^2 at fixed lab height) and ``Z = z0 + y``: ``z0`` is the
-    lab height of the data's y origin.  ``s`` and ``z0`` are fitted to the *y equation only*: the
-    vertical trap is what the acoustic model describes best, while the hinge is where the largest
-    expected gap lies (pair scattering), which must not be absorbed into the pressure.  For fixed
-    ``z0`` the fit is linear (in ``s`` and any y-effect parameters); ``z0`` is found by a bounded scalar
-    search.  Each run's initial state is the smoothed measured state at its first interior frame.
+    lab height of the data's y origin.  ``s`` and ``z0`` are fitted to the *y equation only* (integral
+    form): the vertical trap is what the acoustic model describes best, while the hinge is where the
+    largest expected gap lies (pair scattering), which must not be absorbed into the pressure.  For
+    fixed ``z0`` the fit is linear (in ``s`` and any y-effect parameters); ``z0`` is found by a bounded
+    scalar search.  Measured on no-effect twin data: the pressure within 0.02 % (the accelerations gave
+    +0.1 %, enough of a hinge-stiffness mismatch for pair scattering to absorb with p = 0.001).  Each
+    run's initial state is the smoothed measured state at its first interior frame.
 
 Energy balance
     Weak dissipation is invisible in instantaneous accelerations (gamma ydot is ~1e-2 of the trap
@@ -24,31 +37,35 @@ Energy balance
     again linear in every effect parameter (and in s).  This is the third equation of every fit.
 
 Gap
-    Short-time gap of run r and equation q: ``R_rq = sum (a_data - a_sim)^2 / sum (a_data - mean)^2``,
-    the fraction of the measured acceleration variance the simulation leaves unexplained (1 for a
-    model no better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).  The
-    energy component is ``R_rE = sum_k (dE_k,data - W_k,sim)^2 / sum_k (E_k - E_rest)^2``: the
-    unexplained energy change per window relative to the oscillation energy.
-    Each component has a noise floor, the value a perfect model would show because the data's
-    accelerations and velocities carry derivative noise: the tracking-noise variance (raw minus
-    smoothed positions) times the Savitzky-Golay gain, over the same normalisation.  ``gap`` = mean
-    over runs of the mean over the three components of ``R - floor``: the unexplained fraction *in
-    excess of measurement noise* (about 0 for a model that explains the data within its noise; it can
-    be slightly negative because the floor is an estimate).  This is the scalar of ``gap_before`` and
-    ``gap_after``; the long-time errors (attractor shape, Poincare, frequency of
-    :mod:`fitting.losses`) are reported beside it.
+    Short-time gap of run r, y equation: ``R_ry = sum (a_data - a_sim)^2 / sum (a_data - mean)^2``, the
+    fraction of the measured acceleration variance the simulation leaves unexplained (1 for a model no
+    better than a constant, 0 for a perfect one; derivative noise sets a floor > 0).  Theta equation,
+    integral form: ``R_rtheta = sum r^2 / sum (P theta)^2``, the unexplained fraction of the detrended
+    measured angle (accelerations as for y when there is no integral data).  The energy component is
+    ``R_rE = sum_k (dE_k,data - W_k,sim)^2 / sum_k (E_k - E_rest)^2``: the unexplained energy change per
+    window relative to the oscillation energy.  Each component has a noise floor, the value a perfect
+    model would show: for accelerations and energies the tracking-noise variance (raw minus smoothed
+    positions) times the Savitzky-Golay gain, for the integral form ``(frames - 2 per window)
+    sigma_theta^2``, over the same normalisation.  ``gap`` = mean over runs of the mean over the three
+    components of ``R - floor``: the unexplained fraction *in excess of measurement noise* (about 0 for
+    a model that explains the data within its noise; it can be slightly negative because the floor is
+    an estimate).  This is the scalar of ``gap_before`` and ``gap_after``; the long-time errors
+    (attractor shape, Poincare, frequency of :mod:`fitting.losses`) are reported beside it.
 
 Which effect
     A candidate is fitted (with the calibration) on all runs but one and scored on the held-out
     run (K-fold over runs), giving one held-out gap per run with and without the candidate.  The
     improvement is significant when the one-sided sign-flip permutation test of the mean per-run
     held-out improvement (:func:`sign_flip_pvalue`, exact) gives p < ``alpha`` and the median
-    held-out improvement exceeds ``min_relative_improvement`` of the current gap.  The permutation
-    test uses the size of each run's improvement, not only its rank: runs with little motion in the
-    affected coordinate carry almost no signal and, with random signs but small sizes, barely move it,
-    where they cost the Wilcoxon signed-rank test (also reported) whole ranks.  Held-out scoring is the penalty for added parameters: a parameter that only fits
-    noise, or a run-specific disturbance, does not improve other runs.  Candidates are added
-    greedily (largest median held-out improvement first) while a significant one remains.
+    held-out improvement exceeds ``min_absolute_improvement`` of the variance and
+    ``min_relative_improvement`` of the current gap.  The permutation test uses the size of each run's
+    improvement, not only its rank: runs with little motion in the affected coordinate carry almost
+    no signal and, with random signs but small sizes, barely move it, where they cost the Wilcoxon
+    signed-rank test (also reported) whole ranks.  Held-out scoring is the penalty for added
+    parameters: a parameter that only fits noise, or a run-specific disturbance, does not improve
+    other runs.  Candidates are added greedily (largest median held-out improvement first) while a
+    significant one remains.  No cause is named while the calibration equation itself stays
+    unexplained (:func:`identify_effects`, ``max_vertical_gap``).
 """
 from __future__ import annotations
 
