@@ -659,14 +659,14 @@ def scalar_gap(per_run: NDArray) -> float:
 
 
 def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArray[np.float64]:
-    """K-fold over runs (run i is in fold i mod K): per run, the gap (beyond the noise floor) of a fit made
-    on the other folds.
+    """K-fold over runs (run i is in fold i mod K): per run, the gap components (beyond the noise floor;
+    (n_runs, 3): y, theta, energy) of a fit made on the other folds.
 
     Every run is held out exactly once, so each run gets one held-out score (leave-one-run-out when
     K >= the number of runs)."""
     n = len(runs)
     k = min(folds, n)
-    out = np.empty(n)
+    out = np.empty((n, 3))
     for f in range(k):
         test = [i for i in range(n) if i % k == f]
         train = [r for i, r in enumerate(runs) if i % k != f]
@@ -676,8 +676,13 @@ def _held_out_gaps(model, runs, effects: Sequence[str], folds: int = 5) -> NDArr
         res, _ = _residuals(physics, held, fit.calibration, fit.effects)
         en = _energy_residuals(physics, fit.calibration, fit.effects)
         integral = _integral_residuals(physics, fit.calibration, fit.effects)
-        out[test] = short_time_gaps(held, res, en, integral=integral).mean(axis=1)
+        out[test] = short_time_gaps(held, res, en, integral=integral)
     return out
+
+
+def _acting_components(name: str) -> list[int]:
+    """Gap components an effect acts in: y (0) and theta (1) where it has parameters, and the energy (2)."""
+    return [q for q in (0, 1) if _param_slices([name], q)] + [2]
 
 
 @dataclass
@@ -711,7 +716,8 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
     # Weighing runs by their share of the pooled variance instead was measured to lose a constant
     # hinge torque (mirror_asymmetry, beta0 = 60 1/s^2, tests/validation/test_diagnosis.py), whose
     # signal is the same in every run while the energy residual's noise grows with the run's energy.
-    current = _held_out_gaps(model, runs, chosen)
+    current_c = _held_out_gaps(model, runs, chosen)
+    current = current_c.mean(axis=1)
     remaining = [c for c in candidates]
     while remaining:
         round_info = {"base": list(chosen), "base_held_out_gap": float(np.mean(current)), "candidates": {}}
@@ -719,7 +725,8 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
         for c in remaining:
             if progress:
                 progress(f"testing {c} on top of {chosen or 'calibration'}")
-            trial = _held_out_gaps(model, runs, chosen + [c])
+            trial_c = _held_out_gaps(model, runs, chosen + [c])
+            trial = trial_c.mean(axis=1)
             diff = current - trial  # > 0: the candidate helps the held-out run (the floor cancels)
             try:
                 p_w = float(wilcoxon(diff, alternative="greater", zero_method="zsplit").pvalue) if np.any(diff != 0) else 1.0
@@ -727,23 +734,30 @@ def identify_effects(model, runs: Sequence[RunAccelerations], candidates: Sequen
                 p_w = 1.0
             p = sign_flip_pvalue(diff)
             # practical significance: the median held-out improvement (in gap units, the noise floor
-            # cancels) must exceed min_absolute_improvement of the variance and
-            # min_relative_improvement of the remaining excess gap
+            # cancels) must exceed min_absolute_improvement of the variance, and its improvement of the
+            # gap components the candidate acts in (its equations and the energy) must exceed
+            # min_relative_improvement of what remains in them: a hinge effect is not judged against a
+            # remaining gap of the vertical equation it cannot touch
             gain = float(np.median(diff))
-            threshold = max(min_absolute_improvement, min_relative_improvement * max(float(np.mean(current)), 0.0))
+            comps = _acting_components(c)
+            base_c = max(float(np.mean(current_c[:, comps])), 0.0)
+            gain_c = float(np.median(current_c[:, comps].mean(axis=1) - trial_c[:, comps].mean(axis=1)))
             rel = gain / max(float(np.mean(current)), min_absolute_improvement)
-            significant = bool(p < alpha and gain > threshold)
+            significant = bool(p < alpha and gain > min_absolute_improvement and gain_c > min_relative_improvement * base_c)
             round_info["candidates"][c] = {"held_out_gap": float(np.mean(trial)), "median_improvement": gain,
-                                           "median_improvement_fraction": rel, "threshold": threshold,
+                                           "median_improvement_fraction": rel, "threshold": min_absolute_improvement,
+                                           "components": comps, "median_improvement_in_components": gain_c,
+                                           "remaining_gap_in_components": base_c,
                                            "p_value": p, "wilcoxon_p": p_w, "significant": significant, "per_run_held_out": trial.tolist()}
             if significant and rel > best_gain:
-                best, best_gain, best_trial = c, rel, trial
+                best, best_gain, best_trial = c, rel, trial_c
         result.steps.append(round_info)
         if best is None:
             break
         chosen.append(best)
         remaining.remove(best)
-        current = best_trial
+        current_c = best_trial
+        current = current_c.mean(axis=1)
     result.vertical_gap = float(np.mean(fit_gaps(runs, fit_gap_model(model, runs, chosen))[:, 0]))
     if result.vertical_gap > max_vertical_gap:
         result.withheld, chosen = chosen, []
