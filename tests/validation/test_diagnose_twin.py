@@ -7,14 +7,15 @@ import pytest
 
 from validation.diagnose import DiagnoseConfig, diagnose_dataset
 
-#: single effects at moderate strength: effects on theta need an RMS of ~10 1/s^2 to stand out of the
-#: ~50 1/s^2 derivative noise of thetaddot on the soft Gor'kov hinge (weaker ones: see the blind table)
+#: single effects at moderate strength (velocity coupling in the middle of the blind range of
+#: validation.blind.STRENGTHS; the theta equation is fitted in its integral form, whose noise is the
+#: tracking noise itself, see docs/diagnosis.md)
 SINGLE = {
     "linear_damping": {"gamma_y": 1.5, "gamma_theta": 1.5},
     "quadratic_drag": {"c_y": 200.0, "c_theta": 0.3},
     "pair_scattering": {"kappa": 15000.0},
     "mirror_asymmetry": {"beta0": 10.0, "beta1": 3.0e4},  # beta0/omega_theta^2 = 0.09 on the soft hinge
-    "velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6},
+    "velocity_coupling": {"c5": 5.0e3, "c6": 1.0e6},  # measured: c5 +3 %, c6 -5 %, p = 0.006
 }
 
 
@@ -136,10 +137,11 @@ def test_diagnose_cli_bad_directory(tmp_path):
 
 
 @pytest.mark.slow
-def test_velocity_coupling_above_its_detection_limit(tmp_path):
-    """At twice the strength of the single-effect case (c5 = 3e4, c6 = 6e6) velocity_coupling is identified
-    (measured for twin seeds 3, 5, 6: p = 0.007, 0.005, 0.001) with its parameters within 10 % (asserted at the
-    issue's 25 %); at 1.5e4 / 3e6 it sits at the detection limit of 10 runs of 3 s (see the xfail above)."""
+def test_strong_velocity_coupling_identified(tmp_path):
+    """Strong coupling (c5 = 3e4, c6 = 6e6, twice the old single-effect case): identified alone, measured
+    c5 +13 %, c6 -11 % (asserted at the issue's 25 %).  The bias grows with the strength (+3 % / -5 % at
+    5e3 / 1e6): the hinge columns are evaluated at theta smoothed over half a hinge period, which
+    leaves out the fast response the coupling itself drives (see the xfail below)."""
     effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
     data, _ = _twin(tmp_path, effects)
     diag, _ = diagnose_dataset(data, FAST, progress=False)
@@ -147,3 +149,15 @@ def test_velocity_coupling_above_its_detection_limit(tmp_path):
     fitted = diag["effects"][0]["params"]
     for p, v in effects["velocity_coupling"].items():
         assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "measured at c5 = 1.5e4, c6 = 3e6 (twin seed 3): velocity_coupling is identified (p = 0.003; c5 +8 %, c6 -9 %), "
+    "but pair_scattering is named after it with kappa = 0.49 1/s^2 (p = 0.005; 0.35 % of the hinge acceleration), "
+    "absorbing the bias of the smoothed hinge columns at strong coupling; at 5e3 / 1e6 and 3e4 / 6e6 the same seed "
+    "names velocity_coupling alone"))
+def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
+    data, _ = _twin(tmp_path, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["velocity_coupling"]
