@@ -59,3 +59,19 @@ def test_broken_image_is_detected(tmp_path, chromium_required):
     page.write_text('<html><body><img alt="nothing" src="data:image/png;base64,AAAA"></body></html>')
     check = check_report_in_browser(page, tmp_path / "shot.png")
     assert check.broken_images == ["nothing"] and check.images_ok == 0
+
+
+def test_identified_effects_add_their_static_coefficients():
+    """Pair scattering's -kappa cos^2(k (Z_eq + y)) theta adds kappa k^2 cos(2 k Z_eq) to theta*y^2 and
+    -kappa cos^2(k Z_eq) to theta (Taylor); on a small box the least squares approaches them."""
+    from validation.report_builder import effect_static_coefficients
+
+    k, z_eq, kappa = 836.2, -4.289e-4, 1.95e4
+    diag = {"identified": ["pair_scattering"], "effects": [{"name": "pair_scattering", "params": {"kappa": kappa}}]}
+    c = effect_static_coefficients(diag, k, z_eq, theta_max=0.05, y_max=20e-6)
+    # box of +-20 um: the next Taylor term (y^4) shifts the y^2 coefficient by ~(k y_max)^2 / 3 ~ 1e-4
+    np.testing.assert_allclose(c["y^2*theta"], kappa * k**2 * np.cos(2 * k * z_eq), rtol=1e-3)
+    np.testing.assert_allclose(c["theta"], -kappa * np.cos(k * z_eq) ** 2, rtol=1e-6)
+    np.testing.assert_allclose(c["y*theta"], kappa * k * np.sin(2 * k * z_eq), rtol=1e-3)
+    assert abs(c["y^2"]) < 1e-6 * abs(c["y^2*theta"])  # odd in theta: no theta-free terms
+    assert effect_static_coefficients({"identified": [], "effects": []}, k, z_eq, 0.3, 1e-4) == {}
