@@ -53,13 +53,14 @@ __all__ = ["column_states", "double_integral", "integral_window", "window_starts
            "select_integral_form", "integral_form_selection", "METHOD"]
 
 
-def double_integral(f: NDArray, dt: float) -> NDArray[np.float64]:
-    """``K[f]`` along axis 0 on a uniform grid: the second antiderivative that vanishes with its
+def double_integral(f: NDArray, dt: float, axis: int = 0) -> NDArray[np.float64]:
+    """``K[f]`` along ``axis`` on a uniform grid: the second antiderivative that vanishes with its
     derivative at the first sample (trapezoid rule twice; error (omega dt)^2 / 12 at frequency omega)."""
-    f = np.asarray(f, float)
+    f = np.moveaxis(np.asarray(f, float), axis, 0)
     zero = np.zeros((1,) + f.shape[1:])
     c1 = np.concatenate([zero, np.cumsum(0.5 * (f[1:] + f[:-1]), axis=0) * dt])
-    return np.concatenate([zero, np.cumsum(0.5 * (c1[1:] + c1[:-1]), axis=0) * dt])
+    c2 = np.concatenate([zero, np.cumsum(0.5 * (c1[1:] + c1[:-1]), axis=0) * dt])
+    return np.moveaxis(c2, 0, axis)
 
 
 def integral_window(dt: float, frequency_hz: float, periods: float = 0.75,
@@ -103,11 +104,13 @@ def integral_columns(f: NDArray, dt: float, starts: NDArray, window: int) -> NDA
     integral form.  Each window is integrated from its own first frame (trapezoid rule twice)."""
     f = np.asarray(f, float)
     idx = np.asarray(starts)[:, None] + np.arange(window)[None, :]
-    seg = f[idx]  # (n_win, window, ...)
-    zero = np.zeros(seg.shape[:1] + (1,) + seg.shape[2:])
-    c1 = np.concatenate([zero, np.cumsum(0.5 * (seg[:, 1:] + seg[:, :-1]), axis=1) * dt], axis=1)
-    c2 = np.concatenate([zero, np.cumsum(0.5 * (c1[:, 1:] + c1[:, :-1]), axis=1) * dt], axis=1)
-    return _detrend_stacked(c2).reshape((idx.size,) + f.shape[1:])
+    return _detrend_stacked(double_integral(f[idx], dt, axis=1)).reshape((idx.size,) + f.shape[1:])
+
+
+def _z(coefficients: NDArray, std_errors: NDArray) -> NDArray[np.float64]:
+    """coefficient / standard error (NaN or inf where the error is 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return coefficients / std_errors
 
 
 @dataclass(frozen=True)
@@ -139,8 +142,7 @@ class IntegralFit:
     @property
     def z(self) -> NDArray[np.float64]:
         """coefficient / standard error."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.coefficients / self.std_errors
+        return _z(self.coefficients, self.std_errors)
 
 
 def _design(positions: Sequence[NDArray], columns: Sequence[NDArray], dts: Sequence[float],
@@ -267,8 +269,7 @@ class IntegralSelection:
     @property
     def z(self) -> NDArray[np.float64]:
         """coefficient / standard error."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.coefficients / self.std_errors
+        return _z(self.coefficients, self.std_errors)
 
     def get(self, term: str) -> tuple[float, float]:
         """(value, standard error) of ``term``; (NaN, NaN) if it was not selected."""
