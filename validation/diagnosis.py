@@ -368,11 +368,12 @@ class _Physics:
         res = minimize_scalar(f, bounds=(-4e-4, min(4e-4, -z0 - 1e-6)), method="bounded", options={"xatol": 1e-10})
         return float(res.fun)
 
-    def integral_known(self, z0: float) -> list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]]:
-        """Per run (runs must carry integral data): for y and for theta, the integral-form columns of
-        (the acoustic acceleration at nominal pressure, to be scaled by s; the rest of the simulation's
-        acceleration): (F_Z / M, -g) and (Q_theta / I, -I' thetadot^2 / (2 I)), at every frame."""
-        key = ("integral", round(z0, 12))
+    def integral_known(self, z0: float, q: int) -> list[tuple[NDArray, NDArray]]:
+        """Per run (runs must carry integral data), for coordinate q (0: y, 1: theta): the integral-form
+        columns of (the acoustic acceleration at nominal pressure, to be scaled by s; the rest of the
+        simulation's acceleration): (F_Z / M, -g) or (Q_theta / I, -I' thetadot^2 / (2 I)), at every frame.
+        Only the coordinate asked for is integrated (the calibration's height search needs y alone)."""
+        key = ("integral", q, round(z0, 12))
         if key not in self._cache:
             d = self.model.dimer
             out = []
@@ -380,21 +381,22 @@ class _Physics:
                 pi = r.integral
                 y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
                 st = self.model.integrals_at_height(th, z0 + y, _cached_sums(self.model, pi))
-                inertia = d.hinge_inertia(th)
-                out.append(((pi.columns(0, st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))),
-                            (pi.columns(1, st.q_theta / inertia),
-                             pi.columns(1, -0.5 * d.hinge_inertia_derivative(th) * thd**2 / inertia))))
+                if q == 0:
+                    out.append((pi.columns(0, st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))))
+                else:
+                    inertia = d.hinge_inertia(th)
+                    out.append((pi.columns(1, st.q_theta / inertia),
+                                pi.columns(1, -0.5 * d.hinge_inertia_derivative(th) * thd**2 / inertia)))
             self._cache[key] = out
         return self._cache[key]
 
-    def integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None) -> list[tuple[NDArray, NDArray]]:
-        """Per run: integral-form columns (rows, n_params) of the effects' y and theta accelerations."""
+    def integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None, q: int) -> list[NDArray]:
+        """Per run: integral-form columns (rows, n_params) of the effects' accelerations of coordinate q."""
         out = []
         for r in self.runs:
             pi = r.integral
-            regs = [effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq) for n in effects]
-            regs = np.concatenate(regs, axis=2) if regs else np.zeros((pi.state.shape[0], 2, 0))
-            out.append((pi.columns(0, regs[:, 0, :]), pi.columns(1, regs[:, 1, :])))
+            regs = [effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq)[:, q, :] for n in effects]
+            out.append(pi.columns(q, np.concatenate(regs, axis=1) if regs else np.zeros((pi.state.shape[0], 0))))
         return out
 
     def centrifugal(self, r: RunAccelerations) -> NDArray:
@@ -458,8 +460,9 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
     """Fit the calibration (s, z0) and the parameters of ``effects`` to the runs.
 
     With integral data on every run (:class:`PositionIntegrals`, what :func:`validation.diagnose.prepare_runs`
-    gives) both equations are fitted in their integral form, against the measured positions; otherwise
-    against the Savitzky-Golay accelerations (matched kernel).
+    gives) the calibration (vertical equation) and the theta rows of the effect fit use the integral form,
+    against the measured positions; the y rows of the effect fit, and everything without integral data,
+    use the Savitzky-Golay accelerations (matched kernel).
 
     Parameters
     ----------
@@ -482,10 +485,10 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
         against the measured y when the runs carry integral data (calibrated pressure within 0.02 % on
         no-effect twin data, against +0.1 % from the Savitzky-Golay accelerations), else the accelerations."""
         if integral:
-            known = physics.integral_known(z0)
-            cols = physics.integral_effect_columns(z0, effects, None)
-            x = np.concatenate([np.column_stack([kn[0][0], c[0]]) for kn, c in zip(known, cols)])
-            b = np.concatenate([r.integral.target(0) - kn[0][1] for r, kn in zip(runs, known)])
+            known = physics.integral_known(z0, 0)
+            cols = physics.integral_effect_columns(z0, effects, None, 0)
+            x = np.concatenate([np.column_stack([kn[0], c]) for kn, c in zip(known, cols)])
+            b = np.concatenate([r.integral.target(0) - kn[1] for r, kn in zip(runs, known)])
             return x, b
         cols, tgt = _design(physics, runs, z0, effects, 0)
         return np.concatenate(cols), np.concatenate(tgt)
@@ -526,8 +529,8 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
         w_y = 1.0 / np.sqrt(max(np.sum((ay_all - ay_all.mean()) ** 2), 1e-300))
         w_t = 1.0 / np.sqrt(max(np.sum((at_all - at_all.mean()) ** 2), 1e-300))
         if integral:  # the theta equation in its integral form, against the measured theta
-            known = physics.integral_known(z0)
-            cols = physics.integral_effect_columns(z0, effects, cal.equilibrium_height_m)
+            known = physics.integral_known(z0, 1)
+            cols = physics.integral_effect_columns(z0, effects, cal.equilibrium_height_m, 1)
             w_t = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(1) ** 2)) for r in runs), 1e-300))
         for i, (r, (fz, qt)) in enumerate(zip(runs, forces)):
             z = z0 + r.state[:, 0]
@@ -535,8 +538,8 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
             rows.append(w_y * regs[:, 0, :])
             rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - physics.g)))
             if integral:
-                rows.append(w_t * cols[i][1])
-                rhs.append(w_t * (r.integral.target(1) - s_cal * known[i][1][0] - known[i][1][1]))
+                rows.append(w_t * cols[i])
+                rhs.append(w_t * (r.integral.target(1) - s_cal * known[i][0] - known[i][1]))
             else:
                 rows.append(w_t * regs[:, 1, :])
                 rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + physics.centrifugal(r))))
@@ -561,7 +564,7 @@ def fit_gap_model(model, runs: Sequence[RunAccelerations], effects: Sequence[str
 
 
 def _uses_integral(runs: Sequence[RunAccelerations]) -> bool:
-    """Both equations use the integral form when every run carries usable integral data."""
+    """The integral form (calibration and theta equation) is used when every run carries usable integral data."""
     return bool(runs) and all(r.integral is not None and r.integral.usable for r in runs)
 
 
@@ -572,12 +575,12 @@ def _integral_residuals(physics: _Physics, cal: Calibration, params: dict) -> li
         return None
     names = list(params)
     pv = np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)
-    known = physics.integral_known(cal.z_origin_m)
-    cols = physics.integral_effect_columns(cal.z_origin_m, names, cal.equilibrium_height_m)
+    known = physics.integral_known(cal.z_origin_m, 1)
+    cols = physics.integral_effect_columns(cal.z_origin_m, names, cal.equilibrium_height_m, 1)
     out = []
     for r, kn, c in zip(physics.runs, known, cols):
         target = r.integral.target(1)
-        res = target - cal.pressure_scale * kn[1][0] - kn[1][1] - (c[1] @ pv if pv.size else 0.0)
+        res = target - cal.pressure_scale * kn[0] - kn[1] - (c @ pv if pv.size else 0.0)
         out.append((res, float(np.sum(target**2)), r.integral.floor(1)))
     return out
 
