@@ -87,7 +87,7 @@ def plot_thetaddot_map(sweep: SweepResult, ax=None):
 
 def save_sweep_figures(sweep: SweepResult, out_dir: str | os.PathLike) -> list[Path]:
     """Write restoring_force.png, restoring_torque.png and thetaddot_map.png into ``out_dir``."""
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

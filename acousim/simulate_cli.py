@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .cli import UserInputError
+from cubedimer.cli import UserInputError
 
 __all__ = ["add_parser", "run"]
 
@@ -121,7 +121,7 @@ def build_config(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``python -m acousim simulate``; returns the exit code."""
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
 
     from .twin import TwinError, check_output_dir, simulate_dataset
 

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from fitting.atomic import atomic_write_text
-from fitting.library import library_exponents, term_name
+from cubedimer.atomic import atomic_write_text
+from cubedimer.terms import library_exponents, term_name
 
 from .forces import GorkovDimer
 

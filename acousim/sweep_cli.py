@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from .cli import UserInputError
+from cubedimer.cli import UserInputError
 
 __all__ = ["add_parser", "parse_range", "run_sweep"]
 

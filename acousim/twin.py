@@ -37,6 +37,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.atomic import json_text
+
 from .dynamics import DEFAULT_MAX_STEP, DimerDynamics
 from .effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from .surrogate import ForceSurrogate, cached_surrogate
@@ -382,13 +384,13 @@ def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
 
 
 def simulate_runs(config: TwinConfig, executor=None, progress: bool = True) -> tuple[list[SimulatedRun], DimerDynamics, float]:
-    """Simulate every run of ``config`` through :func:`fitting.executor.map_ordered`.
+    """Simulate every run of ``config`` through :func:`cubedimer.executor.map_ordered`.
 
     Returns
     -------
     (runs, dynamics, true pressure [Pa])
     """
-    from fitting.executor import ExecutorConfig, map_ordered
+    from cubedimer.executor import ExecutorConfig, map_ordered
 
     dynamics, p_true = twin_dynamics(config)
     _, seeds = run_seeds(config.seed, config.runs)
@@ -457,10 +459,6 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
     return out
 
 
-def _json(data: dict) -> str:
-    return json.dumps(data, indent=2, sort_keys=False, allow_nan=True) + "\n"
-
-
 def check_output_dir(out_dir: str | os.PathLike, force: bool = False) -> Path:
     """Refuse an existing non-empty directory (or a file) unless ``force``; returns the path."""
     out = Path(out_dir)
@@ -492,8 +490,8 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
     try:
         for i, (f, r) in enumerate(zip(files, runs), 1):
             (tmp / f).write_text(run_csv_text(r, i, config.runs), encoding="utf-8")
-        (tmp / "meta.json").write_text(_json(meta_dict(config, dynamics)), encoding="utf-8")
-        (tmp / "truth.json").write_text(_json(truth), encoding="utf-8")
+        (tmp / "meta.json").write_text(json_text(meta_dict(config, dynamics)), encoding="utf-8")
+        (tmp / "truth.json").write_text(json_text(truth), encoding="utf-8")
         with open(tmp / "truth_states.npz", "wb") as fh:
             np.savez(fh, t=runs[0].t, **{Path(f).stem: r.state for f, r in zip(files, runs)})
         os.chmod(tmp, 0o755)
@@ -544,7 +542,7 @@ def lock_state(t: NDArray, state: NDArray, coherence_min: float = 0.95, rest: fl
     With y ~ A cos(w t), the section is w t = pi/2; for theta ~ B cos(w t + p) there
     theta = -B sin p and thetadot = -B w cos p, so p = atan2(-theta, -thetadot / w).
     """
-    from fitting.poincare import poincare_section
+    from cubedimer.poincare import poincare_section
 
     t, state = np.asarray(t, float), np.asarray(state, float)
     h = int(len(t) * start_fraction)
@@ -583,10 +581,10 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
-    from fitting.poincare import poincare_section
-    from fitting.spectra import amplitude_spectrum
+    from cubedimer.poincare import poincare_section
+    from cubedimer.spectra import amplitude_spectrum
 
     data_dir, fig_dir = Path(data_dir), Path(fig_dir)
     npz = np.load(data_dir / "truth_states.npz")

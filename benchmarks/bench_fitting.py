@@ -83,7 +83,7 @@ def _support_stats(model, truth):
 def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) -> None:
     from fitting.compare import paired_wilcoxon, per_run_losses
     from fitting.ensemble import mean_pvalues
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
     from fitting.model import TERMS
     from fitting.pipeline import FitConfig, fit_dataset
     from fitting.regression import RegressionConfig, fit_ensemble_regression, fit_regression

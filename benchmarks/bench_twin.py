@@ -21,7 +21,7 @@ def main() -> str:
     from acousim.forces import GorkovDimer
     from acousim.surrogate import build_surrogate
     from acousim.twin import PAPER_LIKE, Camera, TwinConfig, simulate_dataset, simulate_run
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
 
     t0 = time.perf_counter()
     model = GorkovDimer()

@@ -21,6 +21,8 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from cubedimer.cli import OneLineParser, run_cli
+
 __all__ = ["main"]
 
 
@@ -29,7 +31,7 @@ def _log(msg: str) -> None:
 
 
 def _cmd_fit(a: argparse.Namespace) -> int:
-    from .executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
     from .pipeline import FitConfig, fit_dataset
 
     cfg = FitConfig()
@@ -51,9 +53,9 @@ def _cmd_fit(a: argparse.Namespace) -> int:
 
 
 def _cmd_compare(a: argparse.Namespace) -> int:
-    from .atomic import atomic_write_json
+    from cubedimer.atomic import write_json
     from .compare import compare_models, cross_coupling_mask, drop_terms
-    from .dataset import DatasetError, load_dataset
+    from cubedimer.dataset import DatasetError, load_dataset
     from .model import PolynomialModel, Scales
     from .pipeline import FitConfig, prepare_runs
 
@@ -77,7 +79,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     cmp = compare_models(ref, variant, [p.derivs for p in prepared], scales,
                          names=[p.run.name for p in prepared], reoptimise=not a.no_reoptimise)
     out = {"variant_label": label, **cmp.to_json()}
-    atomic_write_json(Path(a.out) / "compare.json", out)
+    write_json(Path(a.out) / "compare.json", out)
     for name, t in (("shape", cmp.shape_test), ("Poincare", cmp.poincare_test)):
         print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
               f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")
@@ -98,8 +100,8 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
-    sub = p.add_subparsers(dest="command", required=True)
+    p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     f = sub.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
     f.add_argument("data_dir")
     f.add_argument("--out", required=True, help="output directory (model.json, plots, runs/ cache)")
@@ -139,14 +141,4 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .dataset import DatasetError
-
-    args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except DatasetError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("error: interrupted (finished run refinements are kept; rerun the same command to resume)", file=sys.stderr)
-        return 130
+    return run_cli(build_parser(), argv)

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.stats import wilcoxon
 
 from .derivatives import Derivatives
-from .library import EQUATION_NAMES, parse_term
+from cubedimer.terms import EQUATION_NAMES, parse_term
 from .losses import LossTerms, LossWeights
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference

@@ -30,7 +30,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .library import EQUATION_NAMES
+from cubedimer.terms import EQUATION_NAMES
 from .model import DAMPING_TERMS, TERMS, PolynomialModel
 
 __all__ = ["EnsembleConfig", "TermStatistics", "term_statistics", "select_terms", "select_significant_terms",
@@ -132,7 +132,7 @@ def least_squares_on_support(X: Sequence[NDArray], A: Sequence[NDArray], mask: N
     ndarray (2, 35)
         Scaled coefficients, zero outside ``mask``.
     """
-    from .library import evaluate_library
+    from cubedimer.terms import evaluate_library
 
     Theta = np.vstack(library if library is not None else [evaluate_library(x) for x in X])
     acc = np.vstack(A)

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
-    from .dataset import Run
+    from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
 __all__ = ["column_states", "double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
@@ -216,7 +216,7 @@ def significance_threshold(alpha: float, n_library: int, rank: int) -> float:
 
 def _is_velocity_term(name: str) -> bool:
     """A library term with a velocity factor (FORMATS.md names); other names: contains "dot"."""
-    from .library import is_velocity_free
+    from cubedimer.terms import is_velocity_free
 
     try:
         return not is_velocity_free(name)
@@ -395,7 +395,7 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
 
     Parameters
     ----------
-    runs : per run :class:`fitting.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
+    runs : per run :class:`cubedimer.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
     derivs : per run :class:`fitting.derivatives.Derivatives` of the same run (the smoothed states the
         library is evaluated on; their ``trim`` edge frames are dropped)
     alpha : float
@@ -408,8 +408,8 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
     dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the dominant y
     frequency, theta windows from the dominant theta frequency of each run).
     """
-    from .library import EQUATION_NAMES, evaluate_library, library_terms
-    from .spectra import dominant_frequency
+    from cubedimer.terms import EQUATION_NAMES, evaluate_library, library_terms
+    from cubedimer.spectra import dominant_frequency
 
     dts = [float(r.dt) for r in runs]
     freqs = [(dominant_frequency(np.asarray(r.y, float), dt), dominant_frequency(np.asarray(r.theta, float), dt))

@@ -91,7 +91,7 @@ def _rk4_core(coef, exps, x0, dt, n_out, substeps, bound, out):
 
 @nb.njit(cache=True)
 def _rk4_batch(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid):
-    # serial on purpose: parallelism comes from the process pool (fitting.executor), and numba's
+    # serial on purpose: parallelism comes from the process pool (cubedimer.executor), and numba's
     # OpenMP threading layer is not fork-safe
     for b in range(coefs.shape[0]):
         n_valid[b] = _rk4_core(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps,

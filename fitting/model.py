@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .integrate import integrate
-from .library import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_exponents, library_terms, parse_term
+from cubedimer.terms import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_exponents, library_terms, parse_term
 
 __all__ = ["PolynomialModel", "Scales", "TERMS", "EXPONENTS", "DAMPING_TERMS"]
 

@@ -3,7 +3,7 @@
 :func:`fit_dataset` loads a data set, smooths and differentiates every run, classifies its
 attractor, fits the regression model C0 (per run, and once jointly for reference), refines
 every run's C0 against its long-time features in parallel (through
-:func:`fitting.executor.map_ordered`), computes z-scores and inclusion frequencies, selects
+:func:`cubedimer.executor.map_ordered`), computes z-scores and inclusion frequencies, selects
 the minimal model and re-optimises it jointly on all runs.  Each finished per-run refinement is
 saved to ``OUT_DIR/runs/<file stem>.json`` together with a fingerprint of its input and settings,
 so an interrupted fit resumes without recomputing it.
@@ -19,21 +19,21 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .atomic import atomic_write_json
-from .attractors import AttractorClass, ClassifyConfig, classify_signal
-from .dataset import Dataset, LoadConfig, Run, load_dataset
+from cubedimer.atomic import write_json
+from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_signal
+from cubedimer.dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
                        term_statistics)
-from .executor import ExecutorConfig, map_ordered
+from cubedimer.executor import ExecutorConfig, map_ordered
 from .integral_form import METHOD as INTEGRAL_METHOD, IntegralSelection, integral_form_selection
-from .library import EQUATION_NAMES, STATE_NAMES
+from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
 from .selection import SelectionConfig, SelectionResult, backward_elimination
-from .spectra import dominant_frequency
+from cubedimer.spectra import dominant_frequency
 
 __all__ = ["FitConfig", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
            "fit_dataset", "model_json"]
@@ -206,7 +206,7 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
         i = todo[k]
         fits[i] = rf
         if cache is not None:
-            atomic_write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
+            write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
 
     map_ordered(refine_run, [(prepared[i].run.name, derivs[i], scales, config, candidates) for i in todo],
                 config=executor, desc="refining runs", progress=progress, on_result=save)
@@ -332,12 +332,12 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
                 progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
     """Run steps 1-4 on ``data_dir`` and write ``out_dir/model.json`` (and plots).
 
-    Bad input raises :class:`~fitting.dataset.DatasetError` before anything is written.
+    Bad input raises :class:`~cubedimer.dataset.DatasetError` before anything is written.
     """
     log = log or (lambda m: None)
     ds: Dataset = load_dataset(data_dir, strict=strict, config=config.load)
     if len(ds.runs) < 2:
-        from .dataset import DatasetError
+        from cubedimer.dataset import DatasetError
         raise DatasetError(f"{data_dir}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
     prepared, scales = prepare_runs(ds.runs, config)
     log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped); scales: y {scales.length_y:.3g} m, "
@@ -345,7 +345,7 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
     out = Path(out_dir)
     res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log)
     res = FitResult(**{**res.__dict__, "skipped": ds.skipped})
-    atomic_write_json(out / "model.json", model_json(res))
+    write_json(out / "model.json", model_json(res))
     if plots:
         from .plots import plot_fit
         plot_fit(res, out)

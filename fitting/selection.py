@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 
 from .compare import paired_wilcoxon
 from .derivatives import Derivatives
-from .executor import ExecutorConfig, map_ordered
-from .library import EQUATION_NAMES
+from cubedimer.executor import ExecutorConfig, map_ordered
+from cubedimer.terms import EQUATION_NAMES
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
 

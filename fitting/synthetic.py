@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write_json, atomic_write_text
+from cubedimer.atomic import write_json, atomic_write_text
 from .model import PolynomialModel
 
 __all__ = ["SyntheticConfig", "paper_reduced_model", "generate_runs", "write_dataset"]
@@ -118,5 +118,5 @@ def write_dataset(out_dir: str | os.PathLike, model: PolynomialModel,
         atomic_write_text(out / f"run{i:02d}.csv", "\n".join(lines) + "\n")
     truth = {**model.to_json(), "config": asdict(cfg),
              "initial_states": [r["x0"].tolist() for r in runs], "seed": cfg.seed}
-    atomic_write_json(out / "truth.json", truth)
+    write_json(out / "truth.json", truth)
     return runs

@@ -3,7 +3,7 @@
 Public API: :func:`compare_coefficients`, :func:`shift_origin`, :func:`model_from_meta`.
 """
 from .coefficients import CoefficientComparison, TermComparison, compare_coefficients, origin_sensitivity, shift_origin
-from .simulation import model_from_meta, read_meta
+from .simulation import model_from_meta
 
 __all__ = ["CoefficientComparison", "TermComparison", "compare_coefficients", "origin_sensitivity", "shift_origin",
-           "model_from_meta", "read_meta"]
+           "model_from_meta"]

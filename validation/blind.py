@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fitting.atomic import atomic_write_text
+from cubedimer.atomic import atomic_write_text
 
-from .reporting import write_json_atomic
+from cubedimer.atomic import write_json
 
 __all__ = ["STRENGTHS", "BlindConfig", "draw_case", "run_case", "run_blind", "summarize"]
 
@@ -99,7 +99,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
                   "gap_before": None, "gap_after": None, "shrink": None, "pressure_true_pa": None,
                   "pressure_calibrated_pa": None, "error": f"generation: {generation_error}", "twin_redraws": retries,
                   "scored": False}
-        write_json_atomic(out_dir / "result.json", result)
+        write_json(out_dir / "result.json", result)
         return result
     truth_path = out_dir / "truth.json"
     os.replace(data / "truth.json", truth_path)  # hidden from the diagnosis
@@ -115,7 +115,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     truth = json.loads(truth_path.read_text())
     result = score_case(case, truth, diag, error)
     result["twin_redraws"] = retries
-    write_json_atomic(out_dir / "result.json", result)
+    write_json(out_dir / "result.json", result)
     shutil.rmtree(data, ignore_errors=True)  # keep the study small on disk; truth and result stay
     return result
 
@@ -149,7 +149,7 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
 
 def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress: bool = True) -> dict:
     """Run (or resume) a blind study and write ``summary.json``, ``blind_table.md`` and the confusion matrix."""
-    from fitting.executor import ExecutorConfig, map_ordered
+    from cubedimer.executor import ExecutorConfig, map_ordered
 
     out = Path(out_dir)
     (out / "cases").mkdir(parents=True, exist_ok=True)
@@ -171,7 +171,7 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
         results[r["index"]] = r
     ordered = [results[i] for i in sorted(results)]
     summary = summarize(ordered)
-    write_json_atomic(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
+    write_json(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
     atomic_write_text(out / "blind_table.md", blind_table(summary, config))
     confusion_figure(ordered, out / "confusion_matrix.png")
     return summary
@@ -263,6 +263,6 @@ def confusion_figure(results: list[dict], path: Path) -> Path:
     ax.set_ylabel("present in the data (hidden truth)")
     ax.set_title("Blind check: effects present vs identified")
     fig.colorbar(im, ax=ax, label="count")
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
     return save_figure(fig, path)

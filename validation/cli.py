@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.cli import OneLineParser, UserInputError, run_cli
+from cubedimer.cli import OneLineParser, UserInputError, run_cli
 
 __all__ = ["main"]
 
@@ -55,7 +55,7 @@ def _read_model(path: Path) -> dict:
     for eq, coefs in model["equations"].items():
         if eq not in ("yddot", "thetaddot") or not isinstance(coefs, dict):
             raise UserInputError(f"{path}: unknown equation {eq!r}; expected yddot and thetaddot")
-        from fitting.library import parse_term
+        from cubedimer.terms import parse_term
 
         for term, v in coefs.items():
             try:
@@ -69,11 +69,13 @@ def _read_model(path: Path) -> dict:
 def run_compare(args: argparse.Namespace) -> int:
     from acousim.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 
-    from fitting.atomic import atomic_write_text
+    from cubedimer.atomic import atomic_write_text
 
     from .coefficients import compare_coefficients
-    from .reporting import write_json_atomic
-    from .simulation import model_from_meta, read_meta
+    from cubedimer.atomic import write_json
+    from cubedimer.meta import read_meta
+
+    from .simulation import model_from_meta
 
     model = _read_model(Path(args.model))
     rng = model.get("data_range", {})
@@ -105,7 +107,7 @@ def run_compare(args: argparse.Namespace) -> int:
     out = Path(args.out)
     d = cmp.to_dict()
     d["static_fit"] = {"relative_residual": static.relative_residual, "y_origin_of_sweep": static.y_origin}
-    write_json_atomic(out / "comparison.json", d)
+    write_json(out / "comparison.json", d)
     text = f"# Fitted model vs simulated static coefficients\n\n{cmp.origin}.\n\n{cmp.table()}\n"
     atomic_write_text(out / "comparison.md", text)
     print(cmp.table())
@@ -146,7 +148,7 @@ def _candidate_names() -> list[str]:
 
 
 def run_diagnose(args: argparse.Namespace) -> int:
-    from fitting.dataset import DatasetError
+    from cubedimer.dataset import DatasetError
 
     from .diagnose import DiagnoseConfig, diagnose_dataset, write_diagnosis
 
@@ -193,7 +195,7 @@ def _add_blind(sub) -> None:
 
 
 def run_blind_cli(args: argparse.Namespace) -> int:
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
 
     from .blind import BlindConfig, blind_table, run_blind
 
@@ -226,7 +228,7 @@ def _add_report(sub) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from fitting.dataset import DatasetError
+    from cubedimer.dataset import DatasetError
 
     from .report_builder import build_report
 

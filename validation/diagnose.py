@@ -54,7 +54,7 @@ def prepare_runs(dataset) -> tuple[list[RunAccelerations], list[np.ndarray]]:
     """Smoothed states and accelerations of every run (interior frames) with their derivative-noise
     variances [yddot, thetaddot, ydot, thetadot] (also returned separately)."""
     from fitting.derivatives import SmoothingConfig, run_derivatives
-    from fitting.spectra import dominant_frequency
+    from cubedimer.spectra import dominant_frequency
 
     from fitting.integral_form import column_states, integral_window
 
@@ -112,9 +112,11 @@ def _thin(runs: Sequence[RunAccelerations], max_frames: int) -> list[RunAccelera
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
                      progress: bool = True, mesh_size: float | None = None) -> tuple[dict, dict]:
     """Diagnose a data set.  Returns (diagnosis dict per FORMATS.md, internals for figures)."""
-    from fitting.dataset import load_dataset
+    from cubedimer.dataset import load_dataset
 
-    from .simulation import model_from_meta, read_meta
+    from cubedimer.meta import read_meta
+
+    from .simulation import model_from_meta
 
     say = (lambda m: print(f"[diagnose] {m}", file=sys.stderr, flush=True)) if progress else (lambda m: None)
     dataset = load_dataset(data_dir, strict=strict, report=lambda m: say(f"skipping {m}"))
@@ -235,11 +237,11 @@ def write_diagnosis(diagnosis: dict, internals: dict, out_dir: str | Path) -> li
     """diagnosis.json, the figures and diagnosis.html (a report section) into ``out_dir``."""
     from .diagnosis_plots import diagnosis_figures
     from .report import Section, Table, write_report
-    from .reporting import write_json_atomic
+    from cubedimer.atomic import write_json
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "diagnosis.json", diagnosis)
+    write_json(out / "diagnosis.json", diagnosis)
     figs = diagnosis_figures(diagnosis, internals, out / "figures")
     section = diagnosis_section(diagnosis, figs)
     write_report([section], out, "Sim-to-real gap diagnosis")

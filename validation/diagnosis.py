@@ -778,7 +778,7 @@ def localize_residuals(runs: Sequence[RunAccelerations], residuals: Sequence[NDA
     * ``time_scales``: fraction of the residual variance per frequency band, relative to the
       dominant y frequency of the data.
     """
-    from fitting.library import evaluate_library, library_terms
+    from cubedimer.terms import evaluate_library, library_terms
 
     terms = library_terms()
     allstate = np.concatenate([r.state for r in runs])
@@ -828,7 +828,7 @@ def localize_residuals(runs: Sequence[RunAccelerations], residuals: Sequence[NDA
                     rms[:, a, b] = np.sqrt(np.mean(res_all[m] ** 2, axis=0))
         regions[label] = {"x_edges": xe.tolist(), "y_edges": ye.tolist(), "rms_yddot": rms[0].tolist(), "rms_thetaddot": rms[1].tolist()}
     # time scales
-    from fitting.spectra import dominant_frequency
+    from cubedimer.spectra import dominant_frequency
 
     bands = [(0.0, 0.25), (0.25, 0.75), (0.75, 1.5), (1.5, 2.5), (2.5, np.inf)]
     power = np.zeros((len(bands), 2))

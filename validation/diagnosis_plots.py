@@ -10,7 +10,7 @@ from .report import Figure
 __all__ = ["diagnosis_figures"]
 
 
-from fitting.atomic import save_figure as _save
+from cubedimer.atomic import save_figure as _save
 
 
 def diagnosis_figures(diagnosis: dict, internals: dict, out_dir: str | Path) -> list[Figure]:

@@ -12,9 +12,9 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fitting.atomic import atomic_write_text
+from cubedimer.atomic import atomic_write_text
 
-from .reporting import write_json_atomic
+from cubedimer.atomic import write_json
 
 __all__ = ["Figure", "Table", "Section", "write_report", "format_number"]
 
@@ -115,5 +115,5 @@ def write_report(sections: list[Section], out_dir: str | Path, title: str, subti
     parts.append("</body></html>")
     path = out / "report.html"
     atomic_write_text(path, "\n".join(p for p in parts if p))
-    write_json_atomic(out / "numbers.json", numbers)
+    write_json(out / "numbers.json", numbers)
     return path

@@ -40,7 +40,7 @@ def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta
     box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
     the calibrated Z_eq (PHYSICS.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
     kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
-    from fitting.library import evaluate_library, is_velocity_free, library_terms
+    from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
 
     from .diagnosis import CANDIDATE_EFFECTS, effect_regressors
 
@@ -85,7 +85,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from acousim.render import render_dimer
     from acousim.sweep import fit_static_coefficients, static_sweep
     from fitting.compare import compare_models, cross_coupling_mask
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
     from fitting.pipeline import FitConfig, fit_dataset
     from fitting.plots import plot_comparison
 
@@ -93,7 +93,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from .diagnose import DiagnoseConfig, diagnose_dataset, diagnosis_section
     from .diagnosis_plots import diagnosis_figures
     from .report_figures import data_figures, phase_space_figures, restoring_overlay_figure
-    from .simulation import model_from_meta, read_meta
+    from cubedimer.meta import read_meta
+
+    from .simulation import model_from_meta
 
     say = (lambda m: print(f"[report] {m}", file=sys.stderr, flush=True)) if progress else (lambda m: None)
     out = Path(out_dir)
@@ -239,10 +241,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     dfigs = diagnosis_figures(diag, internals, figs_dir)
     sec = diagnosis_section(diag, dfigs)
     sections.append(Section("diagnosis", "6. The sim-to-real gap", sec.reading, sec.figures, sec.tables, sec.numbers))
-    from .reporting import write_json_atomic
+    from cubedimer.atomic import write_json
 
-    write_json_atomic(out / "diagnosis.json", diag)
-    write_json_atomic(out / "comparison.json", coef_cmp.to_dict())
+    write_json(out / "diagnosis.json", diag)
+    write_json(out / "comparison.json", coef_cmp.to_dict())
     path = write_report(sections, out, "Cube dimer: model vs simulation",
                         f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
     say(f"written {path}")

@@ -21,7 +21,7 @@ def _plt():
 
 
 def _save(fig, path: Path) -> Path:
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
     return save_figure(fig, path, dpi=120)
 
@@ -32,7 +32,7 @@ CLASS_COLORS = {"locked-in-phase": "tab:blue", "locked-anti-phase": "tab:red", "
 
 def data_figures(prepared: Sequence, out: Path) -> list[tuple[Path, str]]:
     """Time series, spectra, phase-difference distribution and attractor classes of the runs."""
-    from fitting.spectra import amplitude_spectrum
+    from cubedimer.spectra import amplitude_spectrum
 
     plt = _plt()
     figs = []
@@ -90,7 +90,7 @@ def data_figures(prepared: Sequence, out: Path) -> list[tuple[Path, str]]:
 
 def phase_space_figures(prepared: Sequence, model, out: Path) -> list[tuple[Path, str]]:
     """(theta, thetadot, y) portraits per class, data and minimal model, and Poincare-map convergence."""
-    from fitting.poincare import poincare_section
+    from cubedimer.poincare import poincare_section
 
     plt = _plt()
     by_class: dict[str, list] = {}

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from acousim.cli import main
-from fitting.dataset import load_dataset
+from cubedimer.dataset import load_dataset
 
 REPO = Path(__file__).resolve().parents[2]
 FAST = ["--workers", "1", "--no-progress", "--duration", "1", "--fps", "500"]

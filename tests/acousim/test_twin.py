@@ -7,8 +7,9 @@ import pytest
 from acousim.effects import EffectSet
 from acousim.twin import (PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run,
                           simulate_runs, true_pressure, twin_dynamics)
-from fitting.dataset import META_KEYS, load_dataset, load_run
-from fitting.executor import ExecutorConfig
+from cubedimer.dataset import load_dataset, load_run
+from cubedimer.meta import META_KEYS
+from cubedimer.executor import ExecutorConfig
 
 SERIAL = ExecutorConfig(workers=1)
 G = 9.81

@@ -79,7 +79,7 @@ def test_report_renders_in_chromium(damping_report, tmp_path, chromium_required)
 def test_velocity_terms_are_dynamic_only(tmp_path):
     """With velocity_coupling on, the fit finds velocity terms and the comparison lists them as dynamic only."""
     from acousim import GorkovDimer, fit_static_coefficients, static_sweep
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
     from fitting.pipeline import FitConfig, fit_dataset
     from dataclasses import replace
     from validation.coefficients import compare_coefficients
@@ -93,7 +93,7 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     sw = static_sweep(GorkovDimer(), np.linspace(-0.4, 0.4, 21), np.linspace(-2e-4, 2e-4, 21))
     st = fit_static_coefficients(sw)
     c = compare_coefficients(model, st.coefficients, st.std_errors)
-    from fitting.library import is_velocity_free
+    from cubedimer.terms import is_velocity_free
 
     velocity_rows = [r for r in c.rows if not is_velocity_free(r.term)]
     assert velocity_rows, "the fitted model should contain velocity terms"

@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from fitting.executor import ExecutorConfig, map_ordered
+from cubedimer.executor import ExecutorConfig, map_ordered
 
 
 def _work(seed: int) -> float:

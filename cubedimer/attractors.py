@@ -1,6 +1,6 @@
 """Classification of runs into attractor classes by amplitude and y-theta phase relation.
 
-Features come from :func:`fitting.spectra.spectral_features` of the smoothed run (or of a
+Features come from :func:`cubedimer.spectra.spectral_features` of the smoothed run (or of a
 simulation).  Classes:
 
 * ``theta-at-rest``: theta amplitude below ``theta_rest`` (default 0.02);

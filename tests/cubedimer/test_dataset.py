@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fitting.dataset import DatasetError, load_dataset, load_run
+from cubedimer.dataset import DatasetError, load_dataset, load_run
 
 
 def test_good_file_with_comments_extra_columns_and_gaps(tmp_path, sine_run):

@@ -15,11 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
-__all__ = ["DatasetError", "Run", "Dataset", "LoadConfig", "load_run", "load_dataset", "fill_gaps",
-           "META_KEYS"]
-
-META_KEYS = ("side_length_m", "particle_density_kg_m3", "bulk_modulus_pa", "frequency_hz",
-             "sound_speed_m_s", "air_density_kg_m3", "pressure_amplitude_pa")
+__all__ = ["DatasetError", "Run", "Dataset", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
 
 
 class DatasetError(ValueError):
@@ -201,22 +197,6 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt))
 
 
-def _load_meta(path: Path) -> dict:
-    f = path / "meta.json"
-    if not f.exists():
-        return {}
-    try:
-        meta = json.loads(f.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise DatasetError(f"{f}: unreadable meta.json ({exc})") from None
-    if not isinstance(meta, dict):
-        raise DatasetError(f"{f}: meta.json must hold a JSON object")
-    for k in META_KEYS:
-        if k in meta and not isinstance(meta[k], (int, float)):
-            raise DatasetError(f"{f}: key {k!r} must be a number, got {meta[k]!r}")
-    return meta
-
-
 def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConfig = LoadConfig(),
                  report=None) -> Dataset:
     """Load every ``*.csv`` in ``path`` (sorted by name).
@@ -244,7 +224,9 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     files = sorted(p.glob("*.csv"))
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
-    meta = _load_meta(p)
+    from .meta import read_meta
+
+    meta = read_meta(p)
     report = report or (lambda msg: print(f"warning: skipping {msg}", file=sys.stderr))
     runs, skipped = [], []
     for f in files:
