@@ -46,3 +46,61 @@ def test_environment_selects_scheduler(monkeypatch):
     assert ExecutorConfig(workers=None).resolved_workers() == (os.cpu_count() or 1)
     with pytest.raises(ValueError):
         ExecutorConfig(workers=0).resolved_workers()
+
+
+def _inner_pid(_: int) -> int:
+    return os.getpid()
+
+
+def _outer(n: int) -> tuple[int, list[int], bool]:
+    """A task that itself calls map_ordered with the default config (a pool, if it were allowed)."""
+    from cubedimer.executor import in_task
+
+    return os.getpid(), map_ordered(_inner_pid, range(n), ExecutorConfig(workers=2), progress=False), in_task()
+
+
+def _assert_nested_serial(out, n=3):
+    for pid, inner, marked in out:
+        assert marked and inner == [pid] * n  # the inner work ran in the task's own process
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_map_ordered_inside_a_task_runs_serially(workers):
+    out = map_ordered(_outer, [3, 3, 3], ExecutorConfig(workers=workers), progress=False)
+    _assert_nested_serial(out)
+    if workers == 1:
+        assert {pid for pid, _, _ in out} == {os.getpid()}
+    from cubedimer.executor import in_task
+
+    assert not in_task()  # the marker does not leak out of the task
+
+
+def test_single_item_with_workers_left_may_use_them():
+    """One item on a multi-worker config runs here unmarked: its own parallel work may use the pool."""
+    (pid, inner, marked), = map_ordered(_outer, [2], ExecutorConfig(workers=2), progress=False)
+    assert pid == os.getpid() and not marked and os.getpid() not in inner
+
+
+@pytest.fixture(scope="module")
+def process_cluster():
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
+    distributed = pytest.importorskip("dask.distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=None, silence_logs=50)
+    yield cluster
+    cluster.close(timeout=30)
+
+
+def test_nested_map_ordered_on_a_process_cluster(process_cluster):
+    """Daemonic dask worker processes may not start children: nested work must run in the task."""
+    out = map_ordered(_outer, [3, 3, 3, 3], ExecutorConfig(scheduler=process_cluster.scheduler_address), progress=False)
+    _assert_nested_serial(out)
+    assert os.getpid() not in {pid for pid, _, _ in out}
+    assert map_ordered(_work, range(4), ExecutorConfig(scheduler=process_cluster.scheduler_address),
+                       progress=False) == [_work(s) for s in range(4)]
+
+
+def test_config_validates_itself():
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError):
+            ExecutorConfig(workers=bad)
