@@ -91,8 +91,19 @@ def process_cluster():
     cluster.close(timeout=30)
 
 
+def _module_file(_: int) -> str:
+    import cubedimer.executor
+
+    return cubedimer.executor.__file__
+
+
 def test_nested_map_ordered_on_a_process_cluster(process_cluster):
     """Daemonic dask worker processes may not start children: nested work must run in the task."""
+    import cubedimer.executor
+
+    # the workers run this checkout's code (what the cluster tests of the commands rely on)
+    assert set(map_ordered(_module_file, range(2), ExecutorConfig(scheduler=process_cluster.scheduler_address),
+                           progress=False)) == {cubedimer.executor.__file__}
     out = map_ordered(_outer, [3, 3, 3, 3], ExecutorConfig(scheduler=process_cluster.scheduler_address), progress=False)
     _assert_nested_serial(out)
     assert os.getpid() not in {pid for pid, _, _ in out}
