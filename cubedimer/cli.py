@@ -4,8 +4,8 @@ Each package's ``cli`` module builds an :class:`OneLineParser` with one sub-pars
 (``add_parser(subparsers)`` functions that set ``func``) and calls :func:`run_cli`, which
 
 * configures logging (library code logs; progress bars stay on stderr),
-* turns errors a user can fix (:class:`UserInputError`, :class:`~cubedimer.dataset.DatasetError`)
-  into one line ``error: ...`` on stderr and exit status 2, with no traceback,
+* turns errors a user can fix (:class:`UserInputError`, :class:`~cubedimer.dataset.DatasetError`,
+  :class:`~cubedimer.executor.ExecutorError`) into one line ``error: ...`` on stderr and exit status 2, with no traceback,
 * turns Ctrl-C into exit status 130 with a line on what was kept.
 
 Shared options live here too, so that every command spells them the same way:
@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 from .dataset import DatasetError
-from .executor import ExecutorConfig
+from .executor import ExecutorConfig, ExecutorError
 
 __all__ = ["UserInputError", "OneLineParser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
@@ -213,7 +213,7 @@ def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> i
     configure_logging(quiet=bool(getattr(args, "quiet", False)), verbose=bool(getattr(args, "verbose", False)))
     try:
         return int(args.func(args) or 0)
-    except (UserInputError, DatasetError) as exc:
+    except (UserInputError, DatasetError, ExecutorError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

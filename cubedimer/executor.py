@@ -28,11 +28,15 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
-__all__ = ["ExecutorConfig", "map_ordered", "in_task"]
+__all__ = ["ExecutorConfig", "ExecutorError", "map_ordered", "in_task"]
 
 logger = logging.getLogger(__name__)
 
 _task_state = threading.local()  # .depth: how many map_ordered tasks enclose the current call
+
+
+class ExecutorError(RuntimeError):
+    """The requested executor cannot be used (dask not installed, scheduler unreachable); one line."""
 
 
 @dataclass(frozen=True)
@@ -151,12 +155,15 @@ def map_ordered(
         if address:
             try:
                 from dask.distributed import Client, as_completed as dask_as_completed
-            except ImportError as exc:  # pragma: no cover - depends on the optional extra
-                raise RuntimeError(
-                    "a dask scheduler was requested but dask.distributed is not installed: "
-                    "pip install 'cubedimer[dask]'"
-                ) from exc
-            with Client(address) as client:
+            except ImportError:  # pragma: no cover - depends on the optional extra
+                raise ExecutorError(f"a dask scheduler ({address}) was requested but dask.distributed is not "
+                                    f"installed: pip install 'cubedimer[dask]'") from None
+            try:
+                client = Client(address)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ExecutorError(f"cannot reach the dask scheduler at {address} ({type(exc).__name__}: "
+                                    f"{str(exc)[:200]})") from None
+            with client:
                 futures = {client.submit(task, it, pure=False): i for i, it in enumerate(items)}
                 for fut in dask_as_completed(list(futures)):
                     i = futures[fut]

@@ -115,3 +115,12 @@ def test_config_validates_itself():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ValueError):
             ExecutorConfig(workers=bad)
+
+
+def test_unreachable_scheduler_is_one_executor_error():
+    dask = pytest.importorskip("dask")
+    from cubedimer.executor import ExecutorError
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        with pytest.raises(ExecutorError, match="cannot reach the dask scheduler at tcp://127.0.0.1:9"):
+            map_ordered(_work, range(2), ExecutorConfig(scheduler="tcp://127.0.0.1:9"), progress=False)
