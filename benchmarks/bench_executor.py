@@ -51,7 +51,7 @@ def _study(n_workers: int, tmp: Path) -> dict:
 
     config = BlindConfig(cases=CASES, runs=RUNS, duration=DURATION)
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=40) as cluster, Client(cluster) as client:
+                      dashboard_address=":0", silence_logs=40) as cluster, Client(cluster) as client:
         executor = ExecutorConfig(scheduler=cluster.scheduler_address)
         warm = client.run(_warm, str(tmp / f"warm{n_workers}"))
         cpu0 = sum(client.run(_cpu_seconds).values())

@@ -143,3 +143,28 @@ def test_data_set_files_respect_the_umask(tmp_path, mask, mode):
         os.umask(old)
     for f in (tmp_path / "d").iterdir():
         assert stat.S_IMODE(f.stat().st_mode) == mode, f.name
+
+
+@pytest.fixture(scope="module")
+def process_cluster():
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
+    distributed = pytest.importorskip("dask.distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=":0", silence_logs=50)
+    yield cluster
+    cluster.close(timeout=30)
+
+
+@pytest.mark.slow
+def test_identical_data_sets_serially_on_local_processes_and_on_a_cluster(tmp_path, process_cluster):
+    common = ["simulate", "--runs", "3", "--seed", "5", "--no-progress", "--duration", "1", "--fps", "500",
+              "--effect", "pair_scattering:kappa=12000"]
+    outs = {"serial": ["--workers", "1"], "local": ["--workers", "2"],
+            "cluster": ["--scheduler", process_cluster.scheduler_address]}
+    files = {}
+    for name, extra in outs.items():
+        assert main([*common, *extra, "--out", str(tmp_path / name)]) == 0
+        files[name] = {p.name: p.read_bytes() for p in sorted((tmp_path / name).iterdir())}
+    assert sorted(files["serial"]) == ["meta.json", "run01.csv", "run02.csv", "run03.csv", "truth.json",
+                                       "truth_states.npz"]
+    assert files["local"] == files["serial"] and files["cluster"] == files["serial"]

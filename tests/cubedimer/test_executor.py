@@ -33,7 +33,7 @@ def test_errors_propagate():
 
 def test_dask_cluster_gives_same_results():
     distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
         out = map_ordered(_work, range(4), ExecutorConfig(scheduler=cluster.scheduler_address), progress=False)
     assert out == [_work(s) for s in range(4)]
 
@@ -86,7 +86,7 @@ def process_cluster():
     """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
     distributed = pytest.importorskip("dask.distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=None, silence_logs=50)
+                                       dashboard_address=":0", silence_logs=50)
     yield cluster
     cluster.close(timeout=30)
 

@@ -71,7 +71,7 @@ def process_cluster():
     """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
     distributed = pytest.importorskip("dask.distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=None, silence_logs=50)
+                                       dashboard_address=":0", silence_logs=50)
     yield cluster
     cluster.close(timeout=30)
 
