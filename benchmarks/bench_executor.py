@@ -44,15 +44,14 @@ def _noop(x: int) -> int:
 
 
 def _study(n_workers: int, tmp: Path) -> dict:
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
 
-    from cubedimer.executor import ExecutorConfig, map_ordered
+    from cubedimer.executor import ExecutorConfig, loopback_cluster, map_ordered
     from validation.blind import BlindConfig, run_blind
 
     config = BlindConfig(cases=CASES, runs=RUNS, duration=DURATION)
-    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=":0", silence_logs=40) as cluster, Client(cluster) as client:
-        executor = ExecutorConfig(scheduler=cluster.scheduler_address)
+    with loopback_cluster(n_workers) as address, Client(address) as client:
+        executor = ExecutorConfig(scheduler=address)
         warm = client.run(_warm, str(tmp / f"warm{n_workers}"))
         cpu0 = sum(client.run(_cpu_seconds).values())
         t0 = time.perf_counter()

@@ -24,11 +24,12 @@ import numbers
 import os
 import sys
 import threading
+from contextlib import contextmanager
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
-__all__ = ["ExecutorConfig", "ExecutorError", "map_ordered", "in_task"]
+__all__ = ["ExecutorConfig", "ExecutorError", "map_ordered", "in_task", "loopback_cluster"]
 
 logger = logging.getLogger(__name__)
 
@@ -199,3 +200,29 @@ def map_ordered(
         return results
     finally:
         bar.close()
+
+
+@contextmanager
+def loopback_cluster(n_workers: int = 2, timeout: float = 60.0) -> Iterator[str]:
+    """A dask cluster on 127.0.0.1 for trying the cluster path on one machine; yields its address.
+
+    A scheduler and ``n_workers`` daemonic worker processes of one thread each (what
+    ``dask scheduler`` plus ``dask worker --nworkers N --nthreads 1`` start), shut down on exit.
+
+    Parameters
+    ----------
+    n_workers : int
+        Worker processes.
+    timeout : float
+        Longest wait [s] of a worker for the scheduler, and for the cluster to close.
+    """
+    try:
+        from dask.distributed import LocalCluster
+    except ImportError:  # pragma: no cover - depends on the optional extra
+        raise ExecutorError("dask.distributed is not installed: pip install 'cubedimer[dask]'") from None
+    cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                           dashboard_address=":0", silence_logs=logging.ERROR, death_timeout=timeout)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close(timeout=timeout)

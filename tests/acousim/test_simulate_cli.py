@@ -147,12 +147,12 @@ def test_data_set_files_respect_the_umask(tmp_path, mask, mode):
 
 @pytest.fixture(scope="module")
 def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
-    distributed = pytest.importorskip("dask.distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=":0", silence_logs=50)
-    yield cluster
-    cluster.close(timeout=30)
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address
 
 
 @pytest.mark.slow
@@ -160,7 +160,7 @@ def test_identical_data_sets_serially_on_local_processes_and_on_a_cluster(tmp_pa
     common = ["simulate", "--runs", "3", "--seed", "5", "--no-progress", "--duration", "1", "--fps", "500",
               "--effect", "pair_scattering:kappa=12000"]
     outs = {"serial": ["--workers", "1"], "local": ["--workers", "2"],
-            "cluster": ["--scheduler", process_cluster.scheduler_address]}
+            "cluster": ["--scheduler", process_cluster]}
     files = {}
     for name, extra in outs.items():
         assert main([*common, *extra, "--out", str(tmp_path / name)]) == 0

@@ -83,12 +83,12 @@ def test_single_item_with_workers_left_may_use_them():
 
 @pytest.fixture(scope="module")
 def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
-    distributed = pytest.importorskip("dask.distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=":0", silence_logs=50)
-    yield cluster
-    cluster.close(timeout=30)
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address
 
 
 def _module_file(_: int) -> str:
@@ -102,12 +102,12 @@ def test_nested_map_ordered_on_a_process_cluster(process_cluster):
     import cubedimer.executor
 
     # the workers run this checkout's code (what the cluster tests of the commands rely on)
-    assert set(map_ordered(_module_file, range(2), ExecutorConfig(scheduler=process_cluster.scheduler_address),
+    assert set(map_ordered(_module_file, range(2), ExecutorConfig(scheduler=process_cluster),
                            progress=False)) == {cubedimer.executor.__file__}
-    out = map_ordered(_outer, [3, 3, 3, 3], ExecutorConfig(scheduler=process_cluster.scheduler_address), progress=False)
+    out = map_ordered(_outer, [3, 3, 3, 3], ExecutorConfig(scheduler=process_cluster), progress=False)
     _assert_nested_serial(out)
     assert os.getpid() not in {pid for pid, _, _ in out}
-    assert map_ordered(_work, range(4), ExecutorConfig(scheduler=process_cluster.scheduler_address),
+    assert map_ordered(_work, range(4), ExecutorConfig(scheduler=process_cluster),
                        progress=False) == [_work(s) for s in range(4)]
 
 

@@ -101,12 +101,12 @@ def test_synth_size_limit(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
-    distributed = pytest.importorskip("dask.distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=":0", silence_logs=50)
-    yield cluster
-    cluster.close(timeout=30)
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address
 
 
 @pytest.mark.slow
@@ -122,7 +122,7 @@ def test_fit_identical_serially_on_local_processes_and_on_a_cluster(small_datase
     for name in ("run01.json", "run02.json"):
         (cluster / "runs" / name).write_bytes((serial / "runs" / name).read_bytes())
     assert main(["fit", str(small_dataset), "--out", str(cluster), *opts,
-                 "--scheduler", process_cluster.scheduler_address]) == 0
+                 "--scheduler", process_cluster]) == 0
     reference = (fitted / "model.json").read_bytes()  # the module's fit on 2 local processes
     assert (serial / "model.json").read_bytes() == reference
     assert (cluster / "model.json").read_bytes() == reference

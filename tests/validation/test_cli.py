@@ -68,12 +68,12 @@ def test_parallel_commands_take_the_shared_executor_options(capsys, command):
 
 @pytest.fixture(scope="module")
 def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes."""
-    distributed = pytest.importorskip("dask.distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=":0", silence_logs=50)
-    yield cluster
-    cluster.close(timeout=30)
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address
 
 
 def _study_files(out):
@@ -91,7 +91,7 @@ def test_blind_study_identical_serially_locally_and_on_a_cluster(tmp_path, proce
     assert main(["blind", "--cases", "2", *small, "--workers", "1", "--out", str(serial)]) == 0
     # begun locally: one case (its runs simulated on 2 local processes), then finished on the cluster
     assert main(["blind", "--cases", "1", *small, "--workers", "2", "--out", str(mixed)]) == 0
-    assert main(["blind", "--cases", "2", *small, "--scheduler", process_cluster.scheduler_address,
+    assert main(["blind", "--cases", "2", *small, "--scheduler", process_cluster,
                  "--out", str(mixed)]) == 0
     assert "resuming: 1 cases done, 1 to run" in capsys.readouterr().err
     reference = _study_files(serial)
