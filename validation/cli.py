@@ -145,8 +145,8 @@ def _add_diagnose(sub) -> None:
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
-                           "errors) run one after another in this process, so today these options change nothing "
-                           "for this command; they are accepted so that every command takes the same options.")
+                           "errors) run one after another in this process, so these options do not change this "
+                           "command; it accepts them so that every command takes the same options.")
     p.set_defaults(func=run_diagnose)
 
 
