@@ -1,4 +1,4 @@
-"""The model-discovery pipeline (steps 1-4 of issue #4): data -> C0 -> refined runs -> minimal model.
+"""The model-discovery pipeline: data -> C0 -> refined runs -> minimal model.
 
 :func:`fit_dataset` loads a data set, smooths and differentiates every run, classifies its
 attractor, fits the regression model C0 (per run, and once jointly for reference), refines
@@ -452,7 +452,8 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
                 progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
     """Run steps 1-4 on ``data_dir`` and write ``out_dir/model.json`` (and plots).
 
-    Bad input raises :class:`~cubedimer.dataset.DatasetError` before anything is written.
+    Bad input raises :class:`~cubedimer.dataset.DatasetError` before anything is written; a minimal
+    model that blows up with no sane fallback raises :class:`NoSaneModelError` and writes no model.json.
     """
     log = log or (lambda m: None)
     ds: Dataset = load_dataset(data_dir, strict=strict, config=config.load)
