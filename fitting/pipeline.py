@@ -41,7 +41,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from .integral_form import METHOD as INTEGRAL_METHOD, IntegralSelection, integral_form_selection
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
-from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
+from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales, damping_mask
 from .oracle import OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
 from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
@@ -333,10 +333,7 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
     """
     out: list[tuple[str, PolynomialModel]] = []
     p = mean_pvalues(stats)
-    damping = np.zeros_like(mask)
-    for q, eq in enumerate(EQUATION_NAMES):
-        damping[q, TERMS.index(DAMPING_TERMS[eq])] = True
-    removable = np.flatnonzero((model.support & ~damping).ravel())
+    removable = np.flatnonzero((model.support & ~damping_mask()).ravel())
     order = removable[np.argsort(-p.ravel()[removable], kind="stable")]  # least significant first
     names = [f"{EQUATION_NAMES[i // len(TERMS)]}:{TERMS[i % len(TERMS)]}" for i in order]
     keep = model.support.copy().ravel()
