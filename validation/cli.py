@@ -150,7 +150,7 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .diagnose import DiagnoseConfig, diagnose_dataset, write_diagnosis
+    from .diagnosis import DiagnoseConfig, diagnose_dataset, write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -230,7 +230,7 @@ def _add_report(sub) -> None:
 def run_report(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .report_builder import build_report
+    from .report.pipeline import build_report
 
     try:
         build_report(args.data, args.out, args.workers, args.scheduler, progress=not args.quiet, max_evals=args.max_evals)
