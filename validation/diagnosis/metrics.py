@@ -136,7 +136,8 @@ def gap_components(integral_theta: bool) -> tuple[GapComponent, GapComponent, Ga
 
 def gap_definition(components: Sequence[GapComponent]) -> str:
     """The definition of the scalar gap as text (diagnosis.json ``gap_definition``), composed from ``components``."""
-    return (f"mean over runs of the mean of {len(components)} unexplained fractions, each minus its noise floor: "
+    count = {2: "two", 3: "three"}.get(len(components), str(len(components)))
+    return (f"mean over runs of the mean of {count} unexplained fractions, each minus its noise floor: "
             + "; ".join(c.describe() for c in components) + " (validation.diagnosis)")
 
 

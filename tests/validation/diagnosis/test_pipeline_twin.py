@@ -167,3 +167,25 @@ def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
     data, _ = _twin(tmp_path, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
     diag, _ = diagnose_dataset(data, FAST, progress=False)
     assert diag["identified"] == ["velocity_coupling"]
+
+
+@pytest.mark.slow
+def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
+    """The command end to end on a small twin data set: diagnosis.json with the FORMATS.md keys, the report
+    section with its figures, and the progress logged on stderr."""
+    import subprocess
+    import sys
+
+    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, runs=3, duration=2.0)
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(data), "--out", str(out),
+                        "--candidates", "pair_scattering", "--no-long-time"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    diag = json.loads((out / "diagnosis.json").read_text())
+    assert {"identified", "calibration", "gap_before", "gap_after", "effects", "localization", "skipped_files",
+            "remaining_gap", "gap_definition", "gap_components"} <= set(diag)
+    assert [e["name"] for e in diag["effects"]] == ["pair_scattering"]
+    assert (out / "report.html").exists()
+    assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
+    assert "[validation.diagnosis.pipeline] 3 runs; calibrating" in r.stderr
+    assert "[validation.diagnosis.identification] testing pair_scattering on top of calibration" in r.stderr

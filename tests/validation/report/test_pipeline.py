@@ -102,7 +102,7 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     assert velocity_rows, "the fitted model should contain velocity terms"
     assert all(r.kind.startswith("dynamic only") and r.simulated != r.simulated for r in velocity_rows)  # NaN prediction
     # the runs' refined models carry the velocity-coupling terms, and the comparison lists them as dynamic only
-    # (whether the minimal model keeps them is the ensemble rule's business: see the fitting issue)
+    # (whether the minimal model keeps them is the ensemble rule's business, docs/fitting.md)
     inclusion = model["inclusion_frequency"]["thetaddot"]
     by_term = {r.term: r for r in velocity_rows if r.equation == "thetaddot"}
     for term in ("y*thetadot^2", "y*ydot*thetadot"):
