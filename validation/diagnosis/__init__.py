@@ -31,8 +31,8 @@ from .identification import (CandidateTest, Identification, IdentificationRound,
                              identify_effects)
 from .localization import localize_residuals
 from .long_time import LongTimeGap, long_time_gaps
-from .metrics import (GapComponent, fit_gaps, gap_components, gap_definition, noise_floors, scalar_gap,
-                      short_time_gaps)
+from .metrics import (GapComponent, fit_components, fit_gaps, gap_components, gap_definition, noise_floors,
+                      scalar_gap, short_time_gaps)
 from .pipeline import EXPLAINED_GAP, DiagnoseConfig, DiagnosisInternals, diagnose_dataset, write_diagnosis
 from .preparation import PositionIntegrals, RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
@@ -43,7 +43,7 @@ __all__ = [
     "RunAccelerations", "PositionIntegrals", "prepare_diagnosis_runs", "DiagnosisProblem",
     "Calibration", "calibrate",
     "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
-    "GapComponent", "gap_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",
+    "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",
     "PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps", "identify_effects",
     "localize_residuals", "LongTimeGap", "long_time_gaps",
     "sign_flip_pvalue", "wilcoxon_greater_pvalue",

@@ -3,9 +3,8 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import (Calibration, DiagnosisProblem, EnergyResidual, GapFit, IntegralResidual,
-                                  RunAccelerations, fit_gap_model, fit_gaps, gap_components, gap_definition,
-                                  short_time_gaps)
-from validation.diagnosis.metrics import fit_components
+                                  RunAccelerations, fit_components, fit_gap_model, fit_gaps, gap_components,
+                                  gap_definition, short_time_gaps)
 
 
 def _runs_and_residuals(seed=0, n_runs=3, n=200):
