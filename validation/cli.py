@@ -159,7 +159,7 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .diagnose import DiagnoseConfig, diagnose_dataset, write_diagnosis
+    from .diagnosis import DiagnoseConfig, diagnose_dataset, write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -244,7 +244,7 @@ def _add_report(sub) -> None:
 def run_report(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .report_builder import build_report
+    from .report.pipeline import build_report
 
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
