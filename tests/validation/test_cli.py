@@ -66,16 +66,6 @@ def test_parallel_commands_take_the_shared_executor_options(capsys, command):
     assert exc.value.code == 0 and "--workers N" in text and "--scheduler ADDRESS" in text
 
 
-@pytest.fixture(scope="module")
-def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
-
-    with loopback_cluster(2) as address:
-        yield address
-
-
 def _study_files(out):
     return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*"))
             if p.is_file() and p.suffix in (".json", ".md")}
