@@ -88,3 +88,10 @@ def test_blind_study_identical_serially_locally_and_on_a_cluster(tmp_path, proce
     assert "cases/case001/result.json" in reference and "summary.json" in reference
     assert _study_files(mixed) == reference
     shutil.rmtree(serial)
+
+
+def test_diagnose_refuses_a_negative_practical_threshold_in_one_line(tmp_path, tiny_data, capsys):
+    assert main(["diagnose", str(tiny_data), "--out", str(tmp_path / "out"), "--min-improvement", "-0.1"]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("error: ") and "min_relative_improvement" in line
+    assert not (tmp_path / "out").exists()
