@@ -11,6 +11,7 @@ every fit here is a linear least-squares problem at the measured states.  One mo
 * :mod:`~validation.diagnosis.simulation_model`: the simulation's terms at the measured states;
 * :mod:`~validation.diagnosis.candidates`: the candidate effects as linear regressors;
 * :mod:`~validation.diagnosis.calibration`: pressure and origin from the vertical equation;
+* :mod:`~validation.diagnosis.drift`: the pressure per time window within runs, and the test of its drift;
 * :mod:`~validation.diagnosis.gap_model`: the calibrated simulation plus effects, fitted
   (:func:`fit_gap_model`), and its residuals;
 * :mod:`~validation.diagnosis.metrics`: the gap components and the scalar gap;
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 from .calibration import Calibration, calibrate
 from .candidates import CANDIDATE_EFFECTS, effect_regressors
+from .drift import DriftSettings, DriftTest, PressureDrift, detect_pressure_drift
 from .gap_model import EnergyResidual, GapFit, IntegralResidual, apply_gap_model, fit_gap_model, predicted_accelerations
 from .identification import (CandidateTest, Identification, IdentificationRound, PracticalThresholds, held_out_gaps,
                              identify_effects)
@@ -42,6 +44,7 @@ __all__ = [
     "CANDIDATE_EFFECTS", "effect_regressors",
     "RunAccelerations", "PositionIntegrals", "prepare_diagnosis_runs", "DiagnosisProblem",
     "Calibration", "calibrate",
+    "DriftSettings", "DriftTest", "PressureDrift", "detect_pressure_drift",
     "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
     "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",
     "PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps", "identify_effects",

@@ -18,6 +18,7 @@ import numpy as np
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
+from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
@@ -49,6 +50,8 @@ class DiagnoseConfig:
         this fraction of its variance (the calibration is then distorted by something else)
     long_time : also compute the long-time (shape, Poincare, frequency) gaps
     long_time_duration : seconds of each run simulated for them [s]; None: the whole run
+    drift : settings of the test for a pressure drifting within runs (:mod:`validation.diagnosis.drift`);
+        None: the pressure is taken as constant without testing
     """
 
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
@@ -59,6 +62,7 @@ class DiagnoseConfig:
     max_vertical_gap: float = 0.05
     long_time: bool = True
     long_time_duration: float | None = 2.0
+    drift: DriftSettings | None = DriftSettings()
 
     def __post_init__(self):
         unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
@@ -124,7 +128,12 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     model = model_from_meta(meta, mesh_size=mesh_size).interpolated()
     problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
     runs = problem.runs
-    log("%d runs; calibrating pressure and height origin", len(runs))
+    log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
+    drift = detect_pressure_drift(problem, config.drift) if config.drift is not None else None
+    if drift is not None and drift.detected:
+        log("pressure drift detected (relative amplitude %.3g, time scale %.2g s, p = %.2g): the simulation "
+            "follows it", drift.relative_amplitude, drift.time_scale_s, drift.p_value)
+        problem = problem.with_drift(drift.drift)
     base = fit_gap_model(problem, [])
     per_before = fit_gaps(runs, base)
     gap_before = scalar_gap(per_before)
@@ -184,6 +193,11 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,
     }
+    if drift is not None and drift.detected:
+        remaining["statement"] = (
+            f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
+            f"{drift.time_scale_s:.2g} s, F-test p = {drift.p_value:.2g}); the simulation follows the drift, and on top of it "
+            + remaining["statement"])
     if ident.withheld:
         remaining["statement"] += (
             f"; the vertical (calibration) equation itself stays {100 * ident.vertical_gap:.0f} % unexplained, so the "
@@ -191,17 +205,20 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
             "held-out runs on top of that calibration) is not named as a cause")
     cal = final.calibration
     components = fit_components(final)
+    calibration = {
+        "pressure_amplitude_pa": cal.pressure_amplitude_pa,
+        "nominal_pressure_amplitude_pa": cal.nominal_pressure_pa,
+        "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
+        "y_origin_height_m": cal.z_origin_m,
+        "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
+        "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
+        "calibrated_on": CALIBRATED_ON,
+    }
+    if drift is not None:
+        calibration["drift"] = drift.to_dict()
     diagnosis = {
         "identified": identified,
-        "calibration": {
-            "pressure_amplitude_pa": cal.pressure_amplitude_pa,
-            "nominal_pressure_amplitude_pa": cal.nominal_pressure_pa,
-            "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
-            "y_origin_height_m": cal.z_origin_m,
-            "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
-            "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
-            "calibrated_on": CALIBRATED_ON,
-        },
+        "calibration": calibration,
         "gap_before": gap_before,
         "gap_after": gap_after,
         "gap_definition": gap_definition(components),

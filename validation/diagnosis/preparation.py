@@ -37,6 +37,12 @@ class PositionIntegrals:
     state: NDArray[np.float64]  # (n, 4) smoothed states at the same frames
     windows: tuple[int, int]  # frames per window for y and theta (fitting.integral_form.integral_window)
     noise_var: tuple[float, float]  # tracking-noise variances of y [m^2] and theta [-]
+    t0: float = 0.0  # time of the first frame [s]
+
+    @property
+    def times(self) -> NDArray[np.float64]:
+        """Times of the frames [s]."""
+        return self.t0 + self.dt * np.arange(self.positions.shape[0])
 
     def starts(self, q: int) -> NDArray[np.int64]:
         """First frames of the non-overlapping windows of coordinate q."""
@@ -152,7 +158,7 @@ def prepare_diagnosis_runs(dataset) -> list[RunAccelerations]:
             si = slice(edge, len(run.t) - edge)
             integral = PositionIntegrals(float(run.dt), np.column_stack([run.y[si], run.theta[si]]).astype(float), cols_state[si],
                                          (integral_window(run.dt, f_y), integral_window(run.dt, f_theta)),
-                                         (float(sigma2[0]), float(sigma2[1])))
+                                         (float(sigma2[0]), float(sigma2[1])), float(run.t[edge]))
         except ValueError:  # too short for the hinge window: the theta component uses the accelerations
             integral = None
         runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv,

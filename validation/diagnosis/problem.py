@@ -28,11 +28,15 @@ class DiagnosisProblem:
         The runs at the frames the fits use.
     recorded_runs : sequence of RunAccelerations, optional
         The same runs at every recorded frame (initial states, long-time errors); default ``runs``.
+    drift : validation.diagnosis.drift.PressureDrift, optional
+        The pressure's drift in time within each run: the simulation's acoustic terms are scaled by its
+        factor (:meth:`pressure_factor`); None: a constant pressure.
     """
 
     def __init__(self, model, runs: Sequence[RunAccelerations], recorded_runs: Sequence[RunAccelerations] | None = None,
-                 *, _shared: dict | None = None):
+                 *, drift=None, _shared: dict | None = None):
         self.model = model
+        self.drift = drift
         self.runs: tuple[RunAccelerations, ...] = tuple(runs)
         self.recorded_runs: tuple[RunAccelerations, ...] = tuple(self.runs if recorded_runs is None else recorded_runs)
         # id(holder) -> (holder, orientation sums); the holder is kept so that its id stays unique
@@ -46,7 +50,17 @@ class DiagnosisProblem:
     def subset(self, indices: Sequence[int]) -> "DiagnosisProblem":
         """The problem of the runs at ``indices`` (same model, shared caches)."""
         runs = [self.runs[i] for i in indices]
-        return DiagnosisProblem(self.model, runs, _shared=self._shared)
+        return DiagnosisProblem(self.model, runs, drift=self.drift, _shared=self._shared)
+
+    def with_drift(self, drift) -> "DiagnosisProblem":
+        """The same problem with the simulation's pressure drifting as ``drift`` (a
+        :class:`~validation.diagnosis.drift.PressureDrift`, or None for a constant pressure)."""
+        return DiagnosisProblem(self.model, self.runs, self.recorded_runs, drift=drift, _shared=self._shared)
+
+    def pressure_factor(self, name: str, t):
+        """Factor (p(t) / p_mean)^2 on the simulation's acoustic terms of run ``name`` at times ``t`` [s]
+        (None when the pressure is constant)."""
+        return None if self.drift is None else self.drift.factor(name, t)
 
     def __len__(self) -> int:
         return len(self.runs)

@@ -54,9 +54,12 @@ class SimulationTerms:
                 self._sums = [self.problem.orientation_sums(r) for r in self.runs]
             for r, sums in zip(self.runs, self._sums):
                 s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
+                fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])
+                f = self.problem.pressure_factor(r.name, r.t)
+                if f is not None:  # a drifting pressure scales the acoustic forces in time
+                    fz, qt = f * fz, f * qt
                 # accelerations as the data see them (same smoothing); the potential is used raw
-                out.append((r.smooth(s.force_z / self.mass), r.smooth(s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])),
-                            s.potential))
+                out.append((r.smooth(fz), r.smooth(qt), s.potential))
             if len(self._cache) > 64:
                 self._cache.clear()
             self._cache[key] = out
@@ -82,13 +85,20 @@ class SimulationTerms:
             idx = np.arange(0, len(r.t), step)
             if idx[-1] != len(r.t) - 1:
                 idx = np.append(idx, len(r.t) - 1)
+            a, b = idx[:-1], idx[1:]
+            f = self.problem.pressure_factor(r.name, r.t)
+            if f is None:
+                du, u0 = pot[b] - pot[a], pot[a]
+            else:  # the acoustic forces are f(t) times the nominal ones: the balance holds with int f dU_ac
+                cum_u = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(pot))])
+                du = cum_u[b] - cum_u[a]
+                # oscillation energy at the window's pressure: E_rest(s f) ~ E_rest(s) + s (f - 1) U_ac(rest)
+                u0 = f[a] * pot[a] - (f[a] - 1.0) * rest_u
             regs = [effect_regressors(n, r.state, z0 + y, self.k, z_eq) for n in effects]
             regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
             power = self.mass * yd[:, None] * regs[:, 0, :] + inertia[:, None] * thd[:, None] * regs[:, 1, :]
             cum = np.concatenate([np.zeros((1, power.shape[1])), np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
-            a, b = idx[:-1], idx[1:]
-            out.append({"dk": kin[b] - kin[a], "du": pot[b] - pot[a], "work": cum[b] - cum[a],
-                        "k0": kin[a], "u0": pot[a]})
+            out.append({"dk": kin[b] - kin[a], "du": du, "work": cum[b] - cum[a], "k0": kin[a], "u0": u0})
         return out
 
     def rest_energy(self, s: float, z0: float) -> float:
@@ -112,11 +122,13 @@ class SimulationTerms:
                 pi = r.integral
                 y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
                 st = self.model.integrals_at_height(th, z0 + y, self.problem.orientation_sums(pi))
+                f = self.problem.pressure_factor(r.name, pi.times)
+                f = 1.0 if f is None else f  # a drifting pressure scales the acoustic forces in time
                 if q == 0:
-                    out.append((pi.columns(0, st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))))
+                    out.append((pi.columns(0, f * st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))))
                 else:
                     inertia = d.hinge_inertia(th)
-                    out.append((pi.columns(1, st.q_theta / inertia),
+                    out.append((pi.columns(1, f * st.q_theta / inertia),
                                 pi.columns(1, -0.5 * d.hinge_inertia_derivative(th) * thd**2 / inertia)))
             self._cache[key] = out
         return self._cache[key]
