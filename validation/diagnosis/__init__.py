@@ -17,6 +17,7 @@ every fit here is a linear least-squares problem at the measured states.  One mo
 * :mod:`~validation.diagnosis.metrics`: the gap components and the scalar gap;
 * :mod:`~validation.diagnosis.statistics` and :mod:`~validation.diagnosis.identification`: held-out
   (K-fold) identification with the sign-flip test and practical thresholds;
+* :mod:`~validation.diagnosis.discovery`: the library terms that carry what no candidate explains;
 * :mod:`~validation.diagnosis.localization`: where the residual lies (terms, regions, time scales);
 * :mod:`~validation.diagnosis.long_time`: attractor, Poincare and frequency errors;
 * :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` and :func:`write_diagnosis`.
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 from .calibration import Calibration, calibrate
 from .candidates import CANDIDATE_EFFECTS, effect_regressors
+from .discovery import DiscoveredTerm, Discovery, discover_terms, discovered_equations, judge_candidates
 from .drift import DriftSettings, DriftTest, PressureDrift, detect_pressure_drift
 from .gap_model import EnergyResidual, GapFit, IntegralResidual, apply_gap_model, fit_gap_model, predicted_accelerations
 from .identification import (CandidateTest, Identification, IdentificationRound, PracticalThresholds, held_out_gaps,
@@ -44,6 +46,7 @@ __all__ = [
     "CANDIDATE_EFFECTS", "effect_regressors",
     "RunAccelerations", "PositionIntegrals", "prepare_diagnosis_runs", "DiagnosisProblem",
     "Calibration", "calibrate",
+    "DiscoveredTerm", "Discovery", "discover_terms", "discovered_equations", "judge_candidates",
     "DriftSettings", "DriftTest", "PressureDrift", "detect_pressure_drift",
     "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
     "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",

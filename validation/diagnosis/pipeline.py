@@ -18,6 +18,7 @@ import numpy as np
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
+from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
@@ -52,6 +53,8 @@ class DiagnoseConfig:
     long_time_duration : seconds of each run simulated for them [s]; None: the whole run
     drift : settings of the test for a pressure drifting within runs (:mod:`validation.diagnosis.drift`);
         None: the pressure is taken as constant without testing
+    discover : regress what remains after the candidates on the cubic library (:mod:`validation.diagnosis.discovery`)
+    discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
     """
 
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
@@ -63,6 +66,8 @@ class DiagnoseConfig:
     long_time: bool = True
     long_time_duration: float | None = 2.0
     drift: DriftSettings | None = DriftSettings()
+    discover: bool = True
+    discovery_min_improvement: float = 1e-3
 
     def __post_init__(self):
         unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
@@ -141,8 +146,23 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     log("gap before = %.3g (noise floor %.3g); identifying effects", gap_before, floor)
     ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
                              progress=progress)
-    identified = ident.identified
+    identified = list(ident.identified)
     final = fit_gap_model(problem, identified)
+    discovery, replaced = Discovery(), {}
+    if config.discover:
+        log("regressing the remaining residual on the library (held-out runs)")
+        discovery = discover_terms(problem, final, alpha=config.alpha,
+                                   min_absolute_improvement=config.discovery_min_improvement,
+                                   min_relative_improvement=config.min_relative_improvement)
+        if not discovery.empty and identified:
+            kept, pvals = judge_candidates(problem, identified, discovery, alpha=config.alpha)
+            if kept != identified:
+                replaced = {c: pvals[c] for c in identified if c not in kept}
+                identified = kept
+                final = fit_gap_model(problem, identified)
+                discovery = discover_terms(problem, final, alpha=config.alpha,
+                                           min_absolute_improvement=config.discovery_min_improvement,
+                                           min_relative_improvement=config.min_relative_improvement)
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
     # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
@@ -152,7 +172,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     for i, name in enumerate(identified):
         fit = fit_gap_model(problem, identified[: i + 1])
         g = scalar_gap(fit_gaps(runs, fit))
-        test = ident.rounds[i].candidates[name]
+        test = ident.rounds[ident.identified.index(name)].candidates[name]
         effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
                         "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
                         "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1})
@@ -163,11 +183,15 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         fit = fit_gap_model(problem, identified + [name])
         g = scalar_gap(fit_gaps(runs, fit))
         test = last_tests.get(name)
+        note = "fitted on top of the identified effects; not a significant held-out improvement"
+        if name in replaced:
+            note = (f"improved held-out runs, but not once the discovered terms are fitted (p = {replaced[name]:.2g}): "
+                    "the discovered terms explain its share of the gap better")
         others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
                        "significant": False, "p_value": test.p_value if test else None,
                        "wilcoxon_p": test.wilcoxon_p if test else None,
                        "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
-                       "note": "fitted on top of the identified effects; not a significant held-out improvement"})
+                       "note": note})
     effects += sorted(others, key=lambda e: e["gap_after"])
     loc_before = localize_residuals(runs, base.residuals)
     loc_after = localize_residuals(runs, final.residuals)
@@ -192,7 +216,13 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,
+        "discovered_terms": discovery.to_dict(),
+        "discovered_equations": discovered_equations(discovery),
+        "discovery_selected": discovery.selected,
+        "replaced_by_discovered_terms": [{"name": c, "p_value": p} for c, p in replaced.items()],
     }
+    if not discovery.empty:
+        remaining["statement"] += "; the library terms that carry it: " + "; ".join(discovered_equations(discovery).values())
     if drift is not None and drift.detected:
         remaining["statement"] = (
             f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
