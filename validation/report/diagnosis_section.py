@@ -75,16 +75,44 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         what = f"The gap is caused by {cause}."
     else:
         what = "No candidate effect improves held-out runs significantly."
+    drift = cal.get("drift") or {}
+    # a detected drift and the discovered terms are part of the remaining-gap statement; their tables are below
+    drift_text = f"No drift of the pressure within runs (F-test p = {drift['p_value']:.2g}). " if drift.get("tested") and not drift.get("detected") else ""
+    found = ""
+    replaced = rem.get("replaced_by_discovered_terms") or []
+    if replaced:
+        found += (" Not named, because the discovered terms explain its share better on held-out runs: "
+                  + ", ".join(r["name"] for r in replaced) + ".")
+    skipped = diagnosis.get("skipped_files") or []
+    data_text = ""
+    if skipped or diagnosis.get("glitch_frames_masked"):
+        data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.get('glitch_frames_masked', 0)} tracking-glitch "
+                     "frames masked. ")
     reading = (
+        data_text + drift_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
         f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
         f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} With them the gap is {100 * diagnosis['gap_after']:.1f} %: "
-        f"{rem['statement']}."
+        f"{rem['statement']}.{found}"
     )
     rows = [[e["name"], "yes" if e["significant"] else "no",
              ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
             for e in diagnosis["effects"]]
-    return Section("diagnosis", "Sim-to-real gap", reading, figures,
-                   [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)],
-                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident})
+    tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)]
+    terms = rem.get("discovered_terms") or {}
+    term_rows = [[eq, t["term"], t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
+                 for eq, ts in terms.items() for t in ts]
+    if term_rows:
+        tables.append(Table("Discovered library terms (what no candidate explains)",
+                            ["equation", "term", "coefficient (SI)", "std error", "shrink", "held-out p (sign-flip)"], term_rows))
+    if drift.get("detected"):
+        tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
+                            [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))
+    if skipped:
+        tables.append(Table("Skipped files", ["file", "reason"],
+                            [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
+    return Section("diagnosis", "Sim-to-real gap", reading, figures, tables,
+                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident,
+                    "drift_detected": bool(drift.get("detected")),
+                    "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
