@@ -70,7 +70,7 @@ def test_free_fall_with_free_hinge(bare):
     np.testing.assert_allclose(tr.y, -0.5 * G * tr.t**2, rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(tr.state[:, 1], -G * tr.t, rtol=1e-12, atol=1e-18)
     # no torque: the hinge's kinetic energy I(theta) thetadot^2 / 2 is conserved (RK4 error ~ (h w)^5)
-    kin = bare.surrogate.hinge_inertia(tr.theta) * tr.state[:, 3] ** 2
+    kin = bare.force_model.hinge_inertia(tr.theta) * tr.state[:, 3] ** 2
     assert np.ptp(kin) / kin[0] < 1e-10
 
 
@@ -91,7 +91,7 @@ def test_compiled_rk4_matches_scipy_dop853(bare):
     ids=["y-only", "mixed", "large-theta", "large-y"],
 )
 def test_energy_is_conserved_without_effects(bare, x0):
-    f_y = bare.surrogate.linear_frequencies()[0]
+    f_y = bare.force_model.linear_frequencies()[0]
     tr = bare.integrate(x0, 100 / f_y, 1e-3)
     assert tr.ok
     e = bare.energy(tr.state)
@@ -105,7 +105,7 @@ def test_energy_check_detects_a_wrong_force(bare):
     """A 1 % error in the hinge force breaks T + V conservation visibly: the check can fail."""
     import dataclasses
 
-    s = bare.surrogate
+    s = bare.force_model
     wrong = dataclasses.replace(s, beta=tuple(np.asarray(s.beta) * np.r_[1.0, np.full(len(s.beta) - 1, 1.01)]))
     # integrate the wrong dynamics, evaluate the energy of the right one
     x0 = [-2e-4, 0.0, 0.5, 0.0]
@@ -143,7 +143,7 @@ def test_linear_damping_decay_rate_theta(bare, gamma_theta):
 @pytest.mark.parametrize("kappa", [0.0, 12000.0])
 def test_small_oscillation_frequencies_match_swept_stiffnesses(bare, swept, kappa):
     dyn = bare.with_effects(EffectSet.parse([f"pair_scattering:kappa={kappa}"]))
-    k, z_eq = bare.surrogate.wavenumber, bare.surrogate.z_eq
+    k, z_eq = bare.force_model.wavenumber, bare.force_model.z_eq
     f_y_exp = np.sqrt(swept["w2_y"]) / (2 * np.pi)
     # pair_scattering adds kappa cos^2(k Z_eq) to the hinge's w^2 at the equilibrium
     f_t_exp = np.sqrt(swept["w2_theta"] + kappa * np.cos(k * z_eq) ** 2) / (2 * np.pi)
@@ -218,12 +218,48 @@ def test_mirror_asymmetry_equilibrium_is_the_static_balance(bare, default_model,
 def test_falling_out_of_the_trap_is_reported(bare):
     tr = bare.integrate([0.0, -0.2, 0.0, 0.0], 1.0, 1e-3)
     assert tr.status == 1 and "fell out" in tr.message
-    assert np.all(np.isfinite(tr.state)) and tr.y[-1] > bare.surrogate.escape_height()
+    assert np.all(np.isfinite(tr.state)) and tr.y[-1] > bare.force_model.escape_height()
 
 
 def test_hinge_closing_is_reported(bare):
     tr = bare.integrate([0.0, 0.0, 0.9, 40.0], 1.0, 1e-3)
     assert tr.status == 2 and np.all(np.abs(tr.theta) < 1)
+
+
+def test_batch_equals_single_runs(bare):
+    dyn = bare.with_effects(EffectSet.parse(["pair_scattering:kappa=12000", "linear_damping:gamma_y=0.3"]))
+    x0s = np.array([[-1.5e-4, -0.02, 0.2, 1.0], [0.0, -0.2, 0.0, 0.0], [1e-4, 0.0, -0.3, 0.0]])
+    states, n_valid, status = dyn.integrate_batch(x0s, 1.0, 1e-3)
+    for i, x0 in enumerate(x0s):
+        tr = dyn.integrate(x0, 1.0, 1e-3)
+        assert n_valid[i] == len(tr.t) and status[i] == tr.status
+        np.testing.assert_array_equal(states[i, : n_valid[i]], tr.state)  # identical arithmetic
+    assert status.tolist() == [0, 1, 0]  # the second falls out of the trap
+    assert np.all(np.isnan(states[1, n_valid[1]:]))
+    # an extra bound on |y| stops the first run too
+    _, nv, st = dyn.integrate_batch(x0s[:1], 1.0, 1e-3, y_bound=1e-4)
+    assert nv[0] < 1001 and st[0] == 1
+
+
+@pytest.mark.slow
+def test_compiled_entry_points_are_cached_on_disk(tmp_path):
+    """Worker processes load the compiled equations of motion from numba's cache."""
+    from tests.cubedimer.test_rk4 import cache_hits_in_fresh_processes
+
+    code = """
+        import numpy as np
+        import acousim.dynamics as d
+        from acousim.effects import EffectSet
+        from acousim.surrogate import cached_surrogate
+        dyn = d.DimerDynamics(cached_surrogate(), EffectSet.parse(["linear_damping:gamma_y=0.3"]))
+        dyn.integrate([1e-4, 0, 0.1, 0], 0.01, 1e-3)
+        dyn.integrate([1e-4, 0, 0.1, 0], 0.01, 1e-3, field_on=False)
+        dyn.integrate_batch([[1e-4, 0, 0.1, 0]], 0.01, 1e-3)
+        dyn.rhs(0.0, [1e-4, 0, 0.1, 0])
+    """
+    entries = "[d._integrate_field_on, d._integrate_field_off, d._integrate_field_on_batch, d.state_derivative]"
+    first, second = cache_hits_in_fresh_processes(code, entries, tmp_path)
+    assert first == 0 and second >= 4
 
 
 def test_bad_arguments(bare):
