@@ -91,6 +91,12 @@ def _velocity_coupling_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
     return (0.0, 0.0), (thetadot * thetadot * y, thetadot * ydot * y)
 
 
+def _state_arrays(*values) -> tuple[list[NDArray[np.float64]], tuple[int, ...]]:
+    """The values as float arrays and their broadcast shape."""
+    arrays = [np.asarray(v, float) for v in values]
+    return arrays, np.broadcast_shapes(*(a.shape for a in arrays))
+
+
 @dataclass(frozen=True)
 class Effect:
     """Base class: an unmodelled effect adding to the accelerations (see the module table).
@@ -140,20 +146,19 @@ class Effect:
 
         Row 0 is the yddot equation [m/s^2 per unit parameter], row 1 thetaddot [1/s^2 per unit
         parameter]; columns follow :meth:`parameter_names`.  State in SI, ``wavenumber`` k [1/m],
-        ``z_eq`` [m] the equilibrium height below the node (the effects' y is Z_com - Z_eq).
+        ``z_eq`` [m] the equilibrium height below the node (the effects' y is Z_com - Z_eq; a scalar
+        or an array broadcasting with the state).
         """
-        args = [np.asarray(v, float) for v in (y, ydot, theta, thetadot)]
-        shape = np.broadcast_shapes(*(a.shape for a in args))
-        cy, ct = cls.columns(*args, float(wavenumber), float(z_eq))
+        args, shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
+        cy, ct = cls.columns(*args[:4], float(wavenumber), args[4])
         rows = [np.stack([np.broadcast_to(np.asarray(c, float), shape) for c in cols], axis=-1) for cols in (cy, ct)]
         return np.stack(rows, axis=-2)
 
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Terms added to (yddot [m/s^2], thetaddot [1/s^2]): ``sum_j p_j column_j`` (numpy, arrays in SI)."""
-        args = [np.asarray(v, float) for v in (y, ydot, theta, thetadot)]
-        shape = np.broadcast_shapes(*(a.shape for a in args))
-        cy, ct = self.columns(*args, float(wavenumber), float(z_eq))
+        args, shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
+        cy, ct = self.columns(*args[:4], float(wavenumber), args[4])
         p = self.parameter_vector()
         ay = sum((pj * np.asarray(c, float) for pj, c in zip(p, cy)), np.zeros(shape))
         at = sum((pj * np.asarray(c, float) for pj, c in zip(p, ct)), np.zeros(shape))
@@ -386,7 +391,7 @@ class EffectSet:
                    wavenumber: float, z_eq: float) -> NDArray[np.float64]:
         """Every effect's :meth:`Effect.regressors` side by side: (..., 2, total parameters); the
         set's accelerations are ``regressors @ parameter_vector()``."""
-        shape = np.broadcast_shapes(*(np.shape(v) for v in (y, ydot, theta, thetadot)))
+        shape = np.broadcast_shapes(*(np.shape(v) for v in (y, ydot, theta, thetadot, z_eq)))
         parts = [type(e).regressors(y, ydot, theta, thetadot, wavenumber, z_eq) for e in self.effects]
         return np.concatenate(parts, axis=-1) if parts else np.zeros(shape + (2, 0))
 
@@ -398,7 +403,7 @@ class EffectSet:
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Sum of every effect's terms (yddot [m/s^2], thetaddot [1/s^2]), numpy reference implementation."""
-        shape = np.broadcast(*(np.asarray(v) for v in (y, ydot, theta, thetadot))).shape
+        shape = np.broadcast(*(np.asarray(v) for v in (y, ydot, theta, thetadot, z_eq))).shape
         ay, at = np.zeros(shape), np.zeros(shape)
         for e in self.effects:
             a, b = e.accelerations(y, ydot, theta, thetadot, wavenumber, z_eq)

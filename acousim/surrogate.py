@@ -27,7 +27,7 @@ the gradient of the surrogate potential and the continuous dynamics conserve T +
 
 Accuracy is measured against the direct model (:meth:`ForceSurrogate.accuracy`) and recorded at
 build time against the swept ``q_y`` and ``q_theta`` columns (which the fit never sees): typically
-1e-10 of max|Q| over the box, far inside the 0.5 % the issue asks for.
+1e-10 of max|Q| over the box, far inside the required 0.5 %.
 
 Mirror symmetry.  For equal cubes U_ac is even in theta; the symmetrised quadrature of
 :class:`~acousim.forces.GorkovDimer` makes the swept potential even to round-off, and the surrogate

@@ -64,22 +64,12 @@ def _box_check(y, yd, th, thd, lower, upper):
     """0 inside the box, else the status code of the first violation."""
     if not (np.isfinite(y) and np.isfinite(yd) and np.isfinite(th) and np.isfinite(thd)):
         return 1
-    if y < lower[0]:
-        return 2
-    if y > upper[0]:
-        return 3
-    if yd < lower[1]:
-        return 4
-    if yd > upper[1]:
-        return 5
-    if th < lower[2]:
-        return 6
-    if th > upper[2]:
-        return 7
-    if thd < lower[3]:
-        return 8
-    if thd > upper[3]:
-        return 9
+    x = (y, yd, th, thd)
+    for i in range(4):
+        if x[i] < lower[i]:
+            return 2 + 2 * i
+        if x[i] > upper[i]:
+            return 3 + 2 * i
     return 0
 
 
