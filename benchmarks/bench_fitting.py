@@ -1,4 +1,4 @@
-"""Benchmarks of the fitting package (issue #4): integrator speed, 30-run pipeline, baselines.
+"""Benchmarks of the fitting package: integrator speed, 30-run pipeline, baselines.
 
 Run ``python -m benchmarks.bench_fitting [--runs 30] [--workers 2]``: prints a markdown report.
 ``main()`` returns it (the ``python -m benchmarks`` runner's contract); ``run(out_lines)``

@@ -99,6 +99,50 @@ def _cmd_synth(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_plan(a: argparse.Namespace) -> int:
+    from cubedimer.cli import UserInputError
+    from .model import PolynomialModel
+    from .oracle import NoiseLevels, plan_runs
+
+    try:
+        model = PolynomialModel.from_json(str(a.model))
+    except (OSError, ValueError, KeyError) as exc:
+        raise UserInputError(f"{a.model}: not a readable model.json ({exc})") from None
+    try:
+        plan = plan_runs(model, NoiseLevels(a.noise_y, a.noise_theta), a.duration, a.fps, a.term, target_z=a.target_z,
+                         size=a.size, n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
+                         y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude)
+    except (ValueError, RuntimeError) as exc:
+        raise UserInputError(str(exc)) from None
+    print(plan.format_table())
+    return 0
+
+
+def _add_plan(sub) -> None:
+    """``plan``: how many runs make a term resolvable (the oracle's experiment planner)."""
+    from cubedimer.cli import positive_float, positive_int
+
+    p = sub.add_parser("plan", help="how many runs make a term resolvable (oracle z of integral-form least squares)")
+    p.add_argument("--model", required=True, help="model.json (fit's output or a truth.json)")
+    p.add_argument("--term", required=True, help="EQUATION:TERM, e.g. thetaddot:y^2*theta")
+    p.add_argument("--size", type=float, default=None, help="the term's coefficient [SI] (default: the model's)")
+    p.add_argument("--noise-y", type=positive_float, required=True, help="tracking noise of y [m]")
+    p.add_argument("--noise-theta", type=positive_float, required=True, help="tracking noise of theta [-]")
+    p.add_argument("--duration", type=positive_float, default=3.0, help="run length [s]")
+    p.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
+    p.add_argument("--target-z", type=positive_float, default=5.0, help="oracle z that counts as resolvable")
+    p.add_argument("--runs", type=positive_int, nargs="+", default=[4, 6, 8, 10, 12, 16, 20, 30, 50],
+                   help="rows of the table (numbers of runs)")
+    p.add_argument("--reference-runs", type=positive_int, default=48,
+                   help="reference runs the per-run information is measured on")
+    p.add_argument("--y-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="range of initial y amplitudes [m] (default 60e-6 150e-6)")
+    p.add_argument("--theta-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="range of initial theta amplitudes [-] (default 0.08 0.4)")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_plan)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
@@ -137,6 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--noise-theta", type=float, default=0.005)
     s.add_argument("--seed", type=int, default=0)
     s.set_defaults(func=_cmd_synth)
+    _add_plan(sub)
     return p
 
 

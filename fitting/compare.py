@@ -1,4 +1,4 @@
-"""Model comparison (step 5): a variant against the minimal model on every run.
+"""Model comparison: a variant against the minimal model on every run.
 
 Each model is simulated from every run's initial state; the per-run shape and Poincare errors
 (:mod:`fitting.losses`) are compared with the Wilcoxon signed-rank test on the paired per-run

@@ -25,9 +25,6 @@ __all__ = ["plot_fit", "plot_comparison"]
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     return plt
