@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import atomic_save, write_json
+from cubedimer.atomic import atomic_save, default_dir_mode, write_json
 from cubedimer.dataset import write_run_csv
 
 from ..dynamics import DimerDynamics
@@ -79,12 +79,6 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
     return out
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def check_output_dir(out_dir: str | os.PathLike, force: bool = False) -> Path:
     """Refuse an existing non-empty directory (or a file) unless ``force``; returns the path."""
     out = Path(out_dir)
@@ -120,7 +114,7 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
         write_json(tmp / "truth.json", truth)
         states = {Path(f).stem: r.state for f, r in zip(files, runs)}
         atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=runs[0].t, **states))
-        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp's folder is private; give it an ordinary folder's mode
+        os.chmod(tmp, default_dir_mode())  # mkdtemp's folder is private; give it an ordinary folder's mode
         if out.exists():
             trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=parent))
             os.replace(out, trash / out.name)
