@@ -91,7 +91,7 @@ class DiscoveryConfig:
     window_periods: float = 0.75
     segments: SegmentConfig = field(default_factory=SegmentConfig)
     max_iterations: int = 6
-    tolerance: float = 0.1
+    tolerance: float = 0.5
     velocity_first: bool = True
     keep_damping: bool = True
     min_contribution: float = 0.0
@@ -256,14 +256,26 @@ def numerov_columns(f: NDArray) -> NDArray[np.float64]:
     return g
 
 
+_VELOCITY_FREE = np.array([is_velocity_free(t) for t in TERMS])
+
+
 def _design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Sequence[float], windows: Sequence[int],
-            trims: Sequence[int]) -> _Design:
+            trims: Sequence[int], cache: dict | None = None) -> _Design:
+    """R factors of the integral-form design of one equation.  ``cache`` (run index -> (trim, columns)) keeps
+    the integrated velocity-free columns between passes whose position states are the same (raw) data."""
     rs, rows, wins = [], [], []
-    for x, f, dt, w, tr in zip(positions, library, dts, windows, trims):
+    for i, (x, f, dt, w, tr) in enumerate(zip(positions, library, dts, windows, trims)):
         starts = window_starts(len(x), int(w), int(tr))
         if starts.size == 0:
             continue
-        X = integral_columns(numerov_columns(f), dt, starts, int(w))
+        X = np.empty((starts.size * int(w), f.shape[1]))
+        hit = cache is not None and i in cache and cache[i][0] == tr
+        cols = ~_VELOCITY_FREE if hit else np.ones(f.shape[1], bool)
+        X[:, cols] = integral_columns(numerov_columns(f[:, cols]), dt, starts, int(w))
+        if hit:
+            X[:, _VELOCITY_FREE] = cache[i][1]
+        elif cache is not None:
+            cache[i] = (tr, X[:, _VELOCITY_FREE].copy())
         b = detrend_windows(x, starts, int(w))
         rs.append(_r_factor([np.column_stack([X, b])]))
         rows.append(X.shape[0])
@@ -404,9 +416,11 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
     positions = (ys, ths)
 
-    def one_pass(states: Sequence[NDArray], trims: Sequence[int]):
+    caches: list[dict] = [{}, {}]
+
+    def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool):
         lib = [evaluate_library(s) for s in states]
-        designs = [_design(positions[q], lib, dts, windows[q], trims) for q in range(2)]
+        designs = [_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None) for q in range(2)]
         coef, se, res_std, paths, chosen = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), [], []
         for q in range(2):
             sel, path = _select(designs[q], forced[q], config)
@@ -433,7 +447,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                 states = [np.column_stack([y, s[:, 1], th, s[:, 3]]) for y, th, s in zip(ys, ths, states)]
             trims = [edge if f.any() else 0 for f, edge in zip(estimate.failed, edges)]
             label = "model"
-        coef, se, res_std, designs, paths, chosen = one_pass(states, trims)
+        coef, se, res_std, designs, paths, chosen = one_pass(states, trims, it > 0 and config.raw_positions)
         mask = coef != 0.0
         change = np.inf
         if prev is not None:
