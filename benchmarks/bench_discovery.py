@@ -51,11 +51,29 @@ def _stiff_hinge() -> dict:
                           "y*thetadot^2": -1.5e3, "y*ydot*thetadot": 5.0e6}}
 
 
+def _weak(hinge_hz: float, a2: float, b2: float, b3: float, b5: float, b6: float, c_y: float, c_theta: float) -> dict:
+    """Section 6's form with weak y^2 and hinge terms (oracle z of 5-20 at the paper's data size)."""
+    w_y, w_t = 2 * np.pi * 22.0, 2 * np.pi * hinge_hz
+    eq = {"yddot": {"y": -w_y ** 2, "y^2": a2, "ydot": -0.3},
+          "thetaddot": {"theta": -w_t ** 2, "y": b2, "y^2*theta": b3, "thetadot": -0.8,
+                        "y*thetadot^2": b5, "y*ydot*thetadot": b6}}
+    if c_y:
+        eq["yddot"]["1"] = c_y
+    if c_theta:
+        eq["thetaddot"]["1"] = c_theta
+    return eq
+
+
 CASES = {
     "paper": Case("paper", _paper(), 12, 3.0, 1500.0, 1.5e-6, 0.003),
     "signs": Case("signs", _paper(constants=False, sign=-1.0), 8, 2.5, 2000.0, 2.0e-6, 0.004),
     "stiff": Case("stiff", _stiff_hinge(), 20, 3.0, 2000.0, 1.5e-6, 0.0035),
     "paper8": Case("paper8", _paper(), 8, 3.0, 2000.0, 2.0e-6, 0.004),
+    "weak8": Case("weak8", _weak(9.0, 1.0e6, 1.5e6, 4.0e9, 400.0, 2.0e6, 0.1, 60.0), 8, 3.0, 1500.0, 2.0e-6, 0.004),
+    "weak12above": Case("weak12above", _weak(35.0, -2.0e6, 5.0e6, 2.0e10, -200.0, 1.0e6, 0.0, 0.0),
+                        12, 2.5, 1500.0, 2.0e-6, 0.003),
+    "weak20": Case("weak20", _weak(9.0, 3.0e6, -1.5e6, -1.5e9, 150.0, -1.0e6, 0.0, -40.0), 20, 3.0, 1800.0,
+                   1.5e-6, 0.0035),
 }
 
 
@@ -154,17 +172,39 @@ def report(case: Case, seed: int, sc: dict, res, wall: float) -> list[str]:
     return lines
 
 
+def summary_row(case: Case, seed: int, sc: dict, res, wall: float) -> str:
+    """One markdown row: criterion, missed / spurious / outside tolerance, worst coefficient error, time."""
+    rows = sc["rows"]
+    weakest = min(r[3] for r in rows)
+    worst = max((r for r in rows if r[4]), key=lambda r: r[7] / max(0.1 * abs(r[2]) / (abs(r[2]) / r[3]), 3.0),
+                default=None)
+    worst_txt = f"{worst[1]} {100 * worst[6]:.1f} % = {worst[7]:.1f} SE" if worst else "-"
+    return (f"| {case.name} | {seed} | {case.n_runs} | {'PASS' if sc['passed'] else 'FAIL'} | {weakest:.1f} | "
+            f"{', '.join(sc['missed']) or '-'} | {', '.join(sc['spurious']) or '-'} | {', '.join(sc['bad']) or '-'} | "
+            f"{worst_txt} | {len(res.iterations)} | {wall:.2f} |")
+
+
+SUMMARY_HEADER = ["| case | seed | runs | criterion | weakest oracle z | missed (z >= 5) | spurious | outside tolerance | "
+                  "worst coefficient (relative, in oracle SE) | passes | time [s] |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+
 def main(argv: list[str] | None = None) -> str:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", nargs="*", default=list(CASES))
     ap.add_argument("--seeds", nargs="*", type=int, default=[101])
+    ap.add_argument("--summary", action="store_true", help="one row per data set instead of per-term tables")
     args = ap.parse_args(argv)
-    lines = ["## discovery benchmark", ""]
+    lines = ["## discovery benchmark", ""] + (SUMMARY_HEADER if args.summary else [])
     for name in args.cases:
         for seed in args.seeds:
             sc, res, wall = run_case(CASES[name], seed)
-            lines += report(CASES[name], seed, sc, res, wall)
-            print("\n".join(lines[-(len(sc["rows"]) + 10):]), flush=True)
+            if args.summary:
+                lines.append(summary_row(CASES[name], seed, sc, res, wall))
+                print(lines[-1], flush=True)
+            else:
+                lines += report(CASES[name], seed, sc, res, wall)
+                print("\n".join(lines[-(len(sc["rows"]) + 10):]), flush=True)
     return "\n".join(lines)
 
 

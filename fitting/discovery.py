@@ -97,6 +97,7 @@ class DiscoveryConfig:
     min_contribution: float = 0.0
     n_folds: int = 5
     raw_positions: bool = True
+    stepwise: bool = True
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -329,10 +330,26 @@ def _heldout(d: _Design, paths: Sequence[Sequence[int]], n_folds: int) -> list[f
     return out
 
 
-def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> tuple[list[int], list[list[int]]]:
-    """Backward elimination with Holm's stopping rule; returns the selected columns and the whole path."""
+def _abs_z(d: _Design, cols: Sequence[int]) -> NDArray[np.float64]:
+    c, se, _ = _fit(d, cols)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.nan_to_num(np.abs(c / se), nan=0.0)
+
+
+def _holm_ok(absz: NDArray, free: NDArray[np.bool_], alpha: float, n_hyp: int) -> bool:
+    """Holm's rule over ``n_hyp`` hypotheses declares every free term significant."""
     from scipy.special import ndtr
 
+    return n_hyp == 0 or bool(holm_reject(2.0 * ndtr(-absz[free]), alpha, n_hyp).all())
+
+
+def _rss(d: _Design, cols: Sequence[int]) -> float:
+    return _lstsq(d.total, list(cols))[2] if len(cols) else float(d.total[:, -1] @ d.total[:, -1])
+
+
+def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> tuple[list[int], list[list[int]]]:
+    """Backward elimination with Holm's stopping rule, then stepwise additions and swaps; returns the selected
+    columns and the elimination path (from the full library to the forced terms)."""
     n_lib = d.total.shape[1] - 1
     n_hyp = int(n_lib - forced.sum())
     velocity = np.array([not is_velocity_free(t) for t in TERMS[:n_lib]])
@@ -341,14 +358,10 @@ def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> t
     selected: list[int] | None = None
     while True:
         path.append(list(keep))
-        c, se, _ = _fit(d, keep)
-        free = np.array([not forced[j] for j in keep], bool)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            absz = np.nan_to_num(np.abs(c / se), nan=0.0)
-        if selected is None and n_hyp > 0:
-            p = 2.0 * ndtr(-absz[free])
-            if holm_reject(p, config.alpha, n_hyp).all():
-                selected = list(keep)
+        absz = _abs_z(d, keep)
+        free = ~forced[keep]
+        if selected is None and _holm_ok(absz, free, config.alpha, n_hyp):
+            selected = list(keep)
         if not free.any():
             break
         pool = np.flatnonzero(free)
@@ -357,7 +370,63 @@ def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> t
             if weak_v.size:
                 pool = weak_v
         keep.pop(int(pool[np.argmin(absz[pool])]))
-    return (selected if selected is not None else list(keep)), path
+    cols = selected if selected is not None else list(keep)
+    if config.stepwise:
+        cols = _stepwise(d, cols, forced, config.alpha, n_hyp)
+    return cols, path
+
+
+def _stepwise(d: _Design, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int) -> list[int]:
+    """Improve a support found by backward elimination.
+
+    Add the most significant outside term if every term stays significant (Holm); else swap one free term for
+    an outside one when that lowers the residual sum of squares and keeps every term significant; stop when
+    neither applies.  Backward elimination alone decides between two nearly collinear terms by which one the
+    full library's fit happens to make less significant (measured: y*thetadot^2 with oracle z 7 lost to
+    y*theta^2 on a nearly harmonic hinge); the swap compares the two supports directly.  Velocity terms earn
+    their place: replacing a velocity-free term by a velocity term needs a drop of the residual sum of squares
+    by more than z_alpha^2 residual variances (z_alpha = 2.58 at alpha = 0.01; a likelihood-ratio test at level
+    alpha).  On harmonic y motion y^2*theta and ydot^2*theta are nearly collinear (measured drops of -5 to +2.4
+    residual variances between them, against +10 to +25 for y*thetadot^2 over y*theta^2), so this keeps the
+    velocity-free term there.
+    """
+    from scipy.special import ndtri
+
+    n_lib = d.total.shape[1] - 1
+    velocity = ~_VELOCITY_FREE[:n_lib]
+    tau_v = float(ndtri(1.0 - 0.5 * alpha)) ** 2
+    cols = sorted(cols)
+    for _ in range(4 * n_lib):
+        outside = [j for j in range(n_lib) if j not in cols]
+        best = None
+        for j in outside:
+            trial = sorted(cols + [j])
+            absz = _abs_z(d, trial)
+            if _holm_ok(absz, ~forced[trial], alpha, n_hyp):
+                zj = absz[trial.index(j)]
+                if best is None or zj > best[0]:
+                    best = (zj, trial)
+        if best is not None:
+            cols = best[1]
+            continue
+        base = _rss(d, cols)
+        s2 = base / max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)
+        swaps = []
+        for i in cols:
+            if forced[i]:
+                continue
+            for j in outside:
+                trial = sorted([k for k in cols if k != i] + [j])
+                gain = (base - _rss(d, trial)) / s2
+                if gain > (tau_v if velocity[j] and not velocity[i] else 0.0):
+                    swaps.append((-gain, trial))
+        for _, trial in sorted(swaps):
+            if _holm_ok(_abs_z(d, trial), ~forced[trial], alpha, n_hyp):
+                cols = trial
+                break
+        else:
+            return cols
+    return cols
 
 
 def _prune_practical(d: _Design, cols: list[int], forced: NDArray[np.bool_], threshold: float) -> list[int]:
