@@ -246,10 +246,10 @@ def numerov_columns(f: NDArray) -> NDArray[np.float64]:
     Twice the trapezoid rule gives ``x[k+1] - 2 x[k] + x[k-1] = dt^2 (f[k-1] + 2 f[k] + f[k+1]) / 4``;
     Numerov's relation ``dt^2 (f[k-1] + 10 f[k] + f[k+1]) / 12`` is exact to O(dt^6).  Replacing f by
     ``g = (-f[k-1] + 8 f[k] - f[k+1]) / 6`` makes the two agree to O((omega dt)^4) (the straight lines
-    that differ are removed by the detrending).  Without it the double integral is (omega dt)^2 / 12
-    too large at angular frequency omega: 0.07 % at 22 Hz and 1500 fps, measured as a y-stiffness
-    bias of 7.6 oracle standard errors on 12 runs, and a model that oscillates 0.07 % too slowly
-    drifts in phase over a state-estimation segment.  The first and last frames are left unchanged.
+    that differ are removed by the detrending).  Without it the double integral is (omega dt)^2 / 6
+    too large at angular frequency omega: 0.14 % at 22 Hz and 1500 fps, measured as a y-stiffness
+    bias of 7.6 oracle standard errors on 12 runs; a model whose frequency is that far off drifts in
+    phase over a state-estimation segment.  The first and last frames are left unchanged.
     """
     f = np.asarray(f, float)
     g = f.copy()
