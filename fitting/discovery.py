@@ -80,9 +80,14 @@ class DiscoveryConfig:
         Drop velocity terms first while one is below the Bonferroni level.
     keep_damping : bool
         Always keep ydot in yddot and thetadot in thetaddot.
-    min_contribution : float
-        Practical threshold: a selected term whose share ``|c_j| ||X_j|| / ||b||`` of the equation's
-        position-space signal is below this is dropped (0: off).
+    selection_passes : int
+        Passes that may change the support; after them (or when the support returns to an earlier one) it is
+        frozen and only the coefficients and states iterate.
+    heldout_prune : bool
+        After Holm's rule, continue the elimination and keep the support with the smallest held-out error.
+    heldout_tolerance : float
+        Keep the smallest support whose held-out RMS error is at most ``1 + heldout_tolerance`` times the
+        smallest on that path (0: the minimum itself).
     n_folds : int
         Folds over runs of the held-out error (at most the number of runs).
     """
@@ -94,7 +99,9 @@ class DiscoveryConfig:
     tolerance: float = 0.5
     velocity_first: bool = True
     keep_damping: bool = True
-    min_contribution: float = 0.0
+    selection_passes: int = 3
+    heldout_prune: bool = True
+    heldout_tolerance: float = 0.0
     n_folds: int = 5
     raw_positions: bool = True
     stepwise: bool = True
@@ -106,8 +113,8 @@ class DiscoveryConfig:
             raise ValueError(f"window_periods must be positive, got {self.window_periods}")
         if self.max_iterations < 0 or self.n_folds < 2:
             raise ValueError("max_iterations must be >= 0 and n_folds >= 2")
-        if not (self.tolerance > 0 and 0 <= self.min_contribution < 1):
-            raise ValueError("tolerance must be positive and min_contribution in [0, 1)")
+        if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
+            raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
 
 
 @dataclass(frozen=True)
@@ -347,33 +354,54 @@ def _rss(d: _Design, cols: Sequence[int]) -> float:
     return _lstsq(d.total, list(cols))[2] if len(cols) else float(d.total[:, -1] @ d.total[:, -1])
 
 
-def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> tuple[list[int], list[list[int]]]:
-    """Backward elimination with Holm's stopping rule, then stepwise additions and swaps; returns the selected
-    columns and the elimination path (from the full library to the forced terms)."""
-    n_lib = d.total.shape[1] - 1
-    n_hyp = int(n_lib - forced.sum())
-    velocity = np.array([not is_velocity_free(t) for t in TERMS[:n_lib]])
-    keep = list(range(n_lib))
-    path: list[list[int]] = []
-    selected: list[int] | None = None
+def _eliminate(d: _Design, cols: Sequence[int], forced: NDArray[np.bool_], alpha: float, velocity_first: bool):
+    """Backward elimination from ``cols`` down to the forced terms: yields (support, |z|) before every step.
+    The least significant free term goes; with ``velocity_first`` velocity terms go first while one of them is
+    below the Bonferroni level."""
+    n_hyp = max(int(forced.size - forced.sum()), 1)
+    keep = list(cols)
     while True:
-        path.append(list(keep))
         absz = _abs_z(d, keep)
+        yield list(keep), absz
         free = ~forced[keep]
-        if selected is None and _holm_ok(absz, free, config.alpha, n_hyp):
-            selected = list(keep)
         if not free.any():
-            break
+            return
         pool = np.flatnonzero(free)
-        if config.velocity_first:
-            weak_v = pool[velocity[np.array(keep)[pool]] & (absz[pool] < holm_z_threshold(config.alpha, max(n_hyp, 1), 1))]
+        if velocity_first:
+            weak_v = pool[~_VELOCITY_FREE[np.array(keep)[pool]] & (absz[pool] < holm_z_threshold(alpha, n_hyp, 1))]
             if weak_v.size:
                 pool = weak_v
         keep.pop(int(pool[np.argmin(absz[pool])]))
-    cols = selected if selected is not None else list(keep)
+
+
+def _select(d: _Design, forced: NDArray[np.bool_], config: DiscoveryConfig) -> tuple[list[int], list[list[int]]]:
+    """Backward elimination from the full library until Holm's rule declares every free term significant, then
+    stepwise additions and swaps (:func:`_stepwise`); returns the selection and the elimination path."""
+    n_lib = d.total.shape[1] - 1
+    n_hyp = int(n_lib - forced.sum())
+    path: list[list[int]] = []
+    cols: list[int] = []
+    for keep, absz in _eliminate(d, range(n_lib), forced, config.alpha, config.velocity_first):
+        path.append(keep)
+        cols = keep
+        if _holm_ok(absz, ~forced[keep], config.alpha, n_hyp):
+            break
     if config.stepwise:
         cols = _stepwise(d, cols, forced, config.alpha, n_hyp)
     return cols, path
+
+
+def _heldout_prune(d: _Design, cols: list[int], forced: NDArray[np.bool_],
+                   config: DiscoveryConfig) -> tuple[list[int], list[list[int]], list[float]]:
+    """Continue the elimination from the significant support ``cols`` down to the forced terms and keep the
+    smallest support whose held-out error is within ``heldout_tolerance`` of the smallest on that path."""
+    path = [keep for keep, _ in _eliminate(d, cols, forced, config.alpha, config.velocity_first)]
+    held = _heldout(d, path, config.n_folds)
+    if not np.all(np.isfinite(held)):
+        return cols, path, held
+    limit = min(held) * (1.0 + config.heldout_tolerance)
+    best = max(i for i, h in enumerate(held) if h <= limit)
+    return path[best], path, held
 
 
 def _stepwise(d: _Design, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int) -> list[int]:
@@ -429,24 +457,6 @@ def _stepwise(d: _Design, cols: list[int], forced: NDArray[np.bool_], alpha: flo
     return cols
 
 
-def _prune_practical(d: _Design, cols: list[int], forced: NDArray[np.bool_], threshold: float) -> list[int]:
-    """Drop, one at a time, the free term with the smallest share of the signal while it is below ``threshold``."""
-    if threshold <= 0:
-        return cols
-    cols = list(cols)
-    signal = max(float(np.linalg.norm(d.total[:, -1])), 1e-300)
-    while True:
-        c, _, _ = _fit(d, cols)
-        share = np.abs(c) * np.linalg.norm(d.total[:, cols], axis=0) / signal
-        free = [i for i, j in enumerate(cols) if not forced[j]]
-        if not free:
-            return cols
-        worst = min(free, key=lambda i: share[i])
-        if share[worst] >= threshold:
-            return cols
-        cols.pop(worst)
-
-
 # ---- the discovery loop ----------------------------------------------------------------------------------------
 def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
                    config: DiscoveryConfig = DiscoveryConfig()) -> DiscoveryResult:
@@ -487,24 +497,32 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
 
     caches: list[dict] = [{}, {}]
 
-    def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool):
+    def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool, frozen: NDArray | None):
         lib = [evaluate_library(s) for s in states]
         designs = [_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None) for q in range(2)]
-        coef, se, res_std, paths, chosen = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), [], []
+        coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
         for q in range(2):
             sel, path = _select(designs[q], forced[q], config)
-            sel = _prune_practical(designs[q], sel, forced[q], config.min_contribution)
+            held_a = [float("nan")] * len(path)
+            if config.heldout_prune:
+                sel, path_b, held_b = _heldout_prune(designs[q], sel, forced[q], config)
+                path, held = path + path_b, held_a + held_b
+            else:
+                held = held_a
+            if frozen is not None:
+                sel = list(np.flatnonzero(frozen[q]))
             c, e, s = _fit(designs[q], sel)
             coef[q, sel], se[q, sel], res_std[q] = c, e, s
-            paths.append(path)
-            chosen.append(sel)
-        return coef, se, res_std, designs, paths, chosen
+            fronts.append((path, held, sel))
+        return coef, se, res_std, designs, fronts
 
     states, trims, label = first, edges, "smoothed"
     estimate = None
     history: list[IterationLog] = []
     prev = None
     converged = False
+    frozen: NDArray | None = None
+    masks: list[NDArray] = []
     for it in range(config.max_iterations + 1):
         t0 = time.perf_counter()
         if it > 0:
@@ -516,8 +534,18 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                 states = [np.column_stack([y, s[:, 1], th, s[:, 3]]) for y, th, s in zip(ys, ths, states)]
             trims = [edge if f.any() else 0 for f, edge in zip(estimate.failed, edges)]
             label = "model"
-        coef, se, res_std, designs, paths, chosen = one_pass(states, trims, it > 0 and config.raw_positions)
+        coef, se, res_std, designs, fronts = one_pass(states, trims, it > 0 and config.raw_positions, frozen)
         mask = coef != 0.0
+        if frozen is None and it >= 1:
+            # a selection that returns to an earlier support (held-out errors within their noise) or keeps
+            # changing is frozen: the smaller of the last two supports, then only the coefficients iterate
+            if any(np.array_equal(mask, m) for m in masks[:-1]) and not np.array_equal(mask, masks[-1]):
+                frozen = min((masks[-1], mask), key=lambda m: int(m.sum()))
+                label += ", support frozen (cycle)"
+            elif it >= config.selection_passes:
+                frozen = mask
+                label += ", support frozen"
+        masks.append(mask)
         change = np.inf
         if prev is not None:
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -538,10 +566,19 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         prev = (coef, se, mask)
     pareto = {}
     for q, eq in enumerate(EQUATION_NAMES):
-        held = _heldout(designs[q], paths[q], config.n_folds)
-        sel = set(chosen[q])
-        pareto[eq] = tuple(PathPoint(tuple(TERMS[j] for j in cols), _fit(designs[q], cols)[2], h,
-                                     selected=set(cols) == sel) for cols, h in zip(paths[q], held))
+        path, held, sel = fronts[q]
+        missing = [i for i, h in enumerate(held) if not np.isfinite(h)]
+        for i, h in zip(missing, _heldout(designs[q], [path[i] for i in missing], config.n_folds)):
+            held[i] = h
+        seen, points = set(), []
+        for cols, h in zip(path, held):
+            key = tuple(sorted(cols))
+            if key in seen:
+                continue
+            seen.add(key)
+            points.append(PathPoint(tuple(TERMS[j] for j in key), _fit(designs[q], key)[2], h,
+                                    selected=set(key) == set(sel)))
+        pareto[eq] = tuple(sorted(points, key=lambda p: -p.n_terms))
     log.info("discovery: %d terms in %.2f s (%s)", int(mask.sum()), time.perf_counter() - t_start,
              "converged" if converged else "not converged")
     return DiscoveryResult(mask=mask, coef=coef, std_errors=se, residual_std=res_std, window_s=window_s,

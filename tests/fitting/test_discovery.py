@@ -119,7 +119,7 @@ def test_config_validates_itself():
     with pytest.raises(ValueError):
         DiscoveryConfig(alpha=0.0)
     with pytest.raises(ValueError):
-        DiscoveryConfig(min_contribution=1.5)
+        DiscoveryConfig(heldout_tolerance=1.5)
     with pytest.raises(ValueError):
         SegmentConfig(bounds_s=(0.5, 0.1))
 
