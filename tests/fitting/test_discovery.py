@@ -139,10 +139,9 @@ def test_small_data_set_gives_the_true_support_and_a_pareto_front():
     chosen = [p for p in front if p.selected]
     assert len(chosen) == 1 and chosen[0].n_terms == 7
     # the selected support predicts held-out runs as well as the full library (within 1 %: both are at the
-    # noise level) and clearly better than the support with one term fewer
+    # noise level) and better than every smaller support on the front
     assert chosen[0].heldout_rms < 1.01 * front[0].heldout_rms
-    after = front[front.index(chosen[0]) + 1]
-    assert after.heldout_rms > chosen[0].heldout_rms
+    assert all(p.heldout_rms > chosen[0].heldout_rms for p in front if p.n_terms < 7)
     js = res.to_json()
     assert set(js["thetaddot"]["terms"]) == {t for t, m in zip(TERMS, truth.support[1]) if m}
 
