@@ -307,14 +307,15 @@ def _design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Seque
     return _Design(rs, np.array(rows), np.array(wins), _r_factor(rs))
 
 
-def _lstsq(R: NDArray, cols: Sequence[int]) -> tuple[NDArray, NDArray, float]:
-    """Coefficients, unscaled covariance (X_S^T X_S)^-1 and residual sum of squares on the columns ``cols``."""
+def _lstsq(R: NDArray, cols: Sequence[int], covariance: bool = True) -> tuple[NDArray, NDArray | None, float]:
+    """Coefficients, unscaled covariance (X_S^T X_S)^-1 (None unless ``covariance``) and residual sum of squares
+    on the columns ``cols``."""
     A = R[:, cols]
     scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
     As = A / scale
     c, *_ = np.linalg.lstsq(As, R[:, -1], rcond=None)
     r = R[:, -1] - As @ c
-    cov = np.linalg.pinv(As.T @ As) / np.outer(scale, scale)
+    cov = np.linalg.pinv(As.T @ As) / np.outer(scale, scale) if covariance else None
     return c / scale, cov, float(r @ r)
 
 
@@ -343,7 +344,7 @@ def _heldout(d: _Design, paths: Sequence[Sequence[int]], n_folds: int) -> list[f
     for cols in paths:
         sse = 0.0
         for fold, Rt in zip(folds, train):
-            c = _lstsq(Rt, cols)[0] if len(cols) else np.zeros(0)
+            c = _lstsq(Rt, cols, covariance=False)[0] if len(cols) else np.zeros(0)
             for r in fold:
                 res = d.per_run[r][:, list(cols)] @ c - d.per_run[r][:, -1]
                 sse += float(res @ res)
@@ -365,7 +366,7 @@ def _holm_ok(absz: NDArray, free: NDArray[np.bool_], alpha: float, n_hyp: int) -
 
 
 def _rss(d: _Design, cols: Sequence[int]) -> float:
-    return _lstsq(d.total, list(cols))[2] if len(cols) else float(d.total[:, -1] @ d.total[:, -1])
+    return _lstsq(d.total, list(cols), covariance=False)[2] if len(cols) else float(d.total[:, -1] @ d.total[:, -1])
 
 
 def _eliminate(d: _Design, cols: Sequence[int], forced: NDArray[np.bool_], alpha: float, velocity_first: bool):
@@ -441,33 +442,36 @@ def _stepwise(d: _Design, cols: list[int], forced: NDArray[np.bool_], alpha: flo
     tau = float(ndtri(1.0 - 0.5 * alpha)) ** 2
     cols = sorted(cols)
     visited = {tuple(cols)}
-    for _ in range(4 * n_lib):
-        outside = [j for j in range(n_lib) if j not in cols]
-        free = [i for i in cols if not forced[i]]
-        moves: list[list[int]] = []
-        # 1. the most significant addition
-        adds = []
+
+    def significant(trial: list[int]) -> bool:
+        return tuple(trial) not in visited and _holm_ok(_abs_z(d, trial), ~forced[trial], alpha, n_hyp)
+
+    def additions(outside: list[int], free: list[int], base: float, s2: float) -> list[list[int]]:
+        """The most significant addition that keeps every term significant."""
+        best = None
         for j in outside:
             trial = sorted(cols + [j])
             if tuple(trial) in visited:
                 continue
             absz = _abs_z(d, trial)
-            if _holm_ok(absz, ~forced[trial], alpha, n_hyp):
-                adds.append((-absz[trial.index(j)], trial))
-        moves += [t for _, t in sorted(adds)][:1]
-        base = _rss(d, cols)
-        s2 = base / max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)
-        # 2. one-for-one swaps that lower the residual (a velocity term replacing a velocity-free one: by > tau)
-        swaps = []
+            if _holm_ok(absz, ~forced[trial], alpha, n_hyp) and (best is None or absz[trial.index(j)] > best[0]):
+                best = (absz[trial.index(j)], trial)
+        return [best[1]] if best else []
+
+    def swaps(outside: list[int], free: list[int], base: float, s2: float) -> list[list[int]]:
+        """One-for-one swaps that lower the residual (a velocity term replacing a velocity-free one: by > tau)."""
+        out = []
         for i in free:
             for j in outside:
                 trial = sorted([k for k in cols if k != i] + [j])
                 gain = (base - _rss(d, trial)) / s2
                 if gain > (tau if velocity[j] and not velocity[i] else 0.0):
-                    swaps.append((-gain, trial))
-        moves += [t for _, t in sorted(swaps)]
-        # 3. two-for-one merges that cost less than tau residual variances
-        merges = []
+                    out.append((-gain, trial))
+        return [t for _, t in sorted(out)]
+
+    def merges(outside: list[int], free: list[int], base: float, s2: float) -> list[list[int]]:
+        """Two-for-one replacements that cost less than tau residual variances."""
+        out = []
         for ia in range(len(free)):
             for ib in range(ia + 1, len(free)):
                 rest = [k for k in cols if k not in (free[ia], free[ib])]
@@ -475,14 +479,25 @@ def _stepwise(d: _Design, cols: list[int], forced: NDArray[np.bool_], alpha: flo
                     trial = sorted(rest + [j])
                     loss = (_rss(d, trial) - base) / s2
                     if loss < tau:
-                        merges.append((loss, trial))
-        moves += [t for _, t in sorted(merges)]
-        for trial in moves:
-            if tuple(trial) not in visited and _holm_ok(_abs_z(d, trial), ~forced[trial], alpha, n_hyp):
-                cols = trial
-                visited.add(tuple(cols))
+                        out.append((loss, trial))
+        return [t for _, t in sorted(out)]
+
+    for _ in range(4 * n_lib):
+        outside = [j for j in range(n_lib) if j not in cols]
+        free = [i for i in cols if not forced[i]]
+        base = _rss(d, cols)
+        s2 = base / max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)
+        moved = False
+        for kind in (additions, swaps, merges):
+            for trial in kind(outside, free, base, s2):
+                if significant(trial):
+                    cols = trial
+                    visited.add(tuple(cols))
+                    moved = True
+                    break
+            if moved:
                 break
-        else:
+        if not moved:
             return cols
     return cols
 
