@@ -4,7 +4,7 @@ Readers never see a partial file, and an interrupted or failing writer leaves th
 none) in place.  The temporary file is created private (``tempfile.mkstemp`` gives mode 0600);
 before it is moved into place it gets the mode an ordinary ``open(path, "w")`` would give
 (0666 minus the process umask), so that results written to a shared folder stay readable to
-colleagues.
+colleagues (:func:`default_dir_mode` gives the same for a directory built in a temporary place).
 
 There is one JSON writer, :func:`write_json`: indent 2, keys in insertion order, NaN and
 infinities written as ``null`` (strict JSON that every reader accepts).
@@ -18,14 +18,37 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable
 
-__all__ = ["atomic_write_text", "write_json", "json_safe", "json_text", "atomic_save", "save_figure", "default_file_mode"]
+__all__ = ["atomic_write_text", "write_json", "json_safe", "json_text", "atomic_save", "save_figure", "default_file_mode",
+           "default_dir_mode"]
+
+
+def _umask() -> int:
+    """The process umask, read without changing it where the system allows (Linux ``/proc``), since
+    setting it briefly would race with other threads creating files."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def default_file_mode() -> int:
     """The permission bits ``open(path, "w")`` gives a new file: 0o666 minus the process umask."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
+    return 0o666 & ~_umask()
+
+
+def default_dir_mode() -> int:
+    """The permission bits ``os.mkdir(path)`` gives a new directory: 0o777 minus the process umask.
+
+    A directory made with ``tempfile.mkdtemp`` (mode 0700) and moved into place as a result should
+    be given this mode first, like a file written by :func:`atomic_save`.
+    """
+    return 0o777 & ~_umask()
 
 
 def atomic_save(path: str | os.PathLike, writer: Callable[[str], Any]) -> None:

@@ -6,16 +6,21 @@ raises :class:`DatasetError` whose message is one line naming the file and the p
 """
 from __future__ import annotations
 
-import json
+import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from .spectra import dominant_frequency
+
 __all__ = ["DatasetError", "Run", "Dataset", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
+
+logger = logging.getLogger(__name__)
 
 
 class DatasetError(ValueError):
@@ -112,27 +117,30 @@ def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tup
     return out, int(bad.sum())
 
 
-def _dominant_frequency(t: NDArray, x: NDArray, fmin: float = 0.0) -> float:
-    """Frequency [Hz] of the largest spectral peak; if that lies below ``fmin`` (e.g. a slow drift of
-    the levitation height from a drifting pressure), the largest peak at or above ``fmin`` instead,
-    provided it is prominent (at least 30 % of the largest), so that noise is never taken for it."""
-    x = x - x.mean()
-    n = x.size
-    spec = np.abs(np.fft.rfft(x * np.hanning(n)))
-    f = np.fft.rfftfreq(n, (t[-1] - t[0]) / (n - 1))
-    spec[0] = 0.0
-    j = int(np.argmax(spec))
-    if fmin > 0 and f[j] < fmin:
-        above = f >= fmin
-        if above.any():
-            k = int(np.argmax(np.where(above, spec, 0.0)))
-            if spec[k] >= 0.3 * spec[j]:
-                return float(f[k])
-    return float(f[j])
+#: Longest piece of a file's content echoed into an error message [characters].
+ECHO_LIMIT = 80
+
+#: Height of the largest peak at or above the ``min_periods`` frequency, relative to the overall largest
+#: peak, above which that peak is taken for the oscillation rather than a slow drift below it.
+DRIFT_PROMINENCE = 0.3
+
+
+def _cut(text: str, limit: int = ECHO_LIMIT) -> str:
+    """``text`` cut to at most ``limit`` characters, an ellipsis marking the cut."""
+    return text if len(text) <= limit else text[: limit - 1] + "\u2026"
+
+
+def _echo(text: str) -> str:
+    """File content quoted in an error message: cut (see :func:`_cut`) and repr-quoted."""
+    return repr(_cut(text))
 
 
 def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     """Read one CSV run, check it against FORMATS.md, fill short gaps.
+
+    The file is read as UTF-8 with or without a byte-order mark (spreadsheet programs write one).
+    Line numbers in messages are those of the file (comments and blank lines counted), and file
+    content quoted in a message is cut to :data:`ECHO_LIMIT` characters.
 
     Raises
     ------
@@ -142,64 +150,76 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     path = Path(path)
     name = path.name
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
-        raise DatasetError(f"{path}: unreadable file ({exc.__class__.__name__}: {exc})") from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+        raise DatasetError(f"{path}: unreadable file ({exc.__class__.__name__}: {_cut(str(exc))})") from None
+    lines = [(k, ln) for k, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise DatasetError(f"{path}: empty file (no header row)")
-    header = [h.strip().lower() for h in lines[0].split(",")]
+    header_line, header_text = lines[0]
+    header = [h.strip().lower() for h in header_text.split(",")]
     for col in ("t", "y", "theta"):
         if col not in header:
-            raise DatasetError(f"{path}: missing column {col!r} (header: {','.join(header)})")
+            raise DatasetError(f"{path}: missing column {col!r} (header on line {header_line}: "
+                               f"{_echo(','.join(header))})")
     idx = [header.index(c) for c in ("t", "y", "theta")]
-    rows = []
-    for k, ln in enumerate(lines[1:], 2):
+    rows, line_no = [], []
+    for k, ln in lines[1:]:
         parts = ln.split(",")
         if len(parts) < len(header):
-            raise DatasetError(f"{path}: data line {k} has {len(parts)} fields, header has {len(header)}")
+            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}")
         vals = []
         for i in idx:
             s = parts[i].strip()
             try:
                 vals.append(float(s) if s else np.nan)
             except ValueError:
-                raise DatasetError(f"{path}: non-numeric value {s!r} in column {header[i]!r} on data line {k}") from None
+                raise DatasetError(f"{path}: non-numeric value {_echo(s)} in column {header[i]!r} on line {k}") from None
         rows.append(vals)
+        line_no.append(k)
     if len(rows) < 16:
         raise DatasetError(f"{path}: only {len(rows)} data rows; too short to hold {config.min_periods:g} oscillation periods")
     a = np.asarray(rows, dtype=float)
     t, y, th = a[:, 0], a[:, 1], a[:, 2]
     if not np.all(np.isfinite(t)):
-        raise DatasetError(f"{path}: missing or non-finite time values")
+        k = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DatasetError(f"{path}: missing or non-finite time value on line {line_no[k]}")
     dt = np.diff(t)
     if np.any(dt <= 0):
         k = int(np.flatnonzero(dt <= 0)[0])
-        raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (row {k + 2})")
+        raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (line {line_no[k + 1]})")
     med = float(np.median(dt))
     dev = float(np.max(np.abs(dt - med)) / med)
     if dev > config.uniform_tol:
+        k = int(np.argmax(np.abs(dt - med)))
         raise DatasetError(f"{path}: time is not uniformly sampled (step deviates {dev:.1%} from the median "
-                           f"{med:.4g} s; allowed {config.uniform_tol:.0%})")
-    fin = th[np.isfinite(th)]
-    if fin.size and np.any(np.abs(fin) >= 1.0):
-        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {np.max(np.abs(fin)):.4g})")
+                           f"{med:.4g} s on line {line_no[k + 1]}; allowed {config.uniform_tol:.0%})")
+    fin = np.isfinite(th)
+    if fin.any() and np.any(np.abs(th[fin]) >= 1.0):
+        k = int(np.flatnonzero(fin & (np.abs(np.where(fin, th, 0.0)) >= 1.0))[0])
+        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {np.max(np.abs(th[fin])):.4g}; "
+                           f"first on line {line_no[k]})")
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
     y, ny = fill_gaps(t, y, config.max_gap, "y", str(path))
     th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
     duration = t[-1] - t[0]
-    f = _dominant_frequency(t, y, config.min_periods / duration if duration > 0 else 0.0)
+    f = dominant_frequency(y, duration / (t.size - 1), config.min_periods / duration if duration > 0 else 0.0,
+                           prefer_above=DRIFT_PROMINENCE, refine=False)
     if f <= 0 or duration * f < config.min_periods:
         raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
                            f"({duration:.3g} s at a dominant y frequency of {f:.3g} Hz)")
     return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt))
 
 
+def _log_skip(message: str) -> None:
+    logger.warning("skipping %s", message)
+
+
 def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConfig = LoadConfig(),
-                 report=None) -> Dataset:
-    """Load every ``*.csv`` in ``path`` (sorted by name).
+                 report: Callable[[str], None] | None = None) -> Dataset:
+    """Load every CSV file (``*.csv``, any case of the suffix) in ``path``, sorted by name.
 
     Parameters
     ----------
@@ -207,27 +227,28 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
         Data set directory.
     strict : bool
         If True the first bad file raises; otherwise it is reported (``report(message)``,
-        default: print to stderr) and skipped.
+        default: a warning on the ``cubedimer.dataset`` logger) and skipped.
     config : LoadConfig
     report : callable, optional
 
     Raises
     ------
     DatasetError
-        If ``path`` is not a directory, holds no CSV, no file is good, or (strict) any file is bad.
+        If ``path`` does not exist or is not a directory, holds no CSV, no file is good, or
+        (strict) any file is bad.
     """
-    import sys
-
     p = Path(path)
+    if not p.exists():
+        raise DatasetError(f"{p}: does not exist")
     if not p.is_dir():
-        raise DatasetError(f"{p}: not a directory")
-    files = sorted(p.glob("*.csv"))
+        raise DatasetError(f"{p}: not a directory (a data set is a directory of CSV files)")
+    files = sorted(f for f in p.iterdir() if f.suffix.lower() == ".csv" and f.is_file())
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
     from .meta import read_meta
 
     meta = read_meta(p)
-    report = report or (lambda msg: print(f"warning: skipping {msg}", file=sys.stderr))
+    report = report or _log_skip
     runs, skipped = [], []
     for f in files:
         try:

@@ -15,7 +15,7 @@ from typing import Any
 
 from .dataset import DatasetError
 
-__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "read_meta", "validate_meta"]
+__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "read_meta", "validate_meta", "check_meta_value"]
 
 #: Defaults (PHYSICS.md section 1) of the keys of FORMATS.md, SI units.
 META_DEFAULTS: dict[str, float] = {
@@ -42,6 +42,27 @@ META_RANGES: dict[str, tuple[float, float]] = {
 }
 
 
+def check_meta_value(key: str, value: Any, source: str = "meta.json") -> float:
+    """``value`` of the meta key ``key`` as a float, checked against :data:`META_RANGES`.
+
+    Used for meta.json and for command-line options that set the same quantity.
+
+    Raises
+    ------
+    DatasetError
+        ``"<source>: <key> must be ..."`` on a wrong type (booleans and strings included), a
+        non-finite or an implausible value.
+    """
+    lo, hi = META_RANGES[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DatasetError(f"{source}: {key} must be a number in SI units, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or not lo < v < hi:
+        raise DatasetError(f"{source}: {key} = {v!r} is outside the plausible range ({lo:g}, {hi:g}); "
+                           f"check the value and its units (SI)")
+    return v
+
+
 def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     """Check the known keys of ``meta`` (a parsed meta.json); return a copy with them as floats.
 
@@ -53,17 +74,9 @@ def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     if not isinstance(meta, dict):
         raise DatasetError(f"{source}: meta.json must hold a JSON object, got {type(meta).__name__}")
     out = dict(meta)
-    for key, (lo, hi) in META_RANGES.items():
-        if key not in meta:
-            continue
-        v = meta[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise DatasetError(f"{source}: {key} must be a number in SI units, got {v!r}")
-        v = float(v)
-        if not math.isfinite(v) or not lo < v < hi:
-            raise DatasetError(f"{source}: {key} = {v!r} is outside the plausible range ({lo:g}, {hi:g}); "
-                               f"check the value and its units (SI)")
-        out[key] = v
+    for key in META_RANGES:
+        if key in meta:
+            out[key] = check_meta_value(key, meta[key], source)
     return out
 
 

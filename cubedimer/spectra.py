@@ -30,13 +30,13 @@ def amplitude_spectrum(x: NDArray, dt: float) -> tuple[NDArray, NDArray]:
     return np.fft.rfftfreq(x.size, dt), 2.0 * np.abs(spec) / w.sum()
 
 
-def _peak(f: NDArray, a: NDArray, fmin: float) -> float:
+def _peak(f: NDArray, a: NDArray, fmin: float, refine: bool = True) -> float:
     a = a.copy()
     a[f < fmin] = 0.0
     i = int(np.argmax(a))
     if a[i] <= 0.0:
         return 0.0
-    if 0 < i < a.size - 1 and a[i - 1] > 0 and a[i + 1] > 0:
+    if refine and 0 < i < a.size - 1 and a[i - 1] > 0 and a[i + 1] > 0:
         l0, l1, l2 = np.log(a[i - 1]), np.log(a[i]), np.log(a[i + 1])
         den = l0 - 2 * l1 + l2
         d = 0.5 * (l0 - l2) / den if den != 0 else 0.0
@@ -44,11 +44,43 @@ def _peak(f: NDArray, a: NDArray, fmin: float) -> float:
     return float(f[i])
 
 
-def dominant_frequency(x: NDArray, dt: float, fmin: float = 0.0) -> float:
-    """Frequency [Hz] of the largest spectral peak above ``fmin`` [Hz]; 0 for a constant signal."""
+def dominant_frequency(x: NDArray, dt: float, fmin: float = 0.0, *, prefer_above: float | None = None,
+                       refine: bool = True) -> float:
+    """Frequency [Hz] of the largest spectral peak of ``x`` sampled every ``dt`` [s]; 0 for a constant signal.
+
+    Parameters
+    ----------
+    x : ndarray
+        Signal (any units; the mean is removed).
+    dt : float
+        Sampling interval [s].
+    fmin : float
+        Lower frequency bound [Hz].  By default a hard bound: peaks below ``max(fmin, 1.5 bins)`` are
+        ignored.
+    prefer_above : float, optional
+        Drift-robust rule instead of the hard bound: the largest peak above the zero-frequency bin is
+        taken, unless it lies below ``fmin`` (e.g. a slow drift of the levitation height) and the largest
+        peak at or above ``fmin`` reaches ``prefer_above`` times its height, in which case that one is
+        taken; so noise above ``fmin`` is never taken for the oscillation.  A fraction in (0, 1].
+    refine : bool
+        Parabolic interpolation of the log-magnitude around the peak bin (otherwise the bin frequency).
+    """
     f, a = amplitude_spectrum(x, dt)
-    f0 = max(fmin, 1.5 * (f[1] - f[0]) if f.size > 1 else 0.0)
-    return _peak(f, a, f0)
+    if prefer_above is None:
+        f0 = max(fmin, 1.5 * (f[1] - f[0]) if f.size > 1 else 0.0)
+        return _peak(f, a, f0, refine)
+    if not 0.0 < prefer_above <= 1.0:
+        raise ValueError(f"prefer_above must lie in (0, 1], got {prefer_above!r}")
+    a = a.copy()
+    a[0] = 0.0
+    j = int(np.argmax(a))
+    if fmin > 0 and f[j] < fmin:
+        above = f >= fmin
+        if above.any():
+            k = int(np.argmax(np.where(above, a, 0.0)))
+            if a[k] >= prefer_above * a[j]:
+                return _peak(f, np.where(above, a, 0.0), fmin, refine)
+    return _peak(f, a, 0.0, refine)
 
 
 def phase_difference(y: NDArray, theta: NDArray, dt: float, f: float | None = None) -> float:

@@ -10,6 +10,7 @@ from .compare import compare_models, cross_coupling_mask, drop_terms, paired_wil
 from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, select_terms, term_statistics
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
+from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_standard_errors, plan_runs
 from .pipeline import FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
 from .refine import RefineConfig, refine
 from .selection import SelectionConfig
@@ -21,6 +22,7 @@ __all__ = [
     "RegressionConfig", "fit_regression", "RefineConfig", "refine", "LossWeights", "LossTerms",
     "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
     "SelectionConfig",
+    "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_standard_errors", "plan_runs",
     "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
     "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",
     "SyntheticConfig", "paper_reduced_model", "write_dataset",

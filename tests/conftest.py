@@ -42,7 +42,7 @@ def rng():
 def chromium_required():
     """Skip when no Chromium is installed, unless the run promised one (make test sets
     CUBEDIMER_REQUIRE_BROWSER=1 after installing it), in which case its absence is a failure."""
-    from validation.browser import find_chromium
+    from validation.report.browser_check import find_chromium
 
     if find_chromium() is None:
         if os.environ.get("CUBEDIMER_REQUIRE_BROWSER") == "1":

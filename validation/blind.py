@@ -4,25 +4,26 @@ Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilit
 ``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
 within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
-directory before :func:`validation.diagnose.diagnose_dataset` runs, so the diagnosis never sees it.
+directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 Each finished case is saved as ``cases/caseNNN/result.json`` and not recomputed on a rerun.
 """
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import atomic_write_text
+from cubedimer.atomic import atomic_write_text, write_json
 
-from cubedimer.atomic import write_json
+__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "BlindConfig", "draw_case", "run_case", "score_case", "run_blind",
+           "summarize", "blind_table", "confusion_figure"]
 
-__all__ = ["STRENGTHS", "BlindConfig", "draw_case", "run_case", "run_blind", "summarize"]
+logger = logging.getLogger(__name__)
 
 #: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.
 STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
@@ -45,6 +46,12 @@ class BlindConfig:
     duration: float = 3.0
     pressure_error: float = 0.10
     long_time: bool = False
+
+    def __post_init__(self):
+        if self.cases < 1 or self.runs < 3 or not self.duration > 0:
+            raise ValueError("a blind study needs cases >= 1, runs >= 3 and duration > 0")
+        if not 0 <= self.pressure_error < 1:
+            raise ValueError(f"pressure_error must lie in [0, 1), got {self.pressure_error}")
 
 
 def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
@@ -75,7 +82,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     from acousim.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
-    from .diagnose import DiagnoseConfig, diagnose_dataset
+    from .diagnosis import DiagnoseConfig, diagnose_dataset
 
     data = out_dir / "data"
     if data.exists():
@@ -121,6 +128,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
 
 
 def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+    """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
     found = [] if diag is None else list(diag["identified"])
     params_err = {}
@@ -162,8 +170,8 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
             results[i] = json.loads(path.read_text())
         else:
             todo.append((case, config, str(path.parent)))
-    if progress and results:
-        print(f"[blind] resuming: {len(results)} cases done, {len(todo)} to run", file=sys.stderr)
+    if results:
+        (logger.info if progress else logger.debug)("resuming: %d cases done, %d to run", len(results), len(todo))
     for item in todo:
         Path(item[2]).mkdir(parents=True, exist_ok=True)
     done = map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress)
@@ -208,6 +216,7 @@ def summarize(results: list[dict]) -> dict:
 
 
 def blind_table(summary: dict, config: BlindConfig) -> str:
+    """The summary of a blind study as a Markdown table, beside the targets."""
     def pct(v):
         return "-" if v is None else f"{100 * v:.0f} %"
 
@@ -231,9 +240,6 @@ def blind_table(summary: dict, config: BlindConfig) -> str:
 def confusion_figure(results: list[dict], path: Path) -> Path:
     """Per true effect: identified (diagonal) or missed; false positives in the row of the case's true
     effects (or 'none').  Cases the twin could not generate are left out."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     rows = list(STRENGTHS) + ["none"]

@@ -75,3 +75,81 @@ def test_empty_dir_and_bad_meta(tmp_path, sine_run, write_csv):
     (tmp_path / "meta.json").write_text('{"side_length_m": "big"}')
     with pytest.raises(DatasetError, match="meta.json"):
         load_dataset(tmp_path)
+
+
+def test_byte_order_mark_is_read(tmp_path, sine_run, write_csv):
+    """Spreadsheet programs write UTF-8 with a byte-order mark before the header."""
+    p = write_csv(tmp_path / "bom.csv", *sine_run, comment=False)
+    p.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
+    run = load_run(p)
+    np.testing.assert_allclose(run.y, sine_run[1], rtol=1e-9)
+
+
+def test_error_line_numbers_are_file_lines(tmp_path, sine_run, write_csv):
+    """Row 1002 of the data is line 1004 of the file (a comment line and the header come first)."""
+    p = write_csv(tmp_path / "r.csv", *sine_run)
+    lines = p.read_text().splitlines()
+    assert lines[0].startswith("#") and lines[1] == "t,y,theta"
+    lines[1003] = lines[1003].replace(",", ",abc,", 1).rsplit(",", 1)[0]  # file line 1004: y is 'abc'
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DatasetError, match=r"'abc'.* on line 1004$"):
+        load_run(p)
+    t = sine_run[0].copy()
+    t[1001] = t[1000]  # data row 1002 repeats the time of row 1001
+    write_csv(p, t, *sine_run[1:])
+    with pytest.raises(DatasetError, match=r"not strictly increasing .*\(line 1004\)"):
+        load_run(p)
+
+
+def test_long_garbage_is_cut_in_the_message(tmp_path):
+    p = tmp_path / "g.csv"
+    p.write_text("x" * 20_000 + "\n1,2,3\n")
+    with pytest.raises(DatasetError) as err:
+        load_run(p)
+    msg = str(err.value)
+    assert "missing column 't'" in msg and "\u2026" in msg
+    assert len(msg) < 80 + len(str(p)) + 80  # the 80-character echo plus the file name and the wording
+
+
+def test_upper_case_suffix_is_a_csv_file(tmp_path, sine_run, write_csv):
+    write_csv(tmp_path / "A.CSV", *sine_run)
+    write_csv(tmp_path / "b.Csv", *sine_run)
+    (tmp_path / "notes.txt").write_text("not a run")
+    assert [r.name for r in load_dataset(tmp_path).runs] == ["A.CSV", "b.Csv"]
+
+
+def test_missing_path_and_file_are_named_as_such(tmp_path, sine_run, write_csv):
+    with pytest.raises(DatasetError, match="does not exist"):
+        load_dataset(tmp_path / "nowhere")
+    f = write_csv(tmp_path / "a.csv", *sine_run)
+    with pytest.raises(DatasetError, match="not a directory"):
+        load_dataset(f)
+
+
+def test_skipped_files_are_logged_not_printed(tmp_path, sine_run, write_csv, capsys):
+    import logging
+
+    t, y, th = sine_run
+    write_csv(tmp_path / "a.csv", t, y, th)
+    write_csv(tmp_path / "b.csv", t, y, th + 2.0)
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    log = logging.getLogger("cubedimer.dataset")
+    log.addHandler(handler)
+    try:
+        ds = load_dataset(tmp_path)
+    finally:
+        log.removeHandler(handler)
+    assert len(ds.runs) == 1
+    assert [r.levelno for r in records] == [logging.WARNING] and "b.csv" in records[0].getMessage()
+    assert capsys.readouterr().out == ""
+
+
+def test_slow_drift_below_the_oscillation_is_not_taken_for_it(tmp_path, write_csv):
+    """A drift of the levitation height larger than the oscillation: the run holds enough periods
+    of the oscillation, which the drift-robust rule finds above the min_periods frequency."""
+    t = np.arange(2000) / 1000.0
+    y = 2e-4 * t / t[-1] + 1e-4 * np.cos(2 * np.pi * 22 * t)
+    run = load_run(write_csv(tmp_path / "d.csv", t, y, 0.1 * np.sin(2 * np.pi * 9 * t)))
+    assert run.t.size == 2000

@@ -33,7 +33,7 @@ def test_errors_propagate():
 
 def test_dask_cluster_gives_same_results():
     distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
         out = map_ordered(_work, range(4), ExecutorConfig(scheduler=cluster.scheduler_address), progress=False)
     assert out == [_work(s) for s in range(4)]
 
@@ -46,3 +46,81 @@ def test_environment_selects_scheduler(monkeypatch):
     assert ExecutorConfig(workers=None).resolved_workers() == (os.cpu_count() or 1)
     with pytest.raises(ValueError):
         ExecutorConfig(workers=0).resolved_workers()
+
+
+def _inner_pid(_: int) -> int:
+    return os.getpid()
+
+
+def _outer(n: int) -> tuple[int, list[int], bool]:
+    """A task that itself calls map_ordered with the default config (a pool, if it were allowed)."""
+    from cubedimer.executor import in_task
+
+    return os.getpid(), map_ordered(_inner_pid, range(n), ExecutorConfig(workers=2), progress=False), in_task()
+
+
+def _assert_nested_serial(out, n=3):
+    for pid, inner, marked in out:
+        assert marked and inner == [pid] * n  # the inner work ran in the task's own process
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_map_ordered_inside_a_task_runs_serially(workers):
+    out = map_ordered(_outer, [3, 3, 3], ExecutorConfig(workers=workers), progress=False)
+    _assert_nested_serial(out)
+    if workers == 1:
+        assert {pid for pid, _, _ in out} == {os.getpid()}
+    from cubedimer.executor import in_task
+
+    assert not in_task()  # the marker does not leak out of the task
+
+
+def test_single_item_with_workers_left_may_use_them():
+    """One item on a multi-worker config runs here unmarked: its own parallel work may use the pool."""
+    (pid, inner, marked), = map_ordered(_outer, [2], ExecutorConfig(workers=2), progress=False)
+    assert pid == os.getpid() and not marked and os.getpid() not in inner
+
+
+@pytest.fixture(scope="module")
+def process_cluster():
+    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address
+
+
+def _module_file(_: int) -> str:
+    import cubedimer.executor
+
+    return cubedimer.executor.__file__
+
+
+def test_nested_map_ordered_on_a_process_cluster(process_cluster):
+    """Daemonic dask worker processes may not start children: nested work must run in the task."""
+    import cubedimer.executor
+
+    # the workers run this checkout's code (what the cluster tests of the commands rely on)
+    assert set(map_ordered(_module_file, range(2), ExecutorConfig(scheduler=process_cluster),
+                           progress=False)) == {cubedimer.executor.__file__}
+    out = map_ordered(_outer, [3, 3, 3, 3], ExecutorConfig(scheduler=process_cluster), progress=False)
+    _assert_nested_serial(out)
+    assert os.getpid() not in {pid for pid, _, _ in out}
+    assert map_ordered(_work, range(4), ExecutorConfig(scheduler=process_cluster),
+                       progress=False) == [_work(s) for s in range(4)]
+
+
+def test_config_validates_itself():
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError):
+            ExecutorConfig(workers=bad)
+
+
+def test_unreachable_scheduler_is_one_executor_error():
+    dask = pytest.importorskip("dask")
+    from cubedimer.executor import ExecutorError
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        with pytest.raises(ExecutorError, match="cannot reach the dask scheduler at tcp://127.0.0.1:9"):
+            map_ordered(_work, range(2), ExecutorConfig(scheduler="tcp://127.0.0.1:9"), progress=False)

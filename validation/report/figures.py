@@ -1,4 +1,4 @@
-"""Figures of the model-vs-simulation report (matplotlib, Agg).  Every axis is labelled with units."""
+"""Figures of the model-vs-simulation report (matplotlib).  Every axis is labelled with units."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -12,9 +12,6 @@ UM = 1e6
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     return plt

@@ -1,22 +1,24 @@
-"""``python -m validation report``: the model-vs-simulation report of a data set.
+"""``python -m validation report``: the numbers of the model-vs-simulation report of a data set, and the report.
 
-Runs, in order (each step printed): the fitting pipeline (``fitting.pipeline.fit_dataset``), the
+Runs, in order (each step logged): the fitting pipeline (``fitting.pipeline.fit_dataset``), the
 variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap
-diagnosis (:mod:`validation.diagnose`, which also calibrates the simulation), a static sweep of the
+diagnosis (:mod:`validation.diagnosis`, which also calibrates the simulation), a static sweep of the
 calibrated Gor'kov model over the data's range, the coefficient comparison
 (:mod:`validation.coefficients`) and the rendered mesh; then writes ``report.html`` (self-contained),
 ``figures/*.png`` and ``numbers.json``.
 """
 from __future__ import annotations
 
-import sys
+import logging
 from pathlib import Path
 
 import numpy as np
 
-from .report import Figure, Section, Table, write_report
+from .html import Figure, Section, Table, write_report
 
-__all__ = ["build_report", "model_equation_text", "lead_term_reading"]
+__all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
+
+logger = logging.getLogger(__name__)
 
 
 def model_equation_text(equations: dict) -> list[str]:
@@ -42,7 +44,7 @@ def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta
     kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
     from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
 
-    from .diagnosis import CANDIDATE_EFFECTS, effect_regressors
+    from ..diagnosis import CANDIDATE_EFFECTS, effect_regressors
 
     th, y = np.meshgrid(np.linspace(-theta_max, theta_max, 21), np.linspace(-y_max, y_max, 41))
     state = np.column_stack([y.ravel(), np.zeros(y.size), th.ravel(), np.zeros(y.size)])
@@ -82,22 +84,39 @@ def lead_term_reading(lead, n_sigma: float) -> str:
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None) -> Path:
+    """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
+
+    Parameters
+    ----------
+    data_dir : path of the data set (CSV runs and meta.json)
+    out_dir : report directory: report.html, figures/*.png, numbers.json, fit/, diagnosis.json, comparison.json
+    workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
+    progress : progress bars, and the steps logged at INFO level (else DEBUG)
+    max_evals : refinement evaluations per run (default: the fitting default)
+
+    Returns
+    -------
+    Path of report.html
+    """
     from acousim.render import render_dimer
     from acousim.sweep import fit_static_coefficients, static_sweep
-    from fitting.compare import compare_models, cross_coupling_mask
     from cubedimer.executor import ExecutorConfig
+    from cubedimer.meta import read_meta
+    from fitting.compare import compare_models, cross_coupling_mask
     from fitting.pipeline import FitConfig, fit_dataset
     from fitting.plots import plot_comparison
 
-    from .coefficients import compare_coefficients
-    from .diagnose import DiagnoseConfig, diagnose_dataset, diagnosis_section
-    from .diagnosis_plots import diagnosis_figures
-    from .report_figures import data_figures, phase_space_figures, restoring_overlay_figure
-    from cubedimer.meta import read_meta
+    from ..coefficients import compare_coefficients
+    from ..diagnosis import DiagnoseConfig, diagnose_dataset
+    from ..simulation import model_from_meta
+    from .diagnosis_section import diagnosis_figures, diagnosis_section
+    from .figures import data_figures, phase_space_figures, restoring_overlay_figure
 
-    from .simulation import model_from_meta
+    level = logging.INFO if progress else logging.DEBUG
 
-    say = (lambda m: print(f"[report] {m}", file=sys.stderr, flush=True)) if progress else (lambda m: None)
+    def say(message: str) -> None:
+        logger.log(level, "%s", message)
+
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -122,7 +141,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
     diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress)
-    cal = internals["final"].calibration
+    cal = internals.final.calibration
     say("4/5 sweeping the calibrated Gor'kov model and comparing coefficients")
     meta = read_meta(data_dir)
     sim = model_from_meta(meta, pressure_amplitude_pa=cal.pressure_amplitude_pa)

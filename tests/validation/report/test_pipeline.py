@@ -1,9 +1,12 @@
-"""The full model-vs-simulation report on twin data (issue: validation report)."""
+"""The model-vs-simulation report's numbers: the identified effects' static coefficients, and the full
+report on twin data."""
 import json
 import re
 
 import numpy as np
 import pytest
+
+from validation.report.pipeline import effect_static_coefficients
 
 SECTIONS = ["data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
 
@@ -22,7 +25,7 @@ def _twin(path, effects, runs=8, duration=3.0, seed=4):
 @pytest.fixture(scope="module")
 def damping_report(tmp_path_factory):
     """Twin data whose only effect is viscous damping (nothing acts on theta beyond the Gor'kov model)."""
-    from validation.report_builder import build_report
+    from validation.report import build_report
 
     base = tmp_path_factory.mktemp("report")
     data = _twin(base / "data", {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
@@ -64,7 +67,7 @@ def test_theta_y2_agrees_with_simulation_without_theta_effects(damping_report):
 
 @pytest.mark.slow
 def test_report_renders_in_chromium(damping_report, tmp_path, chromium_required):
-    from validation.browser import check_report_in_browser
+    from validation.report.browser_check import check_report_in_browser
 
     check = check_report_in_browser(damping_report, tmp_path / "report.png", window=(1200, 3000))
     assert check.console == [], check.console
@@ -99,9 +102,23 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     assert velocity_rows, "the fitted model should contain velocity terms"
     assert all(r.kind.startswith("dynamic only") and r.simulated != r.simulated for r in velocity_rows)  # NaN prediction
     # the runs' refined models carry the velocity-coupling terms, and the comparison lists them as dynamic only
-    # (whether the minimal model keeps them is the ensemble rule's business: see the fitting issue)
+    # (whether the minimal model keeps them is the ensemble rule's business, docs/fitting.md)
     inclusion = model["inclusion_frequency"]["thetaddot"]
     by_term = {r.term: r for r in velocity_rows if r.equation == "thetaddot"}
     for term in ("y*thetadot^2", "y*ydot*thetadot"):
         assert inclusion[term] >= 0.75, (term, inclusion[term])
         assert term in by_term and by_term[term].kind.startswith("dynamic only")
+
+
+def test_identified_effects_add_their_static_coefficients():
+    """Pair scattering's -kappa cos^2(k (Z_eq + y)) theta adds kappa k^2 cos(2 k Z_eq) to theta*y^2 and
+    -kappa cos^2(k Z_eq) to theta (Taylor); on a small box the least squares approaches them."""
+    k, z_eq, kappa = 836.2, -4.289e-4, 1.95e4
+    diag = {"identified": ["pair_scattering"], "effects": [{"name": "pair_scattering", "params": {"kappa": kappa}}]}
+    c = effect_static_coefficients(diag, k, z_eq, theta_max=0.05, y_max=20e-6)
+    # box of +-20 um: the next Taylor term (y^4) shifts the y^2 coefficient by ~(k y_max)^2 / 3 ~ 1e-4
+    np.testing.assert_allclose(c["y^2*theta"], kappa * k**2 * np.cos(2 * k * z_eq), rtol=1e-3)
+    np.testing.assert_allclose(c["theta"], -kappa * np.cos(k * z_eq) ** 2, rtol=1e-6)
+    np.testing.assert_allclose(c["y*theta"], kappa * k * np.sin(2 * k * z_eq), rtol=1e-3)
+    assert abs(c["y^2"]) < 1e-6 * abs(c["y^2*theta"])  # odd in theta: no theta-free terms
+    assert effect_static_coefficients({"identified": [], "effects": []}, k, z_eq, 0.3, 1e-4) == {}

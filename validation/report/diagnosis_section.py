@@ -1,22 +1,22 @@
-"""Figures of a diagnosis: gap by candidate, residual maps before/after, residual by library term."""
+"""The diagnosis as a report section: its figures (gap by candidate, residual maps before and after,
+residual by library term) and its reading paragraph and table, from diagnosis.json."""
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
 
-from .report import Figure
-
-__all__ = ["diagnosis_figures"]
-
-
 from cubedimer.atomic import save_figure as _save
 
+from .html import Figure, Section, Table
 
-def diagnosis_figures(diagnosis: dict, internals: dict, out_dir: str | Path) -> list[Figure]:
-    import matplotlib
+__all__ = ["diagnosis_figures", "diagnosis_section"]
 
-    matplotlib.use("Agg", force=False)
+
+def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[Figure]:
+    """The diagnosis's figures as PNG files in ``out_dir``, from the diagnosis.json document ``diagnosis``
+    (``internals``, the :class:`validation.diagnosis.DiagnosisInternals`, is accepted for figures that need
+    the runs themselves)."""
     import matplotlib.pyplot as plt
 
     out = Path(out_dir)
@@ -62,3 +62,29 @@ def diagnosis_figures(diagnosis: dict, internals: dict, out_dir: str | Path) -> 
     figs.append(Figure(_save(fig, out / "residual_terms.png"),
                        "Which library terms carry the gap: each term's share of the residual variance when fitted alone."))
     return figs
+
+
+def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
+    """The report section of a diagnosis: the reading (calibration, gap, cause) and the ranked candidates."""
+    cal = diagnosis["calibration"]
+    ident = diagnosis["identified"]
+    rem = diagnosis["remaining_gap"]
+    if ident:
+        cause = ", then ".join(f"{e['name']} ({', '.join(f'{k} = {v:.3g}' for k, v in e['params'].items())})"
+                               for e in diagnosis["effects"] if e["significant"])
+        what = f"The gap is caused by {cause}."
+    else:
+        what = "No candidate effect improves held-out runs significantly."
+    reading = (
+        f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
+        f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
+        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
+        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} With them the gap is {100 * diagnosis['gap_after']:.1f} %: "
+        f"{rem['statement']}."
+    )
+    rows = [[e["name"], "yes" if e["significant"] else "no",
+             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
+            for e in diagnosis["effects"]]
+    return Section("diagnosis", "Sim-to-real gap", reading, figures,
+                   [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)],
+                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident})
