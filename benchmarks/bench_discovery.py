@@ -100,20 +100,18 @@ def make_data(case: Case, seed: int):
     return truth, runs, derivs, exact
 
 
-def oracle(truth, runs, exact, window_periods: float = 0.75) -> np.ndarray:
-    """Standard errors (2, 35) of integral-form least squares on the true support at the exact states."""
-    from cubedimer.spectra import dominant_frequency
-    from cubedimer.terms import evaluate_library
-    from fitting.integral_form import fit_integral_form, integral_window
+def oracle(truth, runs, exact, noise: tuple[float, float]) -> np.ndarray:
+    """Oracle standard errors (2, 35) of the true support (:func:`fitting.oracle.oracle_standard_errors` from the
+    exact initial states at the data set's noise)."""
+    from fitting.model import TERMS
+    from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 
+    res = oracle_standard_errors(truth, [OracleRun(e[0], len(e), r.dt) for r, e in zip(runs, exact)],
+                                 NoiseLevels(*noise))
     se = np.zeros(truth.coef.shape)
-    dts = [r.dt for r in runs]
-    for q, coord in enumerate(("y", "theta")):
-        cols = np.flatnonzero(truth.support[q])
-        pos = [np.asarray(getattr(r, coord), float) for r in runs]
-        windows = [integral_window(dt, dominant_frequency(p, dt), window_periods) for p, dt in zip(pos, dts)]
-        fit = fit_integral_form(pos, [evaluate_library(s)[:, cols] for s in exact], dts, windows)
-        se[q, cols] = fit.std_errors
+    for q, eq in enumerate(("yddot", "thetaddot")):
+        for t, o in res.terms[eq].items():
+            se[q, TERMS.index(t)] = o.std_error
     return se
 
 
@@ -148,7 +146,7 @@ def run_case(case: Case, seed: int, config=None) -> tuple[dict, object, float]:
     from fitting.discovery import DiscoveryConfig, discover_model
 
     truth, runs, derivs, exact = make_data(case, seed)
-    se = oracle(truth, runs, exact)
+    se = oracle(truth, runs, exact, (case.noise_y, case.noise_theta))
     t0, c0 = time.perf_counter(), time.process_time()
     res = discover_model(runs, derivs, config or DiscoveryConfig())
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0

@@ -14,13 +14,13 @@ import pytest
 
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
-from cubedimer.terms import evaluate_library
 from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model, numerov_columns
-from fitting.integral_form import (detrend_windows, fit_integral_form, integral_columns, integral_window,
-                                   window_starts)
+from fitting.discovery import DiscoveryConfig, discover_model
+from fitting.support_search import numerov_columns
+from fitting.integral_form import detrend_windows, integral_columns, window_starts
 from fitting.model import TERMS, PolynomialModel
 from fitting.model_states import SegmentConfig, model_states, segment_layout
+from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 W_Y, W_9, W_35 = 2 * np.pi * 22.0, 2 * np.pi * 9.0, 2 * np.pi * 35.0
@@ -43,15 +43,14 @@ def _data(truth: PolynomialModel, cfg: SyntheticConfig):
     return runs, derivs, exact
 
 
-def _oracle_se(truth: PolynomialModel, runs, exact) -> np.ndarray:
-    """Standard errors (2, 35) of integral-form least squares on the true support at the exact states."""
+def _oracle_se(truth: PolynomialModel, runs, exact, cfg: SyntheticConfig) -> np.ndarray:
+    """Oracle standard errors (2, 35) of the true support from the exact initial states at the data's noise."""
+    res = oracle_standard_errors(truth, [OracleRun(e[0], len(e), r.dt) for r, e in zip(runs, exact)],
+                                 NoiseLevels(cfg.noise_y, cfg.noise_theta))
     se = np.zeros(truth.coef.shape)
-    dts = [r.dt for r in runs]
-    for q, coord in enumerate(("y", "theta")):
-        cols = np.flatnonzero(truth.support[q])
-        pos = [np.asarray(getattr(r, coord), float) for r in runs]
-        windows = [integral_window(dt, dominant_frequency(p, dt)) for p, dt in zip(pos, dts)]
-        se[q, cols] = fit_integral_form(pos, [evaluate_library(s)[:, cols] for s in exact], dts, windows).std_errors
+    for q, eq in enumerate(("yddot", "thetaddot")):
+        for t, o in res.terms[eq].items():
+            se[q, TERMS.index(t)] = o.std_error
     return se
 
 
@@ -128,10 +127,10 @@ def test_small_data_set_gives_the_true_support_and_a_pareto_front():
     # 4 runs of 2 s, low noise: every term of the paper's reduced model has oracle z > 10
     truth = _truth(W_9, {"1": 0.1, "y^2": 9.5e6},
                    {"1": 60.0, "y": 1.5e6, "y^2*theta": 2e10, "y*thetadot^2": 5e3, "y*ydot*thetadot": 8e6})
-    runs, derivs, exact = _data(truth, SyntheticConfig(n_runs=4, duration=2.0, noise_y=1e-6, noise_theta=0.002,
-                                                       seed=21))
+    cfg = SyntheticConfig(n_runs=4, duration=2.0, noise_y=1e-6, noise_theta=0.002, seed=21)
+    runs, derivs, exact = _data(truth, cfg)
     res = discover_model(runs, derivs)
-    _check(truth, res, _oracle_se(truth, runs, exact))
+    _check(truth, res, _oracle_se(truth, runs, exact, cfg))
     assert res.converged
     assert np.array_equal(res.mask, truth.support)
     front = res.pareto["thetaddot"]
@@ -175,7 +174,7 @@ def test_discovery_reaches_the_oracle_on_sparse_truths(name):
     truth, cfg = CASES[name]
     runs, derivs, exact = _data(truth, cfg)
     res = discover_model(runs, derivs)
-    _check(truth, res, _oracle_se(truth, runs, exact))
+    _check(truth, res, _oracle_se(truth, runs, exact, cfg))
     # the residual is the tracking noise (the columns carry no extra error): within 3 %
     np.testing.assert_allclose(res.residual_std, [cfg.noise_y, cfg.noise_theta], rtol=0.03)
 
@@ -185,7 +184,7 @@ def test_smoothed_columns_alone_miss_the_criterion_where_model_states_meet_it():
     """The model-based passes are needed: with the first (smoothed-state) pass alone the weak 8-run set fails."""
     truth, cfg = CASES["weak-8runs"]
     runs, derivs, exact = _data(truth, cfg)
-    se = _oracle_se(truth, runs, exact)
+    se = _oracle_se(truth, runs, exact, cfg)
     first = discover_model(runs, derivs, DiscoveryConfig(max_iterations=0))
     with pytest.raises(AssertionError):
         _check(truth, first, se)
