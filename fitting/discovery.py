@@ -62,10 +62,13 @@ __all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "d
 log = logging.getLogger(__name__)
 
 #: One-line description of the method (written next to the result).
-METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period), backward elimination from the "
-          "35-term library until Holm's rule at family-wise alpha declares every remaining term significant (damping "
-          "terms always kept), repeated with the columns evaluated at the selected model's trajectories fitted segment "
-          "by segment to the data until the support and coefficients converge")
+METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, Numerov-corrected "
+          "double integrals); per equation backward elimination from the 35-term library until Holm's rule at "
+          "family-wise alpha declares every remaining term significant, stepwise additions, swaps and two-for-one "
+          "merges that keep every term significant, then the support with the smallest held-out error (K-fold over "
+          "runs) on the continued elimination path; damping terms always kept; repeated with the columns at the raw "
+          "positions and the velocities of the selected model's trajectories fitted segment by segment to the data "
+          "until the support and coefficients converge")
 
 
 @dataclass(frozen=True)
@@ -106,6 +109,11 @@ class DiscoveryConfig:
         smallest on that path (0: the minimum itself).
     n_folds : int
         Folds over runs of the held-out error (at most the number of runs).
+    raw_positions : bool
+        Model-state passes evaluate the columns at the raw positions and the model's velocities (True) or at
+        the model's positions and velocities (False; measured to drift: module docstring).
+    stepwise : bool
+        Stepwise additions, swaps and merges after the backward elimination.
     """
 
     alpha: float = 0.01
@@ -128,8 +136,11 @@ class DiscoveryConfig:
             raise ValueError(f"alpha must lie in (0, 1), got {self.alpha}")
         if not self.window_periods > 0:
             raise ValueError(f"window_periods must be positive, got {self.window_periods}")
-        if self.max_iterations < 0 or self.n_folds < 2:
-            raise ValueError("max_iterations must be >= 0 and n_folds >= 2")
+        lo, hi = self.window_bounds_s
+        if not 0 < lo <= hi:
+            raise ValueError(f"window_bounds_s must satisfy 0 < min <= max, got {self.window_bounds_s}")
+        if self.max_iterations < 0 or self.n_folds < 2 or self.selection_passes < 1:
+            raise ValueError("max_iterations must be >= 0, n_folds >= 2 and selection_passes >= 1")
         if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
             raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
 
@@ -280,7 +291,8 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
 
     def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool, frozen: NDArray | None):
         lib = [evaluate_library(s) for s in states]
-        designs = [reduced_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None) for q in range(2)]
+        designs = [reduced_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None)
+                   for q in range(2)]
         coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
         for q in range(2):
             sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise)
