@@ -74,8 +74,8 @@ def numerov_columns(f: NDArray) -> NDArray[np.float64]:
 _VELOCITY_FREE = np.array([is_velocity_free(t) for t in TERMS])
 
 
-def reduced_design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Sequence[float], windows: Sequence[int],
-            trims: Sequence[int], cache: dict | None = None) -> ReducedDesign:
+def reduced_design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Sequence[float],
+                   windows: Sequence[int], trims: Sequence[int], cache: dict | None = None) -> ReducedDesign:
     """R factors of the integral-form design of one equation.  ``cache`` (run index -> (trim, columns)) keeps
     the integrated velocity-free columns between passes whose position states are the same (raw) data."""
     rs, rows, wins = [], [], []
@@ -217,21 +217,24 @@ def prune_heldout(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], 
 def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int) -> list[int]:
     """Improve a support found by backward elimination.
 
-    Add the most significant outside term if every term stays significant (Holm); else swap one free term for
-    an outside one when that lowers the residual sum of squares and keeps every term significant; else replace
-    two free terms by one outside term when that raises the residual sum of squares by less than log(N)
-    residual variances (N: degrees of freedom; the Bayesian information criterion's price of one parameter,
-    for two non-nested supports); never return to a support met before; stop when none applies.  Backward elimination alone decides between two nearly collinear terms by which one the
-    full library's fit happens to make less significant (measured: y*thetadot^2 with oracle z 7 lost to
+    Moves, in this order of preference: add the most significant outside term if every term stays
+    significant (Holm); swap one free term for an outside one when that lowers the residual sum of squares;
+    replace two free terms by one outside term when that raises the residual sum of squares by less than
+    log(N) residual variances (N: degrees of freedom; the Bayesian information criterion's price of one
+    parameter, for two non-nested supports).  Every move keeps all terms significant and never returns to a
+    support met before; the search stops when no move applies.
+
+    Why: backward elimination alone decides between two nearly collinear terms by which one the full
+    library's fit happens to make less significant (measured: y*thetadot^2 with oracle z 7 lost to
     y*theta^2 on a nearly harmonic hinge); the swap compares the two supports directly.  Velocity terms earn
-    their place: replacing a velocity-free term by a velocity term needs a drop of the residual sum of squares
-    by more than z_alpha^2 residual variances (z_alpha = 2.58 at alpha = 0.01; a likelihood-ratio test at level
-    alpha).  On harmonic y motion y^2*theta and ydot^2*theta are nearly collinear (measured drops of -5 to +2.4
-    residual variances between them, against +10 to +25 for y*thetadot^2 over y*theta^2), so this keeps the
-    velocity-free term there.  The merge undoes a pair that stands in for one true term: y*theta^2 +
-    ydot*theta*thetadot for y*thetadot^2 fitted 0.4 residual variances better on a 35-Hz hinge and 8.0 on an
-    8-run set (z_alpha^2 = 6.6 would keep that pair; log(N) = 10.5 there), the best of ~600 pairs a search
-    over two-for-one replacements tries.
+    their place: replacing a velocity-free term by a velocity term needs a drop of the residual sum of
+    squares by more than z_alpha^2 residual variances (z_alpha = 2.58 at alpha = 0.01; a likelihood-ratio
+    test at level alpha).  On harmonic y motion y^2*theta and ydot^2*theta are nearly collinear (measured
+    drops of -5 to +2.4 residual variances between them, against +10 to +25 for y*thetadot^2 over
+    y*theta^2), so this keeps the velocity-free term there.  The merge undoes a pair that stands in for one
+    true term: y*theta^2 + ydot*theta*thetadot for y*thetadot^2 fitted 0.4 residual variances better on a
+    35-Hz hinge and 8.0 on an 8-run set (z_alpha^2 = 6.6 would keep that pair; log(N) = 10.5 there), the
+    best of the ~600 pairs the search tries.
     """
     from scipy.special import ndtri
 
