@@ -7,12 +7,14 @@ support with its columns at the exact noise-free states, against the noisy posit
 every true term with oracle z >= 5 is selected, at most one spurious term over both equations, every
 coefficient within max(10 %, 3 oracle standard errors).
 
-Run ``python -m benchmarks.bench_discovery [--seeds 101 102] [--cases paper signs stiff]``: prints a
-markdown report.  ``main()`` returns it.
+Run ``python -m benchmarks.bench_discovery [--seeds 101 102] [--cases paper signs stiff] [--details]``:
+prints a markdown report (one row per data set, or per-term tables with ``--details``).  ``main()``
+returns it (the ``python -m benchmarks`` runner's contract).
 """
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from dataclasses import dataclass
 
@@ -191,23 +193,24 @@ SUMMARY_HEADER = ["| case | seed | runs | criterion | weakest oracle z | missed 
 
 
 def main(argv: list[str] | None = None) -> str:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """Run the benchmark and return the markdown report (``argv`` defaults to no options: one row per data set
+    of seed 101)."""
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_discovery", description=__doc__.splitlines()[0])
     ap.add_argument("--cases", nargs="*", default=list(CASES))
     ap.add_argument("--seeds", nargs="*", type=int, default=[101])
-    ap.add_argument("--summary", action="store_true", help="one row per data set instead of per-term tables")
-    args = ap.parse_args(argv)
-    lines = ["## discovery benchmark", ""] + (SUMMARY_HEADER if args.summary else [])
+    ap.add_argument("--details", action="store_true", help="a per-term table per data set instead of one row")
+    args = ap.parse_args(argv if argv is not None else [])
+    lines = ["## discovery benchmark (integral form with model-based states, against the oracle)", ""]
+    lines += [] if args.details else SUMMARY_HEADER
     for name in args.cases:
         for seed in args.seeds:
             sc, res, wall = run_case(CASES[name], seed)
-            if args.summary:
-                lines.append(summary_row(CASES[name], seed, sc, res, wall))
-                print(lines[-1], flush=True)
-            else:
-                lines += report(CASES[name], seed, sc, res, wall)
-                print("\n".join(lines[-(len(sc["rows"]) + 10):]), flush=True)
+            new = report(CASES[name], seed, sc, res, wall) if args.details else [summary_row(CASES[name], seed, sc,
+                                                                                             res, wall)]
+            lines += new
+            print("\n".join(new), file=sys.stderr, flush=True)
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
-    main()
+    print(main(sys.argv[1:]))
