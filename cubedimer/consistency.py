@@ -32,7 +32,6 @@ from typing import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .meta import META_DEFAULTS
 from .spectra import dominant_frequency
 
 __all__ = ["ConsistencyConfig", "RunFeatures", "Inconsistency", "run_features", "check_consistency",
@@ -126,6 +125,8 @@ def nominal_trap_frequency(meta: Mapping[str, float]) -> float:
     to leading order (the cube dimer's finite size lowers it by ~3 % at the defaults).  NaN when the
     field cannot levitate the particle.
     """
+    from .meta import META_DEFAULTS
+
     m = {**META_DEFAULTS, **dict(meta)}
     rho0, c0, f = m["air_density_kg_m3"], m["sound_speed_m_s"], m["frequency_hz"]
     rho_p, k_p, p0 = m["particle_density_kg_m3"], m["bulk_modulus_pa"], m["pressure_amplitude_pa"]
@@ -183,6 +184,8 @@ def _own_problem(f: RunFeatures, meta: Mapping[str, float] | None, c: Consistenc
                 f"{f.y_amplitude / f.noise_y:.1f} times its frame-to-frame noise")
     if meta is None:
         return None
+    from .meta import META_DEFAULTS
+
     m = {**META_DEFAULTS, **dict(meta)}
     quarter = m["sound_speed_m_s"] / m["frequency_hz"] / 4.0
     if f.y_amplitude > quarter:

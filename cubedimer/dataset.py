@@ -16,9 +16,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from .consistency import ConsistencyConfig, check_consistency, run_features
+from .glitches import GlitchConfig, find_glitches
 from .spectra import dominant_frequency
 
-__all__ = ["DatasetError", "Run", "Dataset", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
+__all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
 
 logger = logging.getLogger(__name__)
 
@@ -42,12 +44,20 @@ class LoadConfig:
         Allowed relative deviation of any time step from the median step (FORMATS.md: 1 %).
     min_periods : float
         Minimum number of oscillation periods (of the dominant y frequency) a run must hold.
+    glitches : GlitchConfig or None
+        Isolated tracking glitches are found (:mod:`cubedimer.glitches`) and masked like missing
+        frames; None keeps every frame.
+    consistency : ConsistencyConfig or None
+        Runs that do not fit the rest of the set or meta.json (:mod:`cubedimer.consistency`) are
+        reported and skipped; None loads every readable run.
     """
 
     max_gap: int = 10
     max_missing_fraction: float = 0.05
     uniform_tol: float = 0.01
     min_periods: float = 5.0
+    glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
+    consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,7 +75,9 @@ class Run:
     theta : ndarray
         Normalised bending angle [-].
     n_filled : int
-        Frames that were missing and filled.
+        Frames that were missing or masked as glitches, and filled.
+    glitch_frames : tuple of int
+        Indices of the frames masked as tracking glitches (in y or theta).
     """
 
     name: str
@@ -73,6 +85,12 @@ class Run:
     y: NDArray[np.float64]
     theta: NDArray[np.float64]
     n_filled: int = 0
+    glitch_frames: tuple[int, ...] = ()
+
+    @property
+    def n_glitches(self) -> int:
+        """Number of frames masked as tracking glitches."""
+        return len(self.glitch_frames)
 
     @property
     def dt(self) -> float:
@@ -86,12 +104,32 @@ class Run:
 
 @dataclass(frozen=True, eq=False)
 class Dataset:
-    """Good runs of a data set, its meta data and the one-line errors of skipped files."""
+    """Good runs of a data set, its meta data and the files that were skipped, with their reasons."""
 
     path: str
     runs: tuple[Run, ...]
     meta: dict = field(default_factory=dict)
-    skipped: tuple[str, ...] = ()
+    skipped: tuple["SkippedFile", ...] = ()
+
+    @property
+    def n_glitches(self) -> int:
+        """Frames masked as tracking glitches over all runs."""
+        return sum(r.n_glitches for r in self.runs)
+
+    def skipped_files(self) -> list[dict[str, str]]:
+        """``[{"file": name, "reason": one line}, ...]`` (the ``skipped_files`` of FORMATS.md)."""
+        return [{"file": s.file, "reason": s.reason} for s in self.skipped]
+
+
+@dataclass(frozen=True)
+class SkippedFile:
+    """A file left out of a data set: its name and the one-line reason."""
+
+    file: str
+    reason: str
+
+    def __str__(self) -> str:
+        return f"{self.file}: {self.reason}"
 
 
 def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tuple[NDArray, int]:
@@ -202,6 +240,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
+    y_raw, th_raw = y, th
     y, ny = fill_gaps(t, y, config.max_gap, "y", str(path))
     th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
     duration = t[-1] - t[0]
@@ -210,7 +249,17 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     if f <= 0 or duration * f < config.min_periods:
         raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
                            f"({duration:.3g} s at a dominant y frequency of {f:.3g} Hz)")
-    return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt))
+    glitch_frames: tuple[int, ...] = ()
+    if config.glitches is not None:
+        frames_per_period = t.size / (duration * f)
+        gy = find_glitches(y_raw, frames_per_period, config.glitches)
+        gt = find_glitches(th_raw, frames_per_period, config.glitches)
+        if gy.any() or gt.any():
+            glitch_frames = tuple(int(i) for i in np.flatnonzero(gy | gt))
+            y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.max_gap, "y", str(path))
+            th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.max_gap, "theta", str(path))
+            logger.info("%s: %d tracking glitch frame(s) masked", name, len(glitch_frames))
+    return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt), glitch_frames=glitch_frames)
 
 
 def _log_skip(message: str) -> None:
@@ -250,14 +299,74 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     meta = read_meta(p)
     report = report or _log_skip
     runs, skipped = [], []
+
+    def skip(file: str, reason: str) -> None:
+        if strict:
+            raise DatasetError(f"{p / file}: {reason}")
+        skipped.append(SkippedFile(file, reason))
+        report(f"{p / file}: {reason}")
+
     for f in files:
         try:
             runs.append(load_run(f, config))
         except DatasetError as exc:
             if strict:
                 raise
-            skipped.append(str(exc))
-            report(str(exc))
+            prefix = f"{f}: "
+            msg = str(exc)
+            skipped.append(SkippedFile(f.name, msg[len(prefix):] if msg.startswith(prefix) else msg))
+            report(msg)
+    if config.consistency is not None and runs:
+        features = [run_features(r.name, r.t, r.y) for r in runs]
+        # meta.json's constants are checked only when the data set has one (defaults prove nothing)
+        bad = {x.file: x.reason for x in check_consistency(features, meta if meta else None, config.consistency)}
+        for r in runs:
+            if r.name in bad:
+                skip(r.name, bad[r.name])
+        runs = [r for r in runs if r.name not in bad]
     if not runs:
         raise DatasetError(f"{p}: no usable runs ({len(skipped)} bad files)")
+    skipped.sort(key=lambda s: s.file)
     return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped))
+
+
+# ---------------------------------------------------------------------- writing
+__all__ += ["format_run_csv", "write_run_csv"]
+
+
+def _csv_number(v: float, spec: str, missing: str) -> str:
+    return missing if not np.isfinite(v) else format(v, spec)
+
+
+def format_run_csv(t: NDArray, y: NDArray, theta: NDArray, comments: tuple[str, ...] | list[str] = (),
+                   t_decimals: int = 9, y_digits: int = 10, theta_decimals: int = 10, missing: str = "nan") -> str:
+    """The text of one run's CSV (FORMATS.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
+
+    Parameters
+    ----------
+    t, y, theta : ndarray (n,)
+        Times [s], heights [m], bends [-]; non-finite y or theta (missing frames) are written as ``missing``.
+    comments : sequence of str
+        Comment lines, written after ``# ``.
+    t_decimals, theta_decimals : int
+        Decimals of t and theta (fixed point).
+    y_digits : int
+        Decimals of y's mantissa (scientific notation).
+    missing : str
+        Text of a missing value (``"nan"`` or ``""``; the loader reads both).
+    """
+    ts, ys, ths = f".{int(t_decimals)}f", f".{int(y_digits)}e", f".{int(theta_decimals)}f"
+    lines = [f"# {c}" for c in comments] + ["t,y,theta"]
+    lines += [f"{format(a, ts)},{_csv_number(b, ys, missing)},{_csv_number(c, ths, missing)}"
+              for a, b, c in zip(np.asarray(t, float), np.asarray(y, float), np.asarray(theta, float))]
+    return "\n".join(lines) + "\n"
+
+
+def write_run_csv(path: str | os.PathLike, t: NDArray, y: NDArray, theta: NDArray,
+                  comments: tuple[str, ...] | list[str] = (), **number_format) -> Path:
+    """Write one run's CSV atomically (:func:`format_run_csv`; ``number_format`` are its format
+    keywords); returns the path."""
+    from .atomic import atomic_write_text
+
+    atomic_write_text(path, format_run_csv(t, y, theta, comments, **number_format))
+    return Path(path)

@@ -101,11 +101,16 @@ def find_glitches(x: ArrayLike, frames_per_period: float, config: GlitchConfig =
     if n < 2 * w:
         return glitch
     missing = ~np.isfinite(x)
+    # frames within half a window of a missing frame see the interpolation across the gap: never flagged
+    near_gap = maximum_filter1d(missing.astype(np.uint8), w, mode="nearest").astype(bool)
+    finite = x[~missing]
+    # a scale below 1e-6 of the coordinate's range is round-off (noise-free synthetic data), not tracking noise
+    floor = 1e-6 * float(np.ptp(finite)) if finite.size else 0.0
     for _ in range(config.max_rounds):
         filled = _fill(x, glitch | missing)
         r = filled - savgol_filter(filled, w, 3, mode="interp")
-        r[glitch | missing] = 0.0
-        scale = 1.4826 * float(np.median(np.abs(r[~(glitch | missing)])))
+        r[glitch | near_gap] = 0.0
+        scale = max(1.4826 * float(np.median(np.abs(r[~(glitch | near_gap)]))), floor)
         if not scale > 0:
             break
         a = np.abs(r)

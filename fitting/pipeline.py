@@ -32,7 +32,7 @@ import numpy as np
 
 from cubedimer.atomic import write_json
 from cubedimer.cli import UserInputError
-from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_signal
+from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_trajectory
 from cubedimer.dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
@@ -127,7 +127,8 @@ class FitResult:
     joint_start: PolynomialModel
     joint: RefineResult
     config: FitConfig
-    skipped: tuple[str, ...] = ()
+    skipped: tuple[dict, ...] = ()
+    n_glitches: int = 0
     #: the paper's rule (z > threshold plus damping terms) on the per-run refinements; equals
     #: ``mask`` when ``config.selection.rule == "zscore"``
     mask_zscore: np.ndarray | None = None
@@ -156,7 +157,7 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
     for r in runs:
         fy = dominant_frequency(r.y, r.dt)
         d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
-        att = classify_signal(d.state[:, 0], d.state[:, 2], r.dt, config.classify)
+        att = classify_trajectory(d.t, d.state, config.classify)
         out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att))
     scales = dataset_scales([p.derivs for p in out], [p.f_y for p in out])
     return out, scales
@@ -415,6 +416,7 @@ def model_json(res: FitResult) -> dict:
         "scales": res.scales.to_dict(),
         "settings": json.loads(json.dumps(asdict(res.config), default=float)),
         "skipped_files": list(res.skipped),
+        "glitch_frames_masked": res.n_glitches,
         "selection": _selection_json(res),
         "integral_form": _integral_form_json(res),
         "fallback": res.fallback,
@@ -458,11 +460,11 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
         from cubedimer.dataset import DatasetError
         raise DatasetError(f"{data_dir}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
     prepared, scales = prepare_runs(ds.runs, config)
-    log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped); scales: y {scales.length_y:.3g} m, "
+    log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped, {ds.n_glitches} glitch frames masked); scales: y {scales.length_y:.3g} m, "
         f"theta {scales.length_theta:.3g}, time {scales.time:.3g} s")
     out = Path(out_dir)
     res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log)
-    res = FitResult(**{**res.__dict__, "skipped": ds.skipped})
+    res = FitResult(**{**res.__dict__, "skipped": tuple(ds.skipped_files()), "n_glitches": ds.n_glitches})
     write_json(out / "model.json", model_json(res))
     if plots:
         from .plots import plot_fit

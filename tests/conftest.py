@@ -68,3 +68,14 @@ def sine_run():
     """A clean 22-Hz y / 9-Hz theta signal, 2 s at 1000 fps."""
     t = np.arange(2000) / 1000.0
     return t, 1e-4 * np.cos(2 * np.pi * 22 * t), 0.2 * np.sin(2 * np.pi * 9 * t)
+
+
+@pytest.fixture(scope="session")
+def process_cluster():
+    """A real dask cluster on the loopback for the whole session: a scheduler and two daemonic worker
+    processes (as every normal deployment has); yields its address and shuts it down at the end."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address

@@ -113,7 +113,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     # the nominal pressure the experimenter believes in is 3 kPa; the truth is off by pressure_error
     meta = json.loads((data / "meta.json").read_text())
     meta["pressure_amplitude_pa"] = 3000.0
-    (data / "meta.json").write_text(json.dumps(meta))
+    write_json(data / "meta.json", meta)
     try:
         diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
         error = None

@@ -168,8 +168,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
     if not 0 < args.alpha < 1:
         raise UserInputError("--alpha must lie in (0, 1)")
     prepare_output_dir(args.out, "--out", create=False)
-    config = DiagnoseConfig(candidates=cands, alpha=args.alpha, min_relative_improvement=args.min_improvement,
-                            long_time=not args.no_long_time)
+    try:
+        config = DiagnoseConfig(candidates=cands, alpha=args.alpha, min_relative_improvement=args.min_improvement,
+                                long_time=not args.no_long_time)
+    except ValueError as exc:
+        raise UserInputError(f"{exc} (see --help)") from None
     try:
         diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet)
     except (DatasetError, ValueError) as exc:

@@ -145,16 +145,6 @@ def test_data_set_files_respect_the_umask(tmp_path, mask, mode):
         assert stat.S_IMODE(f.stat().st_mode) == mode, f.name
 
 
-@pytest.fixture(scope="module")
-def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
-
-    with loopback_cluster(2) as address:
-        yield address
-
-
 @pytest.mark.slow
 def test_identical_data_sets_serially_on_local_processes_and_on_a_cluster(tmp_path, process_cluster):
     common = ["simulate", "--runs", "3", "--seed", "5", "--no-progress", "--duration", "1", "--fps", "500",

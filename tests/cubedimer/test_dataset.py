@@ -153,3 +153,51 @@ def test_slow_drift_below_the_oscillation_is_not_taken_for_it(tmp_path, write_cs
     y = 2e-4 * t / t[-1] + 1e-4 * np.cos(2 * np.pi * 22 * t)
     run = load_run(write_csv(tmp_path / "d.csv", t, y, 0.1 * np.sin(2 * np.pi * 9 * t)))
     assert run.t.size == 2000
+
+
+def _noisy_runs(n, seed, duration=3.0, fps=1500.0):
+    """n decaying 21.8-Hz runs with 1.5 um / 0.003 tracking noise, as (t, y, theta)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(duration * fps)) / fps
+    out = []
+    for _ in range(n):
+        a, b = rng.uniform(5e-5, 3e-4), rng.uniform(0.05, 0.3)
+        y = a * np.exp(-0.3 * t) * np.cos(2 * np.pi * 21.8 * t + rng.uniform(0, 6)) + 1.5e-6 * rng.standard_normal(t.size)
+        th = b * np.cos(2 * np.pi * 9.0 * t + rng.uniform(0, 6)) + 0.003 * rng.standard_normal(t.size)
+        out.append((t, y, th))
+    return out
+
+
+def test_tracking_glitches_are_masked_and_counted(tmp_path, write_csv):
+    (t, y, th), = _noisy_runs(1, 4)
+    clean = y.copy()
+    idx = np.array([100, 900, 1700, 2500, 3300, 4100])
+    y = y.copy()
+    y[idx] += 100 * 1.5e-6  # 100 times the tracking noise
+    run = load_run(write_csv(tmp_path / "g.csv", t, y, th))
+    assert run.glitch_frames == tuple(idx) and run.n_glitches == 6
+    # a masked frame is interpolated from its neighbours: within a few noise levels of the clean value
+    np.testing.assert_allclose(run.y[idx], clean[idx], atol=5 * 1.5e-6)
+    assert load_run(write_csv(tmp_path / "c.csv", t, clean, th)).n_glitches == 0
+
+
+@pytest.mark.parametrize("n_runs", [4, 12])
+def test_a_file_in_milliseconds_is_skipped_with_its_cause(tmp_path, write_csv, n_runs):
+    for i, (t, y, th) in enumerate(_noisy_runs(n_runs, n_runs), 1):
+        write_csv(tmp_path / f"run{i:02d}.csv", 1e3 * t if i == 2 else t, y, th)
+    ds = load_dataset(tmp_path)
+    assert [r.name for r in ds.runs] == [f"run{i:02d}.csv" for i in range(1, n_runs + 1) if i != 2]
+    (entry,) = ds.skipped_files()
+    assert entry["file"] == "run02.csv" and entry["reason"].startswith("t looks like milliseconds")
+    with pytest.raises(DatasetError, match="run02.csv: t looks like milliseconds"):
+        load_dataset(tmp_path, strict=True)
+
+
+def test_meta_plausibility_names_a_micrometre_file_even_alone(tmp_path, write_csv):
+    (t, y, th), = _noisy_runs(1, 8)
+    write_csv(tmp_path / "um.csv", t, 1e6 * y, th)
+    (tmp_path / "meta.json").write_text('{"side_length_m": 5e-4, "pressure_amplitude_pa": 3000}')
+    with pytest.raises(DatasetError, match="no usable runs"):
+        load_dataset(tmp_path)
+    with pytest.raises(DatasetError, match="um.csv: y amplitude .* quarter wavelength .*micrometres"):
+        load_dataset(tmp_path, strict=True)

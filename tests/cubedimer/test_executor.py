@@ -81,16 +81,6 @@ def test_single_item_with_workers_left_may_use_them():
     assert pid == os.getpid() and not marked and os.getpid() not in inner
 
 
-@pytest.fixture(scope="module")
-def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
-
-    with loopback_cluster(2) as address:
-        yield address
-
-
 def _module_file(_: int) -> str:
     import cubedimer.executor
 

@@ -99,16 +99,6 @@ def test_synth_size_limit(tmp_path, capsys):
     assert "exceeds the limit" in _one_line_error(capsys) and not (tmp_path / "d").exists()
 
 
-@pytest.fixture(scope="module")
-def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
-
-    with loopback_cluster(2) as address:
-        yield address
-
-
 @pytest.mark.slow
 def test_fit_identical_serially_on_local_processes_and_on_a_cluster(small_dataset, fitted, tmp_path, process_cluster):
     """Byte-identical model.json wherever the per-run refinements ran; a fit begun serially

@@ -66,16 +66,6 @@ def test_parallel_commands_take_the_shared_executor_options(capsys, command):
     assert exc.value.code == 0 and "--workers N" in text and "--scheduler ADDRESS" in text
 
 
-@pytest.fixture(scope="module")
-def process_cluster():
-    """A real dask cluster on the loopback: a scheduler and two daemonic worker processes; its address."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
-
-    with loopback_cluster(2) as address:
-        yield address
-
-
 def _study_files(out):
     return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*"))
             if p.is_file() and p.suffix in (".json", ".md")}
@@ -98,3 +88,10 @@ def test_blind_study_identical_serially_locally_and_on_a_cluster(tmp_path, proce
     assert "cases/case001/result.json" in reference and "summary.json" in reference
     assert _study_files(mixed) == reference
     shutil.rmtree(serial)
+
+
+def test_diagnose_refuses_a_negative_practical_threshold_in_one_line(tmp_path, tiny_data, capsys):
+    assert main(["diagnose", str(tiny_data), "--out", str(tmp_path / "out"), "--min-improvement", "-0.1"]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("error: ") and "min_relative_improvement" in line
+    assert not (tmp_path / "out").exists()

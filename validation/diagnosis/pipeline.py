@@ -215,7 +215,8 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         "long_time": long_time,
         "remaining_gap": remaining,
         "identification_rounds": [r.to_dict() for r in ident.rounds],
-        "skipped_files": list(dataset.skipped),
+        "skipped_files": dataset.skipped_files(),
+        "glitch_frames_masked": dataset.n_glitches,
         "settings": {"alpha": config.alpha, "min_relative_improvement": config.min_relative_improvement,
                      "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
     }
