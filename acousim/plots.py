@@ -21,9 +21,6 @@ UM = 1e6  # metres -> micrometres for axes
 
 
 def _figure(figsize=(5.0, 3.8)):
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     return plt.subplots(figsize=figsize, constrained_layout=True)

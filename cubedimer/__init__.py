@@ -8,6 +8,9 @@ here, so that ``acousim`` and ``fitting`` never import each other:
 * :mod:`cubedimer.terms` - term names and the cubic monomial library over [y, ydot, theta, thetadot]
 * :mod:`cubedimer.spectra`, :mod:`cubedimer.poincare`, :mod:`cubedimer.attractors` - signal analysis
   shared by the twin, the fit and the report
+* :mod:`cubedimer.consistency`, :mod:`cubedimer.glitches` - cross-run checks of a data set and
+  tracking-glitch masking, used by the loader
+* :mod:`cubedimer.rk4` - the one compiled fixed-step RK4 kernel (twin and fitted models)
 * :mod:`cubedimer.atomic` - atomic file output and the one JSON writer
 * :mod:`cubedimer.executor` - the seam for parallel work (local processes or a dask cluster)
 * :mod:`cubedimer.cli` - the command-line runner, shared options and one-line errors

@@ -7,6 +7,7 @@ refinement against attractor shape, Poincare map and frequency with nlopt, ensem
 significance of the ensemble mean and the minimal model, and paired model comparison.  Independent of ``acousim``.
 """
 from .compare import compare_models, cross_coupling_mask, drop_terms, paired_wilcoxon
+from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
 from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, select_terms, term_statistics
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
@@ -21,7 +22,7 @@ __all__ = [
     "PolynomialModel", "Scales",
     "RegressionConfig", "fit_regression", "RefineConfig", "refine", "LossWeights", "LossTerms",
     "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
-    "SelectionConfig",
+    "SelectionConfig", "DiscoveryConfig", "DiscoveryResult", "discover_model",
     "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_standard_errors", "plan_runs",
     "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
     "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",

@@ -32,7 +32,7 @@ import numpy as np
 
 from cubedimer.atomic import write_json
 from cubedimer.cli import UserInputError
-from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_signal
+from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_trajectory
 from cubedimer.dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
@@ -157,7 +157,7 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
     for r in runs:
         fy = dominant_frequency(r.y, r.dt)
         d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
-        att = classify_signal(d.state[:, 0], d.state[:, 2], r.dt, config.classify)
+        att = classify_trajectory(d.t, d.state, config.classify)
         out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att))
     scales = dataset_scales([p.derivs for p in out], [p.f_y for p in out])
     return out, scales

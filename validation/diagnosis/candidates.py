@@ -2,8 +2,8 @@
 
 Every candidate effect is linear in its parameters, so its added accelerations at given states are
 ``effect_regressors(...) @ params`` and every fit of the diagnosis is a linear least-squares problem at
-the measured states.  The accelerations themselves are those of :mod:`acousim.effects` (one definition
-of the physics); this module only evaluates them with one parameter at a time set to 1.
+the measured states.  The columns are those of :meth:`acousim.effects.Effect.regressors` (the one definition of each
+effect); this module only chooses the effects' y (measured from the calibrated equilibrium).
 """
 from __future__ import annotations
 
@@ -29,8 +29,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
                       z_eq: float | None = None) -> NDArray[np.float64]:
     """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
 
-    Column j is the effect of :mod:`acousim.effects` evaluated with parameter j set to 1 and the others
-    to 0.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
+    :meth:`acousim.effects.Effect.regressors` of the effect at the effects' y = Z_com - Z_eq.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
     parameter] and thetaddot [1/s^2 per unit parameter] equations.
 
     Parameters
@@ -51,19 +50,13 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
 
     if name not in EFFECT_TYPES:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
-    cls = EFFECT_TYPES[name]
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
     if z_eq is None:
         y_eff, z_ref = y, z_com - y
     else:
         y_eff, z_ref = z_com - z_eq, z_eq
-    cols = []
-    for p in cls.parameter_names():
-        unit = cls(**{q: (1.0 if q == p else 0.0) for q in cls.parameter_names()})
-        ay, at = unit.accelerations(y_eff, yd, th, thd, wavenumber, z_ref)
-        cols.append(np.stack([np.broadcast_to(ay, y.shape), np.broadcast_to(at, y.shape)], axis=-1))
-    return np.stack(cols, axis=-1).astype(float)
+    return EFFECT_TYPES[name].regressors(y_eff, yd, th, thd, wavenumber, z_ref)
 
 
 def parameter_slots(effects: Sequence[str], eq: int) -> list[tuple[str, str, int]]:

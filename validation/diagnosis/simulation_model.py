@@ -1,7 +1,8 @@
 """The simulation's accelerations, energies and integral-form columns at the measured states.
 
 :class:`SimulationTerms` wraps the simulation's equations of motion (the Gor'kov model of PHYSICS.md
-section 4 at nominal pressure, with the hinge's centrifugal term) for the diagnosis: per run, the
+section 4 at nominal pressure; the hinge's velocity term is :func:`acousim.equations.hinge_acceleration`, the
+effects' columns :meth:`acousim.effects.Effect.regressors`) for the diagnosis: per run, the
 acoustic force and torque, the potential for the energy balance, and the double integrals of the
 accelerations for the integral form.  The calibration scales the acoustic parts by
 s = (p0 / p_nom)^2; the candidate effects' columns come from :func:`validation.diagnosis.candidates.effect_regressors`.
@@ -12,6 +13,8 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+
+from acousim.equations import hinge_acceleration
 
 from .candidates import effect_regressors
 from .preparation import RunAccelerations
@@ -74,7 +77,6 @@ class SimulationTerms:
         without the acoustic part, ``u_osc`` its acoustic part at nominal pressure [J].
         """
         d = self.model.dimer
-        rest_u = float(self.model.integrals_at_height(0.0, z0).potential)
         out = []
         for r, (_, _, pot) in zip(self.runs, self._static(z0)):
             y, yd, th, thd = r.state.T
@@ -129,7 +131,7 @@ class SimulationTerms:
                 else:
                     inertia = d.hinge_inertia(th)
                     out.append((pi.columns(1, f * st.q_theta / inertia),
-                                pi.columns(1, -0.5 * d.hinge_inertia_derivative(th) * thd**2 / inertia)))
+                                pi.columns(1, hinge_acceleration(0.0, inertia, d.hinge_inertia_derivative(th), thd))))
             self._cache[key] = out
         return self._cache[key]
 
@@ -143,6 +145,7 @@ class SimulationTerms:
         return out
 
     def centrifugal(self, r: RunAccelerations) -> NDArray:
+        """The velocity part of Lagrange's theta equation, -1/2 I' thetadot^2 / I [1/s^2] (smoothed as the data)."""
         th, thd = r.state[:, 2], r.state[:, 3]
         d = self.model.dimer
-        return r.smooth(-0.5 * d.hinge_inertia_derivative(th) * thd**2 / d.hinge_inertia(th))
+        return r.smooth(hinge_acceleration(0.0, d.hinge_inertia(th), d.hinge_inertia_derivative(th), thd))

@@ -23,8 +23,7 @@ def _save(fig, path: Path) -> Path:
     return save_figure(fig, path, dpi=120)
 
 
-CLASS_COLORS = {"locked-in-phase": "tab:blue", "locked-anti-phase": "tab:red", "locked-quadrature": "tab:purple",
-                "theta-at-rest": "tab:gray", "independent": "tab:orange"}
+from cubedimer.attractors import CLASS_COLORS
 
 
 def data_figures(prepared: Sequence, out: Path) -> list[tuple[Path, str]]:

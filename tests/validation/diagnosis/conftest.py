@@ -6,8 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from validation.diagnosis import (CANDIDATE_EFFECTS, Calibration, DiagnosisProblem, RunAccelerations,
-                                  effect_regressors, predicted_accelerations)
+from validation.diagnosis import Calibration, DiagnosisProblem, RunAccelerations, predicted_accelerations
 
 
 @pytest.fixture(scope="module")
@@ -17,52 +16,28 @@ def fast_model():
     return GorkovDimer().interpolated()
 
 
-def _rk4_calibrated_runs(model, cal: Calibration, effects: dict, x0, t, substeps: int = 2, bound: float = 2e-3):
-    """Integrate the calibrated simulation model (+ effects) from each run's initial state: the
-    synthetic trajectories of these tests.
+def _calibrated_runs(cal: Calibration, effects: dict, x0, t, substeps: int = 2):
+    """Integrate the calibrated simulation model (+ effects) from each run's initial state with the suite's
+    equations of motion and compiled RK4 (:class:`acousim.DimerDynamics`): the synthetic trajectories of
+    these tests.
 
-    Classical RK4 with step ``dt / substeps`` on a uniform output grid ``t``, batched over runs (all
-    runs advance together; the model is evaluated once per stage for the whole batch).  A run whose
-    |y| exceeds ``bound`` [m] (it left the trap) or turns non-finite is frozen and reported through
-    ``n_valid``.  ``model``: an interpolated acousim.GorkovDimer at nominal pressure; ``x0`` (n_runs, 4);
-    ``t`` (n,) uniform times [s].  Returns states (n_runs, n, 4) and n_valid (n_runs,).
+    The force model is the default dimer's surrogate at the calibrated pressure, whose y is measured from
+    its own equilibrium Z_eq; the data's y is measured from ``cal.z_origin_m``, so states are shifted by
+    Z_eq - z0.  ``x0`` (n_runs, 4) in the data's y; ``t`` (n,) uniform times [s].  Returns states
+    (n_runs, n, 4) and the number of valid samples per run.
     """
-    x = np.array(x0, float)
-    n_runs, n = x.shape[0], len(t)
-    h = float(t[1] - t[0]) / substeps
-    out = np.empty((n_runs, n, 4))
-    out[:, 0] = x
-    n_valid = np.full(n_runs, n, dtype=np.int64)
-    alive = np.ones(n_runs, bool)
-    dimer, g, k = model.dimer, model.gravity, model.wave.wavenumber
-    mass = dimer.total_mass
-    names = list(effects)
-    pvec = [np.array([effects[e][p] for p in CANDIDATE_EFFECTS[e]]) for e in names]
+    from acousim import DimerDynamics, EffectSet, cached_surrogate
 
-    def rhs(s):
-        th = np.clip(s[:, 2], -1.0, 1.0)
-        z = cal.z_origin_m + s[:, 0]
-        st = model.integrals_at_height(th, z)
-        inertia = dimer.hinge_inertia(th)
-        a = np.column_stack([cal.pressure_scale * st.force_z / mass - g,
-                             (cal.pressure_scale * st.q_theta - 0.5 * dimer.hinge_inertia_derivative(th) * s[:, 3] ** 2) / inertia])
-        for e, pv in zip(names, pvec):
-            a = a + effect_regressors(e, s, z, k, cal.equilibrium_height_m) @ pv
-        return np.column_stack([s[:, 1], a[:, 0], s[:, 3], a[:, 1]])
-
-    for i in range(1, n):
-        for _ in range(substeps):
-            k1 = rhs(x)
-            k2 = rhs(x + 0.5 * h * k1)
-            k3 = rhs(x + 0.5 * h * k2)
-            k4 = rhs(x + h * k3)
-            x = np.where(alive[:, None], x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), x)
-        bad = alive & (~np.all(np.isfinite(x), axis=1) | (np.abs(x[:, 0]) > bound) | (np.abs(x[:, 2]) >= 1.0))
-        if np.any(bad):
-            n_valid[bad] = i
-            alive &= ~bad
-            x[bad] = out[bad, i - 1]
-        out[:, i] = x
+    sur = cached_surrogate().with_pressure(cal.pressure_amplitude_pa)
+    dyn = DimerDynamics(sur, EffectSet.from_dict(effects))
+    shift = np.array([sur.z_eq - cal.z_origin_m, 0.0, 0.0, 0.0])
+    dt = float(t[1] - t[0])
+    out = np.full((len(x0), len(t), 4), np.nan)
+    n_valid = np.zeros(len(x0), dtype=np.int64)
+    for i, x in enumerate(np.asarray(x0, float)):
+        traj = dyn.integrate(x - shift, duration=dt * (len(t) - 1), dt_out=dt, max_step=dt / substeps)
+        out[i, : len(traj.t)] = traj.state + shift
+        n_valid[i] = len(traj.t)
     return out, n_valid
 
 
@@ -75,7 +50,7 @@ def _synthetic_runs(model, cal, effects, n_runs=8, duration=1.6, fps=500, noise=
     x0 = np.column_stack([rng.uniform(-1.5e-4, 1.5e-4, n_runs), rng.uniform(-0.01, 0.01, n_runs),
                           rng.uniform(-0.4, 0.4, n_runs), rng.uniform(-5, 5, n_runs)])
     t = np.arange(int(duration * fps)) / fps
-    states, n_valid = _rk4_calibrated_runs(model, cal, effects, x0, t)
+    states, n_valid = _calibrated_runs(cal, effects, x0, t)
     assert np.all(n_valid == len(t))
     runs = [RunAccelerations(f"run{i:02d}.csv", t, states[i], np.zeros((len(t), 2))) for i in range(n_runs)]
     pred = predicted_accelerations(DiagnosisProblem(model, runs), cal, effects)
@@ -103,6 +78,7 @@ def write_twin_like_dataset(path, runs=8, duration=3.0, fps=2000, seed=0, drift=
     from numpy.polynomial import chebyshev as cheb
 
     from acousim import cached_surrogate
+    from acousim.equations import hinge_acceleration
 
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)
@@ -128,10 +104,9 @@ def write_twin_like_dataset(path, runs=8, duration=3.0, fps=2000, seed=0, drift=
         th = s[:, 2]
         bv, gv, dav, dbv, dgv = cheb.chebval(th, coef)
         c, sn = np.cos(two_k * (s[:, 0] + z_eq)), np.sin(two_k * (s[:, 0] + z_eq))
-        inertia = sur.inertia_const + sur.inertia_sin2 * np.sin(np.pi * th / 4) ** 2
-        d_inertia = sur.inertia_sin2 * (np.pi / 4) * np.sin(np.pi * th / 2)
         ay = scale * two_k * (bv * sn - gv * c) / m - g
-        at = (-scale * (dav + dbv * c + dgv * sn) - 0.5 * d_inertia * s[:, 3] ** 2) / inertia - cubic_hinge * th**3
+        at = hinge_acceleration(-scale * (dav + dbv * c + dgv * sn), sur.hinge_inertia(th), sur.hinge_inertia_derivative(th),
+                                s[:, 3]) - cubic_hinge * th**3
         return np.column_stack([s[:, 1], ay, s[:, 3], at])
 
     out = np.empty((n, runs, 4))
