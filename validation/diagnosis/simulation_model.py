@@ -77,6 +77,7 @@ class SimulationTerms:
         without the acoustic part, ``u_osc`` its acoustic part at nominal pressure [J].
         """
         d = self.model.dimer
+        rest_u = float(self.model.integrals_at_height(0.0, z0).potential)  # U_ac at the data's origin, theta = 0
         out = []
         for r, (_, _, pot) in zip(self.runs, self._static(z0)):
             y, yd, th, thd = r.state.T
