@@ -82,7 +82,8 @@ def test_partly_corrupt_dataset(tmp_path):
     diag, _ = diagnose_dataset(data, FAST, progress=False)
     assert diag["identified"] == ["pair_scattering"]
     assert len(diag["skipped_files"]) == 2
-    assert any(files[0].name in s for s in diag["skipped_files"]) and any(files[1].name in s for s in diag["skipped_files"])
+    assert {files[0].name, files[1].name} == {s["file"] for s in diag["skipped_files"]}  # FORMATS.md: {file, reason}
+    assert all(s["reason"] for s in diag["skipped_files"])
     assert len(diag["gap_per_run"]["runs"]) == 8
 
 
