@@ -15,6 +15,11 @@ executor, a daemonic process (which may not start children) or a dask worker - c
 ``map_ordered`` serially, in its own process.  A blind study therefore parallelises over its cases
 and each case simulates its runs one after another, on local processes and on a cluster alike;
 callers need not know where they run (:func:`in_task` tells them).
+
+Every task runs with one BLAS thread (:func:`single_blas_thread`), wherever it runs: a dask worker
+process starts with one (its nanny sets ``OMP_NUM_THREADS=1``), and a multi-threaded BLAS rounds its
+reductions differently, so that without this the same study differed in the last digits between a
+serial run and a cluster.  The parallelism is across tasks.
 """
 from __future__ import annotations
 
@@ -29,7 +34,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
-__all__ = ["ExecutorConfig", "ExecutorError", "map_ordered", "in_task", "loopback_cluster"]
+__all__ = ["ExecutorConfig", "ExecutorError", "map_ordered", "in_task", "loopback_cluster", "single_blas_thread"]
 
 logger = logging.getLogger(__name__)
 
@@ -92,18 +97,31 @@ def in_task() -> bool:
     return False
 
 
-class _Task:
-    """``fn`` marked as a task while it runs, so that a :func:`map_ordered` inside it runs serially."""
+def single_blas_thread():
+    """Context manager: one BLAS/OpenMP thread inside it (threadpoolctl), the same result wherever a
+    task runs; many small factorisations are also faster so on a shared machine."""
+    from threadpoolctl import threadpool_limits
 
-    def __init__(self, fn: Callable[[Any], Any]):
+    return threadpool_limits(1)
+
+
+class _Task:
+    """``fn`` run with one BLAS thread; with ``mark``, also marked as a task while it runs, so that a
+    :func:`map_ordered` inside it runs serially."""
+
+    def __init__(self, fn: Callable[[Any], Any], mark: bool = True):
         self.fn = fn
+        self.mark = mark
 
     def __call__(self, item: Any) -> Any:
-        _task_state.depth = getattr(_task_state, "depth", 0) + 1
-        try:
-            return self.fn(item)
-        finally:
-            _task_state.depth -= 1
+        with single_blas_thread():
+            if not self.mark:
+                return self.fn(item)
+            _task_state.depth = getattr(_task_state, "depth", 0) + 1
+            try:
+                return self.fn(item)
+            finally:
+                _task_state.depth -= 1
 
 
 def _progress(total: int, desc: str | None, enabled: bool):
@@ -177,7 +195,7 @@ def map_ordered(
         if min(requested, len(items)) <= 1:
             # workers=1 means one process for everything, nested work included; a single item with
             # more workers allowed runs here unmarked, so that work inside it may still use them
-            call = task if requested == 1 else fn
+            call = task if requested == 1 else _Task(fn, mark=False)
             for i, it in enumerate(items):
                 results[i] = call(it)
                 if on_result:

@@ -47,11 +47,12 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.executor import single_blas_thread
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
 from .integral_form import column_states, integral_window
 from .model import TERMS, PolynomialModel, damping_mask
 from .model_states import SegmentConfig, model_states, segment_length
-from .support_search import fit_support, heldout_rms, prune_heldout, reduced_design, select_support, single_blas_thread
+from .support_search import fit_support, heldout_rms, prune_heldout, reduced_design, select_support
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run

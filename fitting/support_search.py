@@ -26,7 +26,7 @@ from .model import TERMS
 from .multiple_testing import holm_reject, holm_z_threshold
 
 __all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "heldout_rms", "select_support",
-           "prune_heldout", "single_blas_thread"]
+           "prune_heldout"]
 
 @dataclass(frozen=True)
 class ReducedDesign:
@@ -40,17 +40,6 @@ class ReducedDesign:
 
 def _r_factor(blocks: Sequence[NDArray]) -> NDArray[np.float64]:
     return np.linalg.qr(np.vstack(blocks), mode="r")
-
-
-def single_blas_thread():
-    """One BLAS thread for the many small factorisations (on a shared 2-core machine a multi-threaded
-    OpenBLAS made a 4500 x 36 QR 20 times slower); a no-op without threadpoolctl."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn (pysindy)
-        from contextlib import nullcontext
-        return nullcontext()
-    return threadpool_limits(1)
 
 
 def numerov_columns(f: NDArray) -> NDArray[np.float64]:

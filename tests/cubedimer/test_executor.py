@@ -114,3 +114,29 @@ def test_unreachable_scheduler_is_one_executor_error():
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
         with pytest.raises(ExecutorError, match="cannot reach the dask scheduler at tcp://127.0.0.1:9"):
             map_ordered(_work, range(2), ExecutorConfig(scheduler="tcp://127.0.0.1:9"), progress=False)
+
+
+def _blas_threads(_: int) -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_every_task_runs_with_one_blas_thread(workers):
+    """A dask worker starts with one BLAS thread; every task gets one everywhere, so that reductions
+    round the same way serially, on local processes and on a cluster (results byte-identical)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(2):  # the caller's own setting must not leak into the tasks
+        threads = map_ordered(_blas_threads, range(1 if workers == 2 else 3), ExecutorConfig(workers=workers),
+                              progress=False)
+    assert threads and all(t == [1] * len(t) and t for t in threads), threads
+
+
+def test_blas_threads_restored_after_the_tasks():
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(2):
+        map_ordered(_blas_threads, range(2), ExecutorConfig(workers=1), progress=False)
+        assert all(n == 2 for n in _blas_threads(0)), _blas_threads(0)
