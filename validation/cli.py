@@ -189,18 +189,26 @@ def _add_blind(sub) -> None:
         "blind",
         help="blind check of the diagnosis on twin data sets with hidden effects",
         description=(
-            "Generate N data sets with the digital twin, each with a hidden random choice of no effect, one or two "
-            "effects (random strengths from weak to strong) and a random pressure error; diagnose each without "
-            "access to its truth; score identification (exact-set rate by number of effects, per-effect precision "
-            "and recall), parameter errors, shrink and false positives. Writes summary.json, blind_table.md and "
-            "confusion_matrix.png; finished cases are kept and not recomputed on a rerun."
+            "Generate N data sets per case kind, diagnose each without access to its truth and score it. Candidate "
+            "cases: a hidden random choice of no effect, one or two effects (random strengths from weak to strong) "
+            "and a random pressure error; scored by identification (exact-set rate by number of effects, per-effect "
+            "precision and recall), parameter errors, shrink and false positives. Further kinds: an effect outside "
+            "the candidates (not forced onto a candidate, leading discovered term), a drifting pressure (detected), "
+            "tracking glitches (against the same case without them) and a file in the wrong units (skipped by name). "
+            "Writes summary.json, blind_table.md and confusion_matrix.png; finished cases are kept and not "
+            "recomputed on a rerun."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--cases", type=positive_int, default=50, help="number of data sets")
+    p.add_argument("--cases", type=positive_int, default=50, help="number of data sets per case kind")
     p.add_argument("--seed", type=int, default=0, help="seed of the hidden choices")
     p.add_argument("--runs", type=positive_int, default=10, help="runs per data set (at least 3)")
     p.add_argument("--duration", type=positive_float, default=3.0, help="duration of each run [s]")
+    p.add_argument("--kinds", default="all",
+                   help="comma-separated case kinds, each with --cases cases and its own rows in the table: candidates "
+                   "(hidden candidate effects), out_of_candidate (a cubic hinge term or a y-dependent damping), drift "
+                   "(a drifting pressure), glitches (outlier frames, scored against the clean twin), unit_slip (one "
+                   "run in micrometres or milliseconds, to be skipped by name); 'all' for every kind")
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
     add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "
@@ -209,15 +217,21 @@ def _add_blind(sub) -> None:
 
 
 def run_blind_cli(args: argparse.Namespace) -> int:
-    from .blind import BlindConfig, blind_table, run_blind
+    from .blind import KINDS, BlindConfig, blind_table, run_blind
 
+    kinds = KINDS if args.kinds.strip() == "all" else tuple(k.strip() for k in args.kinds.split(",") if k.strip())
+    unknown = [k for k in kinds if k not in KINDS]
+    if unknown or not kinds:
+        raise UserInputError(f"--kinds: unknown kind(s) {', '.join(unknown) or '(none)'}; kinds are {', '.join(KINDS)} or all")
+    if "unit_slip" in kinds and args.runs < 4:
+        raise UserInputError("unit_slip cases need --runs >= 4 (three runs must remain to compare)")
     if args.runs < 3:
         raise UserInputError("need --runs >= 3 (the diagnosis compares held-out runs)")
     check_limit("--cases", args.cases, MAX_BLIND_CASES)
     check_limit("frames per case (--runs x --duration x 2000 fps)", args.runs * args.duration * 2000.0,
                 MAX_BLIND_FRAMES_PER_CASE)
     prepare_output_dir(args.out, "--out", create=False)
-    config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration)
+    config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration, kinds=kinds)
     summary = run_blind(config, args.out, executor_config(args))
     print(blind_table(summary, config))
     return 0

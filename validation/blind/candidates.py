@@ -1,11 +1,10 @@
-"""Blind check of the gap diagnosis on twin data sets with hidden effects.
+"""Blind cases of the candidate effects: twin data sets with hidden candidate effects.
 
 Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilities
 ``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
 within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
-Each finished case is saved as ``cases/caseNNN/result.json`` and not recomputed on a rerun.
 """
 from __future__ import annotations
 
@@ -13,15 +12,16 @@ import json
 import logging
 import os
 import shutil
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import atomic_write_text, write_json
+from cubedimer.atomic import write_json
 
-__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "BlindConfig", "draw_case", "run_case", "score_case", "run_blind",
-           "summarize", "blind_table", "confusion_figure"]
+from .config import BlindConfig
+
+__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "draw_parameters", "draw_from", "draw_case", "generate_twin_case", "hide_truth", "diagnose_blind",
+           "run_case", "score_case", "summarize", "candidates_table", "confusion_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -36,59 +36,41 @@ STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
 N_EFFECT_PROBABILITIES = (0.2, 0.4, 0.4)
 
 
-@dataclass(frozen=True)
-class BlindConfig:
-    """Settings of a blind study (twin runs per case, duration, noise as the twin's defaults)."""
-
-    cases: int = 50
-    seed: int = 0
-    runs: int = 10
-    duration: float = 3.0
-    pressure_error: float = 0.10
-    long_time: bool = False
-
-    def __post_init__(self):
-        if self.cases < 1 or self.runs < 3 or not self.duration > 0:
-            raise ValueError("a blind study needs cases >= 1, runs >= 3 and duration > 0")
-        if not 0 <= self.pressure_error < 1:
-            raise ValueError(f"pressure_error must lie in [0, 1), got {self.pressure_error}")
+def draw_parameters(rng: np.random.Generator, name: str) -> dict[str, float]:
+    """Parameters of effect ``name``: log-uniform within ``STRENGTHS[name]``, a random sign where allowed."""
+    params = {}
+    for p, (lo, hi, signed) in STRENGTHS[name].items():
+        v = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+        if signed and rng.random() < 0.5:
+            v = -v
+        params[p] = v
+    return params
 
 
-def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
-    """The hidden truth of case ``index``: effects with parameters, pressure error, twin seed."""
-    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
+def draw_from(rng: np.random.Generator, index: int, pressure_error: float = 0.10) -> dict:
+    """A hidden candidate case drawn from ``rng`` (see :func:`draw_case`)."""
     n = int(rng.choice(3, p=N_EFFECT_PROBABILITIES))
-    names = list(rng.choice(list(STRENGTHS), size=n, replace=False)) if n else []
-    effects = {}
-    for name in sorted(names, key=list(STRENGTHS).index):
-        params = {}
-        for p, (lo, hi, signed) in STRENGTHS[name].items():
-            v = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-            if signed and rng.random() < 0.5:
-                v = -v
-            params[p] = v
-        effects[name] = params
+    names = [str(x) for x in rng.choice(list(STRENGTHS), size=n, replace=False)] if n else []
+    effects = {name: draw_parameters(rng, name) for name in sorted(names, key=list(STRENGTHS).index)}
     return {"index": index, "effects": effects, "pressure_error": float(rng.uniform(-pressure_error, pressure_error)),
             "twin_seed": int(rng.integers(2**31))}
 
 
-def _case_task(item: tuple) -> dict:
-    case, config, out_dir = item
-    return run_case(case, config, Path(out_dir))
+def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
+    """The hidden truth of case ``index``: effects with parameters, pressure error, twin seed."""
+    return draw_from(np.random.default_rng(np.random.SeedSequence([seed, index])), index, pressure_error)
 
 
-def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
-    """Generate, diagnose blind, score one case; writes ``result.json`` in ``out_dir``."""
+def generate_twin_case(case: dict, config: BlindConfig, data: Path) -> tuple[str | None, int]:
+    """Write the twin data set of a drawn case into ``data`` with its truth.json; (error or None, redraws).
+
+    A drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs): the twin's
+    seed is redrawn (same effects and pressure) up to 5 times."""
     from acousim.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
-    from .diagnosis import DiagnoseConfig, diagnose_dataset
-
-    data = out_dir / "data"
     if data.exists():
         shutil.rmtree(data)
-    # a drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs):
-    # redraw the twin's seed (same effects and pressure) up to 5 times, and count the redraws
     generation_error, retries = None, 0
     for retries in range(5):
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
@@ -96,30 +78,52 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
                           pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]))
         try:
             simulate_dataset(twin, data, progress=False, force=True)
-            generation_error = None
-            break
+            return None, retries
         except TwinError as exc:
             generation_error = str(exc)
-    if generation_error is not None:
-        result = {"index": case["index"], "true_effects": case["effects"], "true_set": sorted(case["effects"]),
-                  "identified": [], "exact": False, "n_true": len(case["effects"]), "parameter_relative_error": {},
-                  "gap_before": None, "gap_after": None, "shrink": None, "pressure_true_pa": None,
-                  "pressure_calibrated_pa": None, "error": f"generation: {generation_error}", "twin_redraws": retries,
-                  "scored": False}
-        write_json(out_dir / "result.json", result)
-        return result
-    truth_path = out_dir / "truth.json"
-    os.replace(data / "truth.json", truth_path)  # hidden from the diagnosis
-    # the nominal pressure the experimenter believes in is 3 kPa; the truth is off by pressure_error
+    return generation_error, retries
+
+
+def hide_truth(data: Path, truth_path: Path) -> dict:
+    """Move truth.json out of ``data`` and set meta.json to the nominal 3 kPa the experimenter believes in;
+    returns the truth."""
+    os.replace(data / "truth.json", truth_path)
     meta = json.loads((data / "meta.json").read_text())
     meta["pressure_amplitude_pa"] = 3000.0
     write_json(data / "meta.json", meta)
+    return json.loads(truth_path.read_text())
+
+
+def diagnose_blind(data: Path, config: BlindConfig) -> tuple[dict | None, str | None]:
+    """The diagnosis of ``data`` (long-time errors as configured), or (None, error) if it failed."""
+    from ..diagnosis import DiagnoseConfig, diagnose_dataset
+
     try:
         diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
-        error = None
+        return diag, None
     except Exception as exc:  # a failed diagnosis is a result of the study, not a crash of it
-        diag, error = None, f"{type(exc).__name__}: {exc}"
-    truth = json.loads(truth_path.read_text())
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def not_generated(case: dict, error: str, retries: int) -> dict:
+    """The result of a case the twin could not generate (left out of the scores)."""
+    return {"index": case["index"], "true_effects": case["effects"], "true_set": sorted(case["effects"]),
+            "identified": [], "exact": False, "n_true": len(case["effects"]), "parameter_relative_error": {},
+            "gap_before": None, "gap_after": None, "shrink": None, "pressure_true_pa": None,
+            "pressure_calibrated_pa": None, "error": f"generation: {error}", "twin_redraws": retries,
+            "scored": False}
+
+
+def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
+    """Generate, diagnose blind, score one case; writes ``result.json`` in ``out_dir``."""
+    data = out_dir / "data"
+    generation_error, retries = generate_twin_case(case, config, data)
+    if generation_error is not None:
+        result = not_generated(case, generation_error, retries)
+        write_json(out_dir / "result.json", result)
+        return result
+    truth = hide_truth(data, out_dir / "truth.json")  # hidden from the diagnosis
+    diag, error = diagnose_blind(data, config)
     result = score_case(case, truth, diag, error)
     result["twin_redraws"] = retries
     write_json(out_dir / "result.json", result)
@@ -155,36 +159,6 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
     }
 
 
-def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress: bool = True) -> dict:
-    """Run (or resume) a blind study and write ``summary.json``, ``blind_table.md`` and the confusion matrix."""
-    from cubedimer.executor import ExecutorConfig, map_ordered
-
-    out = Path(out_dir)
-    (out / "cases").mkdir(parents=True, exist_ok=True)
-    results: dict[int, dict] = {}
-    todo = []
-    for i in range(config.cases):
-        case = draw_case(config.seed, i, config.pressure_error)
-        path = out / "cases" / f"case{i:03d}" / "result.json"
-        if path.exists():
-            results[i] = json.loads(path.read_text())
-        else:
-            todo.append((case, config, str(path.parent)))
-    if results:
-        (logger.info if progress else logger.debug)("resuming: %d cases done, %d to run", len(results), len(todo))
-    for item in todo:
-        Path(item[2]).mkdir(parents=True, exist_ok=True)
-    done = map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress)
-    for r in done:
-        results[r["index"]] = r
-    ordered = [results[i] for i in sorted(results)]
-    summary = summarize(ordered)
-    write_json(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
-    atomic_write_text(out / "blind_table.md", blind_table(summary, config))
-    confusion_figure(ordered, out / "confusion_matrix.png")
-    return summary
-
-
 def summarize(results: list[dict]) -> dict:
     """Identification rates, per-effect precision/recall, parameter errors, shrink, false positives."""
     names = list(STRENGTHS)
@@ -215,13 +189,12 @@ def summarize(results: list[dict]) -> dict:
     return out
 
 
-def blind_table(summary: dict, config: BlindConfig) -> str:
-    """The summary of a blind study as a Markdown table, beside the targets."""
+def candidates_table(summary: dict) -> list[str]:
+    """The candidate cases' summary as Markdown lines (a table of rates and one per effect), beside the targets."""
     def pct(v):
         return "-" if v is None else f"{100 * v:.0f} %"
 
-    lines = [f"# Blind check: {summary['n_cases']} cases (seed {config.seed}, {config.runs} runs x {config.duration:g} s each)", "",
-             "| quantity | value | target |", "|---|---|---|",
+    lines = [f"## Candidate effects ({summary['n_cases']} cases)", "", "| quantity | value | target |", "|---|---|---|",
              f"| exact identification, no effect ({summary['n_0_effects']} sets) | {pct(summary['exact_rate_0_effects'])} | no effect named |",
              f"| exact identification, one effect ({summary['n_1_effects']} sets) | {pct(summary['exact_rate_1_effects'])} | >= 90 % |",
              f"| exact identification, two effects ({summary['n_2_effects']} sets) | {pct(summary['exact_rate_2_effects'])} | >= 80 % |",
@@ -234,7 +207,7 @@ def blind_table(summary: dict, config: BlindConfig) -> str:
     for n, d in summary["per_effect"].items():
         lines.append(f"| {n} | {d['tp']} | {d['fp']} | {d['fn']} | {pct(d['precision'])} | {pct(d['recall'])} | "
                      f"{pct(d['median_max_parameter_error'])} | {pct(d['fraction_parameters_within_25pct'])} |")
-    return "\n".join(lines) + "\n"
+    return lines
 
 
 def confusion_figure(results: list[dict], path: Path) -> Path:

@@ -1,0 +1,55 @@
+"""Settings of a blind study: :class:`BlindConfig` and the case kinds it can run."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["KINDS", "BlindConfig"]
+
+#: The case kinds, in table order: hidden candidate effects; an effect no candidate describes (a cubic hinge term
+#: or a y-dependent damping); a pressure drifting within runs (with or without a candidate on top); isolated
+#: tracking glitches (scored against the same case without them); one run written in micrometres or
+#: milliseconds (to be skipped by name).
+KINDS = ("candidates", "out_of_candidate", "drift", "glitches", "unit_slip")
+
+
+@dataclass(frozen=True)
+class BlindConfig:
+    """Settings of a blind study.
+
+    Parameters
+    ----------
+    cases : int
+        Cases per kind.
+    seed : int
+        Seed of every hidden choice (each case draws from ``(seed, kind, index)``).
+    runs : int
+        Runs per data set (at least 3; a unit-slip case needs at least 4, so that 3 remain to compare).
+    duration : float
+        Duration of each run [s].
+    pressure_error : float
+        Hidden pressure error: the truth is nominal x (1 + e), e uniform in +-``pressure_error``.
+    long_time : bool
+        Compute the diagnosis's long-time errors too (not scored).
+    kinds : tuple of str
+        The case kinds to run (a subset of :data:`KINDS`).
+    """
+
+    cases: int = 50
+    seed: int = 0
+    runs: int = 10
+    duration: float = 3.0
+    pressure_error: float = 0.10
+    long_time: bool = False
+    kinds: tuple[str, ...] = KINDS
+
+    def __post_init__(self):
+        if self.cases < 1 or self.runs < 3 or not self.duration > 0:
+            raise ValueError("a blind study needs cases >= 1, runs >= 3 and duration > 0")
+        if not 0 <= self.pressure_error < 1:
+            raise ValueError(f"pressure_error must lie in [0, 1), got {self.pressure_error}")
+        object.__setattr__(self, "kinds", tuple(self.kinds))
+        unknown = [k for k in self.kinds if k not in KINDS]
+        if unknown or not self.kinds:
+            raise ValueError(f"unknown case kind(s) {', '.join(unknown) or '(none given)'}; kinds are {', '.join(KINDS)}")
+        if "unit_slip" in self.kinds and self.runs < 4:
+            raise ValueError("unit-slip cases need runs >= 4 (three runs must remain to compare)")

@@ -1,0 +1,139 @@
+"""Twin-like data sets with causes outside the candidates: a cubic hinge term, a y-dependent damping, a pressure
+drifting in time, optionally with candidate effects on top.
+
+The runs integrate the surrogate's equations of motion (PHYSICS.md section 4; the Gor'kov force and torque from the
+default dimer's Chebyshev surrogate and :func:`acousim.equations.hinge_acceleration`) with classical RK4 at the
+frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
+
+* a pressure ``p(t) = p_true (1 + drift sin(2 pi t / T + phase))`` (T and phase drawn per run; the Gor'kov
+  forces scale with p^2 at fixed lab height),
+* ``-cubic_hinge theta^3`` [1/s^2] added to thetaddot,
+* ``-y_damping y^2 ydot`` [1/(m^2 s)] added to yddot, with y measured from the true equilibrium height,
+* the accelerations of candidate effects (:class:`acousim.effects.EffectSet`, y from the true equilibrium).
+
+The CSVs (FORMATS.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
+equilibrium height and meta.json holds the nominal pressure.  The drops start at |y| of 80-150 um, so that
+each run's oscillation dominates its y spectrum (a drift of a few per cent moves the equilibrium by tens of
+micrometres).  Every random choice comes from ``seed``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from cubedimer.atomic import write_json
+from cubedimer.dataset import write_run_csv
+
+__all__ = ["TwinLikeError", "write_twin_like_dataset"]
+
+
+class TwinLikeError(ValueError):
+    """A run left the trap or closed the hinge; the data set was not written."""
+
+
+def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3.0, fps: float = 2000.0,
+                            seed: int = 0, pressure_error: float = 0.0, drift: float = 0.0,
+                            drift_period: tuple[float, float] = (1.5, 4.0), cubic_hinge: float = 0.0,
+                            y_damping: float = 0.0, effects: dict | None = None,
+                            noise: tuple[float, float] = (1e-6, 0.005)) -> dict:
+    """Write ``runs`` CSVs and meta.json into ``path`` (see the module docstring).
+
+    Parameters
+    ----------
+    pressure_error : float
+        The true mean pressure is nominal x (1 + e), e uniform in +-``pressure_error``.
+    drift : float
+        Relative amplitude of the sinusoidal pressure drift (0: constant).
+    drift_period : (float, float)
+        Range of the drift's period [s], drawn per run.
+    cubic_hinge : float
+        Coefficient k of ``-k theta^3`` in thetaddot [1/s^2].
+    y_damping : float
+        Coefficient c of ``-c y^2 ydot`` in yddot [1/(m^2 s)].
+    effects : dict, optional
+        Candidate effects ``{name: {param: value}}`` (:meth:`acousim.effects.EffectSet.from_dict`).
+    noise : (float, float)
+        Tracking noise standard deviations of y [m] and theta [-].
+
+    Returns
+    -------
+    dict
+        The truth: ``pressure_amplitude_pa`` (mean), ``period_s``, ``phase``, ``relative_half_range`` (per run,
+        of p(t) over the recorded frames), ``cubic_hinge``, ``y_damping``, ``effects``, ``files``.
+
+    Raises
+    ------
+    TwinLikeError
+        If a run leaves the trap or theta reaches +-1.
+    """
+    from numpy.polynomial import chebyshev as cheb
+
+    from acousim import EffectSet, cached_surrogate
+    from acousim.equations import hinge_acceleration
+
+    path = Path(path)
+    path.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    sur = cached_surrogate()
+    p_nom = sur.pressure_amplitude_pa
+    p_true = p_nom * (1 + rng.uniform(-pressure_error, pressure_error))
+    m, g, two_k, z_eq = sur.mass, sur.gravity, sur.two_k, sur.z_eq
+    z_true = sur.with_pressure(p_true).z_eq  # equilibrium at the mean true pressure: the effects' y origin
+    eff = EffectSet.from_dict(effects or {})
+    _, b, gm, da, db, dg = sur.coefficient_arrays()
+    coef = np.stack([b, gm, da, db, dg], axis=1)  # Chebyshev series in theta, one column per function
+    n = int(round(duration * fps))
+    h = 1.0 / fps
+    phase = rng.uniform(0, 2 * np.pi, runs)
+    period = rng.uniform(*drift_period, runs)
+    x = np.column_stack([rng.choice([-1, 1], runs) * rng.uniform(0.8e-4, 1.5e-4, runs), np.zeros(runs),
+                         rng.uniform(-0.3, 0.3, runs), rng.uniform(-2, 2, runs)])
+
+    def pressure(t):
+        return p_true * (1 + drift * np.sin(2 * np.pi * t / period + phase))
+
+    def rhs(t, s):
+        scale = (pressure(t) / p_nom) ** 2
+        th = s[:, 2]
+        bv, gv, dav, dbv, dgv = cheb.chebval(th, coef)
+        c, sn = np.cos(two_k * (s[:, 0] + z_eq)), np.sin(two_k * (s[:, 0] + z_eq))
+        ay = scale * two_k * (bv * sn - gv * c) / m - g
+        at = hinge_acceleration(-scale * (dav + dbv * c + dgv * sn), sur.hinge_inertia(th),
+                                sur.hinge_inertia_derivative(th), s[:, 3]) - cubic_hinge * th**3
+        y_rel = s[:, 0] + z_eq - z_true
+        ay = ay - y_damping * y_rel**2 * s[:, 1]
+        if len(eff):
+            ey, et = eff.accelerations(y_rel, s[:, 1], th, s[:, 3], sur.wavenumber, z_true)
+            ay, at = ay + ey, at + et
+        return np.column_stack([s[:, 1], ay, s[:, 3], at])
+
+    out = np.empty((n, runs, 4))
+    out[0] = x
+    with np.errstate(all="ignore"):
+        for i in range(1, n):
+            t = (i - 1) * h
+            k1 = rhs(t, x)
+            k2 = rhs(t + h / 2, x + h / 2 * k1)
+            k3 = rhs(t + h / 2, x + h / 2 * k2)
+            k4 = rhs(t + h, x + h * k3)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            out[i] = x
+            if not (np.all(np.isfinite(x)) and np.all(np.abs(x[:, 2]) < 1) and np.all(np.abs(x[:, 0]) < np.pi / two_k)):
+                raise TwinLikeError(f"a run left the trap or closed the hinge at t = {i * h:.3f} s")
+    t = np.arange(n) / fps
+    files = []
+    for r in range(runs):
+        y = out[:, r, 0] + rng.normal(0, noise[0], n)
+        th = out[:, r, 2] + rng.normal(0, noise[1], n)
+        name = f"run{r:02d}.csv"
+        write_run_csv(path / name, t, y, th, ["twin-like run: surrogate equations of motion",
+                                              "units: t [s], y [m], theta [-]"], t_decimals=9, y_digits=10,
+                      theta_decimals=10, missing="nan")
+        files.append(name)
+    write_json(path / "meta.json", {"pressure_amplitude_pa": p_nom})
+    p_t = pressure(t[:, None])  # (n, runs)
+    return {"pressure_amplitude_pa": float(p_true), "period_s": period.tolist(), "phase": phase.tolist(),
+            "relative_half_range": (0.5 * np.ptp(p_t, axis=0) / p_t.mean(axis=0)).tolist(),
+            "drift": float(drift), "cubic_hinge": float(cubic_hinge), "y_damping": float(y_damping),
+            "effects": eff.to_dict(), "files": files}
