@@ -31,7 +31,8 @@ class BlindConfig:
     long_time : bool
         Compute the diagnosis's long-time errors too (not scored).
     kinds : tuple of str
-        The case kinds to run (a subset of :data:`KINDS`).
+        The case kinds to run (a subset of :data:`KINDS`; default the candidate cases alone, whose study is
+        the reference of the identification targets; each further kind costs one or two diagnoses per case).
     """
 
     cases: int = 50
@@ -40,7 +41,7 @@ class BlindConfig:
     duration: float = 3.0
     pressure_error: float = 0.10
     long_time: bool = False
-    kinds: tuple[str, ...] = KINDS
+    kinds: tuple[str, ...] = ("candidates",)
 
     def __post_init__(self):
         if self.cases < 1 or self.runs < 3 or not self.duration > 0:
