@@ -34,10 +34,10 @@ def _draw(kind: str, config: BlindConfig, index: int) -> dict:
     return draw_extended_case(kind, config.seed, index, config.pressure_error)
 
 
-def _case_task(item: tuple) -> dict:
+def _case_task(item: tuple) -> tuple[str, dict]:
     kind, case, config, out_dir = item
     run = run_case if kind == "candidates" else run_extended_case
-    return {"kind": kind, **run(case, config, Path(out_dir))}
+    return kind, run(case, config, Path(out_dir))  # the result exactly as saved, so a resumed study is identical
 
 
 def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress: bool = True) -> dict:
@@ -60,8 +60,8 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
     n_done = sum(len(r) for r in results.values())
     if n_done:
         (logger.info if progress else logger.debug)("resuming: %d cases done, %d to run", n_done, len(todo))
-    for r in map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress):
-        results[r["kind"]][r["index"]] = r
+    for kind, r in map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress):
+        results[kind][r["index"]] = r
     ordered = {k: [results[k][i] for i in sorted(results[k])] for k in config.kinds}
     summaries = {k: summarize_kind(k, ordered[k]) for k in config.kinds}
     doc = {"config": {**config.__dict__, "kinds": list(config.kinds)},
