@@ -222,9 +222,17 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
         opt.set_xtol_rel(config.xtol_rel)
         opt.set_ftol_rel(config.ftol_rel)
         try:
-            x = opt.optimize(x)
+            try:
+                x = opt.optimize(x)
+            except nlopt.invalid_argument:
+                # BOBYQA rejects a start that lies closer to a bound than its initial step (but not on it): a
+                # later stage starting near the box's edge retries with the step cut to the room left
+                room = np.minimum(x - (x0 - half), (x0 + half) - x)
+                step = config.initial_step * half
+                opt.set_initial_step(np.where((room > 0) & (room < step), 0.5 * room, step))
+                x = opt.optimize(x)
             status = int(opt.last_optimize_result())
-        except (nlopt.RoundoffLimited, RuntimeError, ValueError):  # keep the previous stage's point
+        except (nlopt.RoundoffLimited, nlopt.invalid_argument, RuntimeError, ValueError):  # keep the previous point
             status = -4
         history += stage.history
     best = obj.coef(x)

@@ -7,7 +7,7 @@ import pytest
 
 from fitting.cli import main
 
-FAST = ["--max-evals", "40", "--joint-max-evals", "40", "--workers", "2", "--quiet"]
+FAST = ["--method", "paper", "--max-evals", "40", "--joint-max-evals", "40", "--workers", "2", "--quiet"]
 
 
 @pytest.fixture(scope="module")
