@@ -11,7 +11,7 @@ Steps of :func:`fit_discovery` (``FitConfig(method="discovery")``, the default o
 3. If the polished model blows up on any run, the fallbacks are tried: the discovered model as the
    regression gave it, then those of :func:`fitting.pipeline.fallback_candidates`; the best sane one is
    re-optimised and ``model.json["fallback"]`` says so; with none, :class:`fitting.pipeline.NoSaneModelError`.
-4. Per run, the regression model C0 restricted to the selected terms (pysindy STLSQ, one run at a time) gives
+4. Per run, least squares of the smoothed accelerations on the selected terms (one run at a time) gives
    ``per_run`` and the across-run ``zscores`` of ``model.json`` (FORMATS.md); it is not refined per run.
 5. Oracle standard errors of the final model's terms (:mod:`fitting.oracle`).
 """
@@ -22,10 +22,10 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .discovery import discover_model
-from .ensemble import term_statistics, select_terms
-from .model import TERMS, Scales
-from .refine import Objective, default_substeps, refine, scaled_reference
-from .regression import fit_regression
+from .ensemble import least_squares_on_support, select_terms, term_statistics
+from .model import TERMS, PolynomialModel, Scales
+from .refine import refine
+from .regression import scaled_data, scaled_library
 from cubedimer.terms import EQUATION_NAMES
 
 __all__ = ["fit_discovery"]
@@ -54,23 +54,22 @@ def fit_discovery(prepared: Sequence, scales: Scales, config, log: Callable[[str
                               for q, eq in enumerate(EQUATION_NAMES))
     log(f"discovery ({'converged' if disc.converged else 'not converged'} after {len(disc.iterations)} passes): "
         f"{int(mask.sum())} terms: {fmt(mask)}")
-    # ---- per-run regression on the selected terms (per_run and zscores of model.json) -------------------------
-    run_fits = []
-    for p, d in zip(prepared, derivs):
-        c0 = fit_regression([d], scales, config.regression, candidates=mask)
-        cs = scales.to_scaled(c0.coef)
-        ref = scaled_reference(d, scales)
-        lt = Objective([ref], c0.support, default_substeps(cs, ref.dt, config.polish.h_omega),
-                       config.polish.weights).per_run(cs)[0]
-        run_fits.append(RunFit(name=p.run.name, c0=c0, refined=c0, loss_c0=lt, loss_refined=lt,
-                               history=np.array([lt.total]), n_evals=0, status=0))
-    stats = term_statistics([f.refined for f in run_fits])
     # ---- long-time polish inside a box of a few standard errors ------------------------------------------------
     start = disc.model
     se_scaled = np.abs(scales.to_scaled(disc.std_errors))
     half = np.where(mask, np.maximum(config.polish_se * se_scaled, 1e-12), 0.0)
     log(f"long-time polish of the discovered model on {len(derivs)} runs (box +-{config.polish_se:g} standard errors)")
     joint = refine(start, derivs, scales, config.polish, mask=mask, half_width=half)
+    # ---- per run: least squares on the selected terms (per_run and zscores of model.json) ----------------------
+    X, A = scaled_data(derivs, scales)
+    lib = scaled_library(derivs, scales, config.regression.matched_filter)
+    run_fits = []
+    for k, p in enumerate(prepared):
+        m = PolynomialModel(scales.to_si(least_squares_on_support([X[k]], [A[k]], mask, [lib[k]])))
+        lt = joint.per_run_start[k]  # the discovered model's long-time loss on this run
+        run_fits.append(RunFit(name=p.run.name, c0=m, refined=m, loss_c0=lt, loss_refined=lt, history=np.zeros(0),
+                               n_evals=0, status=0))
+    stats = term_statistics([f.refined for f in run_fits])
     log(f"final mean loss {joint.loss_end.total:.4g} (shape {joint.loss_end.shape:.3g}, "
         f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
     fallback = None

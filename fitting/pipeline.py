@@ -425,8 +425,12 @@ def model_json(res: FitResult) -> dict:
     eq_mask = {eq: [t for t, m in zip(TERMS, res.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
     per_run = []
     for p, f, lt in zip(res.runs, res.run_fits, res.joint.per_run_end):
-        d = f.to_json()
-        d.pop("history")
+        if res.rule == "discovery":
+            d = {"file": f.name, "equations": f.refined.equations(),
+                 "fit": "least squares of the smoothed accelerations on the selected terms (this run alone)"}
+        else:
+            d = f.to_json()
+            d.pop("history")
         d["attractor"] = p.attractor.to_dict()
         d["loss_minimal_model"] = lt.to_dict()
         per_run.append(d)
