@@ -94,3 +94,23 @@ def test_method_is_validated():
     with pytest.raises(ValueError):
         FitConfig(polish_se=0.0)
     assert main(["fit", "nowhere", "--out", "x", "--selection", "zscore"]) == 2  # a paper-only option
+
+
+def test_blown_up_discovery_is_never_written_with_exit_0(sparse, tmp_path, monkeypatch, capsys):
+    """A discovery that lost the restoring y term (forced) blows up; every fallback lacks the term: exit 2."""
+    import fitting.discovery_fit as discovery_fit
+    from fitting.discovery import DiscoveryResult
+
+    data, _ = sparse
+    # yddot = 1 + ydot + y^2 drifts away under its constant: every run leaves the blow-up bound
+    lost = PolynomialModel.from_equations({"yddot": {"1": 50.0, "ydot": -0.3, "y^2": 9.5e6},
+                                           "thetaddot": TRUTH.equations()["thetaddot"]})
+    fake = DiscoveryResult(mask=lost.support, coef=lost.coef, std_errors=0.01 * np.abs(lost.coef),
+                           residual_std=np.array([CFG.noise_y, CFG.noise_theta]), window_s=np.array([0.03, 0.08]),
+                           pareto={"yddot": (), "thetaddot": ()}, iterations=(), converged=True)
+    monkeypatch.setattr(discovery_fit, "discover_model", lambda *a, **k: fake)
+    out = tmp_path / "out"
+    assert main(["fit", str(data), "--out", str(out), "--no-plots", "--quiet", "--max-evals", "30"]) == 2
+    assert not (out / "model.json").exists()
+    err = capsys.readouterr().err
+    assert "blows up on 4 of 4 runs" in err and "no model written" in err
