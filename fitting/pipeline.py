@@ -85,7 +85,7 @@ class FitConfig:
     #: long-time polish of the discovered model (method "discovery")
     polish: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=150))
     #: half-width of the polish box in the discovery's standard errors
-    polish_se: float = 2.0
+    polish_se: float = 0.5
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:

@@ -57,7 +57,7 @@ def sparse(tmp_path_factory):
 def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp_path):
     data, raw = sparse
     out = tmp_path / "out"
-    # 40 evaluations of the polish (default 150) keep the test fast; the polish stays in its +-2 SE box anyway
+    # 40 evaluations of the polish (default 150) keep the test fast; the polish stays in its +-0.5 SE box anyway
     assert main(["fit", str(data), "--out", str(out), "--no-plots", "--quiet", "--workers", "1",
                  "--max-evals", "40"]) == 0
     d = json.loads((out / "model.json").read_text())
