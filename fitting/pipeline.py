@@ -463,7 +463,10 @@ def model_json(res: FitResult) -> dict:
         "method": res.config.method,
     }
     if res.discovery is not None:
-        out["discovery"] = res.discovery.to_json()
+        out["discovery"] = disc = res.discovery.to_json()
+        # the discovery is the pooled integral form: its estimates in the cross-check's place (same keys)
+        out["integral_form"] = {"method": disc["method"], **{
+            eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
     return out
 
 

@@ -64,6 +64,7 @@ def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp
     assert d["method"] == "discovery" and d["settings"]["method"] == "discovery"
     assert d["settings"]["polish"]["max_evals"] == 40
     assert d["selection"]["rule"] == "discovery" and d["discovery"]["converged"]
+    assert d["integral_form"]["thetaddot"]["terms"] == d["discovery"]["thetaddot"]["terms"]
     assert d["fallback"] is None and not d["loss"]["final"]["blown_up"]
     # oracle standard error beside every selected term; per-run entries and z-scores as FORMATS.md asks
     for eq, terms in d["equations"].items():
