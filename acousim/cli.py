@@ -50,6 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     sweep_cli.add_parser(sub)
+    from .fullwave import cli as fullwave_cli; fullwave_cli.add_parser(sub)  # noqa: E702
     try:
         from . import simulate_cli
     except ImportError:  # the twin is optional while it is being built

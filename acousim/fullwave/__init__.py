@@ -1,0 +1,1 @@
+"""Full-wave (boundary-element) scattering model of the cube dimer (PHYSICS.md section 7)."""

@@ -1,0 +1,346 @@
+"""Sound-hard boundary-element scattering of the standing wave and the radiation force (PHYSICS.md section 7).
+
+Method
+------
+The total pressure ``p`` (complex amplitude, time factor ``exp(-i w t)``) on the surface ``S`` of a set
+of rigid, immobile, closed bodies solves the exterior Helmholtz problem with ``dp/dn = 0`` on ``S``.
+With bempp-cl's double-layer operator ``D`` and hypersingular operator ``W`` (``W = -d/dn D``), the
+Burton-Miller boundary integral equation of the second kind reads::
+
+    (I/2 - D - (i/k) W) p = p_in - (i/k) dp_in/dn        on S
+
+discretised with continuous piecewise-linear (P1) elements and Galerkin testing, assembled densely
+(numba backend) and LU-factorised once.
+
+Exact height structure
+----------------------
+The geometry is given in local coordinates ``r'`` around a reference point that sits at the lab
+height ``Z_ref`` above the pressure node.  There ``p_in = p0 [sin(k Z_ref) cos(k z') + cos(k Z_ref) sin(k z')]``,
+so the surface field is ``p = p0 [sin(k Z_ref) p_c + cos(k Z_ref) p_s]`` with ``p_c``, ``p_s`` the
+solutions for the incident fields ``cos(k z')`` and ``sin(k z')`` (two right-hand sides, one
+factorisation).  Forces are quadratic in ``p``; with ``F[p, q]`` the symmetric bilinear form of the
+force, every force and torque component is::
+
+    F(Z_ref) = A + B cos(2 k Z_ref) + C sin(2 k Z_ref),
+    A = p0^2 (F[c,c] + F[s,s]) / 2,  B = p0^2 (F[s,s] - F[c,c]) / 2,  C = p0^2 F[c,s]
+
+Force and torque
+----------------
+On each body (outward normal ``n``, time-averaged quantities)::
+
+    F   = - int [ |p|^2 / (4 rho0 c0^2) - rho0 |v|^2 / 4 ] n dS
+    tau = - int (r - c) x n [ same bracket ] dS,     v = grad p / (i w rho0)
+
+with ``v`` tangential on a sound-hard surface: the surface gradient of the P1 pressure (constant per
+triangle).  ``|p|^2`` and the lever arm are integrated with a 6-point, degree-4 triangle rule.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import lu_factor, lu_solve
+
+from ..medium import Medium
+
+__all__ = [
+    "Body",
+    "HeightStructure",
+    "ScatteringSolution",
+    "solve_scattering",
+    "surface_force_density",
+    "triangle_rule",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Body:
+    """One closed, outward-oriented triangulated body in local coordinates.
+
+    Parameters
+    ----------
+    vertices : ndarray (n, 3)
+        Vertex coordinates [m] relative to the reference point of the problem.
+    faces : ndarray (m, 3)
+        Triangles (vertex indices), counter-clockwise seen from outside.
+    centre : ndarray (3,)
+        Point [m] the torque is taken about (e.g. the volume centroid).
+    """
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    centre: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        v = np.ascontiguousarray(self.vertices, float)
+        f = np.ascontiguousarray(self.faces, np.int64)
+        c = np.asarray(self.centre, float).reshape(3)
+        if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or f.shape[1] != 3:
+            raise ValueError("a body needs vertices (n, 3) and faces (m, 3)")
+        if f.size and (f.min() < 0 or f.max() >= len(v)):
+            raise ValueError("face indices out of range")
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "faces", f)
+        object.__setattr__(self, "centre", c)
+
+
+def triangle_rule() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Symmetric 6-point triangle quadrature, exact for polynomials of degree 4.
+
+    Returns
+    -------
+    bary : ndarray (6, 3)
+        Barycentric coordinates of the nodes.
+    weights : ndarray (6,)
+        Weights summing to 1 (multiply by the triangle area).
+    """
+    a1, w1 = 0.445948490915965, 0.223381589678011
+    a2, w2 = 0.091576213509771, 0.109951743655322
+    b1, b2 = 1.0 - 2.0 * a1, 1.0 - 2.0 * a2
+    bary = np.array([[a1, a1, b1], [a1, b1, a1], [b1, a1, a1], [a2, a2, b2], [a2, b2, a2], [b2, a2, a2]])
+    weights = np.array([w1, w1, w1, w2, w2, w2])
+    return bary, weights
+
+
+@dataclass(frozen=True)
+class HeightStructure:
+    """Force and torque of every body as ``A + B cos(2 k Z) + C sin(2 k Z)``.
+
+    Attributes
+    ----------
+    force_a, force_b, force_c : ndarray (n_bodies, 3)
+        Coefficients of the force [N].
+    torque_a, torque_b, torque_c : ndarray (n_bodies, 3)
+        Coefficients of the torque about each body's ``centre`` [N m].
+    two_k : float
+        2k [1/m].
+    pressure_amplitude_pa : float
+        p0 [Pa] the coefficients belong to (they scale as p0^2).
+    centres : ndarray (n_bodies, 3)
+        The torque reference points in local coordinates [m].
+    """
+
+    force_a: NDArray[np.float64]
+    force_b: NDArray[np.float64]
+    force_c: NDArray[np.float64]
+    torque_a: NDArray[np.float64]
+    torque_b: NDArray[np.float64]
+    torque_c: NDArray[np.float64]
+    two_k: float
+    pressure_amplitude_pa: float
+    centres: NDArray[np.float64]
+
+    def force(self, z_ref: ArrayLike) -> NDArray[np.float64]:
+        """Forces [N], shape ``z_ref.shape + (n_bodies, 3)``, with the reference point at height ``z_ref`` [m]."""
+        return self._eval(self.force_a, self.force_b, self.force_c, z_ref)
+
+    def torque(self, z_ref: ArrayLike) -> NDArray[np.float64]:
+        """Torques [N m] about each body's centre, shape ``z_ref.shape + (n_bodies, 3)``."""
+        return self._eval(self.torque_a, self.torque_b, self.torque_c, z_ref)
+
+    def _eval(self, a: NDArray, b: NDArray, c: NDArray, z_ref: ArrayLike) -> NDArray[np.float64]:
+        z = np.asarray(z_ref, float)[..., None, None]
+        return a + b * np.cos(self.two_k * z) + c * np.sin(self.two_k * z)
+
+    def with_pressure(self, pressure_amplitude_pa: float) -> "HeightStructure":
+        """The same coefficients at another pressure amplitude (exact p0^2 scaling)."""
+        r = (float(pressure_amplitude_pa) / self.pressure_amplitude_pa) ** 2
+        return HeightStructure(
+            r * self.force_a, r * self.force_b, r * self.force_c, r * self.torque_a, r * self.torque_b,
+            r * self.torque_c, self.two_k, float(pressure_amplitude_pa), self.centres,
+        )
+
+
+@dataclass(frozen=True)
+class ScatteringSolution:
+    """Surface pressures of the two incident parts and everything needed to post-process them.
+
+    Attributes
+    ----------
+    vertices : ndarray (n, 3)
+        All vertices [m] (local coordinates); the P1 degrees of freedom.
+    faces : ndarray (m, 3)
+        All triangles.
+    body_of_face : ndarray (m,)
+        Index of the body each triangle belongs to.
+    p_cos, p_sin : ndarray (n,) complex
+        Total surface pressure per unit p0 for the incident fields ``cos(k z')`` and ``sin(k z')``.
+    medium : Medium
+    bodies : tuple of Body
+    timings : dict
+        Wall times [s] of assembly and solve.
+    """
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    body_of_face: NDArray[np.int64]
+    p_cos: NDArray[np.complex128]
+    p_sin: NDArray[np.complex128]
+    medium: Medium
+    bodies: tuple
+    space: object = field(repr=False, compare=False, default=None)
+    timings: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def n_dofs(self) -> int:
+        """Number of P1 degrees of freedom."""
+        return int(len(self.vertices))
+
+    def surface_pressure(self, z_ref: float, pressure_amplitude_pa: float = 1.0) -> NDArray[np.complex128]:
+        """Total surface pressure [Pa] at the vertices with the reference point at height ``z_ref`` [m]."""
+        k = self.medium.wavenumber
+        return pressure_amplitude_pa * (np.sin(k * z_ref) * self.p_cos + np.cos(k * z_ref) * self.p_sin)
+
+    def height_structure(self, pressure_amplitude_pa: float = 1.0) -> HeightStructure:
+        """A, B, C of every body's force and torque at ``pressure_amplitude_pa`` [Pa]."""
+        fcc, tcc = self._bilinear(self.p_cos, self.p_cos)
+        fss, tss = self._bilinear(self.p_sin, self.p_sin)
+        fcs, tcs = self._bilinear(self.p_cos, self.p_sin)
+        p2 = float(pressure_amplitude_pa) ** 2
+        centres = np.array([b.centre for b in self.bodies])
+        return HeightStructure(
+            force_a=p2 * 0.5 * (fcc + fss), force_b=p2 * 0.5 * (fss - fcc), force_c=p2 * fcs,
+            torque_a=p2 * 0.5 * (tcc + tss), torque_b=p2 * 0.5 * (tss - tcc), torque_c=p2 * tcs,
+            two_k=2.0 * self.medium.wavenumber, pressure_amplitude_pa=float(pressure_amplitude_pa), centres=centres,
+        )
+
+    def forces_at(self, z_ref: float, pressure_amplitude_pa: float = 1.0) -> tuple[NDArray, NDArray]:
+        """(forces [N], torques [N m]) per body, (n_bodies, 3) each, by direct post-processing at one height."""
+        p = self.surface_pressure(z_ref, pressure_amplitude_pa)
+        return self._bilinear(p, p)
+
+    def _bilinear(self, p: NDArray, q: NDArray) -> tuple[NDArray, NDArray]:
+        dens, pts, w_area, normals = surface_force_density(self.vertices, self.faces, p, q, self.medium)
+        nb = len(self.bodies)
+        forces = np.zeros((nb, 3))
+        torques = np.zeros((nb, 3))
+        # traction t = -dens * n per quadrature node
+        trac = -(dens[:, :, None] * normals[:, None, :])  # (m, q, 3)
+        for b, body in enumerate(self.bodies):
+            sel = self.body_of_face == b
+            wq = w_area[sel]
+            forces[b] = np.einsum("mq,mqk->k", wq, trac[sel])
+            lever = pts[sel] - body.centre
+            torques[b] = np.einsum("mq,mqk->k", wq, np.cross(lever, trac[sel]))
+        return forces, torques
+
+
+def surface_force_density(
+    vertices: NDArray, faces: NDArray, p: NDArray, q: NDArray, medium: Medium
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The symmetric bilinear radiation-stress density ``Re[p q*]/(4 rho0 c0^2) - rho0 Re[v_p . v_q*]/4``.
+
+    Parameters
+    ----------
+    vertices, faces : ndarray
+        The triangulation [m].
+    p, q : ndarray (n,) complex
+        P1 nodal pressures [Pa].
+    medium : Medium
+
+    Returns
+    -------
+    dens : ndarray (m, 6)
+        Density [Pa] at the quadrature nodes of every triangle.
+    points : ndarray (m, 6, 3)
+        Quadrature nodes [m].
+    weights : ndarray (m, 6)
+        Quadrature weights times triangle areas [m^2].
+    normals : ndarray (m, 3)
+        Unit normals from the triangle orientation.
+    """
+    rho0, c0 = medium.density_kg_m3, medium.sound_speed_m_s
+    omega = 2.0 * np.pi * medium.frequency_hz
+    x = vertices[faces]  # (m, 3, 3)
+    e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    cr = np.cross(e1, e2)
+    two_area = np.linalg.norm(cr, axis=1)
+    normals = cr / two_area[:, None]
+    bary, w = triangle_rule()
+    points = np.einsum("qj,mjk->mqk", bary, x)
+    pv, qv = p[faces], q[faces]  # (m, 3)
+    pq = np.einsum("qj,mj->mq", bary, pv) * np.conj(np.einsum("qj,mj->mq", bary, qv))
+    # surface gradient of a P1 function: J (J^T J)^-1 [f1 - f0, f2 - f0]
+    g11, g12, g22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    det = g11 * g22 - g12**2
+
+    def grad(f: NDArray) -> NDArray:
+        d1, d2 = f[:, 1] - f[:, 0], f[:, 2] - f[:, 0]
+        a = (g22 * d1 - g12 * d2) / det
+        b = (-g12 * d1 + g11 * d2) / det
+        return a[:, None] * e1 + b[:, None] * e2
+
+    gp, gq = grad(pv), grad(qv)
+    vv = np.real(np.sum(gp * np.conj(gq), axis=1)) / (omega * rho0) ** 2  # Re[v_p . v_q*]
+    dens = np.real(pq) / (4 * rho0 * c0**2) - rho0 * vv[:, None] / 4
+    weights = 0.5 * two_area[:, None] * w[None, :]
+    return dens, points, weights, normals
+
+
+def _rhs(space_vertices: NDArray, faces: NDArray, k: float) -> NDArray[np.complex128]:
+    """Galerkin right-hand sides ``int phi_i (p_in - (i/k) dp_in/dn) dS`` for p_in = cos(kz), sin(kz); (n, 2)."""
+    x = space_vertices[faces]
+    cr = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    two_area = np.linalg.norm(cr, axis=1)
+    nz = cr[:, 2] / two_area
+    bary, w = triangle_rule()
+    z = np.einsum("qj,mj->mq", bary, x[:, :, 2])
+    g_cos = np.cos(k * z) - (1j / k) * (-k * np.sin(k * z)) * nz[:, None]
+    g_sin = np.sin(k * z) - (1j / k) * (k * np.cos(k * z)) * nz[:, None]
+    out = np.zeros((len(space_vertices), 2), complex)
+    for col, g in enumerate((g_cos, g_sin)):
+        # (m, q) values times weights, distributed to the three vertices by the barycentric basis
+        contrib = np.einsum("mq,q,qj->mj", g, w, bary) * (0.5 * two_area)[:, None]
+        np.add.at(out[:, col], faces.ravel(), contrib.ravel())
+    return out
+
+
+def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium()) -> ScatteringSolution:
+    """Solve the sound-hard scattering of ``cos(k z')`` and ``sin(k z')`` by ``bodies`` (one LU factorisation).
+
+    Parameters
+    ----------
+    bodies : sequence of Body
+        Closed, outward-oriented surfaces in local coordinates [m] (the reference point is z' = 0).
+    medium : Medium
+        Frequency, sound speed and density.
+
+    Returns
+    -------
+    ScatteringSolution
+        Use :meth:`ScatteringSolution.height_structure` for forces and torques at every height.
+    """
+    import bempp_cl.api as bempp  # imported here: the import is slow and prints a Gmsh notice
+
+    k = medium.wavenumber
+    offsets = np.cumsum([0] + [len(b.vertices) for b in bodies])
+    vertices = np.concatenate([b.vertices for b in bodies])
+    faces = np.concatenate([b.faces + o for b, o in zip(bodies, offsets[:-1])])
+    body_of_face = np.concatenate([np.full(len(b.faces), i) for i, b in enumerate(bodies)])
+    t0 = time.perf_counter()
+    grid = bempp.Grid(vertices.T.copy(), faces.T.astype(np.uint32).copy())
+    space = bempp.function_space(grid, "P", 1)
+    gv = np.asarray(grid.vertices).T
+    ge = np.asarray(grid.elements).T.astype(np.int64)
+    if gv.shape != vertices.shape or not np.array_equal(ge, faces) or not np.array_equal(space.local2global, ge):
+        raise RuntimeError("bempp reordered the grid; the P1 degrees of freedom no longer match the vertices")
+    opts = dict(assembler="dense", device_interface="numba")
+    ident = bempp.operators.boundary.sparse.identity(space, space, space)
+    dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, space, k, **opts)
+    hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, space, k, **opts)
+    matrix = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
+    t1 = time.perf_counter()
+    rhs = _rhs(vertices, faces, k)
+    sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
+    t2 = time.perf_counter()
+    log.info("full-wave solve: %d DOFs, assembly %.1f s, LU + 2 solves %.2f s", len(vertices), t1 - t0, t2 - t1)
+    return ScatteringSolution(
+        vertices=vertices, faces=faces, body_of_face=body_of_face, p_cos=sol[:, 0], p_sin=sol[:, 1],
+        medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1},
+    )
