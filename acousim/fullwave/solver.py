@@ -52,6 +52,7 @@ __all__ = [
     "HeightStructure",
     "ScatteringSolution",
     "solve_scattering",
+    "enclosing_sphere_force",
     "surface_force_density",
     "triangle_rule",
 ]
@@ -215,6 +216,19 @@ class ScatteringSolution:
         p = self.surface_pressure(z_ref, pressure_amplitude_pa)
         return self._bilinear(p, p)
 
+    def exterior_pressure(self, points: ArrayLike, z_ref: float, pressure_amplitude_pa: float = 1.0) -> NDArray[np.complex128]:
+        """Total pressure [Pa] at exterior points (m, 3) [m, local coordinates]: ``p = p_in + D p`` with the
+        double-layer potential of the surface pressure (sound-hard representation formula)."""
+        bempp = import_bempp()
+        pts = np.asarray(points, float)
+        k = self.medium.wavenumber
+        surf = self.surface_pressure(z_ref, pressure_amplitude_pa)
+        pot = bempp.operators.potential.helmholtz.double_layer(self.space, pts.T.copy(), k,
+                                                               assembler="dense", device_interface="numba")
+        scat = pot.evaluate(bempp.GridFunction(self.space, coefficients=surf)).ravel()
+        inc = pressure_amplitude_pa * np.sin(k * (z_ref + pts[:, 2]))
+        return inc + scat
+
     def _bilinear(self, p: NDArray, q: NDArray) -> tuple[NDArray, NDArray]:
         dens, pts, w_area, normals = surface_force_density(self.vertices, self.faces, p, q, self.medium)
         nb = len(self.bodies)
@@ -229,6 +243,38 @@ class ScatteringSolution:
             lever = pts[sel] - body.centre
             torques[b] = np.einsum("mq,mqk->k", wq, np.cross(lever, trac[sel]))
         return forces, torques
+
+
+def enclosing_sphere_force(
+    solution: ScatteringSolution, z_ref: float, radius: float, pressure_amplitude_pa: float = 1.0,
+    n_polar: int = 24, step: float = 1e-3,
+) -> NDArray[np.float64]:
+    """Total radiation force [N] from the momentum flux through a sphere of ``radius`` [m] about the local origin.
+
+    ``F = - int [ (|p|^2/(4 rho0 c0^2) - rho0 |v|^2/4) n + (rho0/2) Re[(v.n) v*] ] dS`` with the exterior field
+    from the representation formula and ``v = grad p / (i w rho0)`` by central differences (step ``step * radius``).
+    Gauss-Legendre in cos(polar angle) times the trapezoidal rule in azimuth (2 n_polar points).
+    """
+    med = solution.medium
+    rho0, c0, omega = med.density_kg_m3, med.sound_speed_m_s, 2 * np.pi * med.frequency_hz
+    x, wx = np.polynomial.legendre.leggauss(n_polar)
+    az = 2 * np.pi * np.arange(2 * n_polar) / (2 * n_polar)
+    ct, ph = np.meshgrid(x, az, indexing="ij")
+    st = np.sqrt(1 - ct**2)
+    n = np.stack([st * np.cos(ph), st * np.sin(ph), ct], -1).reshape(-1, 3)
+    w = (wx[:, None] * np.full(az.size, 2 * np.pi / az.size)[None, :]).ravel() * radius**2
+    pts = radius * n
+    h = step * radius
+    offsets = np.concatenate([np.zeros((1, 3)), h * np.eye(3), -h * np.eye(3)])
+    allp = (pts[None, :, :] + offsets[:, None, :]).reshape(-1, 3)
+    vals = solution.exterior_pressure(allp, z_ref, pressure_amplitude_pa).reshape(7, -1)
+    p = vals[0]
+    grad = np.stack([(vals[1 + i] - vals[4 + i]) / (2 * h) for i in range(3)], -1)
+    v = grad / (1j * omega * rho0)
+    lag = np.abs(p) ** 2 / (4 * rho0 * c0**2) - rho0 * np.sum(np.abs(v) ** 2, axis=1) / 4
+    vn = np.sum(v * n, axis=1)
+    flux = lag[:, None] * n + 0.5 * rho0 * np.real(vn[:, None] * np.conj(v))
+    return -np.einsum("m,mk->k", w, flux)
 
 
 def surface_force_density(
@@ -301,7 +347,94 @@ def _rhs(space_vertices: NDArray, faces: NDArray, k: float) -> NDArray[np.comple
     return out
 
 
-def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium()) -> ScatteringSolution:
+def import_bempp():
+    """``bempp_cl.api``, imported with its start-up notice (printed to stdout) sent to the log instead."""
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        import bempp_cl.api as bempp
+    if buf.getvalue().strip():
+        log.debug("bempp-cl: %s", buf.getvalue().strip())
+    return bempp
+
+
+def mirror_maps(vertices: NDArray, faces: NDArray, rtol: float = 1e-9) -> dict[str, NDArray[np.int64]]:
+    """Vertex permutations of the mirrors X -> -X and Y -> -Y that map the triangulation onto itself.
+
+    Returns
+    -------
+    dict
+        ``{"x": perm, "y": perm}`` for each mirror under which the vertex set and the triangle set are
+        invariant (``vertices[perm[i]]`` is the mirror image of ``vertices[i]``).
+    """
+    from scipy.spatial import cKDTree
+
+    scale = float(np.max(np.ptp(vertices, axis=0)))
+    tree = cKDTree(vertices)
+    face_set = {tuple(sorted(f)) for f in faces.tolist()}
+    out = {}
+    for name, axis in (("x", 0), ("y", 1)):
+        mirrored = vertices.copy()
+        mirrored[:, axis] *= -1
+        dist, perm = tree.query(mirrored)
+        if np.max(dist) > rtol * scale or len(np.unique(perm)) != len(perm):
+            continue
+        if all(tuple(sorted(perm[f])) in face_set for f in faces.tolist()):
+            out[name] = perm.astype(np.int64)
+    return out
+
+
+def _symmetric_matrix(bempp, grid, space, vertices: NDArray, faces: NDArray, k: float, maps: dict) -> tuple | None:
+    """Assemble only the rows of the representative vertices (X >= 0, Y >= 0 for the mirrors in ``maps``) and
+    fold the columns over each vertex orbit.  Returns (reduced matrix, representatives, orbit matrix) or None
+    when the mesh does not conform to the mirror planes."""
+    n = len(vertices)
+    tol = 1e-9 * float(np.max(np.ptp(vertices, axis=0)))
+    region = np.ones(n, bool)
+    for name, axis in (("x", 0), ("y", 1)):
+        if name in maps:
+            region &= vertices[:, axis] >= -tol
+    support = np.flatnonzero(region[faces].all(axis=1))
+    reps = np.flatnonzero(region)
+    if not np.array_equal(np.unique(faces[support]), reps):
+        return None
+    # orbit of every vertex -> its representative
+    group = [np.arange(n)]
+    for perm in maps.values():
+        group += [perm[g] for g in group]
+    rep_of = np.full(n, -1, np.int64)
+    rep_index = -np.ones(n, np.int64)
+    rep_index[reps] = np.arange(reps.size)
+    for g in group:
+        hit = region[g] & (rep_of < 0)
+        rep_of[hit] = g[hit]
+    # g maps i to g[i]; rep_of[i] is the member of i's orbit in the region
+    if np.any(rep_of < 0):
+        return None
+    fold = np.zeros((n, reps.size))
+    fold[np.arange(n), rep_index[rep_of]] = 1.0
+    dual = bempp.function_space(grid, "P", 1, support_elements=support, include_boundary_dofs=True,
+                                truncate_at_segment_edge=False)
+    # dof -> vertex map of the restricted test space
+    l2g = np.asarray(dual.local2global)
+    sup = np.asarray(dual.support_elements)
+    dof_vertex = -np.ones(dual.global_dof_count, np.int64)
+    used = np.asarray(dual.local_multipliers)[sup] != 0
+    dof_vertex[l2g[sup][used]] = faces[sup][used]
+    if np.any(dof_vertex < 0) or not np.array_equal(np.sort(dof_vertex), reps):
+        return None
+    opts = dict(assembler="dense", device_interface="numba")
+    ident = bempp.operators.boundary.sparse.identity(space, space, dual)
+    dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, dual, k, **opts)
+    hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, dual, k, **opts)
+    rows = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()  # (n_dofs_dual, n)
+    order = np.argsort(rep_index[dof_vertex])
+    return rows[order] @ fold, reps, fold
+
+
+def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium(), use_symmetry: bool = True) -> ScatteringSolution:
     """Solve the sound-hard scattering of ``cos(k z')`` and ``sin(k z')`` by ``bodies`` (one LU factorisation).
 
     Parameters
@@ -310,13 +443,17 @@ def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium()) -> Scatt
         Closed, outward-oriented surfaces in local coordinates [m] (the reference point is z' = 0).
     medium : Medium
         Frequency, sound speed and density.
+    use_symmetry : bool
+        When the triangulation is mirror symmetric in X = 0 and/or Y = 0 (as the dimer meshes are), the
+        incident field is too, so the solution is: assemble only the rows of the vertices with X, Y >= 0
+        and fold the columns over the mirror images (a quarter of the dense assembly for both mirrors).
 
     Returns
     -------
     ScatteringSolution
         Use :meth:`ScatteringSolution.height_structure` for forces and torques at every height.
     """
-    import bempp_cl.api as bempp  # imported here: the import is slow and prints a Gmsh notice
+    bempp = import_bempp()  # imported here: the import is slow and prints a Gmsh notice
 
     k = medium.wavenumber
     offsets = np.cumsum([0] + [len(b.vertices) for b in bodies])
@@ -330,17 +467,27 @@ def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium()) -> Scatt
     ge = np.asarray(grid.elements).T.astype(np.int64)
     if gv.shape != vertices.shape or not np.array_equal(ge, faces) or not np.array_equal(space.local2global, ge):
         raise RuntimeError("bempp reordered the grid; the P1 degrees of freedom no longer match the vertices")
-    opts = dict(assembler="dense", device_interface="numba")
-    ident = bempp.operators.boundary.sparse.identity(space, space, space)
-    dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, space, k, **opts)
-    hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, space, k, **opts)
-    matrix = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
-    t1 = time.perf_counter()
     rhs = _rhs(vertices, faces, k)
-    sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
+    maps = mirror_maps(vertices, faces) if use_symmetry else {}
+    reduced = _symmetric_matrix(bempp, grid, space, vertices, faces, k, maps) if maps else None
+    if reduced is not None:
+        matrix, reps, fold = reduced
+        t1 = time.perf_counter()
+        sol = fold @ lu_solve(lu_factor(matrix, check_finite=False), rhs[reps], check_finite=False)
+        sym = "".join(sorted(maps))
+    else:
+        opts = dict(assembler="dense", device_interface="numba")
+        ident = bempp.operators.boundary.sparse.identity(space, space, space)
+        dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, space, k, **opts)
+        hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, space, k, **opts)
+        matrix = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
+        t1 = time.perf_counter()
+        sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
+        sym = ""
     t2 = time.perf_counter()
-    log.info("full-wave solve: %d DOFs, assembly %.1f s, LU + 2 solves %.2f s", len(vertices), t1 - t0, t2 - t1)
+    log.info("full-wave solve: %d DOFs (mirror symmetry: %s), assembly %.1f s, LU + 2 solves %.2f s",
+             len(vertices), sym or "none", t1 - t0, t2 - t1)
     return ScatteringSolution(
         vertices=vertices, faces=faces, body_of_face=body_of_face, p_cos=sol[:, 0], p_sin=sol[:, 1],
-        medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1},
+        medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1, "symmetry": sym},
     )

@@ -429,7 +429,8 @@ def _cache_dir() -> Path:
     env = os.environ.get("ACOUSIM_FULLWAVE_CACHE")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parent.parent.parent / "meshes" / "fullwave"
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "cubedimer" / "fullwave"
 
 
 def _key(settings: dict) -> str:
@@ -447,6 +448,9 @@ def cached_fullwave_surrogate(
     cache_dir: str | os.PathLike | None = None,
 ) -> FullwaveSurrogate:
     """The surrogate for these settings: the shipped default table, a cached table, or a new build (saved).
+
+    The cache directory is ``$ACOUSIM_FULLWAVE_CACHE``, else ``$XDG_CACHE_HOME/cubedimer/fullwave`` (default
+    ``~/.cache/cubedimer/fullwave``), one JSON file per settings hash.
 
     Tables are keyed by geometry, mesh, medium, density and build settings; the pressure amplitude is
     applied afterwards by the exact p0^2 scaling.
