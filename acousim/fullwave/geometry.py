@@ -6,8 +6,10 @@ line).  The faces are tensor-product grids of three one-dimensional node sets:
 
 * along u and w: graded geometrically from ``h_hinge`` at the hinge-edge end to ``h_max``;
 * along v (the hinge line): ``h_along``, refined to ``h_corner`` at both ends (the hinge-edge corners);
-* with an edge radius ``r_e > 0`` every node set is also refined to ``r_e pi / 8`` within ``r_e`` of its
-  ends, and the cube surface is mapped onto the rounded cube by the closest-point map of the inner box.
+* with an edge radius ``r_e > 0`` the u and w node sets are also refined to ``r_e pi / 8`` within ``r_e`` of
+  the hinge edge, and the cube surface is mapped onto the rounded cube by the closest-point map of the
+  inner box.  The arcs of the other edges are resolved only by the local element size (they matter far
+  less than the hinge edge, and refining all twelve would multiply the cost of the tensor-product faces).
 
 Long, thin triangles along the hinge are deliberate: the wedge field varies fast across the hinge edge
 and slowly along it.  Cube B (X > 0) is the body mesh rotated by ``psi_B = pi/4 - phi`` (counter-clockwise
@@ -116,7 +118,7 @@ FAMILY_BASE = dict(h_hinge=0.04, h_max=0.25, h_along=0.25, h_corner=0.12, growth
 def mesh_family(q: float, side: float = 500e-6, gap: float | None = None, edge_radius: float = 0.0) -> DimerMeshSpec:
     """The mesh of refinement level ``q``: every element size of :data:`FAMILY_BASE` times q, growth fixed.
 
-    q = 1 is the coarse test mesh (536 DOFs); the default is q = 0.35 (2,132 DOFs); see docs/fullwave.md.
+    q = 1 is the coarse test mesh (536 DOFs); the default is q = 0.5 (1,368 DOFs); see docs/fullwave.md.
     """
     b = FAMILY_BASE
     return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius, h_hinge=b["h_hinge"] * q, h_max=b["h_max"] * q,
@@ -124,7 +126,7 @@ def mesh_family(q: float, side: float = 500e-6, gap: float | None = None, edge_r
 
 
 #: Default-accuracy mesh (see docs/fullwave.md for its convergence).
-DEFAULT_SPEC = mesh_family(0.35)
+DEFAULT_SPEC = mesh_family(0.5)
 #: Coarse mesh for tests.
 COARSE_SPEC = mesh_family(1.0)
 
@@ -166,8 +168,9 @@ def _axis_nodes(spec: DimerMeshSpec, kind: str) -> NDArray[np.float64]:
             h = min(spec.h_max, spec.h_hinge + g * (1.0 - x))
         else:
             h = min(spec.h_along, spec.h_corner + g * min(x, 1.0 - x))
-        if r > 0:
-            h = min(h, h_round + g * max(0.0, min(x, 1.0 - x) - r))
+        if r > 0 and kind != "along":  # resolve the rounded hinge edge; other arcs take the local size
+            d_hinge = x if kind == "to_minus" else 1.0 - x
+            h = min(h, h_round + g * max(0.0, d_hinge - r))
         # never step over more than what the far end allows
         return max(h, 1e-6)
 

@@ -25,6 +25,7 @@ Forces scale exactly as p0^2 (:meth:`FullwaveSurrogate.with_pressure`).
 from __future__ import annotations
 
 import hashlib
+import sys
 import json
 import logging
 import os
@@ -487,3 +488,44 @@ def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> Fullwav
 def coarse_fullwave_surrogate(**kwargs) -> FullwaveSurrogate:
     """The coarse test variant (:data:`COARSE_BUILD`), cached on disk like any other."""
     return cached_fullwave_surrogate(**{**COARSE_BUILD, **kwargs})
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m acousim.fullwave.surrogate --out FILE [--level Q] [--n-half N] [--theta-max T] [--gap G]``."""
+    import argparse
+
+    from .geometry import mesh_family
+
+    p = argparse.ArgumentParser(prog="python -m acousim.fullwave.surrogate",
+                                description="Build a full-wave surrogate table (JSON) of the cube dimer.")
+    p.add_argument("--out", required=True, help="output JSON")
+    p.add_argument("--level", type=float, default=None, help="mesh level q of mesh_family (default: the default mesh)")
+    p.add_argument("--n-half", type=int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
+    p.add_argument("--theta-max", type=float, default=DEFAULT_BUILD["theta_max"], help="interpolation half-width")
+    p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
+    p.add_argument("--gap", type=float, default=None, help="hinge gap [m] (default 0.01 side)")
+    p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
+    p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude [Pa]")
+    args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    for name in ("bempp", "numba"):
+        logging.getLogger(name).setLevel(logging.WARNING)
+    if args.level is None and args.gap is None and args.edge_radius == 0 and args.side == 500e-6:
+        spec = DEFAULT_SPEC
+    else:
+        spec = mesh_family(args.level if args.level is not None else 0.35, side=args.side, gap=args.gap,
+                           edge_radius=args.edge_radius)
+    sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
+                                   pressure_amplitude_pa=args.pressure)
+    sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
+    sur.save(args.out)
+    f_y, f_t = sur.linear_frequencies()
+    log.info("wrote %s: %d DOFs, %d solves, %.0f s; f_y %.3f Hz, f_theta %.3f Hz", args.out, sur.build_accuracy["dofs"],
+             args.n_half, sur.build_accuracy["wall_s"], f_y, f_t)
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.exit(main())
