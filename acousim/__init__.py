@@ -8,9 +8,12 @@ Physics follows ``shared/PHYSICS.md``; see the README for a tour.  Public API:
 * the model: :class:`GorkovDimer` (forces, torques, Q_y, Q_theta, Z_eq, stiffness)
 * sweeps: :func:`static_sweep`, :func:`fit_static_coefficients`, :func:`taylor_coefficients`
 * closed-form references: :mod:`acousim.analytic`
-* dynamics and the digital twin: :class:`ForceSurrogate`, :func:`build_surrogate`, :class:`DimerDynamics`,
-  the effects of PHYSICS.md section 5 (:class:`EffectSet` and one class per effect), :class:`TwinConfig`,
-  :func:`simulate_dataset` and the ``PAPER_LIKE`` preset
+* force models: the :class:`ForceModel` protocol and its :class:`ForceCoefficients`; the Gor'kov
+  :class:`ForceSurrogate` (:func:`build_surrogate`)
+* equations of motion: :func:`accelerations` (force model plus effects), :class:`DimerDynamics`
+  (integration), the effects of PHYSICS.md section 5 (:class:`EffectSet` and one class per effect)
+* the digital twin (:mod:`acousim.twin`): :class:`TwinConfig`, :class:`Camera`, :class:`DropProtocol`,
+  :func:`simulate_run`, :func:`simulate_dataset`, the ``PAPER_LIKE`` preset and :class:`TwinError`
 """
 from .dimer import CubeDimer, bend_angle
 from .field import StandingWave, gorkov_potential_density, gorkov_potential_gradient
@@ -19,11 +22,13 @@ from .medium import GRAVITY, Medium, ParticleMaterial, contrast_factors
 from .mesh import tetrahedralize_cube
 from .quadrature import tetrahedral_quadrature, tetrahedron_rule
 from .sweep import SweepResult, fit_static_coefficients, read_sweep_csv, static_sweep, taylor_coefficients
+from .force_model import ForceCoefficients, ForceModel
 from .surrogate import ForceSurrogate, SurrogateBox, build_surrogate, cached_surrogate
-from .dynamics import DimerDynamics, Trajectory
 from .effects import (EFFECT_TYPES, EffectSet, LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag,
                       VelocityCoupling, parse_effect)
-from .twin import PAPER_LIKE, Camera, DropProtocol, TwinConfig, simulate_dataset, simulate_run
+from .equations import accelerations
+from .dynamics import DimerDynamics, Trajectory
+from .twin import PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
 
 __all__ = [
     "CubeDimer",
@@ -48,10 +53,13 @@ __all__ = [
     "read_sweep_csv",
     "static_sweep",
     "taylor_coefficients",
+    "ForceModel",
+    "ForceCoefficients",
     "ForceSurrogate",
     "SurrogateBox",
     "build_surrogate",
     "cached_surrogate",
+    "accelerations",
     "DimerDynamics",
     "Trajectory",
     "EFFECT_TYPES",
@@ -68,4 +76,5 @@ __all__ = [
     "TwinConfig",
     "simulate_dataset",
     "simulate_run",
+    "TwinError",
 ]

@@ -2,7 +2,7 @@
 
 Each effect is a frozen dataclass whose class attribute ``name`` and field names are exactly those
 of PHYSICS.md (they appear in files and reports); each adds terms to the accelerations
-``(yddot, thetaddot)`` of the Gor'kov equations of motion:
+``(yddot, thetaddot)`` of the equations of motion:
 
 =====================  ===========================  ==========================================
 name                   parameters (SI)              adds to (yddot, thetaddot)
@@ -18,16 +18,32 @@ name                   parameters (SI)              adds to (yddot, thetaddot)
 (at most one of each name); :func:`parse_effect` reads the command-line form
 ``NAME:param=value,param=value`` (parameters not given are 0).
 
-The compiled integrator (:mod:`acousim.dynamics`) reads the set as one flat parameter vector
-(:meth:`EffectSet.packed`, order :data:`PACKED_PARAMETERS`); absent effects contribute zeros,
-which is the same as switching them off.
+One definition per effect.  Every effect is linear in its parameters, so it is defined by its
+*regressor columns*: a plain function ``columns(y, ydot, theta, thetadot, wavenumber, z_eq)``
+returning ``(yddot columns, thetaddot columns)``, one entry per parameter, such that the added
+accelerations are ``sum_j p_j column_j``.  The same function serves
+
+* the numpy reference (:meth:`Effect.regressors`, :meth:`Effect.accelerations`,
+  :meth:`EffectSet.regressors`, :meth:`EffectSet.accelerations`), on arrays;
+* the linear fits of the diagnosis (:meth:`Effect.regressors`: the design-matrix columns);
+* the compiled equations of motion: numba compiles the same source for scalars, and
+  :func:`packed_effect_accelerations` sums every effect over the flat parameter vector
+  :meth:`EffectSet.packed` (order :data:`PACKED_PARAMETERS`; absent effects contribute zeros).
+
+A new effect is a subclass with its ``columns`` function, an entry in :data:`EFFECT_TYPES` and one
+line in :func:`packed_effect_accelerations` (the tests compare the compiled sum with the numpy one
+for every effect type).
+
+With the acoustic field off only the air's effects (``acts_without_field``: ``linear_damping``,
+``quadratic_drag``) act; :meth:`EffectSet.acting` selects them.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import ClassVar, Iterable, Mapping
+from typing import Callable, ClassVar, Iterable, Mapping
 
+import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -42,6 +58,7 @@ __all__ = [
     "EFFECT_TYPES",
     "PACKED_PARAMETERS",
     "parse_effect",
+    "packed_effect_accelerations",
     "EffectError",
 ]
 
@@ -50,13 +67,51 @@ class EffectError(ValueError):
     """A bad effect specification; ``str(err)`` is one line."""
 
 
+# ---------------------------------------------------------------------- the definitions
+# Each returns (yddot columns, thetaddot columns), one entry per parameter in the order of the
+# effect's fields; scalars in and out under numba, arrays (or broadcastable scalars) under numpy.
+def _linear_damping_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    return (-ydot, 0.0), (0.0, -thetadot)
+
+
+def _quadratic_drag_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    return (-abs(ydot) * ydot, 0.0), (0.0, -abs(thetadot) * thetadot)
+
+
+def _pair_scattering_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    c = np.cos(wavenumber * (z_eq + y))
+    return (0.0,), (-c * c * theta,)
+
+
+def _mirror_asymmetry_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    return (0.0, 0.0), (1.0, y)
+
+
+def _velocity_coupling_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    return (0.0, 0.0), (thetadot * thetadot * y, thetadot * ydot * y)
+
+
+def _state_arrays(*values) -> tuple[list[NDArray[np.float64]], tuple[int, ...]]:
+    """The values as float arrays and their broadcast shape."""
+    arrays = [np.asarray(v, float) for v in values]
+    return arrays, np.broadcast_shapes(*(a.shape for a in arrays))
+
+
 @dataclass(frozen=True)
 class Effect:
-    """Base class: an unmodelled effect adding to the accelerations (see the module table)."""
+    """Base class: an unmodelled effect adding to the accelerations (see the module table).
+
+    Subclasses set ``name``, their parameters as float fields, and ``columns`` (the one definition
+    of the effect, see the module docstring).
+    """
 
     name: ClassVar[str] = ""
     #: parameters that must be >= 0 (dissipation and stiffening)
     _non_negative: ClassVar[tuple[str, ...]] = ()
+    #: True for effects of the air, which act with the acoustic field off too
+    acts_without_field: ClassVar[bool] = False
+    #: regressor columns ``(y, ydot, theta, thetadot, wavenumber, z_eq) -> (yddot cols, thetaddot cols)``
+    columns: ClassVar[Callable]
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -80,11 +135,34 @@ class Effect:
         """{parameter name: value} (SI)."""
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}
 
+    def parameter_vector(self) -> NDArray[np.float64]:
+        """Parameter values in the order of :meth:`parameter_names`."""
+        return np.array([getattr(self, p) for p in self.parameter_names()], float)
+
+    @classmethod
+    def regressors(cls, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
+                   wavenumber: float, z_eq: float) -> NDArray[np.float64]:
+        """d(accelerations)/d(parameters): array (..., 2, n_params) over the broadcast state shape.
+
+        Row 0 is the yddot equation [m/s^2 per unit parameter], row 1 thetaddot [1/s^2 per unit
+        parameter]; columns follow :meth:`parameter_names`.  State in SI, ``wavenumber`` k [1/m],
+        ``z_eq`` [m] the equilibrium height below the node (the effects' y is Z_com - Z_eq; a scalar
+        or an array broadcasting with the state).
+        """
+        args, shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
+        cy, ct = cls.columns(*args[:4], float(wavenumber), args[4])
+        rows = [np.stack([np.broadcast_to(np.asarray(c, float), shape) for c in cols], axis=-1) for cols in (cy, ct)]
+        return np.stack(rows, axis=-2)
+
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Terms added to (yddot [m/s^2], thetaddot [1/s^2]); state in SI, ``wavenumber`` k [1/m],
-        ``z_eq`` [m] the equilibrium height below the node.  Reference (numpy) implementation."""
-        raise NotImplementedError
+        """Terms added to (yddot [m/s^2], thetaddot [1/s^2]): ``sum_j p_j column_j`` (numpy, arrays in SI)."""
+        args, shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
+        cy, ct = self.columns(*args[:4], float(wavenumber), args[4])
+        p = self.parameter_vector()
+        ay = sum((pj * np.asarray(c, float) for pj, c in zip(p, cy)), np.zeros(shape))
+        at = sum((pj * np.asarray(c, float) for pj, c in zip(p, ct)), np.zeros(shape))
+        return ay, at
 
 
 @dataclass(frozen=True)
@@ -93,11 +171,10 @@ class LinearDamping(Effect):
 
     name: ClassVar[str] = "linear_damping"
     _non_negative: ClassVar[tuple[str, ...]] = ("gamma_y", "gamma_theta")
+    acts_without_field: ClassVar[bool] = True
+    columns: ClassVar[Callable] = staticmethod(_linear_damping_columns)
     gamma_y: float = 0.0
     gamma_theta: float = 0.0
-
-    def accelerations(self, y, ydot, theta, thetadot, wavenumber, z_eq):
-        return -self.gamma_y * np.asarray(ydot, float), -self.gamma_theta * np.asarray(thetadot, float)
 
 
 @dataclass(frozen=True)
@@ -106,12 +183,10 @@ class QuadraticDrag(Effect):
 
     name: ClassVar[str] = "quadratic_drag"
     _non_negative: ClassVar[tuple[str, ...]] = ("c_y", "c_theta")
+    acts_without_field: ClassVar[bool] = True
+    columns: ClassVar[Callable] = staticmethod(_quadratic_drag_columns)
     c_y: float = 0.0
     c_theta: float = 0.0
-
-    def accelerations(self, y, ydot, theta, thetadot, wavenumber, z_eq):
-        yd, td = np.asarray(ydot, float), np.asarray(thetadot, float)
-        return -self.c_y * np.abs(yd) * yd, -self.c_theta * np.abs(td) * td
 
 
 @dataclass(frozen=True)
@@ -120,11 +195,8 @@ class PairScattering(Effect):
 
     name: ClassVar[str] = "pair_scattering"
     _non_negative: ClassVar[tuple[str, ...]] = ("kappa",)
+    columns: ClassVar[Callable] = staticmethod(_pair_scattering_columns)
     kappa: float = 0.0
-
-    def accelerations(self, y, ydot, theta, thetadot, wavenumber, z_eq):
-        z = z_eq + np.asarray(y, float)
-        return np.zeros_like(z), -self.kappa * np.cos(wavenumber * z) ** 2 * np.asarray(theta, float)
 
 
 @dataclass(frozen=True)
@@ -132,12 +204,9 @@ class MirrorAsymmetry(Effect):
     """Broken mirror symmetry: thetaddot += beta0 + beta1 y; beta0 in 1/s^2, beta1 in 1/(m s^2)."""
 
     name: ClassVar[str] = "mirror_asymmetry"
+    columns: ClassVar[Callable] = staticmethod(_mirror_asymmetry_columns)
     beta0: float = 0.0
     beta1: float = 0.0
-
-    def accelerations(self, y, ydot, theta, thetadot, wavenumber, z_eq):
-        y = np.asarray(y, float)
-        return np.zeros_like(y), self.beta0 + self.beta1 * y
 
 
 @dataclass(frozen=True)
@@ -145,12 +214,9 @@ class VelocityCoupling(Effect):
     """Velocity-dependent acoustic forces: thetaddot += c5 thetadot^2 y + c6 thetadot ydot y; c5, c6 in 1/m."""
 
     name: ClassVar[str] = "velocity_coupling"
+    columns: ClassVar[Callable] = staticmethod(_velocity_coupling_columns)
     c5: float = 0.0
     c6: float = 0.0
-
-    def accelerations(self, y, ydot, theta, thetadot, wavenumber, z_eq):
-        y, yd, td = (np.asarray(v, float) for v in (y, ydot, thetadot))
-        return np.zeros_like(y), self.c5 * td**2 * y + self.c6 * td * yd * y
 
 
 #: name -> effect class, in PHYSICS.md order.
@@ -162,6 +228,43 @@ EFFECT_TYPES: dict[str, type[Effect]] = {
 PACKED_PARAMETERS: tuple[tuple[str, str], ...] = tuple(
     (name, p) for name, cls in EFFECT_TYPES.items() for p in cls.parameter_names()
 )
+
+
+# ---------------------------------------------------------------------- the compiled sum
+_linear_damping_kernel = nb.njit(cache=True)(_linear_damping_columns)
+_quadratic_drag_kernel = nb.njit(cache=True)(_quadratic_drag_columns)
+_pair_scattering_kernel = nb.njit(cache=True)(_pair_scattering_columns)
+_mirror_asymmetry_kernel = nb.njit(cache=True)(_mirror_asymmetry_columns)
+_velocity_coupling_kernel = nb.njit(cache=True)(_velocity_coupling_columns)
+
+
+@nb.njit(cache=True)
+def _add_columns(ay, at, cy, ct, p, i0):
+    """(ay + sum_j p[i0 + j] cy[j], at + sum_j p[i0 + j] ct[j], i0 + number of columns)."""
+    for j in range(len(cy)):
+        ay += p[i0 + j] * cy[j]
+        at += p[i0 + j] * ct[j]
+    return ay, at, i0 + len(cy)
+
+
+@nb.njit(cache=True)
+def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, packed):
+    """Compiled: the summed effect terms (yddot, thetaddot) of one state for the parameter vector
+    ``packed`` (:meth:`EffectSet.packed`, order :data:`PACKED_PARAMETERS`)."""
+    ay = 0.0
+    at = 0.0
+    i0 = 0
+    cy, ct = _linear_damping_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
+    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
+    cy, ct = _quadratic_drag_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
+    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
+    cy, ct = _pair_scattering_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
+    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
+    cy, ct = _mirror_asymmetry_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
+    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
+    cy, ct = _velocity_coupling_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
+    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
+    return ay, at
 
 
 def parse_effect(spec: str) -> Effect:
@@ -270,6 +373,28 @@ class EffectSet:
     def __iter__(self):
         return iter(self.effects)
 
+    def acting(self, field_on: bool = True) -> "EffectSet":
+        """The effects that act with the field on (all) or off (those with ``acts_without_field``)."""
+        if field_on:
+            return self
+        return EffectSet(tuple(e for e in self.effects if e.acts_without_field))
+
+    def parameter_names(self) -> tuple[tuple[str, str], ...]:
+        """(effect name, parameter name) of each column of :meth:`regressors`."""
+        return tuple((e.name, p) for e in self.effects for p in e.parameter_names())
+
+    def parameter_vector(self) -> NDArray[np.float64]:
+        """The parameters of the set's effects in the order of :meth:`parameter_names`."""
+        return np.concatenate([e.parameter_vector() for e in self.effects] or [np.zeros(0)])
+
+    def regressors(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
+                   wavenumber: float, z_eq: float) -> NDArray[np.float64]:
+        """Every effect's :meth:`Effect.regressors` side by side: (..., 2, total parameters); the
+        set's accelerations are ``regressors @ parameter_vector()``."""
+        shape = np.broadcast_shapes(*(np.shape(v) for v in (y, ydot, theta, thetadot, z_eq)))
+        parts = [type(e).regressors(y, ydot, theta, thetadot, wavenumber, z_eq) for e in self.effects]
+        return np.concatenate(parts, axis=-1) if parts else np.zeros(shape + (2, 0))
+
     def packed(self) -> NDArray[np.float64]:
         """Flat parameter vector in the order of :data:`PACKED_PARAMETERS` (absent effects: 0)."""
         d = self.to_dict()
@@ -278,7 +403,7 @@ class EffectSet:
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Sum of every effect's terms (yddot [m/s^2], thetaddot [1/s^2]), numpy reference implementation."""
-        shape = np.broadcast(*(np.asarray(v) for v in (y, ydot, theta, thetadot))).shape
+        shape = np.broadcast(*(np.asarray(v) for v in (y, ydot, theta, thetadot, z_eq))).shape
         ay, at = np.zeros(shape), np.zeros(shape)
         for e in self.effects:
             a, b = e.accelerations(y, ydot, theta, thetadot, wavenumber, z_eq)

@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.atomic import atomic_save
+
 __all__ = [
     "cube_surface",
     "tetrahedralize_cube",
@@ -202,11 +204,7 @@ def tetrahedralize_cube(side: float, edge_length: float, mesh_dir: Path | str | 
         _check_unit_cube(grid, "fresh fTetWild mesh")
         if use_cache:
             try:
-                mesh_dir.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(suffix=".vtu", dir=mesh_dir)
-                os.close(fd)
-                grid.save(tmp)
-                os.replace(tmp, path)
+                atomic_save(path, lambda tmp: grid.save(tmp))
             except OSError:
                 pass  # a read-only cache is not an error: the mesh is still returned
     scaled = grid.copy()

@@ -21,9 +21,6 @@ UM = 1e6  # metres -> micrometres for axes
 
 
 def _figure(figsize=(5.0, 3.8)):
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     return plt.subplots(figsize=figsize, constrained_layout=True)
@@ -87,7 +84,7 @@ def plot_thetaddot_map(sweep: SweepResult, ax=None):
 
 def save_sweep_figures(sweep: SweepResult, out_dir: str | os.PathLike) -> list[Path]:
     """Write restoring_force.png, restoring_torque.png and thetaddot_map.png into ``out_dir``."""
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

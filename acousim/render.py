@@ -77,7 +77,7 @@ def render_dimer(model: GorkovDimer, theta: float, y: float, path: str | os.Path
     plotter.camera.up = (0.0, 0.0, 1.0)
     plotter.camera.parallel_projection = True
     plotter.reset_camera()
-    from fitting.atomic import atomic_save
+    from cubedimer.atomic import atomic_save
 
     path = Path(path)
     atomic_save(path, lambda tmp: plotter.screenshot(str(tmp)))

@@ -20,9 +20,18 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .cli import UserInputError
+from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, executor_config,
+                           prepare_output_dir)
+from cubedimer.meta import check_meta_value
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES"]
+
+#: Most runs of one data set.
+MAX_RUNS = 10_000
+#: Most camera frames of one run (1,000 s at 2,000 fps).
+MAX_FRAMES_PER_RUN = 2_000_000
+#: Most frames of a data set: every run's states are held in memory before writing (~60 bytes a frame).
+MAX_FRAMES = 20_000_000
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -80,12 +89,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
-    p.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
     p.add_argument("--force", action="store_true", help="replace a non-empty output folder")
     p.add_argument("--figures", default=None, metavar="DIR",
                    help="also write the twin figures (time series and spectra, phase portraits, Poincare "
                    "map, phase-difference histogram) of this data set to DIR")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_executor_arguments(p)
     p.set_defaults(func=run)
     return p
 
@@ -95,6 +104,16 @@ def build_config(args: argparse.Namespace):
     from .effects import EffectError, EffectSet
     from .twin import PRESETS, Camera, DropProtocol, TwinConfig, TwinError
 
+    check_limit("--runs", args.runs, MAX_RUNS)
+    if args.duration > 0 and args.fps > 0:
+        frames = args.duration * args.fps
+        check_limit("frames per run (--duration x --fps)", frames, MAX_FRAMES_PER_RUN)
+        if args.runs > 0:
+            check_limit("frames in the data set (--runs x --duration x --fps)", args.runs * frames, MAX_FRAMES,
+                        "simulate fewer or shorter runs, or several data sets")
+    check_meta_value("side_length_m", args.side, "--side")
+    if args.pressure is not None:
+        check_meta_value("pressure_amplitude_pa", args.pressure, "--pressure")
     try:
         effects = EffectSet.parse(args.effect)
         preset = PRESETS[args.preset] if args.preset else None
@@ -121,18 +140,16 @@ def build_config(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``python -m acousim simulate``; returns the exit code."""
-    from fitting.executor import ExecutorConfig
-
     from .twin import TwinError, check_output_dir, simulate_dataset
 
     config = build_config(args)
-    if args.workers is not None and args.workers < 1:
-        raise UserInputError(f"--workers must be >= 1, got {args.workers}")
     try:
         check_output_dir(args.out, args.force)
+        prepare_output_dir(args.out, "--out", moved_into_place=True)
         if args.figures:
             check_output_dir(args.figures, True)
-        truth = simulate_dataset(config, args.out, ExecutorConfig(workers=args.workers), force=args.force,
+            prepare_output_dir(args.figures, "--figures", create=False)
+        truth = simulate_dataset(config, args.out, executor_config(args), force=args.force,
                                  progress=not args.no_progress)
     except TwinError as exc:
         raise UserInputError(str(exc)) from None

@@ -27,7 +27,7 @@ the gradient of the surrogate potential and the continuous dynamics conserve T +
 
 Accuracy is measured against the direct model (:meth:`ForceSurrogate.accuracy`) and recorded at
 build time against the swept ``q_y`` and ``q_theta`` columns (which the fit never sees): typically
-1e-10 of max|Q| over the box, far inside the 0.5 % the issue asks for.
+1e-10 of max|Q| over the box, far inside the required 0.5 %.
 
 Mirror symmetry.  For equal cubes U_ac is even in theta; the symmetrised quadrature of
 :class:`~acousim.forces.GorkovDimer` makes the swept potential even to round-off, and the surrogate
@@ -45,6 +45,7 @@ from scipy.optimize import brentq
 
 from .dimer import CubeDimer
 from .field import StandingWave
+from .force_model import ForceCoefficients
 from .forces import GorkovDimer
 from .medium import GRAVITY
 
@@ -155,6 +156,16 @@ class ForceSurrogate:
         pad = lambda c: np.pad(c, (0, n - c.size))
         da, db, dg = (pad(cheb.chebder(c)) if c.size > 1 else np.zeros(n) for c in (a, b, g))
         return pad(a), pad(b), pad(g), da, db, dg
+
+    def force_coefficients(self) -> ForceCoefficients:
+        """The :class:`~acousim.force_model.ForceModel` height structure of the forces.
+
+        ``Q_y + M g = -dU_ac/dZ = 2k (beta sin 2kZ - gamma cos 2kZ)``, so A_y = 0, B_y = -2k gamma,
+        C_y = 2k beta [N]; ``Q_theta = -dU_ac/dtheta``, so (A, B, C)_theta = -(alpha', beta', gamma') [N m].
+        """
+        _, b, g, da, db, dg = self.coefficient_arrays()
+        return ForceCoefficients(q_y_a=np.zeros(1), q_y_b=-self.two_k * g, q_y_c=self.two_k * b,
+                                 q_theta_a=-da, q_theta_b=-db, q_theta_c=-dg)
 
     # ------------------------------------------------------------------ physics
     def acoustic_potential(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from fitting.atomic import atomic_write_text
-from fitting.library import library_exponents, term_name
+from cubedimer.atomic import atomic_write_text, write_json
+from cubedimer.terms import library_exponents, term_name
 
 from .forces import GorkovDimer
 
@@ -219,7 +219,8 @@ class StaticCoefficients:
         }
 
     def to_json(self, path: str | os.PathLike) -> None:
-        atomic_write_text(path, json.dumps(self.to_dict(), indent=2, sort_keys=False) + "\n")
+        """Write :meth:`to_dict` as JSON (the suite's one JSON writer, atomic)."""
+        write_json(path, self.to_dict())
 
 
 def fit_static_coefficients(

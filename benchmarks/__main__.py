@@ -1,6 +1,7 @@
 """Run every benchmark module and write one markdown table file.
 
-Each module ``benchmarks/bench_*.py`` exposes ``main() -> str`` returning a markdown section.
+Each module ``benchmarks/bench_*.py`` exposes ``main() -> str`` returning a markdown section; every
+such module is found and run (``acousim``, ``executor``, ``fitting``, ``twin``).
 ``--only NAME`` runs one (e.g. ``--only acousim``).
 """
 from __future__ import annotations
@@ -11,9 +12,10 @@ import os
 import pkgutil
 import platform
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from cubedimer.atomic import atomic_write_text
 
 
 def main(argv=None) -> int:
@@ -40,11 +42,7 @@ def main(argv=None) -> int:
         sections.append(f"\n_{name}: {time.perf_counter() - t0:.1f} s wall._\n")
     text = "\n".join(sections) + "\n"
     out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=".results.")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, out)
+    atomic_write_text(out, text)  # readable by others as the umask allows
     print(text)
     print(f"[bench] written {out}", file=sys.stderr)
     return 0

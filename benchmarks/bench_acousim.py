@@ -1,4 +1,4 @@
-"""Sweep throughput and accuracy against mesh size (issue: acousim sweeps).
+"""Sweep throughput and accuracy against mesh size.
 
 Accuracy: max |Q_theta - exact| / max |exact| over a 41 x 41 (theta in [-0.9, 0.9], y in
 [-200, 200] um) grid, against the closed form of ``acousim.analytic``.  Throughput: grid points

@@ -1,4 +1,4 @@
-"""Benchmarks of the fitting package (issue #4): integrator speed, 30-run pipeline, baselines.
+"""Benchmarks of the fitting package: integrator speed, 30-run pipeline, baselines.
 
 Run ``python -m benchmarks.bench_fitting [--runs 30] [--workers 2]``: prints a markdown report.
 ``main()`` returns it (the ``python -m benchmarks`` runner's contract); ``run(out_lines)``
@@ -83,7 +83,7 @@ def _support_stats(model, truth):
 def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) -> None:
     from fitting.compare import paired_wilcoxon, per_run_losses
     from fitting.ensemble import mean_pvalues
-    from fitting.executor import ExecutorConfig
+    from cubedimer.executor import ExecutorConfig
     from fitting.model import TERMS
     from fitting.pipeline import FitConfig, fit_dataset
     from fitting.regression import RegressionConfig, fit_ensemble_regression, fit_regression

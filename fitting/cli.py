@@ -1,6 +1,6 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
-* ``fit DATA_DIR --out OUT_DIR [--workers N] [--strict] [--no-plots] [--max-evals N]``:
+* ``fit DATA_DIR --out OUT_DIR [--workers N | --scheduler ADDRESS] [--strict] [--no-plots] [--max-evals N]``:
   steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
@@ -21,7 +21,14 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from cubedimer.cli import (OneLineParser, add_executor_arguments, check_limit, executor_config, positive_float,
+                           positive_int, prepare_output_dir, run_cli)
+
 __all__ = ["main"]
+
+#: Most runs and frames per run of a synthetic data set (frames are held in memory before writing).
+MAX_SYNTH_RUNS = 10_000
+MAX_SYNTH_FRAMES_PER_RUN = 2_000_000
 
 
 def _log(msg: str) -> None:
@@ -29,9 +36,9 @@ def _log(msg: str) -> None:
 
 
 def _cmd_fit(a: argparse.Namespace) -> int:
-    from .executor import ExecutorConfig
     from .pipeline import FitConfig, fit_dataset
 
+    prepare_output_dir(a.out, "--out", create=False)
     cfg = FitConfig()
     if a.max_evals:
         cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
@@ -42,7 +49,7 @@ def _cmd_fit(a: argparse.Namespace) -> int:
     if getattr(a, "selection", None):
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
     t0 = time.perf_counter()
-    res = fit_dataset(a.data_dir, a.out, cfg, ExecutorConfig(workers=a.workers), strict=a.strict,
+    res = fit_dataset(a.data_dir, a.out, cfg, executor_config(a), strict=a.strict,
                       plots=not a.no_plots, progress=not a.quiet, log=_log)
     _log(f"wrote {Path(a.out) / 'model.json'} in {time.perf_counter() - t0:.1f} s")
     for eq, terms in res.model.equations().items():
@@ -51,12 +58,13 @@ def _cmd_fit(a: argparse.Namespace) -> int:
 
 
 def _cmd_compare(a: argparse.Namespace) -> int:
-    from .atomic import atomic_write_json
+    from cubedimer.atomic import write_json
     from .compare import compare_models, cross_coupling_mask, drop_terms
-    from .dataset import DatasetError, load_dataset
+    from cubedimer.dataset import DatasetError, load_dataset
     from .model import PolynomialModel, Scales
     from .pipeline import FitConfig, prepare_runs
 
+    prepare_output_dir(a.out, "--out", create=False)
     try:
         data = json.loads(Path(a.model).read_text())
         ref = PolynomialModel.from_json(data)
@@ -77,7 +85,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     cmp = compare_models(ref, variant, [p.derivs for p in prepared], scales,
                          names=[p.run.name for p in prepared], reoptimise=not a.no_reoptimise)
     out = {"variant_label": label, **cmp.to_json()}
-    atomic_write_json(Path(a.out) / "compare.json", out)
+    write_json(Path(a.out) / "compare.json", out)
     for name, t in (("shape", cmp.shape_test), ("Poincare", cmp.poincare_test)):
         print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
               f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")
@@ -90,6 +98,9 @@ def _cmd_compare(a: argparse.Namespace) -> int:
 def _cmd_synth(a: argparse.Namespace) -> int:
     from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
+    check_limit("--runs", a.runs, MAX_SYNTH_RUNS)
+    check_limit("frames per run (--duration x --fps)", a.duration * a.fps, MAX_SYNTH_FRAMES_PER_RUN)
+    prepare_output_dir(a.out_dir, "OUT_DIR", create=False)
     cfg = SyntheticConfig(n_runs=a.runs, duration=a.duration, fps=a.fps, noise_y=a.noise_y,
                           noise_theta=a.noise_theta, seed=a.seed)
     write_dataset(a.out_dir, paper_reduced_model(), cfg)
@@ -97,18 +108,61 @@ def _cmd_synth(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_plan(a: argparse.Namespace) -> int:
+    from cubedimer.cli import UserInputError
+    from .model import PolynomialModel
+    from .oracle import NoiseLevels, plan_runs
+
+    try:
+        model = PolynomialModel.from_json(str(a.model))
+    except (OSError, ValueError, KeyError) as exc:
+        raise UserInputError(f"{a.model}: not a readable model.json ({exc})") from None
+    try:
+        plan = plan_runs(model, NoiseLevels(a.noise_y, a.noise_theta), a.duration, a.fps, a.term, target_z=a.target_z,
+                         size=a.size, n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
+                         y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude)
+    except (ValueError, RuntimeError) as exc:
+        raise UserInputError(str(exc)) from None
+    print(plan.format_table())
+    return 0
+
+
+def _add_plan(sub) -> None:
+    """``plan``: how many runs make a term resolvable (the oracle's experiment planner)."""
+    from cubedimer.cli import positive_float, positive_int
+
+    p = sub.add_parser("plan", help="how many runs make a term resolvable (oracle z of integral-form least squares)")
+    p.add_argument("--model", required=True, help="model.json (fit's output or a truth.json)")
+    p.add_argument("--term", required=True, help="EQUATION:TERM, e.g. thetaddot:y^2*theta")
+    p.add_argument("--size", type=float, default=None, help="the term's coefficient [SI] (default: the model's)")
+    p.add_argument("--noise-y", type=positive_float, required=True, help="tracking noise of y [m]")
+    p.add_argument("--noise-theta", type=positive_float, required=True, help="tracking noise of theta [-]")
+    p.add_argument("--duration", type=positive_float, default=3.0, help="run length [s]")
+    p.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
+    p.add_argument("--target-z", type=positive_float, default=5.0, help="oracle z that counts as resolvable")
+    p.add_argument("--runs", type=positive_int, nargs="+", default=[4, 6, 8, 10, 12, 16, 20, 30, 50],
+                   help="rows of the table (numbers of runs)")
+    p.add_argument("--reference-runs", type=positive_int, default=48,
+                   help="reference runs the per-run information is measured on")
+    p.add_argument("--y-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="range of initial y amplitudes [m] (default 60e-6 150e-6)")
+    p.add_argument("--theta-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="range of initial theta amplitudes [-] (default 0.08 0.4)")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_plan)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
-    sub = p.add_subparsers(dest="command", required=True)
+    p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     f = sub.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
     f.add_argument("data_dir")
     f.add_argument("--out", required=True, help="output directory (model.json, plots, runs/ cache)")
-    f.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     f.add_argument("--no-plots", action="store_true")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
-    f.add_argument("--max-evals", type=int, default=None, help="objective evaluations per run refinement")
-    f.add_argument("--joint-max-evals", type=int, default=None, help="evaluations of the joint re-optimisation")
+    f.add_argument("--max-evals", type=positive_int, default=None, help="objective evaluations per run refinement")
+    f.add_argument("--joint-max-evals", type=positive_int, default=None, help="evaluations of the joint re-optimisation")
     f.add_argument("--selection", choices=("significance", "zscore", "backward"), default=None,
                    help="term selection: 'significance' (default: the mean coefficient across runs is "
                         "significantly non-zero, t-test with Holm correction at 0.01), 'zscore' (the paper's "
@@ -116,6 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--relative-threshold", action="store_true",
                    help="apply the regression threshold to each equation relative to its signal size (for a hinge "
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
+    add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
     c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
     c.add_argument("data_dir")
@@ -128,25 +183,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_cmd_compare)
     s = sub.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
     s.add_argument("out_dir")
-    s.add_argument("--runs", type=int, default=15)
-    s.add_argument("--duration", type=float, default=3.0, help="[s]")
-    s.add_argument("--fps", type=float, default=1500.0)
+    s.add_argument("--runs", type=positive_int, default=15)
+    s.add_argument("--duration", type=positive_float, default=3.0, help="[s]")
+    s.add_argument("--fps", type=positive_float, default=1500.0)
     s.add_argument("--noise-y", type=float, default=1e-6, help="[m]")
     s.add_argument("--noise-theta", type=float, default=0.005)
     s.add_argument("--seed", type=int, default=0)
     s.set_defaults(func=_cmd_synth)
+    _add_plan(sub)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .dataset import DatasetError
-
-    args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except DatasetError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("error: interrupted (finished run refinements are kept; rerun the same command to resume)", file=sys.stderr)
-        return 130
+    return run_cli(build_parser(), argv)

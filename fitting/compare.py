@@ -1,4 +1,4 @@
-"""Model comparison (step 5): a variant against the minimal model on every run.
+"""Model comparison: a variant against the minimal model on every run.
 
 Each model is simulated from every run's initial state; the per-run shape and Poincare errors
 (:mod:`fitting.losses`) are compared with the Wilcoxon signed-rank test on the paired per-run
@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.stats import wilcoxon
 
 from .derivatives import Derivatives
-from .library import EQUATION_NAMES, parse_term
+from cubedimer.terms import EQUATION_NAMES, parse_term
 from .losses import LossTerms, LossWeights
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference

@@ -30,8 +30,9 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .library import EQUATION_NAMES
-from .model import DAMPING_TERMS, TERMS, PolynomialModel
+from cubedimer.terms import EQUATION_NAMES
+from .model import TERMS, PolynomialModel, damping_mask
+from .multiple_testing import holm_reject
 
 __all__ = ["EnsembleConfig", "TermStatistics", "term_statistics", "select_terms", "select_significant_terms",
            "mean_pvalues", "Z_CAP", "least_squares_on_support"]
@@ -79,8 +80,7 @@ def select_terms(stats: TermStatistics, config: EnsembleConfig = EnsembleConfig(
     """Boolean mask (2, 35) of the minimal model's terms."""
     mask = stats.zscore > config.z_threshold
     if config.keep_damping:
-        for q, eq in enumerate(EQUATION_NAMES):
-            mask[q, TERMS.index(DAMPING_TERMS[eq])] = True
+        mask |= damping_mask()
     return mask
 
 
@@ -98,19 +98,11 @@ def select_significant_terms(stats: TermStatistics, alpha: float = 0.01, keep_da
     """Terms whose mean coefficient across runs is significantly non-zero (module docstring): Holm-Bonferroni
     over the terms present in at least one run, family-wise level ``alpha``; plus the damping terms."""
     p = mean_pvalues(stats)
-    tested = np.flatnonzero(stats.inclusion.ravel() > 0)
-    order = tested[np.argsort(p.ravel()[tested], kind="stable")]
-    keep = np.zeros(p.size, bool)
-    m = len(order)
-    for rank, idx in enumerate(order):
-        if p.ravel()[idx] <= alpha / (m - rank):
-            keep[idx] = True
-        else:
-            break  # Holm: stop at the first non-rejection
-    mask = keep.reshape(p.shape)
+    tested = stats.inclusion > 0
+    mask = np.zeros(p.shape, bool)
+    mask[tested] = holm_reject(p[tested], alpha)
     if keep_damping:
-        for q, eq in enumerate(EQUATION_NAMES):
-            mask[q, TERMS.index(DAMPING_TERMS[eq])] = True
+        mask |= damping_mask()
     return mask
 
 
@@ -132,7 +124,7 @@ def least_squares_on_support(X: Sequence[NDArray], A: Sequence[NDArray], mask: N
     ndarray (2, 35)
         Scaled coefficients, zero outside ``mask``.
     """
-    from .library import evaluate_library
+    from cubedimer.terms import evaluate_library
 
     Theta = np.vstack(library if library is not None else [evaluate_library(x) for x in X])
     acc = np.vstack(A)

@@ -44,12 +44,14 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .multiple_testing import holm_z_threshold
+
 if TYPE_CHECKING:
-    from .dataset import Run
+    from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
 __all__ = ["column_states", "double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
-           "IntegralFit", "fit_integral_form", "significance_threshold", "IntegralSelection",
+           "IntegralFit", "fit_integral_form", "IntegralSelection",
            "select_integral_form", "integral_form_selection", "METHOD"]
 
 
@@ -202,21 +204,9 @@ def fit_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], 
     return _ols(X, b, n_win, int(max(windows)))
 
 
-def significance_threshold(alpha: float, n_library: int, rank: int) -> float:
-    """|z| Holm's step-down rule asks of the ``rank``-th most significant of ``n_library`` terms.
-
-    Two-sided normal p <= alpha / (n_library - rank + 1): Bonferroni (alpha / n_library) for the most
-    significant term, alpha for the ``n_library``-th.  Family-wise error rate ``alpha``.
-    """
-    from scipy.special import ndtri
-
-    p = alpha / max(n_library - rank + 1, 1)
-    return float(ndtri(1.0 - 0.5 * p))
-
-
 def _is_velocity_term(name: str) -> bool:
     """A library term with a velocity factor (FORMATS.md names); other names: contains "dot"."""
-    from .library import is_velocity_free
+    from cubedimer.terms import is_velocity_free
 
     try:
         return not is_velocity_free(name)
@@ -228,7 +218,7 @@ def _holm_rejects_all(z: NDArray, alpha: float, n_library: int) -> bool:
     """True if Holm's rule over ``n_library`` hypotheses declares every one of the terms with ``z`` significant
     (the terms not in ``z``, dropped before, count as the least significant ones)."""
     az = np.sort(np.abs(np.nan_to_num(z, nan=0.0)))[::-1]
-    thr = np.array([significance_threshold(alpha, n_library, k + 1) for k in range(az.size)])
+    thr = np.array([holm_z_threshold(alpha, n_library, k + 1) for k in range(az.size)])
     return bool(np.all(az >= thr))
 
 
@@ -330,7 +320,7 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
         # harmonic y motion y^2*theta and ydot^2*theta are nearly collinear and would otherwise be chosen
         # between by noise)
         velocity = np.array([_is_velocity_term(names[k]) for k in keep])
-        weak_velocity = velocity & (absz < significance_threshold(alpha, len(names), 1))
+        weak_velocity = velocity & (absz < holm_z_threshold(alpha, len(names), 1))
         pool = np.flatnonzero(weak_velocity) if weak_velocity.any() else np.arange(len(keep))
         worst = int(pool[np.argmin(absz[pool])])
         dropped.append(names[keep.pop(worst)])
@@ -395,7 +385,7 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
 
     Parameters
     ----------
-    runs : per run :class:`fitting.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
+    runs : per run :class:`cubedimer.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
     derivs : per run :class:`fitting.derivatives.Derivatives` of the same run (the smoothed states the
         library is evaluated on; their ``trim`` edge frames are dropped)
     alpha : float
@@ -408,8 +398,8 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
     dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the dominant y
     frequency, theta windows from the dominant theta frequency of each run).
     """
-    from .library import EQUATION_NAMES, evaluate_library, library_terms
-    from .spectra import dominant_frequency
+    from cubedimer.terms import EQUATION_NAMES, evaluate_library, library_terms
+    from cubedimer.spectra import dominant_frequency
 
     dts = [float(r.dt) for r in runs]
     freqs = [(dominant_frequency(np.asarray(r.y, float), dt), dominant_frequency(np.asarray(r.theta, float), dt))

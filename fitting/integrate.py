@@ -2,18 +2,18 @@
 
 A polynomial model is given by an exponent table ``exps`` (n_terms, 4) over the state
 [y, ydot, theta, thetadot] and a coefficient matrix ``coef`` (2, n_terms) for the accelerations
-[yddot, thetaddot].  The right-hand side is evaluated with per-variable power tables (powers up
+[yddot, thetaddot].  The acceleration is evaluated with per-variable power tables (powers up
 to 3 for the cubic library), so one evaluation costs ~2 multiplications per term and allocates
-nothing.  Everything runs in numba ``@njit`` code; :func:`integrate_batch` integrates many
-(model, initial state) pairs in one compiled call (no per-trajectory Python overhead).
+nothing.  The integrator is the suite's one compiled RK4, :func:`cubedimer.rk4.rk4`;
+:func:`integrate_batch` integrates many (model, initial state) pairs in one compiled call (no
+per-trajectory Python overhead).
 
 Accuracy: classical RK4 has a local error O(h^5); with ``h * omega <= 0.05`` (omega the
-fastest angular frequency) the phase error is ~(h omega)^5 / 120 per step, ~1.5e-5 rad after
-66 periods (3 s at 22 Hz) (checked against the analytic solution and DOP853 at rtol=1e-11 in
-the tests and the benchmark).
+fastest angular frequency) the phase error is ~(h omega)^5 / 120 per step (checked against the
+analytic solution and DOP853 at rtol=1e-11 in the tests and the benchmark).
 
 Blow-up: integration stops as soon as any state leaves ``|x_i| <= bound_i`` or becomes
-non-finite; the number of valid output samples is returned (never an exception or NaN in the
+non-finite; the number of valid output samples is returned (never an exception, NaN or inf in the
 valid part).
 """
 from __future__ import annotations
@@ -22,14 +22,18 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.rk4 import rk4
+
 __all__ = ["integrate", "integrate_batch", "rhs"]
 
 _MAXPOW = 8
 
 
-@nb.njit(cache=True, inline="always")
-def _accel(x0, x1, x2, x3, exps, c0, c1, pw):
-    # power table pw[var, k] = x_var ** k
+@nb.njit(cache=True)
+def _polynomial_accel(x0, x1, x2, x3, args):
+    """(yddot, thetaddot) = coef @ monomials(x); ``args = (exps, c0, c1, pw)`` with the scratch power
+    table ``pw[var, k] = x_var ** k``."""
+    exps, c0, c1, pw = args
     for k in range(1, pw.shape[1]):
         pw[0, k] = pw[0, k - 1] * x0
         pw[1, k] = pw[1, k - 1] * x1
@@ -45,57 +49,26 @@ def _accel(x0, x1, x2, x3, exps, c0, c1, pw):
 
 
 @nb.njit(cache=True)
-def _rk4_core(coef, exps, x0, dt, n_out, substeps, bound, out):
-    """Integrate one model; fill ``out[:n_valid]``; return n_valid."""
+def _integrate_one(coef, exps, x0, dt, n_out, substeps, bound, out):
+    """Integrate one model with the core RK4 in the box |x_i| <= bound_i; fill ``out[:n_valid]``;
+    return n_valid."""
     maxp = 1
     for j in range(exps.shape[0]):
         for i in range(4):
             if exps[j, i] > maxp:
                 maxp = exps[j, i]
     pw = np.ones((4, maxp + 1))
-    c0 = coef[0]
-    c1 = coef[1]
-    h = dt / substeps
-    y, yd, th, thd = x0[0], x0[1], x0[2], x0[3]
-    out[0, 0] = y
-    out[0, 1] = yd
-    out[0, 2] = th
-    out[0, 3] = thd
-    for n in range(1, n_out):
-        for s in range(substeps):
-            a1, b1 = _accel(y, yd, th, thd, exps, c0, c1, pw)
-            k1y, k1yd, k1t, k1td = yd, a1, thd, b1
-            a2, b2 = _accel(y + 0.5 * h * k1y, yd + 0.5 * h * k1yd, th + 0.5 * h * k1t,
-                            thd + 0.5 * h * k1td, exps, c0, c1, pw)
-            k2y, k2yd, k2t, k2td = yd + 0.5 * h * k1yd, a2, thd + 0.5 * h * k1td, b2
-            a3, b3 = _accel(y + 0.5 * h * k2y, yd + 0.5 * h * k2yd, th + 0.5 * h * k2t,
-                            thd + 0.5 * h * k2td, exps, c0, c1, pw)
-            k3y, k3yd, k3t, k3td = yd + 0.5 * h * k2yd, a3, thd + 0.5 * h * k2td, b3
-            a4, b4 = _accel(y + h * k3y, yd + h * k3yd, th + h * k3t, thd + h * k3td,
-                            exps, c0, c1, pw)
-            k4y, k4yd, k4t, k4td = yd + h * k3yd, a4, thd + h * k3td, b4
-            y += h / 6.0 * (k1y + 2.0 * k2y + 2.0 * k3y + k4y)
-            yd += h / 6.0 * (k1yd + 2.0 * k2yd + 2.0 * k3yd + k4yd)
-            th += h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
-            thd += h / 6.0 * (k1td + 2.0 * k2td + 2.0 * k3td + k4td)
-        ok = (abs(y) <= bound[0]) and (abs(yd) <= bound[1]) and (abs(th) <= bound[2]) \
-            and (abs(thd) <= bound[3])
-        if not ok:  # also catches NaN (comparisons are False)
-            return n
-        out[n, 0] = y
-        out[n, 1] = yd
-        out[n, 2] = th
-        out[n, 3] = thd
-    return n_out
+    n_valid, _ = rk4(_polynomial_accel, (exps, coef[0], coef[1], pw), x0, dt / substeps, substeps, n_out,
+                     -bound, bound, out)
+    return n_valid
 
 
 @nb.njit(cache=True)
-def _rk4_batch(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid):
-    # serial on purpose: parallelism comes from the process pool (fitting.executor), and numba's
+def _integrate_many(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid):
+    # serial on purpose: parallelism comes from the process pool (cubedimer.executor), and numba's
     # OpenMP threading layer is not fork-safe
     for b in range(coefs.shape[0]):
-        n_valid[b] = _rk4_core(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps,
-                               bounds[b], out[b])
+        n_valid[b] = _integrate_one(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps, bounds[b], out[b])
 
 
 def _as_bound(bound, n: int | None = None) -> NDArray[np.float64]:
@@ -144,7 +117,7 @@ def integrate(
     if exps.max(initial=0) > _MAXPOW:
         raise ValueError(f"monomial powers above {_MAXPOW} are not supported")
     out = np.full((int(n_out), 4), np.nan)
-    nv = _rk4_core(np.ascontiguousarray(coef, dtype=float), exps,
+    nv = _integrate_one(np.ascontiguousarray(coef, dtype=float), exps,
                    np.ascontiguousarray(x0, dtype=float), float(dt), int(n_out), int(substeps),
                    _as_bound(bound), out)
     return out, int(nv)
@@ -189,7 +162,7 @@ def integrate_batch(
     n_outs = np.ascontiguousarray(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)))
     out = np.full((B, int(n_outs.max()), 4), np.nan)
     n_valid = np.zeros(B, dtype=np.int64)
-    _rk4_batch(coefs, np.ascontiguousarray(exps, dtype=np.int64), x0s, dts, n_outs,
+    _integrate_many(coefs, np.ascontiguousarray(exps, dtype=np.int64), x0s, dts, n_outs,
                int(substeps), _as_bound(bound, B), out, n_valid)
     return out, n_valid
 

@@ -47,8 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from .poincare import poincare_section
-from .spectra import dominant_frequency
+from cubedimer.poincare import poincare_section
+from cubedimer.spectra import dominant_frequency
 
 __all__ = ["LossWeights", "LossTerms", "Reference", "make_reference", "loss_terms", "rest_model_terms"]
 

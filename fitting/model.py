@@ -15,15 +15,24 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .integrate import integrate
-from .library import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_exponents, library_terms, parse_term
+from cubedimer.terms import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_exponents, library_terms, parse_term
 
-__all__ = ["PolynomialModel", "Scales", "TERMS", "EXPONENTS", "DAMPING_TERMS"]
+__all__ = ["PolynomialModel", "Scales", "TERMS", "EXPONENTS", "DAMPING_TERMS", "damping_mask"]
 
 TERMS: tuple[str, ...] = tuple(library_terms(3))
 EXPONENTS: NDArray[np.int64] = library_exponents(3)
 EXPONENTS.setflags(write=False)
 #: The viscous damping term of each equation (always kept in the minimal model).
 DAMPING_TERMS: dict[str, str] = {"yddot": "ydot", "thetaddot": "thetadot"}
+
+
+def damping_mask() -> NDArray[np.bool_]:
+    """Boolean mask (2, n_terms) that is True at the linear damping term of each equation
+    (``ydot`` in yddot, ``thetadot`` in thetaddot): the terms every selection rule keeps."""
+    m = np.zeros((len(EQUATION_NAMES), len(TERMS)), bool)
+    for q, eq in enumerate(EQUATION_NAMES):
+        m[q, TERMS.index(DAMPING_TERMS[eq])] = True
+    return m
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,23 @@
-"""The model-discovery pipeline (steps 1-4 of issue #4): data -> C0 -> refined runs -> minimal model.
+"""The model-discovery pipeline: data -> C0 -> refined runs -> minimal model.
 
 :func:`fit_dataset` loads a data set, smooths and differentiates every run, classifies its
 attractor, fits the regression model C0 (per run, and once jointly for reference), refines
 every run's C0 against its long-time features in parallel (through
-:func:`fitting.executor.map_ordered`), computes z-scores and inclusion frequencies, selects
+:func:`cubedimer.executor.map_ordered`), computes z-scores and inclusion frequencies, selects
 the minimal model and re-optimises it jointly on all runs.  Each finished per-run refinement is
 saved to ``OUT_DIR/runs/<file stem>.json`` together with a fingerprint of its input and settings,
 so an interrupted fit resumes without recomputing it.
+
+Never a blown-up model: when the jointly re-optimised minimal model leaves the blow-up bound on any
+run, :func:`fit_runs` falls back to the best of (a) the minimal model without its least significant
+terms, (b) the regression-only ensemble (median of the per-run C0 on the selected terms) and (c) the
+pooled integral-form model, each integrated over every run and scored with the long-time loss; the
+winner is re-optimised jointly and ``model.json["fallback"]`` says what happened.  If none of them
+integrates over every run with a loss below :data:`MAX_SANE_LOSS`, :class:`NoSaneModelError` is raised
+and nothing is written.
+
+Beside every selected term, ``model.json["oracle"]`` gives the oracle standard error and z of the final
+model (:mod:`fitting.oracle`) at the data's estimated tracking noise.
 """
 from __future__ import annotations
 
@@ -19,24 +30,34 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .atomic import atomic_write_json
-from .attractors import AttractorClass, ClassifyConfig, classify_signal
-from .dataset import Dataset, LoadConfig, Run, load_dataset
+from cubedimer.atomic import write_json
+from cubedimer.cli import UserInputError
+from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_trajectory
+from cubedimer.dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
                        term_statistics)
-from .executor import ExecutorConfig, map_ordered
+from cubedimer.executor import ExecutorConfig, map_ordered
 from .integral_form import METHOD as INTEGRAL_METHOD, IntegralSelection, integral_form_selection
-from .library import EQUATION_NAMES, STATE_NAMES
+from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
-from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
+from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales, damping_mask
+from .oracle import OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
 from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
 from .selection import SelectionConfig, SelectionResult, backward_elimination
-from .spectra import dominant_frequency
+from cubedimer.spectra import dominant_frequency
 
 __all__ = ["FitConfig", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
-           "fit_dataset", "model_json"]
+           "fit_dataset", "model_json", "NoSaneModelError", "MAX_SANE_LOSS", "fallback_candidates"]
+
+#: A fallback model must integrate over every run and have a mean long-time loss below this (the rest
+#: model, a trajectory sitting at the origin, scores ~2.5: shape ~0.5, Poincare 1, frequency 1).
+MAX_SANE_LOSS = 1.0
+
+
+class NoSaneModelError(UserInputError):
+    """The minimal model blows up and no fallback integrates over every run (nothing is written)."""
 
 
 @dataclass(frozen=True)
@@ -106,7 +127,8 @@ class FitResult:
     joint_start: PolynomialModel
     joint: RefineResult
     config: FitConfig
-    skipped: tuple[str, ...] = ()
+    skipped: tuple[dict, ...] = ()
+    n_glitches: int = 0
     #: the paper's rule (z > threshold plus damping terms) on the per-run refinements; equals
     #: ``mask`` when ``config.selection.rule == "zscore"``
     mask_zscore: np.ndarray | None = None
@@ -118,6 +140,10 @@ class FitResult:
     #: the pooled integral-form selection per equation (:func:`fitting.integral_form.integral_form_selection`),
     #: a cross-check reported next to the minimal model; None if the runs are too short for its windows
     integral_form: dict[str, IntegralSelection] | None = None
+    #: when the selected minimal model blew up: ``{"reason", "used", "blown_up_model", "candidates"}``
+    fallback: dict | None = None
+    #: oracle standard errors of the final model's terms at the data's tracking noise
+    oracle: OracleResult | None = None
 
     @property
     def model(self) -> PolynomialModel:
@@ -131,7 +157,7 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
     for r in runs:
         fy = dominant_frequency(r.y, r.dt)
         d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
-        att = classify_signal(d.state[:, 0], d.state[:, 2], r.dt, config.classify)
+        att = classify_trajectory(d.t, d.state, config.classify)
         out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att))
     scales = dataset_scales([p.derivs for p in out], [p.f_y for p in out])
     return out, scales
@@ -206,7 +232,7 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
         i = todo[k]
         fits[i] = rf
         if cache is not None:
-            atomic_write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
+            write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
 
     map_ordered(refine_run, [(prepared[i].run.name, derivs[i], scales, config, candidates) for i in todo],
                 config=executor, desc="refining runs", progress=progress, on_result=save)
@@ -268,9 +294,99 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     joint = refine(joint_start, derivs, scales, config.joint, mask=mask)
     log(f"final mean loss {joint.loss_end.total:.4g} (shape {joint.loss_end.shape:.3g}, "
         f"Poincare {joint.loss_end.poincare:.3g}, frequency {joint.loss_end.frequency:.3g})")
+    fallback = None
+    if joint.loss_end.blown_up:
+        joint_start, joint, fallback = _fall_back(joint, mask, stats, run_fits, integral, derivs, scales, config, log)
+        mask = joint.model.support
+    oracle = _oracle(joint.model, prepared, log)
     return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
                      mask=mask, joint_start=joint_start, joint=joint, config=config, mask_zscore=mask_z,
-                     selection=selection, candidate_fit=cand_fit, rule=rule, integral_form=integral)
+                     selection=selection, candidate_fit=cand_fit, rule=rule, integral_form=integral,
+                     fallback=fallback, oracle=oracle)
+
+
+def _oracle(model: PolynomialModel, prepared: Sequence[PreparedRun], log: Callable[[str], None]) -> OracleResult | None:
+    """Oracle standard errors of ``model``'s terms on the runs at the data's estimated tracking noise."""
+    derivs = [p.derivs for p in prepared]
+    try:
+        noise = estimate_tracking_noise([p.run for p in prepared])
+        res = oracle_standard_errors(model, runs_from_data(derivs), noise)
+    except ValueError as err:
+        log(f"oracle skipped: {err}")
+        return None
+    log(f"oracle z at tracking noise {noise.sigma_y:.3g} m / {noise.sigma_theta:.3g}: " + "; ".join(
+        f"{eq}: " + ", ".join(f"{t} {o.z:.3g}" for t, o in terms.items()) for eq, terms in res.terms.items()))
+    return res
+
+
+def _n_blown(per_run: Sequence[LossTerms]) -> int:
+    return sum(int(t.blown_up) for t in per_run)
+
+
+def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermStatistics, run_fits: Sequence[RunFit],
+                        integral: dict[str, IntegralSelection] | None) -> list[tuple[str, PolynomialModel]]:
+    """The models tried when the minimal model blows up, in order of preference.
+
+    1. ``model`` without its k least significant terms (largest ensemble-mean p-value; the damping terms
+       stay), for k = 1, 2, ...: the terms the selection let in last.
+    2. The regression-only ensemble: the median over runs of the per-run regression models C0 on ``mask``.
+    3. The pooled integral-form model (its selected terms and coefficients), if available.
+    """
+    out: list[tuple[str, PolynomialModel]] = []
+    p = mean_pvalues(stats)
+    removable = np.flatnonzero((model.support & ~damping_mask()).ravel())
+    order = removable[np.argsort(-p.ravel()[removable], kind="stable")]  # least significant first
+    names = [f"{EQUATION_NAMES[i // len(TERMS)]}:{TERMS[i % len(TERMS)]}" for i in order]
+    keep = model.support.copy().ravel()
+    for k, idx in enumerate(order[:-1] if len(order) > 1 else []):
+        keep[idx] = False
+        out.append((f"minimal model without {', '.join(names[:k + 1])}", model.with_mask(keep.reshape(mask.shape))))
+    if run_fits:
+        c0 = np.median([f.c0.coef for f in run_fits], axis=0)
+        out.append(("regression-only ensemble (median of the per-run C0 on the selected terms)",
+                    PolynomialModel(np.where(mask, c0, 0.0))))
+    if integral is not None:
+        eqs = {eq: dict(zip(s.terms, map(float, s.coefficients))) for eq, s in integral.items()}
+        out.append(("pooled integral-form model", PolynomialModel.from_equations(eqs)))
+    return out
+
+
+def _fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics, run_fits: Sequence[RunFit],
+               integral: dict[str, IntegralSelection] | None, derivs: Sequence[Derivatives], scales: Scales,
+               config: FitConfig, log: Callable[[str], None]) -> tuple[PolynomialModel, RefineResult, dict]:
+    """Replace a blown-up minimal model by the best sane fallback (module docstring), re-optimised jointly.
+
+    Returns (start of the re-optimisation, its result, the ``fallback`` record); raises
+    :class:`NoSaneModelError` if no candidate integrates over every run with a loss below ``MAX_SANE_LOSS``."""
+    n_blown = _n_blown(joint.per_run_end)
+    reason = (f"the re-optimised minimal model ({int(mask.sum())} terms) blows up on {n_blown} of "
+              f"{len(derivs)} runs")
+    log(f"{reason}: trying fallbacks")
+    refs = [scaled_reference(d, scales) for d in derivs]
+    tried, best = [], None
+    for name, model in fallback_candidates(joint.model, mask, stats, run_fits, integral):
+        c = scales.to_scaled(model.coef)
+        m = model.support
+        obj = Objective(refs, m, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
+        per = obj.per_run(np.where(m, c, 0.0))
+        total = float(np.mean([t.total for t in per]))
+        nb = _n_blown(per)
+        tried.append({"name": name, "loss": total, "blown_up_runs": nb, "n_terms": int(m.sum())})
+        log(f"  fallback {name}: {int(m.sum())} terms, mean loss {total:.4g}, blows up on {nb} runs")
+        if nb == 0 and total < MAX_SANE_LOSS and (best is None or total < best[0]):
+            best = (total, name, model)
+    if best is None:
+        raise NoSaneModelError(f"{reason}, and no fallback (the model without its weakest terms, the regression-only "
+                               "ensemble, the pooled integral-form model) integrates over every run; no model written")
+    _, name, model = best
+    log(f"fallback used: {name}; re-optimising it jointly")
+    # refine never ends worse than its start, and a blow-up scores above MAX_SANE_LOSS: res integrates everywhere
+    res = refine(model, derivs, scales, config.joint, mask=model.support)
+    log(f"fallback final mean loss {res.loss_end.total:.4g} (shape {res.loss_end.shape:.3g}, "
+        f"Poincare {res.loss_end.poincare:.3g}, frequency {res.loss_end.frequency:.3g})")
+    record = {"reason": reason, "used": name, "candidates": tried,
+              "blown_up_model": {"equations": joint.model.equations(), "loss": joint.loss_end.to_dict()}}
+    return model, res, record
 
 
 def model_json(res: FitResult) -> dict:
@@ -300,8 +416,11 @@ def model_json(res: FitResult) -> dict:
         "scales": res.scales.to_dict(),
         "settings": json.loads(json.dumps(asdict(res.config), default=float)),
         "skipped_files": list(res.skipped),
+        "glitch_frames_masked": res.n_glitches,
         "selection": _selection_json(res),
         "integral_form": _integral_form_json(res),
+        "fallback": res.fallback,
+        "oracle": res.oracle.to_json() if res.oracle is not None else None,
     }
 
 
@@ -332,20 +451,21 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
                 progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
     """Run steps 1-4 on ``data_dir`` and write ``out_dir/model.json`` (and plots).
 
-    Bad input raises :class:`~fitting.dataset.DatasetError` before anything is written.
+    Bad input raises :class:`~cubedimer.dataset.DatasetError` before anything is written; a minimal
+    model that blows up with no sane fallback raises :class:`NoSaneModelError` and writes no model.json.
     """
     log = log or (lambda m: None)
     ds: Dataset = load_dataset(data_dir, strict=strict, config=config.load)
     if len(ds.runs) < 2:
-        from .dataset import DatasetError
+        from cubedimer.dataset import DatasetError
         raise DatasetError(f"{data_dir}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
     prepared, scales = prepare_runs(ds.runs, config)
-    log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped); scales: y {scales.length_y:.3g} m, "
+    log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped, {ds.n_glitches} glitch frames masked); scales: y {scales.length_y:.3g} m, "
         f"theta {scales.length_theta:.3g}, time {scales.time:.3g} s")
     out = Path(out_dir)
     res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log)
-    res = FitResult(**{**res.__dict__, "skipped": ds.skipped})
-    atomic_write_json(out / "model.json", model_json(res))
+    res = FitResult(**{**res.__dict__, "skipped": tuple(ds.skipped_files()), "n_glitches": ds.n_glitches})
+    write_json(out / "model.json", model_json(res))
     if plots:
         from .plots import plot_fit
         plot_fit(res, out)

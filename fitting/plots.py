@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .atomic import atomic_save
-from .library import EQUATION_NAMES
+from cubedimer.atomic import atomic_save
+from cubedimer.terms import EQUATION_NAMES
 from .model import TERMS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -25,9 +25,6 @@ __all__ = ["plot_fit", "plot_comparison"]
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     return plt
@@ -84,7 +81,7 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     paths.append(out / "optimisation.png")
     _save(fig, paths[-1])
     # phase portraits and Poincare maps
-    from .poincare import poincare_section
+    from cubedimer.poincare import poincare_section
     from .refine import scaled_reference
 
     runs = res.runs[:n_runs]

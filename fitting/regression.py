@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .derivatives import Derivatives
-from .library import STATE_NAMES, parse_term
+from cubedimer.terms import STATE_NAMES, parse_term
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 
 __all__ = ["RegressionConfig", "dataset_scales", "fit_regression", "fit_ensemble_regression",
@@ -77,7 +77,7 @@ def scaled_data(derivs: Sequence[Derivatives], scales: Scales) -> tuple[list[NDA
 def scaled_library(derivs: Sequence[Derivatives], scales: Scales, matched_filter: bool = True) -> list[NDArray]:
     """Per run: the 35-term library of the scaled smoothed states on the interior frames, its columns
     filtered by the acceleration kernel when ``matched_filter`` (see :class:`RegressionConfig`)."""
-    from .library import evaluate_library
+    from cubedimer.terms import evaluate_library
 
     out = []
     for d in derivs:

@@ -35,9 +35,9 @@ from numpy.typing import NDArray
 
 from .compare import paired_wilcoxon
 from .derivatives import Derivatives
-from .executor import ExecutorConfig, map_ordered
-from .library import EQUATION_NAMES
-from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
+from cubedimer.executor import ExecutorConfig, map_ordered
+from cubedimer.terms import EQUATION_NAMES
+from .model import TERMS, PolynomialModel, Scales, damping_mask
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
 
 def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[np.ndarray, np.ndarray]:
@@ -48,7 +48,7 @@ def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[n
     return c, m
 
 
-__all__ = ["SelectionConfig", "SelectionStep", "SelectionResult", "backward_elimination", "damping_mask"]
+__all__ = ["SelectionConfig", "SelectionStep", "SelectionResult", "backward_elimination"]
 
 
 @dataclass(frozen=True)
@@ -114,13 +114,6 @@ class SelectionResult:
     model: PolynomialModel
     per_run: list[float]
     steps: list[SelectionStep]
-
-
-def damping_mask() -> NDArray[np.bool_]:
-    m = np.zeros((2, len(TERMS)), bool)
-    for q, eq in enumerate(EQUATION_NAMES):
-        m[q, TERMS.index(DAMPING_TERMS[eq])] = True
-    return m
 
 
 def _reopt_task(task: tuple) -> tuple[NDArray, list[float]]:

@@ -11,7 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write_json, atomic_write_text
+from cubedimer.atomic import write_json
+from cubedimer.dataset import write_run_csv
+
 from .model import PolynomialModel
 
 __all__ = ["SyntheticConfig", "paper_reduced_model", "generate_runs", "write_dataset"]
@@ -112,11 +114,10 @@ def write_dataset(out_dir: str | os.PathLike, model: PolynomialModel,
     out.mkdir(parents=True, exist_ok=True)
     runs = generate_runs(model, cfg)
     for i, r in enumerate(runs, 1):
-        lines = ["# synthetic run from fitting.synthetic (SI units)", "t,y,theta"]
-        lines += [f"{t:.7f},{'' if np.isnan(y) else f'{y:.6e}'},{'' if np.isnan(th) else f'{th:.6f}'}"
-                  for t, y, th in zip(r["t"], r["y"], r["theta"])]
-        atomic_write_text(out / f"run{i:02d}.csv", "\n".join(lines) + "\n")
+        write_run_csv(out / f"run{i:02d}.csv", r["t"], r["y"], r["theta"],
+                      ["synthetic run from fitting.synthetic (SI units)"],
+                      t_decimals=7, y_digits=6, theta_decimals=6, missing="")
     truth = {**model.to_json(), "config": asdict(cfg),
              "initial_states": [r["x0"].tolist() for r in runs], "seed": cfg.seed}
-    atomic_write_json(out / "truth.json", truth)
+    write_json(out / "truth.json", truth)
     return runs

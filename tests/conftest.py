@@ -42,9 +42,40 @@ def rng():
 def chromium_required():
     """Skip when no Chromium is installed, unless the run promised one (make test sets
     CUBEDIMER_REQUIRE_BROWSER=1 after installing it), in which case its absence is a failure."""
-    from validation.browser import find_chromium
+    from validation.report.browser_check import find_chromium
 
     if find_chromium() is None:
         if os.environ.get("CUBEDIMER_REQUIRE_BROWSER") == "1":
             pytest.fail("Chromium is required for this run but was not found")
         pytest.skip("Chromium not installed")
+
+
+def _write_csv(path, t, y, theta, header="t,y,theta", comment=True):
+    lines = (["# test file"] if comment else []) + [header]
+    lines += [f"{a:.10g},{b:.10g},{c:.10g}" for a, b, c in zip(t, y, theta)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture
+def write_csv():
+    """Writer of a CSV run: ``write_csv(path, t, y, theta, header=...)``."""
+    return _write_csv
+
+
+@pytest.fixture
+def sine_run():
+    """A clean 22-Hz y / 9-Hz theta signal, 2 s at 1000 fps."""
+    t = np.arange(2000) / 1000.0
+    return t, 1e-4 * np.cos(2 * np.pi * 22 * t), 0.2 * np.sin(2 * np.pi * 9 * t)
+
+
+@pytest.fixture(scope="session")
+def process_cluster():
+    """A real dask cluster on the loopback for the whole session: a scheduler and two daemonic worker
+    processes (as every normal deployment has); yields its address and shuts it down at the end."""
+    pytest.importorskip("dask.distributed")
+    from cubedimer.executor import loopback_cluster
+
+    with loopback_cluster(2) as address:
+        yield address

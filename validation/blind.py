@@ -4,25 +4,26 @@ Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilit
 ``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
 within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
-directory before :func:`validation.diagnose.diagnose_dataset` runs, so the diagnosis never sees it.
+directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 Each finished case is saved as ``cases/caseNNN/result.json`` and not recomputed on a rerun.
 """
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from fitting.atomic import atomic_write_text
+from cubedimer.atomic import atomic_write_text, write_json
 
-from .reporting import write_json_atomic
+__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "BlindConfig", "draw_case", "run_case", "score_case", "run_blind",
+           "summarize", "blind_table", "confusion_figure"]
 
-__all__ = ["STRENGTHS", "BlindConfig", "draw_case", "run_case", "run_blind", "summarize"]
+logger = logging.getLogger(__name__)
 
 #: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.
 STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
@@ -45,6 +46,12 @@ class BlindConfig:
     duration: float = 3.0
     pressure_error: float = 0.10
     long_time: bool = False
+
+    def __post_init__(self):
+        if self.cases < 1 or self.runs < 3 or not self.duration > 0:
+            raise ValueError("a blind study needs cases >= 1, runs >= 3 and duration > 0")
+        if not 0 <= self.pressure_error < 1:
+            raise ValueError(f"pressure_error must lie in [0, 1), got {self.pressure_error}")
 
 
 def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
@@ -75,7 +82,7 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     from acousim.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
-    from .diagnose import DiagnoseConfig, diagnose_dataset
+    from .diagnosis import DiagnoseConfig, diagnose_dataset
 
     data = out_dir / "data"
     if data.exists():
@@ -99,14 +106,14 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
                   "gap_before": None, "gap_after": None, "shrink": None, "pressure_true_pa": None,
                   "pressure_calibrated_pa": None, "error": f"generation: {generation_error}", "twin_redraws": retries,
                   "scored": False}
-        write_json_atomic(out_dir / "result.json", result)
+        write_json(out_dir / "result.json", result)
         return result
     truth_path = out_dir / "truth.json"
     os.replace(data / "truth.json", truth_path)  # hidden from the diagnosis
     # the nominal pressure the experimenter believes in is 3 kPa; the truth is off by pressure_error
     meta = json.loads((data / "meta.json").read_text())
     meta["pressure_amplitude_pa"] = 3000.0
-    (data / "meta.json").write_text(json.dumps(meta))
+    write_json(data / "meta.json", meta)
     try:
         diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
         error = None
@@ -115,12 +122,13 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     truth = json.loads(truth_path.read_text())
     result = score_case(case, truth, diag, error)
     result["twin_redraws"] = retries
-    write_json_atomic(out_dir / "result.json", result)
+    write_json(out_dir / "result.json", result)
     shutil.rmtree(data, ignore_errors=True)  # keep the study small on disk; truth and result stay
     return result
 
 
 def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+    """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
     found = [] if diag is None else list(diag["identified"])
     params_err = {}
@@ -149,7 +157,7 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
 
 def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress: bool = True) -> dict:
     """Run (or resume) a blind study and write ``summary.json``, ``blind_table.md`` and the confusion matrix."""
-    from fitting.executor import ExecutorConfig, map_ordered
+    from cubedimer.executor import ExecutorConfig, map_ordered
 
     out = Path(out_dir)
     (out / "cases").mkdir(parents=True, exist_ok=True)
@@ -162,8 +170,8 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
             results[i] = json.loads(path.read_text())
         else:
             todo.append((case, config, str(path.parent)))
-    if progress and results:
-        print(f"[blind] resuming: {len(results)} cases done, {len(todo)} to run", file=sys.stderr)
+    if results:
+        (logger.info if progress else logger.debug)("resuming: %d cases done, %d to run", len(results), len(todo))
     for item in todo:
         Path(item[2]).mkdir(parents=True, exist_ok=True)
     done = map_ordered(_case_task, todo, executor or ExecutorConfig(), desc="blind cases", progress=progress)
@@ -171,7 +179,7 @@ def run_blind(config: BlindConfig, out_dir: str | Path, executor=None, progress:
         results[r["index"]] = r
     ordered = [results[i] for i in sorted(results)]
     summary = summarize(ordered)
-    write_json_atomic(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
+    write_json(out / "summary.json", {"config": config.__dict__, "summary": summary, "cases": ordered})
     atomic_write_text(out / "blind_table.md", blind_table(summary, config))
     confusion_figure(ordered, out / "confusion_matrix.png")
     return summary
@@ -208,6 +216,7 @@ def summarize(results: list[dict]) -> dict:
 
 
 def blind_table(summary: dict, config: BlindConfig) -> str:
+    """The summary of a blind study as a Markdown table, beside the targets."""
     def pct(v):
         return "-" if v is None else f"{100 * v:.0f} %"
 
@@ -231,9 +240,6 @@ def blind_table(summary: dict, config: BlindConfig) -> str:
 def confusion_figure(results: list[dict], path: Path) -> Path:
     """Per true effect: identified (diagonal) or missed; false positives in the row of the case's true
     effects (or 'none').  Cases the twin could not generate are left out."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
     rows = list(STRENGTHS) + ["none"]
@@ -263,6 +269,6 @@ def confusion_figure(results: list[dict], path: Path) -> Path:
     ax.set_ylabel("present in the data (hidden truth)")
     ax.set_title("Blind check: effects present vs identified")
     fig.colorbar(im, ax=ax, label="count")
-    from fitting.atomic import save_figure
+    from cubedimer.atomic import save_figure
 
     return save_figure(fig, path)

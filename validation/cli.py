@@ -8,9 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.cli import OneLineParser, UserInputError, run_cli
+from cubedimer.cli import (OneLineParser, UserInputError, add_executor_arguments, check_limit, executor_config,
+                           positive_float, positive_int, prepare_output_dir, run_cli)
 
 __all__ = ["main"]
+
+#: Most cases of a blind study, and most simulated frames of one case (runs x duration x 2,000 fps).
+MAX_BLIND_CASES = 10_000
+MAX_BLIND_FRAMES_PER_CASE = 20_000_000
 
 
 def _add_compare(sub) -> None:
@@ -55,7 +60,7 @@ def _read_model(path: Path) -> dict:
     for eq, coefs in model["equations"].items():
         if eq not in ("yddot", "thetaddot") or not isinstance(coefs, dict):
             raise UserInputError(f"{path}: unknown equation {eq!r}; expected yddot and thetaddot")
-        from fitting.library import parse_term
+        from cubedimer.terms import parse_term
 
         for term, v in coefs.items():
             try:
@@ -69,12 +74,15 @@ def _read_model(path: Path) -> dict:
 def run_compare(args: argparse.Namespace) -> int:
     from acousim.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 
-    from fitting.atomic import atomic_write_text
+    from cubedimer.atomic import atomic_write_text
 
     from .coefficients import compare_coefficients
-    from .reporting import write_json_atomic
-    from .simulation import model_from_meta, read_meta
+    from cubedimer.atomic import write_json
+    from cubedimer.meta import read_meta
 
+    from .simulation import model_from_meta
+
+    prepare_output_dir(args.out, "--out", create=False)
     model = _read_model(Path(args.model))
     rng = model.get("data_range", {})
     theta_max = args.fit_theta_max or rng.get("theta_abs_max") or 0.3
@@ -105,7 +113,7 @@ def run_compare(args: argparse.Namespace) -> int:
     out = Path(args.out)
     d = cmp.to_dict()
     d["static_fit"] = {"relative_residual": static.relative_residual, "y_origin_of_sweep": static.y_origin}
-    write_json_atomic(out / "comparison.json", d)
+    write_json(out / "comparison.json", d)
     text = f"# Fitted model vs simulated static coefficients\n\n{cmp.origin}.\n\n{cmp.table()}\n"
     atomic_write_text(out / "comparison.md", text)
     print(cmp.table())
@@ -136,6 +144,9 @@ def _add_diagnose(sub) -> None:
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
+    add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
+                           "errors) run one after another in this process, so these options do not change this "
+                           "command; it accepts them so that every command takes the same options.")
     p.set_defaults(func=run_diagnose)
 
 
@@ -146,9 +157,9 @@ def _candidate_names() -> list[str]:
 
 
 def run_diagnose(args: argparse.Namespace) -> int:
-    from fitting.dataset import DatasetError
+    from cubedimer.dataset import DatasetError
 
-    from .diagnose import DiagnoseConfig, diagnose_dataset, write_diagnosis
+    from .diagnosis import DiagnoseConfig, diagnose_dataset, write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -156,8 +167,12 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(f"unknown effect(s) {', '.join(unknown)}; candidates are {', '.join(_candidate_names())}")
     if not 0 < args.alpha < 1:
         raise UserInputError("--alpha must lie in (0, 1)")
-    config = DiagnoseConfig(candidates=cands, alpha=args.alpha, min_relative_improvement=args.min_improvement,
-                            long_time=not args.no_long_time)
+    prepare_output_dir(args.out, "--out", create=False)
+    try:
+        config = DiagnoseConfig(candidates=cands, alpha=args.alpha, min_relative_improvement=args.min_improvement,
+                                long_time=not args.no_long_time)
+    except ValueError as exc:
+        raise UserInputError(f"{exc} (see --help)") from None
     try:
         diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet)
     except (DatasetError, ValueError) as exc:
@@ -182,25 +197,28 @@ def _add_blind(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--cases", type=int, default=50, help="number of data sets")
+    p.add_argument("--cases", type=positive_int, default=50, help="number of data sets")
     p.add_argument("--seed", type=int, default=0, help="seed of the hidden choices")
-    p.add_argument("--runs", type=int, default=10, help="runs per data set")
-    p.add_argument("--duration", type=float, default=3.0, help="duration of each run [s]")
-    p.add_argument("--workers", type=int, default=None, help="parallel worker processes (default: all cores)")
-    p.add_argument("--scheduler", default=None, help="dask.distributed scheduler address (overrides --workers)")
-    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--runs", type=positive_int, default=10, help="runs per data set (at least 3)")
+    p.add_argument("--duration", type=positive_float, default=3.0, help="duration of each run [s]")
+    p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
+                   "on a cluster of several machines it must be a folder every worker sees at the same path")
+    add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "
+                           "inside its task.")
     p.set_defaults(func=run_blind_cli)
 
 
 def run_blind_cli(args: argparse.Namespace) -> int:
-    from fitting.executor import ExecutorConfig
-
     from .blind import BlindConfig, blind_table, run_blind
 
-    if args.cases < 1 or args.runs < 3 or args.duration <= 0:
-        raise UserInputError("need --cases >= 1, --runs >= 3 and --duration > 0")
+    if args.runs < 3:
+        raise UserInputError("need --runs >= 3 (the diagnosis compares held-out runs)")
+    check_limit("--cases", args.cases, MAX_BLIND_CASES)
+    check_limit("frames per case (--runs x --duration x 2000 fps)", args.runs * args.duration * 2000.0,
+                MAX_BLIND_FRAMES_PER_CASE)
+    prepare_output_dir(args.out, "--out", create=False)
     config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration)
-    summary = run_blind(config, args.out, ExecutorConfig(workers=args.workers, scheduler=args.scheduler))
+    summary = run_blind(config, args.out, executor_config(args))
     print(blind_table(summary, config))
     return 0
 
@@ -218,20 +236,24 @@ def _add_report(sub) -> None:
     )
     p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
     p.add_argument("--out", required=True, help="report directory")
-    p.add_argument("--workers", type=int, default=None, help="parallel worker processes (default: all cores)")
-    p.add_argument("--scheduler", default=None, help="dask.distributed scheduler address")
-    p.add_argument("--max-evals", type=int, default=None, help="refinement evaluations per run (default: the fitting default)")
+    p.add_argument("--max-evals", type=positive_int, default=None,
+                   help="refinement evaluations per run (default: the fitting default)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
+    add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
+                           "and figures run in this process.")
     p.set_defaults(func=run_report)
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from fitting.dataset import DatasetError
+    from cubedimer.dataset import DatasetError
 
-    from .report_builder import build_report
+    from .report.pipeline import build_report
 
+    prepare_output_dir(args.out, "--out", create=False)
+    executor = executor_config(args)
     try:
-        build_report(args.data, args.out, args.workers, args.scheduler, progress=not args.quiet, max_evals=args.max_evals)
+        build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
+                     max_evals=args.max_evals)
     except DatasetError as exc:
         raise UserInputError(str(exc)) from None
     return 0

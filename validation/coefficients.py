@@ -30,7 +30,7 @@ from math import comb
 
 import numpy as np
 
-from fitting.library import is_velocity_free, library_terms, parse_term, term_name
+from cubedimer.terms import is_velocity_free, library_terms, parse_term, term_name
 
 __all__ = [
     "TermComparison",

@@ -2,15 +2,12 @@
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
-
-from ..cli import UserInputError
+from cubedimer.atomic import json_text, write_json
+from cubedimer.cli import UserInputError, prepare_output_file
 
 __all__ = ["add_parser", "run_force", "force_on_mesh"]
 
@@ -100,8 +97,8 @@ def run_force(args: argparse.Namespace) -> int:
             raise UserInputError(f"--{name.replace('_', '-')} must be positive, got {v:g} {unit}")
     if not np.isfinite(args.z):
         raise UserInputError("--z must be finite")
-    if args.out is not None and not Path(args.out).resolve().parent.is_dir():
-        raise UserInputError(f"--out {args.out}: directory does not exist")
+    if args.out is not None:
+        prepare_output_file(args.out)
     v, f = _load_mesh(args.mesh)
     medium = Medium(frequency_hz=args.frequency, sound_speed_m_s=args.sound_speed, density_kg_m3=args.air_density)
     try:
@@ -109,17 +106,8 @@ def run_force(args: argparse.Namespace) -> int:
     except MeshError as exc:
         raise UserInputError(str(exc)) from None
     result["settings"]["mesh"] = str(args.mesh)
-    text = json.dumps(result, indent=1) + "\n"
     if args.out is None:
-        sys.stdout.write(text)
-        return 0
-    out = Path(args.out)
-    fd, tmp = tempfile.mkstemp(dir=out.resolve().parent, prefix=".force.", suffix=".json")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        sys.stdout.write(json_text(result))
+    else:
+        write_json(args.out, result)
     return 0

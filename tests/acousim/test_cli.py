@@ -61,3 +61,33 @@ def test_bad_arguments_fail_cleanly(tmp_path, args, message):
 def test_help_explains_units():
     r = run("sweep", "--help")
     assert r.returncode == 0 and "q_theta [N m]" in r.stdout
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--theta", "-0.5:0.5:100000", "--y", "-1e-4:1e-4:100000"], "exceeds the limit"),
+        (["--pressure", "1e300"], "pressure_amplitude_pa = 1e+300 is outside the plausible range"),
+        (["--frequency", "inf"], "must be positive"),
+        (["--density", "1e9"], "particle_density_kg_m3"),
+    ],
+)
+def test_sizes_and_implausible_values_are_refused_in_one_line(tmp_path, args, message):
+    r = run("sweep", *args, "--out", str(tmp_path / "s.csv"))
+    lines = [l for l in r.stderr.strip().splitlines() if l.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and message in lines[0], r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("option", ["--out", "--coefficients", "--render", "--plots"])
+def test_unwritable_output_is_refused_before_computing(tmp_path, option):
+    """A path under a file cannot be created, even by root (who ignores permission bits)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    target = blocker / "sub" / ("figs" if option == "--plots" else "x.out")
+    args = ["--out", str(tmp_path / "s.csv")] if option != "--out" else []
+    r = run("sweep", *args, option, str(target), "--theta", "-0.5:0.5:3", "--y", "-1e-4:1e-4:3")
+    lines = [l for l in r.stderr.strip().splitlines() if l.strip()]
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert lines[0].startswith("error: " + option) and "not a directory" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # nothing computed or written

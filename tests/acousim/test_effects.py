@@ -4,7 +4,8 @@ import pytest
 
 from acousim.dynamics import DimerDynamics
 from acousim.effects import (EFFECT_TYPES, PACKED_PARAMETERS, EffectError, EffectSet, LinearDamping,
-                             MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling, parse_effect)
+                             MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling, packed_effect_accelerations,
+                             parse_effect)
 from acousim.surrogate import cached_surrogate
 
 K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
@@ -75,6 +76,75 @@ def test_compiled_rhs_adds_exactly_the_effect(effect):
         assert d[1] == pytest.approx(ey, abs=1e-12)
         assert d[3] == pytest.approx(et, rel=1e-9, abs=1e-9)
         assert d[0] == 0.0 and d[2] == 0.0  # dy/dt = ydot, dtheta/dt = thetadot untouched
+
+
+def _states(seed, n=20):
+    rng = np.random.default_rng(seed)
+    return rng.uniform(-3e-4, 3e-4, n), rng.uniform(-0.05, 0.05, n), rng.uniform(-0.8, 0.8, n), rng.uniform(-20, 20, n)
+
+
+def test_every_effect_type_has_an_example():
+    assert sorted(e.name for e in EXAMPLES) == sorted(EFFECT_TYPES)
+
+
+@pytest.mark.parametrize("effect", EXAMPLES, ids=lambda e: e.name)
+def test_regressors_are_the_linear_form_of_the_accelerations(effect):
+    """accelerations == regressors @ parameters: the columns the diagnosis fits are the effect itself."""
+    x = _states(5)
+    reg = type(effect).regressors(*x, K, Z_EQ)
+    assert reg.shape == (20, 2, len(effect.parameter_names()))
+    ay, at = effect.accelerations(*x, K, Z_EQ)
+    pred = reg @ effect.parameter_vector()
+    np.testing.assert_allclose(pred[:, 0], ay, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(pred[:, 1], at, rtol=1e-14, atol=0)
+    # column j is the effect with parameter j at 1 and the others at 0, checked against PHYSICS.md
+    for j, p in enumerate(effect.parameter_names()):
+        unit = {q: float(q == p) for q in effect.parameter_names()}
+        ey, et = _expected(effect.name, unit, *x)
+        np.testing.assert_allclose(reg[:, 0, j], ey + 0 * x[0], rtol=1e-14, atol=0)
+        np.testing.assert_allclose(reg[:, 1, j], et + 0 * x[0], rtol=1e-14, atol=0)
+
+
+def test_the_equilibrium_height_may_vary_per_state():
+    """The diagnosis passes Z_eq per sample (its lab origin minus the data's y)."""
+    x = _states(8)
+    z_eq = Z_EQ + np.linspace(-1e-5, 1e-5, 20)
+    reg = PairScattering.regressors(*x, K, z_eq)
+    np.testing.assert_allclose(reg[:, 1, 0], -np.cos(K * (z_eq + x[0])) ** 2 * x[2], rtol=1e-14)
+    ay, at = EffectSet((PairScattering(kappa=2.0),)).accelerations(*x, K, z_eq)
+    np.testing.assert_allclose(at, 2.0 * reg[:, 1, 0], rtol=1e-14)
+
+
+def test_set_regressors_stack_the_effects():
+    s = EffectSet(tuple(EXAMPLES))
+    x = _states(6)
+    reg = s.regressors(*x, K, Z_EQ)
+    assert reg.shape == (20, 2, len(PACKED_PARAMETERS))
+    assert s.parameter_names() == PACKED_PARAMETERS
+    np.testing.assert_array_equal(s.parameter_vector(), s.packed())
+    ay, at = s.accelerations(*x, K, Z_EQ)
+    pred = reg @ s.parameter_vector()
+    np.testing.assert_allclose(pred[:, 0], ay, rtol=1e-13, atol=1e-300)
+    np.testing.assert_allclose(pred[:, 1], at, rtol=1e-13, atol=1e-300)
+    assert EffectSet().regressors(*x, K, Z_EQ).shape == (20, 2, 0)
+
+
+@pytest.mark.parametrize("name", list(EFFECT_TYPES))
+def test_compiled_sum_uses_every_effect_definition(name):
+    """The compiled packed sum adds exactly the numpy terms of each effect type, at its packed slot."""
+    effect = next(e for e in EXAMPLES if e.name == name)
+    packed = EffectSet((effect,)).packed()
+    for y, yd, th, thd in zip(*_states(7, 10)):
+        got = packed_effect_accelerations(y, yd, th, thd, K, Z_EQ, packed)
+        exp = effect.accelerations(y, yd, th, thd, K, Z_EQ)
+        # same columns, same products; only the order of the additions of zeros may differ
+        np.testing.assert_allclose(got, [float(exp[0]), float(exp[1])], rtol=1e-14, atol=1e-300)
+
+
+def test_only_the_air_acts_without_the_field():
+    s = EffectSet(tuple(EXAMPLES))
+    assert s.acting(field_on=False).names == ("linear_damping", "quadratic_drag")
+    assert s.acting(field_on=True) == s
 
 
 def test_any_subset_composes_additively():

@@ -1,5 +1,6 @@
 """``python -m acousim simulate``: the command contract of FORMATS.md."""
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 from acousim.cli import main
-from fitting.dataset import load_dataset
+from cubedimer.dataset import load_dataset
 
 REPO = Path(__file__).resolve().parents[2]
 FAST = ["--workers", "1", "--no-progress", "--duration", "1", "--fps", "500"]
@@ -59,6 +60,10 @@ def test_preset_and_override(tmp_path):
         (["--pressure-error", "0.9"], "pressure error"),
         (["--t-off", "0.02:0.03"], "fell out of the trap"),
         (["--fps", "0"], "fps"),
+        (["--duration", "1e9"], "frames per run (--duration x --fps) = 500,000,000,000 exceeds the limit"),
+        (["--runs", "9000", "--duration", "10"], "frames in the data set"),
+        (["--runs", "1000000"], "--runs = 1,000,000 exceeds the limit"),
+        (["--pressure", "1e300"], "--pressure: pressure_amplitude_pa = 1e+300 is outside the plausible range"),
     ],
 )
 def test_user_errors_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, extra, fragment):
@@ -92,3 +97,64 @@ def test_python_dash_m_entry_point(tmp_path):
     # default noise: 1 um on y, 0.005 on theta, 3 missing frames per run
     assert all(r.n_filled == 3 for r in ds.runs)
     assert np.all(np.abs(ds.runs[0].theta) < 1)
+
+
+def test_executor_options_are_the_shared_ones(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "--runs", "1", *FAST, "--workers", "0", "--out", str(tmp_path / "d")])
+    assert exc.value.code == 2 and "--workers: must be at least 1" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    assert "--scheduler ADDRESS" in capsys.readouterr().out
+
+
+def test_unwritable_output_is_refused_before_simulating(tmp_path, capsys):
+    """--out under a file cannot be created, even by root (who ignores permission bits)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    for option, target in (("--out", blocker / "d"), ("--figures", blocker / "figs")):
+        extra = [] if option == "--out" else ["--out", str(tmp_path / "d")]
+        rc = main(["simulate", "--runs", "1", *FAST, *extra, option, str(target)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and err[0].startswith(f"error: {option}") and "not a directory" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0, reason="root may write into a read-only directory")
+def test_read_only_parent_is_refused(tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        assert main(["simulate", "--runs", "1", *FAST, "--out", str(ro / "d")]) == 2
+        assert "cannot write" in capsys.readouterr().err
+    finally:
+        ro.chmod(0o700)
+
+
+@pytest.mark.parametrize("mask, mode", [(0o022, 0o644), (0o077, 0o600)])
+def test_data_set_files_respect_the_umask(tmp_path, mask, mode):
+    import stat
+
+    old = os.umask(mask)
+    try:
+        assert main(["simulate", "--runs", "1", *FAST, "--out", str(tmp_path / "d")]) == 0
+    finally:
+        os.umask(old)
+    for f in (tmp_path / "d").iterdir():
+        assert stat.S_IMODE(f.stat().st_mode) == mode, f.name
+
+
+@pytest.mark.slow
+def test_identical_data_sets_serially_on_local_processes_and_on_a_cluster(tmp_path, process_cluster):
+    common = ["simulate", "--runs", "3", "--seed", "5", "--no-progress", "--duration", "1", "--fps", "500",
+              "--effect", "pair_scattering:kappa=12000"]
+    outs = {"serial": ["--workers", "1"], "local": ["--workers", "2"],
+            "cluster": ["--scheduler", process_cluster]}
+    files = {}
+    for name, extra in outs.items():
+        assert main([*common, *extra, "--out", str(tmp_path / name)]) == 0
+        files[name] = {p.name: p.read_bytes() for p in sorted((tmp_path / name).iterdir())}
+    assert sorted(files["serial"]) == ["meta.json", "run01.csv", "run02.csv", "run03.csv", "truth.json",
+                                       "truth_states.npz"]
+    assert files["local"] == files["serial"] and files["cluster"] == files["serial"]

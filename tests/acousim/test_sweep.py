@@ -11,7 +11,7 @@ from acousim.sweep import SweepResult, fit_static_coefficients, read_sweep_csv, 
 def _synthetic_sweep(coefs_yddot, coefs_thetaddot):
     theta, y = np.linspace(-0.5, 0.5, 15), np.linspace(-1e-4, 1e-4, 13)
     tt, yy = np.meshgrid(theta, y, indexing="ij")
-    from fitting.library import parse_term
+    from cubedimer.terms import parse_term
 
     def poly(c):
         out = np.zeros_like(tt)

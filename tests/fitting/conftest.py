@@ -24,23 +24,3 @@ def small_dataset(tmp_path_factory, truth):
 def clean_runs(truth):
     """Four noise-free 3-s runs (dicts with t, y, theta, exact state)."""
     return generate_runs(truth, SyntheticConfig(n_runs=4, noise_y=0.0, noise_theta=0.0, missing_frames=0, seed=3))
-
-
-def _write_csv(path, t, y, theta, header="t,y,theta", comment=True):
-    lines = (["# test file"] if comment else []) + [header]
-    lines += [f"{a:.10g},{b:.10g},{c:.10g}" for a, b, c in zip(t, y, theta)]
-    path.write_text("\n".join(lines) + "\n")
-    return path
-
-
-@pytest.fixture
-def write_csv():
-    """Writer of a CSV run: ``write_csv(path, t, y, theta, header=...)``."""
-    return _write_csv
-
-
-@pytest.fixture
-def sine_run():
-    """A clean 22-Hz y / 9-Hz theta signal, 2 s at 1000 fps."""
-    t = np.arange(2000) / 1000.0
-    return t, 1e-4 * np.cos(2 * np.pi * 22 * t), 0.2 * np.sin(2 * np.pi * 9 * t)

@@ -54,3 +54,66 @@ def test_compare_cli(small_dataset, fitted, tmp_path):
                  "--no-reoptimise", "--no-plots"]) == 0
     d = json.loads((tmp_path / "compare.json").read_text())
     assert len(d["per_run"]) == 3 and 0.0 <= d["wilcoxon_shape"]["p_greater"] <= 1.0
+
+
+def _one_line_error(capsys) -> str:
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.mark.parametrize("meta, fragment", [
+    ('{"side_length_m": -5e-4}', "side_length_m = -0.0005 is outside the plausible range"),
+    ('{"side_length_m": true}', "side_length_m must be a number"),
+    ('{"pressure_amplitude_pa": 1e300}', "pressure_amplitude_pa = 1e+300 is outside the plausible range"),
+    ('{"pressure_amplitude_pa": "3 kPa"}', "pressure_amplitude_pa must be a number"),
+])
+def test_fit_refuses_bad_meta_json_naming_it(tmp_path, small_dataset, capsys, meta, fragment):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "run01.csv").write_text((small_dataset / "run01.csv").read_text())
+    (data / "meta.json").write_text(meta)
+    assert main(["fit", str(data), "--out", str(tmp_path / "out"), *FAST]) == 2
+    line = _one_line_error(capsys)
+    assert "meta.json" in line and fragment in line
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["fit", "compare", "synth"])
+def test_unwritable_out_is_refused_before_computing(tmp_path, small_dataset, fitted, capsys, command):
+    """A path under a file cannot be created, even by root (who ignores permission bits)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    target = str(blocker / "out")
+    argv = {"fit": ["fit", str(small_dataset), "--out", target, *FAST],
+            "compare": ["compare", str(small_dataset), "--model", str(fitted / "model.json"), "--out", target],
+            "synth": ["synth", target, "--runs", "2"]}[command]
+    assert main(argv) == 2
+    line = _one_line_error(capsys)
+    assert target.split("/")[-2] in line and "not a directory" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+def test_synth_size_limit(tmp_path, capsys):
+    assert main(["synth", str(tmp_path / "d"), "--duration", "1e9"]) == 2
+    assert "exceeds the limit" in _one_line_error(capsys) and not (tmp_path / "d").exists()
+
+
+@pytest.mark.slow
+def test_fit_identical_serially_on_local_processes_and_on_a_cluster(small_dataset, fitted, tmp_path, process_cluster):
+    """Byte-identical model.json wherever the per-run refinements ran; a fit begun serially
+    finishes on the cluster from its per-run caches."""
+    opts = [a for a in FAST if a not in ("--workers", "2")] + ["--no-plots"]
+    serial, cluster = tmp_path / "serial", tmp_path / "cluster"
+    assert main(["fit", str(small_dataset), "--out", str(serial), *opts, "--workers", "1"]) == 0
+    # resume across executors: keep two of the three serial run caches, refine the third on the cluster
+    cluster.mkdir()
+    (cluster / "runs").mkdir()
+    for name in ("run01.json", "run02.json"):
+        (cluster / "runs" / name).write_bytes((serial / "runs" / name).read_bytes())
+    assert main(["fit", str(small_dataset), "--out", str(cluster), *opts,
+                 "--scheduler", process_cluster]) == 0
+    reference = (fitted / "model.json").read_bytes()  # the module's fit on 2 local processes
+    assert (serial / "model.json").read_bytes() == reference
+    assert (cluster / "model.json").read_bytes() == reference
+    assert (cluster / "runs" / "run03.json").read_bytes() == (serial / "runs" / "run03.json").read_bytes()

@@ -4,7 +4,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from fitting.integral_form import (detrend_windows, double_integral, fit_integral_form, integral_window,
-                                   select_integral_form, significance_threshold, window_starts)
+                                   select_integral_form, window_starts)
+from fitting.multiple_testing import holm_z_threshold
 
 DT = 1.0 / 2000.0  # the twin's camera rate [s]
 W0 = 2 * np.pi * 2.0  # hinge-like natural frequency [rad/s]
@@ -119,7 +120,7 @@ def test_selection_drops_a_zero_term_and_keeps_true_ones(driven_runs):
     assert sel.terms == ("x", "y^2*x")
     assert set(sel.dropped) == {"y*x", "x^3", "xdot"}
     az = np.sort(np.abs(sel.z))[::-1]  # Holm: the k-th most significant needs p <= alpha / (L - k + 1)
-    assert np.all(az >= [significance_threshold(0.01, len(names), k + 1) for k in range(az.size)])
+    assert np.all(az >= [holm_z_threshold(0.01, len(names), k + 1) for k in range(az.size)])
     assert np.all(np.abs(sel.coefficients - [-W0**2, C_TRUE]) <= 4 * sel.std_errors)
     np.testing.assert_allclose(sel.window_s, w * DT)
     assert sel.get("x^3")[0] != sel.get("x^3")[0]  # NaN for a dropped term
@@ -131,8 +132,8 @@ def test_significance_threshold_is_holm_along_the_path():
     from scipy.stats import norm
 
     # the most significant of 35: Bonferroni, two-sided p = alpha / 35; the 35th: p = alpha
-    np.testing.assert_allclose(2 * norm.sf(significance_threshold(0.01, 35, 1)), 0.01 / 35, rtol=1e-10)
-    np.testing.assert_allclose(2 * norm.sf(significance_threshold(0.01, 35, 35)), 0.01, rtol=1e-10)
+    np.testing.assert_allclose(2 * norm.sf(holm_z_threshold(0.01, 35, 1)), 0.01 / 35, rtol=1e-10)
+    np.testing.assert_allclose(2 * norm.sf(holm_z_threshold(0.01, 35, 35)), 0.01, rtol=1e-10)
 
 
 @pytest.mark.parametrize("window", [71, 979, 2001])

@@ -41,3 +41,19 @@ def test_batch_equals_single(truth):
         ts, _ = integrate(truth.coef, EXPONENTS, x0s[i], 1e-3, n, 2)
         np.testing.assert_array_equal(tb[i, :n], ts)  # identical arithmetic
     assert list(nb) == [500, 300]
+
+
+@pytest.mark.slow
+def test_compiled_integrators_are_cached_on_disk(tmp_path):
+    """Worker processes load the compiled integrator from numba's cache instead of compiling it."""
+    from tests.cubedimer.test_rk4 import cache_hits_in_fresh_processes
+
+    code = """
+        import numpy as np
+        import fitting.integrate as fi
+        c = np.array([[-1.0, 0.0], [0.0, -1.0]]); e = np.array([[1, 0, 0, 0], [0, 0, 1, 0]])
+        fi.integrate(c, e, np.array([1.0, 0, 0.1, 0]), 0.01, 5, bound=10.0)
+        fi.integrate_batch(c, e, np.array([[1.0, 0, 0.1, 0]]), 0.01, 5, bound=10.0)
+    """
+    first, second = cache_hits_in_fresh_processes(code, "[fi._integrate_one, fi._integrate_many]", tmp_path)
+    assert first == 0 and second >= 2

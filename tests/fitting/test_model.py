@@ -3,7 +3,7 @@ import json
 import numpy as np
 import pytest
 
-from fitting.library import evaluate_library
+from cubedimer.terms import evaluate_library
 from fitting.model import TERMS, PolynomialModel, Scales
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from fitting.compare import paired_wilcoxon
-from fitting.executor import ExecutorConfig
+from cubedimer.executor import ExecutorConfig
 from fitting.model import TERMS
 from fitting.pipeline import fit_dataset
 from fitting.synthetic import SyntheticConfig, write_dataset

@@ -49,7 +49,7 @@ def test_refinement_removes_coefficient_bias(clean_derivs, truth):
     np.testing.assert_allclose(res.model.coef[0, TERMS.index("y")], truth.coef[0, TERMS.index("y")], rtol=1e-2)
     np.testing.assert_allclose(res.model.coef[1, TERMS.index("theta")], truth.coef[1, TERMS.index("theta")], rtol=1e-2)
     # and the refined model's y frequency matches the truth's to 0.2 % (start: 1.5 %)
-    from fitting.spectra import dominant_frequency
+    from cubedimer.spectra import dominant_frequency
     t = np.arange(4500) / 1500
     x0 = d[0].state[d[0].trim]
     f = [dominant_frequency(m.simulate(x0, t)[0][:, 0], 1 / 1500) for m in (truth, res.model, PolynomialModel(c))]
@@ -65,7 +65,7 @@ def test_relative_threshold_keeps_a_small_term_of_the_slow_equation():
     from fitting.derivatives import Derivatives
     from fitting.model import TERMS, Scales
     from fitting.regression import RegressionConfig, fit_regression
-    from fitting.library import evaluate_library
+    from cubedimer.terms import evaluate_library
 
     rng = np.random.default_rng(0)
     x = rng.uniform(-1, 1, (3000, 4))

@@ -1,9 +1,9 @@
 """Unit tests of the joint-loss term selection (fitting.selection) and its pipeline fallback."""
 import numpy as np
 
-from fitting.model import DAMPING_TERMS, TERMS
+from fitting.model import DAMPING_TERMS, TERMS, damping_mask
 from fitting.pipeline import FitConfig, model_json
-from fitting.selection import SelectionConfig, damping_mask
+from fitting.selection import SelectionConfig
 
 
 def test_damping_mask_has_the_two_viscous_terms():

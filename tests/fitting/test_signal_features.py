@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from fitting.attractors import classify_signal
+from cubedimer.attractors import classify_signal
 from fitting.derivatives import SmoothingConfig, noise_gain, run_derivatives, savgol_window
-from fitting.poincare import poincare_map, poincare_section
-from fitting.spectra import dominant_frequency, phase_difference
+from cubedimer.poincare import poincare_map, poincare_section
+from cubedimer.spectra import dominant_frequency, phase_difference
 
 
 def test_savgol_derivatives_bias_and_noise():

@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from fitting.library import evaluate_library, library_terms
+from cubedimer.terms import evaluate_library, library_terms
 from validation.coefficients import (compare_coefficients, fitted_equilibrium_offset, origin_sensitivity,
                                      shift_origin)
 

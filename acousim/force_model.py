@@ -1,0 +1,140 @@
+"""What the equations of motion need from a force model (PHYSICS.md sections 3, 4 and 7).
+
+A force model gives the generalised forces ``Q_y`` [N] and ``Q_theta`` [N m] of the dimer over
+(theta, y), with ``y`` measured from the equilibrium height ``Z_eq`` (< 0, below the pressure
+node).  Every acoustic model of the suite has the same exact height structure: the incident field
+at ``Z = Z_eq + y`` is a combination of sin(kZ) and cos(kZ), forces are quadratic in the field, so
+
+    Q_y     = A_y(theta)     + B_y(theta)     cos(2kZ) + C_y(theta)     sin(2kZ)  - M g
+    Q_theta = A_theta(theta) + B_theta(theta) cos(2kZ) + C_theta(theta) sin(2kZ)
+
+and a model hands the compiled equations of motion the six coefficient functions as Chebyshev
+series in theta on [-1, 1] (:class:`ForceCoefficients`; gravity is kept apart).  The Gor'kov
+surrogate (:class:`acousim.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
+model gives Q_y and Q_theta directly (they need not derive from a potential).
+
+:class:`ForceModel` is the protocol (structural: any object with these members is one).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.polynomial import chebyshev as cheb
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["ForceCoefficients", "ForceModel"]
+
+_FIELDS = ("q_y_a", "q_y_b", "q_y_c", "q_theta_a", "q_theta_b", "q_theta_c")
+
+
+def _trimmed(c: ArrayLike, name: str) -> NDArray[np.float64]:
+    a = np.ascontiguousarray(np.asarray(c, float).ravel())
+    if a.size == 0 or not np.all(np.isfinite(a)):
+        raise ValueError(f"force coefficient series {name} must be non-empty and finite")
+    nz = np.flatnonzero(a)
+    # trailing zeros change nothing (Clenshaw adds exact zeros) but cost time in every evaluation
+    return a[: int(nz[-1]) + 1 if nz.size else 1].copy()
+
+
+@dataclass(frozen=True, eq=False)
+class ForceCoefficients:
+    """Chebyshev-in-theta coefficients of the acoustic generalised forces' height structure.
+
+    ``Q_y + M g = A_y + B_y cos(2kZ) + C_y sin(2kZ)`` [N] and
+    ``Q_theta = A_theta + B_theta cos(2kZ) + C_theta sin(2kZ)`` [N m], ``Z = Z_eq + y`` [m]; each of
+    A, B, C is ``sum_j c_j T_j(theta)``.  Arrays may differ in length; trailing zeros are dropped.
+
+    Attributes
+    ----------
+    q_y_a, q_y_b, q_y_c : ndarray
+        Series of A_y, B_y, C_y [N].
+    q_theta_a, q_theta_b, q_theta_c : ndarray
+        Series of A_theta, B_theta, C_theta [N m].
+    """
+
+    q_y_a: NDArray[np.float64]
+    q_y_b: NDArray[np.float64]
+    q_y_c: NDArray[np.float64]
+    q_theta_a: NDArray[np.float64]
+    q_theta_b: NDArray[np.float64]
+    q_theta_c: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in _FIELDS:
+            object.__setattr__(self, name, _trimmed(getattr(self, name), name))
+
+    def as_tuple(self) -> tuple[NDArray[np.float64], ...]:
+        """(A_y, B_y, C_y, A_theta, B_theta, C_theta): the order the compiled kernel reads."""
+        return tuple(getattr(self, name) for name in _FIELDS)
+
+    def evaluate(self, theta: ArrayLike, z: ArrayLike, two_k: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(Q_y + M g [N], Q_theta [N m]) at bend ``theta`` and height ``z`` above the node [m]; ``two_k`` [1/m]."""
+        theta, z = np.asarray(theta, float), np.asarray(z, float)
+        c, s = np.cos(two_k * z), np.sin(two_k * z)
+        a_y, b_y, c_y, a_t, b_t, c_t = (cheb.chebval(theta, x) for x in self.as_tuple())
+        return a_y + b_y * c + c_y * s, a_t + b_t * c + c_t * s
+
+
+@runtime_checkable
+class ForceModel(Protocol):
+    """What the equations of motion (:mod:`acousim.equations`) need from a force model.
+
+    Attributes
+    ----------
+    z_eq : float
+        Equilibrium height Z_eq [m] of the theta = 0 dimer (below the node, < 0); y is Z_com - Z_eq.
+    mass : float
+        Total mass M [kg].
+    gravity : float
+        g [m/s^2].
+    wavenumber : float
+        k [1/m].
+    two_k : float
+        2k [1/m], the argument scale of the height structure.
+    inertia_const, inertia_sin2 : float
+        ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)`` [kg m^2] (PHYSICS.md section 4).
+    pressure_amplitude_pa : float
+        p0 [Pa] the forces belong to.
+    settings : dict
+        The model's settings (side, material, mesh or solver parameters) for bookkeeping.
+    """
+
+    z_eq: float
+    mass: float
+    gravity: float
+    wavenumber: float
+    two_k: float
+    inertia_const: float
+    inertia_sin2: float
+    pressure_amplitude_pa: float
+    settings: dict
+
+    def generalized_forces(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(Q_y [N] including -M g, Q_theta [N m]) at (theta, y)."""
+        ...
+
+    def force_coefficients(self) -> ForceCoefficients:
+        """The height structure of Q_y + M g and Q_theta as Chebyshev series in theta."""
+        ...
+
+    def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """I(theta) [kg m^2]."""
+        ...
+
+    def hinge_inertia_derivative(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """dI/dtheta [kg m^2]."""
+        ...
+
+    def with_pressure(self, pressure_amplitude_pa: float) -> "ForceModel":
+        """The model at another pressure amplitude [Pa] (forces scale as p0^2; Z_eq moves)."""
+        ...
+
+    def linear_frequencies(self) -> tuple[float, float]:
+        """Small-oscillation frequencies (f_y, f_theta) [Hz] about (theta, y) = (0, 0)."""
+        ...
+
+    def escape_height(self) -> float:
+        """y [m] of the barrier below the equilibrium (theta = 0) below which the dimer falls out."""
+        ...

@@ -1,0 +1,35 @@
+"""The digital twin: synthetic field-drop experiments written as data sets (FORMATS.md).
+
+* :mod:`acousim.twin.config` - settings: :class:`DropProtocol`, :class:`Camera`, :class:`TwinConfig`,
+  presets (:data:`PAPER_LIKE`) and :class:`TwinError`;
+* :mod:`acousim.twin.simulation` - the field-drop simulation of one run (:func:`simulate_run`) and of
+  every run of a configuration (:func:`simulate_field_drop_runs`);
+* :mod:`acousim.twin.writer` - writing a data set with its truth files (:func:`simulate_dataset`);
+* :mod:`acousim.twin.figures` - figures of a twin data set (:func:`write_twin_figures`).
+"""
+from .config import PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
+from .figures import write_twin_figures
+from .simulation import SimulatedRun, run_seeds, simulate_field_drop_runs, simulate_run, true_pressure, twin_dynamics
+from .writer import check_output_dir, meta_dict, simulate_dataset, truth_dict, write_run
+
+__all__ = [
+    "DropProtocol",
+    "Camera",
+    "TwinConfig",
+    "TwinPreset",
+    "TwinError",
+    "PAPER_LIKE",
+    "PRESETS",
+    "SimulatedRun",
+    "simulate_run",
+    "simulate_field_drop_runs",
+    "simulate_dataset",
+    "true_pressure",
+    "run_seeds",
+    "twin_dynamics",
+    "meta_dict",
+    "truth_dict",
+    "check_output_dir",
+    "write_run",
+    "write_twin_figures",
+]

@@ -1,0 +1,156 @@
+"""The field-drop simulation: one run (drop, free oscillation, camera) and every run of a configuration.
+
+A synthetic experiment follows the protocol of the source paper:
+
+1. the dimer levitates at its equilibrium height (y = 0, ydot = 0) with its hinge at a random
+   angle ``theta_drop`` and rate ``thetadot_drop`` (:class:`~acousim.twin.config.DropProtocol`);
+2. the field is switched off for a random ``t_off``: free fall (``yddot = -g``) with a free hinge
+   (:class:`~acousim.dynamics.DimerDynamics` with ``field_on=False``), so the dimer starts its
+   oscillation ~ g t_off^2 / 2 below the equilibrium, moving down at g t_off;
+3. the field is switched on again and the camera (:class:`~acousim.twin.config.Camera`) records
+   the free oscillation for ``duration`` seconds at ``fps`` frames per second, starting at t = 0
+   when the field is back on, with Gaussian tracking noise on y and theta and a few missing frames.
+
+Randomness: one :class:`numpy.random.SeedSequence` from the seed is split into a stream for the
+pressure error and one child per run (``spawn``), so every run's draws depend on the seed and the
+run's index only, not on the number of workers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cubedimer.executor import ExecutorConfig, map_ordered
+
+from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
+from ..surrogate import ForceSurrogate, cached_surrogate
+from .config import Camera, DropProtocol, TwinConfig, TwinError
+
+__all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
+           "simulate_field_drop_runs"]
+
+
+@dataclass(frozen=True, eq=False)
+class SimulatedRun:
+    """One synthetic run.
+
+    Attributes
+    ----------
+    t : ndarray (n,)
+        Frame times [s], 0 when the field is back on.
+    y, theta : ndarray (n,)
+        Observed (noisy, ``nan`` in missing frames) y [m] and theta [-].
+    state : ndarray (n, 4)
+        Exact [y, ydot, theta, thetadot] at the frames.
+    drop : dict
+        The drawn protocol values (``t_off_s``, ``theta_drop``, ``thetadot_drop``).
+    missing : ndarray of int
+        Indices of the missing frames.
+    """
+
+    t: NDArray[np.float64]
+    y: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    state: NDArray[np.float64]
+    drop: dict
+    missing: NDArray[np.int64]
+
+    @property
+    def state_at_field_on(self) -> NDArray[np.float64]:
+        return self.state[0]
+
+
+def run_seeds(seed: int, runs: int) -> tuple[np.random.SeedSequence, list[np.random.SeedSequence]]:
+    """(pressure stream, one stream per run) derived from the master seed."""
+    p, r = np.random.SeedSequence(int(seed)).spawn(2)
+    return p, r.spawn(int(runs))
+
+
+def true_pressure(nominal: float, error: float, seed: int) -> float:
+    """The true p0 [Pa]: uniform in nominal x [1 - error, 1 + error], from the seed's pressure stream."""
+    if error == 0:
+        return float(nominal)
+    rng = np.random.default_rng(run_seeds(seed, 0)[0])
+    return float(nominal * (1.0 + error * rng.uniform(-1.0, 1.0)))
+
+
+def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera, duration: float,
+                 seed: np.random.SeedSequence | int, max_step: float = DEFAULT_MAX_STEP) -> SimulatedRun:
+    """Simulate one field-drop run and record it with the camera.
+
+    Parameters
+    ----------
+    dynamics : DimerDynamics
+        The (true) dimer and effects.
+    protocol : DropProtocol
+    camera : Camera
+    duration : float
+        Recorded time [s].
+    seed : SeedSequence or int
+        The run's random stream (drop values first, then camera noise and missing frames).
+    max_step : float
+        Longest internal RK4 step [s].
+
+    Raises
+    ------
+    TwinError
+        If the dimer leaves the trap or the hinge closes (theta = +-1) during the run.
+    """
+    rng = np.random.default_rng(seed)
+    drop = protocol.draw(rng)
+    x_drop = np.array([0.0, 0.0, drop["theta_drop"], drop["thetadot_drop"]])
+    if drop["t_off_s"] > 0:
+        fall = dynamics.integrate(x_drop, drop["t_off_s"], drop["t_off_s"], max_step=max_step, field_on=False)
+        if not fall.ok:
+            raise TwinError(f"during the drop (t_off = {drop['t_off_s'] * 1e3:.2f} ms): {fall.message}")
+        x_on = fall.state[-1]
+    else:
+        x_on = x_drop
+    n = int(round(duration * camera.fps))
+    traj = dynamics.integrate(x_on, (n - 1) / camera.fps, 1.0 / camera.fps, max_step=max_step, field_on=True)
+    if not traj.ok:
+        raise TwinError(
+            f"{traj.message} at t = {traj.t[-1]:.3f} s (t_off = {drop['t_off_s'] * 1e3:.2f} ms, "
+            f"theta_drop = {drop['theta_drop']:.3f}, thetadot_drop = {drop['thetadot_drop']:.3g} 1/s); "
+            "use shorter drops or a smaller hinge range"
+        )
+    y, th, idx = camera.record(traj.state, rng)
+    return SimulatedRun(t=traj.t, y=y, theta=th, state=traj.state, drop=drop, missing=idx)
+
+
+def _run_task(item: tuple) -> SimulatedRun:
+    dynamics, protocol, camera, duration, seed, max_step = item
+    return simulate_run(dynamics, protocol, camera, duration, seed, max_step)
+
+
+def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
+    """The true dynamics of a configuration and its true pressure amplitude [Pa]."""
+    p_true = true_pressure(config.pressure_amplitude_pa, config.pressure_error, config.seed)
+    try:
+        sur: ForceSurrogate = cached_surrogate(float(config.side), float(config.pressure_amplitude_pa),
+                                               config.mesh_size)
+        if p_true != config.pressure_amplitude_pa:
+            sur = sur.with_pressure(p_true)
+    except ValueError as exc:  # the field cannot levitate the dimer
+        raise TwinError(str(exc)) from None
+    return DimerDynamics(sur, config.effects), p_true
+
+
+def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool = True) -> tuple[list[SimulatedRun], DimerDynamics, float]:
+    """Simulate every run of ``config`` through :func:`cubedimer.executor.map_ordered`.
+
+    Returns
+    -------
+    (runs, dynamics, true pressure [Pa])
+    """
+    dynamics, p_true = twin_dynamics(config)
+    _, seeds = run_seeds(config.seed, config.runs)
+    items = [(dynamics, config.protocol, config.camera, config.duration, s, config.max_step) for s in seeds]
+    executor = executor or ExecutorConfig()
+    try:
+        runs = map_ordered(_run_task, items, executor, desc="simulate", progress=progress)
+    except TwinError as exc:
+        raise TwinError(f"a run could not be simulated: {exc}") from None
+    return runs, dynamics, p_true

@@ -1,0 +1,128 @@
+"""Writing a twin data set (FORMATS.md): run CSVs, ``meta.json``, ``truth.json`` and the exact states.
+
+:func:`simulate_dataset` writes ``runNN.csv`` (columns ``t, y, theta``), ``meta.json`` (the
+*nominal* settings, FORMATS.md keys), ``truth.json`` (the true pressure, the effects with their
+parameters, the seed and every other setting, including each run's drawn initial conditions) and
+``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics), into
+a temporary folder renamed into place at the end, so a failure leaves nothing behind.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from cubedimer.atomic import atomic_save, default_dir_mode, write_json
+from cubedimer.dataset import write_run_csv
+
+from ..dynamics import DimerDynamics
+from .config import TwinConfig, TwinError
+from .simulation import SimulatedRun, simulate_field_drop_runs
+
+__all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "write_run"]
+
+
+def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int) -> Path:
+    """Write the CSV of one run (FORMATS.md): comments, header ``t,y,theta``, one row per frame,
+    missing frames as ``nan``."""
+    comments = [f"acousim digital twin, run {index} of {total}: free oscillation after the field is back on at t = 0",
+                "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"]
+    return write_run_csv(path, run.t, run.y, run.theta, comments, t_decimals=9, y_digits=10, theta_decimals=10,
+                         missing="nan")
+
+
+def meta_dict(config: TwinConfig, dynamics: DimerDynamics) -> dict:
+    """meta.json: the FORMATS.md keys with the *nominal* pressure amplitude."""
+    st = dynamics.force_model.settings
+    return {
+        "side_length_m": float(config.side),
+        "particle_density_kg_m3": float(st["particle_density_kg_m3"]),
+        "bulk_modulus_pa": float(st["bulk_modulus_pa"]),
+        "frequency_hz": float(st["frequency_hz"]),
+        "sound_speed_m_s": float(st["sound_speed_m_s"]),
+        "air_density_kg_m3": float(st["air_density_kg_m3"]),
+        "pressure_amplitude_pa": float(config.pressure_amplitude_pa),
+        "source": "acousim digital twin (synthetic)",
+    }
+
+
+def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs: list[SimulatedRun],
+               files: list[str]) -> dict:
+    """truth.json: true pressure, effects, seed, every setting and each run's initial conditions."""
+    fm = dynamics.force_model
+    f_y, f_theta = fm.linear_frequencies()
+    out = {
+        "pressure_amplitude_pa": float(p_true),
+        "effects": config.effects.to_dict(),
+        "seed": int(config.seed),
+        **config.to_dict(),
+        "equilibrium_height_m": float(fm.z_eq),
+        "escape_height_m": float(fm.escape_height()),
+        "gorkov_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
+        "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
+    }
+    if hasattr(fm, "build_accuracy") and hasattr(fm, "box"):  # the Gor'kov surrogate's own record
+        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "box": asdict(fm.box)}
+    out.update({
+        "state": ["y", "ydot", "theta", "thetadot"],
+        "runs_detail": [
+            {"file": f, **r.drop, "state_at_field_on": [float(v) for v in r.state[0]],
+             "missing_frames": [int(i) for i in r.missing]}
+            for f, r in zip(files, runs)
+        ],
+        "units": "SI",
+    })
+    return out
+
+
+def check_output_dir(out_dir: str | os.PathLike, force: bool = False) -> Path:
+    """Refuse an existing non-empty directory (or a file) unless ``force``; returns the path."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise TwinError(f"{out} exists and is not a directory")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise TwinError(f"{out} is not empty (use --force to replace it)")
+    return out
+
+
+def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=None, force: bool = False,
+                     progress: bool = True) -> dict:
+    """Simulate and write a data set (see the module docstring); returns the truth dictionary.
+
+    Raises
+    ------
+    TwinError
+        Bad settings, a non-empty ``out_dir`` without ``force``, or a run that leaves the trap;
+        nothing is written then.
+    """
+    out = check_output_dir(out_dir, force)
+    runs, dynamics, p_true = simulate_field_drop_runs(config, executor, progress)
+    width = max(2, len(str(config.runs)))
+    files = [f"run{i:0{width}d}.csv" for i in range(1, config.runs + 1)]
+    truth = truth_dict(config, dynamics, p_true, runs, files)
+    parent = out.resolve().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
+    try:
+        for i, (f, r) in enumerate(zip(files, runs), 1):
+            write_run(tmp / f, r, i, config.runs)
+        write_json(tmp / "meta.json", meta_dict(config, dynamics))
+        write_json(tmp / "truth.json", truth)
+        states = {Path(f).stem: r.state for f, r in zip(files, runs)}
+        atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=runs[0].t, **states))
+        os.chmod(tmp, default_dir_mode())  # mkdtemp's folder is private; give it an ordinary folder's mode
+        if out.exists():
+            trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=parent))
+            os.replace(out, trash / out.name)
+            os.replace(tmp, out)
+            shutil.rmtree(trash, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return truth

@@ -1,0 +1,32 @@
+"""cubedimer: the shared core of the cube-dimer suite.
+
+What more than one of the user-facing packages (``acousim``, ``fitting``, ``validation``) needs lives
+here, so that ``acousim`` and ``fitting`` never import each other:
+
+* :mod:`cubedimer.dataset` - the trajectory data-set format (FORMATS.md): loader, checks, gap filling
+* :mod:`cubedimer.meta` - the one validated reader of ``meta.json``
+* :mod:`cubedimer.terms` - term names and the cubic monomial library over [y, ydot, theta, thetadot]
+* :mod:`cubedimer.spectra`, :mod:`cubedimer.poincare`, :mod:`cubedimer.attractors` - signal analysis
+  shared by the twin, the fit and the report
+* :mod:`cubedimer.consistency`, :mod:`cubedimer.glitches` - cross-run checks of a data set and
+  tracking-glitch masking, used by the loader
+* :mod:`cubedimer.rk4` - the one compiled fixed-step RK4 kernel (twin and fitted models)
+* :mod:`cubedimer.atomic` - atomic file output and the one JSON writer
+* :mod:`cubedimer.executor` - the seam for parallel work (local processes or a dask cluster)
+* :mod:`cubedimer.cli` - the command-line runner, shared options and one-line errors
+
+This package imports none of the three user-facing packages.
+"""
+from .atomic import atomic_save, atomic_write_text, json_safe, save_figure, write_json
+from .dataset import Dataset, DatasetError, LoadConfig, Run, load_dataset, load_run
+from .executor import ExecutorConfig, map_ordered
+from .meta import META_DEFAULTS, META_KEYS, read_meta
+from .terms import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_terms, parse_term, term_name
+
+__all__ = [
+    "atomic_save", "atomic_write_text", "json_safe", "save_figure", "write_json",
+    "Dataset", "DatasetError", "LoadConfig", "Run", "load_dataset", "load_run",
+    "ExecutorConfig", "map_ordered",
+    "META_DEFAULTS", "META_KEYS", "read_meta",
+    "EQUATION_NAMES", "STATE_NAMES", "evaluate_library", "library_terms", "parse_term", "term_name",
+]

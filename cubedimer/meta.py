@@ -1,0 +1,98 @@
+"""The experiment's constants: one validated reader of a data set's ``meta.json`` (FORMATS.md).
+
+Every key is optional; missing keys take the defaults of PHYSICS.md section 1.  A key that is
+present must be a real number (not a boolean, not a string), finite, and inside a physically
+plausible range; otherwise :class:`~cubedimer.dataset.DatasetError` is raised with a one-line message
+naming the file, the key and what to do.  Keys this suite does not know are passed through.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+from .dataset import DatasetError
+
+__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "read_meta", "validate_meta", "check_meta_value"]
+
+#: Defaults (PHYSICS.md section 1) of the keys of FORMATS.md, SI units.
+META_DEFAULTS: dict[str, float] = {
+    "side_length_m": 500e-6,
+    "particle_density_kg_m3": 2160.0,
+    "bulk_modulus_pa": 24.9e9,
+    "frequency_hz": 45_650.0,
+    "sound_speed_m_s": 343.0,
+    "air_density_kg_m3": 1.204,
+    "pressure_amplitude_pa": 3000.0,
+}
+
+META_KEYS: tuple[str, ...] = tuple(META_DEFAULTS)
+
+#: Open ranges a value must lie in (a generous envelope around acoustic levitation in air or water).
+META_RANGES: dict[str, tuple[float, float]] = {
+    "side_length_m": (1e-7, 1e-2),
+    "particle_density_kg_m3": (1.0, 1e5),
+    "bulk_modulus_pa": (1e3, 1e13),
+    "frequency_hz": (100.0, 1e8),
+    "sound_speed_m_s": (10.0, 1e5),
+    "air_density_kg_m3": (1e-3, 1e5),
+    "pressure_amplitude_pa": (1e-3, 1e7),
+}
+
+
+def check_meta_value(key: str, value: Any, source: str = "meta.json") -> float:
+    """``value`` of the meta key ``key`` as a float, checked against :data:`META_RANGES`.
+
+    Used for meta.json and for command-line options that set the same quantity.
+
+    Raises
+    ------
+    DatasetError
+        ``"<source>: <key> must be ..."`` on a wrong type (booleans and strings included), a
+        non-finite or an implausible value.
+    """
+    lo, hi = META_RANGES[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DatasetError(f"{source}: {key} must be a number in SI units, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or not lo < v < hi:
+        raise DatasetError(f"{source}: {key} = {v!r} is outside the plausible range ({lo:g}, {hi:g}); "
+                           f"check the value and its units (SI)")
+    return v
+
+
+def validate_meta(meta: Any, source: str = "meta.json") -> dict:
+    """Check the known keys of ``meta`` (a parsed meta.json); return a copy with them as floats.
+
+    Raises
+    ------
+    DatasetError
+        ``"<source>: <key> must be ..."`` on a wrong type, a non-finite or an implausible value.
+    """
+    if not isinstance(meta, dict):
+        raise DatasetError(f"{source}: meta.json must hold a JSON object, got {type(meta).__name__}")
+    out = dict(meta)
+    for key in META_RANGES:
+        if key in meta:
+            out[key] = check_meta_value(key, meta[key], source)
+    return out
+
+
+def read_meta(data_dir: str | os.PathLike) -> dict:
+    """The validated meta.json of the data set in ``data_dir`` ({} if there is none).
+
+    Raises
+    ------
+    DatasetError
+        Unreadable or invalid meta.json (the message names the file).
+    """
+    path = Path(data_dir) / "meta.json"
+    if not path.exists():
+        return {}
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8-sig"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise DatasetError(f"{path}: unreadable meta.json ({exc})") from None
+    return validate_meta(meta, str(path))

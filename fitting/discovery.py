@@ -1,0 +1,380 @@
+"""Model discovery on the integral form with model-based column states (the default selection).
+
+Method
+------
+1. **Integral form, pooled over runs** (:mod:`fitting.integral_form`): per window of 0.75 of the
+   coordinate's dominant period, the measured position minus its straight line is regressed on the
+   detrended double integrals of the 35 library columns.  The residual is the white tracking noise,
+   so least squares is efficient and its standard errors are honest.
+2. **Selection** on each equation, in three steps.  (a) Backward elimination from the full library,
+   dropping the least significant term (velocity terms first while one is below the Bonferroni level),
+   until Holm's rule (:func:`fitting.multiple_testing.holm_reject`, family-wise ``alpha`` over the
+   library terms that are not forced in) declares every remaining term significant.  (b) Stepwise
+   additions, swaps and merges that keep every term significant
+   (:func:`fitting.support_search.select_support`): elimination alone decides
+   between nearly collinear terms by the accident of the full fit.  (c) Held-out pruning: the elimination
+   continues from there down to the forced terms, and the support with the smallest held-out error
+   (K-fold over runs) on that path is kept, so a term must also improve the prediction of runs it was not
+   fitted on.  The damping terms (ydot in yddot, thetadot in thetaddot) are always kept.
+3. **Errors in the variables.**  The first pass evaluates the columns at raw y, smoothed ydot and theta
+   smoothed over half a hinge period (:func:`fitting.integral_form.column_states`); such columns lose
+   weak velocity terms and bias others (measured: 5.5 oracle standard errors on the y coupling of the
+   hinge).  Every later pass evaluates them at the raw positions and the velocities of the selected
+   model's own trajectories, fitted segment by segment to the data
+   (:func:`fitting.model_states.model_states`), and selects again from the full library.  Raw positions
+   cost nothing (their white noise averages out in the double integral), while model positions feed the
+   model's own errors back into the columns (measured: the passes then drifted by ~2 standard errors per
+   pass and collected spurious theta terms in yddot).  The columns are prefiltered
+   (:func:`fitting.support_search.numerov_columns`) so that the double integral is fourth-order accurate; the model's
+   frequencies are then unbiased, which the segment fits need.  The passes stop when the support is
+   unchanged and no coefficient moved by more than ``tolerance`` standard errors; a support that
+   returns to an earlier one, or still changes after ``selection_passes``, is frozen.
+4. **Trade-off.**  Every support met on the elimination paths, with its held-out error (fit on the other
+   runs; root-mean-square misfit of the held-out runs' detrended positions per degree of freedom),
+   forms the Pareto front of number of terms against held-out error (:attr:`DiscoveryResult.pareto`).
+
+Everything after the column evaluation works on the R factor of the QR decomposition of each run's
+design ``[X b]`` (35 + 1 columns), so a least squares on any support, the whole elimination path and
+the cross-validation cost microseconds each.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cubedimer.executor import single_blas_thread
+from cubedimer.terms import EQUATION_NAMES, evaluate_library
+from .integral_form import column_states, integral_window
+from .model import TERMS, PolynomialModel, damping_mask
+from .model_states import SegmentConfig, model_states, segment_length
+from .support_search import fit_support, heldout_rms, prune_heldout, reduced_design, select_support
+
+if TYPE_CHECKING:
+    from cubedimer.dataset import Run
+    from .derivatives import Derivatives
+
+__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "METHOD"]
+
+log = logging.getLogger(__name__)
+
+#: One-line description of the method (written next to the result).
+METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, Numerov-corrected "
+          "double integrals); per equation backward elimination from the 35-term library until Holm's rule at "
+          "family-wise alpha declares every remaining term significant, stepwise additions, swaps and two-for-one "
+          "merges that keep every term significant, then the support with the smallest held-out error (K-fold over "
+          "runs) on the continued elimination path; damping terms always kept; repeated with the columns at the raw "
+          "positions and the velocities of the selected model's trajectories fitted segment by segment to the data "
+          "until the support and coefficients converge")
+
+
+@dataclass(frozen=True)
+class DiscoveryConfig:
+    """Settings of :func:`discover_model`.
+
+    Parameters
+    ----------
+    alpha : float
+        Family-wise significance level of Holm's rule (per equation).
+    window_periods : float
+        Integral-form window in periods of the coordinate's dominant frequency
+        (:func:`fitting.integral_form.integral_window`).
+    window_bounds_s : (float, float)
+        Its minimum and maximum [s].  The raw positions' noise in the columns, double integrated over a
+        window W, grows like (omega W)^2 times the coordinate's stiffness, while shorter windows lose
+        information.  Measured on a 35-Hz hinge (1500 fps, 12 runs): with the 30-ms minimum of the
+        cross-check (1.05 periods) its damping came out 4 oracle standard errors off; at 0.75 periods
+        (21 ms) the standard errors of the hinge terms were 1.3-1.7 times the oracle's; at 25 ms (0.875
+        periods) every coefficient was within 2.4 oracle standard errors on 5 data sets.
+    segments : SegmentConfig
+        The model-based state estimate.
+    max_iterations : int
+        Passes with model-based states after the first pass.
+    tolerance : float
+        Convergence: every coefficient changed by less than ``tolerance`` standard errors.
+    velocity_first : bool
+        Drop velocity terms first while one is below the Bonferroni level.
+    keep_damping : bool
+        Always keep ydot in yddot and thetadot in thetaddot.
+    selection_passes : int
+        Passes that may change the support; after them (or when the support returns to an earlier one) it is
+        frozen and only the coefficients and states iterate.
+    heldout_prune : bool
+        After Holm's rule, continue the elimination and keep the support with the smallest held-out error.
+    heldout_tolerance : float
+        Keep the smallest support whose held-out RMS error is at most ``1 + heldout_tolerance`` times the
+        smallest on that path (0: the minimum itself).
+    n_folds : int
+        Folds over runs of the held-out error (at most the number of runs).
+    raw_positions : bool
+        Model-state passes evaluate the columns at the raw positions and the model's velocities (True) or at
+        the model's positions and velocities (False; measured to drift: module docstring).
+    stepwise : bool
+        Stepwise additions, swaps and merges after the backward elimination.
+    """
+
+    alpha: float = 0.01
+    window_periods: float = 0.75
+    window_bounds_s: tuple[float, float] = (0.025, 0.5)
+    segments: SegmentConfig = field(default_factory=SegmentConfig)
+    max_iterations: int = 6
+    tolerance: float = 0.5
+    velocity_first: bool = True
+    keep_damping: bool = True
+    selection_passes: int = 3
+    heldout_prune: bool = True
+    heldout_tolerance: float = 0.0
+    n_folds: int = 5
+    raw_positions: bool = True
+    stepwise: bool = True
+
+    def __post_init__(self) -> None:
+        if not 0 < self.alpha < 1:
+            raise ValueError(f"alpha must lie in (0, 1), got {self.alpha}")
+        if not self.window_periods > 0:
+            raise ValueError(f"window_periods must be positive, got {self.window_periods}")
+        lo, hi = self.window_bounds_s
+        if not 0 < lo <= hi:
+            raise ValueError(f"window_bounds_s must satisfy 0 < min <= max, got {self.window_bounds_s}")
+        if self.max_iterations < 0 or self.n_folds < 2 or self.selection_passes < 1:
+            raise ValueError("max_iterations must be >= 0, n_folds >= 2 and selection_passes >= 1")
+        if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
+            raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
+
+
+@dataclass(frozen=True)
+class PathPoint:
+    """One support on an equation's elimination path.
+
+    Attributes
+    ----------
+    terms : tuple of str
+    residual_std : float
+        In-sample residual standard deviation per degree of freedom [m or rad].
+    heldout_rms : float
+        Held-out root-mean-square misfit per degree of freedom (K-fold over runs) [m or rad]; NaN with
+        fewer than two runs.
+    selected : bool
+        The support Holm's rule stopped at.
+    """
+
+    terms: tuple[str, ...]
+    residual_std: float
+    heldout_rms: float
+    selected: bool = False
+
+    @property
+    def n_terms(self) -> int:
+        return len(self.terms)
+
+    def to_json(self) -> dict:
+        return {"n_terms": self.n_terms, "terms": list(self.terms), "residual_std": self.residual_std,
+                "heldout_rms": self.heldout_rms, "selected": self.selected}
+
+
+@dataclass(frozen=True)
+class IterationLog:
+    """One pass: which states, how many terms, how far the coefficients moved."""
+
+    iteration: int
+    states: str
+    n_terms: tuple[int, int]
+    max_change_se: float
+    residual_std: tuple[float, float]
+    state_rms: tuple[float, float]
+    failed_frames: int
+    seconds: float
+
+    def to_json(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True, eq=False)
+class DiscoveryResult:
+    """Outcome of :func:`discover_model`.
+
+    Attributes
+    ----------
+    mask : ndarray of bool (2, 35)
+        Selected terms (rows yddot, thetaddot).
+    coef : ndarray (2, 35)
+        Least-squares coefficients on the selected support [SI]; zero elsewhere.
+    std_errors : ndarray (2, 35)
+        Their standard errors [SI]; zero outside the support.
+    residual_std : ndarray (2,)
+        Residual standard deviation of y [m] and theta [-] (compare with the tracking noise).
+    window_s : ndarray (2,)
+        Median integral-form window of each equation [s].
+    pareto : dict
+        ``{equation: tuple of PathPoint}``, from the full library to the forced terms.
+    iterations : tuple of IterationLog
+    converged : bool
+    """
+
+    mask: NDArray[np.bool_]
+    coef: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+    residual_std: NDArray[np.float64]
+    window_s: NDArray[np.float64]
+    pareto: dict[str, tuple[PathPoint, ...]]
+    iterations: tuple[IterationLog, ...]
+    converged: bool
+
+    @property
+    def z(self) -> NDArray[np.float64]:
+        """coefficient / standard error (0 outside the support)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.mask, self.coef / np.where(self.mask, self.std_errors, 1.0), 0.0)
+
+    @property
+    def model(self) -> PolynomialModel:
+        return PolynomialModel(self.coef)
+
+    def terms(self) -> dict[str, list[str]]:
+        return {eq: [t for t, m in zip(TERMS, self.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
+
+    def to_json(self) -> dict:
+        """Selected terms with value, std_error and z per equation; the Pareto front; the iterations."""
+        z = self.z
+        return {"method": METHOD,
+                **{eq: {"terms": {t: {"value": float(self.coef[q, j]), "std_error": float(self.std_errors[q, j]),
+                                      "z": float(z[q, j])} for j, t in enumerate(TERMS) if self.mask[q, j]},
+                        "residual_std": float(self.residual_std[q]), "window_s": float(self.window_s[q]),
+                        "pareto": [p.to_json() for p in self.pareto[eq]]}
+                   for q, eq in enumerate(EQUATION_NAMES)},
+                "iterations": [it.to_json() for it in self.iterations], "converged": self.converged}
+
+
+# ---- the discovery loop ----------------------------------------------------------------------------------------
+def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
+                   config: DiscoveryConfig = DiscoveryConfig()) -> DiscoveryResult:
+    """Select and fit both equations on the integral form with model-based column states (module docstring).
+
+    Parameters
+    ----------
+    runs : per run :class:`cubedimer.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
+    derivs : per run :class:`fitting.derivatives.Derivatives` (the smoothed ydot of the first pass, its edges)
+    config : DiscoveryConfig
+
+    Returns
+    -------
+    DiscoveryResult
+    """
+    with single_blas_thread():
+        return _discover(runs, derivs, config)
+
+
+def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> DiscoveryResult:
+    from cubedimer.spectra import dominant_frequency
+
+    t_start = time.perf_counter()
+    dts = [float(r.dt) for r in runs]
+    ys = [np.asarray(r.y, float) for r in runs]
+    ths = [np.asarray(r.theta, float) for r in runs]
+    freqs = [(dominant_frequency(y, dt), dominant_frequency(th, dt)) for y, th, dt in zip(ys, ths, dts)]
+    first, edges = [], []
+    for r, d, dt, (f_y, f_theta) in zip(runs, derivs, dts, freqs):
+        st, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
+        first.append(st)
+        edges.append(edge)
+    windows = [[integral_window(dt, f[q], config.window_periods, config.window_bounds_s) for f, dt in zip(freqs, dts)]
+               for q in range(2)]
+    window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], dts)]) for q in range(2)])
+    seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
+    forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
+    positions = (ys, ths)
+
+    caches: list[dict] = [{}, {}]
+
+    def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool, frozen: NDArray | None):
+        lib = [evaluate_library(s) for s in states]
+        designs = [reduced_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None)
+                   for q in range(2)]
+        coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
+        for q in range(2):
+            sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise)
+            held_a = [float("nan")] * len(path)
+            if config.heldout_prune:
+                sel, path_b, held_b = prune_heldout(designs[q], sel, forced[q], config.alpha, config.velocity_first,
+                                                    config.n_folds, config.heldout_tolerance)
+                path, held = path + path_b, held_a + held_b
+            else:
+                held = held_a
+            if frozen is not None:
+                sel = list(np.flatnonzero(frozen[q]))
+            c, e, s = fit_support(designs[q], sel)
+            coef[q, sel], se[q, sel], res_std[q] = c, e, s
+            fronts.append((path, held, sel))
+        return coef, se, res_std, designs, fronts
+
+    states, trims, label = first, edges, "smoothed"
+    estimate = None
+    history: list[IterationLog] = []
+    prev = None
+    converged = False
+    frozen: NDArray | None = None
+    masks: list[NDArray] = []
+    for it in range(config.max_iterations + 1):
+        t0 = time.perf_counter()
+        if it > 0:
+            sigma = (float(res_std[0]), float(res_std[1]))
+            estimate = model_states(PolynomialModel(coef), dts, ys, ths, first, seg_len, sigma, config.segments,
+                                    x0=estimate.x0 if estimate is not None else None)
+            states = estimate.states
+            if config.raw_positions:
+                states = [np.column_stack([y, s[:, 1], th, s[:, 3]]) for y, th, s in zip(ys, ths, states)]
+            trims = [edge if f.any() else 0 for f, edge in zip(estimate.failed, edges)]
+            label = "model"
+        coef, se, res_std, designs, fronts = one_pass(states, trims, it > 0 and config.raw_positions, frozen)
+        mask = coef != 0.0
+        if frozen is None and it >= 1:
+            # a selection that returns to an earlier support (held-out errors within their noise) or keeps
+            # changing is frozen: the smaller of the last two supports, then only the coefficients iterate
+            if any(np.array_equal(mask, m) for m in masks[:-1]) and not np.array_equal(mask, masks[-1]):
+                frozen = min((masks[-1], mask), key=lambda m: int(m.sum()))
+                label += ", support frozen (cycle)"
+            elif it >= config.selection_passes:
+                frozen = mask
+                label += ", support frozen"
+        masks.append(mask)
+        change = np.inf
+        if prev is not None:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                d = np.abs(coef - prev[0]) / np.maximum(se, prev[1])
+            change = float(np.nanmax(np.where(mask | prev[2], d, 0.0)))
+            if not np.array_equal(mask, prev[2]):
+                change = np.inf
+        history.append(IterationLog(
+            iteration=it, states=label, n_terms=(int(mask[0].sum()), int(mask[1].sum())), max_change_se=change,
+            residual_std=(float(res_std[0]), float(res_std[1])),
+            state_rms=tuple(float(v) for v in (estimate.rms if estimate is not None else (np.nan, np.nan))),
+            failed_frames=estimate.n_failed if estimate is not None else 0, seconds=time.perf_counter() - t0))
+        log.info("discovery pass %d (%s states): %d + %d terms, max change %.3g SE, residual std %.3g m, %.3g",
+                 it, label, mask[0].sum(), mask[1].sum(), change, res_std[0], res_std[1])
+        if change < config.tolerance:
+            converged = True
+            break
+        prev = (coef, se, mask)
+    pareto = {}
+    for q, eq in enumerate(EQUATION_NAMES):
+        path, held, sel = fronts[q]
+        missing = [i for i, h in enumerate(held) if not np.isfinite(h)]
+        for i, h in zip(missing, heldout_rms(designs[q], [path[i] for i in missing], config.n_folds)):
+            held[i] = h
+        seen, points = set(), []
+        for cols, h in zip(path, held):
+            key = tuple(sorted(cols))
+            if key in seen:
+                continue
+            seen.add(key)
+            points.append(PathPoint(tuple(TERMS[j] for j in key), fit_support(designs[q], key)[2], h,
+                                    selected=set(key) == set(sel)))
+        pareto[eq] = tuple(sorted(points, key=lambda p: -p.n_terms))
+    log.info("discovery: %d terms in %.2f s (%s)", int(mask.sum()), time.perf_counter() - t_start,
+             "converged" if converged else "not converged")
+    return DiscoveryResult(mask=mask, coef=coef, std_errors=se, residual_std=res_std, window_s=window_s,
+                           pareto=pareto, iterations=tuple(history), converged=converged)

@@ -1,0 +1,168 @@
+"""The oracle (integral-form standard errors at a model's own noise-free trajectories) and the run planner."""
+import json
+
+import numpy as np
+import pytest
+
+from cubedimer.dataset import load_dataset
+from cubedimer.spectra import dominant_frequency
+from cubedimer.terms import EQUATION_NAMES, evaluate_library
+from fitting.cli import main
+from fitting.integral_form import detrend_windows, fit_integral_form, integral_columns, integral_window, window_starts
+from fitting.model import TERMS
+from fitting.oracle import (NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise, oracle_standard_errors,
+                            plan_runs)
+from fitting.pipeline import prepare_runs
+from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model, write_dataset
+
+NOISE = NoiseLevels(1.5e-6, 0.003)  # the paper-like tracking noise of the issue's table [m], [-]
+FPS = 1500.0
+
+
+@pytest.fixture(scope="module")
+def model():
+    return paper_reduced_model()
+
+
+@pytest.fixture(scope="module")
+def clean(model):
+    """Six noise-free 2-s runs of the paper's reduced model (exact states from fitting.synthetic)."""
+    return generate_runs(model, SyntheticConfig(n_runs=6, duration=2.0, fps=FPS, noise_y=0.0, noise_theta=0.0,
+                                                missing_frames=0, seed=5))
+
+
+def _stacked(positions, columns, windows):
+    """The integral form's detrended design and targets (targets (rows, draws) for positions (n, draws))."""
+    X, b = [], []
+    for x, f, w in zip(positions, columns, windows):
+        starts = window_starts(len(x), w)
+        X.append(integral_columns(f, 1.0 / FPS, starts, w))
+        b.append(detrend_windows(x, starts, w))
+    return np.concatenate(X), np.concatenate(b)
+
+
+def _lstsq(X, b):
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    return np.linalg.lstsq(X / scale, b, rcond=None)[0] / scale[:, None]
+
+
+def test_oracle_standard_errors_match_a_monte_carlo_of_the_estimator(model, clean):
+    """300 noise draws on fixed noise-free trajectories, each fitted by fitting.integral_form.fit_integral_form
+    on the true support with its columns at the exact states: the spread of the estimates is the oracle SE.
+
+    The oracle integrates the model itself from the initial states (fitting.integrate), so this also checks
+    that its trajectories, windows and columns are those of the estimator."""
+    runs = [OracleRun(r["x0"], r["t"].size, 1.0 / FPS) for r in clean]
+    oracle = oracle_standard_errors(model, runs, NOISE)
+    rng = np.random.default_rng(2024)
+    n_draws = 300  # the sample std of 300 draws scatters by 1/sqrt(2 * 299) = 4 %: 20 % is ~5 of those
+    for q, (eq, coord) in enumerate(zip(EQUATION_NAMES, (0, 2))):
+        names = list(oracle.terms[eq])
+        assert names == [t for t, c in zip(TERMS, model.coef[q]) if c != 0]
+        cols = [TERMS.index(t) for t in names]
+        columns = [evaluate_library(r["state"])[:, cols] for r in clean]
+        windows = [integral_window(1.0 / FPS, dominant_frequency(r["state"][:, coord], 1.0 / FPS)) for r in clean]
+        dts = [1.0 / FPS] * len(clean)
+        est, reported = [], []
+        for _ in range(20):  # the estimator itself, a few draws ...
+            pos = [r["state"][:, coord] + NOISE.of(eq) * rng.standard_normal(r["t"].size) for r in clean]
+            fit = fit_integral_form(pos, columns, dts, windows)
+            est.append(fit.coefficients)
+            reported.append(fit.std_errors)
+            # ... equals the same least squares done for many draws at once (below) to round-off
+            X, b = _stacked(pos, columns, windows)
+            np.testing.assert_allclose(_lstsq(X, b[:, None])[:, 0], fit.coefficients, rtol=1e-7)
+        pos = [r["state"][:, coord][:, None] + NOISE.of(eq) * rng.standard_normal((r["t"].size, n_draws - 20))
+               for r in clean]
+        X, b = _stacked(pos, columns, windows)
+        est = np.vstack([np.array(est), _lstsq(X, b).T])
+        mc = np.std(est, axis=0, ddof=1)
+        se = np.array([oracle.terms[eq][t].std_error for t in names])
+        ratio = mc / se
+        assert np.all(np.abs(ratio - 1.0) < 0.2), dict(zip(names, ratio))
+        # the estimator's own (residual-based) standard errors agree too
+        np.testing.assert_allclose(np.mean(reported, axis=0), se, rtol=0.2)
+        # and the z reported is |coefficient| / SE
+        for t, o in oracle.terms[eq].items():
+            assert o.coefficient == model.coef[q, TERMS.index(t)] and o.z == pytest.approx(abs(o.coefficient) / o.std_error)
+    # linear in the noise: twice the noise, twice the standard errors
+    twice = oracle_standard_errors(model, runs, NoiseLevels(2 * NOISE.sigma_y, 2 * NOISE.sigma_theta))
+    for eq in EQUATION_NAMES:
+        for t, o in oracle.terms[eq].items():
+            assert twice.terms[eq][t].std_error == pytest.approx(2 * o.std_error, rel=1e-9)
+    js = oracle.to_json()
+    assert set(js["thetaddot"]["y^2*theta"]) == {"coefficient", "std_error", "z"} and js["n_runs"] == 6
+
+
+def test_planner_scaling_is_measured_and_consistent(model):
+    """The planner's rows at n runs: the median oracle SE over random draws falls like 1/sqrt(n) (measured on the
+    draws), and its row at n = n_reference is the oracle of the reference runs themselves."""
+    kw = dict(duration=2.0, fps=FPS, term="thetaddot:theta*y^2", n_reference=32, run_counts=(8, 16, 32), n_draws=100,
+              seed=3)
+    plan = plan_runs(model, NOISE, **kw)
+    assert (plan.equation, plan.term) == ("thetaddot", "y^2*theta")
+    se = {n: s for n, s, _, _ in plan.table}
+    # pooling runs of different amplitudes also breaks near-collinearities, so few runs gain slightly more than
+    # 1/sqrt(n) (measured on a pool of 96 runs: 5-7 % for 6-24 runs); 12 % leaves room for the draws' scatter
+    assert se[16] / se[32] == pytest.approx(np.sqrt(2), rel=0.12)
+    assert se[8] / se[16] == pytest.approx(np.sqrt(2), rel=0.12)
+    assert -0.65 < plan.scaling_exponent < -0.42
+    gen = generate_runs(model, SyntheticConfig(n_runs=32, duration=2.0, fps=FPS, noise_y=0.0, noise_theta=0.0,
+                                               missing_frames=0, seed=3))
+    direct = oracle_standard_errors(model, [OracleRun(g["x0"], g["t"].size, 1.0 / FPS) for g in gen], NOISE)
+    assert se[32] == pytest.approx(direct.terms["thetaddot"]["y^2*theta"].std_error, rel=1e-9)
+    # a smaller term (the model changes with it, so does the table): the first row whose median z reaches 5
+    small = plan_runs(model, NOISE, size=5.0 * se[16], **kw)
+    assert small.table[0][2] < 5.0 <= small.table[-1][2]
+    assert small.runs_needed == next(n for n, _, z, _ in small.table if z >= 5.0)
+    # far beyond the table: extrapolated with 1/sqrt(n) from its largest row
+    tiny = plan_runs(model, NOISE, size=0.1 * se[32], **kw)
+    n_last, se_last = tiny.table[-1][:2]
+    assert tiny.runs_needed == pytest.approx(n_last * (5.0 * se_last / abs(tiny.coefficient)) ** 2, rel=0.01)
+    assert tiny.runs_needed_90 == 0
+
+
+def test_canonical_term_and_noise_levels():
+    assert canonical_term("thetaddot:theta*y^2") == ("thetaddot", "y^2*theta")
+    assert canonical_term("yddot:1") == ("yddot", "1")
+    for bad in ("y^2*theta", "zddot:y", "yddot:y^4"):
+        with pytest.raises(ValueError):
+            canonical_term(bad)
+    with pytest.raises(ValueError):
+        NoiseLevels(0.0, 0.003)
+
+
+def test_tracking_noise_estimate_ignores_glitches(tmp_path, model):
+    """Fourth differences, MAD-based: within 5 % of the true noise with 6 glitches of 100 sigma per run (the
+    estimate's own scatter over ~12000 frames is ~1.2 %; the glitches touch 0.25 % of the differences)."""
+    write_dataset(tmp_path, model, SyntheticConfig(n_runs=4, duration=2.0, fps=FPS, noise_y=NOISE.sigma_y,
+                                                   noise_theta=NOISE.sigma_theta, missing_frames=0, seed=1))
+    rng = np.random.default_rng(0)
+    for f in sorted(tmp_path.glob("run*.csv")):
+        lines = f.read_text().splitlines()
+        for i in rng.choice(np.arange(30, len(lines) - 30), size=6, replace=False):
+            t, y, th = lines[i].split(",")
+            lines[i] = f"{t},{float(y) + rng.choice([-1, 1]) * 100 * NOISE.sigma_y:.6e},{th}"
+        f.write_text("\n".join(lines) + "\n")
+    prepared, _ = prepare_runs(load_dataset(tmp_path).runs)
+    est = estimate_tracking_noise([p.run for p in prepared])
+    assert est.sigma_y == pytest.approx(NOISE.sigma_y, rel=0.05)
+    assert est.sigma_theta == pytest.approx(NOISE.sigma_theta, rel=0.05)
+
+
+def test_plan_cli(tmp_path, model, capsys):
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(model.to_json()))
+    args = ["plan", "--model", str(path), "--noise-y", "1.5e-6", "--noise-theta", "0.003", "--duration", "1",
+            "--fps", "1500", "--runs", "4", "8", "--reference-runs", "6"]
+    assert main(args + ["--term", "thetaddot:y^2*theta"]) == 0
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines() if line.split() and line.split()[0].isdigit()]
+    assert [r[0] for r in rows] == ["4", "8"] and float(rows[1][2]) > float(rows[0][2]) > 0
+    assert "runs needed for oracle z >= 5" in out
+    # a term outside the model needs a size; an unknown term is one line, exit 2
+    assert main(args + ["--term", "thetaddot:theta^3"]) == 2
+    assert main(args + ["--term", "thetaddot:theta^5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(e.startswith("error:") for e in err)
+    assert main(args + ["--term", "thetaddot:theta^3", "--size", "-300"]) == 0

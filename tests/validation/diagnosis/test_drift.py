@@ -1,0 +1,67 @@
+"""The pressure calibrated in time: a drift within runs is detected, measured and followed by the simulation;
+none is reported on data at a constant pressure."""
+import numpy as np
+import pytest
+
+from validation.diagnosis import (EXPLAINED_GAP, DiagnoseConfig, DiagnosisProblem, DriftSettings, PressureDrift,
+                                  detect_pressure_drift, diagnose_dataset, prepare_diagnosis_runs)
+
+FAST = DiagnoseConfig(long_time=False)
+
+
+def test_pressure_drift_factor_interpolates_between_nodes():
+    drift = PressureDrift({"a.csv": (np.array([0.0, 1.0, 2.0]), np.array([1.0, 1.1, 0.9]))})
+    np.testing.assert_allclose(drift.factor("a.csv", [0.0, 0.5, 1.5, 3.0]), [1.0, 1.05, 1.0, 0.9])
+    assert drift.factor("other.csv", [0.0]) is None  # a run without nodes keeps the constant pressure
+
+
+@pytest.mark.parametrize("kwargs", [{"window_s": 0.0}, {"alpha": 1.0}, {"min_relative_amplitude": -0.1}])
+def test_drift_settings_validate(kwargs):
+    with pytest.raises(ValueError):
+        DriftSettings(**kwargs)
+
+
+def _problem(data_dir):
+    from cubedimer.dataset import load_dataset
+    from cubedimer.meta import read_meta
+
+    from validation.simulation import model_from_meta
+
+    model = model_from_meta(read_meta(data_dir)).interpolated()
+    return DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(load_dataset(data_dir)), 1500)
+
+
+@pytest.mark.slow
+def test_no_drift_at_constant_pressure(clean_dataset):
+    """Measured (seed 1): F = 0.73 on (63, 41475) degrees of freedom, p = 0.94, pressure nodes within 0.03 %
+    of each other: the integral-form residual is the white tracking noise the F-test assumes."""
+    data, truth = clean_dataset
+    test = detect_pressure_drift(_problem(data))
+    assert test.tested and not test.detected
+    assert test.p_value > 0.01  # far from the 1e-6 level: a constant pressure is not near the threshold
+    assert test.relative_amplitude < 0.1 * DriftSettings().min_relative_amplitude
+    p = np.concatenate([n[1] for n in test.nodes.values()])
+    np.testing.assert_allclose(p, truth["pressure_amplitude_pa"], rtol=1e-3)  # each node within 0.1 %
+
+
+@pytest.mark.slow
+def test_drift_detected_then_effects_on_top(drift_dataset):
+    """A 4 % drift (periods 1.5-4 s): before, the calibration came out several per cent off and no cause could be
+    named (the vertical equation stayed unexplained).  Now: the drift is detected with its amplitude (measured 4.2 %
+    against a true median half range of 4.0 %), the simulation follows it, and the data are explained within
+    the noise with nothing named."""
+    data, truth = drift_dataset
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    drift = diag["calibration"]["drift"]
+    assert drift["detected"] and drift["p_value"] < 1e-6
+    # the node pressures are each window's least-squares value; their half range within a run is the drift's
+    # (noise per node ~0.2 Pa, 0.01 %); 15 %: the nodes sample a sinusoid 0.4 s apart and miss its peaks by up to 3 %
+    assert drift["relative_amplitude"] == pytest.approx(np.median(truth["relative_half_range"]), rel=0.15)
+    assert 0.1 < drift["time_scale_s"] < 1.0  # T / 2 pi for periods of 1.5-4 s: 0.24-0.64 s
+    assert len(drift["times_s"]) == len(drift["pressure_amplitude_pa"]) == len(drift["run"]) > 0
+    assert diag["calibration"]["pressure_amplitude_pa"] == pytest.approx(truth["pressure_amplitude_pa"], rel=0.01)
+    assert diag["identified"] == [] and diag["remaining_gap"]["withheld"] == []
+    assert diag["gap_after"] < EXPLAINED_GAP and diag["remaining_gap"]["explained_within_noise"]
+    assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
+    assert "drifts" in diag["remaining_gap"]["statement"]
+    assert diag["skipped_files"] == []

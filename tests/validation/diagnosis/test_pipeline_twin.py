@@ -1,0 +1,146 @@
+"""The diagnosis on digital-twin data sets: each single effect, none, and a partly corrupt data set (causes
+outside the candidates: test_drift.py and test_discovery.py)."""
+import json
+
+import numpy as np
+import pytest
+
+from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, diagnose_dataset
+
+#: single effects at moderate strength (velocity coupling in the middle of the blind range of
+#: validation.blind.STRENGTHS; the theta equation is fitted in its integral form, whose noise is the
+#: tracking noise itself, see docs/diagnosis.md)
+SINGLE = {
+    "linear_damping": {"gamma_y": 1.5, "gamma_theta": 1.5},
+    "quadratic_drag": {"c_y": 200.0, "c_theta": 0.3},
+    "pair_scattering": {"kappa": 15000.0},
+    "mirror_asymmetry": {"beta0": 10.0, "beta1": 3.0e4},  # beta0/omega_theta^2 = 0.09 on the soft hinge
+    "velocity_coupling": {"c5": 5.0e3, "c6": 1.0e6},  # measured: c5 +3 %, c6 -5 %, p = 0.006
+}
+
+
+def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
+    from acousim.effects import EffectSet
+    from acousim.twin import TwinConfig, simulate_dataset
+
+    data = tmp_path / "data"
+    from acousim.twin import DropProtocol
+
+    # drops of moderate angle and rate: the soft Gor'kov hinge plus an effect must not reach theta = +-1
+    cfg = TwinConfig(runs=runs, duration=duration, seed=seed, pressure_error=pressure_error,
+                     effects=EffectSet.from_dict(effects),
+                     protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
+    truth = simulate_dataset(cfg, data, progress=False)
+    (data / "truth.json").rename(tmp_path / "truth.json")  # the diagnosis is blind
+    return data, truth
+
+
+FAST = DiagnoseConfig(long_time=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(SINGLE))
+def test_single_effect_identified_with_parameters(tmp_path, name):
+    data, truth = _twin(tmp_path, {name: SINGLE[name]})
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == [name]
+    assert not diag["calibration"]["drift"]["detected"]  # no false alarm at a constant pressure with an effect
+    fitted = next(e for e in diag["effects"] if e["name"] == name)["params"]
+    for p, v in SINGLE[name].items():
+        # acceptance: parameters within 25 %
+        assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
+    # the calibrated pressure recovers the hidden pressure error (Savitzky-Golay bias ~1 %, see docs)
+    np.testing.assert_allclose(diag["calibration"]["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=0.02)
+    if diag["gap_before"] > EXPLAINED_GAP:
+        assert diag["gap_after"] < 0.3 * diag["gap_before"]
+    else:
+        # a gap already below the "explained" level lies within the estimate of the noise floor, where a
+        # shrink ratio means nothing (velocity coupling at 5e3 / 1e6: 1.2e-4 -> 5.4e-5): it must not grow
+        assert diag["gap_after"] <= diag["gap_before"] and diag["remaining_gap"]["explained_within_noise"]
+
+
+@pytest.mark.slow
+def test_no_effect_names_nothing(tmp_path):
+    data, truth = _twin(tmp_path, {}, seed=5)
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == []
+    assert diag["remaining_gap"]["explained_within_noise"]
+    assert not diag["calibration"]["drift"]["detected"]
+    assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
+    # twin runs carry integral data: the theta component is computed, and described, in its integral form
+    assert diag["gap_component_forms"] == {"yddot": "acceleration", "thetaddot": "integral", "energy": "energy balance"}
+    assert "thetaddot (integral form)" in diag["gap_definition"]
+
+
+@pytest.mark.slow
+def test_partly_corrupt_dataset(tmp_path):
+    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, seed=11)
+    files = sorted(data.glob("run*.csv"))
+    text = files[0].read_text().splitlines()
+    files[0].write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
+    files[1].write_text("t,y\n0,0\n")  # no theta column
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["pair_scattering"]
+    assert len(diag["skipped_files"]) == 2
+    assert {files[0].name, files[1].name} == {s["file"] for s in diag["skipped_files"]}  # FORMATS.md: {file, reason}
+    assert all(s["reason"] for s in diag["skipped_files"])
+    assert len(diag["gap_per_run"]["runs"]) == 8
+
+
+def test_diagnose_cli_bad_directory(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(tmp_path / "nope"), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "nope" in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_strong_velocity_coupling_identified(tmp_path):
+    """Strong coupling (c5 = 3e4, c6 = 6e6, six times the single-effect case): identified alone, measured
+    c5 +13 %, c6 -11 % (asserted at the acceptance level of 25 %).  The bias grows with the strength (+3 % / -5 % at
+    5e3 / 1e6): the hinge columns are evaluated at theta smoothed over half a hinge period, which
+    leaves out the fast response the coupling itself drives (see the xfail below)."""
+    effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
+    data, _ = _twin(tmp_path, effects)
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["velocity_coupling"]
+    fitted = diag["effects"][0]["params"]
+    for p, v in effects["velocity_coupling"].items():
+        assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "measured at c5 = 1.5e4, c6 = 3e6 (twin seed 3): velocity_coupling is identified (p = 0.003; c5 +8 %, c6 -9 %), "
+    "but pair_scattering is named after it with kappa = 0.49 1/s^2 (p = 0.005; 0.35 % of the hinge acceleration), "
+    "absorbing the bias of the smoothed hinge columns at strong coupling; at 5e3 / 1e6 and 3e4 / 6e6 the same seed "
+    "names velocity_coupling alone"))
+def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
+    data, _ = _twin(tmp_path, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == ["velocity_coupling"]
+
+
+@pytest.mark.slow
+def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
+    """The command end to end on a small twin data set: diagnosis.json with the FORMATS.md keys, the report
+    section with its figures, and the progress logged on stderr."""
+    import subprocess
+    import sys
+
+    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, runs=3, duration=2.0)
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(data), "--out", str(out),
+                        "--candidates", "pair_scattering", "--no-long-time"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    diag = json.loads((out / "diagnosis.json").read_text())
+    assert {"identified", "calibration", "gap_before", "gap_after", "effects", "localization", "skipped_files",
+            "remaining_gap", "gap_definition", "gap_components"} <= set(diag)
+    assert [e["name"] for e in diag["effects"]] == ["pair_scattering"]
+    assert (out / "report.html").exists()
+    assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
+    assert "[validation.diagnosis.pipeline] 3 runs; calibrating" in r.stderr
+    assert "[validation.diagnosis.identification] testing pair_scattering on top of calibration" in r.stderr

@@ -1,0 +1,97 @@
+"""``python -m validation``: outputs checked before computing, meta.json errors, the same executor options
+on every parallel command, and a blind study identical serially, on local processes and on a cluster."""
+import shutil
+
+import pytest
+
+from validation.cli import main
+
+
+def _one_line_error(capsys) -> str:
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.fixture
+def tiny_data(tmp_path, sine_run, write_csv):
+    data = tmp_path / "data"
+    data.mkdir()
+    write_csv(data / "run01.csv", *sine_run)
+    return data
+
+
+@pytest.mark.parametrize("meta, fragment", [
+    ('{"side_length_m": -5e-4}', "side_length_m = -0.0005 is outside the plausible range"),
+    ('{"side_length_m": false}', "side_length_m must be a number"),
+    ('{"pressure_amplitude_pa": 1e300}', "pressure_amplitude_pa = 1e+300 is outside the plausible range"),
+])
+def test_diagnose_refuses_bad_meta_json_naming_it(tmp_path, tiny_data, capsys, meta, fragment):
+    (tiny_data / "meta.json").write_text(meta)
+    assert main(["diagnose", str(tiny_data), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    line = _one_line_error(capsys)
+    assert "meta.json" in line and fragment in line
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["compare", "diagnose", "report", "blind"])
+def test_unwritable_out_is_refused_before_computing(tmp_path, tiny_data, capsys, command):
+    """A path under a file cannot be created, even by root (who ignores permission bits)."""
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    target = str(blocker / "out")
+    argv = {"compare": ["compare", "--model", str(tmp_path / "model.json"), "--data", str(tiny_data)],
+            "diagnose": ["diagnose", str(tiny_data)],
+            "report": ["report", str(tiny_data)],
+            "blind": ["blind", "--cases", "1"]}[command]
+    assert main([*argv, "--out", target]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith(f"error: --out {target}") and "not a directory" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "file"]
+
+
+def test_blind_size_limits(tmp_path, capsys):
+    assert main(["blind", "--cases", "100000", "--out", str(tmp_path / "b")]) == 2
+    assert "--cases = 100,000 exceeds the limit" in _one_line_error(capsys)
+    assert main(["blind", "--runs", "10", "--duration", "1e6", "--out", str(tmp_path / "b")]) == 2
+    assert "frames per case" in _one_line_error(capsys)
+    assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("command", ["diagnose", "report", "blind"])
+def test_parallel_commands_take_the_shared_executor_options(capsys, command):
+    with pytest.raises(SystemExit) as exc:
+        main([command, "--help"])
+    text = capsys.readouterr().out
+    assert exc.value.code == 0 and "--workers N" in text and "--scheduler ADDRESS" in text
+
+
+def _study_files(out):
+    return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*"))
+            if p.is_file() and p.suffix in (".json", ".md")}
+
+
+@pytest.mark.slow
+def test_blind_study_identical_serially_locally_and_on_a_cluster(tmp_path, process_cluster, capsys):
+    """Each case simulates its runs inside its task (daemonic dask workers may not start a process
+    pool); the study's files are byte-identical wherever the cases ran, and a study begun on local
+    processes finishes on the cluster."""
+    small = ["--runs", "3", "--duration", "2"]
+    serial, mixed = tmp_path / "serial", tmp_path / "mixed"
+    assert main(["blind", "--cases", "2", *small, "--workers", "1", "--out", str(serial)]) == 0
+    # begun locally: one case (its runs simulated on 2 local processes), then finished on the cluster
+    assert main(["blind", "--cases", "1", *small, "--workers", "2", "--out", str(mixed)]) == 0
+    assert main(["blind", "--cases", "2", *small, "--scheduler", process_cluster,
+                 "--out", str(mixed)]) == 0
+    assert "resuming: 1 cases done, 1 to run" in capsys.readouterr().err
+    reference = _study_files(serial)
+    assert "cases/case001/result.json" in reference and "summary.json" in reference
+    assert _study_files(mixed) == reference
+    shutil.rmtree(serial)
+
+
+def test_diagnose_refuses_a_negative_practical_threshold_in_one_line(tmp_path, tiny_data, capsys):
+    assert main(["diagnose", str(tiny_data), "--out", str(tmp_path / "out"), "--min-improvement", "-0.1"]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("error: ") and "min_relative_improvement" in line
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,84 @@
+"""The candidate effects of PHYSICS.md section 5 as linear regressors of the accelerations.
+
+Every candidate effect is linear in its parameters, so its added accelerations at given states are
+``effect_regressors(...) @ params`` and every fit of the diagnosis is a linear least-squares problem at
+the measured states.  The columns are those of :meth:`acousim.effects.Effect.regressors` (the one definition of each
+effect); this module only chooses the effects' y (measured from the calibrated equilibrium).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CANDIDATE_EFFECTS", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+
+
+def _candidates() -> dict[str, tuple[str, ...]]:
+    from acousim.effects import EFFECT_TYPES
+
+    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
+
+
+#: Candidate effects and their parameters (PHYSICS.md section 5, as defined in :mod:`acousim.effects`).
+CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
+
+
+def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,
+                      z_eq: float | None = None) -> NDArray[np.float64]:
+    """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
+
+    :meth:`acousim.effects.Effect.regressors` of the effect at the effects' y = Z_com - Z_eq.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
+    parameter] and thetaddot [1/s^2 per unit parameter] equations.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`CANDIDATE_EFFECTS`.
+    state : array (n, 4)
+        [y, ydot, theta, thetadot] (SI).
+    z_com : array (n,) or float
+        Height of the centre of mass above the pressure node [m].
+    wavenumber : float
+        k of the standing wave [1/m].
+    z_eq : float, optional
+        Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
+        PHYSICS.md (default: the state's own y, i.e. Z_eq = Z_com - y).
+    """
+    from acousim.effects import EFFECT_TYPES
+
+    if name not in EFFECT_TYPES:
+        raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
+    y, yd, th, thd = np.asarray(state, float).T
+    z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
+    if z_eq is None:
+        y_eff, z_ref = y, z_com - y
+    else:
+        y_eff, z_ref = z_com - z_eq, z_eq
+    return EFFECT_TYPES[name].regressors(y_eff, yd, th, thd, wavenumber, z_ref)
+
+
+def parameter_slots(effects: Sequence[str], eq: int) -> list[tuple[str, str, int]]:
+    """(effect, parameter, column) of the parameters of ``effects`` that act in equation ``eq`` (0: yddot,
+    1: thetaddot); columns count from 1 for the y equation, whose column 0 is the pressure term."""
+    out, col = [], (1 if eq == 0 else 0)
+    for n in effects:
+        probe = effect_regressors(n, np.ones((1, 4)), np.zeros(1), 1.0)[0, eq, :]
+        for p_i, p in enumerate(CANDIDATE_EFFECTS[n]):
+            if probe[p_i] != 0:
+                out.append((n, p, col))
+            col += 1
+    return out
+
+
+def acting_components(name: str) -> list[int]:
+    """Gap components an effect acts in: y (0) and theta (1) where it has parameters, and the energy (2)."""
+    return [q for q in (0, 1) if parameter_slots([name], q)] + [2]
+
+
+def parameter_vector(params: dict[str, dict[str, float]], names: Sequence[str] | None = None) -> NDArray[np.float64]:
+    """The parameters of ``names`` (default: every effect in ``params``), concatenated in the order of
+    :data:`CANDIDATE_EFFECTS`' parameter lists."""
+    names = list(params) if names is None else list(names)
+    return np.array([params[n][p] for n in names for p in CANDIDATE_EFFECTS[n]], float)

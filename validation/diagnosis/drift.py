@@ -1,0 +1,237 @@
+"""A pressure that drifts in time: the pressure calibrated per time window within each run, and a test
+of whether it varies.
+
+The calibration (:mod:`~validation.diagnosis.calibration`) fits one pressure scale ``s = (p0/p_nom)^2``
+per data set to the vertical equation in its integral form.  Here the same equation is fitted with a
+pressure scale that varies in time within each run: piecewise linear between nodes ``window_s`` apart,
+
+    yddot = s(t) F_Z(theta, z0 + y) / M - g,    s(t) = sum_k s_k phi_k(t)   (hat functions phi_k),
+
+which is exact for the Gor'kov model (its forces scale with p0^2 at fixed lab height) and still linear
+in the node values: the columns are the detrended double integrals ``P K[phi_k F_Z / M]`` over the
+integral-form windows.  The origin height z0 (one per data set) is found by a bounded scalar search,
+as in the calibration.
+
+Test.  The residual of the integral form is the white tracking noise itself for a model that
+explains the data (its noise floor is exact, :class:`~validation.diagnosis.preparation.PositionIntegrals`),
+so the nested least-squares models "one pressure per data set" (2 parameters: s, z0) and "a pressure
+per node and run" (``sum K_r + 1``) are compared by the F-test of their residual sums of squares.  The
+level is far below the usual 0.01 (:data:`DRIFT_ALPHA`), and a drift must also be large enough to
+matter (:data:`MIN_RELATIVE_AMPLITUDE` of the pressure), because the F-test inherits any systematic
+misfit of the vertical equation (an unmodelled y effect such as damping leaves a structured residual
+that a per-window pressure can absorb a little of); both were set on no-drift data (docs/diagnosis.md).
+
+When the drift is significant, :class:`PressureDrift` (the factor ``s(t) / mean s`` per run) is
+given to the :class:`~validation.diagnosis.problem.DiagnosisProblem`, and every later fit (the
+calibration of the mean pressure, the candidate effects, the held-out identification) uses the
+simulation at that drifting pressure.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .preparation import uses_integral_form
+from .problem import DiagnosisProblem
+
+__all__ = ["DriftSettings", "PressureDrift", "DriftTest", "detect_pressure_drift", "DRIFT_ALPHA",
+           "MIN_RELATIVE_AMPLITUDE"]
+
+#: Level of the F-test (set on no-drift twin data, docs/diagnosis.md).
+DRIFT_ALPHA = 1e-6
+#: A drift smaller than this relative pressure amplitude (half its range within a run, median over runs)
+#: is not reported.
+MIN_RELATIVE_AMPLITUDE = 0.005
+
+
+@dataclass(frozen=True)
+class DriftSettings:
+    """Settings of the drift test.
+
+    Parameters
+    ----------
+    window_s : spacing of the pressure's nodes within each run [s]
+    alpha : level of the F-test
+    min_relative_amplitude : smallest relative pressure amplitude reported as a drift
+    z0_window : the origin height is searched within +-z0_window [m] of the nominal Z_eq
+    """
+
+    window_s: float = 0.4
+    alpha: float = DRIFT_ALPHA
+    min_relative_amplitude: float = MIN_RELATIVE_AMPLITUDE
+    z0_window: float = 4e-4
+
+    def __post_init__(self):
+        if not self.window_s > 0:
+            raise ValueError(f"drift window must be positive, got {self.window_s}")
+        if not 0 < self.alpha < 1:
+            raise ValueError(f"drift alpha must lie in (0, 1), got {self.alpha}")
+        if not self.min_relative_amplitude >= 0:
+            raise ValueError(f"min_relative_amplitude must be >= 0, got {self.min_relative_amplitude}")
+
+
+@dataclass(frozen=True, eq=False)
+class PressureDrift:
+    """The pressure's drift within each run: per run name, node times [s] and the factor
+    ``f = s(t) / mean s`` (the simulation's acoustic forces are scaled by it), linear in between and
+    constant beyond the end nodes."""
+
+    nodes: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+    def factor(self, name: str, t: NDArray) -> NDArray[np.float64] | None:
+        """The factor at times ``t`` [s] of run ``name`` (None for a run without drift nodes)."""
+        if name not in self.nodes:
+            return None
+        times, f = self.nodes[name]
+        return np.interp(np.asarray(t, float), times, f)
+
+
+@dataclass(frozen=True, eq=False)
+class DriftTest:
+    """Result of :func:`detect_pressure_drift`."""
+
+    detected: bool
+    tested: bool  #: False when the runs carry no integral-form data (nothing is tested)
+    p_value: float
+    f_statistic: float
+    dof: tuple[int, int]
+    relative_amplitude: float  #: half the range of p(t) within a run over its mean, median over runs
+    time_scale_s: float  #: rms(p - mean) / rms(dp/dt), median over runs (T / 2 pi for a sinusoid of period T)
+    #: per run name: node times [s], pressure amplitude [Pa] and its standard error [Pa] at the nodes
+    nodes: dict[str, tuple[NDArray, NDArray, NDArray]]
+    z_origin_m: float
+    settings: DriftSettings
+
+    @property
+    def drift(self) -> PressureDrift:
+        """The drift as factors on the simulation's acoustic forces, relative to the mean pressure scale."""
+        s_mean = float(np.mean(np.concatenate([p**2 for _, p, _ in self.nodes.values()])))
+        return PressureDrift({n: (t, p**2 / s_mean) for n, (t, p, _) in self.nodes.items()})
+
+    def to_dict(self) -> dict:
+        """The diagnosis.json form (``calibration.drift``): flat lists ``times_s``, ``pressure_amplitude_pa``
+        (and ``std_error_pa``), one entry per node, with the run of each node in ``run``."""
+        names = [n for n in self.nodes for _ in self.nodes[n][0]]
+        out = {"detected": self.detected, "tested": self.tested, "relative_amplitude": self.relative_amplitude,
+               "time_scale_s": self.time_scale_s, "p_value": self.p_value, "f_statistic": self.f_statistic,
+               "dof": list(self.dof), "window_s": self.settings.window_s, "alpha": self.settings.alpha,
+               "min_relative_amplitude": self.settings.min_relative_amplitude,
+               "test": "F-test of one pressure per data set against a piecewise-linear pressure per run "
+                       "(nodes window_s apart), both on the vertical equation in its integral form",
+               "times_s": [], "pressure_amplitude_pa": [], "std_error_pa": [], "run": []}
+        if self.tested:
+            out["times_s"] = np.concatenate([t for t, _, _ in self.nodes.values()]).tolist()
+            out["pressure_amplitude_pa"] = np.concatenate([p for _, p, _ in self.nodes.values()]).tolist()
+            out["std_error_pa"] = np.concatenate([e for _, _, e in self.nodes.values()]).tolist()
+            out["run"] = names
+        return out
+
+
+def _node_times(t0: float, t1: float, window_s: float) -> NDArray[np.float64]:
+    k = max(2, int(round((t1 - t0) / window_s)) + 1)
+    return np.linspace(t0, t1, k)
+
+
+def _hat_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
+    """(n, K) piecewise-linear interpolation weights of ``t`` on ``nodes`` (rows sum to 1)."""
+    eye = np.eye(nodes.size)
+    return np.column_stack([np.interp(t, nodes, eye[k]) for k in range(nodes.size)])
+
+
+def _designs(problem: DiagnosisProblem, z0: float, window_s: float) -> list[tuple[NDArray, NDArray, NDArray]]:
+    """Per run: (columns P K[phi_k F_Z/M] (rows, K), target P y - P K[-g] (rows,), node times)."""
+    model = problem.model
+    mass, g = model.dimer.total_mass, model.gravity
+    out = []
+    for r in problem.runs:
+        pi = r.integral
+        t = pi.times
+        nodes = _node_times(t[0], t[-1], window_s)
+        st = model.integrals_at_height(pi.state[:, 2], z0 + pi.state[:, 0], problem.orientation_sums(pi))
+        x = pi.columns(0, (st.force_z / mass)[:, None] * _hat_basis(t, nodes))
+        b = pi.target(0) - pi.columns(0, np.full(t.shape, -g))
+        out.append((x, b, nodes))
+    return out
+
+
+def _lstsq(x: NDArray, b: NDArray) -> tuple[NDArray, float, NDArray]:
+    """Column-scaled least squares: (solution, residual sum of squares, diag((X^T X)^-1))."""
+    scale = np.maximum(np.sqrt(np.sum(x * x, axis=0)), 1e-300)
+    xs = x / scale
+    sol, *_ = np.linalg.lstsq(xs, b, rcond=None)
+    r = b - xs @ sol
+    return sol / scale, float(r @ r), np.diag(np.linalg.pinv(xs.T @ xs)) / scale**2
+
+
+def _rss(designs, per_node: bool) -> float:
+    if per_node:
+        return sum(_lstsq(x, b)[1] for x, b, _ in designs)
+    x = np.concatenate([x.sum(axis=1) for x, _, _ in designs])[:, None]
+    return _lstsq(x, np.concatenate([b for _, b, _ in designs]))[1]
+
+
+def _amplitude_and_time_scale(nodes: dict) -> tuple[float, float]:
+    amps, scales = [], []
+    for t, p, _ in nodes.values():
+        q = p / np.mean(p) - 1.0
+        amps.append(0.5 * float(np.ptp(q)))
+        rate = np.diff(q) / np.diff(t)
+        rms_rate = float(np.sqrt(np.mean(rate**2)))
+        scales.append(float(np.sqrt(np.mean(q**2))) / rms_rate if rms_rate > 0 else float("inf"))
+    return float(np.median(amps)), float(np.median(scales))
+
+
+def detect_pressure_drift(problem: DiagnosisProblem, settings: DriftSettings = DriftSettings()) -> DriftTest:
+    """Calibrate the pressure per node within each run and test whether it varies (module docstring).
+
+    Parameters
+    ----------
+    problem : DiagnosisProblem
+        Its runs need integral-form data (else nothing is tested and ``detected`` is False).
+    settings : DriftSettings
+
+    Returns
+    -------
+    DriftTest
+    """
+    from scipy.optimize import minimize_scalar
+    from scipy.stats import f as f_dist
+
+    runs = problem.runs
+    if not uses_integral_form(runs):
+        return DriftTest(False, False, float("nan"), float("nan"), (0, 0), float("nan"), float("nan"), {},
+                         float("nan"), settings)
+    w = settings.window_s
+    z_eq = problem.model.equilibrium_height
+    bounds = (z_eq - settings.z0_window, min(z_eq + settings.z0_window, -1e-6))
+
+    def search(per_node: bool) -> float:
+        res = minimize_scalar(lambda z: _rss(_designs(problem, z, w), per_node), bounds=bounds, method="bounded",
+                              options={"xatol": 1e-9})
+        return float(res.x)
+
+    z1 = search(True)
+    designs = _designs(problem, z1, w)
+    rss1 = _rss(designs, True)
+    rss0 = _rss(_designs(problem, search(False), w), False)
+    n_rows = sum(b.size for _, b, _ in designs)
+    n_win = sum(r.integral.starts(0).size for r in runs)
+    p1 = sum(x.shape[1] for x, _, _ in designs) + 1
+    dof1, dof2 = p1 - 2, n_rows - 2 * n_win - p1
+    s2 = rss1 / max(dof2, 1)
+    fstat = float(max(rss0 - rss1, 0.0) / max(dof1, 1) / max(s2, 1e-300))
+    pval = float(f_dist.sf(fstat, dof1, dof2)) if dof1 > 0 and dof2 > 0 else 1.0
+    p_nom = problem.model.wave.pressure_amplitude_pa
+    nodes = {}
+    for r, (x, b, t) in zip(runs, designs):
+        sol, rss, var = _lstsq(x, b)
+        s = np.maximum(sol, 1e-12)
+        se_s = np.sqrt(np.clip(var * rss / max(b.size - 2 * r.integral.starts(0).size - x.shape[1], 1), 0, None))
+        p = p_nom * np.sqrt(s)
+        nodes[r.name] = (t, p, p_nom * se_s / (2 * np.sqrt(s)))  # dp = p_nom ds / (2 sqrt(s))
+    amp, scale = _amplitude_and_time_scale(nodes)
+    detected = bool(pval < settings.alpha and amp >= settings.min_relative_amplitude)
+    return DriftTest(detected, True, pval, fstat, (int(dof1), int(dof2)), amp, scale, nodes, z1, settings)

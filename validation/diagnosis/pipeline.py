@@ -1,0 +1,285 @@
+"""A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
+
+Output, ``diagnosis.json`` (FORMATS.md, extended)::
+
+    {"identified": [...], "calibration": {...}, "gap_before": g0, "gap_after": g1, "gap_definition": "...",
+     "gap_components": [...], "gap_component_forms": {...}, "gap_per_run": {...}, "noise_floor": ...,
+     "effects": [every candidate, ranked], "localization": {"before": ..., "after": ...},
+     "long_time": {...}, "remaining_gap": {...}, "identification_rounds": [...], "skipped_files": [...],
+     "settings": {...}}
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .calibration import CALIBRATED_ON
+from .candidates import CANDIDATE_EFFECTS
+from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
+from .drift import DriftSettings, detect_pressure_drift
+from .gap_model import GapFit, fit_gap_model
+from .identification import PracticalThresholds, identify_effects
+from .localization import localize_residuals
+from .long_time import long_time_gaps, mean_long_time_gap
+from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
+from .preparation import RunAccelerations, prepare_diagnosis_runs
+from .problem import DiagnosisProblem
+
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
+
+logger = logging.getLogger(__name__)
+
+#: A gap (in excess of the noise floor) below this is "explained within the noise".
+EXPLAINED_GAP = 0.01
+
+
+@dataclass(frozen=True)
+class DiagnoseConfig:
+    """Settings of a diagnosis.
+
+    Parameters
+    ----------
+    candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
+    alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
+    min_relative_improvement : practical significance, as a fraction of the current gap
+    min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
+    max_frames_per_run : runs are thinned to at most this many frames for the fits (speed)
+    max_vertical_gap : no cause is named when the vertical (calibration) equation stays unexplained beyond
+        this fraction of its variance (the calibration is then distorted by something else)
+    long_time : also compute the long-time (shape, Poincare, frequency) gaps
+    long_time_duration : seconds of each run simulated for them [s]; None: the whole run
+    drift : settings of the test for a pressure drifting within runs (:mod:`validation.diagnosis.drift`);
+        None: the pressure is taken as constant without testing
+    discover : regress what remains after the candidates on the cubic library (:mod:`validation.diagnosis.discovery`)
+    discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
+    """
+
+    candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
+    alpha: float = 0.01
+    min_relative_improvement: float = 0.05
+    min_absolute_improvement: float = 5e-6
+    max_frames_per_run: int = 1500
+    max_vertical_gap: float = 0.05
+    long_time: bool = True
+    long_time_duration: float | None = 2.0
+    drift: DriftSettings | None = DriftSettings()
+    discover: bool = True
+    discovery_min_improvement: float = 1e-3
+
+    def __post_init__(self):
+        unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
+        if unknown:
+            raise ValueError(f"unknown effect(s) {', '.join(unknown)}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
+        if not 0 < self.alpha < 1:
+            raise ValueError(f"alpha must lie in (0, 1), got {self.alpha}")
+        if self.max_frames_per_run < 10:
+            raise ValueError(f"max_frames_per_run must be at least 10, got {self.max_frames_per_run}")
+        if self.long_time_duration is not None and not self.long_time_duration > 0:
+            raise ValueError(f"long_time_duration must be positive, got {self.long_time_duration}")
+        self.thresholds  # validates the practical thresholds
+
+    @property
+    def thresholds(self) -> PracticalThresholds:
+        """The practical-significance settings of the identification."""
+        return PracticalThresholds(self.min_relative_improvement, self.min_absolute_improvement, self.max_vertical_gap)
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisInternals:
+    """What the figures and the report need beyond diagnosis.json: the problem and the fits before and after."""
+
+    problem: DiagnosisProblem
+    base: GapFit  #: the calibrated simulation alone
+    final: GapFit  #: with the identified effects
+
+    @property
+    def runs(self) -> tuple[RunAccelerations, ...]:
+        return self.problem.runs
+
+    @property
+    def model(self):
+        return self.problem.model
+
+
+def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
+                     progress: bool = True, mesh_size: float | None = None) -> tuple[dict, DiagnosisInternals]:
+    """Diagnose a data set.
+
+    Parameters
+    ----------
+    data_dir : path of the data set (CSV runs and meta.json)
+    config : DiagnoseConfig
+    strict : stop at the first bad file instead of skipping it
+    progress : log the steps at INFO level (else DEBUG)
+    mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
+
+    Returns
+    -------
+    (diagnosis, internals)
+        The diagnosis.json document (FORMATS.md) and :class:`DiagnosisInternals` for figures.
+    """
+    from cubedimer.dataset import load_dataset
+    from cubedimer.meta import read_meta
+
+    from ..simulation import model_from_meta
+
+    log = logger.info if progress else logger.debug
+    skip = logger.warning if progress else logger.debug
+    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
+    meta = read_meta(data_dir)
+    model = model_from_meta(meta, mesh_size=mesh_size).interpolated()
+    problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
+    runs = problem.runs
+    log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
+    drift = detect_pressure_drift(problem, config.drift) if config.drift is not None else None
+    if drift is not None and drift.detected:
+        log("pressure drift detected (relative amplitude %.3g, time scale %.2g s, p = %.2g): the simulation "
+            "follows it", drift.relative_amplitude, drift.time_scale_s, drift.p_value)
+        problem = problem.with_drift(drift.drift)
+    base = fit_gap_model(problem, [])
+    per_before = fit_gaps(runs, base)
+    gap_before = scalar_gap(per_before)
+    floor = float(np.mean(noise_floors(runs, base)))
+    log("gap before = %.3g (noise floor %.3g); identifying effects", gap_before, floor)
+    ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
+                             progress=progress)
+    identified = list(ident.identified)
+    final = fit_gap_model(problem, identified)
+    discovery, replaced = Discovery(), {}
+    if config.discover:
+        log("regressing the remaining residual on the library (held-out runs)")
+        discovery = discover_terms(problem, final, alpha=config.alpha,
+                                   min_absolute_improvement=config.discovery_min_improvement,
+                                   min_relative_improvement=config.min_relative_improvement)
+        if not discovery.empty and identified:
+            kept, pvals = judge_candidates(problem, identified, discovery, alpha=config.alpha)
+            if kept != identified:
+                replaced = {c: pvals[c] for c in identified if c not in kept}
+                identified = kept
+                final = fit_gap_model(problem, identified)
+                discovery = discover_terms(problem, final, alpha=config.alpha,
+                                           min_absolute_improvement=config.discovery_min_improvement,
+                                           min_relative_improvement=config.min_relative_improvement)
+    per_after = fit_gaps(runs, final)
+    gap_after = scalar_gap(per_after)
+    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
+    # the others fitted on top of the identified set
+    effects = []
+    last_tests = ident.last_tests()
+    for i, name in enumerate(identified):
+        fit = fit_gap_model(problem, identified[: i + 1])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = ident.rounds[ident.identified.index(name)].candidates[name]
+        effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                        "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                        "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1})
+    others = []
+    for name in config.candidates:
+        if name in identified:
+            continue
+        fit = fit_gap_model(problem, identified + [name])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = last_tests.get(name)
+        note = "fitted on top of the identified effects; not a significant held-out improvement"
+        if name in replaced:
+            note = (f"improved held-out runs, but not once the discovered terms are fitted (p = {replaced[name]:.2g}): "
+                    "the discovered terms explain its share of the gap better")
+        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                       "significant": False, "p_value": test.p_value if test else None,
+                       "wilcoxon_p": test.wilcoxon_p if test else None,
+                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
+                       "note": note})
+    effects += sorted(others, key=lambda e: e["gap_after"])
+    loc_before = localize_residuals(runs, base.residuals)
+    loc_after = localize_residuals(runs, final.residuals)
+    long_time = {}
+    if config.long_time:
+        log("long-time gaps (simulating every run from its first state)")
+        lt_before = long_time_gaps(problem, base, config.long_time_duration)
+        lt_after = long_time_gaps(problem, final, config.long_time_duration) if identified else lt_before
+        long_time = {"before": {"mean": mean_long_time_gap(lt_before), "per_run": [g.to_dict() for g in lt_before]},
+                     "after": {"mean": mean_long_time_gap(lt_after), "per_run": [g.to_dict() for g in lt_after]}}
+    # the gap is already in excess of the noise floor: "explained" when under 1 % of the variance
+    explained = bool(gap_after <= EXPLAINED_GAP)
+    remaining = {
+        "gap": gap_after,
+        "noise_floor": floor,
+        "explained_within_noise": explained,
+        "statement": (
+            "the calibrated simulation with the identified effects explains the data within its derivative noise"
+            if explained else
+            "a gap remains that no candidate effect explains: see localization.after for the terms, state-space "
+            "regions and time scales that carry it"),
+        "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
+        "vertical_gap": ident.vertical_gap,
+        "withheld": ident.withheld,
+        "discovered_terms": discovery.to_dict(),
+        "discovered_equations": discovered_equations(discovery),
+        "discovery_selected": discovery.selected,
+        "replaced_by_discovered_terms": [{"name": c, "p_value": p} for c, p in replaced.items()],
+    }
+    if not discovery.empty:
+        remaining["statement"] += "; the library terms that carry it: " + "; ".join(discovered_equations(discovery).values())
+    if drift is not None and drift.detected:
+        remaining["statement"] = (
+            f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
+            f"{drift.time_scale_s:.2g} s, F-test p = {drift.p_value:.2g}); the simulation follows the drift, and on top of it "
+            + remaining["statement"])
+    if ident.withheld:
+        remaining["statement"] += (
+            f"; the vertical (calibration) equation itself stays {100 * ident.vertical_gap:.0f} % unexplained, so the "
+            f"calibration is distorted by a cause outside the candidates, and {', '.join(ident.withheld)} (which improved "
+            "held-out runs on top of that calibration) is not named as a cause")
+    cal = final.calibration
+    components = fit_components(final)
+    calibration = {
+        "pressure_amplitude_pa": cal.pressure_amplitude_pa,
+        "nominal_pressure_amplitude_pa": cal.nominal_pressure_pa,
+        "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
+        "y_origin_height_m": cal.z_origin_m,
+        "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
+        "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
+        "calibrated_on": CALIBRATED_ON,
+    }
+    if drift is not None:
+        calibration["drift"] = drift.to_dict()
+    diagnosis = {
+        "identified": identified,
+        "calibration": calibration,
+        "gap_before": gap_before,
+        "gap_after": gap_after,
+        "gap_definition": gap_definition(components),
+        "gap_components": [c.name for c in components],
+        "gap_component_forms": {c.name: c.form for c in components},
+        "gap_per_run": {"before": per_before.tolist(), "after": per_after.tolist(), "runs": [r.name for r in runs]},
+        "noise_floor": floor,
+        "noise_floor_note": "mean floor already subtracted from every gap",
+        "effects": effects,
+        "localization": {"before": loc_before, "after": loc_after},
+        "long_time": long_time,
+        "remaining_gap": remaining,
+        "identification_rounds": [r.to_dict() for r in ident.rounds],
+        "skipped_files": dataset.skipped_files(),
+        "glitch_frames_masked": dataset.n_glitches,
+        "settings": {"alpha": config.alpha, "min_relative_improvement": config.min_relative_improvement,
+                     "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
+    }
+    return diagnosis, DiagnosisInternals(problem, base, final)
+
+
+def write_diagnosis(diagnosis: dict, internals: DiagnosisInternals, out_dir: str | Path) -> list[Path]:
+    """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``."""
+    from cubedimer.atomic import write_json
+
+    from ..report.diagnosis_section import diagnosis_figures, diagnosis_section
+    from ..report.html import write_report
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "diagnosis.json", diagnosis)
+    figs = diagnosis_figures(diagnosis, internals, out / "figures")
+    write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
+    return [out / "diagnosis.json", out / "report.html"]

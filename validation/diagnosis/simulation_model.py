@@ -1,0 +1,152 @@
+"""The simulation's accelerations, energies and integral-form columns at the measured states.
+
+:class:`SimulationTerms` wraps the simulation's equations of motion (the Gor'kov model of PHYSICS.md
+section 4 at nominal pressure; the hinge's velocity term is :func:`acousim.equations.hinge_acceleration`, the
+effects' columns :meth:`acousim.effects.Effect.regressors`) for the diagnosis: per run, the
+acoustic force and torque, the potential for the energy balance, and the double integrals of the
+accelerations for the integral form.  The calibration scales the acoustic parts by
+s = (p0 / p_nom)^2; the candidate effects' columns come from :func:`validation.diagnosis.candidates.effect_regressors`.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from acousim.equations import hinge_acceleration
+
+from .candidates import effect_regressors
+from .preparation import RunAccelerations
+from .problem import DiagnosisProblem
+
+__all__ = ["SimulationTerms", "ENERGY_WINDOW_S"]
+
+#: Length of the energy-balance windows [s] (about ten periods of the vertical motion).
+ENERGY_WINDOW_S = 0.4
+
+
+class SimulationTerms:
+    """Static Gor'kov terms at the data states for a fast (interpolated) model at nominal pressure.
+
+    Wraps the simulation's equations of motion (PHYSICS.md section 4, as :class:`acousim.GorkovDimer`
+    evaluates them) at the measured states of the problem's runs; computed values are cached per
+    instance (one instance per fit).
+    """
+
+    def __init__(self, problem: DiagnosisProblem, energy_window: float = ENERGY_WINDOW_S):
+        self.energy_window = float(energy_window)
+        self.problem = problem
+        model = problem.model
+        self.model = model
+        self.runs = problem.runs
+        self.mass = model.dimer.total_mass
+        self.g = model.gravity
+        self.k = model.wave.wavenumber
+        self._cache: dict[float, list[tuple[NDArray, NDArray]]] = {}
+
+    def forces(self, z0: float) -> list[tuple[NDArray, NDArray]]:
+        """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
+        return [(f, q) for f, q, _ in self._static(z0)]
+
+    def _static(self, z0: float) -> list[tuple[NDArray, NDArray, NDArray]]:
+        key = round(z0, 12)
+        if key not in self._cache:
+            out = []
+            if not hasattr(self, "_sums"):
+                self._sums = [self.problem.orientation_sums(r) for r in self.runs]
+            for r, sums in zip(self.runs, self._sums):
+                s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
+                fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])
+                f = self.problem.pressure_factor(r.name, r.t)
+                if f is not None:  # a drifting pressure scales the acoustic forces in time
+                    fz, qt = f * fz, f * qt
+                # accelerations as the data see them (same smoothing); the potential is used raw
+                out.append((r.smooth(fz), r.smooth(qt), s.potential))
+            if len(self._cache) > 64:
+                self._cache.clear()
+            self._cache[key] = out
+        return self._cache[key]
+
+    def energy_terms(self, z0: float, effects: Sequence[str], z_eq: float | None = None) -> list[dict]:
+        """Per run, per energy window: the data side of the energy balance and the effect work columns.
+
+        Keys: ``dk`` (change of M ydot^2/2 + I thetadot^2/2 + M g y) [J], ``du`` (change of U_ac at
+        nominal pressure) [J], ``work`` (n_windows, n_params) work of each effect parameter's unit
+        term [J per unit parameter], ``e_osc`` (n_windows,) oscillation energy at the window start
+        without the acoustic part, ``u_osc`` its acoustic part at nominal pressure [J].
+        """
+        d = self.model.dimer
+        rest_u = float(self.model.integrals_at_height(0.0, z0).potential)  # U_ac at the data's origin, theta = 0
+        out = []
+        for r, (_, _, pot) in zip(self.runs, self._static(z0)):
+            y, yd, th, thd = r.state.T
+            inertia = d.hinge_inertia(th)
+            kin = 0.5 * self.mass * yd**2 + 0.5 * inertia * thd**2 + self.mass * self.g * y
+            dt = float(np.median(np.diff(r.t)))
+            step = max(2, int(round(self.energy_window / dt)))
+            idx = np.arange(0, len(r.t), step)
+            if idx[-1] != len(r.t) - 1:
+                idx = np.append(idx, len(r.t) - 1)
+            a, b = idx[:-1], idx[1:]
+            f = self.problem.pressure_factor(r.name, r.t)
+            if f is None:
+                du, u0 = pot[b] - pot[a], pot[a]
+            else:  # the acoustic forces are f(t) times the nominal ones: the balance holds with int f dU_ac
+                cum_u = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(pot))])
+                du = cum_u[b] - cum_u[a]
+                # oscillation energy at the window's pressure: E_rest(s f) ~ E_rest(s) + s (f - 1) U_ac(rest)
+                u0 = f[a] * pot[a] - (f[a] - 1.0) * rest_u
+            regs = [effect_regressors(n, r.state, z0 + y, self.k, z_eq) for n in effects]
+            regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
+            power = self.mass * yd[:, None] * regs[:, 0, :] + inertia[:, None] * thd[:, None] * regs[:, 1, :]
+            cum = np.concatenate([np.zeros((1, power.shape[1])), np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
+            out.append({"dk": kin[b] - kin[a], "du": du, "work": cum[b] - cum[a], "k0": kin[a], "u0": u0})
+        return out
+
+    def rest_energy(self, s: float, z0: float) -> float:
+        """Minimum of M g y + s U_ac(0, z0 + y): the energy of the dimer at rest at its equilibrium [J]."""
+        from scipy.optimize import minimize_scalar
+
+        f = lambda y: self.mass * self.g * y + s * float(self.model.integrals_at_height(0.0, z0 + y).potential)  # noqa: E731
+        res = minimize_scalar(f, bounds=(-4e-4, min(4e-4, -z0 - 1e-6)), method="bounded", options={"xatol": 1e-10})
+        return float(res.fun)
+
+    def integral_known(self, z0: float, q: int) -> list[tuple[NDArray, NDArray]]:
+        """Per run (runs must carry integral data), for coordinate q (0: y, 1: theta): the integral-form
+        columns of (the acoustic acceleration at nominal pressure, to be scaled by s; the rest of the
+        simulation's acceleration): (F_Z / M, -g) or (Q_theta / I, -I' thetadot^2 / (2 I)), at every frame.
+        Only the coordinate asked for is integrated (the calibration's height search needs y alone)."""
+        key = ("integral", q, round(z0, 12))
+        if key not in self._cache:
+            d = self.model.dimer
+            out = []
+            for r in self.runs:
+                pi = r.integral
+                y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
+                st = self.model.integrals_at_height(th, z0 + y, self.problem.orientation_sums(pi))
+                f = self.problem.pressure_factor(r.name, pi.times)
+                f = 1.0 if f is None else f  # a drifting pressure scales the acoustic forces in time
+                if q == 0:
+                    out.append((pi.columns(0, f * st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))))
+                else:
+                    inertia = d.hinge_inertia(th)
+                    out.append((pi.columns(1, f * st.q_theta / inertia),
+                                pi.columns(1, hinge_acceleration(0.0, inertia, d.hinge_inertia_derivative(th), thd))))
+            self._cache[key] = out
+        return self._cache[key]
+
+    def integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None, q: int) -> list[NDArray]:
+        """Per run: integral-form columns (rows, n_params) of the effects' accelerations of coordinate q."""
+        out = []
+        for r in self.runs:
+            pi = r.integral
+            regs = [effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq)[:, q, :] for n in effects]
+            out.append(pi.columns(q, np.concatenate(regs, axis=1) if regs else np.zeros((pi.state.shape[0], 0))))
+        return out
+
+    def centrifugal(self, r: RunAccelerations) -> NDArray:
+        """The velocity part of Lagrange's theta equation, -1/2 I' thetadot^2 / I [1/s^2] (smoothed as the data)."""
+        th, thd = r.state[:, 2], r.state[:, 3]
+        d = self.model.dimer
+        return r.smooth(hinge_acceleration(0.0, d.hinge_inertia(th), d.hinge_inertia_derivative(th), thd))

@@ -1,0 +1,118 @@
+"""The diagnosis as a report section: its figures (gap by candidate, residual maps before and after,
+residual by library term) and its reading paragraph and table, from diagnosis.json."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from cubedimer.atomic import save_figure as _save
+
+from .html import Figure, Section, Table
+
+__all__ = ["diagnosis_figures", "diagnosis_section"]
+
+
+def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[Figure]:
+    """The diagnosis's figures as PNG files in ``out_dir``, from the diagnosis.json document ``diagnosis``
+    (``internals``, the :class:`validation.diagnosis.DiagnosisInternals`, is accepted for figures that need
+    the runs themselves)."""
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    figs = []
+    # 1. gap by candidate
+    fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
+    names = ["calibrated\nsimulation"] + [e["name"].replace("_", "\n") for e in diagnosis["effects"]]
+    vals = [diagnosis["gap_before"]] + [e["gap_after"] for e in diagnosis["effects"]]
+    colors = ["0.5"] + ["tab:green" if e["significant"] else "tab:gray" for e in diagnosis["effects"]]
+    ax.bar(range(len(vals)), np.maximum(vals, 1e-5), color=colors)
+    ax.axhline(0.01, color="k", ls="--", lw=0.8, label="'explained within noise' threshold")
+    ax.set_xticks(range(len(vals)), names, fontsize=7)
+    ax.set_ylabel("gap (unexplained fraction beyond noise)")
+    ax.set_yscale("log")
+    ax.set_title("Gap before and after adding each effect (green: identified)")
+    ax.legend(fontsize=7)
+    figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
+                       "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
+                       "others on top of the identified set); the gap is the unexplained fraction of acceleration variance and energy "
+                       "balance in excess of the derivative-noise floor; dashed: the threshold below which it counts as explained."))
+    # 2. residual maps over (theta, y), before and after, thetaddot and yddot
+    fig, axes = plt.subplots(2, 2, figsize=(8, 6), constrained_layout=True)
+    for col, key in enumerate(("before", "after")):
+        reg = diagnosis["localization"][key]["regions"]["theta_y"]
+        xe, ye = np.array(reg["x_edges"]), np.array(reg["y_edges"]) * 1e6
+        for row, (eq, unit) in enumerate((("rms_yddot", "m/s$^2$"), ("rms_thetaddot", "1/s$^2$"))):
+            ax = axes[row, col]
+            m = ax.pcolormesh(xe, ye, np.array(reg[eq], float).T, shading="flat", cmap="magma")
+            fig.colorbar(m, ax=ax, label=f"RMS residual [{unit}]")
+            ax.set_xlabel(r"$\theta$")
+            ax.set_ylabel(r"$y$ [$\mu$m]")
+            ax.set_title(f"{eq.replace('rms_', '')} residual, {key}", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_maps.png"),
+                       "Where the gap lies in state space: RMS acceleration residual over (theta, y) bins (quantile bins), "
+                       "before and after the identified effects."))
+    # 3. residual explained by single library terms
+    fig, axes = plt.subplots(1, 2, figsize=(8, 3.4), constrained_layout=True)
+    for ax, eq in zip(axes, ("yddot", "thetaddot")):
+        rows = sorted(diagnosis["localization"]["before"]["terms"][eq], key=lambda d: -d["explained_fraction_alone"])[:8]
+        ax.barh([r["term"] for r in rows][::-1], [r["explained_fraction_alone"] for r in rows][::-1], color="tab:blue")
+        ax.set_xlabel("fraction of residual variance explained alone")
+        ax.set_title(f"{eq} residual of the calibrated simulation", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_terms.png"),
+                       "Which library terms carry the gap: each term's share of the residual variance when fitted alone."))
+    return figs
+
+
+def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
+    """The report section of a diagnosis: the reading (calibration, gap, cause) and the ranked candidates."""
+    cal = diagnosis["calibration"]
+    ident = diagnosis["identified"]
+    rem = diagnosis["remaining_gap"]
+    if ident:
+        cause = ", then ".join(f"{e['name']} ({', '.join(f'{k} = {v:.3g}' for k, v in e['params'].items())})"
+                               for e in diagnosis["effects"] if e["significant"])
+        what = f"The gap is caused by {cause}."
+    else:
+        what = "No candidate effect improves held-out runs significantly."
+    drift = cal.get("drift") or {}
+    # a detected drift and the discovered terms are part of the remaining-gap statement; their tables are below
+    drift_text = f"No drift of the pressure within runs (F-test p = {drift['p_value']:.2g}). " if drift.get("tested") and not drift.get("detected") else ""
+    found = ""
+    replaced = rem.get("replaced_by_discovered_terms") or []
+    if replaced:
+        found += (" Not named, because the discovered terms explain its share better on held-out runs: "
+                  + ", ".join(r["name"] for r in replaced) + ".")
+    skipped = diagnosis.get("skipped_files") or []
+    data_text = ""
+    if skipped or diagnosis.get("glitch_frames_masked"):
+        data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.get('glitch_frames_masked', 0)} tracking-glitch "
+                     "frames masked. ")
+    reading = (
+        data_text + drift_text +
+        f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
+        f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
+        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
+        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} With them the gap is {100 * diagnosis['gap_after']:.1f} %: "
+        f"{rem['statement']}.{found}"
+    )
+    rows = [[e["name"], "yes" if e["significant"] else "no",
+             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
+            for e in diagnosis["effects"]]
+    tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)]
+    terms = rem.get("discovered_terms") or {}
+    term_rows = [[eq, t["term"], t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
+                 for eq, ts in terms.items() for t in ts]
+    if term_rows:
+        tables.append(Table("Discovered library terms (what no candidate explains)",
+                            ["equation", "term", "coefficient (SI)", "std error", "shrink", "held-out p (sign-flip)"], term_rows))
+    if drift.get("detected"):
+        tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
+                            [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))
+    if skipped:
+        tables.append(Table("Skipped files", ["file", "reason"],
+                            [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
+    return Section("diagnosis", "Sim-to-real gap", reading, figures, tables,
+                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident,
+                    "drift_detected": bool(drift.get("detected")),
+                    "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})

@@ -1,0 +1,157 @@
+"""Figures of the model-vs-simulation report (matplotlib).  Every axis is labelled with units."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["data_figures", "phase_space_figures", "restoring_overlay_figure"]
+
+UM = 1e6
+
+
+def _plt():
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    from cubedimer.atomic import save_figure
+
+    return save_figure(fig, path, dpi=120)
+
+
+from cubedimer.attractors import CLASS_COLORS
+
+
+def data_figures(prepared: Sequence, out: Path) -> list[tuple[Path, str]]:
+    """Time series, spectra, phase-difference distribution and attractor classes of the runs."""
+    from cubedimer.spectra import amplitude_spectrum
+
+    plt = _plt()
+    figs = []
+    # time series of one run per class
+    by_class: dict[str, list] = {}
+    for p in prepared:
+        by_class.setdefault(p.attractor.label, []).append(p)
+    reps = [v[0] for v in by_class.values()][:3]
+    fig, axes = plt.subplots(len(reps), 1, figsize=(8, 2.2 * len(reps)), squeeze=False, constrained_layout=True)
+    for ax, p in zip(axes[:, 0], reps):
+        t, y, th = p.run.t, p.run.y, p.run.theta
+        ax.plot(t, y * UM, color="k", lw=0.5)
+        ax.set_ylabel(r"$y$ [$\mu$m]")
+        ax2 = ax.twinx()
+        ax2.plot(t, th, color=CLASS_COLORS.get(p.attractor.label, "tab:green"), lw=0.5)
+        ax2.set_ylabel(r"$\theta$", color=CLASS_COLORS.get(p.attractor.label, "tab:green"))
+        ax.set_title(f"{p.run.name}: {p.attractor.label} (phase {np.degrees(p.attractor.phase):.0f} deg)", fontsize=9)
+        ax.set_xlabel("t [s]")
+    figs.append((_save(fig, out / "data_timeseries.png"),
+                 "Time series of one run per attractor class: y (black, left axis) and theta (colour, right axis)."))
+    # spectra
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2), constrained_layout=True)
+    for p in prepared:
+        c = CLASS_COLORS.get(p.attractor.label, "tab:green")
+        for ax, x in zip(axes, (p.run.y, p.run.theta)):
+            f, a = amplitude_spectrum(x - x.mean(), p.run.dt)
+            ax.semilogy(f, a / max(a.max(), 1e-300), color=c, lw=0.5, alpha=0.6)
+    fy = np.median([p.f_y for p in prepared])
+    for ax, lab in zip(axes, ("y", r"$\theta$")):
+        for h in (1, 2, 3):
+            ax.axvline(h * fy, color="0.6", ls=":", lw=0.8)
+        ax.set_xlim(0, 4 * fy)
+        ax.set_ylim(1e-4, 1.5)
+        ax.set_xlabel("frequency [Hz] (dotted: 1, 2, 3 x f_y)")
+        ax.set_ylabel(f"amplitude of {lab} / max")
+    axes[0].set_title("spectra of y (colour: attractor class)", fontsize=9)
+    axes[1].set_title(r"spectra of $\theta$", fontsize=9)
+    figs.append((_save(fig, out / "data_spectra.png"),
+                 "Amplitude spectra of every run, normalised; dotted lines at the harmonics of the median y frequency."))
+    # phase difference and classes
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2), constrained_layout=True)
+    ph = np.degrees([p.attractor.phase for p in prepared])
+    axes[0].hist(ph, bins=np.linspace(-180, 180, 37), color="0.3")
+    axes[0].set_xlabel(r"phase of $\theta$ relative to y at f_y [deg]")
+    axes[0].set_ylabel("runs")
+    labels = list(by_class)
+    axes[1].bar(range(len(labels)), [len(by_class[l]) for l in labels], color=[CLASS_COLORS.get(l, "tab:green") for l in labels])
+    axes[1].set_xticks(range(len(labels)), [l.replace("-", "\n", 1) for l in labels], fontsize=8)
+    axes[1].set_ylabel("runs")
+    axes[1].set_title("attractor classes", fontsize=9)
+    figs.append((_save(fig, out / "data_phase_classes.png"),
+                 "Distribution of the y-theta phase difference across runs and the attractor classes (amplitude and phase relation)."))
+    return figs
+
+
+def phase_space_figures(prepared: Sequence, model, out: Path) -> list[tuple[Path, str]]:
+    """(theta, thetadot, y) portraits per class, data and minimal model, and Poincare-map convergence."""
+    from cubedimer.poincare import poincare_section
+
+    plt = _plt()
+    by_class: dict[str, list] = {}
+    for p in prepared:
+        by_class.setdefault(p.attractor.label, []).append(p)
+    reps = [(k, v[0]) for k, v in by_class.items()][:3]
+    fig = plt.figure(figsize=(4.2 * len(reps), 4.0), constrained_layout=True)
+    conv = []
+    for i, (label, p) in enumerate(reps):
+        ax = fig.add_subplot(1, len(reps), i + 1, projection="3d")
+        st = p.derivs.state[p.derivs.trim: len(p.derivs.t) - p.derivs.trim]
+        t = p.derivs.t[p.derivs.trim: len(p.derivs.t) - p.derivs.trim]
+        sim, nv = model.simulate(st[0], t - t[0])
+        ax.plot(st[:, 2], st[:, 3], st[:, 0] * UM, color="k", lw=0.3, label="data")
+        ax.plot(sim[:nv, 2], sim[:nv, 3], sim[:nv, 0] * UM, color="tab:red", lw=0.3, alpha=0.7, label="minimal model")
+        ax.set_xlabel(r"$\theta$")
+        ax.set_ylabel(r"$\dot\theta$ [1/s]")
+        ax.set_zlabel(r"$y$ [$\mu$m]")
+        ax.set_title(f"{label} ({p.run.name})", fontsize=9)
+        if i == 0:
+            ax.legend(fontsize=7)
+        conv.append((label, poincare_section(t, st), poincare_section(t[:nv], sim[:nv])))
+    paths = [(_save(fig, out / "phase_portraits_3d.png"),
+              "Phase portraits in (theta, thetadot, y) of one run per attractor class: data (black) and the minimal model "
+              "integrated from the run's first state (red).")]
+    fig, axes = plt.subplots(1, len(conv), figsize=(4.2 * len(conv), 3.2), squeeze=False, constrained_layout=True)
+    for ax, (label, sd, ss) in zip(axes[0], conv):
+        ax.plot(np.arange(len(sd.theta)), sd.theta, "o-", ms=2, lw=0.5, color="k", label="data")
+        ax.plot(np.arange(len(ss.theta)), ss.theta, "x-", ms=2, lw=0.5, color="tab:red", label="model")
+        ax.set_xlabel("crossing number k (y = 0, ydot < 0)")
+        ax.set_ylabel(r"$\theta$ at the crossing")
+        ax.set_title(label, fontsize=9)
+    axes[0, 0].legend(fontsize=7)
+    paths.append((_save(fig, out / "poincare_convergence.png"),
+                  "Convergence of the Poincare map: theta at successive crossings of y = 0 (ydot < 0), data and model."))
+    return paths
+
+
+def restoring_overlay_figure(sweep, prepared: Sequence, delta: float, out: Path) -> tuple[Path, str]:
+    """The paper's Fig. 2c-d: simulated restoring force and torque with the data's measured accelerations.
+
+    ``delta`` [m]: the data's y is the simulation's y minus delta (calibrated origin).
+    """
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
+    states = np.concatenate([p.derivs.state for p in prepared])
+    accel = np.concatenate([p.derivs.accel for p in prepared])
+    pick = np.random.default_rng(0).choice(len(states), size=min(6000, len(states)), replace=False)
+    st, ac = states[pick], accel[pick]
+    small = np.abs(st[:, 2]) < 0.1
+    axes[0].plot((st[small, 0] + delta) * UM, ac[small, 0], ".", ms=1, color="0.6", label=r"data, $|\theta| < 0.1$")
+    i0 = int(np.argmin(np.abs(sweep.theta_grid)))
+    axes[0].plot(sweep.y_grid * UM, sweep["yddot"][i0], color="tab:blue", lw=2, label=r"Gor'kov model, $\theta = 0$")
+    axes[0].set_xlabel(r"$y$ [$\mu$m] (from the calibrated $Z_{eq}$)")
+    axes[0].set_ylabel(r"$\ddot y$ [m/s$^2$]")
+    axes[0].set_title("restoring force", fontsize=9)
+    axes[0].legend(fontsize=7)
+    ymid = np.abs(st[:, 0] + delta) < 30e-6
+    axes[1].plot(st[ymid, 2], ac[ymid, 1], ".", ms=1, color="0.6", label=r"data, $|y| < 30\,\mu$m")
+    j0 = int(np.argmin(np.abs(sweep.y_grid)))
+    axes[1].plot(sweep.theta_grid, sweep["thetaddot"][:, j0], color="tab:blue", lw=2, label="Gor'kov model, y = 0")
+    axes[1].set_xlabel(r"$\theta$")
+    axes[1].set_ylabel(r"$\ddot\theta$ [1/s$^2$]")
+    axes[1].set_title("restoring torque on the hinge", fontsize=9)
+    axes[1].legend(fontsize=7)
+    return (_save(fig, out / "restoring_overlay.png"),
+            "The paper's Fig. 2c-d for these data: the Gor'kov model's restoring force and torque at the calibrated pressure "
+            "(blue) with the measured accelerations (grey dots, Savitzky-Golay estimates at the measured states).")

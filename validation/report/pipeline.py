@@ -1,0 +1,270 @@
+"""``python -m validation report``: the numbers of the model-vs-simulation report of a data set, and the report.
+
+Runs, in order (each step logged): the fitting pipeline (``fitting.pipeline.fit_dataset``), the
+variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap
+diagnosis (:mod:`validation.diagnosis`, which also calibrates the simulation), a static sweep of the
+calibrated Gor'kov model over the data's range, the coefficient comparison
+(:mod:`validation.coefficients`) and the rendered mesh; then writes ``report.html`` (self-contained),
+``figures/*.png`` and ``numbers.json``.
+"""
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from .html import Figure, Section, Table, write_report
+
+__all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
+
+logger = logging.getLogger(__name__)
+
+
+def model_equation_text(equations: dict) -> list[str]:
+    """The minimal model as equations, e.g. ``yddot = -1.9e4 y + ...`` (SI)."""
+    lines = []
+    for eq in ("yddot", "thetaddot"):
+        terms = equations.get(eq, {})
+        parts = []
+        for t, c in terms.items():
+            sign = "-" if c < 0 else "+"
+            factor = "" if t == "1" else f" {t}"
+            parts.append(f"{sign} {abs(c):.4g}{factor}")
+        body = " ".join(parts).lstrip("+ ") if parts else "0"
+        lines.append(f"{eq} = {body}")
+    return lines
+
+
+def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta_max: float, y_max: float) -> dict[str, float]:
+    """Velocity-free thetaddot coefficients [SI] that the *identified* effects add to the static model: least
+    squares of their accelerations at zero velocity on the velocity-free cubic monomials over the same
+    box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
+    the calibrated Z_eq (PHYSICS.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
+    kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
+    from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
+
+    from ..diagnosis import CANDIDATE_EFFECTS, effect_regressors
+
+    th, y = np.meshgrid(np.linspace(-theta_max, theta_max, 21), np.linspace(-y_max, y_max, 41))
+    state = np.column_stack([y.ravel(), np.zeros(y.size), th.ravel(), np.zeros(y.size)])
+    total = np.zeros(y.size)
+    for name in diag.get("identified", []):
+        params = next(e["params"] for e in diag["effects"] if e["name"] == name)
+        pv = np.array([params[p] for p in CANDIDATE_EFFECTS[name]])
+        total += effect_regressors(name, state, z_eq + state[:, 0], wavenumber, z_eq)[:, 1, :] @ pv
+    if not np.any(total):
+        return {}
+    terms = [t for t in library_terms() if is_velocity_free(t)]
+    lib = evaluate_library(state)[:, [library_terms().index(t) for t in terms]]
+    coef = np.linalg.lstsq(lib / np.abs(lib).max(axis=0), total, rcond=None)[0] / np.abs(lib).max(axis=0)
+    return dict(zip(terms, coef.tolist()))
+
+
+def lead_term_reading(lead, n_sigma: float) -> str:
+    """Section 5's sentences on the theta*y^2 coupling (a :class:`validation.coefficients.TermComparison`), with numbers."""
+    verdict = ("agree in sign and within their combined uncertainty" if lead.signs_agree and lead.within_uncertainty else
+               "agree in sign but not within their combined uncertainty" if lead.signs_agree else
+               "disagree in sign" if lead.signs_agree is False else "cannot be compared (the term was not selected)")
+    if not lead.in_minimal_model and lead.fitted_mean == 0 and lead.fitted_std == 0:
+        ensemble = "not selected in the minimal model and absent from every run's refined model"
+    else:
+        ensemble = (f"fitted {lead.fitted:.3g}{' (not selected in the minimal model)' if not lead.in_minimal_model else ''}, "
+                    f"ensemble mean over the runs' refined models {lead.fitted_mean:.3g} +- {lead.fitted_std:.3g}")
+    sim = f"simulated {lead.simulated:.3g} +- {lead.simulated_std:.3g} 1/(m^2 s^2)"
+    if lead.verdict_from == "integral form":
+        z = lead.integral / lead.integral_std_error
+        return (f"The theta*y^2 coupling: the pooled integral-form fit (position space, coefficients shared by all runs) "
+                f"selects it with {lead.integral:.3g} +- {lead.integral_std_error:.2g} (z = {z:.1f}), against the {sim}; "
+                f"they {verdict} ({n_sigma:g} sigma, ratio {lead.ratio:.2f}). The per-run acceleration fits ({ensemble}) "
+                "scatter from run to run far more than the pooled estimate's standard error, so the verdict uses the pooled estimate.")
+    return (f"The theta*y^2 coupling: {ensemble}; the pooled integral-form fit does not select it; {sim}. "
+            f"On the ensemble statistics they {verdict} ({n_sigma:g} sigma).")
+
+
+def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
+                 progress: bool = True, max_evals: int | None = None) -> Path:
+    """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
+
+    Parameters
+    ----------
+    data_dir : path of the data set (CSV runs and meta.json)
+    out_dir : report directory: report.html, figures/*.png, numbers.json, fit/, diagnosis.json, comparison.json
+    workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
+    progress : progress bars, and the steps logged at INFO level (else DEBUG)
+    max_evals : refinement evaluations per run (default: the fitting default)
+
+    Returns
+    -------
+    Path of report.html
+    """
+    from acousim.render import render_dimer
+    from acousim.sweep import fit_static_coefficients, static_sweep
+    from cubedimer.executor import ExecutorConfig
+    from cubedimer.meta import read_meta
+    from fitting.compare import compare_models, cross_coupling_mask
+    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.plots import plot_comparison
+
+    from ..coefficients import compare_coefficients
+    from ..diagnosis import DiagnoseConfig, diagnose_dataset
+    from ..simulation import model_from_meta
+    from .diagnosis_section import diagnosis_figures, diagnosis_section
+    from .figures import data_figures, phase_space_figures, restoring_overlay_figure
+
+    level = logging.INFO if progress else logging.DEBUG
+
+    def say(message: str) -> None:
+        logger.log(level, "%s", message)
+
+    out = Path(out_dir)
+    figs_dir = out / "figures"
+    fit_dir = out / "fit"
+    config = FitConfig()
+    if max_evals is not None:
+        from dataclasses import replace
+
+        config = replace(config, refine=replace(config.refine, max_evals=max_evals))
+    say("1/5 fitting the data (SINDy, long-time refinement, ensemble z-scores, minimal model)")
+    res = fit_dataset(data_dir, fit_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler),
+                      progress=progress, log=say)
+    import json
+
+    model_json = json.loads((fit_dir / "model.json").read_text())
+    prepared = res.runs
+    say("2/5 comparing the minimal model with its variant without cross-coupling terms")
+    mask = cross_coupling_mask(res.model)
+    variant = res.model.with_mask(res.model.support & ~mask) if mask.any() else None
+    cmp = None
+    if variant is not None:
+        cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales, [p.run.name for p in prepared])
+        plot_comparison(cmp, fit_dir)
+    say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
+    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress)
+    cal = internals.final.calibration
+    say("4/5 sweeping the calibrated Gor'kov model and comparing coefficients")
+    meta = read_meta(data_dir)
+    sim = model_from_meta(meta, pressure_amplitude_pa=cal.pressure_amplitude_pa)
+    states = np.concatenate([p.derivs.state for p in prepared])
+    delta = cal.origin_offset_m
+    theta_max = float(min(0.9, np.quantile(np.abs(states[:, 2]), 0.98)))
+    y_max = float(np.quantile(np.abs(states[:, 0] + delta), 0.98))
+    sweep_plot = static_sweep(sim, np.linspace(-0.9, 0.9, 61), np.linspace(-1.3 * y_max, 1.3 * y_max, 41))
+    sweep_fit = static_sweep(sim, np.linspace(-theta_max, theta_max, 41), np.linspace(-y_max, y_max, 41))
+    static = fit_static_coefficients(sweep_fit)
+    coef_cmp = compare_coefficients(model_json, static.coefficients, static.std_errors, origin_offset=delta,
+                                    static_box=static.box)
+    say("5/5 figures and the report")
+    sections = []
+    # 1 data
+    dfig = data_figures(prepared, figs_dir)
+    classes: dict[str, int] = {}
+    for p in prepared:
+        classes[p.attractor.label] = classes.get(p.attractor.label, 0) + 1
+    fy = np.median([p.f_y for p in prepared])
+    ft = np.median([p.attractor.f_theta for p in prepared])
+    sections.append(Section(
+        "data", "1. The data",
+        f"{len(prepared)} runs ({len(res.skipped)} files skipped as unreadable or invalid). The vertical motion oscillates at "
+        f"a median {fy:.2f} Hz and the hinge at {ft:.2f} Hz; the spectra show whether theta carries the y frequency and its "
+        f"second harmonic (theta locked to y). The runs fall into the attractor classes "
+        + ", ".join(f"{k} ({v})" for k, v in classes.items()) + ", read from the phase of theta relative to y at f_y.",
+        [Figure(p, c) for p, c in dfig],
+        [Table("Runs", ["file", "class", "f_y [Hz]", "f_theta [Hz]", "amplitude y [um]", "amplitude theta", "phase [deg]"],
+               [[p.run.name, p.attractor.label, p.attractor.f_y, p.attractor.f_theta, p.attractor.amp_y * 1e6,
+                 p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p in prepared])],
+        {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": float(fy), "median_f_theta_hz": float(ft)}))
+    # 2 phase space
+    pfig = phase_space_figures(prepared, res.model, figs_dir)
+    loss = model_json["loss"]["final"]
+    sections.append(Section(
+        "phase-space", "2. Phase space",
+        f"The minimal model, integrated from each run's first measured state, reproduces the long-time behaviour with a "
+        f"mean attractor-shape error {loss['shape']:.3g}, Poincare error {loss['poincare']:.3g} and frequency error "
+        f"{loss['frequency']:.3g} (each 0 for a perfect model and about 1 for one that predicts no motion).",
+        [Figure(p, c) for p, c in pfig] + [Figure(fit_dir / "phase_portraits.png", "Phase portraits (y, ydot) and (theta, thetadot): data and minimal model, first runs."),
+                                           Figure(fit_dir / "poincare.png", "Poincare maps (theta, thetadot at y = 0, ydot < 0): data and minimal model.")],
+        [], {"loss_final": loss}))
+    # 3 the fit
+    eqs = model_equation_text(model_json["equations"])
+    rows = []
+    if cmp is not None:
+        rows = [["attractor shape", cmp.shape_test.median_difference, cmp.shape_test.p_greater, cmp.shape_test.n],
+                ["Poincare map", cmp.poincare_test.median_difference, cmp.poincare_test.p_greater, cmp.poincare_test.n]]
+    rule = model_json.get("selection", {}).get("rule", "zscore")
+    rule_text = {"significance": "terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
+                                 "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)",
+                 "zscore": "the paper's rule (terms with z > 3 across runs)",
+                 "backward": "backward elimination on the joint long-time loss"}.get(rule, rule)
+    fit_figs = [Figure(fit_dir / "zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; "
+                                                "red: selected, dashed: the paper's z = 3."),
+                Figure(fit_dir / "coefficients.png", "Distribution across runs of the refined coefficients of the selected terms."),
+                Figure(fit_dir / "optimisation.png", "Optimisation trajectory of the long-time refinement.")]
+    if cmp is not None and (fit_dir / "compare.png").exists():
+        fit_figs.append(Figure(fit_dir / "compare.png", "Per-run errors of the minimal model and of its variant without cross-coupling terms."))
+    cmp_text = ("" if cmp is None else
+                f" Without its cross-coupling terms (re-optimised) the model's per-run errors are larger with one-sided Wilcoxon "
+                f"p = {cmp.shape_test.p_greater:.3g} (attractor shape) and p = {cmp.poincare_test.p_greater:.3g} (Poincare map).")
+    sections.append(Section(
+        "fit", "3. The fit",
+        "Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble rule, "
+        + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + "." + cmp_text,
+        fit_figs,
+        [Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score", "p (ensemble mean = 0)"],
+               [[eq, t, c, model_json["zscores"][eq].get(t),
+                 model_json.get("selection", {}).get("mean_pvalues", {}).get(eq, {}).get(t)]
+                for eq in ("yddot", "thetaddot") for t, c in model_json["equations"][eq].items()])]
+        + ([Table("Variant without cross-coupling terms vs the minimal model (per-run errors)",
+                  ["error", "median difference (variant - minimal)", "Wilcoxon p (variant worse)", "runs"], rows)] if rows else []),
+        {"equations": model_json["equations"], "wilcoxon_shape_p": None if cmp is None else cmp.shape_test.p_greater,
+         "wilcoxon_poincare_p": None if cmp is None else cmp.poincare_test.p_greater}))
+    # 4 the simulation
+    overlay = restoring_overlay_figure(sweep_plot, prepared, delta, figs_dir)
+    render = render_dimer(sim, 0.3, 0.0, figs_dir / "dimer_gorkov.png")
+    sections.append(Section(
+        "simulation", "4. The simulation",
+        f"The Gor'kov model at the calibrated pressure {cal.pressure_amplitude_pa:.0f} Pa (nominal "
+        f"{cal.nominal_pressure_pa:.0f} Pa) holds the dimer {abs(sim.equilibrium_height) * 1e6:.0f} um below the node. Its "
+        "restoring force follows the measured vertical accelerations; where the measured hinge accelerations lie far "
+        "outside the model's torque curve, the hinge is held by something the model omits.",
+        [Figure(*overlay), Figure(render, "The posed dimer mesh (theta = 0.3) coloured by the Gor'kov potential density u.")],
+        [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height}))
+    # 5 model vs simulation
+    lead = coef_cmp.rows[0]
+    # what the identified effects add to the static theta*y^2 (the diagnosis is section 6)
+    added = effect_static_coefficients(diag, sim.wave.wavenumber, cal.equilibrium_height_m, theta_max, y_max)
+    effects_reading = ""
+    fitted_lead = lead.integral if lead.verdict_from == "integral form" else lead.fitted_mean
+    fitted_se = lead.integral_std_error if lead.verdict_from == "integral form" else lead.fitted_std
+    if added.get("y^2*theta") and np.isfinite(fitted_lead):
+        with_effects = lead.simulated + added["y^2*theta"]
+        n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, lead.simulated_std)
+        effects_reading = (f" The effects identified in section 6 ({', '.join(diag['identified'])}) add {added['y^2*theta']:.3g} to the "
+                           f"static theta*y^2 (least squares over the same box); with them the simulation predicts "
+                           f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
+    sections.append(Section(
+        "model-vs-simulation", "5. Model vs simulation",
+        lead_term_reading(lead, coef_cmp.n_sigma) + effects_reading + " Static coefficients are "
+        f"least squares on the calibrated sweep over |theta| <= {theta_max:.2f}, |y| <= {y_max * 1e6:.0f} um and re-expanded "
+        f"about the data's origin ({coef_cmp.origin}). Velocity terms have no static prediction.",
+        [],
+        [Table("Coefficients (SI), the theta*y^2 term first; the verdict columns use the estimate named in 'verdict from'",
+               ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
+                "simulated", "simulated std", "verdict from", "ratio", "signs agree", f"within {coef_cmp.n_sigma:g} sigma"],
+               [[r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
+                 r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
+                 r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.within_uncertainty]
+                for r in coef_cmp.rows if r.kind != "static" or r.in_minimal_model or abs(r.simulated) > 0])],
+        coef_cmp.to_dict()))
+    # 6 the gap
+    dfigs = diagnosis_figures(diag, internals, figs_dir)
+    sec = diagnosis_section(diag, dfigs)
+    sections.append(Section("diagnosis", "6. The sim-to-real gap", sec.reading, sec.figures, sec.tables, sec.numbers))
+    from cubedimer.atomic import write_json
+
+    write_json(out / "diagnosis.json", diag)
+    write_json(out / "comparison.json", coef_cmp.to_dict())
+    path = write_report(sections, out, "Cube dimer: model vs simulation",
+                        f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
+    say(f"written {path}")
+    return path
