@@ -25,11 +25,10 @@ Forces scale exactly as p0^2 (:meth:`FullwaveSurrogate.with_pressure`).
 from __future__ import annotations
 
 import hashlib
-import sys
 import json
 import logging
 import os
-import tempfile
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -40,6 +39,9 @@ from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
+from cubedimer.atomic import write_json
+
+from ..force_model import ForceCoefficients
 from ..medium import GRAVITY, Medium
 from .geometry import COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, rounded_cube_volume
 from .solver import HeightStructure, solve_scattering
@@ -62,7 +64,7 @@ log = logging.getLogger(__name__)
 DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
 #: Build arguments of the shipped default table.
 DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 5, "theta_max": 0.9}
-#: Build arguments of the coarse test variant (< 1 minute after the first bempp compilation).
+#: Build arguments of the coarse variant (q = 1, 4 solves; < 1 minute idle after the first bempp compilation).
 COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
@@ -166,6 +168,15 @@ class FullwaveSurrogate:
         """(Q_y [N], Q_theta [N m]): Q_y = F_Z - M g and Q_theta = (pi/4)(tau_A + tau_B)."""
         q_y = self._harmonic(theta, y, "fz") - self.mass * self.gravity
         return q_y, self._harmonic(theta, y, "qt")
+
+    def force_coefficients(self) -> ForceCoefficients:
+        """The :class:`~acousim.force_model.ForceModel` height structure: (A, B, C) of F_Z [N] and of
+        Q_theta [N m] re-expanded as Chebyshev series in theta itself (the table's series are in
+        ``theta / theta_max``; the re-expansion is the same polynomial, exact to round-off)."""
+        conv = lambda c: cheb.Chebyshev(np.asarray(c, float), domain=[-self.theta_max, self.theta_max]).convert(
+            domain=[-1.0, 1.0]).coef
+        (fa, fb, fc), (qa, qb, qc) = (tuple(conv(c) for c in self.coefficients[k]) for k in _COMPONENTS)
+        return ForceCoefficients(q_y_a=fa, q_y_b=fb, q_y_c=fc, q_theta_a=qa, q_theta_b=qb, q_theta_c=qc)
 
     def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
         """I(theta) [kg m^2] (PHYSICS.md section 4, hinge arm d + g/2)."""
@@ -293,14 +304,8 @@ class FullwaveSurrogate:
                    build_accuracy=d.get("build_accuracy", {}), nodes=d.get("nodes", {}))
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the table as JSON (atomically)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".fullwave.", suffix=".json")
-        with os.fdopen(fd, "w") as fh:
-            json.dump(self.to_dict(), fh, indent=1)
-            fh.write("\n")
-        os.replace(tmp, path)
+        """Write the table as JSON (atomically; missing folders are created)."""
+        write_json(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "FullwaveSurrogate":
@@ -486,7 +491,7 @@ def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> Fullwav
 
 
 def coarse_fullwave_surrogate(**kwargs) -> FullwaveSurrogate:
-    """The coarse test variant (:data:`COARSE_BUILD`), cached on disk like any other."""
+    """The coarse variant (:data:`COARSE_BUILD`), cached on disk like any other."""
     return cached_fullwave_surrogate(**{**COARSE_BUILD, **kwargs})
 
 

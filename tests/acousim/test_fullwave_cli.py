@@ -15,12 +15,6 @@ pytest.importorskip("bempp_cl")
 REPO = Path(__file__).resolve().parents[2]
 
 
-def run(*args: str) -> subprocess.CompletedProcess:
-    """A separate process (the error paths never reach the solver, so they start fast)."""
-    return subprocess.run([sys.executable, "-m", "acousim", "force", *args], cwd=REPO, capture_output=True, text=True,
-                          timeout=600)
-
-
 def run_here(capsys, *args: str) -> tuple[int, str, str]:
     """In this process, so the bempp compilation is shared with the other full-wave tests."""
     from acousim.cli import main
@@ -60,27 +54,37 @@ def test_force_json_contract(tmp_path, capsys):
     assert code == 0 and json.loads(text)["bodies"] == data["bodies"]
 
 
-def test_force_open_mesh_one_line_error(tmp_path):
+def test_force_open_mesh_one_line_error(tmp_path, capsys):
     s = trimesh.creation.icosphere(subdivisions=1, radius=100e-6)
     s.faces = s.faces[1:]
     mesh = tmp_path / "open.stl"
     s.export(mesh)
     out = tmp_path / "force.json"
-    r = run("--mesh", str(mesh), "--z", "0", "--out", str(out))
-    assert r.returncode == 2
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "not closed" in lines[0], r.stderr
+    code, _, err = run_here(capsys, "--mesh", str(mesh), "--z", "0", "--out", str(out))
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "not closed" in lines[0], err
     assert not out.exists() and list(tmp_path.iterdir()) == [mesh]
 
 
-def test_force_inverted_mesh_and_bad_arguments(tmp_path):
+def test_force_inverted_mesh_and_bad_arguments(tmp_path, capsys):
     s = trimesh.creation.icosphere(subdivisions=1, radius=100e-6)
     s.faces = s.faces[:, ::-1]
     mesh = tmp_path / "inv.obj"
     s.export(mesh)
-    r = run("--mesh", str(mesh), "--z", "0")
-    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "inward" in r.stderr
-    r = run("--mesh", str(tmp_path / "missing.stl"), "--z", "0")
-    assert r.returncode == 2 and "no such file" in r.stderr
-    r = run("--mesh", str(mesh), "--z", "0", "--pressure", "-3")
-    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    for args, fragment in (
+        (("--mesh", str(mesh), "--z", "0"), "inward"),
+        (("--mesh", str(tmp_path / "missing.stl"), "--z", "0"), "no such file"),
+        (("--mesh", str(mesh), "--z", "0", "--pressure", "-3"), "--pressure"),
+        (("--mesh", str(mesh), "--z", "0", "--out", str(mesh / "f.json")), "--out"),  # under a file
+    ):
+        code, out, err = run_here(capsys, *args)
+        assert code == 2 and out == "", (args, err)
+        assert len(err.strip().splitlines()) == 1 and fragment in err, (args, err)
+
+
+def test_python_dash_m_entry_point(tmp_path):
+    """``python -m acousim force`` exists (an argument error exits before any solve)."""
+    r = subprocess.run([sys.executable, "-m", "acousim", "force", "--mesh", str(tmp_path / "missing.stl"), "--z", "0"],
+                       cwd=REPO, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [f"error: --mesh {tmp_path / 'missing.stl'}: no such file"]
