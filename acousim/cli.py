@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force} ...``.
 
 Each subcommand lives in its own module and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -14,6 +14,7 @@ __all__ = ["main", "build_parser"]
 
 def build_parser() -> argparse.ArgumentParser:
     from . import simulate_cli, sweep_cli
+    from .fullwave import cli as fullwave_cli
 
     parser = OneLineParser(
         prog="python -m acousim",
@@ -23,6 +24,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     sweep_cli.add_parser(sub)
     simulate_cli.add_parser(sub)
+    fullwave_cli.add_parser(sub)
     return parser
 
 

@@ -110,6 +110,9 @@ class Effect:
     _non_negative: ClassVar[tuple[str, ...]] = ()
     #: True for effects of the air, which act with the acoustic field off too
     acts_without_field: ClassVar[bool] = False
+    #: True when the columns depend on the height above the node itself (through ``wavenumber * (z_eq + y)``),
+    #: not only on the state
+    depends_on_node_height: ClassVar[bool] = False
     #: regressor columns ``(y, ydot, theta, thetadot, wavenumber, z_eq) -> (yddot cols, thetaddot cols)``
     columns: ClassVar[Callable]
 
@@ -195,6 +198,7 @@ class PairScattering(Effect):
 
     name: ClassVar[str] = "pair_scattering"
     _non_negative: ClassVar[tuple[str, ...]] = ("kappa",)
+    depends_on_node_height: ClassVar[bool] = True
     columns: ClassVar[Callable] = staticmethod(_pair_scattering_columns)
     kappa: float = 0.0
 

@@ -49,12 +49,12 @@ def _range(text: str) -> tuple[float, float]:
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register the ``simulate`` subcommand."""
-    from .twin import PRESETS
+    from .twin import FORCE_MODELS, PRESETS
 
     p = subparsers.add_parser(
         "simulate",
         help="synthetic field-drop experiments (digital twin) written as a trajectory data set",
-        description="Simulate field-drop experiments of the cube dimer (Gor'kov model plus any of the "
+        description="Simulate field-drop experiments of the cube dimer (Gor'kov or full-wave model plus any of the "
         "PHYSICS.md section 5 effects) and write them as a FORMATS.md data set with truth.json. "
         "Without --effect (and --preset) no effect is on; noise options of 0 give exact samples.",
     )
@@ -86,6 +86,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
+    p.add_argument("--model", choices=FORCE_MODELS, default="gorkov",
+                   help="acoustic force model: the Gor'kov volume integral, or the full-wave boundary-element "
+                   "surrogate of the default 500 um dimer (shipped table, docs/fullwave.md) (default gorkov)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
@@ -132,7 +135,7 @@ def build_config(args: argparse.Namespace):
         return TwinConfig(
             runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
-            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset,
+            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=args.model,
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None

@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 from .dataset import DatasetError
-from .executor import ExecutorConfig, ExecutorError
+from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
 __all__ = ["UserInputError", "OneLineParser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
@@ -208,11 +208,16 @@ def check_limit(what: str, value: float, limit: float, hint: str = "") -> None:
 
 
 def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> int:
-    """Parse ``argv`` and run the chosen subcommand's ``func``: user errors become one line and exit 2."""
+    """Parse ``argv`` and run the chosen subcommand's ``func``: user errors become one line and exit 2.
+
+    The command runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`), as every
+    executor task does: its numbers are then the same whether it runs here or inside a task, and the
+    many small factorisations are faster so (parallel work goes through the executor's processes)."""
     args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     configure_logging(quiet=bool(getattr(args, "quiet", False)), verbose=bool(getattr(args, "verbose", False)))
     try:
-        return int(args.func(args) or 0)
+        with single_blas_thread():
+            return int(args.func(args) or 0)
     except (UserInputError, DatasetError, ExecutorError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

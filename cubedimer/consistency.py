@@ -105,14 +105,25 @@ def _noise_level(x: NDArray) -> float:
     return 1.4826 * float(np.median(np.abs(r - np.median(r)))) / math.sqrt(1.0 - c0)
 
 
+#: A peak at five or more cycles per run is the oscillation when it reaches this fraction of a slower peak.
+SLOW_PEAK_FRACTION = 0.1
+
+
 def run_features(name: str, t: NDArray, y: NDArray) -> RunFeatures:
-    """:class:`RunFeatures` of one gap-filled run (t [s], y [m])."""
+    """:class:`RunFeatures` of one gap-filled run (t [s], y [m]).
+
+    f_y is the largest spectral peak at five or more cycles per run, unless nothing there reaches
+    :data:`SLOW_PEAK_FRACTION` of a slower peak: a slow drift of the levitation height (a drifting
+    pressure) is not taken for the run's oscillation, and a run that only drifts keeps its slow f_y."""
     t, y = np.asarray(t, float), np.asarray(y, float)
     dt = float((t[-1] - t[0]) / (t.size - 1))
+    duration = float(t[-1] - t[0])
     q = np.quantile(y, [0.01, 0.99])
-    return RunFeatures(name=name, y_amplitude=0.5 * float(q[1] - q[0]),
-                       f_y=dominant_frequency(y, dt) if np.ptp(y) > 0 else 0.0,
-                       duration=float(t[-1] - t[0]), noise_y=_noise_level(y))
+    f_y = (dominant_frequency(y, dt, fmin=5.0 / duration, prefer_above=SLOW_PEAK_FRACTION)
+           if np.ptp(y) > 0 else 0.0)
+    return RunFeatures(name=name, y_amplitude=0.5 * float(q[1] - q[0]), f_y=f_y,
+                       duration=duration, noise_y=_noise_level(y))
+
 
 
 def nominal_trap_frequency(meta: Mapping[str, float]) -> float:

@@ -1,10 +1,12 @@
 """Data-driven model discovery for levitated cube dimers.
 
-Pipeline: load trajectories (:mod:`cubedimer.dataset`), smooth and differentiate
-(:mod:`fitting.derivatives`), Poincare sections/maps, spectra and attractor classes, sparse
-regression of the accelerations on the 35-term cubic library with pysindy (C0), long-time
-refinement against attractor shape, Poincare map and frequency with nlopt, ensemble z-scores, the
-significance of the ensemble mean and the minimal model, and paired model comparison.  Independent of ``acousim``.
+Two methods (:class:`FitConfig` ``method``): ``"discovery"`` (default) selects and fits the terms of the
+35-term cubic library on the integral form pooled over runs, with model-based column states
+(:func:`discover_model`), then polishes the coefficients with the long-time refinement (attractor shape,
+Poincare map, frequency; nlopt) and checks the attractors; ``"paper"`` is the source paper's pipeline:
+per-run sparse regression with pysindy (C0), long-time refinement per run, ensemble selection and joint
+re-optimisation of the minimal model.  Also: oracle standard errors and a run planner, paired model
+comparison, synthetic data.  Independent of ``acousim``.
 """
 from .compare import compare_models, cross_coupling_mask, drop_terms, paired_wilcoxon
 from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
@@ -12,7 +14,7 @@ from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, se
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
 from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_standard_errors, plan_runs
-from .pipeline import FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
+from .pipeline import METHODS, FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
 from .refine import RefineConfig, refine
 from .selection import SelectionConfig
 from .regression import RegressionConfig, fit_regression
@@ -24,7 +26,7 @@ __all__ = [
     "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
     "SelectionConfig", "DiscoveryConfig", "DiscoveryResult", "discover_model",
     "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_standard_errors", "plan_runs",
-    "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
+    "METHODS", "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
     "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",
     "SyntheticConfig", "paper_reduced_model", "write_dataset",
 ]

@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
-* ``fit DATA_DIR --out OUT_DIR [--workers N | --scheduler ADDRESS] [--strict] [--no-plots] [--max-evals N]``:
-  steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
+* ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
+  [--no-plots] [--max-evals N]``: steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
@@ -39,9 +39,14 @@ def _cmd_fit(a: argparse.Namespace) -> int:
     from .pipeline import FitConfig, fit_dataset
 
     prepare_output_dir(a.out, "--out", create=False)
-    cfg = FitConfig()
-    if a.max_evals:
+    if a.method != "paper" and (a.selection or a.relative_threshold):
+        from cubedimer.cli import UserInputError
+        raise UserInputError("--selection and --relative-threshold apply to --method paper")
+    cfg = FitConfig(method=a.method)
+    if a.max_evals and a.method == "paper":
         cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
+    elif a.max_evals:
+        cfg = replace(cfg, polish=replace(cfg.polish, max_evals=a.max_evals))
     if a.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
     if getattr(a, "relative_threshold", False):
@@ -161,10 +166,15 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     f.add_argument("--no-plots", action="store_true")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
-    f.add_argument("--max-evals", type=positive_int, default=None, help="objective evaluations per run refinement")
+    f.add_argument("--method", choices=("discovery", "paper"), default="discovery",
+                   help="'discovery' (default: integral-form discovery with model-based states, polished by the "
+                        "long-time refinement) or 'paper' (per-run SINDy and long-time refinement, ensemble selection, "
+                        "joint re-optimisation of the minimal model)")
+    f.add_argument("--max-evals", type=positive_int, default=None,
+                   help="objective evaluations per run refinement (paper) or of the polish (discovery)")
     f.add_argument("--joint-max-evals", type=positive_int, default=None, help="evaluations of the joint re-optimisation")
     f.add_argument("--selection", choices=("significance", "zscore", "backward"), default=None,
-                   help="term selection: 'significance' (default: the mean coefficient across runs is "
+                   help="term selection of --method paper: 'significance' (default: the mean coefficient across runs is "
                         "significantly non-zero, t-test with Holm correction at 0.01), 'zscore' (the paper's "
                         "z > 3 rule; always reported) or 'backward' (elimination on the joint long-time loss; slow)")
     f.add_argument("--relative-threshold", action="store_true",

@@ -35,6 +35,7 @@ from cubedimer.cli import UserInputError
 from cubedimer.attractors import AttractorClass, ClassifyConfig, classify_trajectory
 from cubedimer.dataset import Dataset, LoadConfig, Run, load_dataset
 from .derivatives import Derivatives, SmoothingConfig, run_derivatives
+from .discovery import DiscoveryConfig, DiscoveryResult
 from .ensemble import (EnsembleConfig, TermStatistics, least_squares_on_support, mean_pvalues, select_significant_terms, select_terms,
                        term_statistics)
 from cubedimer.executor import ExecutorConfig, map_ordered
@@ -48,7 +49,7 @@ from .regression import RegressionConfig, dataset_scales, fit_regression, scaled
 from .selection import SelectionConfig, SelectionResult, backward_elimination
 from cubedimer.spectra import dominant_frequency
 
-__all__ = ["FitConfig", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
+__all__ = ["FitConfig", "METHODS", "PreparedRun", "RunFit", "FitResult", "prepare_runs", "candidate_terms", "refine_run", "fit_runs",
            "fit_dataset", "model_json", "NoSaneModelError", "MAX_SANE_LOSS", "fallback_candidates"]
 
 #: A fallback model must integrate over every run and have a mean long-time loss below this (the rest
@@ -75,6 +76,28 @@ class FitConfig:
     candidate_joint: RefineConfig = field(default_factory=lambda: RefineConfig(
         max_evals=300, rel_bound=0.3, abs_bound=0.005, horizons=(0.5, 1.0)))
     classify: ClassifyConfig = field(default_factory=ClassifyConfig)
+    #: ``"discovery"``: integral-form discovery (:func:`fitting.discovery.discover_model`) selects and fits the
+    #: model, the long-time refinement polishes it inside a box of ``polish_se`` of its standard errors;
+    #: ``"paper"``: per-run SINDy and long-time refinement, ensemble selection (``selection.rule``), joint
+    #: re-optimisation of the minimal model
+    method: str = "discovery"
+    discovery: DiscoveryConfig = field(default_factory=DiscoveryConfig)
+    #: long-time polish of the discovered model (method "discovery")
+    polish: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=150))
+    #: half-width of the polish box in the discovery's standard errors
+    polish_se: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ValueError(f"unknown method {self.method!r} (use one of {', '.join(METHODS)})")
+        if not self.polish_se > 0:
+            raise ValueError(f"polish_se must be positive, got {self.polish_se}")
+
+
+#: Model-discovery methods of :class:`FitConfig` (the first is the default).
+METHODS = ("discovery", "paper")
+#: FitConfig fields that only the discovery method uses (left out of a paper fit's recorded settings).
+DISCOVERY_FIELDS = ("discovery", "polish", "polish_se")
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,6 +167,8 @@ class FitResult:
     fallback: dict | None = None
     #: oracle standard errors of the final model's terms at the data's tracking noise
     oracle: OracleResult | None = None
+    #: the integral-form discovery (method "discovery"), else None
+    discovery: DiscoveryResult | None = None
 
     @property
     def model(self) -> PolynomialModel:
@@ -195,8 +220,11 @@ def _fingerprint(p: PreparedRun, scales: Scales, config: FitConfig, candidates: 
 def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig = FitConfig(),
              executor: ExecutorConfig | None = None, cache_dir: str | os.PathLike | None = None,
              progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
-    """Steps 2-4 on prepared runs (see :func:`fit_dataset`)."""
+    """Steps 2-4 on prepared runs (see :func:`fit_dataset`); ``config.method`` chooses the method."""
     log = log or (lambda m: None)
+    if config.method == "discovery":
+        from .discovery_fit import fit_discovery
+        return fit_discovery(prepared, scales, config, log)
     derivs = [p.derivs for p in prepared]
     try:
         integral = integral_form_selection([p.run for p in prepared], derivs, alpha=config.selection.alpha)
@@ -353,8 +381,11 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
 
 def _fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics, run_fits: Sequence[RunFit],
                integral: dict[str, IntegralSelection] | None, derivs: Sequence[Derivatives], scales: Scales,
-               config: FitConfig, log: Callable[[str], None]) -> tuple[PolynomialModel, RefineResult, dict]:
+               config: FitConfig, log: Callable[[str], None],
+               first: Sequence[tuple[str, PolynomialModel]] = ()) -> tuple[PolynomialModel, RefineResult, dict]:
     """Replace a blown-up minimal model by the best sane fallback (module docstring), re-optimised jointly.
+
+    ``first``: (name, model) candidates tried before those of :func:`fallback_candidates`.
 
     Returns (start of the re-optimisation, its result, the ``fallback`` record); raises
     :class:`NoSaneModelError` if no candidate integrates over every run with a loss below ``MAX_SANE_LOSS``."""
@@ -364,7 +395,7 @@ def _fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics, run
     log(f"{reason}: trying fallbacks")
     refs = [scaled_reference(d, scales) for d in derivs]
     tried, best = [], None
-    for name, model in fallback_candidates(joint.model, mask, stats, run_fits, integral):
+    for name, model in [*first, *fallback_candidates(joint.model, mask, stats, run_fits, integral)]:
         c = scales.to_scaled(model.coef)
         m = model.support
         obj = Objective(refs, m, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
@@ -394,12 +425,20 @@ def model_json(res: FitResult) -> dict:
     eq_mask = {eq: [t for t, m in zip(TERMS, res.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
     per_run = []
     for p, f, lt in zip(res.runs, res.run_fits, res.joint.per_run_end):
-        d = f.to_json()
-        d.pop("history")
+        if res.rule == "discovery":
+            d = {"file": f.name, "equations": f.refined.equations(),
+                 "fit": "least squares of the smoothed accelerations on the selected terms (this run alone)"}
+        else:
+            d = f.to_json()
+            d.pop("history")
         d["attractor"] = p.attractor.to_dict()
         d["loss_minimal_model"] = lt.to_dict()
         per_run.append(d)
-    return {
+    settings = json.loads(json.dumps(asdict(res.config), default=float))
+    if res.config.method == "paper":
+        for key in DISCOVERY_FIELDS:
+            settings.pop(key)
+    out = {
         "state": list(STATE_NAMES),
         "equations": res.model.equations(),
         "zscores": res.stats.as_dict(res.stats.zscore),
@@ -414,14 +453,21 @@ def model_json(res: FitResult) -> dict:
         "loss": {"joint_start": res.joint.loss_start.to_dict(), "final": res.joint.loss_end.to_dict(),
                  "n_evals": res.joint.n_evals, "nlopt_status": res.joint.status},
         "scales": res.scales.to_dict(),
-        "settings": json.loads(json.dumps(asdict(res.config), default=float)),
+        "settings": settings,
         "skipped_files": list(res.skipped),
         "glitch_frames_masked": res.n_glitches,
         "selection": _selection_json(res),
         "integral_form": _integral_form_json(res),
         "fallback": res.fallback,
         "oracle": res.oracle.to_json() if res.oracle is not None else None,
+        "method": res.config.method,
     }
+    if res.discovery is not None:
+        out["discovery"] = disc = res.discovery.to_json()
+        # the discovery is the pooled integral form: its estimates in the cross-check's place (same keys)
+        out["integral_form"] = {"method": disc["method"], **{
+            eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
+    return out
 
 
 def _integral_form_json(res: FitResult) -> dict | None:

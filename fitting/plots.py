@@ -51,7 +51,7 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
         ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
     axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
     rule = {"significance": "by the ensemble-mean t-test, Holm", "zscore": "by z > threshold",
-            "backward": "by backward elimination"}.get(getattr(res, "rule", "zscore"), "")
+            "backward": "by backward elimination", "discovery": "by integral-form discovery"}.get(getattr(res, "rule", "zscore"), "")
     axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
     paths.append(out / "zscores.png")
     _save(fig, paths[-1])

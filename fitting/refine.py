@@ -169,7 +169,8 @@ def default_substeps(coef_scaled: NDArray, dt_scaled: float, h_omega: float) -> 
 
 
 def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales,
-           config: RefineConfig = RefineConfig(), mask: NDArray[np.bool_] | None = None) -> RefineResult:
+           config: RefineConfig = RefineConfig(), mask: NDArray[np.bool_] | None = None,
+           half_width: NDArray[np.float64] | None = None) -> RefineResult:
     """Minimise the mean long-time loss over ``derivs`` starting from ``start``.
 
     Parameters
@@ -182,6 +183,9 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
     config : RefineConfig
     mask : ndarray of bool (2, 35), optional
         Terms to optimise (default: the start's support); other terms are zero.
+    half_width : ndarray (2, 35), optional
+        Box half-width per coefficient in scaled units (e.g. a few standard errors); default
+        ``max(rel_bound |c0|, abs_bound)``.
     """
     import nlopt
 
@@ -196,7 +200,12 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
     if x0.size == 0:
         lt = _mean_terms(per_start)
         return RefineResult(start, start, lt, lt, per_start, per_start, np.array([lt.total]), 1, 0)
-    half = np.maximum(config.rel_bound * np.abs(x0), config.abs_bound)
+    if half_width is None:
+        half = np.maximum(config.rel_bound * np.abs(x0), config.abs_bound)
+    else:
+        half = np.asarray(half_width, float)[mask]
+        if not np.all(half > 0):
+            raise ValueError("half_width must be positive on every optimised term")
     x = x0.copy()
     history: list[float] = []
     status = 0
@@ -213,9 +222,17 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
         opt.set_xtol_rel(config.xtol_rel)
         opt.set_ftol_rel(config.ftol_rel)
         try:
-            x = opt.optimize(x)
+            try:
+                x = opt.optimize(x)
+            except nlopt.invalid_argument:
+                # BOBYQA rejects a start that lies closer to a bound than its initial step (but not on it): a
+                # later stage starting near the box's edge retries with the step cut to the room left
+                room = np.minimum(x - (x0 - half), (x0 + half) - x)
+                step = config.initial_step * half
+                opt.set_initial_step(np.where((room > 0) & (room < step), 0.5 * room, step))
+                x = opt.optimize(x)
             status = int(opt.last_optimize_result())
-        except (nlopt.RoundoffLimited, RuntimeError, ValueError):  # keep the previous stage's point
+        except (nlopt.RoundoffLimited, nlopt.invalid_argument, RuntimeError, ValueError):  # keep the previous point
             status = -4
         history += stage.history
     best = obj.coef(x)

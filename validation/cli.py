@@ -252,7 +252,11 @@ def _add_report(sub) -> None:
     p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
     p.add_argument("--out", required=True, help="report directory")
     p.add_argument("--max-evals", type=positive_int, default=None,
-                   help="refinement evaluations per run (default: the fitting default)")
+                   help="evaluations of the fit's long-time refinement (default: the fitting default)")
+    p.add_argument("--method", choices=("discovery", "paper"), default="discovery",
+                   help="the fit's model discovery: integral-form discovery with a long-time polish, or the "
+                        "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
+                        "see python -m fitting fit --help")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
                            "and figures run in this process.")
@@ -268,7 +272,7 @@ def run_report(args: argparse.Namespace) -> int:
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
-                     max_evals=args.max_evals)
+                     max_evals=args.max_evals, method=args.method)
     except DatasetError as exc:
         raise UserInputError(str(exc)) from None
     return 0

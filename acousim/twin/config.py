@@ -17,7 +17,10 @@ from numpy.typing import NDArray
 from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 
-__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS"]
+__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS", "FORCE_MODELS"]
+
+#: The acoustic force models a twin can run on (``--model`` of ``python -m acousim simulate``).
+FORCE_MODELS = ("gorkov", "fullwave")
 
 
 class TwinError(ValueError):
@@ -160,6 +163,10 @@ class TwinConfig:
     camera : Camera
     mesh_size : float, optional
         Mesh edge [m] of the Gor'kov model behind the surrogate (default: the model's default).
+    force_model : {"gorkov", "fullwave"}
+        The acoustic force model: the Gor'kov surrogate (:func:`acousim.surrogate.cached_surrogate`) or
+        the full-wave boundary-element surrogate of the default dimer
+        (:func:`acousim.fullwave.default_fullwave_surrogate`, side 500 um only).
     max_step : float
         Longest internal RK4 step [s].
     preset : str, optional
@@ -178,6 +185,7 @@ class TwinConfig:
     mesh_size: float | None = None
     max_step: float = DEFAULT_MAX_STEP
     preset: str | None = None
+    force_model: str = "gorkov"
 
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 1:
@@ -196,6 +204,10 @@ class TwinConfig:
             raise TwinError(f"mesh size must be positive, got {self.mesh_size!r} m")
         if not np.isfinite(self.max_step) or self.max_step <= 0:
             raise TwinError(f"max_step must be positive, got {self.max_step!r} s")
+        if self.force_model not in FORCE_MODELS:
+            raise TwinError(f"force model must be one of {', '.join(FORCE_MODELS)}, got {self.force_model!r}")
+        if self.force_model == "fullwave" and self.mesh_size is not None:
+            raise TwinError("mesh size applies to the Gor'kov model only, not to the full-wave model")
         n = int(round(self.duration * self.camera.fps))
         if n < 16:
             raise TwinError(f"{self.duration:g} s at {self.camera.fps:g} fps gives only {n} frames")
@@ -214,8 +226,8 @@ class TwinConfig:
         return int(round(self.duration * self.camera.fps))
 
     def to_dict(self) -> dict:
-        """JSON-ready settings (SI units)."""
-        return {
+        """JSON-ready settings (SI units); ``force_model`` is listed when it is not the Gor'kov default."""
+        out = {
             "runs": int(self.runs),
             "duration_s": float(self.duration),
             "seed": int(self.seed),
@@ -231,6 +243,9 @@ class TwinConfig:
             "max_step_s": float(self.max_step),
             "preset": self.preset,
         }
+        if self.force_model != "gorkov":
+            out["force_model"] = self.force_model
+        return out
 
 
 # ---------------------------------------------------------------------- presets

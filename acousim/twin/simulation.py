@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
-from ..surrogate import ForceSurrogate, cached_surrogate
+from ..surrogate import cached_surrogate
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
 __all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
@@ -129,13 +129,27 @@ def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     """The true dynamics of a configuration and its true pressure amplitude [Pa]."""
     p_true = true_pressure(config.pressure_amplitude_pa, config.pressure_error, config.seed)
     try:
-        sur: ForceSurrogate = cached_surrogate(float(config.side), float(config.pressure_amplitude_pa),
-                                               config.mesh_size)
-        if p_true != config.pressure_amplitude_pa:
-            sur = sur.with_pressure(p_true)
+        if config.force_model == "fullwave":
+            sur = _fullwave_model(config, p_true)
+        else:
+            sur = cached_surrogate(float(config.side), float(config.pressure_amplitude_pa), config.mesh_size)
+            if p_true != config.pressure_amplitude_pa:
+                sur = sur.with_pressure(p_true)
     except ValueError as exc:  # the field cannot levitate the dimer
         raise TwinError(str(exc)) from None
     return DimerDynamics(sur, config.effects), p_true
+
+
+def _fullwave_model(config: TwinConfig, p_true: float):
+    """The shipped full-wave table of the default dimer at the true pressure amplitude [Pa]."""
+    from ..fullwave import default_fullwave_surrogate
+
+    sur = default_fullwave_surrogate()
+    side = float(sur.settings["side_m"])
+    if not np.isclose(config.side, side, rtol=1e-9):
+        raise TwinError(f"the full-wave model is tabulated for the {side * 1e6:g} um dimer only, got side "
+                        f"{config.side * 1e6:g} um")
+    return sur if p_true == sur.pressure_amplitude_pa else sur.with_pressure(p_true)
 
 
 def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool = True) -> tuple[list[SimulatedRun], DimerDynamics, float]:

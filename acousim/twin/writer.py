@@ -20,6 +20,7 @@ from cubedimer.atomic import atomic_save, default_dir_mode, write_json
 from cubedimer.dataset import write_run_csv
 
 from ..dynamics import DimerDynamics
+from ..medium import ParticleMaterial
 from .config import TwinConfig, TwinError
 from .simulation import SimulatedRun, simulate_field_drop_runs
 
@@ -41,7 +42,8 @@ def meta_dict(config: TwinConfig, dynamics: DimerDynamics) -> dict:
     return {
         "side_length_m": float(config.side),
         "particle_density_kg_m3": float(st["particle_density_kg_m3"]),
-        "bulk_modulus_pa": float(st["bulk_modulus_pa"]),
+        # the full-wave model treats the cubes as rigid; the record keeps the material's value
+        "bulk_modulus_pa": float(st.get("bulk_modulus_pa", ParticleMaterial().bulk_modulus_pa)),
         "frequency_hz": float(st["frequency_hz"]),
         "sound_speed_m_s": float(st["sound_speed_m_s"]),
         "air_density_kg_m3": float(st["air_density_kg_m3"]),
@@ -62,11 +64,13 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         **config.to_dict(),
         "equilibrium_height_m": float(fm.z_eq),
         "escape_height_m": float(fm.escape_height()),
-        "gorkov_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
+        f"{config.force_model}_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
         "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
     }
     if hasattr(fm, "build_accuracy") and hasattr(fm, "box"):  # the Gor'kov surrogate's own record
         out["surrogate"] = {"build_accuracy": fm.build_accuracy, "box": asdict(fm.box)}
+    elif config.force_model == "fullwave":  # the full-wave table's record and interpolation box
+        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "theta_max": fm.theta_max}
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],
         "runs_detail": [

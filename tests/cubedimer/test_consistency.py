@@ -86,3 +86,17 @@ def test_nominal_trap_frequency_against_the_mesh_model():
     f_y, _ = cached_surrogate().linear_frequencies()
     np.testing.assert_allclose(nominal_trap_frequency({}), f_y, rtol=0.05)
     assert np.isnan(nominal_trap_frequency({"pressure_amplitude_pa": 100.0}))  # cannot levitate
+
+
+@pytest.mark.parametrize("n_runs", [4, 12])
+def test_a_slowly_drifting_height_is_not_another_experiment(n_runs):
+    """A pressure drifting within a run moves the levitation height slowly (periods of seconds, amplitude up to
+    a few times the oscillation's): its f_y is still the trap's oscillation, and the run is not flagged."""
+    rng = np.random.default_rng(n_runs)
+    runs = [_run(rng, f"run{i:02d}.csv") for i in range(n_runs)]
+    name, t, y = runs[1]
+    amp = 0.5 * np.ptp(y)
+    runs[1] = (name, t, y + 2.0 * amp * np.sin(2 * np.pi * t / 2.5))  # a drift larger than the oscillation
+    features = _features(runs)
+    np.testing.assert_allclose(features[1].f_y, F_Y, rtol=0.02)  # two bins of 0.33 Hz: the oscillation's peak
+    assert check_consistency(features, meta={}) == []

@@ -7,7 +7,7 @@ import pytest
 
 from fitting.cli import main
 
-FAST = ["--max-evals", "40", "--joint-max-evals", "40", "--workers", "2", "--quiet"]
+FAST = ["--method", "paper", "--max-evals", "40", "--joint-max-evals", "40", "--workers", "2", "--quiet"]
 
 
 @pytest.fixture(scope="module")
@@ -23,6 +23,8 @@ def test_fit_writes_model_json_and_plots(fitted):
     assert set(d["zscores"]) == {"yddot", "thetaddot"} and len(d["zscores"]["yddot"]) == 35
     assert [r["file"] for r in d["per_run"]] == ["run01.csv", "run02.csv", "run03.csv"]
     assert "ydot" in d["equations"]["yddot"] and "thetadot" in d["equations"]["thetaddot"]  # damping kept
+    assert d["method"] == "paper" and d["selection"]["rule"] == "significance" and "discovery" not in d
+    assert "polish" not in d["settings"]  # a paper fit records only the settings it uses
     for p in ("zscores.png", "coefficients.png", "optimisation.png", "phase_portraits.png", "poincare.png"):
         assert (fitted / p).stat().st_size > 1000
 

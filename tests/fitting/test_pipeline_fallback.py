@@ -26,7 +26,7 @@ def lost_restoring_term(monkeypatch):
     monkeypatch.setattr(pipeline, "select_significant_terms", lambda *a, **k: _mask(NO_RESTORING))
 
 
-FAST = ["--no-plots", "--quiet", "--workers", "1", "--max-evals", "24", "--joint-max-evals", "24"]
+FAST = ["--method", "paper", "--no-plots", "--quiet", "--workers", "1", "--max-evals", "24", "--joint-max-evals", "24"]
 
 
 @pytest.mark.slow

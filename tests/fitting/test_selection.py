@@ -25,7 +25,7 @@ def test_too_few_runs_for_wilcoxon_fall_back_to_zscore_rule(small_dataset, tmp_p
     from fitting.refine import RefineConfig
 
     cfg = FitConfig(refine=RefineConfig(max_evals=60), joint=RefineConfig(max_evals=40, rel_bound=0.3, abs_bound=0.005),
-                    selection=SelectionConfig(rule="backward"))
+                    selection=SelectionConfig(rule="backward"), method="paper")
     res = fit_dataset(small_dataset, tmp_path, config=cfg, plots=False, progress=False)
     assert res.selection is None
     np.testing.assert_array_equal(res.mask, res.mask_zscore)

@@ -87,6 +87,41 @@ def vertical_system(terms: SimulationTerms, z0: float, effects: Sequence[str]) -
     return np.concatenate(cols_per_run), np.concatenate(target_per_run)
 
 
+def _depends_on_node_height(name: str) -> bool:
+    from acousim.effects import EFFECT_TYPES
+
+    return name not in EFFECT_TYPES or EFFECT_TYPES[name].depends_on_node_height
+
+
+def _height_search_rows(terms: SimulationTerms, effects: Sequence[str], y_effects_cols: Sequence[int]):
+    """``z0 -> (x, b)``: the integral-form y system of :func:`vertical_system` reduced to its R factor.
+
+    The acoustic column is A + B cos(2k z0) + C sin(2k z0) (:meth:`SimulationTerms.integral_known_harmonics`)
+    and, for effects that do not depend on the height above the node, every other column and the target
+    are the same at every z0.  With R the triangular factor of M = [A B C E b] (all runs stacked),
+    ``||M v|| = ||R v||`` for every v, so the least squares at any z0 is solved on R's few rows: the same
+    solution and residual to round-off, without touching the tens of thousands of rows again.
+    """
+    harmonics = terms.integral_known_harmonics(0)
+    cols = terms.integral_effect_columns(0.0, effects, None, 0)  # the same at every z0 for these effects
+    blocks = []
+    for r, ((a, b_, c), rest), e in zip(terms.runs, harmonics, cols):
+        e = e[:, [j - 1 for j in y_effects_cols]]
+        blocks.append(np.column_stack([a, b_, c, e, r.integral.target(0) - rest]))
+    m = np.vstack(blocks)
+    r_factor = np.linalg.qr(m, mode="r")
+    n_eff = m.shape[1] - 4
+    two_k = 2.0 * terms.k
+
+    def rows(z0: float):
+        combo = np.zeros((m.shape[1], 1 + n_eff))
+        combo[:3, 0] = (1.0, np.cos(two_k * z0), np.sin(two_k * z0))
+        combo[3:3 + n_eff, 1:] = np.eye(n_eff)
+        return r_factor @ combo, r_factor[:, -1]
+
+    return rows
+
+
 def calibrate(terms: SimulationTerms, effects: Sequence[str] = (), z0_window: float = 4e-4) -> Calibration:
     """Fit the pressure scale s and the origin height z0 to the y equation (with the y parameters of ``effects``).
 
@@ -107,11 +142,18 @@ def calibrate(terms: SimulationTerms, effects: Sequence[str] = (), z0_window: fl
     from scipy.optimize import minimize_scalar
 
     model = terms.model
+    effects = [n for n in effects if parameter_slots([n], 0)]  # only effects acting in y enter the y equation
     y_effects_cols = [c for _, _, c in parameter_slots(effects, 0)]
 
-    def solve_y(z0: float):
+    def solve_rows(z0: float):
         x, b = vertical_system(terms, z0, effects)
-        x = x[:, [0] + y_effects_cols]
+        return x[:, [0] + y_effects_cols], b
+
+    if uses_integral_form(terms.runs) and not any(_depends_on_node_height(n) for n in effects):
+        solve_rows = _height_search_rows(terms, effects, y_effects_cols)
+
+    def solve_y(z0: float):
+        x, b = solve_rows(z0)
         scale = np.maximum(np.abs(x).max(axis=0), 1e-300)
         sol, *_ = np.linalg.lstsq(x / scale, b, rcond=None)
         sol = sol / scale

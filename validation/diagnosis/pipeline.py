@@ -120,7 +120,18 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     -------
     (diagnosis, internals)
         The diagnosis.json document (FORMATS.md) and :class:`DiagnosisInternals` for figures.
+
+    Runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`): the same numbers wherever it
+    runs (here, in an executor task, on a dask worker), and faster for its many small factorisations.
     """
+    from cubedimer.executor import single_blas_thread
+
+    with single_blas_thread():
+        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size)
+
+
+def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
+                      mesh_size: float | None) -> tuple[dict, DiagnosisInternals]:
     from cubedimer.dataset import load_dataset
     from cubedimer.meta import read_meta
 

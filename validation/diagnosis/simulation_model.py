@@ -49,24 +49,51 @@ class SimulationTerms:
         """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
         return [(f, q) for f, q, _ in self._static(z0)]
 
+    def _height_harmonics(self, kind: str, holder, evaluate) -> list[NDArray]:
+        """(A, B, C) of ``evaluate(z0) = A + B cos(2k z0) + C sin(2k z0)`` for one run, from three heights.
+
+        Every acoustic quantity of the model at the data states (forces, torque, potential, and any linear
+        map of them: smoothing, drift factor, integral-form columns) depends on the origin height z0 only
+        through the phase exp(2ik (z0 + y + offset)) of the standing wave's intensity (PHYSICS.md
+        section 3), so three evaluations give it at every z0 to round-off; the calibration's height search
+        then costs no force evaluation.  Shared by the problem's subsets (the folds) for the same drift.
+        """
+        store = self.problem._shared.setdefault("harmonics", {})
+        drift = self.problem.drift
+        key = (kind, id(holder), id(drift))
+        if key not in store:
+            quarter = np.pi / (4.0 * self.k)  # 2k z0 = pi/2
+            v0, v1, v2 = (evaluate(z) for z in (0.0, quarter, 2.0 * quarter))
+            harmonics = []
+            for a0, a1, a2 in zip(v0, v1, v2):
+                const = 0.5 * (a0 + a2)
+                harmonics.append((const, 0.5 * (a0 - a2), a1 - const))
+            store[key] = (holder, drift, harmonics)  # holder and drift kept so that their ids stay unique
+        return store[key][2]
+
+    def _at_height(self, harmonics, z0: float) -> tuple[NDArray, ...]:
+        c, s = np.cos(2.0 * self.k * z0), np.sin(2.0 * self.k * z0)
+        return tuple(a + c * b + s * d for a, b, d in harmonics)
+
     def _static(self, z0: float) -> list[tuple[NDArray, NDArray, NDArray]]:
         key = round(z0, 12)
         if key not in self._cache:
-            out = []
-            if not hasattr(self, "_sums"):
-                self._sums = [self.problem.orientation_sums(r) for r in self.runs]
-            for r, sums in zip(self.runs, self._sums):
-                s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], sums)
-                fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])
-                f = self.problem.pressure_factor(r.name, r.t)
-                if f is not None:  # a drifting pressure scales the acoustic forces in time
-                    fz, qt = f * fz, f * qt
-                # accelerations as the data see them (same smoothing); the potential is used raw
-                out.append((r.smooth(fz), r.smooth(qt), s.potential))
+            out = [self._at_height(self._height_harmonics("static", r, lambda z, r=r: self._static_run(r, z)), z0)
+                   for r in self.runs]
             if len(self._cache) > 64:
                 self._cache.clear()
             self._cache[key] = out
         return self._cache[key]
+
+    def _static_run(self, r: RunAccelerations, z0: float) -> tuple[NDArray, NDArray, NDArray]:
+        """(smoothed F_Z / M, smoothed Q_theta / I, raw U_ac) of one run at origin height z0."""
+        s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], self.problem.orientation_sums(r))
+        fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])
+        f = self.problem.pressure_factor(r.name, r.t)
+        if f is not None:  # a drifting pressure scales the acoustic forces in time
+            fz, qt = f * fz, f * qt
+        # accelerations as the data see them (same smoothing); the potential is used raw
+        return r.smooth(fz), r.smooth(qt), s.potential
 
     def energy_terms(self, z0: float, effects: Sequence[str], z_eq: float | None = None) -> list[dict]:
         """Per run, per energy window: the data side of the energy balance and the effect work columns.
@@ -119,30 +146,62 @@ class SimulationTerms:
         Only the coordinate asked for is integrated (the calibration's height search needs y alone)."""
         key = ("integral", q, round(z0, 12))
         if key not in self._cache:
-            d = self.model.dimer
             out = []
             for r in self.runs:
-                pi = r.integral
-                y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
-                st = self.model.integrals_at_height(th, z0 + y, self.problem.orientation_sums(pi))
-                f = self.problem.pressure_factor(r.name, pi.times)
-                f = 1.0 if f is None else f  # a drifting pressure scales the acoustic forces in time
-                if q == 0:
-                    out.append((pi.columns(0, f * st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))))
-                else:
-                    inertia = d.hinge_inertia(th)
-                    out.append((pi.columns(1, f * st.q_theta / inertia),
-                                pi.columns(1, hinge_acceleration(0.0, inertia, d.hinge_inertia_derivative(th), thd))))
+                acoustic, rest = self._height_harmonics(f"integral{q}", r.integral,
+                                                        lambda z, r=r: self._integral_run(r, z, q))
+                out.append((self._at_height([acoustic], z0)[0], rest[0]))
+            if len(self._cache) > 64:
+                self._cache.clear()
             self._cache[key] = out
         return self._cache[key]
 
+    def integral_known_harmonics(self, q: int) -> list[tuple[tuple[NDArray, NDArray, NDArray], NDArray]]:
+        """Per run: ((A, B, C), rest) with :meth:`integral_known` ``(z0, q)`` = (A + B cos(2k z0) + C sin(2k z0), rest)."""
+        out = []
+        for r in self.runs:
+            acoustic, rest = self._height_harmonics(f"integral{q}", r.integral, lambda z, r=r: self._integral_run(r, z, q))
+            out.append((acoustic, rest[0]))
+        return out
+
+    def _integral_run(self, r: RunAccelerations, z0: float, q: int) -> tuple[NDArray, NDArray]:
+        """Integral-form columns of (acoustic acceleration at nominal pressure, the rest) of one run at z0."""
+        d = self.model.dimer
+        pi = r.integral
+        y, th, thd = pi.state[:, 0], pi.state[:, 2], pi.state[:, 3]
+        st = self.model.integrals_at_height(th, z0 + y, self.problem.orientation_sums(pi))
+        f = self.problem.pressure_factor(r.name, pi.times)
+        f = 1.0 if f is None else f  # a drifting pressure scales the acoustic forces in time
+        if q == 0:
+            return pi.columns(0, f * st.force_z / self.mass), pi.columns(0, np.full(y.shape, -self.g))
+        inertia = d.hinge_inertia(th)
+        return (pi.columns(1, f * st.q_theta / inertia),
+                pi.columns(1, hinge_acceleration(0.0, inertia, d.hinge_inertia_derivative(th), thd)))
+
     def integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None, q: int) -> list[NDArray]:
-        """Per run: integral-form columns (rows, n_params) of the effects' accelerations of coordinate q."""
+        """Per run: integral-form columns (rows, n_params) of the effects' accelerations of coordinate q.
+
+        With ``z_eq`` None the effects' y is the data's y, so an effect that does not depend on the height
+        above the node (:attr:`acousim.effects.Effect.depends_on_node_height`) has the same columns at every
+        z0: they are computed once per run and shared by the problem's subsets."""
+        from acousim.effects import EFFECT_TYPES
+
+        store = self.problem._shared.setdefault("effect_columns", {})
         out = []
         for r in self.runs:
             pi = r.integral
-            regs = [effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq)[:, q, :] for n in effects]
-            out.append(pi.columns(q, np.concatenate(regs, axis=1) if regs else np.zeros((pi.state.shape[0], 0))))
+            blocks = []
+            for n in effects:
+                fixed = z_eq is None and n in EFFECT_TYPES and not EFFECT_TYPES[n].depends_on_node_height
+                key = (n, q, id(pi))
+                if fixed and key in store:
+                    blocks.append(store[key][1])
+                    continue
+                cols = pi.columns(q, effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq)[:, q, :])
+                if fixed:
+                    store[key] = (pi, cols)  # the holder is kept so that its id stays unique
+                blocks.append(cols)
+            out.append(np.concatenate(blocks, axis=1) if blocks else pi.columns(q, np.zeros((pi.state.shape[0], 0))))
         return out
 
     def centrifugal(self, r: RunAccelerations) -> NDArray:

@@ -83,7 +83,7 @@ def lead_term_reading(lead, n_sigma: float) -> str:
 
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
-                 progress: bool = True, max_evals: int | None = None) -> Path:
+                 progress: bool = True, max_evals: int | None = None, method: str = "discovery") -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -92,7 +92,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     out_dir : report directory: report.html, figures/*.png, numbers.json, fit/, diagnosis.json, comparison.json
     workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
     progress : progress bars, and the steps logged at INFO level (else DEBUG)
-    max_evals : refinement evaluations per run (default: the fitting default)
+    max_evals : evaluations of the long-time refinement (per run for ``"paper"``, of the polish for
+        ``"discovery"``; default: the fitting default)
+    method : the fit's model-discovery method (:data:`fitting.pipeline.METHODS`)
 
     Returns
     -------
@@ -120,12 +122,14 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
-    config = FitConfig()
+    config = FitConfig(method=method)
     if max_evals is not None:
         from dataclasses import replace
 
-        config = replace(config, refine=replace(config.refine, max_evals=max_evals))
-    say("1/5 fitting the data (SINDy, long-time refinement, ensemble z-scores, minimal model)")
+        config = replace(config, refine=replace(config.refine, max_evals=max_evals),
+                         polish=replace(config.polish, max_evals=max_evals))
+    say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
+                                    else "integral-form discovery with held-out selection, long-time polish") + ")")
     res = fit_dataset(data_dir, fit_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler),
                       progress=progress, log=say)
     import json

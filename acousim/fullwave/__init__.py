@@ -1,0 +1,26 @@
+"""Full-wave (boundary-element) scattering model of the cube dimer (PHYSICS.md section 7).
+
+* :func:`solve_scattering` (bempp-cl, Burton-Miller, P1) on any set of closed :class:`Body` surfaces, with
+  :class:`HeightStructure` giving every force and torque as ``A + B cos(2kZ) + C sin(2kZ)``;
+* :func:`dimer_bodies` and :class:`DimerMeshSpec`: the posed, gapped, hinge-graded cube meshes;
+* :class:`FullwaveSurrogate`, :func:`build_fullwave_surrogate`, :func:`cached_fullwave_surrogate`,
+  :func:`default_fullwave_surrogate`: the Chebyshev-in-theta force surrogate (same interface as
+  :class:`acousim.surrogate.ForceSurrogate`, without a potential);
+* ``python -m acousim force`` (:mod:`acousim.fullwave.cli`) and the convergence study
+  (``python -m acousim.fullwave.convergence``).
+
+bempp-cl is imported lazily, at the first solve.
+"""
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, MeshError, check_closed_oriented, dimer_bodies,
+                       mesh_family, split_bodies, volume_centroid)
+from .solver import Body, HeightStructure, ScatteringSolution, enclosing_sphere_force, solve_scattering
+from .surrogate import (FullwaveSurrogate, build_fullwave_surrogate, cached_fullwave_surrogate,
+                        coarse_fullwave_surrogate, default_fullwave_surrogate, dimer_generalized_coefficients)
+
+__all__ = [
+    "Body", "HeightStructure", "ScatteringSolution", "solve_scattering", "enclosing_sphere_force",
+    "DimerMeshSpec", "DEFAULT_SPEC", "COARSE_SPEC", "mesh_family", "dimer_bodies", "split_bodies",
+    "check_closed_oriented", "volume_centroid", "MeshError",
+    "FullwaveSurrogate", "build_fullwave_surrogate", "cached_fullwave_surrogate", "default_fullwave_surrogate",
+    "coarse_fullwave_surrogate", "dimer_generalized_coefficients",
+]

@@ -1,0 +1,536 @@
+"""Full-wave force surrogate: Chebyshev series in theta of the exact height structure (PHYSICS.md section 7).
+
+For every bend theta one boundary-element solve (two right-hand sides) gives the total vertical force
+and the bending generalised force as::
+
+    F_Z(theta, Z)     = A_F(theta) + B_F(theta) cos(2 k Z) + C_F(theta) sin(2 k Z)
+    Q_theta(theta, Z) = A_Q(theta) + B_Q(theta) cos(2 k Z) + C_Q(theta) sin(2 k Z)
+
+with ``Z = Z_com = Z_eq + y``, ``Q_y = F_Z - M g`` and ``Q_theta = (pi/4)(tau_A + tau_B)``, each cube's
+torque about its centre taken positive in the sense that increases its own phi (cube B: +Y, cube A: -Y).
+They need not derive from a potential and are used as they are.
+
+Symmetry.  The dimer at -theta is the mirror image in Z (about Z_com) of the dimer at theta, and the
+standing wave ``sin(kZ)`` is odd about the node, so for equal cubes ``F_Z(-theta, -Z) = -F_Z(theta, Z)`` and
+``Q_theta(-theta, -Z) = -Q_theta(theta, Z)``: A and B are odd in theta and C is even.  The surrogate solves at
+the positive half of an even number of Chebyshev points and fills the negative half by this symmetry, so
+the symmetry holds exactly.  Note what it does *not* imply: unlike the Gor'kov model (where every
+volume element sees only the incident field and C_Q vanishes identically), ``Q_theta(0, Z) = C_Q(0) sin(2kZ)``
+need not vanish below the node, so the straight dimer is not exactly an equilibrium in theta.
+
+The coefficient functions are interpolated on ``|theta| <= theta_max`` (Chebyshev points of the first kind
+on that interval); outside it the series is extrapolated and the surrogate says nothing reliable.
+Forces scale exactly as p0^2 (:meth:`FullwaveSurrogate.with_pressure`).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import sys
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from numpy.polynomial import chebyshev as cheb
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
+
+from cubedimer.atomic import write_json
+
+from ..force_model import ForceCoefficients
+from ..medium import GRAVITY, Medium
+from .geometry import COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, rounded_cube_volume
+from .solver import HeightStructure, solve_scattering
+
+__all__ = [
+    "FullwaveSurrogate",
+    "build_fullwave_surrogate",
+    "cached_fullwave_surrogate",
+    "default_fullwave_surrogate",
+    "coarse_fullwave_surrogate",
+    "dimer_generalized_coefficients",
+    "DEFAULT_TABLE",
+    "DEFAULT_BUILD",
+    "COARSE_BUILD",
+]
+
+log = logging.getLogger(__name__)
+
+#: The shipped table of the default dimer.
+DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
+#: Build arguments of the shipped default table.
+DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 5, "theta_max": 0.9}
+#: Build arguments of the coarse variant (q = 1, 4 solves; < 1 minute idle after the first bempp compilation).
+COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
+
+_COMPONENTS = ("fz", "qt")
+
+
+def dimer_generalized_coefficients(hs: HeightStructure) -> dict[str, NDArray[np.float64]]:
+    """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from the per-cube height structure of ``[A, B]``.
+
+    Returns
+    -------
+    dict
+        ``{"fz": array([A, B, C]), "qt": array([A, B, C])}``.
+    """
+    fz = np.array([hs.force_a[:, 2].sum(), hs.force_b[:, 2].sum(), hs.force_c[:, 2].sum()])
+    qt = (np.pi / 4) * np.array([
+        hs.torque_a[1, 1] - hs.torque_a[0, 1], hs.torque_b[1, 1] - hs.torque_b[0, 1], hs.torque_c[1, 1] - hs.torque_c[0, 1],
+    ])
+    return {"fz": fz, "qt": qt}
+
+
+def _tup(a: ArrayLike) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(a, float).ravel())
+
+
+@dataclass(frozen=True)
+class FullwaveSurrogate:
+    """Chebyshev-in-theta representation of the full-wave F_Z and Q_theta (see the module docstring).
+
+    Attributes
+    ----------
+    coefficients : dict
+        ``{"fz": ((A...), (B...), (C...)), "qt": (...)}``: Chebyshev coefficients in ``t = theta / theta_max``
+        of A, B, C of F_Z [N] and Q_theta [N m].
+    theta_max : float
+        Half-width of the interpolation interval in theta (dimensionless).
+    two_k, wavenumber : float
+        2k and k [1/m].
+    z_eq : float
+        Height Z_eq [m] where the theta = 0 dimer's F_Z equals M g (below the node, < 0).
+    mass : float
+        Total mass M [kg] (rounded-edge volume when r_e > 0).
+    gravity : float
+        g [m/s^2].
+    inertia_const, inertia_sin2 : float
+        ``I(theta) = inertia_const + inertia_sin2 sin^2(phi)`` [kg m^2], with the hinge arm d + g/2.
+    pressure_amplitude_pa : float
+        p0 [Pa].
+    settings : dict
+        Geometry, mesh, medium and build settings.
+    build_accuracy : dict
+        Build diagnostics (timings, degrees of freedom, residuals).
+    nodes : dict
+        The raw per-node data: ``theta`` (all Chebyshev nodes) and ``fz``/``qt`` values (n, 3) of (A, B, C).
+    """
+
+    coefficients: dict
+    theta_max: float
+    two_k: float
+    wavenumber: float
+    z_eq: float
+    mass: float
+    gravity: float
+    inertia_const: float
+    inertia_sin2: float
+    pressure_amplitude_pa: float
+    settings: dict = field(default_factory=dict, compare=False, hash=False)
+    build_accuracy: dict = field(default_factory=dict, compare=False, hash=False)
+    nodes: dict = field(default_factory=dict, compare=False, hash=False)
+
+    # ------------------------------------------------------------------ coefficient functions
+    def coefficient_values(self, theta: ArrayLike, component: str, derivative: int = 0) -> NDArray[np.float64]:
+        """(A, B, C)(theta) of ``component`` (``"fz"`` [N] or ``"qt"`` [N m]), stacked on the last axis.
+
+        ``derivative`` > 0 gives d^n/dtheta^n of the coefficient functions.
+        """
+        t = np.asarray(theta, float) / self.theta_max
+        out = []
+        for c in self.coefficients[component]:
+            c = np.asarray(c, float)
+            if derivative:
+                c = cheb.chebder(c, derivative) / self.theta_max**derivative if c.size > derivative else np.zeros(1)
+            out.append(cheb.chebval(t, c))
+        return np.stack(out, -1)
+
+    def _harmonic(self, theta: ArrayLike, y: ArrayLike, component: str, dtheta: int = 0, dy: int = 0) -> NDArray:
+        abc = self.coefficient_values(theta, component, dtheta)
+        z = np.asarray(y, float) + self.z_eq
+        ph = self.two_k * z
+        # d^n/dy^n of cos and sin
+        c = np.cos(ph + dy * np.pi / 2) * self.two_k**dy
+        s = np.sin(ph + dy * np.pi / 2) * self.two_k**dy
+        const = abc[..., 0] if dy == 0 else 0.0
+        return const + abc[..., 1] * c + abc[..., 2] * s
+
+    # ------------------------------------------------------------------ physics
+    def force_z(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Total vertical acoustic force F_Z [N] at bend theta and height y [m] above Z_eq."""
+        return self._harmonic(theta, y, "fz")
+
+    def generalized_forces(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(Q_y [N], Q_theta [N m]): Q_y = F_Z - M g and Q_theta = (pi/4)(tau_A + tau_B)."""
+        q_y = self._harmonic(theta, y, "fz") - self.mass * self.gravity
+        return q_y, self._harmonic(theta, y, "qt")
+
+    def force_coefficients(self) -> ForceCoefficients:
+        """The :class:`~acousim.force_model.ForceModel` height structure: (A, B, C) of F_Z [N] and of
+        Q_theta [N m] re-expanded as Chebyshev series in theta itself (the table's series are in
+        ``theta / theta_max``; the re-expansion is the same polynomial, exact to round-off)."""
+        conv = lambda c: cheb.Chebyshev(np.asarray(c, float), domain=[-self.theta_max, self.theta_max]).convert(
+            domain=[-1.0, 1.0]).coef
+        (fa, fb, fc), (qa, qb, qc) = (tuple(conv(c) for c in self.coefficients[k]) for k in _COMPONENTS)
+        return ForceCoefficients(q_y_a=fa, q_y_b=fb, q_y_c=fc, q_theta_a=qa, q_theta_b=qb, q_theta_c=qc)
+
+    def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """I(theta) [kg m^2] (PHYSICS.md section 4, hinge arm d + g/2)."""
+        return self.inertia_const + self.inertia_sin2 * np.sin(np.pi * np.asarray(theta, float) / 4) ** 2
+
+    def hinge_inertia_derivative(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """dI/dtheta [kg m^2]."""
+        return self.inertia_sin2 * (np.pi / 4) * np.sin(np.pi * np.asarray(theta, float) / 2)
+
+    def accelerations(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
+        q_y, q_t = self.generalized_forces(theta, y)
+        return q_y / self.mass, q_t / self.hinge_inertia(theta)
+
+    def with_pressure(self, pressure_amplitude_pa: float) -> "FullwaveSurrogate":
+        """The surrogate at another pressure amplitude [Pa]: coefficients times (p/p0)^2, Z_eq solved anew."""
+        p = float(pressure_amplitude_pa)
+        if not np.isfinite(p) or p <= 0:
+            raise ValueError(f"pressure amplitude must be positive and finite, got {pressure_amplitude_pa!r} Pa")
+        r = (p / self.pressure_amplitude_pa) ** 2
+        coefs = {k: tuple(_tup(r * np.asarray(c)) for c in v) for k, v in self.coefficients.items()}
+        nodes = {k: (r * np.asarray(v)).tolist() if k in _COMPONENTS else v for k, v in self.nodes.items()}
+        new = replace(self, coefficients=coefs, pressure_amplitude_pa=p, nodes=nodes)
+        z_eq = _equilibrium_height(new)
+        return replace(new, z_eq=z_eq, settings=dict(self.settings, pressure_amplitude_pa=p, equilibrium_height_m=z_eq))
+
+    # ------------------------------------------------------------------ linearisation
+    def taylor_coefficients(self) -> dict[str, dict[str, float]]:
+        """Static Taylor coefficients of the accelerations about (theta, y) = (0, 0) (y from Z_eq).
+
+        Returns
+        -------
+        dict
+            ``{"yddot": {"1", "y", "y^2"}, "thetaddot": {"1", "y", "theta", "y*theta", "y^2*theta", "y^2"}}`` in SI
+            units (FORMATS.md term names); I'(0) = 0, so thetaddot's derivatives are Q_theta's over I(0).
+        """
+        i0 = self.inertia_const
+        m = self.mass
+        d = lambda comp, dt, dy: float(self._harmonic(0.0, 0.0, comp, dt, dy))
+        return {
+            "yddot": {"1": (d("fz", 0, 0) - m * self.gravity) / m, "y": d("fz", 0, 1) / m, "y^2": d("fz", 0, 2) / (2 * m)},
+            "thetaddot": {
+                "1": d("qt", 0, 0) / i0, "y": d("qt", 0, 1) / i0, "y^2": d("qt", 0, 2) / (2 * i0),
+                "theta": d("qt", 1, 0) / i0, "y*theta": d("qt", 1, 1) / i0, "y^2*theta": d("qt", 1, 2) / (2 * i0),
+            },
+        }
+
+    def hinge_stiffness(self, y: float = 0.0) -> float:
+        """dQ_theta/dtheta at theta = 0 and height y above Z_eq [N m] (negative: restoring)."""
+        return float(self._harmonic(0.0, y, "qt", 1, 0))
+
+    def equilibrium(self) -> tuple[float, float]:
+        """(theta*, y*) where Q_y = Q_theta = 0, by Newton's method from (0, 0)."""
+        x = np.zeros(2)
+        for _ in range(50):
+            q = np.array([float(v) for v in self.generalized_forces(x[0], x[1])])
+            jac = self._jacobian(x[0], x[1])
+            step = np.linalg.solve(jac, -q)
+            x = x + step
+            if np.all(np.abs(step) < [1e-13, 1e-15]):
+                break
+        return float(x[0]), float(x[1])
+
+    def _jacobian(self, theta: float, y: float) -> NDArray[np.float64]:
+        """d(Q_y, Q_theta)/d(theta, y): rows Q_y, Q_theta; columns theta, y."""
+        h = self._harmonic
+        return np.array([
+            [float(h(theta, y, "fz", 1, 0)), float(h(theta, y, "fz", 0, 1))],
+            [float(h(theta, y, "qt", 1, 0)), float(h(theta, y, "qt", 0, 1))],
+        ])
+
+    def linear_frequencies(self) -> tuple[float, float]:
+        """Small-oscillation frequencies (f_y, f_theta) [Hz] about the equilibrium :meth:`equilibrium`.
+
+        From the eigenvalues of ``-M^-1 dQ/dq`` (M = diag(M, I(theta*))); the generalised forces need not
+        derive from a potential, so the stiffness matrix may be non-symmetric.  Each frequency is assigned
+        to the coordinate its eigenvector is dominated by (with y scaled by 1/d); NaN for an unstable or
+        oscillatory-growing (complex) mode.
+        """
+        th, y = self.equilibrium()
+        jac = self._jacobian(th, y)  # rows (Q_y, Q_theta), cols (theta, y)
+        k = -np.array([[jac[0, 1], jac[0, 0]], [jac[1, 1], jac[1, 0]]])  # order (y, theta)
+        minv = np.diag([1.0 / self.mass, 1.0 / float(self.hinge_inertia(th))])
+        w2, vec = np.linalg.eig(minv @ k)
+        arm = float(self.settings.get("side_m", 500e-6)) / np.sqrt(2.0)
+        out = [float("nan"), float("nan")]
+        order = np.argsort([abs(vec[0, i]) / arm / (abs(vec[1, i]) + 1e-300) for i in range(2)])[::-1]
+        for slot, i in zip((0, 1), order):
+            v = w2[i]
+            if abs(v.imag) <= 1e-9 * abs(v.real) and v.real > 0:
+                out[slot] = float(np.sqrt(v.real) / (2 * np.pi))
+        return out[0], out[1]
+
+    def escape_height(self) -> float:
+        """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out."""
+        mg = self.mass * self.gravity
+        f = lambda z: float(self._harmonic(0.0, z - self.z_eq, "fz")) - mg
+        quarter = np.pi / self.two_k
+        lo, hi = -1.5 * quarter, -0.5 * quarter
+        if f(lo) * f(hi) >= 0:
+            return float("-inf")
+        return float(brentq(f, lo, hi, xtol=1e-15)) - self.z_eq
+
+    # ------------------------------------------------------------------ files
+    def to_dict(self) -> dict:
+        """JSON-ready dict of everything."""
+        return {
+            "format": "cubedimer-fullwave-surrogate/1",
+            "model": "fullwave",
+            "coefficients": {k: [list(c) for c in v] for k, v in self.coefficients.items()},
+            "theta_max": self.theta_max, "two_k": self.two_k, "wavenumber": self.wavenumber, "z_eq": self.z_eq,
+            "mass": self.mass, "gravity": self.gravity, "inertia_const": self.inertia_const,
+            "inertia_sin2": self.inertia_sin2, "pressure_amplitude_pa": self.pressure_amplitude_pa,
+            "settings": self.settings, "build_accuracy": self.build_accuracy, "nodes": self.nodes,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "FullwaveSurrogate":
+        if d.get("format") != "cubedimer-fullwave-surrogate/1":
+            raise ValueError("not a full-wave surrogate table (format key missing or unknown)")
+        coefs = {k: tuple(_tup(c) for c in v) for k, v in d["coefficients"].items()}
+        keys = ("theta_max", "two_k", "wavenumber", "z_eq", "mass", "gravity", "inertia_const", "inertia_sin2",
+                "pressure_amplitude_pa")
+        return cls(coefficients=coefs, **{k: float(d[k]) for k in keys}, settings=d.get("settings", {}),
+                   build_accuracy=d.get("build_accuracy", {}), nodes=d.get("nodes", {}))
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the table as JSON (atomically; missing folders are created)."""
+        write_json(path, self.to_dict())
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "FullwaveSurrogate":
+        with open(path) as fh:
+            return cls.from_dict(json.load(fh))
+
+
+def _equilibrium_height(sur: FullwaveSurrogate) -> float:
+    """Z in (-lambda/8, 0) where F_Z(0, Z) = M g."""
+    mg = sur.mass * sur.gravity
+    f = lambda z: float(sur._harmonic(0.0, z - sur.z_eq, "fz")) - mg
+    lo = -np.pi / (2 * sur.two_k)
+    if f(lo) < 0:
+        raise ValueError("the field cannot levitate the dimer at this pressure amplitude")
+    return float(brentq(f, lo, 0.0, xtol=1e-15, rtol=1e-14))
+
+
+def chebyshev_half_nodes(n_half: int) -> NDArray[np.float64]:
+    """The positive half of the 2 n_half Chebyshev points of the first kind on (-1, 1), increasing."""
+    n = 2 * n_half
+    t = np.cos(np.pi * (np.arange(n) + 0.5) / n)
+    return np.sort(t[t > 0])
+
+
+def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: int, theta_max: float) -> dict:
+    """The settings a table is keyed by (pressure excluded: tables are rescaled exactly)."""
+    return {
+        **spec.settings(), "frequency_hz": medium.frequency_hz, "sound_speed_m_s": medium.sound_speed_m_s,
+        "air_density_kg_m3": medium.density_kg_m3, "particle_density_kg_m3": float(density),
+        "n_half": int(n_half), "theta_max": float(theta_max),
+    }
+
+
+def build_fullwave_surrogate(
+    spec: DimerMeshSpec = DEFAULT_SPEC,
+    medium: Medium = Medium(),
+    particle_density: float = 2160.0,
+    pressure_amplitude_pa: float = 3000.0,
+    gravity: float = GRAVITY,
+    n_half: int = 5,
+    theta_max: float = 0.9,
+    progress: Callable[[int, int, float], None] | None = None,
+) -> FullwaveSurrogate:
+    """Build the surrogate from ``n_half`` boundary-element solves (theta > 0), mirrored by symmetry.
+
+    Parameters
+    ----------
+    spec : DimerMeshSpec
+        Geometry (side, gap, edge radius) and mesh.
+    medium : Medium
+        Air and frequency.
+    particle_density : float
+        rho_p [kg/m^3] (mass and inertia only: the cubes are rigid and immobile acoustically).
+    pressure_amplitude_pa : float
+        p0 [Pa].
+    gravity : float
+        g [m/s^2].
+    n_half : int
+        Solves; the Chebyshev series has 2 n_half terms on [-theta_max, theta_max].
+    theta_max : float
+        Interpolation half-width in theta, in (0, 1).
+    progress : callable, optional
+        Called as ``progress(i, n_half, seconds)`` after each solve.
+
+    Returns
+    -------
+    FullwaveSurrogate
+    """
+    if not 0 < theta_max < 1:
+        raise ValueError(f"theta_max must lie in (0, 1), got {theta_max!r}")
+    if n_half < 2:
+        raise ValueError("n_half must be >= 2")
+    t_pos = chebyshev_half_nodes(n_half)
+    vals = {c: np.zeros((n_half, 3)) for c in _COMPONENTS}
+    t_start = time.perf_counter()
+    dofs = 0
+    timings = []
+    for i, t in enumerate(t_pos):
+        t0 = time.perf_counter()
+        bodies = dimer_bodies(t * theta_max, spec)
+        sol = solve_scattering(bodies, medium)
+        dofs = sol.n_dofs
+        gen = dimer_generalized_coefficients(sol.height_structure(pressure_amplitude_pa))
+        for c in _COMPONENTS:
+            vals[c][i] = gen[c]
+        timings.append(time.perf_counter() - t0)
+        log.info("full-wave surrogate: theta = %.4f done (%d/%d, %.1f s)", t * theta_max, i + 1, n_half, timings[-1])
+        if progress is not None:
+            progress(i + 1, n_half, timings[-1])
+    # mirror: A, B odd and C even in theta
+    parity = np.array([-1.0, -1.0, 1.0])
+    t_all = np.concatenate([-t_pos[::-1], t_pos])
+    full = {c: np.concatenate([parity * vals[c][::-1], vals[c]]) for c in _COMPONENTS}
+    deg = 2 * n_half - 1
+    coefs = {}
+    for c in _COMPONENTS:
+        series = [cheb.chebfit(t_all, full[c][:, j], deg) for j in range(3)]
+        # exact parities: A, B odd (even terms 0), C even (odd terms 0)
+        series[0][0::2] = 0.0
+        series[1][0::2] = 0.0
+        series[2][1::2] = 0.0
+        coefs[c] = tuple(_tup(s) for s in series)
+    s = spec.side
+    vol = rounded_cube_volume(s, spec.edge_radius)
+    m = particle_density * vol
+    arm = s / np.sqrt(2.0) + 0.5 * spec.gap
+    # I = (pi/4)^2 [2 (m s^2/6) + 2 m arm^2 sin^2 phi] (sharp-cube moment of inertia about the centre)
+    i_const = (np.pi / 4) ** 2 * 2 * m * s**2 / 6
+    i_sin2 = (np.pi / 4) ** 2 * 2 * m * arm**2
+    settings = build_settings(spec, medium, particle_density, n_half, theta_max)
+    settings.update(pressure_amplitude_pa=float(pressure_amplitude_pa), gravity_m_s2=float(gravity), model="fullwave")
+    sur = FullwaveSurrogate(
+        coefficients=coefs, theta_max=float(theta_max), two_k=2 * medium.wavenumber, wavenumber=medium.wavenumber,
+        z_eq=-np.pi / (4 * medium.wavenumber), mass=2 * m, gravity=float(gravity), inertia_const=i_const,
+        inertia_sin2=i_sin2, pressure_amplitude_pa=float(pressure_amplitude_pa), settings=settings,
+        nodes={"theta": (t_all * theta_max).tolist(), **{c: full[c].tolist() for c in _COMPONENTS}},
+    )
+    z_eq = _equilibrium_height(sur)
+    build = {
+        "dofs": int(dofs), "solves": int(n_half), "wall_s": time.perf_counter() - t_start,
+        "solve_wall_s": [float(x) for x in timings], "chebyshev_terms": 2 * n_half,
+    }
+    return replace(sur, z_eq=z_eq, settings=dict(settings, equilibrium_height_m=z_eq), build_accuracy=build)
+
+
+def _cache_dir() -> Path:
+    env = os.environ.get("ACOUSIM_FULLWAVE_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "cubedimer" / "fullwave"
+
+
+def _key(settings: dict) -> str:
+    return hashlib.sha1(json.dumps(settings, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def cached_fullwave_surrogate(
+    spec: DimerMeshSpec = DEFAULT_SPEC,
+    medium: Medium = Medium(),
+    particle_density: float = 2160.0,
+    pressure_amplitude_pa: float = 3000.0,
+    gravity: float = GRAVITY,
+    n_half: int = 5,
+    theta_max: float = 0.9,
+    cache_dir: str | os.PathLike | None = None,
+) -> FullwaveSurrogate:
+    """The surrogate for these settings: the shipped default table, a cached table, or a new build (saved).
+
+    The cache directory is ``$ACOUSIM_FULLWAVE_CACHE``, else ``$XDG_CACHE_HOME/cubedimer/fullwave`` (default
+    ``~/.cache/cubedimer/fullwave``), one JSON file per settings hash.
+
+    Tables are keyed by geometry, mesh, medium, density and build settings; the pressure amplitude is
+    applied afterwards by the exact p0^2 scaling.
+    """
+    key_settings = build_settings(spec, medium, particle_density, n_half, theta_max)
+    candidates = [DEFAULT_TABLE, Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"]
+    for path in candidates:
+        if path.exists():
+            sur = FullwaveSurrogate.load(path)
+            if build_settings_of(sur) == key_settings and sur.gravity == gravity:
+                log.debug("full-wave surrogate from %s", path)
+                return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
+    sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half, theta_max)
+    try:
+        sur.save(candidates[1])
+    except OSError as exc:  # read-only install: keep the result in memory only
+        log.warning("could not cache the full-wave surrogate: %s", exc)
+    return sur
+
+
+def build_settings_of(sur: FullwaveSurrogate) -> dict:
+    """The keyed build settings stored in a table."""
+    s = sur.settings
+    keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5))
+    return {k: s.get(k) for k in keys}
+
+
+def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> FullwaveSurrogate:
+    """The shipped default dimer's table (side 500 um, g = 0.01 s, r_e = 0, 45.65 kHz) at p0 [Pa]."""
+    sur = FullwaveSurrogate.load(DEFAULT_TABLE)
+    return sur if pressure_amplitude_pa == sur.pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
+
+
+def coarse_fullwave_surrogate(**kwargs) -> FullwaveSurrogate:
+    """The coarse variant (:data:`COARSE_BUILD`), cached on disk like any other."""
+    return cached_fullwave_surrogate(**{**COARSE_BUILD, **kwargs})
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m acousim.fullwave.surrogate --out FILE [--level Q] [--n-half N] [--theta-max T] [--gap G]``."""
+    import argparse
+
+    from .geometry import mesh_family
+
+    p = argparse.ArgumentParser(prog="python -m acousim.fullwave.surrogate",
+                                description="Build a full-wave surrogate table (JSON) of the cube dimer.")
+    p.add_argument("--out", required=True, help="output JSON")
+    p.add_argument("--level", type=float, default=None, help="mesh level q of mesh_family (default: the default mesh)")
+    p.add_argument("--n-half", type=int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
+    p.add_argument("--theta-max", type=float, default=DEFAULT_BUILD["theta_max"], help="interpolation half-width")
+    p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
+    p.add_argument("--gap", type=float, default=None, help="hinge gap [m] (default 0.01 side)")
+    p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
+    p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude [Pa]")
+    args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    for name in ("bempp", "numba"):
+        logging.getLogger(name).setLevel(logging.WARNING)
+    if args.level is None and args.gap is None and args.edge_radius == 0 and args.side == 500e-6:
+        spec = DEFAULT_SPEC
+    else:
+        spec = mesh_family(args.level if args.level is not None else 0.35, side=args.side, gap=args.gap,
+                           edge_radius=args.edge_radius)
+    sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
+                                   pressure_amplitude_pa=args.pressure)
+    sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
+    sur.save(args.out)
+    f_y, f_t = sur.linear_frequencies()
+    log.info("wrote %s: %d DOFs, %d solves, %.0f s; f_y %.3f Hz, f_theta %.3f Hz", args.out, sur.build_accuracy["dofs"],
+             args.n_half, sur.build_accuracy["wall_s"], f_y, f_t)
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.exit(main())

@@ -1,0 +1,70 @@
+"""Full-wave (boundary-element) model: assembly and solve time against degrees of freedom, the coarse
+surrogate's build time, hinge accuracy against mesh size, and a full-wave against a Gor'kov sweep.
+
+Accuracy is relative to the finest level run here (q = 0.35), so it is a self-convergence measure;
+docs/fullwave.md has the full study with Richardson estimates.  The first boundary-element call of a
+process compiles bempp-cl's numba kernels (about a minute on 2 cores); it is timed separately.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+
+def main() -> str:
+    from acousim.fullwave.convergence import hinge_quantities, mesh_family
+    from acousim.fullwave.geometry import dimer_bodies
+    from acousim.fullwave.solver import solve_scattering
+    from acousim.fullwave.surrogate import COARSE_BUILD, build_fullwave_surrogate
+    from acousim.surrogate import cached_surrogate
+
+    t0 = time.perf_counter()
+    solve_scattering(dimer_bodies(0.1, mesh_family(1.0)))
+    compile_s = time.perf_counter() - t0
+
+    lines = [
+        "## fullwave: boundary-element solves, surrogate build, hinge accuracy, sweep speed",
+        "",
+        f"First call (numba compilation + one coarse solve): {compile_s:.1f} s.",
+        "",
+        "| level q | DOFs | mirror-reduced unknowns | assembly [s] | LU + 2 solves [s] | stiffness dQ_theta/dtheta [N m] | rel. diff. to q = 0.35 | Z_eq [um] | f_theta / f_y |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    rows = []
+    for q in (1.0, 0.7, 0.5, 0.35):
+        sol = solve_scattering(dimer_bodies(0.1, mesh_family(q)))
+        hq = hinge_quantities(mesh_family(q))
+        rows.append((q, sol.n_dofs, sol.timings["assembly_s"], sol.timings["solve_s"], hq))
+    ref = rows[-1][4]["stiffness_nm"]
+    for q, n, ta, ts, hq in rows:
+        lines.append(
+            f"| {q:.2f} | {n} | ~{n // 4} | {ta:.1f} | {ts:.2f} | {hq['stiffness_nm']:.4e} | "
+            f"{abs(hq['stiffness_nm'] / ref - 1):.1e} | {hq['z_eq_m'] * 1e6:.1f} | {hq['f_theta_hz'] / hq['f_y_hz']:.3f} |"
+        )
+    t0 = time.perf_counter()
+    sur = build_fullwave_surrogate(**COARSE_BUILD)
+    build_s = time.perf_counter() - t0
+    theta = np.linspace(-0.9, 0.9, 41)
+    y = np.linspace(-200e-6, 200e-6, 41)
+    tt, yy = np.meshgrid(theta, y, indexing="ij")
+    t0 = time.perf_counter()
+    for _ in range(20):
+        sur.generalized_forces(tt, yy)
+    fw_sweep = (time.perf_counter() - t0) / 20
+    gk = cached_surrogate()
+    t0 = time.perf_counter()
+    for _ in range(20):
+        gk.generalized_forces(tt, yy)
+    gk_sweep = (time.perf_counter() - t0) / 20
+    lines += [
+        "",
+        f"Coarse surrogate ({COARSE_BUILD['n_half']} solves, {sur.build_accuracy['dofs']} DOFs): built in {build_s:.1f} s.",
+        f"41 x 41 (theta, y) sweep from the surrogates: full-wave {fw_sweep * 1e3:.2f} ms, Gor'kov {gk_sweep * 1e3:.2f} ms "
+        "(both are Chebyshev x harmonic tables; the cost of the full-wave model is in building its table).",
+    ]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(main())

@@ -1,0 +1,30 @@
+"""The mesh-convergence judgement of the full-wave hinge (the study itself runs outside the test suite:
+``python -m acousim.fullwave.convergence --study mesh``, results in docs/fullwave.md)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from acousim.fullwave.convergence import CONVERGED_WITHIN, judge_convergence
+
+
+def test_second_order_sequence_is_converged():
+    """s(h) = s0 (1 + c h^2) on h = 1, 1/1.4, 1/1.4^2: monotone, order 2, finest levels 1.5 % apart."""
+    h = 1.4 ** -np.arange(3)
+    v = -1e-8 * (1 + 0.06 * h**2)
+    verdict = judge_convergence(v, 1.4)
+    assert verdict["monotone"] and np.isclose(verdict["order"], 2.0) and verdict["converged"]
+    assert verdict["finest_difference"] < CONVERGED_WITHIN
+
+
+def test_measured_default_gap_hinge_is_not_converged():
+    """The measured stiffness at g = 0.01 s (q = 0.7, 0.5, 0.35; docs/fullwave.md) is not converged:
+    the corrections (-0.7 %, then -7.6 %) grow."""
+    verdict = judge_convergence([-9.880e-09, -9.811e-09, -9.115e-09], 1.4)
+    assert not verdict["monotone"] and verdict["order"] < 0 and not verdict["converged"]
+    np.testing.assert_allclose(verdict["corrections"], [-0.0070, -0.0764], atol=1e-4)
+
+
+def test_needs_three_levels():
+    with pytest.raises(ValueError):
+        judge_convergence([1.0, 1.1], 1.4)

@@ -1,0 +1,95 @@
+"""Full-wave dimer: mirror symmetries, bend parity and the exact height structure.
+
+These are identities of the geometry and of the linear algebra, true on any mesh, so they are checked on
+the coarsest graded dimer mesh (``mesh_family(2)``, 264 DOFs); the physics of the hinge (convergence,
+gap) is studied by ``python -m acousim.fullwave.convergence`` and stated in docs/fullwave.md."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("bempp_cl")
+
+from acousim.fullwave.geometry import (COARSE_SPEC, check_closed_oriented, cube_body_mesh, dimer_bodies,  # noqa: E402
+                                       mesh_family)
+from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
+from acousim.fullwave.surrogate import dimer_generalized_coefficients  # noqa: E402
+from acousim.medium import Medium  # noqa: E402
+
+THETA = 0.3
+P0 = 3000.0
+Z_TEST = (-0.4e-3, -0.9e-3, 0.25e-3)
+SPEC = mesh_family(2.0)  # the coarsest graded mesh of the family: 132 vertices per cube
+
+
+@pytest.fixture(scope="session")
+def coarse_pair():
+    """Solutions of the dimer at +THETA and -THETA (mirror-reduced) and at THETA without the reduction."""
+    out = {t: solve_scattering(dimer_bodies(t, SPEC)) for t in (THETA, -THETA)}
+    out["full"] = solve_scattering(dimer_bodies(THETA, SPEC), use_symmetry=False)
+    return out
+
+
+# bempp's quadrature is not itself mirror symmetric, so an unreduced solve is symmetric to the
+# quadrature accuracy only (measured ~4e-4 of the largest component on the q = 1 mesh)
+QUADRATURE_SYMMETRY = 2e-3
+
+
+def test_meshes_closed_and_graded():
+    v, f = cube_body_mesh(COARSE_SPEC)
+    check_closed_oriented(v, f)
+    for body in dimer_bodies(0.4, COARSE_SPEC):
+        check_closed_oriented(body.vertices, body.faces)
+    # graded: the smallest spacing across the hinge edge is h_hinge, far away it is coarser
+    u = np.unique(np.round(v[:, 0] / COARSE_SPEC.side, 9))
+    assert np.isclose(u[1] - u[0], COARSE_SPEC.h_hinge)
+    assert np.max(np.diff(u)) > 3 * (u[1] - u[0])
+    # the gap: hinge edges are g cos(phi) apart
+    a, b = dimer_bodies(0.4, COARSE_SPEC)
+    dmin = np.min(np.linalg.norm(a.vertices[:, None, :] - b.vertices[None, :, :], axis=2))
+    assert np.isclose(dmin, COARSE_SPEC.gap * np.cos(np.pi * 0.4 / 4), rtol=1e-9)
+
+
+def test_mirror_symmetry_between_cubes(coarse_pair):
+    """Cube A is the mirror image of B in X = 0: F_A = (-Fx, Fy, Fz)_B and tau_A = (tx, -ty, -tz)_B;
+    the Y-mirror of the whole dimer kills F_Y, tau_X and tau_Z.  Checked on the unreduced solve (where
+    nothing enforces it) to quadrature accuracy, and exactly on the mirror-reduced one."""
+    for key, tol in (("full", QUADRATURE_SYMMETRY), (THETA, 1e-9)):
+        hs = coarse_pair[key].height_structure(P0)
+        for z in Z_TEST:
+            f, t = hs.force(z), hs.torque(z)
+            fs, ts = np.max(np.abs(f)), np.max(np.abs(t))
+            np.testing.assert_allclose(f[0], f[1] * [-1, 1, 1], atol=tol * fs)
+            np.testing.assert_allclose(t[0], t[1] * [1, -1, -1], atol=tol * ts)
+            assert np.max(np.abs(f[:, 1])) < tol * fs
+            assert np.max(np.abs(t[:, [0, 2]])) < tol * ts
+
+
+def test_mirror_reduction_matches_full_solve(coarse_pair):
+    """The quarter-size mirror-reduced system gives the unreduced answer (to quadrature accuracy)."""
+    a = dimer_generalized_coefficients(coarse_pair[THETA].height_structure(P0))
+    b = dimer_generalized_coefficients(coarse_pair["full"].height_structure(P0))
+    for c in ("fz", "qt"):
+        np.testing.assert_allclose(a[c], b[c], atol=5e-3 * np.max(np.abs(b[c])))
+
+
+def test_bend_parity(coarse_pair):
+    """The dimer at -theta is the Z-mirror of the one at theta, and sin(kZ) is odd about the node:
+    F_Z(-theta, -Z) = -F_Z(theta, Z), Q_theta(-theta, -Z) = -Q_theta(theta, Z)."""
+    gp = dimer_generalized_coefficients(coarse_pair[THETA].height_structure(P0))
+    gm = dimer_generalized_coefficients(coarse_pair[-THETA].height_structure(P0))
+    for c in ("fz", "qt"):
+        scale = np.max(np.abs(gp[c]))
+        np.testing.assert_allclose(gm[c], gp[c] * [-1, -1, 1], atol=QUADRATURE_SYMMETRY * scale)
+
+
+def test_height_structure_against_direct_solves(coarse_pair):
+    """A + B cos(2kZ) + C sin(2kZ) from the COM-centred solve equals a direct solve with the dimer
+    placed at Z in absolute coordinates (incident field sin(kZ) itself)."""
+    hs = coarse_pair[THETA].height_structure(P0)
+    for z in (-0.7e-3, 0.4e-3):
+        bodies = [Body(b.vertices + [0, 0, z], b.faces, b.centre + [0, 0, z]) for b in dimer_bodies(THETA, SPEC)]
+        direct = solve_scattering(bodies)
+        f, t = direct.forces_at(0.0, P0)
+        np.testing.assert_allclose(f, hs.force(z), rtol=0, atol=1e-7 * np.max(np.abs(f)))
+        np.testing.assert_allclose(t, hs.torque(z), rtol=0, atol=1e-7 * np.max(np.abs(t)))

@@ -1,0 +1,86 @@
+"""Full-wave surrogate: caching, exact symmetry and scalings, the interface, the shipped default table.
+
+The accuracy of the surrogate against direct solves is a study (``python -m acousim.fullwave.convergence
+--study surrogate``, numbers in docs/fullwave.md); here a tiny build (two solves on the coarsest mesh) checks
+everything that holds for any build."""
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+pytest.importorskip("bempp_cl")
+
+from acousim.fullwave.geometry import COARSE_SPEC, mesh_family  # noqa: E402
+from acousim.fullwave.surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FullwaveSurrogate,  # noqa: E402
+                                        build_fullwave_surrogate, build_settings_of, build_settings,
+                                        cached_fullwave_surrogate, default_fullwave_surrogate)
+from acousim.medium import Medium  # noqa: E402
+
+#: Two solves (theta = 0.34 and 0.83) on the coarsest graded mesh (264 DOFs).
+TINY_BUILD = {"spec": mesh_family(2.0), "n_half": 2, "theta_max": 0.9}
+
+
+@pytest.fixture(scope="session")
+def coarse_surrogate(tmp_path_factory):
+    """Built from scratch into a temporary cache."""
+    cache = tmp_path_factory.mktemp("fullwave_cache")
+    return cached_fullwave_surrogate(**TINY_BUILD, cache_dir=cache), cache
+
+
+def test_coarse_surrogate_cache_and_symmetry(coarse_surrogate):
+    sur, cache = coarse_surrogate
+    files = list(cache.glob("fullwave_*.json"))
+    assert len(files) == 1
+    again = cached_fullwave_surrogate(**TINY_BUILD, cache_dir=cache)  # loads, no solve
+    assert again.coefficients == sur.coefficients
+    # exact symmetry F(-theta, -Z) = -F(theta, Z) (here y = Z - Z_eq)
+    for th in (0.2, 0.55):
+        z = np.array([-0.3e-3, 0.6e-3])
+        for comp in ("fz", "qt"):
+            a = sur._harmonic(th, z - sur.z_eq, comp)
+            b = sur._harmonic(-th, -z - sur.z_eq, comp)
+            np.testing.assert_allclose(b, -a, rtol=1e-12, atol=1e-12 * np.max(np.abs(a)))
+
+
+def _check_common(sur: FullwaveSurrogate) -> None:
+    q_y, _ = sur.generalized_forces(0.0, 0.0)
+    assert abs(q_y) < 1e-9 * sur.mass * sur.gravity
+    assert -np.pi / (4 * sur.wavenumber) < sur.z_eq < 0
+    s2 = sur.with_pressure(2 * sur.pressure_amplitude_pa)
+    np.testing.assert_allclose(s2.coefficient_values(0.3, "qt"), 4 * sur.coefficient_values(0.3, "qt"), rtol=1e-14)
+    assert abs(s2.generalized_forces(0.0, 0.0)[0]) < 1e-9 * sur.mass * sur.gravity
+    assert s2.z_eq > sur.z_eq  # a stronger field holds the dimer closer to the node
+    p = pickle.loads(pickle.dumps(sur))
+    assert p == sur
+    f_y, f_t = sur.linear_frequencies()
+    assert np.isfinite(f_y) and f_y > 0
+    assert sur.escape_height() < 0
+    assert np.isclose(float(sur.hinge_inertia(0.0)), sur.inertia_const)
+    eps = 1e-6
+    d = (sur.hinge_inertia(0.3 + eps) - sur.hinge_inertia(0.3 - eps)) / (2 * eps)
+    assert np.isclose(float(sur.hinge_inertia_derivative(0.3)), float(d), rtol=1e-6)
+
+
+def test_coarse_surrogate_interface(coarse_surrogate):
+    sur, _ = coarse_surrogate
+    _check_common(sur)
+    assert sur.build_accuracy["solves"] == TINY_BUILD["n_half"]
+
+
+def test_shipped_default_table():
+    """The table in the repository is the default build (settings as DEFAULT_BUILD)."""
+    assert DEFAULT_TABLE.exists()
+    sur = default_fullwave_surrogate()
+    b = DEFAULT_BUILD
+    assert build_settings_of(sur) == build_settings(b["spec"], Medium(), 2160.0, b["n_half"], b["theta_max"])
+    _check_common(sur)
+    tay = sur.taylor_coefficients()
+    assert tay["thetaddot"]["theta"] < 0  # the full-wave hinge is restoring
+    assert np.isclose(sur.with_pressure(3300.0).with_pressure(3000.0).z_eq, sur.z_eq, rtol=1e-9)
+
+
+def test_build_rejects_bad_box():
+    with pytest.raises(ValueError):
+        build_fullwave_surrogate(COARSE_SPEC, theta_max=1.0)
