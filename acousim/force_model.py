@@ -24,7 +24,7 @@ import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ForceCoefficients", "ForceModel"]
+__all__ = ["ForceCoefficients", "ForceModel", "SinusoidalInertia"]
 
 _FIELDS = ("q_y_a", "q_y_b", "q_y_c", "q_theta_a", "q_theta_b", "q_theta_c")
 
@@ -138,3 +138,26 @@ class ForceModel(Protocol):
     def escape_height(self) -> float:
         """y [m] of the barrier below the equilibrium (theta = 0) below which the dimer falls out."""
         ...
+
+
+class SinusoidalInertia:
+    """Methods of a force model whose inertia is ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)``
+    (PHYSICS.md section 4) and whose ``generalized_forces`` give (Q_y, Q_theta): the hinge inertia, its
+    derivative and the static accelerations, written once for every such model (a base of the surrogates)."""
+
+    inertia_const: float
+    inertia_sin2: float
+    mass: float
+
+    def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """I(theta) [kg m^2]."""
+        return self.inertia_const + self.inertia_sin2 * np.sin(np.pi * np.asarray(theta, float) / 4) ** 2
+
+    def hinge_inertia_derivative(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """dI/dtheta [kg m^2]."""
+        return self.inertia_sin2 * (np.pi / 4) * np.sin(np.pi * np.asarray(theta, float) / 2)
+
+    def accelerations(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
+        q_y, q_t = self.generalized_forces(theta, y)
+        return q_y / self.mass, q_t / self.hinge_inertia(theta)

@@ -45,7 +45,7 @@ from scipy.optimize import brentq
 
 from .dimer import CubeDimer
 from .field import StandingWave
-from .force_model import ForceCoefficients
+from .force_model import ForceCoefficients, SinusoidalInertia
 from .forces import GorkovDimer
 from .medium import GRAVITY
 
@@ -101,7 +101,7 @@ def _as_tuple(a: ArrayLike) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class ForceSurrogate:
+class ForceSurrogate(SinusoidalInertia):
     """Chebyshev-in-theta x harmonic-in-Z representation of the Gor'kov potential and forces.
 
     Build with :func:`build_surrogate`; all arrays are small and the object is picklable (it is
@@ -193,19 +193,6 @@ class ForceSurrogate:
         q_y = self.two_k * (bv * s - gv * c) - self.mass * self.gravity
         q_theta = -(cheb.chebval(theta, da) + cheb.chebval(theta, db) * c + cheb.chebval(theta, dg) * s)
         return q_y, q_theta
-
-    def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
-        """I(theta) [kg m^2] (PHYSICS.md section 4)."""
-        return self.inertia_const + self.inertia_sin2 * np.sin(np.pi * np.asarray(theta, float) / 4) ** 2
-
-    def hinge_inertia_derivative(self, theta: ArrayLike) -> NDArray[np.float64]:
-        """dI/dtheta [kg m^2]."""
-        return self.inertia_sin2 * (np.pi / 4) * np.sin(np.pi * np.asarray(theta, float) / 2)
-
-    def accelerations(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
-        q_y, q_t = self.generalized_forces(theta, y)
-        return q_y / self.mass, q_t / self.hinge_inertia(theta)
 
     def with_pressure(self, pressure_amplitude_pa: float) -> "ForceSurrogate":
         """The surrogate at another pressure amplitude.

@@ -41,7 +41,7 @@ from scipy.optimize import brentq
 
 from cubedimer.atomic import write_json
 
-from ..force_model import ForceCoefficients
+from ..force_model import ForceCoefficients, SinusoidalInertia
 from ..medium import GRAVITY, Medium
 from .geometry import COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, rounded_cube_volume
 from .solver import HeightStructure, solve_scattering
@@ -90,7 +90,7 @@ def _tup(a: ArrayLike) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class FullwaveSurrogate:
+class FullwaveSurrogate(SinusoidalInertia):
     """Chebyshev-in-theta representation of the full-wave F_Z and Q_theta (see the module docstring).
 
     Attributes
@@ -177,19 +177,6 @@ class FullwaveSurrogate:
             domain=[-1.0, 1.0]).coef
         (fa, fb, fc), (qa, qb, qc) = (tuple(conv(c) for c in self.coefficients[k]) for k in _COMPONENTS)
         return ForceCoefficients(q_y_a=fa, q_y_b=fb, q_y_c=fc, q_theta_a=qa, q_theta_b=qb, q_theta_c=qc)
-
-    def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
-        """I(theta) [kg m^2] (PHYSICS.md section 4, hinge arm d + g/2)."""
-        return self.inertia_const + self.inertia_sin2 * np.sin(np.pi * np.asarray(theta, float) / 4) ** 2
-
-    def hinge_inertia_derivative(self, theta: ArrayLike) -> NDArray[np.float64]:
-        """dI/dtheta [kg m^2]."""
-        return self.inertia_sin2 * (np.pi / 4) * np.sin(np.pi * np.asarray(theta, float) / 2)
-
-    def accelerations(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
-        q_y, q_t = self.generalized_forces(theta, y)
-        return q_y / self.mass, q_t / self.hinge_inertia(theta)
 
     def with_pressure(self, pressure_amplitude_pa: float) -> "FullwaveSurrogate":
         """The surrogate at another pressure amplitude [Pa]: coefficients times (p/p0)^2, Z_eq solved anew."""
