@@ -154,6 +154,9 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
         "shrink": None if diag is None else 1 - diag["gap_after"] / diag["gap_before"],
         "pressure_true_pa": truth["pressure_amplitude_pa"],
         "pressure_calibrated_pa": None if diag is None else diag["calibration"]["pressure_amplitude_pa"],
+        # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
+        "discovered_terms": None if diag is None else {
+            eq: [t["term"] for t in terms] for eq, terms in diag["remaining_gap"]["discovered_terms"].items()},
         "error": error,
         "scored": True,
     }
@@ -171,6 +174,7 @@ def summarize(results: list[dict]) -> dict:
         out[f"n_{k}_effects"] = len(sub)
     none_sets = [r for r in results if r["n_true"] == 0]
     out["false_positive_sets_on_no_effect"] = int(sum(bool(r["identified"]) for r in none_sets))
+    out["sets_with_discovered_terms"] = int(sum(any((r.get("discovered_terms") or {}).values()) for r in results))
     per = {}
     for n in names:
         tp = sum(n in r["identified"] and n in r["true_set"] for r in results)
@@ -199,6 +203,7 @@ def candidates_table(summary: dict) -> list[str]:
              f"| exact identification, one effect ({summary['n_1_effects']} sets) | {pct(summary['exact_rate_1_effects'])} | >= 90 % |",
              f"| exact identification, two effects ({summary['n_2_effects']} sets) | {pct(summary['exact_rate_2_effects'])} | >= 80 % |",
              f"| no-effect sets with an effect named | {summary['false_positive_sets_on_no_effect']} | 0 |",
+             f"| sets with a library term discovered (every effect is a candidate) | {summary.get('sets_with_discovered_terms', '-')} | 0 |",
              f"| median shrink where an effect is present | {pct(summary['median_shrink_with_effect'])} | >= 70 % |",
              f"| median calibrated-pressure error | {pct(summary['median_pressure_error'])} | |",
              f"| failed cases (of which the twin could not generate) | {summary['failed']} ({summary['not_generated']}) | 0 |", "",

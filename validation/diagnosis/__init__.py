@@ -28,7 +28,8 @@ from __future__ import annotations
 
 from .calibration import Calibration, calibrate
 from .candidates import CANDIDATE_EFFECTS, effect_regressors
-from .discovery import DiscoveredTerm, Discovery, discover_terms, discovered_equations, judge_candidates
+from .discovery import (DiscoveredTerm, Discovery, discover_terms, discovered_equations, dissipative_terms,
+                        judge_candidates)
 from .drift import DriftSettings, DriftTest, PressureDrift, detect_pressure_drift
 from .gap_model import EnergyResidual, GapFit, IntegralResidual, apply_gap_model, fit_gap_model, predicted_accelerations
 from .identification import (CandidateTest, Identification, IdentificationRound, PracticalThresholds, held_out_gaps,
@@ -46,7 +47,7 @@ __all__ = [
     "CANDIDATE_EFFECTS", "effect_regressors",
     "RunAccelerations", "PositionIntegrals", "prepare_diagnosis_runs", "DiagnosisProblem",
     "Calibration", "calibrate",
-    "DiscoveredTerm", "Discovery", "discover_terms", "discovered_equations", "judge_candidates",
+    "DiscoveredTerm", "Discovery", "discover_terms", "dissipative_terms", "discovered_equations", "judge_candidates",
     "DriftSettings", "DriftTest", "PressureDrift", "detect_pressure_drift",
     "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
     "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",

@@ -23,6 +23,18 @@ model that explains the data.  What remains is regressed on the detrended double
 A large number of frames makes even a tiny systematic misfit significant in step 1; step 2's practical
 thresholds are what keeps such terms off clean data (measured in docs/diagnosis.md).
 
+3. **The energy balance.**  A dissipation changes a coordinate within a window of the integral form by a
+   fraction of order ``rate / omega`` of its amplitude (a y-dependent damping ``-c y^2 ydot`` of a few 1/s
+   moves y by about 1 % of its amplitude over 0.75 periods), below step 2's practical threshold, while it
+   removes a large share of the oscillation energy over the energy balance's windows (0.4 s).  So steps 1
+   and 2 are repeated on the energy balance of the fit (:class:`EnergyResidual`, with the work of the terms
+   found in the integral form subtracted), the columns being the work per window of the
+   :func:`dissipative_terms` of both equations, and the improvements fractions of the oscillation energy's
+   sum of squares (the energy component of the gap).  Terms found there carry ``form = "energy"``.  Over
+   windows of ten periods only the cycle-averaged dissipation is seen, so terms of the same amplitude
+   dependence (``y^2*ydot`` and ``ydot^3`` both remove energy as A^4) are told apart only through the
+   decay's shape, and their coefficients are less certain than the integral form's (docs/diagnosis.md).
+
 :func:`judge_candidates` then judges the identified candidates against the discovered terms on
 held-out runs: a candidate that no longer improves held-out runs once the discovered terms are fitted
 (for example pair scattering's linear hinge stiffness standing in for a cubic hardening) is not named.
@@ -42,8 +54,8 @@ from .problem import DiagnosisProblem
 from .simulation_model import SimulationTerms
 from .statistics import sign_flip_pvalue
 
-__all__ = ["DiscoveredTerm", "Discovery", "integral_residuals", "discover_terms", "judge_candidates", "discovered_equations",
-           "EQUATIONS"]
+__all__ = ["DiscoveredTerm", "Discovery", "integral_residuals", "energy_balance_residuals", "dissipative_terms",
+           "discover_terms", "judge_candidates", "discovered_equations", "EQUATIONS"]
 
 logger = logging.getLogger(__name__)
 
@@ -61,11 +73,15 @@ class DiscoveredTerm:
     shrink: float  #: fraction of the equation's remaining gap (beyond noise) it removes, added in order
     p_value: float  #: one-sided sign-flip test of its held-out improvement
     held_out_improvement: float  #: median per-run held-out improvement (fraction of the coordinate's variance)
+    #: the balance it was found in: ``"integral"`` (the equation's integral form; shrink and improvement are
+    #: fractions of the detrended coordinate) or ``"energy"`` (the energy balance; fractions of the
+    #: oscillation energy's sum of squares, as the energy gap component)
+    form: str = "integral"
 
     def to_dict(self) -> dict:
         """The diagnosis.json form (``remaining_gap.discovered_terms[equation][i]``)."""
         return {"term": self.term, "coefficient": self.coefficient, "std_error": self.std_error, "shrink": self.shrink,
-                "p_value": self.p_value, "held_out_improvement": self.held_out_improvement}
+                "p_value": self.p_value, "held_out_improvement": self.held_out_improvement, "form": self.form}
 
 
 @dataclass(frozen=True)
@@ -74,15 +90,17 @@ class Discovery:
 
     terms: dict[str, list[DiscoveredTerm]] = field(default_factory=lambda: {e: [] for e in EQUATIONS})
     selected: dict[str, list[str]] = field(default_factory=lambda: {e: [] for e in EQUATIONS})
-    #: per equation: remaining gap (unexplained fraction of the detrended coordinate beyond noise) before the terms
+    #: per equation: remaining gap (unexplained fraction of the detrended coordinate beyond noise) before the
+    #: terms; ``"energy"``: the energy balance's remaining gap before the dissipative terms
     remaining: dict[str, float] = field(default_factory=dict)
 
     @property
     def empty(self) -> bool:
         return not any(self.terms.values())
 
-    def names(self) -> dict[str, list[str]]:
-        return {e: [t.term for t in self.terms[e]] for e in EQUATIONS}
+    def names(self, form: str | None = None) -> dict[str, list[str]]:
+        """Per equation, the discovered terms' names (of one ``form`` only, if given)."""
+        return {e: [t.term for t in self.terms[e] if form is None or t.form == form] for e in EQUATIONS}
 
     def to_dict(self) -> dict:
         """``{"yddot": [...], "thetaddot": [...]}`` (FORMATS.md ``remaining_gap.discovered_terms``)."""
@@ -196,7 +214,8 @@ class _Normal:
 
 
 def discover_terms(problem: DiagnosisProblem, fit: GapFit, alpha: float = 0.01, folds: int = 5,
-                   min_absolute_improvement: float = 1e-3, min_relative_improvement: float = 0.05) -> Discovery:
+                   min_absolute_improvement: float = 1e-3, min_relative_improvement: float = 0.05,
+                   forms: Sequence[str] = ("integral", "energy")) -> Discovery:
     """Library terms that carry the residual of ``fit`` (module docstring).
 
     Parameters
@@ -209,6 +228,9 @@ def discover_terms(problem: DiagnosisProblem, fit: GapFit, alpha: float = 0.01, 
     folds : K of the K-fold over runs
     min_absolute_improvement : a kept term's median held-out improvement, as a fraction of the variance
     min_relative_improvement : the same, as a fraction of the equation's remaining gap
+    forms : where to search: ``"integral"``, the integral form of each equation on the whole library;
+        ``"energy"``, the energy balance on the :func:`dissipative_terms` (after the integral form, with its
+        terms' work subtracted)
 
     Returns
     -------
@@ -223,65 +245,174 @@ def discover_terms(problem: DiagnosisProblem, fit: GapFit, alpha: float = 0.01, 
     names = library_terms()
     residuals = integral_residuals(problem, fit)
     out = Discovery()
-    n = len(problem)
-    allruns = range(n)
-    for q, eq in enumerate(EQUATIONS):
+    for q, eq in enumerate(EQUATIONS if "integral" in forms else ()):
         res = [r[q] for r in residuals]
         norms = np.array([float(np.sum(r.integral.target(q) ** 2)) for r in problem.runs])
         floors = np.array([r.integral.floor(q) for r in problem.runs])
         ne = _Normal(_integrated(problem, _library_columns(problem, q), q), res)
-        remaining = float(np.mean((ne.bb - floors) / norms))  # the equation's remaining gap beyond noise
-        out.remaining[eq] = remaining
+        out.remaining[eq] = float(np.mean((ne.bb - floors) / norms))  # the equation's remaining gap beyond noise
         n_win = sum(r.integral.starts(q).size for r in problem.runs)
         dof_base = sum(b.size for b in res) - 2 * n_win
         kept = ne.select(names, dof_base, alpha)
         out.selected[eq] = [names[j] for j in kept]
-        # held out: each term against the others kept; the weakest failing term goes, the rest are judged again
-        tests: dict[int, tuple[float, float, bool]] = {}
-        while kept:
-            full = ne.held_out_rss(kept, folds)
-            tests = {}
-            for j in kept:
-                diff = (ne.held_out_rss([k for k in kept if k != j], folds) - full) / norms
-                gain, p = float(np.median(diff)), sign_flip_pvalue(diff)
-                ok = p < alpha and gain > min_absolute_improvement and gain > min_relative_improvement * max(remaining, 0.0)
-                logger.debug("discovery %s %s: p = %.3g, median held-out improvement %.3g", eq, names[j], p, gain)
-                tests[j] = (p, gain, ok)
-            failing = [j for j in kept if not tests[j][2]]
-            if not failing:
-                break
-            kept.remove(min(failing, key=lambda j: tests[j][1]))
-        if not kept:
-            continue
-        # coefficients on all runs; each term's shrink: what it removes when added in order (greedy, in-sample)
-        frac = lambda terms: float(np.mean((np.array([ne.rss(i, terms, ne.solve(allruns, terms)) for i in allruns])  # noqa: E731
-                                            - floors) / norms))
-        order: list[int] = []
-        while len(order) < len(kept):
-            order.append(min((j for j in kept if j not in order), key=lambda j: frac(order + [j])))
-        kept = order
-        coef = ne.solve(allruns, kept)
-        s2 = sum(ne.rss(i, kept, coef) for i in allruns) / max(dof_base - len(kept), 1)
-        se = np.sqrt(np.clip(np.diag(np.linalg.pinv(ne.g.sum(axis=0)[np.ix_(kept, kept)])) * s2, 0, None))
-        prev, terms_out = remaining, []
-        for m, j in enumerate(kept):
-            now = frac(kept[: m + 1])
-            shrink = (prev - now) / remaining if remaining > 0 else 0.0
-            prev = now
-            terms_out.append(DiscoveredTerm(names[j], float(coef[m] / ne.scale[j]), float(se[m] / ne.scale[j]),
-                                            float(shrink), tests[j][0], tests[j][1]))
-        out.terms[eq] = terms_out
+        out.terms[eq] = _held_out_terms(ne, names, kept, norms, floors, out.remaining[eq], dof_base, alpha, folds,
+                                        min_absolute_improvement, min_relative_improvement, "integral")
+    if "energy" in forms:
+        _discover_dissipation(problem, fit, out, alpha, folds, min_absolute_improvement, min_relative_improvement)
     return out
 
 
-def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], terms: dict[str, list[str]],
+def _held_out_terms(ne: _Normal, names: Sequence[str], kept: list[int], norms: NDArray, floors: NDArray,
+                    remaining: float, dof_base: int, alpha: float, folds: int, min_absolute_improvement: float,
+                    min_relative_improvement: float, form: str) -> list[DiscoveredTerm]:
+    """Step 2 of the module docstring on the selected columns ``kept`` of ``ne``: each term judged on held-out
+    runs against the others kept (the weakest failing term dropped, the rest judged again); the kept terms
+    ordered by what each removes when added in turn, with their coefficients on all runs."""
+    n = ne.bb.size
+    allruns = range(n)
+    kept = list(kept)
+    tests: dict[int, tuple[float, float, bool]] = {}
+    while kept:
+        full = ne.held_out_rss(kept, folds)
+        tests = {}
+        for j in kept:
+            diff = (ne.held_out_rss([k for k in kept if k != j], folds) - full) / norms
+            gain, p = float(np.median(diff)), sign_flip_pvalue(diff)
+            ok = p < alpha and gain > min_absolute_improvement and gain > min_relative_improvement * max(remaining, 0.0)
+            logger.debug("discovery (%s form) %s: p = %.3g, median held-out improvement %.3g", form, names[j], p, gain)
+            tests[j] = (p, gain, ok)
+        failing = [j for j in kept if not tests[j][2]]
+        if not failing:
+            break
+        kept.remove(min(failing, key=lambda j: tests[j][1]))
+    if not kept:
+        return []
+    # coefficients on all runs; each term's shrink: what it removes when added in order (greedy, in-sample)
+    frac = lambda terms: float(np.mean((np.array([ne.rss(i, terms, ne.solve(allruns, terms)) for i in allruns])  # noqa: E731
+                                        - floors) / norms))
+    order: list[int] = []
+    while len(order) < len(kept):
+        order.append(min((j for j in kept if j not in order), key=lambda j: frac(order + [j])))
+    coef = ne.solve(allruns, order)
+    s2 = sum(ne.rss(i, order, coef) for i in allruns) / max(dof_base - len(order), 1)
+    se = np.sqrt(np.clip(np.diag(np.linalg.pinv(ne.g.sum(axis=0)[np.ix_(order, order)])) * s2, 0, None))
+    prev, out = remaining, []
+    for m, j in enumerate(order):
+        now = frac(order[: m + 1])
+        shrink = (prev - now) / remaining if remaining > 0 else 0.0
+        prev = now
+        out.append(DiscoveredTerm(names[j], float(coef[m] / ne.scale[j]), float(se[m] / ne.scale[j]), float(shrink),
+                                  tests[j][0], tests[j][1], form))
+    return out
+
+
+def dissipative_terms() -> dict[str, list[str]]:
+    """Per equation, the library terms the energy balance can attribute to it: the equation's own velocity
+    times an even function of the velocities up to degree 3 (``ydot``, ``y*ydot``, ``ydot*theta``,
+    ``y^2*ydot``, ``y*ydot*theta``, ``ydot*theta^2``, ``ydot^3`` for yddot, likewise for thetaddot).
+
+    Such a term ``c phi`` in yddot does the work ``c M int ydot phi dt``, of one sign over a window when
+    ``phi / ydot`` keeps its sign: the energy balance sees a dissipation that the windowed integral form of
+    the equation sees only at a fraction of its amplitude over a window.  A term with the other velocity
+    (``thetadot`` in yddot) does the same work as a term of the other equation (``ydot`` in thetaddot,
+    ``M`` against ``I``), and a conservative term (even in the velocities) does no net work over a period:
+    neither is resolved by the energy balance, so neither is searched there.
+    """
+    from cubedimer.terms import term_name
+
+    factors = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))  # powers of (y, theta)
+    out = {}
+    for q, eq in enumerate(EQUATIONS):
+        own = 1 + 2 * q  # index of the equation's velocity in (y, ydot, theta, thetadot)
+        names = []
+        for py, pt in factors:
+            e = [py, 0, pt, 0]
+            e[own] += 1
+            names.append(term_name(e))
+        e = [0, 0, 0, 0]
+        e[own] = 3
+        names.append(term_name(e))
+        out[eq] = names
+    return out
+
+
+def energy_balance_residuals(problem: DiagnosisProblem, fit: GapFit, discovery: Discovery | None = None
+                             ) -> list[NDArray[np.float64]]:
+    """Per run, per energy window: the energy balance's residual under ``fit`` (:class:`EnergyResidual`),
+    minus the work of ``discovery``'s integral-form terms at their coefficients [J]."""
+    terms = SimulationTerms(problem)
+    out = [e.residual.copy() for e in fit.energy]
+    found = [] if discovery is None else [(q, t) for q, eq in enumerate(EQUATIONS) for t in discovery.terms[eq]
+                                          if t.form == "integral"]
+    if found:
+        from cubedimer.terms import evaluate_library, library_terms
+
+        names = library_terms()
+        for i, r in enumerate(problem.runs):
+            lib = evaluate_library(r.state)
+            acc = np.zeros((len(r.t), 2, 1))
+            for q, t in found:
+                acc[:, q, 0] += t.coefficient * lib[:, names.index(t.term)]
+            out[i] = out[i] - terms.window_work(r, acc)[:, 0]
+    return out
+
+
+def _dissipation_work(problem: DiagnosisProblem, names_per_eq: dict[str, list[str]]) -> list[NDArray[np.float64]]:
+    """Per run: the work per energy window (n_windows, p) of each term of ``names_per_eq`` with unit coefficient,
+    the columns in equation order."""
+    from cubedimer.terms import evaluate_library, library_terms
+
+    terms = SimulationTerms(problem)
+    lib_names = library_terms()
+    out = []
+    for r in problem.runs:
+        lib = evaluate_library(r.state)
+        blocks = []
+        for q, eq in enumerate(EQUATIONS):
+            acc = np.zeros((len(r.t), 2, len(names_per_eq[eq])))
+            acc[:, q, :] = lib[:, [lib_names.index(t) for t in names_per_eq[eq]]]
+            blocks.append(terms.window_work(r, acc))
+        out.append(np.concatenate(blocks, axis=1))
+    return out
+
+
+def _discover_dissipation(problem: DiagnosisProblem, fit: GapFit, out: Discovery, alpha: float, folds: int,
+                          min_absolute_improvement: float, min_relative_improvement: float) -> None:
+    """Steps 1 and 2 of the module docstring on the energy balance, for the :func:`dissipative_terms` of both
+    equations together; the terms found are appended to ``out.terms`` with ``form="energy"``."""
+    per_eq = dissipative_terms()
+    names = [t for eq in EQUATIONS for t in per_eq[eq]]
+    owner = [eq for eq in EQUATIONS for _ in per_eq[eq]]
+    # each run's rows scaled by 1/sqrt(sum E_osc^2), as the energy gap component weighs them: the
+    # least squares then minimise the mean of the runs' energy gaps (the runs' oscillation energies differ
+    # by orders of magnitude as the amplitude decays)
+    w = [1.0 / np.sqrt(max(float(np.sum(e.oscillation_energy**2)), 1e-300)) for e in fit.energy]
+    res = [wi * r for wi, r in zip(w, energy_balance_residuals(problem, fit, out))]
+    norms = np.ones(len(w))
+    floors = np.array([wi**2 * e.residual.size * e.noise_variance for wi, e in zip(w, fit.energy)])
+    ne = _Normal([wi * c for wi, c in zip(w, _dissipation_work(problem, per_eq))], res)
+    remaining = float(np.mean(ne.bb - floors))
+    out.remaining["energy"] = remaining
+    dof_base = sum(b.size for b in res)
+    kept = ne.select(names, dof_base, alpha)
+    for j in kept:
+        out.selected[owner[j]].append(names[j] + " (energy)")
+    found = _held_out_terms(ne, names, kept, norms, floors, remaining, dof_base, alpha, folds,
+                            min_absolute_improvement, min_relative_improvement, "energy")
+    for t in found:  # the names are distinct across the equations
+        out.terms[owner[names.index(t.term)]].append(t)
+
+
+def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discovery: Discovery,
                      folds: int) -> NDArray[np.float64]:
     """K-fold over runs: per run, the mean over the three gap components (beyond noise) of a fit of ``effects``
-    and then of the library ``terms`` (on the fit's integral-form residuals) made on the other folds; the
-    y and theta components in their integral form."""
+    and then of the discovered terms made on the other folds: the integral-form terms on the fit's integral-form
+    residuals (the y and theta components in their integral form), the energy-form terms on its energy-balance
+    residuals."""
     from cubedimer.terms import library_terms
 
     names = library_terms()
+    integral_terms, energy_terms = discovery.names("integral"), discovery.names("energy")
     n = len(problem)
     k = min(folds, n)
     out = np.empty(n)
@@ -295,18 +426,31 @@ def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], terms: d
         comps = np.zeros((len(test), 3))
         comps[:, 2] = fit_gaps(te.runs, held)[:, 2]
         for q, eq in enumerate(EQUATIONS):
-            idx = [names.index(t) for t in terms.get(eq, [])]
+            idx = [names.index(t) for t in integral_terms[eq]]
             e_te = [r[q] for r in res_te]
             if idx:
                 c_tr = _integrated(tr, [c[:, idx] for c in _library_columns(tr, q)], q)
                 c_te = _integrated(te, [c[:, idx] for c in _library_columns(te, q)], q)
-                x, b = np.concatenate(c_tr), np.concatenate([r[q] for r in res_tr])
-                scale = np.maximum(np.sqrt(np.sum(x * x, axis=0)), 1e-300)
-                coef = np.linalg.lstsq(x / scale, b, rcond=None)[0] / scale
+                coef = _least_squares(c_tr, [r[q] for r in res_tr])
                 e_te = [e - c @ coef for e, c in zip(e_te, c_te)]
             comps[:, q] = [_fraction(te, i, q, float(e @ e)) for i, e in enumerate(e_te)]
+        if any(energy_terms.values()):  # runs weighed as in _discover_dissipation
+            w = [1.0 / np.sqrt(max(float(np.sum(e.oscillation_energy**2)), 1e-300)) for e in fit.energy]
+            w_tr, w_te = _dissipation_work(tr, energy_terms), _dissipation_work(te, energy_terms)
+            coef = _least_squares([wi * c for wi, c in zip(w, w_tr)], [wi * e.residual for wi, e in zip(w, fit.energy)])
+            for i, (e, w) in enumerate(zip(held.energy, w_te)):
+                norm = max(float(np.sum(e.oscillation_energy**2)), 1e-300)
+                r = e.residual - w @ coef
+                comps[i, 2] = (float(r @ r) - r.size * e.noise_variance) / norm
         out[test] = comps.mean(axis=1)
     return out
+
+
+def _least_squares(cols: Sequence[NDArray], rhs: Sequence[NDArray]) -> NDArray[np.float64]:
+    """Coefficients of stacked columns against stacked right-hand sides (columns scaled to unit norm)."""
+    x, b = np.concatenate(cols), np.concatenate(rhs)
+    scale = np.maximum(np.sqrt(np.sum(x * x, axis=0)), 1e-300)
+    return np.linalg.lstsq(x / scale, b, rcond=None)[0] / scale
 
 
 def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], discovery: Discovery, alpha: float = 0.01,
@@ -324,12 +468,11 @@ def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], disco
     """
     if discovery.empty or not identified:
         return list(identified), {}
-    terms = discovery.names()
     kept = list(identified)
     pvals = {}
     for c in reversed(list(identified)):
-        with_c = _held_out_scores(problem, kept, terms, folds)
-        without = _held_out_scores(problem, [e for e in kept if e != c], terms, folds)
+        with_c = _held_out_scores(problem, kept, discovery, folds)
+        without = _held_out_scores(problem, [e for e in kept if e != c], discovery, folds)
         p = sign_flip_pvalue(without - with_c)
         pvals[c] = p
         if not p < alpha:
@@ -340,12 +483,14 @@ def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], disco
 
 def discovered_equations(discovery: Discovery) -> dict[str, str]:
     """Per equation with discovered terms, the equation as text, e.g.
-    ``"thetaddot = simulation + identified effects + [discovered: -2.42e+04 theta^3]"``."""
+    ``"thetaddot = simulation + identified effects + [discovered: -2.42e+04 theta^3]"``; a term found in the
+    energy balance is marked, e.g. ``-6.1e+08 y^2*ydot (energy balance)``."""
     out = {}
     for eq in EQUATIONS:
         terms = discovery.terms[eq]
         if terms:
-            sum_ = " ".join(f"{'-' if t.coefficient < 0 else '+'} {abs(t.coefficient):.3g} {t.term}" for t in terms)
+            sum_ = " ".join(f"{'-' if t.coefficient < 0 else '+'} {abs(t.coefficient):.3g} {t.term}"
+                            + (" (energy balance)" if t.form == "energy" else "") for t in terms)
             sum_ = sum_[2:] if sum_.startswith("+ ") else "-" + sum_[2:]
             out[eq] = f"{eq} = simulation + identified effects + [discovered: {sum_}]"
     return out

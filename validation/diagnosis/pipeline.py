@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -162,18 +163,17 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     discovery, replaced = Discovery(), {}
     if config.discover:
         log("regressing the remaining residual on the library (held-out runs)")
-        discovery = discover_terms(problem, final, alpha=config.alpha,
-                                   min_absolute_improvement=config.discovery_min_improvement,
-                                   min_relative_improvement=config.min_relative_improvement)
+        discover = partial(discover_terms, problem, alpha=config.alpha,
+                           min_absolute_improvement=config.discovery_min_improvement,
+                           min_relative_improvement=config.min_relative_improvement)
+        discovery = discover(final)
         if not discovery.empty and identified:
             kept, pvals = judge_candidates(problem, identified, discovery, alpha=config.alpha)
             if kept != identified:
                 replaced = {c: pvals[c] for c in identified if c not in kept}
                 identified = kept
                 final = fit_gap_model(problem, identified)
-                discovery = discover_terms(problem, final, alpha=config.alpha,
-                                           min_absolute_improvement=config.discovery_min_improvement,
-                                           min_relative_improvement=config.min_relative_improvement)
+                discovery = discover(final)
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
     # every candidate, ranked: identified ones in order with the gap after the cumulative fit;

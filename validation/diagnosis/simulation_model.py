@@ -110,12 +110,7 @@ class SimulationTerms:
             y, yd, th, thd = r.state.T
             inertia = d.hinge_inertia(th)
             kin = 0.5 * self.mass * yd**2 + 0.5 * inertia * thd**2 + self.mass * self.g * y
-            dt = float(np.median(np.diff(r.t)))
-            step = max(2, int(round(self.energy_window / dt)))
-            idx = np.arange(0, len(r.t), step)
-            if idx[-1] != len(r.t) - 1:
-                idx = np.append(idx, len(r.t) - 1)
-            a, b = idx[:-1], idx[1:]
+            a, b = self.energy_windows(r)
             f = self.problem.pressure_factor(r.name, r.t)
             if f is None:
                 du, u0 = pot[b] - pot[a], pot[a]
@@ -126,10 +121,29 @@ class SimulationTerms:
                 u0 = f[a] * pot[a] - (f[a] - 1.0) * rest_u
             regs = [effect_regressors(n, r.state, z0 + y, self.k, z_eq) for n in effects]
             regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
-            power = self.mass * yd[:, None] * regs[:, 0, :] + inertia[:, None] * thd[:, None] * regs[:, 1, :]
-            cum = np.concatenate([np.zeros((1, power.shape[1])), np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
-            out.append({"dk": kin[b] - kin[a], "du": du, "work": cum[b] - cum[a], "k0": kin[a], "u0": u0})
+            out.append({"dk": kin[b] - kin[a], "du": du, "work": self.window_work(r, regs), "k0": kin[a], "u0": u0})
         return out
+
+    def energy_windows(self, r: RunAccelerations) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """(first, last) frame of each energy window of run r: consecutive windows of ``energy_window`` seconds,
+        the last one ending at the run's last frame."""
+        dt = float(np.median(np.diff(r.t)))
+        step = max(2, int(round(self.energy_window / dt)))
+        idx = np.arange(0, len(r.t), step)
+        if idx[-1] != len(r.t) - 1:
+            idx = np.append(idx, len(r.t) - 1)
+        return idx[:-1], idx[1:]
+
+    def window_work(self, r: RunAccelerations, accelerations: NDArray) -> NDArray[np.float64]:
+        """Work per energy window (n_windows, p) [J] of p acceleration terms ``accelerations`` (n, 2, p)
+        [m/s^2, 1/s^2] of run r: the trapezoid integral of the power M ydot a_y + I(theta) thetadot a_theta."""
+        _, yd, th, thd = r.state.T
+        power = (self.mass * yd[:, None] * accelerations[:, 0, :]
+                 + self.model.dimer.hinge_inertia(th)[:, None] * thd[:, None] * accelerations[:, 1, :])
+        cum = np.concatenate([np.zeros((1, power.shape[1])),
+                              np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t)[:, None], axis=0)])
+        a, b = self.energy_windows(r)
+        return cum[b] - cum[a]
 
     def rest_energy(self, s: float, z0: float) -> float:
         """Minimum of M g y + s U_ac(0, z0 + y): the energy of the dimer at rest at its equilibrium [J]."""

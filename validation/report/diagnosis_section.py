@@ -101,11 +101,13 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
             for e in diagnosis["effects"]]
     tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)]
     terms = rem.get("discovered_terms") or {}
-    term_rows = [[eq, t["term"], t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
+    term_rows = [[eq, t["term"], t.get("form", "integral"), t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
                  for eq, ts in terms.items() for t in ts]
     if term_rows:
-        tables.append(Table("Discovered library terms (what no candidate explains)",
-                            ["equation", "term", "coefficient (SI)", "std error", "shrink", "held-out p (sign-flip)"], term_rows))
+        tables.append(Table("Discovered library terms (what no candidate explains; found in the equation's integral "
+                            "form, or in the energy balance for a dissipation)",
+                            ["equation", "term", "found in", "coefficient (SI)", "std error", "shrink",
+                             "held-out p (sign-flip)"], term_rows))
     if drift.get("detected"):
         tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
                             [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))

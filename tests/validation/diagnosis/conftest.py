@@ -74,6 +74,9 @@ def write_twin_like_dataset(path, **settings) -> dict:
 CUBIC_HINGE = 2.4e4
 #: relative pressure amplitude of the drift tests
 DRIFT = 0.04
+#: the y-dependent damping of the energy-balance discovery tests [1/(m^2 s)]: -Y_DAMPING y^2 ydot in yddot
+#: (Y_DAMPING (100 um)^2 = 6 1/s; y from the true equilibrium)
+Y_DAMPING = 6.0e8
 
 
 @pytest.fixture(scope="session")
@@ -88,6 +91,14 @@ def cubic_dataset(tmp_path_factory):
     """(data directory, truth): 8 runs of 3 s with -CUBIC_HINGE theta^3 added to thetaddot."""
     path = tmp_path_factory.mktemp("twin_like") / "cubic"
     return path, write_twin_like_dataset(path, seed=3, cubic_hinge=CUBIC_HINGE)
+
+
+@pytest.fixture(scope="session")
+def y_damping_dataset(tmp_path_factory):
+    """(data directory, truth): 8 runs of 3 s with -Y_DAMPING y^2 ydot added to yddot, y from the true equilibrium,
+    which lies 77 um above the nominal one (the data's y origin: a true pressure 7.5 % above nominal)."""
+    path = tmp_path_factory.mktemp("twin_like") / "y_damping"
+    return path, write_twin_like_dataset(path, seed=4, y_damping=Y_DAMPING, pressure_error=0.1)
 
 
 @pytest.fixture(scope="session")
