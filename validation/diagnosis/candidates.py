@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CANDIDATE_EFFECTS", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
 def _candidates() -> dict[str, tuple[str, ...]]:
@@ -23,6 +23,12 @@ def _candidates() -> dict[str, tuple[str, ...]]:
 
 #: Candidate effects and their parameters (PHYSICS.md section 5, as defined in :mod:`acousim.effects`).
 CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
+
+#: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
+#: ``-gamma_y ydot`` and ``-gamma_theta thetadot``.  A candidate is not judged against its own copy.
+LIBRARY_EQUIVALENTS: dict[str, dict[str, tuple[str, ...]]] = {
+    "linear_damping": {"yddot": ("ydot",), "thetaddot": ("thetadot",)},
+}
 
 
 def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,

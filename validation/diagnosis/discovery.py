@@ -102,6 +102,11 @@ class Discovery:
         """Per equation, the discovered terms' names (of one ``form`` only, if given)."""
         return {e: [t.term for t in self.terms[e] if form is None or t.form == form] for e in EQUATIONS}
 
+    def without(self, terms: dict[str, Sequence[str]]) -> "Discovery":
+        """The same discovery without the named terms (per equation)."""
+        return Discovery({e: [t for t in self.terms[e] if t.term not in terms.get(e, ())] for e in EQUATIONS},
+                         self.selected, self.remaining)
+
     def to_dict(self) -> dict:
         """``{"yddot": [...], "thetaddot": [...]}`` (FORMATS.md ``remaining_gap.discovered_terms``)."""
         return {e: [t.to_dict() for t in self.terms[e]] for e in EQUATIONS}
@@ -383,14 +388,9 @@ def _discover_dissipation(problem: DiagnosisProblem, fit: GapFit, out: Discovery
     per_eq = dissipative_terms()
     names = [t for eq in EQUATIONS for t in per_eq[eq]]
     owner = [eq for eq in EQUATIONS for _ in per_eq[eq]]
-    # each run's rows scaled by 1/sqrt(sum E_osc^2), as the energy gap component weighs them: the
-    # least squares then minimise the mean of the runs' energy gaps (the runs' oscillation energies differ
-    # by orders of magnitude as the amplitude decays)
-    w = [1.0 / np.sqrt(max(float(np.sum(e.oscillation_energy**2)), 1e-300)) for e in fit.energy]
-    res = [wi * r for wi, r in zip(w, energy_balance_residuals(problem, fit, out))]
-    norms = np.ones(len(w))
-    floors = np.array([wi**2 * e.residual.size * e.noise_variance for wi, e in zip(w, fit.energy)])
-    ne = _Normal([wi * c for wi, c in zip(w, _dissipation_work(problem, per_eq))], res)
+    cols, res, floors = _dissipation_rows(problem, fit, out, per_eq)
+    norms = np.ones(len(res))
+    ne = _Normal(cols, res)
     remaining = float(np.mean(ne.bb - floors))
     out.remaining["energy"] = remaining
     dof_base = sum(b.size for b in res)
@@ -401,6 +401,48 @@ def _discover_dissipation(problem: DiagnosisProblem, fit: GapFit, out: Discovery
                             min_absolute_improvement, min_relative_improvement, "energy")
     for t in found:  # the names are distinct across the equations
         out.terms[owner[names.index(t.term)]].append(t)
+
+
+def _dissipation_rows(problem: DiagnosisProblem, fit: GapFit, discovery: Discovery, per_eq: dict[str, list[str]]
+                      ) -> tuple[list[NDArray], list[NDArray], NDArray]:
+    """Per run, the rows on which dissipative terms ``per_eq`` are fitted and judged: (columns, residual) of the
+    energy balance and of both equations' integral forms, and the sum of the three noise floors.
+
+    The energy rows are the work per window (:func:`energy_balance_residuals`, with the work of
+    ``discovery``'s integral-form terms subtracted); the integral rows are the equations' integral-form
+    residuals (:func:`integral_residuals`, those terms subtracted) with the terms' integral-form columns.  Each
+    block of a run is scaled by 1/sqrt of its normalisation (the oscillation energy's sum of squares; the
+    detrended coordinate's), so that a residual sum of squares is the sum of the run's three gap components
+    and the least squares minimise their mean over runs: the energy balance fixes the cycle-averaged
+    dissipation, the integral forms its shape within the cycle (``y^2*ydot`` and ``ydot^3`` remove the same
+    energy from a harmonic oscillation, but move y differently within it).
+    """
+    from cubedimer.terms import library_terms
+
+    lib_names = library_terms()
+    n_terms = sum(len(v) for v in per_eq.values())
+    w = [1.0 / np.sqrt(max(float(np.sum(e.oscillation_energy**2)), 1e-300)) for e in fit.energy]
+    res = [wi * r for wi, r in zip(w, energy_balance_residuals(problem, fit, discovery))]
+    cols = [wi * c for wi, c in zip(w, _dissipation_work(problem, per_eq))]
+    floors = np.array([wi**2 * e.residual.size * e.noise_variance for wi, e in zip(w, fit.energy)])
+    residuals = integral_residuals(problem, fit)
+    offset = 0
+    for q, eq in enumerate(EQUATIONS):
+        idx = [lib_names.index(t) for t in per_eq[eq]]
+        found = [t for t in discovery.terms[eq] if t.form == "integral"]
+        fidx = [lib_names.index(t.term) for t in found]
+        integ = _integrated(problem, [c[:, idx + fidx] for c in _library_columns(problem, q)], q)
+        for i, r in enumerate(problem.runs):
+            wq = 1.0 / np.sqrt(max(float(np.sum(r.integral.target(q) ** 2)), 1e-300))
+            c = integ[i]
+            b = residuals[i][q] - (c[:, len(idx):] @ np.array([t.coefficient for t in found]) if found else 0.0)
+            block = np.zeros((c.shape[0], n_terms))
+            block[:, offset:offset + len(idx)] = c[:, :len(idx)]
+            cols[i] = np.vstack([cols[i], wq * block])
+            res[i] = np.concatenate([res[i], wq * b])
+            floors[i] += wq**2 * r.integral.floor(q)
+        offset += len(idx)
+    return cols, res, floors
 
 
 def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discovery: Discovery,
@@ -434,14 +476,13 @@ def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discover
                 coef = _least_squares(c_tr, [r[q] for r in res_tr])
                 e_te = [e - c @ coef for e, c in zip(e_te, c_te)]
             comps[:, q] = [_fraction(te, i, q, float(e @ e)) for i, e in enumerate(e_te)]
-        if any(energy_terms.values()):  # runs weighed as in _discover_dissipation
-            w = [1.0 / np.sqrt(max(float(np.sum(e.oscillation_energy**2)), 1e-300)) for e in fit.energy]
-            w_tr, w_te = _dissipation_work(tr, energy_terms), _dissipation_work(te, energy_terms)
-            coef = _least_squares([wi * c for wi, c in zip(w, w_tr)], [wi * e.residual for wi, e in zip(w, fit.energy)])
-            for i, (e, w) in enumerate(zip(held.energy, w_te)):
-                norm = max(float(np.sum(e.oscillation_energy**2)), 1e-300)
-                r = e.residual - w @ coef
-                comps[i, 2] = (float(r @ r) - r.size * e.noise_variance) / norm
+        if any(energy_terms.values()):  # fitted and scored on the rows they were found on
+            cols_tr, res_tr_e, _ = _dissipation_rows(tr, fit, discovery, energy_terms)
+            cols_te, res_te_e, floors_te = _dissipation_rows(te, held, discovery, energy_terms)
+            coef = _least_squares(cols_tr, res_tr_e)
+            for i, (c, b) in enumerate(zip(cols_te, res_te_e)):
+                r = b - c @ coef
+                comps[i, :] = (float(r @ r) - floors_te[i]) / 3.0  # each the mean of the three components
         out[test] = comps.mean(axis=1)
     return out
 
@@ -454,25 +495,50 @@ def _least_squares(cols: Sequence[NDArray], rhs: Sequence[NDArray]) -> NDArray[n
 
 
 def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], discovery: Discovery, alpha: float = 0.01,
-                     folds: int = 5) -> tuple[list[str], dict[str, float]]:
+                     folds: int = 5, group: Sequence[str] = ()) -> tuple[list[str], dict[str, float]]:
     """The identified candidates that still improve held-out runs once the discovered terms are fitted.
 
     Each candidate (last added first) is tested by the one-sided sign-flip test of the per-run held-out
     improvement it gives on top of the other kept candidates and the discovered terms; one that does not
     reach ``alpha`` is dropped: the discovered terms explain its share of the gap at least as well.
 
+    The candidates of ``group`` that were identified are first tested together, as one: two candidate
+    dampings can together mimic a dissipation that neither describes, and each then still improves on top of
+    the other (the effects are fitted before the discovered terms).  A candidate is judged against the
+    discovered terms without the library copies of its own columns (:data:`LIBRARY_EQUIVALENTS`): linear
+    damping is not replaced by the terms ``ydot`` and ``thetadot``.
+
     Returns
     -------
     (kept, p_values)
         The kept candidates in their order, and each tested candidate's p-value.
     """
+    from .candidates import LIBRARY_EQUIVALENTS
+
+    def rivals(tested: Sequence[str]) -> Discovery:  # the discovered terms, without the tested candidates' copies
+        own: dict[str, list[str]] = {e: [] for e in EQUATIONS}
+        for c in tested:
+            for e, names in LIBRARY_EQUIVALENTS.get(c, {}).items():
+                own[e] += names
+        return discovery.without(own)
+
     if discovery.empty or not identified:
         return list(identified), {}
     kept = list(identified)
     pvals = {}
-    for c in reversed(list(identified)):
-        with_c = _held_out_scores(problem, kept, discovery, folds)
-        without = _held_out_scores(problem, [e for e in kept if e != c], discovery, folds)
+    together = [c for c in group if c in kept]
+    if len(together) > 1:
+        with_g = _held_out_scores(problem, kept, rivals(together), folds)
+        without = _held_out_scores(problem, [e for e in kept if e not in together], rivals(together), folds)
+        p = sign_flip_pvalue(without - with_g)
+        if not p < alpha:
+            logger.info("%s are not named: the discovered terms explain their share of the gap on held-out runs "
+                        "(p = %.2g)", " and ".join(together), p)
+            pvals.update({c: p for c in together})
+            kept = [e for e in kept if e not in together]
+    for c in reversed(list(kept)):
+        with_c = _held_out_scores(problem, kept, rivals([c]), folds)
+        without = _held_out_scores(problem, [e for e in kept if e != c], rivals([c]), folds)
         p = sign_flip_pvalue(without - with_c)
         pvals[c] = p
         if not p < alpha:

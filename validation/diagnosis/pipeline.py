@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acousim.effects import EFFECT_TYPES
+
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
 from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
@@ -32,6 +34,9 @@ from .problem import DiagnosisProblem
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
 
 logger = logging.getLogger(__name__)
+
+#: The candidate dampings (the air's effects), judged together against discovered terms.
+AIR_DAMPINGS = tuple(n for n, t in EFFECT_TYPES.items() if t.acts_without_field)
 
 #: A gap (in excess of the noise floor) below this is "explained within the noise".
 EXPLAINED_GAP = 0.01
@@ -167,10 +172,15 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                            min_absolute_improvement=config.discovery_min_improvement,
                            min_relative_improvement=config.min_relative_improvement)
         discovery = discover(final)
-        if not discovery.empty and identified:
-            kept, pvals = judge_candidates(problem, identified, discovery, alpha=config.alpha)
+        # the candidates are judged against the terms found on top of them, and against the dissipative terms
+        # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
+        # describe, leaving nothing to discover on top of it
+        for rivals in (discovery, discover(base, forms=("energy",)) if identified else Discovery()):
+            if rivals.empty or not identified:
+                continue
+            kept, pvals = judge_candidates(problem, identified, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
             if kept != identified:
-                replaced = {c: pvals[c] for c in identified if c not in kept}
+                replaced.update({c: pvals[c] for c in identified if c not in kept})
                 identified = kept
                 final = fit_gap_model(problem, identified)
                 discovery = discover(final)

@@ -102,6 +102,14 @@ def y_damping_dataset(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def centred_y_damping_dataset(tmp_path_factory):
+    """(data directory, truth): as y_damping_dataset, with the true equilibrium near the data's origin (the true
+    pressure within 3 % of nominal)."""
+    path = tmp_path_factory.mktemp("twin_like") / "centred_y_damping"
+    return path, write_twin_like_dataset(path, seed=4, y_damping=Y_DAMPING)
+
+
+@pytest.fixture(scope="session")
 def clean_dataset(tmp_path_factory):
     """(data directory, truth): 8 runs of 3 s of the surrogate alone (a constant pressure off nominal)."""
     path = tmp_path_factory.mktemp("twin_like") / "clean"

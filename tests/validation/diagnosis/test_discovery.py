@@ -152,3 +152,58 @@ def test_y_dependent_damping_discovered_in_the_energy_balance(y_damping_dataset)
     # measured 0.3 % of the truth's rate c Delta^2 at the nominal origin
     assert abs(rate_at_equilibrium) < 0.1 * truth["y_damping"] * delta**2
     assert "y^2*ydot (energy balance)" in diag["remaining_gap"]["discovered_equations"]["yddot"]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "measured (seed 4, c = 6e8, true pressure within 3 %): linear damping and quadratic drag are both identified; "
+    "the dissipative terms found on the calibration alone are -4.64e8 y^2*ydot (23 % under the truth: the "
+    "calibration without effects absorbs part of the loss, and the terms are fitted after it), and the two "
+    "candidates judged together still improve every held-out run on top of it (p = 0.004)"))
+def test_candidate_dampings_standing_in_for_a_dissipation_are_not_named(centred_y_damping_dataset):
+    """With the y-dependent damping centred near the data's origin, linear damping and quadratic drag together
+    reproduce its cycle-averaged energy loss, and both are identified (each still improves on top of the other).
+    Judged together against the dissipative terms found without them, they should no longer improve held-out
+    runs and not be named.  Which dissipative term carries the loss is at the information limit here: y^2*ydot
+    and ydot^3 remove the same energy from a harmonic oscillation, so the test asks for a cubic dissipation in
+    yddot found in the energy balance."""
+    data, truth = centred_y_damping_dataset
+    diag, _ = diagnose_dataset(data, FAST, progress=False)
+    assert diag["identified"] == []
+    assert sorted(r["name"] for r in diag["remaining_gap"]["replaced_by_discovered_terms"]) == [
+        "linear_damping", "quadratic_drag"]
+    lead = diag["remaining_gap"]["discovered_terms"]["yddot"][0]
+    assert lead["form"] == "energy" and lead["term"] in ("y^2*ydot", "ydot^3")
+    assert lead["coefficient"] < 0  # a damping
+
+
+def test_library_equivalents_are_the_candidates_own_columns():
+    """The library terms a candidate is not judged against are its own regressor columns (up to the sign)."""
+    from cubedimer.terms import evaluate_library, library_terms
+    from validation.diagnosis import effect_regressors
+    from validation.diagnosis.candidates import CANDIDATE_EFFECTS, LIBRARY_EQUIVALENTS
+
+    rng = np.random.default_rng(0)
+    state = rng.normal(size=(50, 4)) * np.array([1e-4, 1e-2, 0.3, 3.0])
+    lib = dict(zip(library_terms(), evaluate_library(state).T))
+    for name, forms in LIBRARY_EQUIVALENTS.items():
+        regs = effect_regressors(name, state, 1e-3 + state[:, 0], 1.0, None)
+        for q, eq in enumerate(("yddot", "thetaddot")):
+            for term in forms.get(eq, ()):
+                matches = [p for p in range(len(CANDIDATE_EFFECTS[name]))
+                           if np.allclose(np.abs(regs[:, q, p]), np.abs(lib[term]), rtol=1e-12, atol=0)]
+                assert matches, (name, eq, term)
+
+
+@pytest.mark.slow
+def test_forced_candidate_dampings_judged_together_are_dropped(y_damping_dataset):
+    """Linear damping and quadratic drag forced onto the y-dependent damping (Delta = 77 um) and judged together
+    against the dissipative terms found on the calibration alone: they improve no held-out run (measured p = 1)
+    and both are dropped."""
+    data, _ = y_damping_dataset
+    problem = _problem(data)
+    rivals = discover_terms(problem, fit_gap_model(problem, []), forms=("energy",))
+    assert [t.term for t in rivals.terms["yddot"]][:1] == ["y^2*ydot"] and rivals.names("integral")["yddot"] == []
+    kept, pvals = judge_candidates(problem, ["quadratic_drag", "linear_damping"], rivals,
+                                   group=("linear_damping", "quadratic_drag"))
+    assert kept == [] and pvals["quadratic_drag"] >= 0.01 and pvals["linear_damping"] >= 0.01
