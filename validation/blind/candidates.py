@@ -156,7 +156,8 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
         "pressure_calibrated_pa": None if diag is None else diag["calibration"]["pressure_amplitude_pa"],
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         "discovered_terms": None if diag is None else {
-            eq: [t["term"] for t in terms] for eq, terms in diag["remaining_gap"]["discovered_terms"].items()},
+            eq: [t["term"] for t in terms]
+            for eq, terms in diag.get("remaining_gap", {}).get("discovered_terms", {}).items()},
         "error": error,
         "scored": True,
     }
