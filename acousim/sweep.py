@@ -54,7 +54,7 @@ SWEEP_COLUMNS: tuple[tuple[str, str], ...] = (
 
 @dataclass(frozen=True)
 class SweepResult:
-    """Gor'kov-model values on a (theta, y) grid; every array has shape (n_theta, n_y).
+    """Force-model values on a (theta, y) grid; every array has shape (n_theta, n_y).
 
     Attributes
     ----------
@@ -78,7 +78,7 @@ class SweepResult:
         lines = [f"# acousim static sweep; units: " + ", ".join(f"{c} [{u}]" for c, u in SWEEP_COLUMNS)]
         lines.append("# settings: " + json.dumps(self.settings, sort_keys=True))
         lines.append(",".join(names))
-        body = "\n".join(",".join(f"{v:.10g}" for v in row) for row in data)
+        body = "\n".join(",".join("" if np.isnan(v) else f"{v:.10g}" for v in row) for row in data)
         atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n")
 
 
@@ -101,6 +101,8 @@ def static_sweep(
         raise ValueError("theta and y grids must be 1-D")
     if np.any(np.abs(theta) >= 1):
         raise ValueError("theta must lie in (-1, 1)")
+    if not hasattr(model, "integrals_at_height"):  # a surrogate force model (the full-wave table)
+        return _surrogate_sweep(model, theta, y)
     from tqdm.auto import tqdm
 
     z_eq = model.equilibrium_height
@@ -116,10 +118,28 @@ def static_sweep(
     return SweepResult(theta, y, cols, settings)
 
 
+def _surrogate_sweep(model, theta: NDArray[np.float64], y: NDArray[np.float64]) -> SweepResult:
+    """The sweep of a force surrogate with ``force_z``, ``generalized_forces``, ``hinge_inertia``, ``mass``,
+    ``z_eq``, ``theta_max`` and ``settings`` (:class:`acousim.fullwave.FullwaveSurrogate`).  It has no
+    potential: that column is NaN (empty in the CSV)."""
+    if np.any(np.abs(theta) > model.theta_max):
+        raise ValueError(f"theta must lie within the surrogate's table, |theta| <= {model.theta_max:g}")
+    tt, yy = np.meshgrid(theta, y, indexing="ij")
+    q_y, q_theta = model.generalized_forces(tt, yy)
+    cols = {"theta": tt, "y": yy, "z_com": yy + model.z_eq, "potential": np.full(tt.shape, np.nan),
+            "force_z": model.force_z(tt, yy), "q_y": q_y, "q_theta": q_theta, "yddot": q_y / model.mass,
+            "thetaddot": q_theta / model.hinge_inertia(tt)}
+    return SweepResult(theta, y, cols, sweep_settings(model))
+
+
 def sweep_settings(model: GorkovDimer) -> dict:
-    """The model settings that determine a sweep (written into the CSV header and JSON)."""
+    """The model settings that determine a sweep (written into the CSV header and JSON), with ``model``
+    naming the force model (``gorkov`` or ``fullwave``)."""
+    if not hasattr(model, "integrals_at_height"):
+        return {"model": "fullwave", **model.settings, "equilibrium_height_m": model.z_eq}
     d, w = model.dimer, model.wave
     return {
+        "model": "gorkov",
         "side_a_m": d.side_a,
         "side_b_m": d.side_b,
         "particle_density_kg_m3": d.material.density_kg_m3,
@@ -161,7 +181,8 @@ def read_sweep_csv(path: str | os.PathLike) -> SweepResult:
     if missing:
         raise ValueError(f"{path}: missing column(s) {', '.join(missing)}")
     try:
-        values = np.array([[float(v) for v in r.split(",")] for r in rows[1:]], float).reshape(-1, len(names))
+        values = np.array([[float(v) if v.strip() else np.nan for v in r.split(",")] for r in rows[1:]],
+                          float).reshape(-1, len(names))
     except ValueError:
         raise ValueError(f"{path}: non-numeric or ragged rows") from None
     data = {n: values[:, i] for i, n in enumerate(names)}

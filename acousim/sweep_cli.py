@@ -56,12 +56,16 @@ def add_parser(subparsers) -> None:
             "q_theta [N m], yddot [m/s^2], thetaddot [1/s^2], z_com [m]. y is the height of the centre "
             "of mass above the simulated equilibrium height Z_eq (PHYSICS.md section 2). Optionally "
             "write the figures (restoring force and torque, thetaddot map), the static coefficients "
-            "(least squares on the velocity-free cubic monomials) and a rendering of the posed mesh."
+            "(least squares on the velocity-free cubic monomials) and a rendering of the posed mesh. "
+            "With --model fullwave the full-wave (boundary-element) surrogate of the default 500 um dimer is "
+            "swept instead (shipped table, docs/fullwave.md; |theta| <= 0.9, no potential column)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--theta", default=DEFAULT_THETA, metavar="START:STOP:N", help="bend grid, inside (-1, 1)")
     p.add_argument("--y", default=DEFAULT_Y, metavar="START:STOP:N", help="height grid [m] relative to Z_eq")
+    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
+                   help="force model: the Gor'kov volume integral, or the full-wave surrogate of the default dimer")
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
     p.add_argument("--side-b", type=float, default=None, help="side of the second cube [m] (default: equal)")
     p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude p0 [Pa]")
@@ -104,27 +108,18 @@ def run_sweep(args: argparse.Namespace) -> int:
     if args.plots:
         prepare_output_dir(args.plots, "--plots", create=False)
 
-    from .dimer import CubeDimer
-    from .field import StandingWave
-    from .forces import GorkovDimer
-    from .medium import Medium, ParticleMaterial
     from .sweep import fit_static_coefficients, static_sweep, taylor_coefficients
 
-    material = ParticleMaterial(density_kg_m3=args.density)
-    dimer = CubeDimer(args.side, args.side_b, material)
-    wave = StandingWave(args.pressure, Medium(frequency_hz=args.frequency), material)
-    mesh_size = args.mesh_size if args.mesh_size is not None else 0.2 * min(dimer.sides)
-    if not 0.01 <= mesh_size / min(dimer.sides) <= 1.0:
-        raise UserInputError(f"--mesh-size {mesh_size:g} m must be between 0.01 and 1 times the cube side")
-    try:
-        model = GorkovDimer(dimer, wave, mesh_size=mesh_size, quadrature_degree=args.quadrature_degree)
-        z_eq = model.equilibrium_height
-    except ValueError as exc:
-        raise UserInputError(str(exc)) from None
+    if args.model == "fullwave":
+        model = _fullwave_model(args, theta)
+        z_eq, size_note = model.z_eq, "full-wave surrogate"
+    else:
+        model = _gorkov_model(args)
+        z_eq, size_note = model.equilibrium_height, f"{model.n_tetrahedra} tetrahedra"
     result = static_sweep(model, theta, y, progress=not args.quiet)
     result.to_csv(args.out)
     if not args.quiet:
-        print(f"sweep: {len(theta)} x {len(y)} points, {model.n_tetrahedra} tetrahedra, Z_eq = {z_eq * 1e6:.1f} um -> {args.out}", file=sys.stderr)
+        print(f"sweep: {len(theta)} x {len(y)} points, {size_note}, Z_eq = {z_eq * 1e6:.1f} um -> {args.out}", file=sys.stderr)
     if args.coefficients:
         coefs = fit_static_coefficients(result, theta_max=args.fit_theta_max, y_max=args.fit_y_max, taylor=taylor_coefficients(model))
         coefs.to_json(args.coefficients)
@@ -145,3 +140,46 @@ def run_sweep(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"rendering -> {args.render}", file=sys.stderr)
     return 0
+
+
+def _fullwave_model(args: argparse.Namespace, theta: np.ndarray):
+    """The shipped full-wave surrogate at ``--pressure``; the dimer options must be the table's."""
+    from .fullwave import default_fullwave_surrogate
+
+    try:
+        sur = default_fullwave_surrogate(args.pressure)
+    except ValueError as exc:  # the field cannot levitate the dimer
+        raise UserInputError(str(exc)) from None
+    st = sur.settings
+    for option, value, key in (("--side", args.side, "side_m"), ("--frequency", args.frequency, "frequency_hz"),
+                               ("--density", args.density, "particle_density_kg_m3")):
+        if key in st and not np.isclose(value, float(st[key]), rtol=1e-9):
+            raise UserInputError(f"{option} {value:g}: the full-wave model is tabulated for {key} = {float(st[key]):g} "
+                                 "only (build another table with python -m acousim.fullwave.surrogate)")
+    for option, given in (("--side-b", args.side_b), ("--mesh-size", args.mesh_size), ("--render", args.render)):
+        if given is not None:
+            raise UserInputError(f"{option} applies to the Gor'kov model only, not to --model fullwave")
+    if np.any(np.abs(theta) > sur.theta_max):
+        raise UserInputError(f"--theta {args.theta!r}: the full-wave table covers |theta| <= {sur.theta_max:g}")
+    return sur
+
+
+def _gorkov_model(args: argparse.Namespace):
+    """The Gor'kov model of the options."""
+    from .dimer import CubeDimer
+    from .field import StandingWave
+    from .forces import GorkovDimer
+    from .medium import Medium, ParticleMaterial
+
+    material = ParticleMaterial(density_kg_m3=args.density)
+    dimer = CubeDimer(args.side, args.side_b, material)
+    wave = StandingWave(args.pressure, Medium(frequency_hz=args.frequency), material)
+    mesh_size = args.mesh_size if args.mesh_size is not None else 0.2 * min(dimer.sides)
+    if not 0.01 <= mesh_size / min(dimer.sides) <= 1.0:
+        raise UserInputError(f"--mesh-size {mesh_size:g} m must be between 0.01 and 1 times the cube side")
+    try:
+        model = GorkovDimer(dimer, wave, mesh_size=mesh_size, quadrature_degree=args.quadrature_degree)
+        model.equilibrium_height  # noqa: B018 (raises when the field cannot levitate the dimer)
+    except ValueError as exc:
+        raise UserInputError(str(exc)) from None
+    return model

@@ -91,3 +91,48 @@ def test_unwritable_output_is_refused_before_computing(tmp_path, option):
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert lines[0].startswith("error: " + option) and "not a directory" in lines[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # nothing computed or written
+
+
+def test_fullwave_sweep_is_the_surrogate(tmp_path):
+    """``--model fullwave`` sweeps the shipped full-wave surrogate: its values on the grid, an empty potential
+    column, the model named in the header, and static coefficients whose small-box limit is the surrogate's own
+    Taylor expansion."""
+    from acousim.fullwave import default_fullwave_surrogate
+    from acousim.sweep import read_sweep_csv
+
+    out, cof = tmp_path / "s.csv", tmp_path / "c.json"
+    r = run("sweep", "--model", "fullwave", "--theta", "-0.3:0.3:7", "--y", "-1e-4:1e-4:5", "--out", str(out),
+            "--coefficients", str(cof), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert '"model": "fullwave"' in out.read_text()
+    sweep = read_sweep_csv(out)
+    assert np.all(np.isnan(sweep["potential"]))
+    sur = default_fullwave_surrogate(3000.0)
+    tt, yy = np.meshgrid(sweep.theta_grid, sweep.y_grid, indexing="ij")
+    q_y, q_t = sur.generalized_forces(tt, yy)
+    # the CSV keeps 10 significant digits
+    np.testing.assert_allclose(sweep["q_theta"], q_t, rtol=1e-9, atol=1e-9 * np.abs(q_t).max())
+    np.testing.assert_allclose(sweep["yddot"], q_y / sur.mass, rtol=1e-9, atol=1e-9 * np.abs(q_y / sur.mass).max())
+    np.testing.assert_allclose(sweep["thetaddot"], q_t / sur.hinge_inertia(tt), rtol=1e-9,
+                               atol=1e-9 * np.abs(q_t / sur.hinge_inertia(tt)).max())
+    import json
+
+    taylor = json.loads(cof.read_text())["taylor_at_equilibrium"]
+    # the sweep's small-box fit against the surrogate's analytic derivatives: both are the same Chebyshev
+    # series, so they agree to the fit's truncation (degree 5 on a 20 um x 0.05 box)
+    for term in ("theta", "y*theta", "y^2*theta"):
+        np.testing.assert_allclose(taylor["thetaddot"][term], sur.taylor_coefficients()["thetaddot"][term], rtol=1e-3)
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--mesh-size", "1e-4"], "Gor'kov model only"),
+    (["--side", "4e-4"], "tabulated for"),
+    (["--theta", "-0.95:0.95:3"], "covers |theta| <= 0.9"),
+])
+def test_fullwave_sweep_refuses_what_the_table_does_not_cover(tmp_path, args, message):
+    out = tmp_path / "s.csv"
+    r = run("sweep", "--model", "fullwave", *args, "--out", str(out))
+    assert r.returncode != 0
+    lines = [l for l in r.stderr.strip().splitlines() if l.strip()]
+    assert len(lines) == 1 and message in lines[0], r.stderr
+    assert not out.exists()
