@@ -448,13 +448,11 @@ def _dissipation_rows(problem: DiagnosisProblem, fit: GapFit, discovery: Discove
 def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discovery: Discovery,
                      folds: int) -> NDArray[np.float64]:
     """K-fold over runs: per run, the mean over the three gap components (beyond noise) of a fit of ``effects``
-    and then of the discovered terms made on the other folds: the integral-form terms on the fit's integral-form
-    residuals (the y and theta components in their integral form), the energy-form terms on its energy-balance
-    residuals."""
-    from cubedimer.terms import library_terms
-
-    names = library_terms()
-    integral_terms, energy_terms = discovery.names("integral"), discovery.names("energy")
+    and then of the discovered terms made on the other folds.  Without energy-form terms, the integral-form
+    terms are fitted on the fit's integral-form residuals (the y and theta components in their integral form)
+    and the energy component is the fit's own; with them, every component comes from the rows the
+    energy-form terms were found on (:func:`_dissipation_rows`, which subtract the integral-form terms)."""
+    energy_terms = discovery.names("energy")
     n = len(problem)
     k = min(folds, n)
     out = np.empty(n)
@@ -464,27 +462,38 @@ def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discover
         tr, te = problem.subset(train), problem.subset(test)
         fit = fit_gap_model(tr, effects)
         held = apply_gap_model(te, fit.calibration, fit.effects)
-        res_tr, res_te = integral_residuals(tr, fit), integral_residuals(te, held)
-        comps = np.zeros((len(test), 3))
-        comps[:, 2] = fit_gaps(te.runs, held)[:, 2]
-        for q, eq in enumerate(EQUATIONS):
-            idx = [names.index(t) for t in integral_terms[eq]]
-            e_te = [r[q] for r in res_te]
-            if idx:
-                c_tr = _integrated(tr, [c[:, idx] for c in _library_columns(tr, q)], q)
-                c_te = _integrated(te, [c[:, idx] for c in _library_columns(te, q)], q)
-                coef = _least_squares(c_tr, [r[q] for r in res_tr])
-                e_te = [e - c @ coef for e, c in zip(e_te, c_te)]
-            comps[:, q] = [_fraction(te, i, q, float(e @ e)) for i, e in enumerate(e_te)]
-        if any(energy_terms.values()):  # fitted and scored on the rows they were found on
-            cols_tr, res_tr_e, _ = _dissipation_rows(tr, fit, discovery, energy_terms)
-            cols_te, res_te_e, floors_te = _dissipation_rows(te, held, discovery, energy_terms)
-            coef = _least_squares(cols_tr, res_tr_e)
-            for i, (c, b) in enumerate(zip(cols_te, res_te_e)):
-                r = b - c @ coef
-                comps[i, :] = (float(r @ r) - floors_te[i]) / 3.0  # each the mean of the three components
-        out[test] = comps.mean(axis=1)
+        if any(energy_terms.values()):
+            cols_tr, res_tr, _ = _dissipation_rows(tr, fit, discovery, energy_terms)
+            cols_te, res_te, floors_te = _dissipation_rows(te, held, discovery, energy_terms)
+            coef = _least_squares(cols_tr, res_tr)
+            # a run's weighted residual sum of squares is the sum of its three components beyond their floors
+            rss = np.array([float(np.sum((b - c @ coef) ** 2)) for c, b in zip(cols_te, res_te)])
+            out[test] = (rss - floors_te) / 3.0
+        else:
+            out[test] = _integral_components(tr, te, fit, held, discovery.names("integral")).mean(axis=1)
     return out
+
+
+def _integral_components(tr: DiagnosisProblem, te: DiagnosisProblem, fit: GapFit, held: GapFit,
+                         integral_terms: dict[str, list[str]]) -> NDArray[np.float64]:
+    """Per test run (n_test, 3): the y and theta components in their integral form after ``integral_terms``
+    fitted on the training runs' residuals, and the energy component of ``held``."""
+    from cubedimer.terms import library_terms
+
+    names = library_terms()
+    res_tr, res_te = integral_residuals(tr, fit), integral_residuals(te, held)
+    comps = np.zeros((len(te), 3))
+    comps[:, 2] = fit_gaps(te.runs, held)[:, 2]
+    for q, eq in enumerate(EQUATIONS):
+        idx = [names.index(t) for t in integral_terms[eq]]
+        e_te = [r[q] for r in res_te]
+        if idx:
+            c_tr = _integrated(tr, [c[:, idx] for c in _library_columns(tr, q)], q)
+            c_te = _integrated(te, [c[:, idx] for c in _library_columns(te, q)], q)
+            coef = _least_squares(c_tr, [r[q] for r in res_tr])
+            e_te = [e - c @ coef for e, c in zip(e_te, c_te)]
+        comps[:, q] = [_fraction(te, i, q, float(e @ e)) for i, e in enumerate(e_te)]
+    return comps
 
 
 def _least_squares(cols: Sequence[NDArray], rhs: Sequence[NDArray]) -> NDArray[np.float64]:
