@@ -120,7 +120,7 @@ def weak_sindy(derivs: Sequence, scales) -> NDArray[np.float64]:
     import pysindy as ps
 
     from cubedimer.terms import STATE_NAMES
-    from fitting.regression import _pysindy_to_canonical
+    from fitting.regression import pysindy_to_canonical
 
     X = [d.state / scales.state for d in derivs]
     t = (derivs[0].t - derivs[0].t[0]) / scales.time
@@ -136,7 +136,7 @@ def weak_sindy(derivs: Sequence, scales) -> NDArray[np.float64]:
         model.fit(X, t=t[1] - t[0], feature_names=list(STATE_NAMES))
     names = model.get_feature_names()
     coef = np.asarray(model.coefficients())[[1, 3]]
-    return scales.to_si(_pysindy_to_canonical(names, coef))
+    return scales.to_si(pysindy_to_canonical(names, coef))
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from cubedimer.terms import STATE_NAMES, parse_term
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 
 __all__ = ["RegressionConfig", "dataset_scales", "fit_regression", "fit_ensemble_regression",
-           "scaled_data", "scaled_library"]
+           "scaled_data", "scaled_library", "pysindy_to_canonical"]
 
 
 @dataclass(frozen=True)
@@ -88,7 +88,7 @@ def scaled_library(derivs: Sequence[Derivatives], scales: Scales, matched_filter
     return out
 
 
-def _pysindy_to_canonical(names: list[str], coef: NDArray) -> NDArray:
+def pysindy_to_canonical(names: list[str], coef: NDArray) -> NDArray:
     """Reorder pysindy's feature columns (names like ``y ydot^2``) to the canonical library."""
     index = {tuple(e): j for j, e in enumerate(EXPONENTS)}
     out = np.zeros((coef.shape[0], len(TERMS)))
@@ -135,7 +135,7 @@ def fit_regression(derivs: Sequence[Derivatives], scales: Scales,
         dt = float(derivs[0].t[1] - derivs[0].t[0]) / scales.time
         opt = ps.STLSQ(threshold=config.threshold, alpha=config.alpha, max_iter=config.max_iter)
         names, model = _sindy(opt, X, A, dt)
-        coef = _pysindy_to_canonical(names, model.coefficients())
+        coef = pysindy_to_canonical(names, model.coefficients())
         return PolynomialModel(scales.to_si(coef))
     if candidates is None:
         candidates = np.ones((2, len(TERMS)), bool)
@@ -187,7 +187,7 @@ def fit_ensemble_regression(derivs: Sequence[Derivatives], scales: Scales,
     opt = ps.EnsembleOptimizer(ps.STLSQ(threshold=config.threshold, alpha=config.alpha,
                                         max_iter=config.max_iter), bagging=True, n_models=n_models)
     names, model = _sindy(opt, X, A, dt)
-    coefs = np.array([_pysindy_to_canonical(names, c) for c in opt.coef_list])
+    coefs = np.array([pysindy_to_canonical(names, c) for c in opt.coef_list])
     p = np.mean(coefs != 0, axis=0)
     med = np.where(p >= inclusion, np.median(coefs, axis=0), 0.0)
     return PolynomialModel(scales.to_si(med)), p
