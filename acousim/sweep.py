@@ -101,6 +101,8 @@ def static_sweep(
         raise ValueError("theta and y grids must be 1-D")
     if np.any(np.abs(theta) >= 1):
         raise ValueError("theta must lie in (-1, 1)")
+    if hasattr(model, "as_force_model"):  # a static model backed by a table (acousim.fullwave.FullwaveDimer)
+        model = model.as_force_model()
     if not hasattr(model, "integrals_at_height"):  # a surrogate force model (the full-wave table)
         return _surrogate_sweep(model, theta, y)
     from tqdm.auto import tqdm

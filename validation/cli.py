@@ -126,7 +126,7 @@ def _add_diagnose(sub) -> None:
         "diagnose",
         help="diagnose the sim-to-real gap of a data set",
         description=(
-            "Calibrate the Gor'kov simulation (pressure amplitude and y origin) to a data set, measure the gap "
+            "Calibrate the simulation (Gor'kov or full-wave; pressure amplitude and y origin) to a data set, measure the gap "
             "between simulated and measured accelerations (and the long-time attractor, Poincare and frequency "
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
             "effects of PHYSICS.md section 5 cause it, adding them greedily while a held-out improvement across runs "
@@ -142,6 +142,10 @@ def _add_diagnose(sub) -> None:
     p.add_argument("--candidates", default=",".join(_candidate_names()),
                    help="comma-separated candidate effects")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
+    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
+                   help="the simulation model to calibrate: the Gor'kov volume integral, or the full-wave "
+                   "(boundary-element) table of the default 500 um dimer (docs/fullwave.md; the data's |theta| must "
+                   "stay within 0.9)")
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
@@ -174,7 +178,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
-        diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet)
+        diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
+                                                model=args.model)
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, internals, args.out)
@@ -244,8 +249,9 @@ def _add_report(sub) -> None:
         help="the model-vs-simulation report of a data set (HTML with embedded figures)",
         description=(
             "Fit the data (fitting pipeline), compare the minimal model with its variant without cross-coupling terms, "
-            "diagnose the sim-to-real gap (calibrating the Gor'kov simulation), sweep the calibrated simulation, compare "
-            "coefficients, and write REPORT_DIR/report.html (self-contained), figures/*.png and numbers.json."
+            "diagnose the sim-to-real gap (calibrating the Gor'kov or the full-wave simulation), put the Gor'kov model, "
+            "Gor'kov with fitted pair scattering and the full-wave model side by side, sweep the calibrated simulations, "
+            "compare coefficients, and write REPORT_DIR/report.html (self-contained), figures/*.png and numbers.json."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -257,6 +263,9 @@ def _add_report(sub) -> None:
                    help="the fit's model discovery: integral-form discovery with a long-time polish, or the "
                         "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
                         "see python -m fitting fit --help")
+    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
+                   help="the simulation model the diagnosis (section 6) calibrates; the report puts the other one "
+                   "beside it (sections 4, 5 and 7) whenever the full-wave table of the default 500 um dimer applies")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
                            "and figures run in this process.")
@@ -264,6 +273,7 @@ def _add_report(sub) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
+    from acousim.fullwave.statics import TableMismatch
     from cubedimer.dataset import DatasetError
 
     from .report.pipeline import build_report
@@ -272,8 +282,8 @@ def run_report(args: argparse.Namespace) -> int:
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
-                     max_evals=args.max_evals, method=args.method)
-    except DatasetError as exc:
+                     max_evals=args.max_evals, method=args.method, model=args.model)
+    except (DatasetError, TableMismatch) as exc:
         raise UserInputError(str(exc)) from None
     return 0
 

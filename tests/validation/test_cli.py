@@ -95,3 +95,13 @@ def test_diagnose_refuses_a_negative_practical_threshold_in_one_line(tmp_path, t
     line = _one_line_error(capsys)
     assert line.startswith("error: ") and "min_relative_improvement" in line
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["diagnose", "report"])
+def test_fullwave_model_refuses_another_experiment_in_one_line(tmp_path, tiny_data, capsys, command):
+    """The full-wave table belongs to the 500 um dimer: another side is named, nothing is written."""
+    (tiny_data / "meta.json").write_text('{"side_length_m": 4e-4}')
+    assert main([command, str(tiny_data), "--out", str(tmp_path / "out"), "--model", "fullwave", "--quiet"]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("error: ") and "side_length_m" in line and "full-wave" in line
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

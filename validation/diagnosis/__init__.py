@@ -1,6 +1,6 @@
 """Diagnose the sim-to-real gap: where it lies, which unmodelled effect causes it, how far it shrinks.
 
-"Sim" is the Gor'kov model of PHYSICS.md section 4 calibrated to the data; "real" is any data set in
+"Sim" is the Gor'kov model of PHYSICS.md section 4 (or the full-wave model of section 7) calibrated to the data; "real" is any data set in
 the FORMATS.md format.  Every candidate effect of PHYSICS.md section 5 is linear in its parameters, so
 every fit here is a linear least-squares problem at the measured states.  One module per step:
 
@@ -20,7 +20,9 @@ every fit here is a linear least-squares problem at the measured states.  One mo
 * :mod:`~validation.diagnosis.discovery`: the library terms that carry what no candidate explains;
 * :mod:`~validation.diagnosis.localization`: where the residual lies (terms, regions, time scales);
 * :mod:`~validation.diagnosis.long_time`: attractor, Poincare and frequency errors;
-* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` and :func:`write_diagnosis`.
+* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` and :func:`write_diagnosis`;
+* :mod:`~validation.diagnosis.model_comparison`: the gaps of Gor'kov, Gor'kov + fitted pair scattering and
+  the full-wave model side by side (:func:`compare_simulation_models`).
 
 The method, its tests and the blind check are described in docs/diagnosis.md.
 """
@@ -36,6 +38,7 @@ from .identification import (CandidateTest, Identification, IdentificationRound,
                              identify_effects)
 from .localization import localize_residuals
 from .long_time import LongTimeGap, long_time_gaps
+from .model_comparison import ModelComparison, ModelGap, compare_simulation_models
 from .metrics import (GapComponent, fit_components, fit_gaps, gap_components, gap_definition, noise_floors,
                       scalar_gap, short_time_gaps)
 from .pipeline import EXPLAINED_GAP, DiagnoseConfig, DiagnosisInternals, diagnose_dataset, write_diagnosis
@@ -52,7 +55,7 @@ __all__ = [
     "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
     "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",
     "PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps", "identify_effects",
-    "localize_residuals", "LongTimeGap", "long_time_gaps",
+    "localize_residuals", "LongTimeGap", "long_time_gaps", "ModelGap", "ModelComparison", "compare_simulation_models",
     "sign_flip_pvalue", "wilcoxon_greater_pvalue",
     "DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP",
 ]

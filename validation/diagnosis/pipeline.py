@@ -111,7 +111,8 @@ class DiagnosisInternals:
 
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
-                     progress: bool = True, mesh_size: float | None = None) -> tuple[dict, DiagnosisInternals]:
+                     progress: bool = True, mesh_size: float | None = None,
+                     model: str = "gorkov") -> tuple[dict, DiagnosisInternals]:
     """Diagnose a data set.
 
     Parameters
@@ -121,6 +122,8 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     strict : stop at the first bad file instead of skipping it
     progress : log the steps at INFO level (else DEBUG)
     mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
+    model : the simulation model, ``"gorkov"`` or ``"fullwave"`` (:func:`validation.simulation.model_from_meta`);
+        both are calibrated the same way (pressure amplitude and height origin)
 
     Returns
     -------
@@ -133,11 +136,11 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     from cubedimer.executor import single_blas_thread
 
     with single_blas_thread():
-        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size)
+        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model)
 
 
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
-                      mesh_size: float | None) -> tuple[dict, DiagnosisInternals]:
+                      mesh_size: float | None, model_name: str) -> tuple[dict, DiagnosisInternals]:
     from cubedimer.dataset import load_dataset
     from cubedimer.meta import read_meta
 
@@ -147,7 +150,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     skip = logger.warning if progress else logger.debug
     dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
     meta = read_meta(data_dir)
-    model = model_from_meta(meta, mesh_size=mesh_size).interpolated()
+    model = model_from_meta(meta, mesh_size=mesh_size, model=model_name).interpolated()
     problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
@@ -268,6 +271,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     if drift is not None:
         calibration["drift"] = drift.to_dict()
     diagnosis = {
+        "model": model_name,
         "identified": identified,
         "calibration": calibration,
         "gap_before": gap_before,

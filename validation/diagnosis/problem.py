@@ -22,7 +22,7 @@ class DiagnosisProblem:
 
     Parameters
     ----------
-    model : acousim.GorkovDimer
+    model : acousim.GorkovDimer or acousim.fullwave.FullwaveDimer
         The simulation at nominal pressure (use ``model.interpolated()`` for speed).
     runs : sequence of RunAccelerations
         The runs at the frames the fits use.
@@ -75,9 +75,12 @@ class DiagnosisProblem:
         return store[key][1]
 
     def surrogate(self):
-        """The twin's surrogate (:func:`acousim.surrogate.build_surrogate`) of the model at nominal pressure, built once."""
+        """The force model of the equations of motion at nominal pressure, built once: the twin's surrogate
+        (:func:`acousim.surrogate.build_surrogate`) of a Gor'kov model, or the model's own table when it has one
+        (``as_force_model``, the full-wave model)."""
         if self._shared["surrogate"] is None:
             from acousim.surrogate import build_surrogate
 
-            self._shared["surrogate"] = build_surrogate(self.model)
+            own = getattr(self.model, "as_force_model", None)
+            self._shared["surrogate"] = own() if own is not None else build_surrogate(self.model)
         return self._shared["surrogate"]

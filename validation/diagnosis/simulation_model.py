@@ -86,14 +86,24 @@ class SimulationTerms:
         return self._cache[key]
 
     def _static_run(self, r: RunAccelerations, z0: float) -> tuple[NDArray, NDArray, NDArray]:
-        """(smoothed F_Z / M, smoothed Q_theta / I, raw U_ac) of one run at origin height z0."""
+        """(smoothed F_Z / M, smoothed Q_theta / I, raw U_ac) of one run at origin height z0.
+
+        For a model without a potential (``conservative = False``, the full-wave model) U_ac is the acoustic
+        energy along the run's path: the model's path potential at the first frame minus the work of the
+        acoustic forces since."""
         s = self.model.integrals_at_height(r.state[:, 2], z0 + r.state[:, 0], self.problem.orientation_sums(r))
         fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(r.state[:, 2])
+        potential = s.potential
+        if not getattr(self.model, "conservative", True):
+            # forces without a potential: the acoustic energy along the measured path is its value at the first
+            # frame minus the work done since, so that energy-balance differences are the work itself
+            power = s.force_z * r.state[:, 1] + s.q_theta * r.state[:, 3]
+            potential = potential[0] - np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t))])
         f = self.problem.pressure_factor(r.name, r.t)
         if f is not None:  # a drifting pressure scales the acoustic forces in time
             fz, qt = f * fz, f * qt
         # accelerations as the data see them (same smoothing); the potential is used raw
-        return r.smooth(fz), r.smooth(qt), s.potential
+        return r.smooth(fz), r.smooth(qt), potential
 
     def energy_terms(self, z0: float, effects: Sequence[str], z_eq: float | None = None) -> list[dict]:
         """Per run, per energy window: the data side of the energy balance and the effect work columns.

@@ -125,10 +125,12 @@ def phase_space_figures(prepared: Sequence, model, out: Path) -> list[tuple[Path
     return paths
 
 
-def restoring_overlay_figure(sweep, prepared: Sequence, delta: float, out: Path) -> tuple[Path, str]:
-    """The paper's Fig. 2c-d: simulated restoring force and torque with the data's measured accelerations.
+def restoring_overlay_figure(models: Sequence[tuple], prepared: Sequence, out: Path) -> tuple[Path, str]:
+    """The paper's Fig. 2c-d: the simulations' restoring force and torque with the data's measured accelerations.
 
-    ``delta`` [m]: the data's y is the simulation's y minus delta (calibrated origin).
+    ``models``: (sweep, delta [m], label) per calibrated simulation, the first one the main model; the data's y
+    is each simulation's y minus its delta (calibrated origin).  The axes are the data's: y from the data's
+    origin, and the acceleration range of the data (a model curve may leave the plot; the caption says so).
     """
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
@@ -136,22 +138,37 @@ def restoring_overlay_figure(sweep, prepared: Sequence, delta: float, out: Path)
     accel = np.concatenate([p.derivs.accel for p in prepared])
     pick = np.random.default_rng(0).choice(len(states), size=min(6000, len(states)), replace=False)
     st, ac = states[pick], accel[pick]
+    delta0 = models[0][1]
     small = np.abs(st[:, 2]) < 0.1
-    axes[0].plot((st[small, 0] + delta) * UM, ac[small, 0], ".", ms=1, color="0.6", label=r"data, $|\theta| < 0.1$")
-    i0 = int(np.argmin(np.abs(sweep.theta_grid)))
-    axes[0].plot(sweep.y_grid * UM, sweep["yddot"][i0], color="tab:blue", lw=2, label=r"Gor'kov model, $\theta = 0$")
-    axes[0].set_xlabel(r"$y$ [$\mu$m] (from the calibrated $Z_{eq}$)")
+    axes[0].plot(st[small, 0] * UM, ac[small, 0], ".", ms=1, color="0.6", label=r"data, $|\theta| < 0.1$")
+    ymid = np.abs(st[:, 0] + delta0) < 30e-6
+    axes[1].plot(st[ymid, 2], ac[ymid, 1], ".", ms=1, color="0.6", label=r"data, $|y| < 30\,\mu$m")
+    colors = ("tab:blue", "tab:red", "tab:green")
+    clipped = []
+    for (sweep, delta, label), color in zip(models, colors):
+        i0 = int(np.argmin(np.abs(sweep.theta_grid)))
+        axes[0].plot((sweep.y_grid - delta) * UM, sweep["yddot"][i0], color=color, lw=2, label=rf"{label}, $\theta = 0$")
+        j0 = int(np.argmin(np.abs(sweep.y_grid)))
+        axes[1].plot(sweep.theta_grid, sweep["thetaddot"][:, j0], color=color, lw=2, label=f"{label}, y = 0")
+        lo, hi = np.quantile(ac[ymid, 1], [0.001, 0.999]) if ymid.any() else (-1.0, 1.0)
+        if np.any(np.abs(sweep["thetaddot"][:, j0]) > 3 * max(abs(lo), abs(hi))):
+            clipped.append(label)
+    if ymid.any():
+        lo, hi = np.quantile(ac[ymid, 1], [0.001, 0.999])
+        pad = 0.5 * (hi - lo)
+        axes[1].set_ylim(lo - pad, hi + pad)
+    axes[0].set_xlabel(r"$y$ [$\mu$m] (data's origin)")
     axes[0].set_ylabel(r"$\ddot y$ [m/s$^2$]")
     axes[0].set_title("restoring force", fontsize=9)
     axes[0].legend(fontsize=7)
-    ymid = np.abs(st[:, 0] + delta) < 30e-6
-    axes[1].plot(st[ymid, 2], ac[ymid, 1], ".", ms=1, color="0.6", label=r"data, $|y| < 30\,\mu$m")
-    j0 = int(np.argmin(np.abs(sweep.y_grid)))
-    axes[1].plot(sweep.theta_grid, sweep["thetaddot"][:, j0], color="tab:blue", lw=2, label="Gor'kov model, y = 0")
     axes[1].set_xlabel(r"$\theta$")
     axes[1].set_ylabel(r"$\ddot\theta$ [1/s$^2$]")
     axes[1].set_title("restoring torque on the hinge", fontsize=9)
     axes[1].legend(fontsize=7)
-    return (_save(fig, out / "restoring_overlay.png"),
-            "The paper's Fig. 2c-d for these data: the Gor'kov model's restoring force and torque at the calibrated pressure "
-            "(blue) with the measured accelerations (grey dots, Savitzky-Golay estimates at the measured states).")
+    names = " and ".join(f"the {label} model" for _, _, label in models)
+    caption = (f"The paper's Fig. 2c-d for these data: the restoring force and torque of {names}, each at its calibrated "
+               "pressure and origin, with the measured accelerations (grey dots, Savitzky-Golay estimates at the measured "
+               "states); y is the data's own.")
+    if clipped:
+        caption += f" The torque axis shows the data's range: the {', '.join(clipped)} curve leaves it."
+    return _save(fig, out / "restoring_overlay.png"), caption

@@ -82,8 +82,36 @@ def lead_term_reading(lead, n_sigma: float) -> str:
             f"On the ensemble statistics they {verdict} ({n_sigma:g} sigma).")
 
 
+def _scattering_section(models) -> Section:
+    """Section 7: the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model side by side."""
+    from ..diagnosis.model_comparison import MODEL_LABELS
+
+    rows = {r.model: r for r in models.rows}
+    g0, gp = rows["gorkov"], rows["gorkov+pair_scattering"]
+    kappa = gp.params.get("pair_scattering", {}).get("kappa", float("nan"))
+    text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
+            f"(pressure and origin) on the same runs. The Gor'kov model leaves a gap of {g0.gap:.3g}; with the phenomenological "
+            f"pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
+    if "fullwave" in rows:
+        fw = rows["fullwave"]
+        text += (f" The full-wave model, whose hinge comes from the boundary-element solution with no fitted stiffness, "
+                 f"leaves {fw.gap:.3g} (y equation {fw.components[0]:.3g}, theta equation {fw.components[1]:.3g}, energy "
+                 f"{fw.components[2]:.3g}). docs/fullwave.md states how far its hinge numbers are converged and verified.")
+    else:
+        text += f" The full-wave model is not compared: {models.unavailable}."
+    table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
+                  "0 perfect, about 1 for no motion)",
+                  ["simulation", "pressure [Pa]", "origin offset [um]", "y equation", "theta equation", "energy", "gap",
+                   "long-time error", "fitted parameters"],
+                  [[MODEL_LABELS[r.model], r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
+                    r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
+                   for r in models.rows])
+    return Section("scattering", "7. Scattering added: fitted or from physics", text, [], [table], models.to_dict())
+
+
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
-                 progress: bool = True, max_evals: int | None = None, method: str = "discovery") -> Path:
+                 progress: bool = True, max_evals: int | None = None, method: str = "discovery",
+                 model: str = "gorkov") -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -95,6 +123,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     max_evals : evaluations of the long-time refinement (per run for ``"paper"``, of the polish for
         ``"discovery"``; default: the fitting default)
     method : the fit's model-discovery method (:data:`fitting.pipeline.METHODS`)
+    model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
+        stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
 
     Returns
     -------
@@ -109,7 +139,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from fitting.plots import plot_comparison
 
     from ..coefficients import compare_coefficients
-    from ..diagnosis import DiagnoseConfig, diagnose_dataset
+    from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose_dataset
     from ..simulation import model_from_meta
     from .diagnosis_section import diagnosis_figures, diagnosis_section
     from .figures import data_figures, phase_space_figures, restoring_overlay_figure
@@ -119,6 +149,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     def say(message: str) -> None:
         logger.log(level, "%s", message)
 
+    if model == "fullwave":  # refuse another experiment before the long fit, not after it
+        model_from_meta(read_meta(data_dir), model="fullwave")
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -144,20 +176,33 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales, [p.run.name for p in prepared])
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress)
-    cal = internals.final.calibration
-    say("4/5 sweeping the calibrated Gor'kov model and comparing coefficients")
+    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model)
     meta = read_meta(data_dir)
+    say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
+    models = compare_simulation_models(internals.problem, meta, base=internals.base)
+    # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
+    cals = {k: f.calibration for k, f in models.fits.items() if k in ("gorkov", "fullwave")}
+    cals[model] = internals.final.calibration
+    cal = cals["gorkov"]
+    say("4/5 sweeping the calibrated simulations and comparing coefficients")
     sim = model_from_meta(meta, pressure_amplitude_pa=cal.pressure_amplitude_pa)
     states = np.concatenate([p.derivs.state for p in prepared])
     delta = cal.origin_offset_m
     theta_max = float(min(0.9, np.quantile(np.abs(states[:, 2]), 0.98)))
     y_max = float(np.quantile(np.abs(states[:, 0] + delta), 0.98))
-    sweep_plot = static_sweep(sim, np.linspace(-0.9, 0.9, 61), np.linspace(-1.3 * y_max, 1.3 * y_max, 41))
-    sweep_fit = static_sweep(sim, np.linspace(-theta_max, theta_max, 41), np.linspace(-y_max, y_max, 41))
-    static = fit_static_coefficients(sweep_fit)
-    coef_cmp = compare_coefficients(model_json, static.coefficients, static.std_errors, origin_offset=delta,
-                                    static_box=static.box)
+
+    def sweep_and_compare(simulation, offset: float):
+        plot = static_sweep(simulation, np.linspace(-0.9, 0.9, 61), np.linspace(-1.3 * y_max, 1.3 * y_max, 41))
+        fit = fit_static_coefficients(static_sweep(simulation, np.linspace(-theta_max, theta_max, 41),
+                                                   np.linspace(-y_max, y_max, 41)))
+        return plot, compare_coefficients(model_json, fit.coefficients, fit.std_errors, origin_offset=offset,
+                                          static_box=fit.box)
+
+    sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
+    fw_sweep, fw_cmp = None, None
+    if "fullwave" in cals:
+        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave")
+        fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
     say("5/5 figures and the report")
     sections = []
     # 1 data
@@ -223,51 +268,92 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         {"equations": model_json["equations"], "wilcoxon_shape_p": None if cmp is None else cmp.shape_test.p_greater,
          "wilcoxon_poincare_p": None if cmp is None else cmp.poincare_test.p_greater}))
     # 4 the simulation
-    overlay = restoring_overlay_figure(sweep_plot, prepared, delta, figs_dir)
+    overlay_models = [(sweep_plot, delta, "Gor'kov")]
+    if fw_sweep is not None:
+        overlay_models.append((fw_sweep, cals["fullwave"].origin_offset_m, "full-wave"))
+    overlay = restoring_overlay_figure(overlay_models, prepared, figs_dir)
     render = render_dimer(sim, 0.3, 0.0, figs_dir / "dimer_gorkov.png")
+    fw_text = ""
+    if fw_sweep is not None:
+        fc = cals["fullwave"]
+        fw_text = (f" Beside it (red) the full-wave model, calibrated the same way ({fc.pressure_amplitude_pa:.0f} Pa, origin "
+                   f"{fc.origin_offset_m * 1e6:+.1f} um from the Gor'kov one's): the scattering between the cubes holds the hinge "
+                   "with no fitted stiffness.")
+    elif models.unavailable:
+        fw_text = f" The full-wave model is not shown: {models.unavailable}."
     sections.append(Section(
         "simulation", "4. The simulation",
         f"The Gor'kov model at the calibrated pressure {cal.pressure_amplitude_pa:.0f} Pa (nominal "
         f"{cal.nominal_pressure_pa:.0f} Pa) holds the dimer {abs(sim.equilibrium_height) * 1e6:.0f} um below the node. Its "
         "restoring force follows the measured vertical accelerations; where the measured hinge accelerations lie far "
-        "outside the model's torque curve, the hinge is held by something the model omits.",
+        "outside the model's torque curve, the hinge is held by something the model omits." + fw_text,
         [Figure(*overlay), Figure(render, "The posed dimer mesh (theta = 0.3) coloured by the Gor'kov potential density u.")],
-        [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height}))
+        [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height,
+             "fullwave_calibrated_pressure_pa": cals["fullwave"].pressure_amplitude_pa if "fullwave" in cals else None}))
     # 5 model vs simulation
     lead = coef_cmp.rows[0]
-    # what the identified effects add to the static theta*y^2 (the diagnosis is section 6)
-    added = effect_static_coefficients(diag, sim.wave.wavenumber, cal.equilibrium_height_m, theta_max, y_max)
+    main_cmp = coef_cmp if model == "gorkov" else fw_cmp
+    main_lead, main_cal = main_cmp.rows[0], cals[model]
+    # what the identified effects add to the static theta*y^2 of the diagnosis's model (the diagnosis is section 6)
+    added = effect_static_coefficients(diag, sim.wave.wavenumber, main_cal.equilibrium_height_m, theta_max, y_max)
     effects_reading = ""
-    fitted_lead = lead.integral if lead.verdict_from == "integral form" else lead.fitted_mean
-    fitted_se = lead.integral_std_error if lead.verdict_from == "integral form" else lead.fitted_std
+    fitted_lead = main_lead.integral if main_lead.verdict_from == "integral form" else main_lead.fitted_mean
+    fitted_se = main_lead.integral_std_error if main_lead.verdict_from == "integral form" else main_lead.fitted_std
     if added.get("y^2*theta") and np.isfinite(fitted_lead):
-        with_effects = lead.simulated + added["y^2*theta"]
-        n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, lead.simulated_std)
+        with_effects = main_lead.simulated + added["y^2*theta"]
+        n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
         effects_reading = (f" The effects identified in section 6 ({', '.join(diag['identified'])}) add {added['y^2*theta']:.3g} to the "
-                           f"static theta*y^2 (least squares over the same box); with them the simulation predicts "
+                           f"static theta*y^2 (least squares over the same box); with them the "
+                           f"{'Gor' + chr(39) + 'kov' if model == 'gorkov' else 'full-wave'} simulation predicts "
                            f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
+    fw_reading = ""
+    fw_rows = {}
+    if fw_cmp is not None:
+        fl = fw_cmp.rows[0]
+        fw_rows = {(r.equation, r.term): r for r in fw_cmp.rows}
+        fw_reading = (f" The full-wave model, with no fitted stiffness, gives {fl.simulated:.3g} +- {fl.simulated_std:.2g} for "
+                      f"theta*y^2 (the paper's finite-element check), against the Gor'kov {lead.simulated:.3g}; its column "
+                      "below is its own calibrated sweep over the same box.")
+    header = ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
+              "simulated", "simulated std", "verdict from", "ratio", "signs agree", f"within {coef_cmp.n_sigma:g} sigma"]
+    if fw_cmp is not None:
+        header += ["full wave", "full-wave std"]
+
+    def table_row(r) -> list:
+        row = [r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
+               r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
+               r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.within_uncertainty]
+        if fw_cmp is not None:
+            f = fw_rows.get((r.equation, r.term))
+            row += [f.simulated if f else None, f.simulated_std if f else None]
+        return row
+
+    shown = [r for r in coef_cmp.rows if r.kind != "static" or r.in_minimal_model or abs(r.simulated) > 0
+             or abs(getattr(fw_rows.get((r.equation, r.term)), "simulated", 0.0) or 0.0) > 0]
+    numbers5 = coef_cmp.to_dict()
+    if fw_cmp is not None:
+        numbers5["fullwave"] = fw_cmp.to_dict()
     sections.append(Section(
         "model-vs-simulation", "5. Model vs simulation",
-        lead_term_reading(lead, coef_cmp.n_sigma) + effects_reading + " Static coefficients are "
+        lead_term_reading(lead, coef_cmp.n_sigma) + fw_reading + effects_reading + " Static coefficients are "
         f"least squares on the calibrated sweep over |theta| <= {theta_max:.2f}, |y| <= {y_max * 1e6:.0f} um and re-expanded "
         f"about the data's origin ({coef_cmp.origin}). Velocity terms have no static prediction.",
         [],
-        [Table("Coefficients (SI), the theta*y^2 term first; the verdict columns use the estimate named in 'verdict from'",
-               ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
-                "simulated", "simulated std", "verdict from", "ratio", "signs agree", f"within {coef_cmp.n_sigma:g} sigma"],
-               [[r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
-                 r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
-                 r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.within_uncertainty]
-                for r in coef_cmp.rows if r.kind != "static" or r.in_minimal_model or abs(r.simulated) > 0])],
-        coef_cmp.to_dict()))
+        [Table("Coefficients (SI), the theta*y^2 term first; 'simulated' is the Gor'kov model; the verdict columns use the "
+               "estimate named in 'verdict from'", header, [table_row(r) for r in shown])],
+        numbers5))
+    # 7 (placed after the diagnosis) how far the gap shrinks once scattering is added
+    sections_after = [_scattering_section(models)]
     # 6 the gap
     dfigs = diagnosis_figures(diag, internals, figs_dir)
     sec = diagnosis_section(diag, dfigs)
-    sections.append(Section("diagnosis", "6. The sim-to-real gap", sec.reading, sec.figures, sec.tables, sec.numbers))
+    sections.append(Section("diagnosis", "6. The sim-to-real gap" + ("" if model == "gorkov" else " (full-wave model)"),
+                            sec.reading, sec.figures, sec.tables, sec.numbers))
+    sections += sections_after
     from cubedimer.atomic import write_json
 
     write_json(out / "diagnosis.json", diag)
-    write_json(out / "comparison.json", coef_cmp.to_dict())
+    write_json(out / "comparison.json", numbers5)
     path = write_report(sections, out, "Cube dimer: model vs simulation",
                         f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
     say(f"written {path}")

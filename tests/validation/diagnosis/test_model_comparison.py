@@ -1,0 +1,56 @@
+"""The full-wave model as the diagnosis's simulation, and the three calibrated simulations side by side."""
+import json
+
+import numpy as np
+import pytest
+
+from acousim.cli import main as acousim_main
+from cubedimer.meta import read_meta
+from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, compare_simulation_models, diagnose_dataset
+
+
+@pytest.fixture(scope="module")
+def fullwave_twin(tmp_path_factory):
+    """8 field-drop runs of 2 s of the twin on the full-wave table, the true pressure 0.4 % above nominal."""
+    out = tmp_path_factory.mktemp("fw") / "data"
+    assert acousim_main(["simulate", "--model", "fullwave", "--runs", "8", "--duration", "2", "--seed", "3",
+                         "--pressure-error", "0.05", "--out", str(out), "--no-progress"]) == 0
+    return out, json.loads((out / "truth.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def fullwave_diagnosis(fullwave_twin):
+    data, _ = fullwave_twin
+    return diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False), progress=False, model="fullwave")
+
+
+def test_fullwave_model_calibrates_its_own_twin(fullwave_twin, fullwave_diagnosis):
+    """On data of the full-wave twin the full-wave simulation recovers the true pressure and the true origin.
+
+    Tracking noise 1 um and 8 runs of 2 s: the vertical equation pins the pressure to ~0.1 % and the origin to a
+    fraction of a micrometre (measured 0.02 % and 0.2 um); the tolerances are 5 times that."""
+    _, truth = fullwave_twin
+    diag, internals = fullwave_diagnosis
+    assert diag["model"] == "fullwave"
+    cal = diag["calibration"]
+    np.testing.assert_allclose(cal["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=1e-3)
+    z_eq_true = truth["equilibrium_height_m"]
+    # the data's y is measured from the true equilibrium, so the calibrated origin is the true Z_eq
+    assert abs(cal["y_origin_height_m"] - z_eq_true) < 1e-6
+
+
+def test_side_by_side_gaps_on_fullwave_data(fullwave_twin, fullwave_diagnosis):
+    """Side by side, the full-wave model explains its own twin's vertical motion within the noise, and the Gor'kov
+    model, whose trap is 7 % softer (f_y 21.8 vs 23.4 Hz at the same pressure), needs another pressure for it."""
+    data, truth = fullwave_twin
+    _, internals = fullwave_diagnosis
+    cmp = compare_simulation_models(internals.problem, read_meta(data), base=internals.base, long_time_duration=None)
+    rows = {r.model: r for r in cmp.rows}
+    assert list(rows) == ["gorkov", "gorkov+pair_scattering", "fullwave"] and cmp.unavailable is None
+    # y equation explained within the diagnosis's own threshold (measured 0.002: the 134 Hz hinge motion enters
+    # yddot through F_Z(theta), and the Savitzky-Golay accelerations resolve it only in part)
+    assert rows["fullwave"].components[0] < EXPLAINED_GAP
+    np.testing.assert_allclose(rows["fullwave"].pressure_amplitude_pa, truth["pressure_amplitude_pa"], rtol=1e-3)
+    # the Gor'kov trap is softer: its calibration raises the pressure by several percent to match f_y
+    assert rows["gorkov"].pressure_amplitude_pa > 1.03 * truth["pressure_amplitude_pa"]
+    assert rows["gorkov+pair_scattering"].params["pair_scattering"]["kappa"] > 0
