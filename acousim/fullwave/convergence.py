@@ -28,7 +28,7 @@ from cubedimer.cli import OneLineParser, UserInputError, prepare_output_file, ru
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
 from .solver import enclosing_sphere_force, solve_scattering
-from .surrogate import COARSE_BUILD, build_fullwave_surrogate, dimer_generalized_coefficients
+from .surrogate import COARSE_BUILD, build_fullwave_surrogate, dimer_coefficients
 
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "flux_balance", "surrogate_errors",
            "CONVERGED_WITHIN", "main"]
@@ -39,7 +39,8 @@ CONVERGED_WITHIN = 0.02
 log = logging.getLogger(__name__)
 
 def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_amplitude_pa: float = 3000.0,
-                     particle_density: float = 2160.0, gravity: float = GRAVITY, delta: float = 0.02) -> dict:
+                     particle_density: float = 2160.0, gravity: float = GRAVITY, delta: float = 0.02,
+                     forces: str = "flux") -> dict:
     """Z_eq, F_Z amplitude, hinge stiffness and thetaddot Taylor coefficients of one mesh (two solves).
 
     Returns
@@ -47,13 +48,14 @@ def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_am
     dict
         ``dofs``, ``wall_s``, ``z_eq_m``, ``fz_amplitude_n`` (|C_F(0)|), ``f_y_hz``, ``stiffness_nm``
         (dQ_theta/dtheta at the equilibrium height), ``f_theta_hz`` (from the stiffness alone) and
-        ``thetaddot`` (dict of Taylor coefficients, SI).
+        ``thetaddot`` (dict of Taylor coefficients, SI); ``forces`` is how forces and torques were integrated
+        (:data:`acousim.fullwave.surrogate.FORCE_METHODS`).
     """
     t0 = time.perf_counter()
     two_k = 2 * medium.wavenumber
-    g0 = dimer_generalized_coefficients(solve_scattering(dimer_bodies(0.0, spec), medium).height_structure(pressure_amplitude_pa))
+    g0 = dimer_coefficients(solve_scattering(dimer_bodies(0.0, spec), medium), 0.0, spec, pressure_amplitude_pa, forces)
     sol = solve_scattering(dimer_bodies(delta, spec), medium)
-    gd = dimer_generalized_coefficients(sol.height_structure(pressure_amplitude_pa))
+    gd = dimer_coefficients(sol, delta, spec, pressure_amplitude_pa, forces)
     m = particle_density * rounded_cube_volume(spec.side, spec.edge_radius)
     mass = 2 * m
     c_f = g0["fz"][2]
@@ -80,7 +82,7 @@ def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_am
         "f_y_hz": float(np.sqrt(k_y / mass) / (2 * np.pi)) if k_y > 0 else float("nan"),
         "stiffness_nm": float(stiff),
         "f_theta_hz": float(np.sqrt(-stiff / i0) / (2 * np.pi)) if stiff < 0 else float("nan"),
-        "thetaddot": {k: float(v) for k, v in thetaddot.items()}, "spec": spec.settings(),
+        "thetaddot": {k: float(v) for k, v in thetaddot.items()}, "spec": spec.settings(), "forces": forces,
     }
 
 
@@ -126,8 +128,8 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
     qy_box, qt_box = (np.max(np.abs(q)) for q in sur.generalized_forces(tt, yy))
     err_y = err_t = 0.0
     for theta in thetas:
-        g = dimer_generalized_coefficients(
-            solve_scattering(dimer_bodies(theta, build["spec"])).height_structure(pressure_amplitude_pa))
+        g = dimer_coefficients(solve_scattering(dimer_bodies(theta, build["spec"])), theta, build["spec"],
+                               pressure_amplitude_pa, build.get("forces", "flux"))
         ph = sur.two_k * (y + sur.z_eq)
         direct = {c: g[c][0] + g[c][1] * np.cos(ph) + g[c][2] * np.sin(ph) for c in ("fz", "qt")}
         q_y, q_t = sur.generalized_forces(theta, y)
@@ -205,11 +207,11 @@ def run_study(args: argparse.Namespace) -> int:
     if args.study in ("flux", "surrogate"):
         return _run_check(args, levels)
     if args.study == "mesh":
-        rows = [("q", q, mesh_family(q)) for q in levels]
+        rows = [("q", q, mesh_family(q, gap=args.gap * 500e-6)) for q in levels]
     elif args.study == "gap":
         rows = [("gap_over_side", g, mesh_family(levels[0], gap=g * 500e-6)) for g in _floats(args.gaps, "--gaps")]
     else:
-        rows = [("edge_radius_over_side", r, mesh_family(levels[0], edge_radius=r * 500e-6))
+        rows = [("edge_radius_over_side", r, mesh_family(levels[0], gap=args.gap * 500e-6, edge_radius=r * 500e-6))
                 for r in _floats(args.radii, "--radii")]
     stiffness = []
     for key, val, spec in rows:
@@ -240,6 +242,7 @@ def main(argv: list[str] | None = None) -> int:
                    "coarse surrogate against direct solves")
     p.add_argument("--levels", default="1,0.7,0.5,0.35", help="mesh levels q (mesh study) or the one level used")
     p.add_argument("--gaps", default="0.04,0.02,0.01,0.005", help="gaps as fractions of the side (gap, flux study)")
+    p.add_argument("--gap", type=float, default=0.01, help="the gap as a fraction of the side (mesh, edge study)")
     p.add_argument("--radii", default="0,0.01,0.02,0.04", help="edge radii as fractions of the side (edge study)")
     p.add_argument("--out", required=True, help="JSON lines output (appended per row)")
     p.set_defaults(func=run_study)

@@ -53,6 +53,10 @@ __all__ = [
     "default_fullwave_surrogate",
     "coarse_fullwave_surrogate",
     "dimer_generalized_coefficients",
+    "dimer_flux_coefficients",
+    "dimer_coefficients",
+    "hinge_arm",
+    "FORCE_METHODS",
     "DEFAULT_TABLE",
     "DEFAULT_BUILD",
     "COARSE_BUILD",
@@ -70,8 +74,17 @@ COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 _COMPONENTS = ("fz", "qt")
 
 
-def dimer_generalized_coefficients(hs: HeightStructure) -> dict[str, NDArray[np.float64]]:
+def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm: float = 0.0) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from the per-cube height structure of ``[A, B]``.
+
+    Q_theta is the virtual work per unit theta of every force and torque on the cubes: each cube turns by
+    phi = pi theta / 4 about its centre (cube B about +Y, cube A about -Y), and the centres, at
+    X = +-arm cos(phi) and Z = Z_com, move horizontally::
+
+        Q_theta = (pi/4) (tau_B,Y - tau_A,Y) - (pi/4) arm sin(phi) (F_B,X - F_A,X)
+
+    The second term is the work of the cubes' horizontal interaction force (zero in the Gor'kov model, whose
+    plane standing wave pushes only along Z); ``theta`` and ``arm`` [m] (the hinge arm d + g/2) give it.
 
     Returns
     -------
@@ -79,10 +92,61 @@ def dimer_generalized_coefficients(hs: HeightStructure) -> dict[str, NDArray[np.
         ``{"fz": array([A, B, C]), "qt": array([A, B, C])}``.
     """
     fz = np.array([hs.force_a[:, 2].sum(), hs.force_b[:, 2].sum(), hs.force_c[:, 2].sum()])
+    lever = arm * np.sin(np.pi * float(theta) / 4)
     qt = (np.pi / 4) * np.array([
-        hs.torque_a[1, 1] - hs.torque_a[0, 1], hs.torque_b[1, 1] - hs.torque_b[0, 1], hs.torque_c[1, 1] - hs.torque_c[0, 1],
+        (t[1, 1] - t[0, 1]) - lever * (f[1, 0] - f[0, 0])
+        for t, f in ((hs.torque_a, hs.force_a), (hs.torque_b, hs.force_b), (hs.torque_c, hs.force_c))
     ])
     return {"fz": fz, "qt": qt}
+
+
+def hinge_arm(spec: DimerMeshSpec) -> float:
+    """The hinge arm d + g/2 [m]: distance from the hinge line to each cube's centre."""
+    return spec.side / np.sqrt(2.0) + 0.5 * spec.gap
+
+
+def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
+                            pressure_amplitude_pa: float = 1.0, n_polar: int = 20) -> dict[str, NDArray[np.float64]]:
+    """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from momentum fluxes (:mod:`acousim.fullwave.flux`).
+
+    Cube B's force and torque are the flux through the half sphere X > 0 closed by the mirror disc X = 0 (through
+    the hinge gap); cube A's are their mirror images.  Q_theta as in :func:`dimer_generalized_coefficients`.
+    The sphere's radius is 1.6 times the farthest vertex; the disc's first panels are 0.3 times the distance
+    from the hinge edge to the disc.
+    """
+    from .flux import ExteriorField, flux_height_structure, mirror_half_surface
+
+    med = solution.medium
+    arm = hinge_arm(spec)
+    cube_b = solution.bodies[1]
+    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
+    # cube B's hinge edge (body frame u = -s/2, w = +s/2) in the dimer frame
+    phi = np.pi * float(theta) / 4
+    psi = np.pi / 4 - phi
+    u, w = -0.5 * spec.side, 0.5 * spec.side
+    x_h = arm * np.cos(phi) + np.cos(psi) * u - np.sin(psi) * w
+    z_h = np.sin(psi) * u + np.cos(psi) * w
+    surface = mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar)
+    force, torque = flux_height_structure(ExteriorField(solution), surface, cube_b.centre, med.density_kg_m3,
+                                          med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, pressure_amplitude_pa)
+    # mirror images: F_A = (-F_B,X, F_B,Y, F_B,Z), tau_A,Y = -tau_B,Y
+    qt = (np.pi / 4) * (2.0 * torque[:, 1] - arm * np.sin(phi) * 2.0 * force[:, 0])
+    return {"fz": 2.0 * force[:, 2], "qt": qt, "fx_b": force[:, 0]}
+
+
+#: How a table's forces and torques are integrated: the momentum flux through surfaces away from the cubes
+#: (default: accurate at sharp edges), or the surface tractions on the cubes (see docs/fullwave.md).
+FORCE_METHODS = ("flux", "surface")
+
+
+def dimer_coefficients(solution, theta: float, spec: DimerMeshSpec, pressure_amplitude_pa: float,
+                       forces: str = "flux") -> dict[str, NDArray[np.float64]]:
+    """(A, B, C) of F_Z and Q_theta of one solved dimer pose, by ``forces`` (:data:`FORCE_METHODS`)."""
+    if forces == "flux":
+        return dimer_flux_coefficients(solution, theta, spec, pressure_amplitude_pa)
+    if forces == "surface":
+        return dimer_generalized_coefficients(solution.height_structure(pressure_amplitude_pa), theta, hinge_arm(spec))
+    raise ValueError(f"unknown force method {forces!r}; choose one of {', '.join(FORCE_METHODS)}")
 
 
 def _tup(a: ArrayLike) -> tuple[float, ...]:
@@ -317,12 +381,13 @@ def chebyshev_half_nodes(n_half: int) -> NDArray[np.float64]:
     return np.sort(t[t > 0])
 
 
-def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: int, theta_max: float) -> dict:
+def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: int, theta_max: float,
+                   forces: str = "flux") -> dict:
     """The settings a table is keyed by (pressure excluded: tables are rescaled exactly)."""
     return {
         **spec.settings(), "frequency_hz": medium.frequency_hz, "sound_speed_m_s": medium.sound_speed_m_s,
         "air_density_kg_m3": medium.density_kg_m3, "particle_density_kg_m3": float(density),
-        "n_half": int(n_half), "theta_max": float(theta_max),
+        "n_half": int(n_half), "theta_max": float(theta_max), "forces": str(forces),
     }
 
 
@@ -335,6 +400,7 @@ def build_fullwave_surrogate(
     n_half: int = 5,
     theta_max: float = 0.9,
     progress: Callable[[int, int, float], None] | None = None,
+    forces: str = "flux",
 ) -> FullwaveSurrogate:
     """Build the surrogate from ``n_half`` boundary-element solves (theta > 0), mirrored by symmetry.
 
@@ -356,6 +422,8 @@ def build_fullwave_surrogate(
         Interpolation half-width in theta, in (0, 1).
     progress : callable, optional
         Called as ``progress(i, n_half, seconds)`` after each solve.
+    forces : {"flux", "surface"}
+        How forces and torques are integrated (:data:`FORCE_METHODS`).
 
     Returns
     -------
@@ -375,7 +443,7 @@ def build_fullwave_surrogate(
         bodies = dimer_bodies(t * theta_max, spec)
         sol = solve_scattering(bodies, medium)
         dofs = sol.n_dofs
-        gen = dimer_generalized_coefficients(sol.height_structure(pressure_amplitude_pa))
+        gen = dimer_coefficients(sol, t * theta_max, spec, pressure_amplitude_pa, forces)
         for c in _COMPONENTS:
             vals[c][i] = gen[c]
         timings.append(time.perf_counter() - t0)
@@ -398,11 +466,11 @@ def build_fullwave_surrogate(
     s = spec.side
     vol = rounded_cube_volume(s, spec.edge_radius)
     m = particle_density * vol
-    arm = s / np.sqrt(2.0) + 0.5 * spec.gap
+    arm = hinge_arm(spec)
     # I = (pi/4)^2 [2 (m s^2/6) + 2 m arm^2 sin^2 phi] (sharp-cube moment of inertia about the centre)
     i_const = (np.pi / 4) ** 2 * 2 * m * s**2 / 6
     i_sin2 = (np.pi / 4) ** 2 * 2 * m * arm**2
-    settings = build_settings(spec, medium, particle_density, n_half, theta_max)
+    settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces)
     settings.update(pressure_amplitude_pa=float(pressure_amplitude_pa), gravity_m_s2=float(gravity), model="fullwave")
     sur = FullwaveSurrogate(
         coefficients=coefs, theta_max=float(theta_max), two_k=2 * medium.wavenumber, wavenumber=medium.wavenumber,
@@ -439,6 +507,7 @@ def cached_fullwave_surrogate(
     n_half: int = 5,
     theta_max: float = 0.9,
     cache_dir: str | os.PathLike | None = None,
+    forces: str = "flux",
 ) -> FullwaveSurrogate:
     """The surrogate for these settings: the shipped default table, a cached table, or a new build (saved).
 
@@ -448,7 +517,7 @@ def cached_fullwave_surrogate(
     Tables are keyed by geometry, mesh, medium, density and build settings; the pressure amplitude is
     applied afterwards by the exact p0^2 scaling.
     """
-    key_settings = build_settings(spec, medium, particle_density, n_half, theta_max)
+    key_settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces)
     candidates = [DEFAULT_TABLE, Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"]
     for path in candidates:
         if path.exists():
@@ -456,7 +525,8 @@ def cached_fullwave_surrogate(
             if build_settings_of(sur) == key_settings and sur.gravity == gravity:
                 log.debug("full-wave surrogate from %s", path)
                 return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
-    sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half, theta_max)
+    sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half, theta_max,
+                                   forces=forces)
     try:
         sur.save(candidates[1])
     except OSError as exc:  # read-only install: keep the result in memory only
@@ -498,6 +568,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--gap", type=float, default=None, help="hinge gap [m] (default 0.01 side)")
     p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
     p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude [Pa]")
+    p.add_argument("--forces", choices=FORCE_METHODS, default="flux",
+                   help="force integration: momentum flux away from the cubes, or surface tractions (docs/fullwave.md)")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for name in ("bempp", "numba"):
@@ -508,7 +580,7 @@ def main(argv: list[str] | None = None) -> int:
         spec = mesh_family(args.level if args.level is not None else 0.35, side=args.side, gap=args.gap,
                            edge_radius=args.edge_radius)
     sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
-                                   pressure_amplitude_pa=args.pressure)
+                                   pressure_amplitude_pa=args.pressure, forces=args.forces)
     sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
     sur.save(args.out)
     f_y, f_t = sur.linear_frequencies()
