@@ -13,6 +13,8 @@ from acousim.fullwave.flux import (ExteriorField, enclosing_sphere_surface, flux
 from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
 from acousim.medium import Medium  # noqa: E402
 
+pytestmark = pytest.mark.slow  # one solve of 1,284 DOFs and two flux evaluations: about 2 minutes
+
 MEDIUM = Medium()
 P0 = 3000.0
 RADIUS = 150e-6  # sphere radius [m]: ka = 0.13
