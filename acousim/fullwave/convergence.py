@@ -27,7 +27,8 @@ from cubedimer.cli import OneLineParser, UserInputError, prepare_output_file, ru
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
-from .solver import enclosing_sphere_force, solve_scattering
+from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
+from .solver import solve_scattering
 from .surrogate import COARSE_BUILD, build_fullwave_surrogate, dimer_coefficients
 
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "flux_balance", "surrogate_errors",
@@ -88,26 +89,31 @@ def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_am
 
 def flux_balance(spec: DimerMeshSpec, theta: float = 0.3, heights=(-0.4e-3, 0.9e-3), radius: float = 1.2e-3,
                  pressure_amplitude_pa: float = 3000.0, n_polar: int = 20) -> list[dict]:
-    """Total force on the dimer from the per-cube surface integrals against the momentum flux through an
-    enclosing sphere of ``radius`` [m] (exterior field from bempp's potential operators), at each height [m].
+    """Total force on the dimer from the per-cube surface tractions against the momentum flux through an
+    enclosing sphere of ``radius`` [m] (:mod:`acousim.fullwave.flux`), at each height [m].
 
     The two must agree (momentum conservation in the inviscid fluid); docs/fullwave.md states how far
-    they do not on the cube meshes.
+    the surface tractions do not on sharp cube edges.
 
     Returns
     -------
     list of dict
-        Per height: ``z_m``, ``surface_n`` and ``flux_n`` (total force vectors [N]) and ``ratio_z``
-        (flux / surface of the vertical component).
+        Per height: ``z_m``, ``surface_n`` and ``flux_n`` (total force vectors [N]; the flux's Y component is
+        not evaluated, the field being mirror symmetric in Y) and ``ratio_z`` (flux / surface of the vertical
+        component).
     """
     sol = solve_scattering(dimer_bodies(theta, spec))
     hs = sol.height_structure(pressure_amplitude_pa)
+    med = sol.medium
+    force, _ = flux_height_structure(ExteriorField(sol), enclosing_sphere_surface(radius, n_polar), np.zeros(3),
+                                     med.density_kg_m3, med.sound_speed_m_s, 2 * np.pi * med.frequency_hz,
+                                     pressure_amplitude_pa)
     rows = []
     for z in heights:
         surface = hs.force(z).sum(axis=0)
-        flux = enclosing_sphere_force(sol, z, radius=radius, pressure_amplitude_pa=pressure_amplitude_pa,
-                                      n_polar=n_polar)
-        rows.append({"z_m": float(z), "surface_n": surface.tolist(), "flux_n": np.asarray(flux).tolist(),
+        flux = force[0] + force[1] * np.cos(hs.two_k * z) + force[2] * np.sin(hs.two_k * z)
+        flux[1] = np.nan
+        rows.append({"z_m": float(z), "surface_n": surface.tolist(), "flux_n": flux.tolist(),
                      "ratio_z": float(flux[2] / surface[2])})
     return rows
 

@@ -39,6 +39,8 @@ __all__ = [
     "graded_nodes",
     "cube_body_mesh",
     "dimer_bodies",
+    "hinge_edge_b",
+    "hinge_arm",
     "rounded_cube_volume",
     "split_bodies",
     "check_closed_oriented",
@@ -270,11 +272,22 @@ def dimer_bodies(theta: float, spec: DimerMeshSpec = DEFAULT_SPEC) -> list[Body]
     """
     v, f = _body_mesh_cached(spec)
     phi = np.pi * float(theta) / 4
-    arm = spec.side / np.sqrt(2.0) + 0.5 * spec.gap
-    centre_b = np.array([arm * np.cos(phi), 0.0, 0.0])
+    centre_b = np.array([hinge_arm(spec) * np.cos(phi), 0.0, 0.0])
     vb = v @ _rotation_b(phi).T + centre_b
     va = vb * np.array([-1.0, 1.0, 1.0])
     return [Body(va, f[:, ::-1].copy(), centre_b * np.array([-1.0, 1.0, 1.0])), Body(vb, f.copy(), centre_b)]
+
+
+def hinge_arm(spec: DimerMeshSpec) -> float:
+    """The hinge arm d + g/2 [m]: distance from the hinge line to each cube's centre."""
+    return spec.side / np.sqrt(2.0) + 0.5 * spec.gap
+
+
+def hinge_edge_b(theta: float, spec: DimerMeshSpec = DEFAULT_SPEC) -> NDArray[np.float64]:
+    """Midpoint (3,) [m] of cube B's hinge edge at bend ``theta``, in the coordinates of :func:`dimer_bodies`."""
+    phi = np.pi * float(theta) / 4
+    centre_b = np.array([hinge_arm(spec) * np.cos(phi), 0.0, 0.0])
+    return _rotation_b(phi) @ np.array([-0.5 * spec.side, 0.0, 0.5 * spec.side]) + centre_b
 
 
 _MESH_CACHE: dict = {}

@@ -52,7 +52,6 @@ __all__ = [
     "HeightStructure",
     "ScatteringSolution",
     "solve_scattering",
-    "enclosing_sphere_force",
     "surface_force_density",
     "triangle_rule",
 ]
@@ -216,19 +215,6 @@ class ScatteringSolution:
         p = self.surface_pressure(z_ref, pressure_amplitude_pa)
         return self._bilinear(p, p)
 
-    def exterior_pressure(self, points: ArrayLike, z_ref: float, pressure_amplitude_pa: float = 1.0) -> NDArray[np.complex128]:
-        """Total pressure [Pa] at exterior points (m, 3) [m, local coordinates]: ``p = p_in + D p`` with the
-        double-layer potential of the surface pressure (sound-hard representation formula)."""
-        bempp = import_bempp()
-        pts = np.asarray(points, float)
-        k = self.medium.wavenumber
-        surf = self.surface_pressure(z_ref, pressure_amplitude_pa)
-        pot = bempp.operators.potential.helmholtz.double_layer(self.space, pts.T.copy(), k,
-                                                               assembler="dense", device_interface="numba")
-        scat = pot.evaluate(bempp.GridFunction(self.space, coefficients=surf)).ravel()
-        inc = pressure_amplitude_pa * np.sin(k * (z_ref + pts[:, 2]))
-        return inc + scat
-
     def _bilinear(self, p: NDArray, q: NDArray) -> tuple[NDArray, NDArray]:
         dens, pts, w_area, normals = surface_force_density(self.vertices, self.faces, p, q, self.medium)
         nb = len(self.bodies)
@@ -243,38 +229,6 @@ class ScatteringSolution:
             lever = pts[sel] - body.centre
             torques[b] = np.einsum("mq,mqk->k", wq, np.cross(lever, trac[sel]))
         return forces, torques
-
-
-def enclosing_sphere_force(
-    solution: ScatteringSolution, z_ref: float, radius: float, pressure_amplitude_pa: float = 1.0,
-    n_polar: int = 24, step: float = 1e-3,
-) -> NDArray[np.float64]:
-    """Total radiation force [N] from the momentum flux through a sphere of ``radius`` [m] about the local origin.
-
-    ``F = - int [ (|p|^2/(4 rho0 c0^2) - rho0 |v|^2/4) n + (rho0/2) Re[(v.n) v*] ] dS`` with the exterior field
-    from the representation formula and ``v = grad p / (i w rho0)`` by central differences (step ``step * radius``).
-    Gauss-Legendre in cos(polar angle) times the trapezoidal rule in azimuth (2 n_polar points).
-    """
-    med = solution.medium
-    rho0, c0, omega = med.density_kg_m3, med.sound_speed_m_s, 2 * np.pi * med.frequency_hz
-    x, wx = np.polynomial.legendre.leggauss(n_polar)
-    az = 2 * np.pi * np.arange(2 * n_polar) / (2 * n_polar)
-    ct, ph = np.meshgrid(x, az, indexing="ij")
-    st = np.sqrt(1 - ct**2)
-    n = np.stack([st * np.cos(ph), st * np.sin(ph), ct], -1).reshape(-1, 3)
-    w = (wx[:, None] * np.full(az.size, 2 * np.pi / az.size)[None, :]).ravel() * radius**2
-    pts = radius * n
-    h = step * radius
-    offsets = np.concatenate([np.zeros((1, 3)), h * np.eye(3), -h * np.eye(3)])
-    allp = (pts[None, :, :] + offsets[:, None, :]).reshape(-1, 3)
-    vals = solution.exterior_pressure(allp, z_ref, pressure_amplitude_pa).reshape(7, -1)
-    p = vals[0]
-    grad = np.stack([(vals[1 + i] - vals[4 + i]) / (2 * h) for i in range(3)], -1)
-    v = grad / (1j * omega * rho0)
-    lag = np.abs(p) ** 2 / (4 * rho0 * c0**2) - rho0 * np.sum(np.abs(v) ** 2, axis=1) / 4
-    vn = np.sum(v * n, axis=1)
-    flux = lag[:, None] * n + 0.5 * rho0 * np.real(vn[:, None] * np.conj(v))
-    return -np.einsum("m,mk->k", w, flux)
 
 
 def surface_force_density(

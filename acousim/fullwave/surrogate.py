@@ -43,7 +43,8 @@ from cubedimer.atomic import write_json
 
 from ..force_model import ForceCoefficients, SinusoidalInertia
 from ..medium import GRAVITY, Medium
-from .geometry import COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, rounded_cube_volume
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm, hinge_edge_b,
+                       rounded_cube_volume)
 from .solver import HeightStructure, solve_scattering
 
 __all__ = [
@@ -100,11 +101,6 @@ def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm:
     return {"fz": fz, "qt": qt}
 
 
-def hinge_arm(spec: DimerMeshSpec) -> float:
-    """The hinge arm d + g/2 [m]: distance from the hinge line to each cube's centre."""
-    return spec.side / np.sqrt(2.0) + 0.5 * spec.gap
-
-
 def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
                             pressure_amplitude_pa: float = 1.0, n_polar: int = 20) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from momentum fluxes (:mod:`acousim.fullwave.flux`).
@@ -120,12 +116,9 @@ def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
     arm = hinge_arm(spec)
     cube_b = solution.bodies[1]
     radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
-    # cube B's hinge edge (body frame u = -s/2, w = +s/2) in the dimer frame
+    # cube B's hinge edge (body frame u = -s/2, w = +s/2) posed as dimer_bodies poses the cube
     phi = np.pi * float(theta) / 4
-    psi = np.pi / 4 - phi
-    u, w = -0.5 * spec.side, 0.5 * spec.side
-    x_h = arm * np.cos(phi) + np.cos(psi) * u - np.sin(psi) * w
-    z_h = np.sin(psi) * u + np.cos(psi) * w
+    x_h, _, z_h = hinge_edge_b(theta, spec)
     surface = mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar)
     force, torque = flux_height_structure(ExteriorField(solution), surface, cube_b.centre, med.density_kg_m3,
                                           med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, pressure_amplitude_pa)
