@@ -150,12 +150,12 @@ def _fullwave_model(args: argparse.Namespace, theta: np.ndarray):
         sur = default_fullwave_surrogate(args.pressure)
     except ValueError as exc:  # the field cannot levitate the dimer
         raise UserInputError(str(exc)) from None
-    st = sur.settings
-    for option, value, key in (("--side", args.side, "side_m"), ("--frequency", args.frequency, "frequency_hz"),
-                               ("--density", args.density, "particle_density_kg_m3")):
-        if key in st and not np.isclose(value, float(st[key]), rtol=1e-9):
-            raise UserInputError(f"{option} {value:g}: the full-wave model is tabulated for {key} = {float(st[key]):g} "
-                                 "only (build another table with python -m acousim.fullwave.surrogate)")
+    message = sur.mismatch({"side_length_m": args.side, "frequency_hz": args.frequency,
+                            "particle_density_kg_m3": args.density},
+                           names={"side_length_m": "--side", "frequency_hz": "--frequency",
+                                  "particle_density_kg_m3": "--density"})
+    if message is not None:
+        raise UserInputError(message)
     for option, given in (("--side-b", args.side_b), ("--mesh-size", args.mesh_size), ("--render", args.render)):
         if given is not None:
             raise UserInputError(f"{option} applies to the Gor'kov model only, not to --model fullwave")

@@ -112,6 +112,13 @@ class DimerMeshSpec:
             "growth": self.growth,
         }
 
+    @classmethod
+    def from_settings(cls, settings: dict) -> "DimerMeshSpec":
+        """The spec of :meth:`settings` (extra keys, such as a table's medium settings, are ignored)."""
+        return cls(side=float(settings["side_m"]), gap=float(settings["gap_m"]),
+                   edge_radius=float(settings["edge_radius_m"]),
+                   **{k: float(settings[k]) for k in ("h_hinge", "h_max", "h_along", "h_corner", "growth")})
+
 
 #: The base of the mesh family of :func:`mesh_family` (level q = 1).
 FAMILY_BASE = dict(h_hinge=0.04, h_max=0.25, h_along=0.25, h_corner=0.12, growth=1.6)

@@ -157,17 +157,11 @@ class FullwaveDimer:
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
 
     def check_experiment(self, meta: dict) -> None:
-        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (FORMATS.md keys, PHYSICS.md
-        defaults filled in) the table was not built for (side, particle density, frequency, sound speed, air
-        density; relative tolerance 1e-6)."""
-        st = self.surrogate.settings
-        for key, table_key in (("side_length_m", "side_m"), ("particle_density_kg_m3", "particle_density_kg_m3"),
-                               ("frequency_hz", "frequency_hz"), ("sound_speed_m_s", "sound_speed_m_s"),
-                               ("air_density_kg_m3", "air_density_kg_m3")):
-            if key in meta and table_key in st and not np.isclose(float(meta[key]), float(st[table_key]), rtol=1e-6):
-                raise TableMismatch(f"{key} = {float(meta[key]):g}: the full-wave model is tabulated for "
-                                    f"{float(st[table_key]):g} only (build another table with "
-                                    "python -m acousim.fullwave.surrogate)")
+        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (FORMATS.md keys) the table was
+        not built for (:meth:`FullwaveSurrogate.mismatch`)."""
+        message = self.surrogate.mismatch(meta)
+        if message is not None:
+            raise TableMismatch(message)
 
 
 def default_fullwave_dimer(pressure_amplitude_pa: float = 3000.0) -> FullwaveDimer:

@@ -74,6 +74,13 @@ COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
 
+#: Experimental settings (FORMATS.md metadata key -> table settings key) a table is valid for only.
+TABLE_CONDITIONS = {"side_length_m": "side_m", "particle_density_kg_m3": "particle_density_kg_m3",
+                    "frequency_hz": "frequency_hz", "sound_speed_m_s": "sound_speed_m_s",
+                    "air_density_kg_m3": "air_density_kg_m3"}
+#: Relative tolerance of :meth:`FullwaveSurrogate.mismatch` (settings are decimal numbers written by people).
+TABLE_RTOL = 1e-6
+
 
 def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm: float = 0.0) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from the per-cube height structure of ``[A, B]``.
@@ -234,6 +241,29 @@ class FullwaveSurrogate(SinusoidalInertia):
             domain=[-1.0, 1.0]).coef
         (fa, fb, fc), (qa, qb, qc) = (tuple(conv(c) for c in self.coefficients[k]) for k in _COMPONENTS)
         return ForceCoefficients(q_y_a=fa, q_y_b=fb, q_y_c=fc, q_theta_a=qa, q_theta_b=qb, q_theta_c=qc)
+
+    def mismatch(self, conditions: dict, names: dict | None = None) -> str | None:
+        """The first of ``conditions`` the table was not built for, as a one-line message, or None.
+
+        Parameters
+        ----------
+        conditions : dict
+            Experimental settings under their FORMATS.md metadata keys (:data:`TABLE_CONDITIONS`: side,
+            particle density, frequency, sound speed, air density); other keys are ignored.
+        names : dict, optional
+            How to name a key in the message (e.g. ``{"side_length_m": "--side"}`` for a command-line option).
+
+        A setting matches when it agrees with the table's within a relative :data:`TABLE_RTOL`.
+        """
+        names = names or {}
+        for key, table_key in TABLE_CONDITIONS.items():
+            if key not in conditions or table_key not in self.settings:
+                continue
+            given, tabulated = float(conditions[key]), float(self.settings[table_key])
+            if not np.isclose(given, tabulated, rtol=TABLE_RTOL, atol=0.0):
+                return (f"{names.get(key, key)} = {given:g}: the full-wave model is tabulated for {key} = "
+                        f"{tabulated:g} only (build another table with python -m acousim.fullwave.surrogate)")
+        return None
 
     def with_pressure(self, pressure_amplitude_pa: float) -> "FullwaveSurrogate":
         """The surrogate at another pressure amplitude [Pa]: coefficients times (p/p0)^2, Z_eq solved anew."""
@@ -585,4 +615,7 @@ def main(argv: list[str] | None = None) -> int:
 if __name__ == "__main__":
     import sys
 
-    sys.exit(main())
+    # run the package's copy of this module, so that its log records go to the configured "acousim" logger
+    from acousim.fullwave.surrogate import main as _main
+
+    sys.exit(_main())

@@ -145,10 +145,9 @@ def _fullwave_model(config: TwinConfig, p_true: float):
     from ..fullwave import default_fullwave_surrogate
 
     sur = default_fullwave_surrogate()
-    side = float(sur.settings["side_m"])
-    if not np.isclose(config.side, side, rtol=1e-9):
-        raise TwinError(f"the full-wave model is tabulated for the {side * 1e6:g} um dimer only, got side "
-                        f"{config.side * 1e6:g} um")
+    message = sur.mismatch({"side_length_m": config.side}, names={"side_length_m": "side"})
+    if message is not None:
+        raise TwinError(message)
     return sur if p_true == sur.pressure_amplitude_pa else sur.with_pressure(p_true)
 
 

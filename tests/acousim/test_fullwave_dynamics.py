@@ -90,7 +90,7 @@ def test_simulate_on_the_fullwave_model(tmp_path, capsys, surrogate):
 
 
 @pytest.mark.parametrize("extra, fragment", [
-    (["--side", "400e-6"], "500 um dimer only"),
+    (["--side", "400e-6"], "tabulated for side_length_m = 0.0005 only"),
     (["--mesh-size", "1e-4"], "Gor'kov model only"),
     (["--model", "bem"], "invalid choice"),
 ])
