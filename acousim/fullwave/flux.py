@@ -20,7 +20,7 @@ with ``n`` the outward normal of the enclosed region and ``v = grad p / (i w rho
 
 The exterior field is the representation formula ``p = p_in + D p_S`` (sound-hard), evaluated here with the
 6-point triangle rule on every element, each element subdivided ``n x n`` when a field point is closer than
-``near_ratio`` element sizes (:class:`ExteriorField`): bempp's fixed regular rule is not accurate for points
+``near_ratio`` element sizes (:class:`ExteriorField`; the sum over sources is a compiled kernel): bempp's fixed regular rule is not accurate for points
 in the hinge gap, a few micrometres from two surfaces.  The incident field alone carries no net flux
 through a closed surface, so its exact contribution is subtracted from the discrete sum.
 """
@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
@@ -102,7 +103,6 @@ class ExteriorField:
 
     def scattered(self, points: NDArray, block: int = 32) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
         """Double-layer potential of the surface pressure: values (P, 2) and gradients (P, 3, 2), per unit p0."""
-        k = self.k
         pts = np.asarray(points, float)
         val = np.zeros((len(pts), 2), complex)
         grad = np.zeros((len(pts), 3, 2), complex)
@@ -110,19 +110,8 @@ class ExteriorField:
         for s0 in range(0, len(pts), block):
             idx = order[s0:s0 + block]
             y, w, nrm, dens = self._sources(pts[idx])
-            wd = w[:, None] * dens
-            for i in idx:
-                d = pts[i] - y
-                r2 = np.einsum("qk,qk->q", d, d)
-                r = np.sqrt(r2)
-                e = np.exp(1j * k * r) / (4 * np.pi)
-                f = e * (1j * k * r - 1) / (r2 * r)  # f(r) = G'(r) / r, G = exp(ikr) / (4 pi r)
-                fp = e * (-k * k * r2 - 3j * k * r + 3) / (r2 * r2)  # f'(r)
-                nd = np.einsum("qk,qk->q", nrm, d)
-                kern = -f * nd  # dG/dn_y
-                val[i] = kern @ wd
-                gk = -(fp[:, None] * (nd / r)[:, None] * d + f[:, None] * nrm)
-                grad[i] = gk.T @ wd
+            v, g = _double_layer_block(np.ascontiguousarray(pts[idx]), y, nrm, w[:, None] * dens, float(self.k))
+            val[idx], grad[idx] = v, g
         return val, grad
 
     def incident(self, points: NDArray) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
@@ -134,6 +123,51 @@ class ExteriorField:
         grad[:, 2, 0] = -k * np.sin(k * z)
         grad[:, 2, 1] = k * np.cos(k * z)
         return val, grad
+
+
+_INV_4PI = 1.0 / (4.0 * np.pi)
+
+
+@nb.njit(cache=True, parallel=True, fastmath=True)
+def _double_layer_block(points, y, normals, weighted_density, k):
+    """``sum_q dG/dn_y(x, y_q) w_q sigma_q`` and its x-gradient at each of ``points`` (P, 3), for both
+    densities (columns of ``weighted_density``, (Q, 2)); ``G = exp(ikr) / (4 pi r)``."""
+    n_p, n_q = points.shape[0], y.shape[0]
+    val = np.zeros((n_p, 2), np.complex128)
+    grad = np.zeros((n_p, 3, 2), np.complex128)
+    for i in nb.prange(n_p):
+        v0 = v1 = 0j
+        g = np.zeros((3, 2), np.complex128)
+        for q in range(n_q):
+            dx, dy, dz = points[i, 0] - y[q, 0], points[i, 1] - y[q, 1], points[i, 2] - y[q, 2]
+            r2 = dx * dx + dy * dy + dz * dz
+            r = np.sqrt(r2)
+            inv_r = 1.0 / r
+            inv_r2 = inv_r * inv_r
+            kr = k * r
+            c, sn = np.cos(kr) * _INV_4PI, np.sin(kr) * _INV_4PI  # exp(ikr) / (4 pi)
+            # f = G'(r) / r = e (ikr - 1) / r^3;  fp = f'(r) = e (3 - k^2 r^2 - 3ikr) / r^4
+            fr, fi = (-c - sn * kr) * inv_r2 * inv_r, (c * kr - sn) * inv_r2 * inv_r
+            ar, ai = 3.0 - kr * kr, -3.0 * kr
+            pr, pi_ = (c * ar - sn * ai) * inv_r2 * inv_r2, (c * ai + sn * ar) * inv_r2 * inv_r2
+            nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+            nd = nx * dx + ny * dy + nz * dz
+            kern = complex(-fr * nd, -fi * nd)  # dG/dn_y
+            a = complex(pr * nd * inv_r, pi_ * nd * inv_r)
+            f = complex(fr, fi)
+            gx, gy, gz = -(a * dx + f * nx), -(a * dy + f * ny), -(a * dz + f * nz)
+            s0, s1 = weighted_density[q, 0], weighted_density[q, 1]
+            v0 += kern * s0
+            v1 += kern * s1
+            g[0, 0] += gx * s0
+            g[0, 1] += gx * s1
+            g[1, 0] += gy * s0
+            g[1, 1] += gy * s1
+            g[2, 0] += gz * s0
+            g[2, 1] += gz * s1
+        val[i, 0], val[i, 1] = v0, v1
+        grad[i] = g
+    return val, grad
 
 
 @dataclass(frozen=True)
