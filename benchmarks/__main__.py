@@ -1,8 +1,9 @@
 """Run every benchmark module and write one markdown table file.
 
 Each module ``benchmarks/bench_*.py`` exposes ``main() -> str`` returning a markdown section; every
-such module is found and run (``acousim``, ``executor``, ``fitting``, ``twin``).
-``--only NAME`` runs one (e.g. ``--only acousim``).
+such module is found and run, and its section is written under the marker ``<!-- bench:NAME -->``.
+``--only NAME`` runs one (e.g. ``--only acousim``) and, when ``--out`` exists, replaces only that module's
+section in it.
 """
 from __future__ import annotations
 
@@ -11,11 +12,22 @@ import importlib
 import os
 import pkgutil
 import platform
+import re
 import sys
 import time
 from pathlib import Path
 
 from cubedimer.atomic import atomic_write_text
+
+
+#: Each module's section starts with this line, so that ``--only`` can replace it in an existing file.
+MARKER = "<!-- bench:{} -->"
+
+
+def _sections(text: str) -> dict[str, str]:
+    """The marked sections of an existing results file, by module name."""
+    parts = re.split(r"^<!-- bench:(\w+) -->$", text, flags=re.M)
+    return {name: f"{MARKER.format(name)}{body.rstrip()}\n" for name, body in zip(parts[1::2], parts[2::2])}
 
 
 def main(argv=None) -> int:
@@ -26,22 +38,27 @@ def main(argv=None) -> int:
     here = Path(__file__).parent
     names = sorted(m.name[len("bench_"):] for m in pkgutil.iter_modules([str(here)]) if m.name.startswith("bench_"))
     if args.only:
+        unknown = sorted(set(args.only) - set(names))
+        if unknown:
+            p.error(f"--only {', '.join(unknown)}: no such benchmark; choose from {', '.join(names)}")
         names = [n for n in names if n in args.only]
-    sections = [
+    header = [
         "# Benchmarks",
         "",
         f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}; "
-        f"written {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
+        f"written {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}"
+        + (f" (sections {', '.join(names)}; the others kept from earlier runs)." if args.only else "."),
         "",
     ]
+    out = Path(args.out)
+    kept = _sections(out.read_text()) if args.only and out.exists() else {}
     for name in names:
         print(f"[bench] {name} ...", file=sys.stderr, flush=True)
         t0 = time.perf_counter()
         mod = importlib.import_module(f"benchmarks.bench_{name}")
-        sections.append(mod.main())
-        sections.append(f"\n_{name}: {time.perf_counter() - t0:.1f} s wall._\n")
+        kept[name] = f"{MARKER.format(name)}\n{mod.main()}\n\n_{name}: {time.perf_counter() - t0:.1f} s wall._\n"
+    sections = header + [kept[n] for n in sorted(kept)]
     text = "\n".join(sections) + "\n"
-    out = Path(args.out)
     atomic_write_text(out, text)  # readable by others as the umask allows
     print(text)
     print(f"[bench] written {out}", file=sys.stderr)

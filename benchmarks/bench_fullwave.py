@@ -1,5 +1,6 @@
-"""Full-wave (boundary-element) model: assembly and solve time against degrees of freedom, the coarse
-surrogate's build time, hinge accuracy against mesh size, and a full-wave against a Gor'kov sweep.
+"""Full-wave (boundary-element) model: assembly and solve time against degrees of freedom, the momentum-flux
+post-processing (compiled kernel against the plain numpy sum over sources), the coarse surrogate's build
+time, hinge accuracy against mesh size, and a full-wave against a Gor'kov sweep.
 
 Accuracy is relative to the finest level run here (q = 0.35), so it is a self-convergence measure;
 docs/fullwave.md has the full study with Richardson estimates.  The first boundary-element call of a
@@ -10,6 +11,50 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
+
+def _numpy_double_layer(field, points):
+    """The exterior scattered field as a numpy sum over sources, one field point at a time (the alternative
+    the compiled kernel of :class:`acousim.fullwave.flux.ExteriorField` replaces)."""
+    k = field.k
+    val = np.zeros((len(points), 2), complex)
+    grad = np.zeros((len(points), 3, 2), complex)
+    for i, x in enumerate(points):
+        y, w, nrm, dens = field._sources(x[None, :])
+        wd = w[:, None] * dens
+        d = x - y
+        r2 = np.einsum("qk,qk->q", d, d)
+        r = np.sqrt(r2)
+        e = np.exp(1j * k * r) / (4 * np.pi)
+        f = e * (1j * k * r - 1) / (r2 * r)
+        fp = e * (-k * k * r2 - 3j * k * r + 3) / (r2 * r2)
+        nd = np.einsum("qk,qk->q", nrm, d)
+        val[i] = (-f * nd) @ wd
+        grad[i] = (-(fp[:, None] * (nd / r)[:, None] * d + f[:, None] * nrm)).T @ wd
+    return val, grad
+
+
+def _flux_rows(solution, theta: float, spec) -> list[str]:
+    """Time the flux post-processing of one node, and the numpy sum on a subset of its field points."""
+    from acousim.fullwave.flux import ExteriorField, mirror_half_surface
+    from acousim.fullwave.geometry import hinge_edge_b
+
+    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
+    x_h, _, z_h = hinge_edge_b(theta, spec)
+    pts = mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=20).points
+    field = ExteriorField(solution)
+    field.scattered(pts[:64])  # compile or load the kernel
+    t0 = time.perf_counter()
+    val, grad = field.scattered(pts)
+    kernel_s = time.perf_counter() - t0
+    sub = np.random.default_rng(0).choice(len(pts), 48, replace=False)
+    t0 = time.perf_counter()
+    v_np, g_np = _numpy_double_layer(field, pts[sub])
+    numpy_s = (time.perf_counter() - t0) / len(sub) * len(pts)
+    diff = max(np.max(np.abs(v_np - val[sub])) / np.max(np.abs(val)), np.max(np.abs(g_np - grad[sub])) / np.max(np.abs(grad)))
+    return [
+        f"| {solution.n_dofs} | {len(pts)} | {kernel_s:.1f} | {numpy_s:.0f} (from 48 points) | {numpy_s / kernel_s:.1f} | {diff:.0e} |",
+    ]
 
 
 def main() -> str:
@@ -42,6 +87,17 @@ def main() -> str:
             f"| {q:.2f} | {n} | ~{n // 4} | {ta:.1f} | {ts:.2f} | {hq['stiffness_nm']:.4e} | "
             f"{abs(hq['stiffness_nm'] / ref - 1):.1e} | {hq['z_eq_m'] * 1e6:.1f} | {hq['f_theta_hz'] / hq['f_y_hz']:.3f} |"
         )
+    lines += [
+        "",
+        "Momentum-flux post-processing of one node (theta = 0.3; cube B's half sphere and mirror disc, the exterior "
+        "field with near-field subdivision): the compiled kernel against a numpy sum over sources per field point.",
+        "",
+        "| DOFs | field points | compiled kernel [s] | numpy [s] | speed-up | max. rel. difference |",
+        "|---|---|---|---|---|---|",
+    ]
+    for q in (1.0, 0.5):
+        spec = mesh_family(q)
+        lines += _flux_rows(solve_scattering(dimer_bodies(0.3, spec)), 0.3, spec)
     t0 = time.perf_counter()
     sur = build_fullwave_surrogate(**COARSE_BUILD)
     build_s = time.perf_counter() - t0

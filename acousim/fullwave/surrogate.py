@@ -68,7 +68,7 @@ log = logging.getLogger(__name__)
 #: The shipped table of the default dimer.
 DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
 #: Build arguments of the shipped default table.
-DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 5, "theta_max": 0.9}
+DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 7, "theta_max": 0.9}
 #: Build arguments of the coarse variant (q = 1, 4 solves; < 1 minute idle after the first bempp compilation).
 COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
@@ -584,7 +584,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m acousim.fullwave.surrogate",
                                 description="Build a full-wave surrogate table (JSON) of the cube dimer.")
     p.add_argument("--out", required=True, help="output JSON")
-    p.add_argument("--level", type=float, default=None, help="mesh level q of mesh_family (default: the default mesh)")
+    p.add_argument("--level", type=float, default=None, help="mesh level q of mesh_family (default 0.5: the default mesh)")
     p.add_argument("--n-half", type=int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
     p.add_argument("--theta-max", type=float, default=DEFAULT_BUILD["theta_max"], help="interpolation half-width")
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
@@ -597,11 +597,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for name in ("bempp", "numba"):
         logging.getLogger(name).setLevel(logging.WARNING)
-    if args.level is None and args.gap is None and args.edge_radius == 0 and args.side == 500e-6:
-        spec = DEFAULT_SPEC
-    else:
-        spec = mesh_family(args.level if args.level is not None else 0.35, side=args.side, gap=args.gap,
-                           edge_radius=args.edge_radius)
+    spec = mesh_family(args.level if args.level is not None else 0.5, side=args.side, gap=args.gap,
+                       edge_radius=args.edge_radius)  # level 0.5 with the default geometry is DEFAULT_SPEC
     sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
                                    pressure_amplitude_pa=args.pressure, forces=args.forces)
     sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
