@@ -36,12 +36,10 @@ def _numpy_double_layer(field, points):
 
 def _flux_rows(solution, theta: float, spec) -> list[str]:
     """Time the flux post-processing of one node, and the numpy sum on a subset of its field points."""
-    from acousim.fullwave.flux import ExteriorField, mirror_half_surface
-    from acousim.fullwave.geometry import hinge_edge_b
+    from acousim.fullwave.flux import ExteriorField
+    from acousim.fullwave.surrogate import cube_b_flux_surface
 
-    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
-    x_h, _, z_h = hinge_edge_b(theta, spec)
-    pts = mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=20).points
+    pts = cube_b_flux_surface(solution, theta, spec).points
     field = ExteriorField(solution)
     field.scattered(pts[:64])  # compile or load the kernel
     t0 = time.perf_counter()

@@ -150,19 +150,16 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
     """
     if surrogate is None:
         sur = build_fullwave_surrogate(**build, pressure_amplitude_pa=pressure_amplitude_pa)
-        spec, forces, solves = build["spec"], build.get("forces", "flux"), build["n_half"]
     else:
         sur = surrogate.with_pressure(pressure_amplitude_pa)
-        spec, forces, solves = DimerMeshSpec.from_settings(sur.settings), sur.settings.get("forces", "flux"), sur.settings["n_half"]
-        medium = Medium(frequency_hz=sur.settings["frequency_hz"], sound_speed_m_s=sur.settings["sound_speed_m_s"],
-                        density_kg_m3=sur.settings["air_density_kg_m3"])
+    spec, forces = DimerMeshSpec.from_settings(sur.settings), sur.settings.get("forces", "flux")
     y = np.asarray(y, float)
     tt, yy = np.meshgrid(np.linspace(-sur.theta_max, sur.theta_max, 19), y, indexing="ij")
     qy_box, qt_box = (np.max(np.abs(q)) for q in sur.generalized_forces(tt, yy))
     rows = []
     for theta in thetas:
         t0 = time.perf_counter()
-        sol = solve_scattering(dimer_bodies(theta, spec), Medium() if surrogate is None else medium)
+        sol = solve_scattering(dimer_bodies(theta, spec), sur.medium)
         g = dimer_coefficients(sol, theta, spec, pressure_amplitude_pa, forces)
         ph = sur.two_k * (y + sur.z_eq)
         direct = {c: g[c][0] + g[c][1] * np.cos(ph) + g[c][2] * np.sin(ph) for c in ("fz", "qt")}
@@ -174,7 +171,7 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
         rows.append(row)
         if progress is not None:
             progress(row)
-    return {"q_y": max(r["q_y"] for r in rows), "q_theta": max(r["q_theta"] for r in rows), "solves": int(solves),
+    return {"q_y": max(r["q_y"] for r in rows), "q_theta": max(r["q_theta"] for r in rows), "solves": int(sur.settings["n_half"]),
             "thetas": [float(t) for t in thetas], "per_theta": rows}
 
 

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..field import StandingWave
 from ..force_model import SinusoidalInertia
 from ..forces import StaticForces
-from ..medium import Medium, ParticleMaterial
+from ..medium import ParticleMaterial
 from .surrogate import FullwaveSurrogate, default_fullwave_surrogate
 
 __all__ = ["FullwaveDimer", "FullwaveInertia", "default_fullwave_dimer", "TableMismatch"]
@@ -76,11 +76,8 @@ class FullwaveDimer:
     def __init__(self, surrogate: FullwaveSurrogate):
         self.surrogate = surrogate
         st = surrogate.settings
-        medium = Medium(frequency_hz=float(st.get("frequency_hz", Medium().frequency_hz)),
-                        sound_speed_m_s=float(st.get("sound_speed_m_s", Medium().sound_speed_m_s)),
-                        density_kg_m3=float(st.get("air_density_kg_m3", Medium().density_kg_m3)))
         material = ParticleMaterial(density_kg_m3=float(st.get("particle_density_kg_m3", 2160.0)))
-        self.wave = StandingWave(surrogate.pressure_amplitude_pa, medium, material)
+        self.wave = StandingWave(surrogate.pressure_amplitude_pa, surrogate.medium, material)
         self.gravity = float(surrogate.gravity)
         self.dimer = FullwaveInertia(surrogate.inertia_const, surrogate.inertia_sin2, surrogate.mass)
         tm = surrogate.theta_max

@@ -56,7 +56,6 @@ __all__ = [
     "dimer_generalized_coefficients",
     "dimer_flux_coefficients",
     "dimer_coefficients",
-    "hinge_arm",
     "FORCE_METHODS",
     "DEFAULT_TABLE",
     "DEFAULT_BUILD",
@@ -69,7 +68,8 @@ log = logging.getLogger(__name__)
 DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
 #: Build arguments of the shipped default table.
 DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 7, "theta_max": 0.9}
-#: Build arguments of the coarse variant (q = 1, 4 solves; < 1 minute idle after the first bempp compilation).
+#: Build arguments of the coarse variant (q = 1, 4 solves; about 100 s with the momentum flux on 2 idle cores after
+#: the first bempp compilation, under a minute with ``forces="surface"``).
 COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
@@ -108,6 +108,17 @@ def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm:
     return {"fz": fz, "qt": qt}
 
 
+def cube_b_flux_surface(solution, theta: float, spec: DimerMeshSpec, n_polar: int = 20):
+    """The closed surface around cube B of :func:`dimer_flux_coefficients`: the half sphere X > 0 of 1.6 times
+    the farthest vertex's radius, closed by the mirror disc X = 0 graded towards cube B's hinge edge."""
+    from .flux import mirror_half_surface
+
+    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
+    # cube B's hinge edge (body frame u = -s/2, w = +s/2) posed as dimer_bodies poses the cube
+    x_h, _, z_h = hinge_edge_b(theta, spec)
+    return mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar)
+
+
 def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
                             pressure_amplitude_pa: float = 1.0, n_polar: int = 20) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from momentum fluxes (:mod:`acousim.fullwave.flux`).
@@ -117,16 +128,13 @@ def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
     The sphere's radius is 1.6 times the farthest vertex; the disc's first panels are 0.3 times the distance
     from the hinge edge to the disc.
     """
-    from .flux import ExteriorField, flux_height_structure, mirror_half_surface
+    from .flux import ExteriorField, flux_height_structure
 
     med = solution.medium
     arm = hinge_arm(spec)
     cube_b = solution.bodies[1]
-    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
-    # cube B's hinge edge (body frame u = -s/2, w = +s/2) posed as dimer_bodies poses the cube
     phi = np.pi * float(theta) / 4
-    x_h, _, z_h = hinge_edge_b(theta, spec)
-    surface = mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar)
+    surface = cube_b_flux_surface(solution, theta, spec, n_polar)
     force, torque = flux_height_structure(ExteriorField(solution), surface, cube_b.centre, med.density_kg_m3,
                                           med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, pressure_amplitude_pa)
     # mirror images: F_A = (-F_B,X, F_B,Y, F_B,Z), tau_A,Y = -tau_B,Y
@@ -241,6 +249,14 @@ class FullwaveSurrogate(SinusoidalInertia):
             domain=[-1.0, 1.0]).coef
         (fa, fb, fc), (qa, qb, qc) = (tuple(conv(c) for c in self.coefficients[k]) for k in _COMPONENTS)
         return ForceCoefficients(q_y_a=fa, q_y_b=fb, q_y_c=fc, q_theta_a=qa, q_theta_b=qb, q_theta_c=qc)
+
+    @property
+    def medium(self) -> Medium:
+        """The air and frequency the table was built for (the :class:`Medium` defaults where not recorded)."""
+        st, d = self.settings, Medium()
+        return Medium(frequency_hz=float(st.get("frequency_hz", d.frequency_hz)),
+                      sound_speed_m_s=float(st.get("sound_speed_m_s", d.sound_speed_m_s)),
+                      density_kg_m3=float(st.get("air_density_kg_m3", d.density_kg_m3)))
 
     def mismatch(self, conditions: dict, names: dict | None = None) -> str | None:
         """The first of ``conditions`` the table was not built for, as a one-line message, or None.
