@@ -7,12 +7,21 @@ bin (accuracy ~1 % of a bin for a clean sinusoid, vs. half a bin without).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["amplitude_spectrum", "dominant_frequency", "phase_difference", "SpectralFeatures",
            "spectral_features"]
+
+
+@lru_cache(maxsize=16)
+def _hann(n: int) -> tuple[NDArray[np.float64], float]:
+    """The Hann window of ``n`` samples (read-only; the long-time loss asks for the same few lengths) and its sum."""
+    w = np.hanning(n)
+    w.flags.writeable = False
+    return w, float(w.sum())
 
 
 def amplitude_spectrum(x: NDArray, dt: float) -> tuple[NDArray, NDArray]:
@@ -25,9 +34,9 @@ def amplitude_spectrum(x: NDArray, dt: float) -> tuple[NDArray, NDArray]:
     """
     x = np.asarray(x, float)
     x = x - x.mean()
-    w = np.hanning(x.size)
+    w, wsum = _hann(x.size)
     spec = np.fft.rfft(x * w)
-    return np.fft.rfftfreq(x.size, dt), 2.0 * np.abs(spec) / w.sum()
+    return np.fft.rfftfreq(x.size, dt), 2.0 * np.abs(spec) / wsum
 
 
 def _peak(f: NDArray, a: NDArray, fmin: float, refine: bool = True) -> float:

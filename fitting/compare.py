@@ -22,8 +22,12 @@ from .losses import LossTerms, LossWeights
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
 
-__all__ = ["per_run_losses", "cross_coupling_mask", "drop_terms", "WilcoxonResult", "paired_wilcoxon",
+__all__ = ["COMPARISON_REFINE", "per_run_losses", "cross_coupling_mask", "drop_terms", "WilcoxonResult", "paired_wilcoxon",
            "Comparison", "compare_models"]
+
+
+COMPARISON_REFINE = RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005)
+"""The default joint re-optimisation of a variant before it is compared (:func:`compare_models`)."""
 
 
 def per_run_losses(model: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales,
@@ -107,7 +111,7 @@ class Comparison:
 
 def compare_models(reference: PolynomialModel, variant: PolynomialModel, derivs: Sequence[Derivatives],
                    scales: Scales, names: Sequence[str] | None = None, reoptimise: bool = True,
-                   config: RefineConfig = RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005)) -> Comparison:
+                   config: RefineConfig = COMPARISON_REFINE) -> Comparison:
     """Compare ``variant`` (re-optimised jointly on all runs if ``reoptimise``) with ``reference``."""
     if reoptimise and variant.support.any():
         variant = refine(variant, derivs, scales, config).model

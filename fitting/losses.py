@@ -45,10 +45,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from cubedimer.poincare import poincare_section
 from cubedimer.spectra import dominant_frequency
+
+from .nearest import PointGrid
 
 __all__ = ["LossWeights", "LossTerms", "Reference", "make_reference", "loss_terms", "rest_model_terms"]
 
@@ -101,8 +102,8 @@ class Reference:
         max|x_i| of the data.
     x0 : ndarray (4,)
         Initial state (first row of ``state``).
-    tree : cKDTree
-        Of the normalised data points.
+    points : PointGrid
+        The normalised data points, prepared for exact nearest-point queries.
     s0 : float
         mean_j |x_hat_j|^2.
     section : ndarray (K, 3)
@@ -120,7 +121,7 @@ class Reference:
     t: NDArray[np.float64]
     state: NDArray[np.float64]
     norm: NDArray[np.float64]
-    tree: cKDTree
+    points: PointGrid
     s0: float
     section: NDArray[np.float64]
     section_times: NDArray[np.float64]
@@ -153,7 +154,7 @@ def make_reference(t: NDArray, state: NDArray, sub: int = 3) -> Reference:
     pts = sec.points / norm[1:]
     dt = float(t[1] - t[0])
     f_y = dominant_frequency(state[:, 0], dt)
-    return Reference(t=t, state=state, norm=norm, tree=cKDTree(xn), s0=float(np.mean(np.sum(xn**2, 1))),
+    return Reference(t=t, state=state, norm=norm, points=PointGrid.of(xn), s0=float(np.mean(np.sum(xn**2, 1))),
                      section=pts, section_times=(sec.times - t[0]) * f_y,
                      p0=float(np.mean(np.sum(pts**2, 1)) + 1.0) if len(pts) else 1.0,
                      f_y=f_y, f_theta=dominant_frequency(state[:, 2], dt), sub=sub)
@@ -169,10 +170,10 @@ def loss_terms(sim: NDArray, n_valid: int, ref: Reference, weights: LossWeights 
         pen = weights.penalty * (2.0 - n_valid / n)
         return LossTerms(pen, pen, pen, pen, True)
     sn = sim / ref.norm
-    d1, _ = ref.tree.query(sn, k=1)
-    dn = ref.tree.data[:: ref.sub]
-    d2, _ = cKDTree(sn).query(dn, k=1)
-    shape = 0.5 * (np.mean(d1**2) + np.mean(d2**2)) / ref.s0
+    d1 = ref.points.nearest_squared(sn)  # each simulated point's same-time data point is its first guess
+    every = np.arange(0, n, ref.sub)
+    d2 = PointGrid.of(sn).nearest_squared(ref.points.points[every], guess=every)
+    shape = 0.5 * (np.mean(d1) + np.mean(d2)) / ref.s0
     sec = poincare_section(ref.t, sim)
     q = sec.points / ref.norm[1:]
     K = ref.section.shape[0]

@@ -9,6 +9,25 @@ import pytest
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
+#: Test modules that solve boundary-element problems.  bempp-cl compiles its assembly kernels at first use in
+#: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` runs these modules
+#: on one pytest-xdist worker (``--dist loadgroup``) and the compilation happens once per session.
+BOUNDARY_ELEMENT_MODULES = frozenset({
+    "tests/acousim/test_fullwave_sphere.py", "tests/acousim/test_fullwave_dimer.py",
+    "tests/acousim/test_fullwave_flux.py", "tests/acousim/test_fullwave_cli.py",
+    "tests/acousim/test_fullwave_surrogate.py",
+})
+
+
+def pytest_collection_modifyitems(config, items):
+    """Group the tests for pytest-xdist's ``loadgroup``: a module's tests stay on one worker (so module and
+    session fixtures are built once), and the boundary-element modules share one worker."""
+    root = config.rootpath
+    for item in items:
+        module = item.path.relative_to(root).as_posix() if item.path.is_relative_to(root) else str(item.path)
+        group = "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
+        item.add_marker(pytest.mark.xdist_group(group))
+
 
 @pytest.fixture(scope="session")
 def default_wave():

@@ -258,7 +258,9 @@ def _add_report(sub) -> None:
     p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
     p.add_argument("--out", required=True, help="report directory")
     p.add_argument("--max-evals", type=positive_int, default=None,
-                   help="evaluations of the fit's long-time refinement (default: the fitting default)")
+                   help="evaluations of every long-time refinement: the fit's, and the re-optimisation of the "
+                        "model without cross-coupling terms it is compared with (default: 600 for the comparison, "
+                        "the fitting default for the fit)")
     p.add_argument("--method", choices=("discovery", "paper"), default="discovery",
                    help="the fit's model discovery: integral-form discovery with a long-time polish, or the "
                         "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "

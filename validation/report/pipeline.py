@@ -10,6 +10,7 @@ calibrated Gor'kov model over the data's range, the coefficient comparison
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -120,8 +121,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     out_dir : report directory: report.html, figures/*.png, numbers.json, fit/, diagnosis.json, comparison.json
     workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
     progress : progress bars, and the steps logged at INFO level (else DEBUG)
-    max_evals : evaluations of the long-time refinement (per run for ``"paper"``, of the polish for
-        ``"discovery"``; default: the fitting default)
+    max_evals : evaluations of every long-time refinement: per run and joint for ``"paper"``, of the polish (and
+        of a fallback's joint re-optimisation) for ``"discovery"``, and of the re-optimisation of the variant
+        without cross-coupling terms (section 3);
+        default: the fitting and comparison defaults
     method : the fit's model-discovery method (:data:`fitting.pipeline.METHODS`)
     model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
         stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
@@ -134,7 +137,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from acousim.sweep import fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
     from cubedimer.meta import read_meta
-    from fitting.compare import compare_models, cross_coupling_mask
+    from fitting.compare import COMPARISON_REFINE, compare_models, cross_coupling_mask
     from fitting.pipeline import FitConfig, fit_dataset
     from fitting.plots import plot_comparison
 
@@ -156,10 +159,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     fit_dir = out / "fit"
     config = FitConfig(method=method)
     if max_evals is not None:
-        from dataclasses import replace
-
         config = replace(config, refine=replace(config.refine, max_evals=max_evals),
-                         polish=replace(config.polish, max_evals=max_evals))
+                         polish=replace(config.polish, max_evals=max_evals),
+                         joint=replace(config.joint, max_evals=max_evals))
     say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
                                     else "integral-form discovery with held-out selection, long-time polish") + ")")
     res = fit_dataset(data_dir, fit_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler),
@@ -173,7 +175,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     variant = res.model.with_mask(res.model.support & ~mask) if mask.any() else None
     cmp = None
     if variant is not None:
-        cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales, [p.run.name for p in prepared])
+        cmp_config = COMPARISON_REFINE if max_evals is None else replace(COMPARISON_REFINE, max_evals=max_evals)
+        cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales,
+                             [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
     diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model)
