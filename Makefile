@@ -49,7 +49,7 @@ demo: venv
 # One pytest worker per core (pytest-xdist), each test file on one worker so that module fixtures are built
 # once, and the boundary-element files together (tests/conftest.py); one numba thread per worker (the
 # boundary-element assembly is numba-parallel).
-PYTEST := NUMBA_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadgroup
+PYTEST := NUMBA_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadfile
 
 test: venv browser
 	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) $(PYTEST)

@@ -10,8 +10,8 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 #: Test modules that solve boundary-element problems.  bempp-cl compiles its assembly kernels at first use in
-#: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` runs these modules
-#: on one pytest-xdist worker (``--dist loadgroup``) and the compilation happens once per session.
+#: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` (``--dist loadfile``)
+#: sends these modules to one pytest-xdist worker as one unit and the compilation happens once per session.
 BOUNDARY_ELEMENT_MODULES = frozenset({
     "tests/acousim/test_fullwave_sphere.py", "tests/acousim/test_fullwave_dimer.py",
     "tests/acousim/test_fullwave_flux.py", "tests/acousim/test_fullwave_cli.py",
@@ -19,14 +19,19 @@ BOUNDARY_ELEMENT_MODULES = frozenset({
 })
 
 
-def pytest_collection_modifyitems(config, items):
-    """Group the tests for pytest-xdist's ``loadgroup``: a module's tests stay on one worker (so module and
-    session fixtures are built once), and the boundary-element modules share one worker."""
-    root = config.rootpath
-    for item in items:
-        module = item.path.relative_to(root).as_posix() if item.path.is_relative_to(root) else str(item.path)
-        group = "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
-        item.add_marker(pytest.mark.xdist_group(group))
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadfile``, with the boundary-element modules as one unit (pytest-xdist's ``xdist_group`` marks
+    would do this with ``--dist loadgroup``, but that mode silently stops grouping on pytest 9.2)."""
+    if config.getoption("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class _BoundaryElementsTogether(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = super()._split_scope(nodeid)
+            return "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
+
+    return _BoundaryElementsTogether(config, log)
 
 
 @pytest.fixture(scope="session")
