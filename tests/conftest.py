@@ -19,6 +19,7 @@ BOUNDARY_ELEMENT_MODULES = frozenset({
 })
 
 
+@pytest.hookimpl(optionalhook=True)  # a plain pytest without pytest-xdist ignores it
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadfile``, with the boundary-element modules as one unit (pytest-xdist's ``xdist_group`` marks
     would do this with ``--dist loadgroup``, but that mode silently stops grouping on pytest 9.2)."""
