@@ -20,14 +20,10 @@ from .derivatives import Derivatives
 from cubedimer.terms import EQUATION_NAMES, parse_term
 from .losses import LossTerms, LossWeights
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
-from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
+from .refine import JOINT_REFINE, Objective, RefineConfig, default_substeps, refine, scaled_reference
 
-__all__ = ["COMPARISON_REFINE", "per_run_losses", "cross_coupling_mask", "drop_terms", "WilcoxonResult", "paired_wilcoxon",
+__all__ = ["per_run_losses", "cross_coupling_mask", "drop_terms", "WilcoxonResult", "paired_wilcoxon",
            "Comparison", "compare_models"]
-
-
-COMPARISON_REFINE = RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005)
-"""The default joint re-optimisation of a variant before it is compared (:func:`compare_models`)."""
 
 
 def per_run_losses(model: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales,
@@ -111,7 +107,7 @@ class Comparison:
 
 def compare_models(reference: PolynomialModel, variant: PolynomialModel, derivs: Sequence[Derivatives],
                    scales: Scales, names: Sequence[str] | None = None, reoptimise: bool = True,
-                   config: RefineConfig = COMPARISON_REFINE) -> Comparison:
+                   config: RefineConfig = JOINT_REFINE) -> Comparison:
     """Compare ``variant`` (re-optimised jointly on all runs if ``reoptimise``) with ``reference``."""
     if reoptimise and variant.support.any():
         variant = refine(variant, derivs, scales, config).model

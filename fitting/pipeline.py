@@ -44,7 +44,7 @@ from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales, damping_mask
 from .oracle import OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
-from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
+from .refine import JOINT_REFINE, Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
 from .selection import SelectionConfig, SelectionResult, backward_elimination
 from cubedimer.spectra import dominant_frequency
@@ -69,7 +69,7 @@ class FitConfig:
     smoothing: SmoothingConfig = field(default_factory=SmoothingConfig)
     regression: RegressionConfig = field(default_factory=RegressionConfig)
     refine: RefineConfig = field(default_factory=RefineConfig)
-    joint: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005))
+    joint: RefineConfig = JOINT_REFINE
     ensemble: EnsembleConfig = field(default_factory=EnsembleConfig)
     selection: SelectionConfig = field(default_factory=SelectionConfig)
     #: joint refinement of the whole candidate support (start of the backward elimination)

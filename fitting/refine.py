@@ -22,7 +22,7 @@ from .integrate import integrate_batch
 from .losses import LossTerms, LossWeights, Reference, loss_terms, make_reference
 from .model import EXPONENTS, PolynomialModel, Scales
 
-__all__ = ["RefineConfig", "RefineResult", "Objective", "scaled_reference", "refine", "default_substeps"]
+__all__ = ["RefineConfig", "JOINT_REFINE", "RefineResult", "Objective", "scaled_reference", "refine", "default_substeps"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,11 @@ class RefineConfig:
     h_omega: float = 0.05
     horizons: tuple[float, ...] = (0.25, 0.5, 1.0)
     weights: LossWeights = field(default_factory=LossWeights)
+
+
+#: A joint re-optimisation on all runs: of the minimal model (``FitConfig.joint``) and of a variant before it is
+#: compared with it (:func:`fitting.compare.compare_models`); a tighter box than a per-run refinement's.
+JOINT_REFINE = RefineConfig(max_evals=600, rel_bound=0.3, abs_bound=0.005)
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,8 +21,9 @@ with ``n`` the outward normal of the enclosed region and ``v = grad p / (i w rho
 The exterior field is the representation formula ``p = p_in + D p_S`` (sound-hard), evaluated here with the
 6-point triangle rule on every element, each element subdivided ``n x n`` when a field point is closer than
 ``near_ratio`` element sizes (:class:`ExteriorField`; the sum over sources is a compiled kernel): bempp's
-fixed regular rule is not accurate for points in the hinge gap, a few micrometres from two surfaces.  The incident field alone carries no net flux
-through a closed surface, so its exact contribution is subtracted from the discrete sum.
+fixed regular rule is not accurate for points in the hinge gap, a few micrometres from two surfaces.  The
+incident field alone carries no net flux through a closed surface, so its exact contribution is subtracted
+from the discrete sum.
 """
 from __future__ import annotations
 

@@ -137,8 +137,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from acousim.sweep import fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
     from cubedimer.meta import read_meta
-    from fitting.compare import COMPARISON_REFINE, compare_models, cross_coupling_mask
+    from fitting.compare import compare_models, cross_coupling_mask
     from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.refine import JOINT_REFINE
     from fitting.plots import plot_comparison
 
     from ..coefficients import compare_coefficients
@@ -175,7 +176,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     variant = res.model.with_mask(res.model.support & ~mask) if mask.any() else None
     cmp = None
     if variant is not None:
-        cmp_config = COMPARISON_REFINE if max_evals is None else replace(COMPARISON_REFINE, max_evals=max_evals)
+        cmp_config = JOINT_REFINE if max_evals is None else replace(JOINT_REFINE, max_evals=max_evals)
         cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales,
                              [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
