@@ -68,8 +68,8 @@ log = logging.getLogger(__name__)
 DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
 #: Build arguments of the shipped default table.
 DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 7, "theta_max": 0.9}
-#: Build arguments of the coarse variant (q = 1, 4 solves; about 100 s with the momentum flux on 2 idle cores after
-#: the first bempp compilation, under a minute with ``forces="surface"``).
+#: Build arguments of the coarse variant (q = 1, 4 solves; about 35 s with the momentum flux on 2 idle cores after
+#: bempp's compilation, which takes about 80 s once per process).
 COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")

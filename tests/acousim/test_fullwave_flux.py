@@ -13,7 +13,7 @@ from acousim.fullwave.flux import (ExteriorField, enclosing_sphere_surface, flux
 from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
 from acousim.medium import Medium  # noqa: E402
 
-pytestmark = pytest.mark.slow  # one solve of 1,284 DOFs and two flux evaluations: 30-60 s after compilation
+pytestmark = pytest.mark.slow  # one solve of 1,284 DOFs and two flux evaluations: about 5 s after bempp's compilation
 
 MEDIUM = Medium()
 P0 = 3000.0
