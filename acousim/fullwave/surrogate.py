@@ -43,7 +43,7 @@ from cubedimer.atomic import write_json
 
 from ..force_model import ForceCoefficients, SinusoidalInertia
 from ..medium import GRAVITY, Medium
-from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm, hinge_edge_b,
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm, hinge_edge_b,
                        rounded_cube_volume)
 from .solver import HeightStructure, solve_scattering
 
@@ -67,7 +67,7 @@ log = logging.getLogger(__name__)
 #: The shipped table of the default dimer.
 DEFAULT_TABLE = Path(__file__).resolve().parent.parent / "data" / "fullwave_default.json"
 #: Build arguments of the shipped default table.
-DEFAULT_BUILD = {"spec": DEFAULT_SPEC, "n_half": 7, "theta_max": 0.9}
+DEFAULT_BUILD = {"spec": TABLE_SPEC, "n_half": 7, "theta_max": 0.9}
 #: Build arguments of the coarse variant (q = 1, 4 solves; about 35 s with the momentum flux on 2 idle cores after
 #: bempp's compilation, which takes about 80 s once per process).
 COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
@@ -595,12 +595,14 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m acousim.fullwave.surrogate --out FILE [--level Q] [--n-half N] [--theta-max T] [--gap G]``."""
     import argparse
 
-    from .geometry import mesh_family
+    from .geometry import hinge_refined_spec, mesh_family
 
     p = argparse.ArgumentParser(prog="python -m acousim.fullwave.surrogate",
                                 description="Build a full-wave surrogate table (JSON) of the cube dimer.")
     p.add_argument("--out", required=True, help="output JSON")
-    p.add_argument("--level", type=float, default=None, help="mesh level q of mesh_family (default 0.5: the default mesh)")
+    p.add_argument("--level", type=float, default=None,
+                   help="mesh level q of mesh_family (1: coarse, 0.5: standard); default: the shipped table's mesh, "
+                        "refined along the hinge line (hinge_refined_spec)")
     p.add_argument("--n-half", type=int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
     p.add_argument("--theta-max", type=float, default=DEFAULT_BUILD["theta_max"], help="interpolation half-width")
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
@@ -613,8 +615,10 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for name in ("bempp", "numba"):
         logging.getLogger(name).setLevel(logging.WARNING)
-    spec = mesh_family(args.level if args.level is not None else 0.5, side=args.side, gap=args.gap,
-                       edge_radius=args.edge_radius)  # level 0.5 with the default geometry is DEFAULT_SPEC
+    if args.level is None:  # with the default geometry this is TABLE_SPEC, the shipped table's mesh
+        spec = hinge_refined_spec(side=args.side, gap=args.gap, edge_radius=args.edge_radius)
+    else:
+        spec = mesh_family(args.level, side=args.side, gap=args.gap, edge_radius=args.edge_radius)
     sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
                                    pressure_amplitude_pa=args.pressure, forces=args.forces)
     sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
