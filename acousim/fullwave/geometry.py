@@ -129,8 +129,8 @@ FAMILY_BASE = dict(h_hinge=0.04, h_max=0.25, h_along=0.25, h_corner=0.12, growth
 def mesh_family(q: float, side: float = 500e-6, gap: float | None = None, edge_radius: float = 0.0) -> DimerMeshSpec:
     """The mesh of refinement level ``q``: every element size of :data:`FAMILY_BASE` times q, growth fixed.
 
-    q = 2 is the coarsest (264 DOFs), q = 1 the coarse mesh (536 DOFs), the default q = 0.5 (1,368 DOFs); see
-    docs/fullwave.md.
+    q = 2 is the coarsest (264 DOFs), q = 1 the coarse mesh (536 DOFs), the standard q = 0.5 (1,368 DOFs); the
+    shipped table uses :func:`hinge_refined_spec` instead; see docs/fullwave.md.
     """
     b = FAMILY_BASE
     return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius, h_hinge=b["h_hinge"] * q, h_max=b["h_max"] * q,
