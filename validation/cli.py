@@ -136,7 +136,9 @@ def _add_diagnose(sub) -> None:
     )
     p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
     p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--alpha", type=float, default=0.01, help="significance level of the held-out Wilcoxon test")
+    p.add_argument("--alpha", type=float, default=0.01,
+                   help="significance level of the held-out one-sided sign-flip test of each effect; with n runs "
+                        "its smallest p is 2^-n, so the default 0.01 needs at least 7 runs")
     p.add_argument("--min-improvement", type=float, default=0.05,
                    help="smallest median held-out improvement counted, as a fraction of the current gap")
     p.add_argument("--candidates", default=",".join(_candidate_names()),
@@ -184,6 +186,12 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, internals, args.out)
     if not args.quiet:
+        settings = diagnosis["settings"]
+        if not settings["identification_possible"]:
+            n = len(diagnosis["gap_per_run"]["runs"])
+            print(f"warning: with {n} runs no effect can be identified at --alpha {settings['alpha']:g} (smallest "
+                  f"attainable p {settings['smallest_attainable_p']:.3g}); record at least {settings['runs_needed']} "
+                  "runs", file=sys.stderr)
         print(f"identified: {diagnosis['identified'] or 'none'}; gap {diagnosis['gap_before']:.3g} -> "
               f"{diagnosis['gap_after']:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
     return 0

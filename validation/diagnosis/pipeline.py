@@ -30,6 +30,7 @@ from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
+from .statistics import runs_needed, smallest_sign_flip_pvalue
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
 
@@ -154,6 +155,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
+    p_floor = smallest_sign_flip_pvalue(len(runs))
+    if p_floor > config.alpha:
+        logger.warning("with %d runs the held-out test of every effect cannot reach p <= %g (its smallest p is "
+                       "2^-%d = %.3g): no effect can be identified; record at least %d runs, or raise --alpha",
+                       len(runs), config.alpha, len(runs), p_floor, runs_needed(config.alpha))
     drift = detect_pressure_drift(problem, config.drift) if config.drift is not None else None
     if drift is not None and drift.detected:
         log("pressure drift detected (relative amplitude %.3g, time scale %.2g s, p = %.2g): the simulation "
@@ -289,7 +295,9 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "identification_rounds": [r.to_dict() for r in ident.rounds],
         "skipped_files": dataset.skipped_files(),
         "glitch_frames_masked": dataset.n_glitches,
-        "settings": {"alpha": config.alpha, "min_relative_improvement": config.min_relative_improvement,
+        "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,
+                     "identification_possible": bool(p_floor <= config.alpha), "runs_needed": runs_needed(config.alpha),
+                     "min_relative_improvement": config.min_relative_improvement,
                      "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
     }
     return diagnosis, DiagnosisInternals(problem, base, final)

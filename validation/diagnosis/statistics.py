@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["sign_flip_pvalue", "wilcoxon_greater_pvalue"]
+__all__ = ["sign_flip_pvalue", "wilcoxon_greater_pvalue", "smallest_sign_flip_pvalue", "runs_needed"]
 
 
 def sign_flip_pvalue(diff: ArrayLike, n_random: int = 200_000, seed: int = 0) -> float:
@@ -46,6 +46,19 @@ def sign_flip_pvalue(diff: ArrayLike, n_random: int = 200_000, seed: int = 0) ->
         signs = np.random.default_rng(seed).choice([-1, 1], size=(n_random, n))
     sums = signs @ np.abs(d)
     return float(np.mean(sums >= obs - 1e-12 * np.abs(d).sum()))
+
+
+def smallest_sign_flip_pvalue(n_runs: int) -> float:
+    """The smallest p-value :func:`sign_flip_pvalue` can return for ``n_runs`` differences: 2^-n (every run
+    improved; only the all-positive sign pattern reaches the observed sum). 1 for no run."""
+    return 0.5 ** int(n_runs) if n_runs > 0 else 1.0
+
+
+def runs_needed(alpha: float) -> int:
+    """The fewest runs with which the one-sided sign-flip test can reach ``p <= alpha`` (7 for alpha = 0.01)."""
+    if not 0 < alpha < 1:
+        raise ValueError(f"alpha must lie in (0, 1), got {alpha!r}")
+    return int(np.ceil(-np.log2(alpha) - 1e-12))
 
 
 def wilcoxon_greater_pvalue(diff: ArrayLike) -> float:
