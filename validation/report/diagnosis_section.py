@@ -75,6 +75,12 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         what = f"The gap is caused by {cause}."
     else:
         what = "No candidate effect improves held-out runs significantly."
+        settings = diagnosis.get("settings") or {}
+        if settings.get("identification_possible") is False:
+            n_runs = len(diagnosis["gap_per_run"]["runs"])
+            what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
+                     f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
+                     f"at least {settings['runs_needed']} runs are needed.")
     drift = cal.get("drift") or {}
     # a detected drift and the discovered terms are part of the remaining-gap statement; their tables are below
     drift_text = f"No drift of the pressure within runs (F-test p = {drift['p_value']:.2g}). " if drift.get("tested") and not drift.get("detected") else ""

@@ -151,3 +151,4 @@ def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
     assert diag["settings"]["identification_possible"] is False and diag["settings"]["runs_needed"] == 7
     assert "with 3 runs no effect can be identified at --alpha 0.01" in r.stderr
     assert "record at least 7 runs" in r.stderr
+    assert "at least 7 runs are needed" in (out / "report.html").read_text()
