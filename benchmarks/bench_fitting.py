@@ -76,8 +76,7 @@ def _shape_loss_section(lines: list[str], seed: int) -> None:
     (:class:`fitting.nearest.PointGrid`) against scipy's k-d tree, near the data and far from it."""
     from scipy.spatial import cKDTree
 
-    from fitting.losses import loss_terms, make_reference
-    from fitting.nearest import PointGrid
+    from fitting.losses import attractor_shape_loss, loss_terms, make_reference
     from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model
 
     run = generate_runs(paper_reduced_model(), SyntheticConfig(n_runs=1, seed=seed))[0]
@@ -97,10 +96,7 @@ def _shape_loss_section(lines: list[str], seed: int) -> None:
         return 0.5 * (np.mean(d1**2) + np.mean(d2**2)) / ref.s0
 
     def grid_shape(s):
-        sn, xn = s / ref.norm, ref.points.points
-        every = np.arange(0, t.size, ref.sub)
-        return 0.5 * (np.mean(ref.points.nearest_squared(sn))
-                      + np.mean(PointGrid.of(sn).nearest_squared(xn[every], guess=every))) / ref.s0
+        return attractor_shape_loss(s, ref)
 
     def per_call(fn, s, reps=30):
         fn(s)

@@ -51,7 +51,8 @@ from cubedimer.spectra import dominant_frequency
 
 from .nearest import PointGrid
 
-__all__ = ["LossWeights", "LossTerms", "Reference", "make_reference", "loss_terms", "rest_model_terms"]
+__all__ = ["LossWeights", "LossTerms", "Reference", "make_reference", "loss_terms", "attractor_shape_loss",
+           "rest_model_terms"]
 
 
 @dataclass(frozen=True)
@@ -160,6 +161,17 @@ def make_reference(t: NDArray, state: NDArray, sub: int = 3) -> Reference:
                      f_y=f_y, f_theta=dominant_frequency(state[:, 2], dt), sub=sub)
 
 
+def attractor_shape_loss(sim: NDArray, ref: Reference) -> float:
+    """The shape term of :func:`loss_terms`: the mean squared distance from each normalised simulated point to the
+    nearest data point and from every ``ref.sub``-th data point to the nearest simulated point, averaged and
+    divided by ``ref.s0``.  ``sim`` (n, 4) is sampled at ``ref.t``."""
+    sn = sim / ref.norm
+    d1 = ref.points.nearest_squared(sn)  # each simulated point's same-time data point is its first guess
+    every = np.arange(0, ref.n, ref.sub)
+    d2 = PointGrid.of(sn).nearest_squared(ref.points.points[every], guess=every)
+    return float(0.5 * (np.mean(d1) + np.mean(d2)) / ref.s0)
+
+
 def loss_terms(sim: NDArray, n_valid: int, ref: Reference, weights: LossWeights = LossWeights()) -> LossTerms:
     """Loss of a simulated trajectory ``sim`` (n, 4), sampled at ``ref.t``, against ``ref``.
 
@@ -169,11 +181,7 @@ def loss_terms(sim: NDArray, n_valid: int, ref: Reference, weights: LossWeights 
     if n_valid < n:
         pen = weights.penalty * (2.0 - n_valid / n)
         return LossTerms(pen, pen, pen, pen, True)
-    sn = sim / ref.norm
-    d1 = ref.points.nearest_squared(sn)  # each simulated point's same-time data point is its first guess
-    every = np.arange(0, n, ref.sub)
-    d2 = PointGrid.of(sn).nearest_squared(ref.points.points[every], guess=every)
-    shape = 0.5 * (np.mean(d1) + np.mean(d2)) / ref.s0
+    shape = attractor_shape_loss(sim, ref)
     sec = poincare_section(ref.t, sim)
     q = sec.points / ref.norm[1:]
     K = ref.section.shape[0]

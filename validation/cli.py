@@ -186,12 +186,6 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, internals, args.out)
     if not args.quiet:
-        settings = diagnosis["settings"]
-        if not settings["identification_possible"]:
-            n = len(diagnosis["gap_per_run"]["runs"])
-            print(f"warning: with {n} runs no effect can be identified at --alpha {settings['alpha']:g} (smallest "
-                  f"attainable p {settings['smallest_attainable_p']:.3g}); record at least {settings['runs_needed']} "
-                  "runs", file=sys.stderr)
         print(f"identified: {diagnosis['identified'] or 'none'}; gap {diagnosis['gap_before']:.3g} -> "
               f"{diagnosis['gap_after']:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
     return 0

@@ -11,17 +11,20 @@
 
 bempp-cl is imported lazily, at the first solve.
 """
-from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, MeshError, check_closed_oriented, dimer_bodies,
-                       hinge_refined_spec, mesh_family, split_bodies, volume_centroid)
-from .flux import ExteriorField, FluxSurface, double_layer_potential, enclosing_sphere_surface, flux_height_structure, mirror_half_surface
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, MeshError, check_closed_oriented,
+                       dimer_bodies, hinge_refined_spec, mesh_family, split_bodies, volume_centroid)
+from .flux import (ExteriorField, FluxSurface, double_layer_potential, enclosing_sphere_surface, flux_height_structure,
+                   mirror_half_surface)
 from .solver import Body, HeightStructure, ScatteringSolution, solve_scattering
 from .surrogate import (FullwaveSurrogate, build_fullwave_surrogate, cached_fullwave_surrogate,
                         coarse_fullwave_surrogate, default_fullwave_surrogate, dimer_generalized_coefficients)
 
 __all__ = [
     "Body", "HeightStructure", "ScatteringSolution", "solve_scattering",
-    "ExteriorField", "FluxSurface", "double_layer_potential", "enclosing_sphere_surface", "mirror_half_surface", "flux_height_structure",
-    "DimerMeshSpec", "DEFAULT_SPEC", "TABLE_SPEC", "COARSE_SPEC", "mesh_family", "hinge_refined_spec", "dimer_bodies", "split_bodies",
+    "ExteriorField", "FluxSurface", "double_layer_potential", "enclosing_sphere_surface", "mirror_half_surface",
+    "flux_height_structure",
+    "DimerMeshSpec", "DEFAULT_SPEC", "TABLE_SPEC", "COARSE_SPEC", "mesh_family", "hinge_refined_spec", "dimer_bodies",
+    "split_bodies",
     "check_closed_oriented", "volume_centroid", "MeshError",
     "FullwaveSurrogate", "build_fullwave_surrogate", "cached_fullwave_surrogate", "default_fullwave_surrogate",
     "coarse_fullwave_surrogate", "dimer_generalized_coefficients",

@@ -156,10 +156,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
     p_floor = smallest_sign_flip_pvalue(len(runs))
-    if p_floor > config.alpha:
-        logger.warning("with %d runs the held-out test of every effect cannot reach p <= %g (its smallest p is "
-                       "2^-%d = %.3g): no effect can be identified; record at least %d runs, or raise --alpha",
-                       len(runs), config.alpha, len(runs), p_floor, runs_needed(config.alpha))
+    identification_possible = p_floor <= config.alpha
+    if not identification_possible:  # logged in quiet mode too: it changes what "identified: none" means
+        logger.warning("with %d runs no effect can be identified at --alpha %g (smallest attainable p %.3g of the "
+                       "held-out sign-flip test, 2^-%d); record at least %d runs", len(runs), config.alpha, p_floor,
+                       len(runs), runs_needed(config.alpha))
     drift = detect_pressure_drift(problem, config.drift) if config.drift is not None else None
     if drift is not None and drift.detected:
         log("pressure drift detected (relative amplitude %.3g, time scale %.2g s, p = %.2g): the simulation "
@@ -296,7 +297,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "skipped_files": dataset.skipped_files(),
         "glitch_frames_masked": dataset.n_glitches,
         "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,
-                     "identification_possible": bool(p_floor <= config.alpha), "runs_needed": runs_needed(config.alpha),
+                     "identification_possible": bool(identification_possible), "runs_needed": runs_needed(config.alpha),
                      "min_relative_improvement": config.min_relative_improvement,
                      "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
     }
