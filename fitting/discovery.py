@@ -115,6 +115,9 @@ class DiscoveryConfig:
         the model's positions and velocities (False; measured to drift: module docstring).
     stepwise : bool
         Stepwise additions, swaps and merges after the backward elimination.
+    velocity_price : float or None
+        Residual variances by which a velocity term must lower the residual sum of squares to replace a
+        velocity-free term in a swap (None: z_alpha^2 at ``alpha``).
     """
 
     alpha: float = 0.01
@@ -131,6 +134,7 @@ class DiscoveryConfig:
     n_folds: int = 5
     raw_positions: bool = True
     stepwise: bool = True
+    velocity_price: float | None = None
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -296,7 +300,8 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                    for q in range(2)]
         coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
         for q in range(2):
-            sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise)
+            sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise,
+                                        config.velocity_price)
             held_a = [float("nan")] * len(path)
             if config.heldout_prune:
                 sel, path_b, held_b = prune_heldout(designs[q], sel, forced[q], config.alpha, config.velocity_first,

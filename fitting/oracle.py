@@ -19,6 +19,18 @@ distribution of initial states the standard error falls like ``1 / sqrt(n_runs)`
 measures the per-run information on reference runs (and checks the exponent on nested subsets) and
 tells how many runs make a term of a given size resolvable at a target oracle z.
 
+Aliases.  The oracle z measures a term against *zero*.  A selection also has to tell it from its
+*aliases*: a library term that can stand in for it.  On a nearly harmonic hinge y*thetadot^2 and
+y*theta^2 differ only by an amplitude-dependent y term (thetadot^2 = omega^2 (A^2 - theta^2)), so the two
+supports can fit the same data almost equally well however large the term is.  The **alias z** of a term
+is ``sqrt(dRSS) / sigma``, with dRSS the noise-free residual sum of squares that remains when the term is
+replaced by the best other library term (one for one, the other terms refitted): the number of noise
+standard deviations by which the true support beats its closest one-for-one rival.  It never exceeds
+the oracle z (dropping the term is one of the rivals' special cases).  With noise, the observed
+difference of the two residual sums of squares is about ``dRSS + 2 sigma sqrt(dRSS) xi`` (xi standard
+normal), so even the best estimator prefers the alias with probability ``Phi(-alias_z / 2)``: 16 % at
+alias z 2, 2.3 % at 4.
+
 Noise floor: :func:`estimate_tracking_noise` estimates the white tracking noise of each coordinate
 from the fourth differences of the raw positions (the motion's share is ``(omega dt)^4`` of its
 amplitude), with the median absolute deviation, so isolated tracking glitches do not inflate it.
@@ -42,7 +54,8 @@ if TYPE_CHECKING:
     from .derivatives import Derivatives
 
 __all__ = ["NoiseLevels", "OracleRun", "OracleTerm", "OracleResult", "RunPlan", "estimate_tracking_noise",
-           "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_standard_errors", "plan_runs",
+           "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_aliases", "oracle_standard_errors",
+           "plan_runs",
            "canonical_term", "METHOD"]
 
 #: The positions each equation is the second derivative of.
@@ -51,7 +64,9 @@ _COORD = {"yddot": 0, "thetaddot": 2}
 #: One-line description written next to the result in model.json.
 METHOD = ("oracle: standard error of pooled integral-form least squares on the model's support (windows of 0.75 of the "
           "coordinate's dominant period, 30-500 ms) with the columns at the model's own noise-free trajectories from "
-          "each run's initial state and white tracking noise of the stated std; z = |coefficient| / oracle SE")
+          "each run's initial state and white tracking noise of the stated std; z = |coefficient| / oracle SE; alias: the "
+          "library term that best replaces the term one for one, alias_z = sqrt(noise-free residual sum of squares of "
+          "that replacement) / noise")
 
 
 @dataclass(frozen=True)
@@ -124,11 +139,27 @@ class OracleTerm:
 
     coefficient: float
     std_error: float
+    #: the library term that comes closest to standing in for this one (None: not computed)
+    alias: str | None = None
+    #: sqrt(noise-free residual sum of squares with the term replaced by ``alias``) / noise (module docstring)
+    alias_z: float = float("nan")
 
     @property
     def z(self) -> float:
         """|coefficient| / standard error."""
         return abs(self.coefficient) / self.std_error if self.std_error > 0 else float("inf")
+
+    @property
+    def alias_probability(self) -> float:
+        """Probability that least squares prefers the alias over the true support: Phi(-alias_z / 2)."""
+        from scipy.special import ndtr
+
+        return float(ndtr(-0.5 * self.alias_z)) if np.isfinite(self.alias_z) else float("nan")
+
+    def to_json(self) -> dict:
+        """``{"coefficient", "std_error", "z", "alias", "alias_z"}``."""
+        return {"coefficient": self.coefficient, "std_error": self.std_error, "z": self.z, "alias": self.alias,
+                "alias_z": self.alias_z}
 
 
 @dataclass(frozen=True)
@@ -155,11 +186,12 @@ class OracleResult:
     window_s: dict[str, float]
 
     def to_json(self) -> dict:
-        """``{"method", "noise", "n_runs", "n_blown_up", "window_s", eq: {term: {"coefficient", "std_error", "z"}}}``."""
+        """``{"method", "noise", "n_runs", "n_blown_up", "window_s",
+        eq: {term: {"coefficient", "std_error", "z", "alias", "alias_z"}}}``."""
         out: dict = {"method": METHOD, "noise": self.noise.to_json(), "n_runs": self.n_runs,
                      "n_blown_up": self.n_blown_up, "window_s": dict(self.window_s)}
         for eq, terms in self.terms.items():
-            out[eq] = {t: {"coefficient": o.coefficient, "std_error": o.std_error, "z": o.z} for t, o in terms.items()}
+            out[eq] = {t: o.to_json() for t, o in terms.items()}
         return out
 
 
@@ -283,6 +315,65 @@ def oracle_information(model: PolynomialModel, runs: Sequence[OracleRun], period
     return out
 
 
+def oracle_aliases(model: PolynomialModel, runs: Sequence[OracleRun], noise: NoiseLevels, periods: float = 0.75,
+                   trajectories: Sequence[NDArray] | None = None) -> dict[str, dict[str, tuple[str | None, float]]]:
+    """Each support term's closest one-for-one alias in the library and its alias z (module docstring).
+
+    The columns of the whole library are evaluated at the model's noise-free trajectories, with the
+    windows of :func:`oracle_information`; the runs' stacked designs are reduced to one R factor per
+    equation (35 x 35, columns scaled to unit norm), on which every swap is an exact small least squares.
+
+    Parameters
+    ----------
+    model, runs, noise, periods, trajectories : as :func:`oracle_standard_errors`
+
+    Returns
+    -------
+    ``{equation: {term: (alias term or None, alias z)}}`` for every term of the model's support.
+    """
+    traj = list(trajectories) if trajectories is not None else oracle_trajectories(model, runs)
+    n_lib = len(TERMS)
+    out: dict[str, dict[str, tuple[str | None, float]]] = {}
+    for q, eq in enumerate(EQUATION_NAMES):
+        cols = _support(model, eq)
+        out[eq] = {}
+        if not cols:
+            continue
+        R = np.zeros((0, n_lib))
+        for r, s in zip(runs, traj):
+            if s.shape[0] < 16:
+                continue
+            f = dominant_frequency(s[:, _COORD[eq]], r.dt)
+            w = integral_window(r.dt, f, periods)
+            starts = window_starts(s.shape[0], w)
+            if starts.size == 0:
+                continue
+            X = integral_columns(evaluate_library(s), r.dt, starts, w)
+            R = np.linalg.qr(np.vstack([R, X]), mode="r")
+        if R.shape[0] == 0:
+            out[eq] = {TERMS[i]: (None, float("nan")) for i in cols}
+            continue
+        scale = np.linalg.norm(R, axis=0)
+        empty = scale == 0.0  # a column that vanishes on these trajectories cannot stand in for anything
+        scale[empty] = 1.0
+        Rs = R / scale
+        signal = Rs[:, cols] @ (model.coef[q, cols] * scale[cols])
+        sigma = noise.of(eq)
+        for i in cols:
+            rest = [k for k in cols if k != i]
+            best: tuple[str | None, float] = (None, float("inf"))
+            for j in range(n_lib):
+                if j in cols or empty[j]:
+                    continue
+                A = Rs[:, rest + [j]]
+                beta = np.linalg.lstsq(A, signal, rcond=None)[0]
+                z = float(np.linalg.norm(signal - A @ beta)) / sigma
+                if z < best[1]:
+                    best = (TERMS[j], z)
+            out[eq][TERMS[i]] = best
+    return out
+
+
 def _covariance_diag(info: NDArray) -> NDArray[np.float64]:
     """diag(info^-1) with column scaling (the SI columns span many decades)."""
     d = np.sqrt(np.clip(np.diag(info), 1e-300, None))
@@ -303,7 +394,8 @@ def oracle_standard_errors(model: PolynomialModel, runs: Sequence[OracleRun], no
     periods : float
         Window length in periods of each coordinate's dominant frequency.
     information : optional
-        Precomputed :func:`oracle_information` of the same model and runs.
+        Precomputed :func:`oracle_information` of the same model and runs (then the aliases are not
+        computed: ``alias`` None, ``alias_z`` NaN).
 
     Returns
     -------
@@ -313,6 +405,7 @@ def oracle_standard_errors(model: PolynomialModel, runs: Sequence[OracleRun], no
     if information is None:
         traj = oracle_trajectories(model, runs)
         information = oracle_information(model, runs, periods, traj)
+    aliases = oracle_aliases(model, runs, noise, periods, traj) if traj is not None else {}
     n_blown = 0 if traj is None else sum(int(s.shape[0] < r.n_frames) for s, r in zip(traj, runs))
     terms, window_s, n_used = {}, {}, 0
     for q, eq in enumerate(EQUATION_NAMES):
@@ -323,7 +416,9 @@ def oracle_standard_errors(model: PolynomialModel, runs: Sequence[OracleRun], no
             se = noise.of(eq) * np.sqrt(_covariance_diag(d["information"].sum(axis=0)))
         else:
             se = np.full(len(names), np.inf)
-        terms[eq] = {t: OracleTerm(float(c), float(e)) for t, c, e in zip(names, coef, se)}
+        al = aliases.get(eq, {})
+        terms[eq] = {t: OracleTerm(float(c), float(e), *al.get(t, (None, float("nan"))))
+                     for t, c, e in zip(names, coef, se)}
         window_s[eq] = float(np.nanmedian(d["window_s"])) if d["used"].any() else float("nan")
         n_used = max(n_used, int(d["used"].sum()))
     return OracleResult(terms, noise, n_used, n_blown, window_s)

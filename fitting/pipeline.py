@@ -17,7 +17,8 @@ integrates over every run with a loss below :data:`MAX_SANE_LOSS`, :class:`NoSan
 and nothing is written.
 
 Beside every selected term, ``model.json["oracle"]`` gives the oracle standard error and z of the final
-model (:mod:`fitting.oracle`) at the data's estimated tracking noise.
+model (:mod:`fitting.oracle`) at the data's estimated tracking noise, and the term's closest library alias
+with its alias z.
 """
 from __future__ import annotations
 
@@ -344,6 +345,11 @@ def _oracle(model: PolynomialModel, prepared: Sequence[PreparedRun], log: Callab
         return None
     log(f"oracle z at tracking noise {noise.sigma_y:.3g} m / {noise.sigma_theta:.3g}: " + "; ".join(
         f"{eq}: " + ", ".join(f"{t} {o.z:.3g}" for t, o in terms.items()) for eq, terms in res.terms.items()))
+    close = [f"{eq}: {t} / {o.alias} (alias z {o.alias_z:.2g})" for eq, terms in res.terms.items()
+             for t, o in terms.items() if o.alias_z < 3.0]
+    if close:
+        log("terms the data barely tell from their closest library alias (least squares picks the alias in "
+            "Phi(-alias_z / 2) of data sets): " + "; ".join(close))
     return res
 
 

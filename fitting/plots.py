@@ -55,6 +55,8 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
     paths.append(out / "zscores.png")
     _save(fig, paths[-1])
+    if getattr(res, "discovery", None) is not None:
+        paths.append(_plot_pareto(res.discovery, out / "pareto.png"))
     # coefficient distributions
     sel = [(q, j) for q in range(2) for j in range(len(TERMS)) if res.mask[q, j]]
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(sel)), 4))
@@ -111,6 +113,30 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     _save(fig1, paths[-2])
     _save(fig2, paths[-1])
     return paths
+
+
+def _plot_pareto(disc, path: Path) -> Path:
+    """Held-out error against the number of terms per equation (the discovery's elimination paths)."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for ax, eq in zip(axes, EQUATION_NAMES):
+        pts = [p for p in disc.pareto[eq] if np.isfinite(p.heldout_rms)]
+        if not pts:
+            ax.set_axis_off()
+            continue
+        best = min(p.heldout_rms for p in pts)
+        n = np.array([p.n_terms for p in pts])
+        excess = np.array([100.0 * (p.heldout_rms / best - 1.0) for p in pts])
+        ax.plot(n, excess, "o", color="tab:gray", ms=4, label="supports on the elimination paths")
+        sel = [k for k, p in enumerate(pts) if p.selected]
+        ax.plot(n[sel], excess[sel], "o", color="tab:red", ms=8, label="selected")
+        ax.set_yscale("symlog", linthresh=0.01)
+        ax.set_xlabel("number of terms")
+        ax.set_ylabel("held-out RMS error above the smallest [%]")
+        ax.set_title(f"{eq}: Pareto front (5-fold over runs)")
+        ax.legend(fontsize=7)
+    _save(fig, path)
+    return path
 
 
 def plot_comparison(cmp: "Comparison", out_dir: str | os.PathLike) -> Path:

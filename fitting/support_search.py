@@ -172,7 +172,7 @@ def _eliminate(d: ReducedDesign, cols: Sequence[int], forced: NDArray[np.bool_],
 
 
 def select_support(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,
-                   stepwise: bool = True) -> tuple[list[int], list[list[int]]]:
+                   stepwise: bool = True, velocity_price: float | None = None) -> tuple[list[int], list[list[int]]]:
     """Backward elimination from the full library until Holm's rule declares every free term significant, then
     stepwise additions and swaps (:func:`_stepwise`); returns the selection and the elimination path."""
     n_lib = d.total.shape[1] - 1
@@ -185,7 +185,7 @@ def select_support(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0
         if _holm_ok(absz, ~forced[keep], alpha, n_hyp):
             break
     if stepwise:
-        cols = _stepwise(d, cols, forced, alpha, n_hyp)
+        cols = _stepwise(d, cols, forced, alpha, n_hyp, velocity_price)
     return cols, path
 
 
@@ -203,7 +203,8 @@ def prune_heldout(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], 
     return path[best], path, held
 
 
-def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int) -> list[int]:
+def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int,
+              velocity_price: float | None = None) -> list[int]:
     """Improve a support found by backward elimination.
 
     Moves, in this order of preference: add the most significant outside term if every term stays
@@ -229,8 +230,9 @@ def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alph
 
     n_lib = d.total.shape[1] - 1
     velocity = ~_VELOCITY_FREE[:n_lib]
-    tau = float(ndtri(1.0 - 0.5 * alpha)) ** 2
-    tau_merge = max(tau, float(np.log(max(int(d.rows.sum() - 2 * d.windows.sum()), 2))))
+    z_alpha_sq = float(ndtri(1.0 - 0.5 * alpha)) ** 2
+    tau = z_alpha_sq if velocity_price is None else float(velocity_price)
+    tau_merge = max(z_alpha_sq, float(np.log(max(int(d.rows.sum() - 2 * d.windows.sum()), 2))))
     cols = sorted(cols)
     visited = {tuple(cols)}
 

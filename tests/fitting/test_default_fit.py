@@ -69,6 +69,9 @@ def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp
     # oracle standard error beside every selected term; per-run entries and z-scores as FORMATS.md asks
     for eq, terms in d["equations"].items():
         assert set(d["oracle"][eq]) == set(terms) and all(d["oracle"][eq][t]["std_error"] > 0 for t in terms)
+        for t in terms:  # and the closest alias, never closer to zero than the term itself
+            o = d["oracle"][eq][t]
+            assert o["alias"] in TERMS and o["alias"] not in terms and 0 < o["alias_z"] <= o["z"] * (1 + 1e-9)
     assert len(d["per_run"]) == 4 and len(d["zscores"]["thetaddot"]) == len(TERMS)
     runs = [type("R", (), {"dt": float(r["t"][1] - r["t"][0])}) for r in raw]
     _check(TRUTH, _Fitted(d), _oracle_se(TRUTH, runs, [r["state"] for r in raw], CFG))

@@ -91,7 +91,53 @@ def test_oracle_standard_errors_match_a_monte_carlo_of_the_estimator(model, clea
         for t, o in oracle.terms[eq].items():
             assert twice.terms[eq][t].std_error == pytest.approx(2 * o.std_error, rel=1e-9)
     js = oracle.to_json()
-    assert set(js["thetaddot"]["y^2*theta"]) == {"coefficient", "std_error", "z"} and js["n_runs"] == 6
+    assert set(js["thetaddot"]["y^2*theta"]) == {"coefficient", "std_error", "z", "alias", "alias_z"}
+    assert js["n_runs"] == 6
+    # dropping a term is a special case of replacing it: the alias z never exceeds the oracle z
+    for eq in EQUATION_NAMES:
+        for t, o in oracle.terms[eq].items():
+            assert o.alias in TERMS and o.alias not in oracle.terms[eq] and 0.0 < o.alias_z <= o.z * (1 + 1e-9)
+
+
+def test_alias_z_predicts_how_often_least_squares_prefers_the_alias():
+    """A weak hinge term near its alias: y*thetadot^2 on a nearly harmonic 9-Hz hinge, whose closest rival is
+    ydot*theta*thetadot.  Over noise draws on fixed noise-free trajectories, least squares at the exact columns
+    compares the true support with the one where the term is replaced by its alias: the mean difference of the
+    residual sums of squares is alias_z^2 noise variances, and the alias wins in Phi(-alias_z / 2) of the draws."""
+    from scipy.special import ndtr
+
+    from fitting.model import PolynomialModel
+
+    w_y, w_t = 2 * np.pi * 22.0, 2 * np.pi * 9.0
+    weak = PolynomialModel.from_equations({
+        "yddot": {"y": -w_y ** 2, "y^2": 1.0e6, "ydot": -0.3},
+        "thetaddot": {"theta": -w_t ** 2, "y": 1.5e6, "y^2*theta": 4.0e9, "thetadot": -0.8, "y*thetadot^2": 400.0,
+                      "y*ydot*thetadot": 2.0e6}})
+    noise = NoiseLevels(2.0e-6, 0.004)
+    gen = generate_runs(weak, SyntheticConfig(n_runs=8, duration=3.0, fps=FPS, noise_y=0.0, noise_theta=0.0,
+                                              missing_frames=0, seed=11))
+    runs = [OracleRun(r["x0"], r["t"].size, 1.0 / FPS) for r in gen]
+    term = oracle_standard_errors(weak, runs, noise).terms["thetaddot"]["y*thetadot^2"]
+    assert term.alias == "ydot*theta*thetadot"
+    assert 1.5 < term.alias_z < 5.0 < term.z  # a term well above zero (z ~ 10) but only a few sigma from its alias
+    support = [t for t, c in zip(TERMS, weak.coef[1]) if c != 0]
+    rival = [term.alias if t == "y*thetadot^2" else t for t in support]
+    windows = [integral_window(1.0 / FPS, dominant_frequency(r["state"][:, 2], 1.0 / FPS)) for r in gen]
+    rng = np.random.default_rng(7)
+    n_draws = 4000
+    pos = [r["state"][:, 2][:, None] + noise.sigma_theta * rng.standard_normal((r["t"].size, n_draws)) for r in gen]
+    rss = []
+    for names in (support, rival):
+        columns = [evaluate_library(r["state"])[:, [TERMS.index(t) for t in names]] for r in gen]
+        X, b = _stacked(pos, columns, windows)
+        rss.append(np.sum((b - X @ _lstsq(X, b)) ** 2, axis=0) / noise.sigma_theta ** 2)
+    gain = rss[1] - rss[0]
+    # the mean of 4000 draws scatters by 2 alias_z / sqrt(4000) = 0.03 alias_z; allow 10 % of alias_z^2 + 0.3
+    assert abs(np.mean(gain) - term.alias_z ** 2) < 0.1 * term.alias_z ** 2 + 0.3
+    # a proportion near 0.1 from 4000 draws scatters by 0.005; the normal approximation of the difference of
+    # the two sums of squares (its quadratic part neglected) is good to about 0.02 here
+    assert abs(np.mean(gain < 0) - float(ndtr(-0.5 * term.alias_z))) < 0.03
+    assert term.alias_probability == pytest.approx(float(ndtr(-0.5 * term.alias_z)))
 
 
 def test_planner_scaling_is_measured_and_consistent(model):

@@ -51,6 +51,11 @@ def test_report_has_every_section_image_and_finite_number(damping_report):
         assert np.isfinite(v), c
     numbers = json.loads((damping_report.parent / "numbers.json").read_text())
     assert set(SECTIONS) <= set(numbers)
+    # the default fit (discovery): its Pareto front and the oracle and alias beside every term
+    fit = text[text.index('<section id="fit">'):text.index('<section id="simulation">')]
+    assert "Pareto front of the discovery" in fit
+    for col in ("oracle std error", "oracle z", "alias", "alias z"):
+        assert f"<th>{col}</th>" in fit
 
 
 @pytest.mark.slow
