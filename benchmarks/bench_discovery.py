@@ -102,14 +102,20 @@ def make_data(case: Case, seed: int):
     return truth, runs, derivs, exact
 
 
-def oracle(truth, runs, exact, noise: tuple[float, float]) -> np.ndarray:
-    """Oracle standard errors (2, 35) of the true support (:func:`fitting.oracle.oracle_standard_errors` from the
-    exact initial states at the data set's noise)."""
-    from fitting.model import TERMS
+def oracle_result(truth, runs, exact, noise: tuple[float, float]):
+    """:func:`fitting.oracle.oracle_standard_errors` of the true model from the exact initial states at the data
+    set's noise (standard errors, z, aliases)."""
     from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 
-    res = oracle_standard_errors(truth, [OracleRun(e[0], len(e), r.dt) for r, e in zip(runs, exact)],
-                                 NoiseLevels(*noise))
+    return oracle_standard_errors(truth, [OracleRun(e[0], len(e), r.dt) for r, e in zip(runs, exact)],
+                                  NoiseLevels(*noise))
+
+
+def oracle(truth, runs, exact, noise: tuple[float, float], result=None) -> np.ndarray:
+    """Oracle standard errors (2, 35) of the true support (of ``result`` or :func:`oracle_result`)."""
+    from fitting.model import TERMS
+
+    res = result if result is not None else oracle_result(truth, runs, exact, noise)
     se = np.zeros(truth.coef.shape)
     for q, eq in enumerate(("yddot", "thetaddot")):
         for t, o in res.terms[eq].items():
@@ -117,8 +123,14 @@ def oracle(truth, runs, exact, noise: tuple[float, float]) -> np.ndarray:
     return se
 
 
-def score(truth, result, oracle_se: np.ndarray, z_min: float = 5.0) -> dict:
-    """Found / missed / spurious terms and coefficient errors against max(10 %, 3 oracle SE)."""
+def aliases(result) -> dict[str, tuple[str, float]]:
+    """``{"eq:term": (alias, alias z)}`` of an :func:`oracle_result`."""
+    return {f"{eq}:{t}": (o.alias, o.alias_z) for eq, terms in result.terms.items() for t, o in terms.items()}
+
+
+def score(truth, result, oracle_se: np.ndarray, z_min: float = 5.0, alias: dict | None = None) -> dict:
+    """Found / missed / spurious terms and coefficient errors against max(10 %, 3 oracle SE); with ``alias``
+    (:func:`aliases`) each missed term names its closest alias and alias z."""
     from cubedimer.terms import EQUATION_NAMES
     from fitting.model import TERMS
 
@@ -135,7 +147,8 @@ def score(truth, result, oracle_se: np.ndarray, z_min: float = 5.0) -> dict:
                 rows.append((eq, t, c0, z_or[q, j], bool(result.mask[q, j]), c, abs(c - c0) / abs(c0),
                              abs(c - c0) / oracle_se[q, j], ok))
                 if not result.mask[q, j] and z_or[q, j] >= z_min:
-                    missed.append(f"{eq}:{t}")
+                    a = (alias or {}).get(f"{eq}:{t}")
+                    missed.append(f"{eq}:{t}" + (f" (alias {a[0]}, alias z {a[1]:.1f})" if a else ""))
                 if result.mask[q, j] and not ok:
                     bad.append(f"{eq}:{t}")
             elif result.mask[q, j]:
@@ -148,11 +161,12 @@ def run_case(case: Case, seed: int, config=None) -> tuple[dict, object, float]:
     from fitting.discovery import DiscoveryConfig, discover_model
 
     truth, runs, derivs, exact = make_data(case, seed)
-    se = oracle(truth, runs, exact, (case.noise_y, case.noise_theta))
+    orc = oracle_result(truth, runs, exact, (case.noise_y, case.noise_theta))
+    se = oracle(truth, runs, exact, (case.noise_y, case.noise_theta), orc)
     t0, c0 = time.perf_counter(), time.process_time()
     res = discover_model(runs, derivs, config or DiscoveryConfig())
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    return score(truth, res, se), res, (wall, cpu)
+    return score(truth, res, se, alias=aliases(orc)), res, (wall, cpu)
 
 
 def report(case: Case, seed: int, sc: dict, res, wall: float) -> list[str]:

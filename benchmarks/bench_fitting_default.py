@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench_discovery import CASES, oracle, score
+from .bench_discovery import CASES, aliases, oracle, oracle_result, score
 
 
 class _Final:
@@ -42,12 +42,14 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
     data = workdir / f"{case.name}-{seed}"
     raw = write_dataset(data, truth, cfg)
     runs = [Run(name=f"run{i + 1:02d}.csv", t=r["t"], y=r["y"], theta=r["theta"]) for i, r in enumerate(raw)]
-    se = oracle(truth, runs, [r["state"] for r in raw], (case.noise_y, case.noise_theta))
+    orc = oracle_result(truth, runs, [r["state"] for r in raw], (case.noise_y, case.noise_theta))
+    se = oracle(truth, runs, [r["state"] for r in raw], (case.noise_y, case.noise_theta), orc)
     t0 = time.perf_counter()
     res = fit_dataset(data, workdir / f"{case.name}-{seed}-out", config or FitConfig(), plots=False, progress=False)
     wall = time.perf_counter() - t0
-    before = score(truth, res.discovery, se) if res.discovery is not None else None
-    return score(truth, _Final(res.model), se), wall, res, before
+    al = aliases(orc)
+    before = score(truth, res.discovery, se, alias=al) if res.discovery is not None else None
+    return score(truth, _Final(res.model), se, alias=al), wall, res, before
 
 
 def speed(n_runs: int, workdir: Path, seed: int = 0) -> tuple[float, float]:

@@ -157,6 +157,10 @@ def test_planner_scaling_is_measured_and_consistent(model):
                                                missing_frames=0, seed=3))
     direct = oracle_standard_errors(model, [OracleRun(g["x0"], g["t"].size, 1.0 / FPS) for g in gen], NOISE)
     assert se[32] == pytest.approx(direct.terms["thetaddot"]["y^2*theta"].std_error, rel=1e-9)
+    # the closest alias is the reference runs' own, and the runs to tell it apart scale like alias_z^2
+    d = direct.terms["thetaddot"]["y^2*theta"]
+    assert plan.alias == d.alias and plan.alias_z_reference == pytest.approx(d.alias_z, rel=1e-9)
+    assert plan.runs_needed_alias == int(np.ceil(32 * (4.0 / d.alias_z) ** 2))
     # a smaller term (the model changes with it, so does the table): the first row whose median z reaches 5
     small = plan_runs(model, NOISE, size=5.0 * se[16], **kw)
     assert small.table[0][2] < 5.0 <= small.table[-1][2]
@@ -205,7 +209,7 @@ def test_plan_cli(tmp_path, model, capsys):
     out = capsys.readouterr().out
     rows = [line.split() for line in out.splitlines() if line.split() and line.split()[0].isdigit()]
     assert [r[0] for r in rows] == ["4", "8"] and float(rows[1][2]) > float(rows[0][2]) > 0
-    assert "runs needed for oracle z >= 5" in out
+    assert "runs needed for oracle z >= 5" in out and "closest alias: " in out
     # a term outside the model needs a size; an unknown term is one line, exit 2
     assert main(args + ["--term", "thetaddot:theta^3"]) == 2
     assert main(args + ["--term", "thetaddot:theta^5"]) == 2
