@@ -98,6 +98,27 @@ def test_method_is_validated():
     with pytest.raises(ValueError):
         FitConfig(polish_se=0.0)
     assert main(["fit", "nowhere", "--out", "x", "--selection", "zscore"]) == 2  # a paper-only option
+    assert main(["fit", "nowhere", "--out", "x", "--method", "paper", "--heldout-tolerance", "0.002"]) == 2
+    assert main(["fit", "nowhere", "--out", "x", "--heldout-tolerance", "1.5"]) == 2  # a fraction in [0, 1)
+
+
+def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp_path):
+    """The practical threshold: the smallest support within 30 % of the best held-out error.  Every weak term of
+    TRUTH improves the held-out error by far less than that, so the model shrinks, and the written support is one
+    of the Pareto front's, with its held-out error within the tolerance of the front's best."""
+    data, _ = sparse
+    out = tmp_path / "out"
+    assert main(["fit", str(data), "--out", str(out), "--no-plots", "--quiet", "--workers", "1", "--max-evals", "20",
+                 "--heldout-tolerance", "0.3"]) == 0
+    d = json.loads((out / "model.json").read_text())
+    assert d["settings"]["discovery"]["heldout_tolerance"] == 0.3
+    n_true = int(TRUTH.support.sum())
+    assert sum(len(t) for t in d["equations"].values()) < n_true
+    for eq in ("yddot", "thetaddot"):
+        front = d["discovery"][eq]["pareto"]
+        chosen = [p for p in front if p["selected"]]
+        assert len(chosen) == 1 and set(chosen[0]["terms"]) == set(d["discovery"][eq]["terms"])
+        assert chosen[0]["heldout_rms"] <= 1.3 * min(p["heldout_rms"] for p in front)
 
 
 def test_blown_up_discovery_is_never_written_with_exit_0(sparse, tmp_path, monkeypatch, capsys):
