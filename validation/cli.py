@@ -267,6 +267,10 @@ def _add_report(sub) -> None:
                    help="the fit's model discovery: integral-form discovery with a long-time polish, or the "
                         "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
                         "see python -m fitting fit --help")
+    p.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
+                   help="discovery only: keep the smallest support whose held-out error is within FRACTION of the best "
+                        "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
+                        "see python -m fitting fit --help")
     p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
                    help="the simulation model the diagnosis (section 6) calibrates; the report puts the other one "
                    "beside it (sections 4, 5 and 7) whenever the full-wave table of the default 500 um dimer applies")
@@ -282,11 +286,15 @@ def run_report(args: argparse.Namespace) -> int:
 
     from .report.pipeline import build_report
 
+    if args.heldout_tolerance is not None and (args.method != "discovery" or not 0.0 <= args.heldout_tolerance < 1.0):
+        raise UserInputError(f"--heldout-tolerance {args.heldout_tolerance:g}: a fraction in [0, 1), with --method "
+                             "discovery (0.002 keeps the smallest support within 0.2 % of the best held-out error)")
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
-                     max_evals=args.max_evals, method=args.method, model=args.model)
+                     max_evals=args.max_evals, method=args.method, model=args.model,
+                     heldout_tolerance=args.heldout_tolerance)
     except (DatasetError, TableMismatch) as exc:
         raise UserInputError(str(exc)) from None
     return 0

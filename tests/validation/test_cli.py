@@ -105,3 +105,12 @@ def test_fullwave_model_refuses_another_experiment_in_one_line(tmp_path, tiny_da
     line = _one_line_error(capsys)
     assert line.startswith("error: ") and "side_length_m" in line and "full-wave" in line
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+@pytest.mark.parametrize("extra", [["--heldout-tolerance", "1.5"], ["--heldout-tolerance", "0.002", "--method", "paper"]])
+def test_report_heldout_tolerance_is_checked_before_anything_runs(tmp_path, tiny_data, capsys, extra):
+    """A tolerance outside [0, 1), or with the paper's method, is one line naming the option; nothing is written."""
+    assert main(["report", str(tiny_data), "--out", str(tmp_path / "out"), "--quiet", *extra]) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("error: --heldout-tolerance") and "[0, 1)" in line
+    assert not (tmp_path / "out").exists()

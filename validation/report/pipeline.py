@@ -112,7 +112,7 @@ def _scattering_section(models) -> Section:
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None, method: str = "discovery",
-                 model: str = "gorkov") -> Path:
+                 model: str = "gorkov", heldout_tolerance: float | None = None) -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -128,6 +128,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     method : the fit's model-discovery method (:data:`fitting.pipeline.METHODS`)
     model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
         stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
+    heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
 
     Returns
     -------
@@ -159,6 +160,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     figs_dir = out / "figures"
     fit_dir = out / "fit"
     config = FitConfig(method=method)
+    if heldout_tolerance is not None:
+        if method != "discovery":
+            raise ValueError("heldout_tolerance applies to the discovery method")
+        config = replace(config, discovery=replace(config.discovery, heldout_tolerance=heldout_tolerance))
     if max_evals is not None:
         config = replace(config, refine=replace(config.refine, max_evals=max_evals),
                          polish=replace(config.polish, max_evals=max_evals),
@@ -405,8 +410,8 @@ def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
     if knee and sum(len(t) for t in knee.values()) < n_terms:
         text += (f" The smallest supports within {100 * KNEE_TOLERANCE:g} % of the best held-out error have "
                  f"{sum(len(t) for t in knee.values())} terms (" + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee.items())
-                 + f"); `python -m fitting fit DATA --out DIR --heldout-tolerance {KNEE_TOLERANCE:g}` fits that model "
-                 "(it also drops weak true terms near the information limit).")
+                 + f"); `--heldout-tolerance {KNEE_TOLERANCE:g}` (of `python -m fitting fit` and of this report) fits "
+                 "that model (it also drops weak true terms near the information limit).")
     return text, Table("Discovered model (SI)", ["equation", "term", "coefficient", "std error", "z", "oracle std error",
                                                  "oracle z", "alias", "alias z"], rows)
 
