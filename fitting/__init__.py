@@ -13,7 +13,7 @@ from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
 from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, select_terms, term_statistics
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
-from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_standard_errors, plan_runs
+from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_aliases, oracle_standard_errors, plan_runs
 from .pipeline import METHODS, FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
 from .refine import RefineConfig, refine
 from .selection import SelectionConfig
@@ -25,7 +25,7 @@ __all__ = [
     "RegressionConfig", "fit_regression", "RefineConfig", "refine", "LossWeights", "LossTerms",
     "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
     "SelectionConfig", "DiscoveryConfig", "DiscoveryResult", "discover_model",
-    "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_standard_errors", "plan_runs",
+    "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_aliases", "oracle_standard_errors", "plan_runs",
     "METHODS", "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
     "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",
     "SyntheticConfig", "paper_reduced_model", "write_dataset",

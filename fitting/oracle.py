@@ -55,8 +55,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NoiseLevels", "OracleRun", "OracleTerm", "OracleResult", "RunPlan", "estimate_tracking_noise",
            "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_aliases", "oracle_standard_errors",
-           "plan_runs",
-           "canonical_term", "METHOD"]
+           "plan_runs", "canonical_term", "METHOD"]
 
 #: The positions each equation is the second derivative of.
 _COORD = {"yddot": 0, "thetaddot": 2}
@@ -370,7 +369,7 @@ def oracle_aliases(model: PolynomialModel, runs: Sequence[OracleRun], noise: Noi
                 z = float(np.linalg.norm(signal - A @ beta)) / sigma
                 if z < best[1]:
                     best = (TERMS[j], z)
-            out[eq][TERMS[i]] = best
+            out[eq][TERMS[i]] = best if best[0] is not None else (None, float("nan"))
     return out
 
 
