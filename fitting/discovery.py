@@ -58,9 +58,14 @@ if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
-__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "METHOD"]
+__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "METHOD",
+           "KNEE_TOLERANCE"]
 
 log = logging.getLogger(__name__)
+
+#: Held-out tolerance of the Pareto knee that model.json and the report name (``DiscoveryResult.knee``; the same
+#: number as ``fit --heldout-tolerance 0.002``): on the paper-like twin it gives the Gor'kov-form model.
+KNEE_TOLERANCE = 0.002
 
 #: One-line description of the method (written next to the result).
 METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, Numerov-corrected "
@@ -241,15 +246,31 @@ class DiscoveryResult:
     def terms(self) -> dict[str, list[str]]:
         return {eq: [t for t, m in zip(TERMS, self.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
 
+    def knee(self, tolerance: float = KNEE_TOLERANCE) -> dict[str, tuple[str, ...]]:
+        """Per equation, the smallest support on the Pareto front whose held-out error is within ``tolerance`` (a
+        fraction) of the front's best: the smaller model a practical threshold gives (``heldout_tolerance``).
+        Empty for an equation whose front has no held-out errors (fewer than two runs)."""
+        out = {}
+        for eq in EQUATION_NAMES:
+            front = [p for p in self.pareto[eq] if np.isfinite(p.heldout_rms)]
+            if front:
+                best = min(p.heldout_rms for p in front)
+                out[eq] = min((p for p in front if p.heldout_rms <= best * (1.0 + tolerance)),
+                              key=lambda p: p.n_terms).terms
+        return out
+
     def to_json(self) -> dict:
-        """Selected terms with value, std_error and z per equation; the Pareto front; the iterations."""
+        """Selected terms with value, std_error and z per equation; the Pareto front; its knee at
+        :data:`KNEE_TOLERANCE`; the iterations."""
         z = self.z
+        knee = self.knee()
         return {"method": METHOD,
                 **{eq: {"terms": {t: {"value": float(self.coef[q, j]), "std_error": float(self.std_errors[q, j]),
                                       "z": float(z[q, j])} for j, t in enumerate(TERMS) if self.mask[q, j]},
                         "residual_std": float(self.residual_std[q]), "window_s": float(self.window_s[q]),
                         "pareto": [p.to_json() for p in self.pareto[eq]]}
                    for q, eq in enumerate(EQUATION_NAMES)},
+                "knee": {"tolerance": KNEE_TOLERANCE, **{eq: list(t) for eq, t in knee.items()}},
                 "iterations": [it.to_json() for it in self.iterations], "converged": self.converged}
 
 

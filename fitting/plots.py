@@ -15,6 +15,7 @@ import numpy as np
 
 from cubedimer.atomic import atomic_save
 from cubedimer.terms import EQUATION_NAMES
+from .discovery import KNEE_TOLERANCE
 from .model import TERMS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -130,6 +131,12 @@ def _plot_pareto(disc, path: Path) -> Path:
         ax.plot(n, excess, "o", color="tab:gray", ms=4, label="supports on the elimination paths")
         sel = [k for k, p in enumerate(pts) if p.selected]
         ax.plot(n[sel], excess[sel], "o", color="tab:red", ms=8, label="selected")
+        ax.axhline(100 * KNEE_TOLERANCE, color="tab:blue", ls=":", lw=0.8)
+        knee = disc.knee().get(eq)
+        if knee is not None:
+            k = next(i for i, p in enumerate(pts) if p.terms == knee)
+            ax.plot(n[k], excess[k], "s", mfc="none", mec="tab:blue", ms=11, mew=1.5,
+                    label=f"knee: smallest within {100 * KNEE_TOLERANCE:g} % of the best")
         ax.set_yscale("symlog", linthresh=0.01)
         ax.set_xlabel("number of terms")
         ax.set_ylabel("held-out RMS error above the smallest [%]")

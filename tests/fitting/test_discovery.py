@@ -143,6 +143,13 @@ def test_small_data_set_gives_the_true_support_and_a_pareto_front():
     assert all(p.heldout_rms > chosen[0].heldout_rms for p in front if p.n_terms < 7)
     js = res.to_json()
     assert set(js["thetaddot"]["terms"]) == {t for t, m in zip(TERMS, truth.support[1]) if m}
+    # the knee: tolerance 0 is the front's held-out minimum; a tolerance above every excess is the smallest support
+    best = min(front, key=lambda p: p.heldout_rms)
+    assert res.knee(0.0)["thetaddot"] == best.terms
+    assert res.knee(1e9)["thetaddot"] == front[-1].terms
+    worst_excess = max(p.heldout_rms for p in front) / best.heldout_rms - 1.0
+    assert res.knee(0.5 * worst_excess)["thetaddot"] != front[-1].terms
+    assert js["knee"]["tolerance"] == 0.002 and js["knee"]["thetaddot"] == list(res.knee()["thetaddot"])
 
 
 # ---- the criterion on several sparse truths (slow) -----------------------------------------------------------

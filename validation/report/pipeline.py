@@ -406,30 +406,15 @@ def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
              "the library (real dimers) the data resolve many small terms, and the knee of the front is the smaller "
              "model a physicist may prefer.")
-    knee = _pareto_knee(disc, KNEE_TOLERANCE)
-    if knee and sum(len(t) for t in knee.values()) < n_terms:
-        text += (f" The smallest supports within {100 * KNEE_TOLERANCE:g} % of the best held-out error have "
-                 f"{sum(len(t) for t in knee.values())} terms (" + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee.items())
-                 + f"); `--heldout-tolerance {KNEE_TOLERANCE:g}` (of `python -m fitting fit` and of this report) fits "
-                 "that model (it also drops weak true terms near the information limit).")
+    knee = disc.get("knee") or {}
+    knee_terms = {eq: knee[eq] for eq in ("yddot", "thetaddot") if eq in knee}
+    if len(knee_terms) == 2 and sum(len(t) for t in knee_terms.values()) < n_terms:
+        tol = knee["tolerance"]
+        text += (f" The smallest supports within {100 * tol:g} % of the best held-out error (the knee) have "
+                 f"{sum(len(t) for t in knee_terms.values())} terms ("
+                 + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee_terms.items())
+                 + f"); `--heldout-tolerance {tol:g}` (of `python -m fitting fit` and of this report) fits that model "
+                 "(it also drops weak true terms near the information limit).")
     return text, Table("Discovered model (SI)", ["equation", "term", "coefficient", "std error", "z", "oracle std error",
                                                  "oracle z", "alias", "alias z"], rows)
 
-
-#: Held-out tolerance of the smaller model the report points to (the Pareto knee; ``fit --heldout-tolerance``).
-KNEE_TOLERANCE = 0.002
-
-
-def _pareto_knee(disc: dict, tolerance: float) -> dict[str, list[str]]:
-    """Per equation, the smallest support on model.json's Pareto front whose held-out error is within ``tolerance``
-    of the front's best (empty when a front is missing)."""
-    out = {}
-    for eq in ("yddot", "thetaddot"):
-        front = [p for p in disc.get(eq, {}).get("pareto", []) if p.get("heldout_rms") is not None
-                 and np.isfinite(p["heldout_rms"])]
-        if not front:
-            return {}
-        best = min(p["heldout_rms"] for p in front)
-        out[eq] = list(min((p for p in front if p["heldout_rms"] <= best * (1 + tolerance)),
-                           key=lambda p: p["n_terms"])["terms"])
-    return out
