@@ -151,9 +151,7 @@ class OracleTerm:
     @property
     def alias_probability(self) -> float:
         """Probability that least squares prefers the alias over the true support: Phi(-alias_z / 2)."""
-        from scipy.special import ndtr
-
-        return float(ndtr(-0.5 * self.alias_z)) if np.isfinite(self.alias_z) else float("nan")
+        return _alias_odds(self.alias_z) if np.isfinite(self.alias_z) else float("nan")
 
     def to_json(self) -> dict:
         """``{"coefficient", "std_error", "z", "alias", "alias_z"}``."""
