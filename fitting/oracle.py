@@ -268,6 +268,20 @@ def _support(model: PolynomialModel, equation: str) -> list[int]:
     return [int(j) for j in np.flatnonzero(model.coef[EQUATION_NAMES.index(equation)])]
 
 
+def _run_design(run: OracleRun, trajectory: NDArray, equation: str, periods: float,
+                cols: Sequence[int] | None = None) -> tuple[NDArray[np.float64], int] | None:
+    """The integral-form design of one run's noise-free trajectory for ``equation`` (library columns ``cols``, all
+    by default) and its window [frames]; None when the trajectory is too short for one window."""
+    if trajectory.shape[0] < 16:
+        return None
+    w = integral_window(run.dt, dominant_frequency(trajectory[:, _COORD[equation]], run.dt), periods)
+    starts = window_starts(trajectory.shape[0], w)
+    if starts.size == 0:
+        return None
+    lib = evaluate_library(trajectory)
+    return integral_columns(lib if cols is None else lib[:, list(cols)], run.dt, starts, w), w
+
+
 def oracle_information(model: PolynomialModel, runs: Sequence[OracleRun], periods: float = 0.75,
                        trajectories: Sequence[NDArray] | None = None) -> dict[str, dict]:
     """Per run and equation, the unit-noise information matrix ``X_r^T X_r`` of the integral form.
@@ -297,14 +311,10 @@ def oracle_information(model: PolynomialModel, runs: Sequence[OracleRun], period
         win = np.full(len(runs), np.nan)
         used = np.zeros(len(runs), bool)
         for i, (r, s) in enumerate(zip(runs, traj)):
-            if p == 0 or s.shape[0] < 16:
+            design = _run_design(r, s, eq, periods, cols) if p else None
+            if design is None:
                 continue
-            f = dominant_frequency(s[:, _COORD[eq]], r.dt)
-            w = integral_window(r.dt, f, periods)
-            starts = window_starts(s.shape[0], w)
-            if starts.size == 0:
-                continue
-            X = integral_columns(evaluate_library(s)[:, cols], r.dt, starts, w)
+            X, w = design
             info[i] = X.T @ X
             win[i] = w * r.dt
             used[i] = True
@@ -338,15 +348,9 @@ def oracle_aliases(model: PolynomialModel, runs: Sequence[OracleRun], noise: Noi
             continue
         R = np.zeros((0, n_lib))
         for r, s in zip(runs, traj):
-            if s.shape[0] < 16:
-                continue
-            f = dominant_frequency(s[:, _COORD[eq]], r.dt)
-            w = integral_window(r.dt, f, periods)
-            starts = window_starts(s.shape[0], w)
-            if starts.size == 0:
-                continue
-            X = integral_columns(evaluate_library(s), r.dt, starts, w)
-            R = np.linalg.qr(np.vstack([R, X]), mode="r")
+            design = _run_design(r, s, eq, periods)
+            if design is not None:
+                R = np.linalg.qr(np.vstack([R, design[0]]), mode="r")
         if R.shape[0] == 0:
             out[eq] = {TERMS[i]: (None, float("nan")) for i in cols}
             continue
