@@ -38,18 +38,15 @@ def _log(msg: str) -> None:
 def _cmd_fit(a: argparse.Namespace) -> int:
     from .pipeline import FitConfig, fit_dataset
 
-    prepare_output_dir(a.out, "--out", create=False)
     from cubedimer.cli import UserInputError
+
+    prepare_output_dir(a.out, "--out", create=False)
     if a.method != "paper" and (a.selection or a.relative_threshold):
         raise UserInputError("--selection and --relative-threshold apply to --method paper")
-    if a.heldout_tolerance is not None and a.method == "paper":
-        raise UserInputError("--heldout-tolerance applies to --method discovery")
-    if a.heldout_tolerance is not None and not 0.0 <= a.heldout_tolerance < 1.0:
-        raise UserInputError(f"--heldout-tolerance must lie in [0, 1), got {a.heldout_tolerance:g} "
-                             "(a fraction: 0.002 keeps the smallest support within 0.2 % of the best held-out error)")
-    cfg = FitConfig(method=a.method)
-    if a.heldout_tolerance is not None:
-        cfg = replace(cfg, discovery=replace(cfg.discovery, heldout_tolerance=a.heldout_tolerance))
+    try:
+        cfg = FitConfig(method=a.method).with_heldout_tolerance(a.heldout_tolerance)
+    except ValueError as exc:
+        raise UserInputError(f"--heldout-tolerance {exc}") from None
     if a.max_evals and a.method == "paper":
         cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
     elif a.max_evals:

@@ -286,9 +286,12 @@ def run_report(args: argparse.Namespace) -> int:
 
     from .report.pipeline import build_report
 
-    if args.heldout_tolerance is not None and (args.method != "discovery" or not 0.0 <= args.heldout_tolerance < 1.0):
-        raise UserInputError(f"--heldout-tolerance {args.heldout_tolerance:g}: a fraction in [0, 1), with --method "
-                             "discovery (0.002 keeps the smallest support within 0.2 % of the best held-out error)")
+    from fitting.pipeline import FitConfig
+
+    try:  # before anything runs; build_report applies it
+        FitConfig(method=args.method).with_heldout_tolerance(args.heldout_tolerance)
+    except ValueError as exc:
+        raise UserInputError(f"--heldout-tolerance {exc}") from None
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
     try:

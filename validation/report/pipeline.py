@@ -159,11 +159,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
-    config = FitConfig(method=method)
-    if heldout_tolerance is not None:
-        if method != "discovery":
-            raise ValueError("heldout_tolerance applies to the discovery method")
-        config = replace(config, discovery=replace(config.discovery, heldout_tolerance=heldout_tolerance))
+    config = FitConfig(method=method).with_heldout_tolerance(heldout_tolerance)
     if max_evals is not None:
         config = replace(config, refine=replace(config.refine, max_evals=max_evals),
                          polish=replace(config.polish, max_evals=max_evals),
@@ -264,7 +260,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         fit_text, fit_table = _discovery_fit_text(model_json, eqs)
         if (fit_dir / "pareto.png").exists():
             fit_figs.insert(0, Figure(fit_dir / "pareto.png", "Pareto front of the discovery: held-out error (5-fold over "
-                                                              "runs) against the number of terms, per equation; red: selected."))
+                                                              "runs) against the number of terms, per equation; red: selected; "
+                                                              "blue square: the knee."))
     else:
         rule_text = {"significance": "terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
                                      "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)",
