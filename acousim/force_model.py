@@ -139,6 +139,10 @@ class ForceModel(Protocol):
         """y [m] of the barrier below the equilibrium (theta = 0) below which the dimer falls out."""
         ...
 
+    def provenance(self) -> dict:
+        """How the model was built (its build record and validity range), for truth.json."""
+        ...
+
 
 class SinusoidalInertia:
     """Methods of a force model whose inertia is ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)``

@@ -49,7 +49,8 @@ def _range(text: str) -> tuple[float, float]:
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register the ``simulate`` subcommand."""
-    from .twin import FORCE_MODELS, PRESETS
+    from .models_cli import add_model_arguments
+    from .twin import PRESETS
 
     p = subparsers.add_parser(
         "simulate",
@@ -86,11 +87,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
-    p.add_argument("--model", choices=FORCE_MODELS, default="gorkov",
-                   help="acoustic force model: the Gor'kov volume integral, or the full-wave boundary-element "
-                   "surrogate of the default 500 um dimer (shipped table, docs/fullwave.md) (default gorkov)")
+    add_model_arguments(p)
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
-                   help="tetrahedron edge of the Gor'kov mesh model [m] (default 0.2 x side)")
+                   help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
     p.add_argument("--force", action="store_true", help="replace a non-empty output folder")
     p.add_argument("--figures", default=None, metavar="DIR",
@@ -136,6 +135,7 @@ def build_config(args: argparse.Namespace):
             runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=args.model,
+            gap=args.gap, edge_radius=args.edge_radius,
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None

@@ -70,6 +70,8 @@ class FullwaveDimer:
         The table at the nominal pressure of the experiment.
     """
 
+    #: registry name (:mod:`acousim.models`)
+    name = "fullwave"
     #: the forces need not derive from a potential: energy balances use the work along the path
     conservative = False
 
@@ -90,6 +92,10 @@ class FullwaveDimer:
     def settings(self) -> dict:
         """The table's settings (geometry, mesh, medium, pressure)."""
         return dict(self.surrogate.settings)
+
+    def record(self) -> dict:
+        """The table's settings (geometry, mesh or family, medium, pressure, accuracy source) and Z_eq."""
+        return {"model": self.name, **self.surrogate.settings, "equilibrium_height_m": self.surrogate.z_eq}
 
     @property
     def theta_max(self) -> float:

@@ -360,6 +360,10 @@ class FullwaveSurrogate(SinusoidalInertia):
                 out[slot] = float(np.sqrt(v.real) / (2 * np.pi))
         return out[0], out[1]
 
+    def provenance(self) -> dict:
+        """The build record (solves, DOFs, family interpolation source and accuracy) and the theta range."""
+        return {"build_accuracy": self.build_accuracy, "theta_max": self.theta_max}
+
     def escape_height(self) -> float:
         """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out."""
         mg = self.mass * self.gravity

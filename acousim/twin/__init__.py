@@ -7,13 +7,12 @@
 * :mod:`acousim.twin.writer` - writing a data set with its truth files (:func:`simulate_dataset`);
 * :mod:`acousim.twin.figures` - figures of a twin data set (:func:`write_twin_figures`).
 """
-from .config import FORCE_MODELS, PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
+from .config import PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
 from .figures import write_twin_figures
 from .simulation import SimulatedRun, run_seeds, simulate_field_drop_runs, simulate_run, true_pressure, twin_dynamics
 from .writer import check_output_dir, meta_dict, simulate_dataset, truth_dict, write_run
 
 __all__ = [
-    "FORCE_MODELS",
     "DropProtocol",
     "Camera",
     "TwinConfig",

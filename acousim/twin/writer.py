@@ -67,10 +67,7 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         f"{config.force_model}_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
         "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
     }
-    if hasattr(fm, "build_accuracy") and hasattr(fm, "box"):  # the Gor'kov surrogate's own record
-        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "box": asdict(fm.box)}
-    elif config.force_model == "fullwave":  # the full-wave table's record and interpolation box
-        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "theta_max": fm.theta_max}
+    out["surrogate"] = fm.provenance()
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],
         "runs_detail": [
