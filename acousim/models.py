@@ -174,6 +174,10 @@ class ForceModelType:
         The model-specific :class:`ExperimentConditions` fields it takes (others must be None).
     capabilities : frozenset of str
         What else it offers: ``"render"`` (a volume mesh to draw), ``"potential"`` (forces from a potential).
+    calibratable : callable, optional
+        ``calibratable(conditions) -> {field: (lo, hi, default)}``: model parameters (fields of
+        :class:`ExperimentConditions`) that the data may determine, with the range the model covers and the value
+        it takes when they do not (the full-wave hinge gap); the diagnosis profiles each one the user left unset.
     """
 
     name: str
@@ -182,6 +186,11 @@ class ForceModelType:
     dynamic: Callable[[ExperimentConditions], ForceModel]
     options: frozenset = field(default_factory=frozenset)
     capabilities: frozenset = field(default_factory=frozenset)
+    calibratable: Callable[[ExperimentConditions], dict] | None = None
+
+    def calibration_ranges(self, conditions: ExperimentConditions) -> dict[str, tuple[float, float, float]]:
+        """``{field: (lo, hi, default)}`` of the parameters the data may determine ({} for none)."""
+        return {} if self.calibratable is None else dict(self.calibratable(conditions))
 
     def check(self, conditions: ExperimentConditions) -> None:
         """Refuse model-specific conditions this model does not take (one line naming the option)."""
@@ -276,6 +285,17 @@ def _fullwave_static(c: ExperimentConditions):
     return FullwaveDimer(_fullwave_dynamic(c))
 
 
+def _fullwave_gap_range(c: ExperimentConditions) -> dict:
+    """The hinge gaps [m] the shipped family covers at this dimer's ks, and the default gap 0.01 s."""
+    from .fullwave.family import DEFAULT_GAP_RATIO, shipped_family
+
+    fam = shipped_family()
+    fam.check_covers(c.ks, fam.ranges()[1][0] if fam.ranges() else DEFAULT_GAP_RATIO)
+    (_, _), (g0, g1) = fam.ranges()
+    s = c.side_length_m
+    return {"gap_m": (g0 * s, g1 * s, DEFAULT_GAP_RATIO * s)}
+
+
 register_force_model(ForceModelType(
     "fullwave", "the full-wave (boundary-element) scattering by both cubes, from the table family over (ks, g/s)",
-    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"})))
+    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range))

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acousim.models_cli import add_model_arguments
 from cubedimer.cli import (OneLineParser, UserInputError, add_executor_arguments, check_limit, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 
@@ -144,10 +145,7 @@ def _add_diagnose(sub) -> None:
     p.add_argument("--candidates", default=",".join(_candidate_names()),
                    help="comma-separated candidate effects")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
-    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
-                   help="the simulation model to calibrate: the Gor'kov volume integral, or the full-wave "
-                   "(boundary-element) table of the default 500 um dimer (docs/fullwave.md; the data's |theta| must "
-                   "stay within 0.9)")
+    add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
@@ -181,7 +179,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
         diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
-                                                model=args.model)
+                                                model=args.model, gap=args.gap, edge_radius=args.edge_radius)
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, internals, args.out)
@@ -271,9 +269,7 @@ def _add_report(sub) -> None:
                    help="discovery only: keep the smallest support whose held-out error is within FRACTION of the best "
                         "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
                         "see python -m fitting fit --help")
-    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
-                   help="the simulation model the diagnosis (section 6) calibrates; the report puts the other one "
-                   "beside it (sections 4, 5 and 7) whenever the full-wave table of the default 500 um dimer applies")
+    add_model_arguments(p)
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
                            "and figures run in this process.")
@@ -281,7 +277,9 @@ def _add_report(sub) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
+    from acousim.fullwave.family import FamilyRangeError, FamilyTableError
     from acousim.fullwave.statics import TableMismatch
+    from acousim.models import ConditionError
     from cubedimer.dataset import DatasetError
 
     from .report.pipeline import build_report
@@ -297,8 +295,8 @@ def run_report(args: argparse.Namespace) -> int:
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
                      max_evals=args.max_evals, method=args.method, model=args.model,
-                     heldout_tolerance=args.heldout_tolerance)
-    except (DatasetError, TableMismatch) as exc:
+                     heldout_tolerance=args.heldout_tolerance, gap=args.gap, edge_radius=args.edge_radius)
+    except (DatasetError, TableMismatch, ConditionError, FamilyRangeError, FamilyTableError) as exc:
         raise UserInputError(str(exc)) from None
     return 0
 

@@ -11,7 +11,7 @@ Output, ``diagnosis.json`` (FORMATS.md, extended)::
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 
@@ -28,6 +28,7 @@ from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
+from .model_parameters import calibrate_model_parameter
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import runs_needed, smallest_sign_flip_pvalue
@@ -113,7 +114,8 @@ class DiagnosisInternals:
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
                      progress: bool = True, mesh_size: float | None = None,
-                     model: str = "gorkov") -> tuple[dict, DiagnosisInternals]:
+                     model: str = "gorkov", gap: float | None = None,
+                     edge_radius: float | None = None) -> tuple[dict, DiagnosisInternals]:
     """Diagnose a data set.
 
     Parameters
@@ -123,8 +125,11 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     strict : stop at the first bad file instead of skipping it
     progress : log the steps at INFO level (else DEBUG)
     mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
-    model : the simulation model, ``"gorkov"`` or ``"fullwave"`` (:func:`validation.simulation.model_from_meta`);
-        both are calibrated the same way (pressure amplitude and height origin)
+    model : the simulation model, a name of the registry :mod:`acousim.models` (``"gorkov"``, ``"fullwave"``);
+        every model is calibrated the same way (pressure amplitude and height origin), and a model's own
+        parameters that the data may determine (the full-wave hinge gap) are profiled unless given
+        (:mod:`validation.diagnosis.model_parameters`)
+    gap, edge_radius : hinge gap and edge radius of the full-wave model [m]; a given gap is not calibrated
 
     Returns
     -------
@@ -137,22 +142,71 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     from cubedimer.executor import single_blas_thread
 
     with single_blas_thread():
-        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model)
+        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model, gap, edge_radius)
+
+
+def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
+                               log=logger.info) -> tuple[object, dict]:
+    """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
+    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name."""
+    from acousim.models import force_model_type, static_model
+
+    mtype = force_model_type(model_name)
+    out = {}
+    for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
+        if getattr(conditions, name) is not None:
+            continue
+        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
+
+        def build(value: float, name=name):
+            sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
+            return DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
+
+        pc = calibrate_model_parameter(name, lo, hi, default, build)
+        log("%s", pc.note)
+        out[name] = pc
+        conditions = replace(conditions, **{name: pc.value})
+    return conditions, out
+
+
+def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
+    """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
+    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable."""
+    from acousim.models import force_model_type
+
+    out = {}
+    for name in force_model_type(model_name).calibration_ranges(conditions):
+        base, unit = name.rsplit("_", 1)
+        pc = calibrated.get(name)
+        out[name] = float(getattr(conditions, name))
+        out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
+        out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
+        out[f"{base}_note"] = pc.note if pc is not None else f"{name} fixed by the user"
+        if pc is not None:
+            out[f"{base}_profile"] = pc.to_dict()
+    return out
 
 
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
-                      mesh_size: float | None, model_name: str) -> tuple[dict, DiagnosisInternals]:
+                      mesh_size: float | None, model_name: str, gap: float | None,
+                      edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
+    from acousim.models import static_model
     from cubedimer.dataset import load_dataset
     from cubedimer.meta import read_meta
 
-    from ..simulation import model_from_meta
+    from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
     skip = logger.warning if progress else logger.debug
-    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
     meta = read_meta(data_dir)
-    model = model_from_meta(meta, mesh_size=mesh_size, model=model_name).interpolated()
-    problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
+    conditions = conditions_from_meta(meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
+    static_model(model_name, conditions)  # refuses a misfit (a gap with Gor'kov, a dimer outside the family) first
+    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
+    recorded = prepare_diagnosis_runs(dataset)
+    conditions, parameters = calibrate_model_parameters(model_name, conditions, recorded, config.max_frames_per_run,
+                                                        log)
+    model = static_model(model_name, conditions).interpolated()
+    problem = DiagnosisProblem.from_recorded(model, recorded, config.max_frames_per_run)
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -274,6 +328,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
         "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
         "calibrated_on": CALIBRATED_ON,
+        **_parameter_record(conditions, parameters, model_name),
     }
     if drift is not None:
         calibration["drift"] = drift.to_dict()

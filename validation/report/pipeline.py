@@ -112,7 +112,8 @@ def _scattering_section(models) -> Section:
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None, method: str = "discovery",
-                 model: str = "gorkov", heldout_tolerance: float | None = None) -> Path:
+                 model: str = "gorkov", heldout_tolerance: float | None = None, gap: float | None = None,
+                 edge_radius: float | None = None) -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -129,6 +130,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
         stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
+    gap, edge_radius : hinge gap and edge radius [m] of the full-wave model; without ``gap`` a full-wave diagnosis
+        calibrates it from the data
 
     Returns
     -------
@@ -154,8 +157,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     def say(message: str) -> None:
         logger.log(level, "%s", message)
 
-    if model == "fullwave":  # refuse another experiment before the long fit, not after it
-        model_from_meta(read_meta(data_dir), model="fullwave")
+    # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
+    # before the long fit, not after it
+    model_from_meta(read_meta(data_dir), model=model, gap=gap, edge_radius=edge_radius)
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -182,10 +186,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                              [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model)
+    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model, gap=gap,
+                                       edge_radius=edge_radius)
     meta = read_meta(data_dir)
+    # the full-wave model beside the diagnosis's one: at its calibrated (or given) gap
+    fw_gap = diag["calibration"].get("gap_m", gap)
     say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
-    models = compare_simulation_models(internals.problem, meta, base=internals.base)
+    models = compare_simulation_models(internals.problem, meta, base=internals.base, gap=fw_gap)
     # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
     cals = {k: f.calibration for k, f in models.fits.items() if k in ("gorkov", "fullwave")}
     cals[model] = internals.final.calibration
@@ -207,7 +214,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
     fw_sweep, fw_cmp = None, None
     if "fullwave" in cals:
-        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave")
+        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave",
+                                 gap=fw_gap)
         fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
     say("5/5 figures and the report")
     sections = []
