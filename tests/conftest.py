@@ -106,14 +106,15 @@ def process_cluster():
         yield address
 
 
-#: The synthetic family's analytic dependence: reduced coefficients (dimensionless / ks) of the default table times
-#: (1 + KS_SLOPE (ks - ks0) + KS_CURV (ks - ks0)^2) for every component, and times (1 + GAP_SLOPE L + GAP_CURV L^2),
-#: L = log(g / g0), for Q_theta only (the gap sets the hinge stiffness: softer as the gap opens, as the full wave).
+#: The synthetic family's analytic dependence: the interpolated quantities (dimensionless coefficients, F_Z's over ks)
+#: of the default table times (1 + KS_SLOPE (ks - ks0) + KS_CURV (ks - ks0)^2) for every component, and times
+#: (1 + GAP_SLOPE L + GAP_CURV L^2), L = log(g / g0), for Q_theta only (the gap sets the hinge stiffness: softer as
+#: the gap opens, as in the full wave).  Quadratic in ks and log g: the family's interpolant is exact.
 SYNTHETIC_FAMILY = {"ks_slope": 0.8, "ks_curv": -1.5, "gap_slope": -0.3, "gap_curv": 0.02}
 
 
 def synthetic_reduced(ks: float, gap_ratio: float) -> dict:
-    """The synthetic family's dimensionless coefficients at (ks, g/s): cubic-exact in ks and log g/s."""
+    """The synthetic family's dimensionless coefficients at (ks, g/s)."""
     from acousim.fullwave import default_fullwave_surrogate
     from acousim.fullwave.family import dimensionless_coefficients
 
@@ -124,7 +125,7 @@ def synthetic_reduced(ks: float, gap_ratio: float) -> dict:
     fk = 1 + p["ks_slope"] * (ks - ks0) + p["ks_curv"] * (ks - ks0) ** 2
     lg = np.log(gap_ratio / 0.01)
     fg = 1 + p["gap_slope"] * lg + p["gap_curv"] * lg**2
-    return {"fz": base["fz"] / ks0 * ks * fk, "qt": base["qt"] / ks0 * ks * fk * fg}
+    return {"fz": base["fz"] / ks0 * ks * fk, "qt": base["qt"] * fk * fg}
 
 
 def write_synthetic_family(directory, ks_nodes=None, gap_nodes=None) -> list:

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
-from ..models import ExperimentConditions, force_model_type
+from ..models import ExperimentConditions, force_model_names, force_model_type
 
 __all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS"]
 
@@ -253,7 +253,7 @@ class TwinConfig:
             "max_step_s": float(self.max_step),
             "preset": self.preset,
         }
-        if self.force_model != "gorkov":
+        if self.force_model != force_model_names()[0]:  # listed when it is not the default model
             out["force_model"] = self.force_model
         if self.gap is not None:
             out["gap_m"] = float(self.gap)

@@ -93,8 +93,8 @@ def _scattering_section(models) -> Section:
     text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
             f"(pressure and origin) on the same runs. The Gor'kov model leaves a gap of {g0.gap:.3g}; with the phenomenological "
             f"pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
-    if "fullwave" in rows:
-        fw = rows["fullwave"]
+    fw = rows.get("fullwave")
+    if fw is not None:
         text += (f" The full-wave model, whose hinge comes from the boundary-element solution with no fitted stiffness, "
                  f"leaves {fw.gap:.3g} (y equation {fw.components[0]:.3g}, theta equation {fw.components[1]:.3g}, energy "
                  f"{fw.components[2]:.3g}). docs/fullwave.md states how far its hinge numbers are converged and verified.")
@@ -148,6 +148,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
 
     from ..coefficients import compare_coefficients
     from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose_dataset
+    from ..diagnosis.model_comparison import MODEL_LABELS
     from ..simulation import model_from_meta
     from .diagnosis_section import diagnosis_figures, diagnosis_section
     from .figures import data_figures, phase_space_figures, restoring_overlay_figure
@@ -194,7 +195,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
     models = compare_simulation_models(internals.problem, meta, base=internals.base, gap=fw_gap)
     # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
-    cals = {k: f.calibration for k, f in models.fits.items() if k in ("gorkov", "fullwave")}
+    cals = {k: f.calibration for k, f in models.fits.items() if k in MODEL_LABELS and "+" not in k}  # simulations
     cals[model] = internals.final.calibration
     cal = cals["gorkov"]
     say("4/5 sweeping the calibrated simulations and comparing coefficients")
@@ -213,7 +214,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
 
     sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
     fw_sweep, fw_cmp = None, None
-    if "fullwave" in cals:
+    if cals.get("fullwave") is not None:
         fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave",
                                  gap=fw_gap)
         fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
@@ -312,10 +313,15 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         "outside the model's torque curve, the hinge is held by something the model omits." + fw_text,
         [Figure(*overlay), Figure(render, "The posed dimer mesh (theta = 0.3) coloured by the Gor'kov potential density u.")],
         [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height,
-             "fullwave_calibrated_pressure_pa": cals["fullwave"].pressure_amplitude_pa if "fullwave" in cals else None}))
+             "fullwave_calibrated_pressure_pa": getattr(cals.get("fullwave"), "pressure_amplitude_pa", None)}))
     # 5 model vs simulation
     lead = coef_cmp.rows[0]
-    main_cmp = coef_cmp if model == "gorkov" else fw_cmp
+    comparisons = {"gorkov": coef_cmp, "fullwave": fw_cmp}
+    if comparisons.get(model) is None:  # any other registered model: its own calibrated sweep
+        own = model_from_meta(meta, pressure_amplitude_pa=cals[model].pressure_amplitude_pa, model=model,
+                              gap=gap, edge_radius=edge_radius)
+        comparisons[model] = sweep_and_compare(own, cals[model].origin_offset_m)[1]
+    main_cmp = comparisons[model]  # the diagnosis's model's comparison
     main_lead, main_cal = main_cmp.rows[0], cals[model]
     # what the identified effects add to the static theta*y^2 of the diagnosis's model (the diagnosis is section 6)
     added = effect_static_coefficients(diag, sim.wave.wavenumber, main_cal.equilibrium_height_m, theta_max, y_max)
@@ -327,7 +333,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
         effects_reading = (f" The effects identified in section 6 ({', '.join(diag['identified'])}) add {added['y^2*theta']:.3g} to the "
                            f"static theta*y^2 (least squares over the same box); with them the "
-                           f"{'Gor' + chr(39) + 'kov' if model == 'gorkov' else 'full-wave'} simulation predicts "
+                           f"{MODEL_LABELS.get(model, model).split(' (')[0]} simulation predicts "
                            f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
     fw_reading = ""
     fw_rows = {}
@@ -370,7 +376,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # 6 the gap
     dfigs = diagnosis_figures(diag, internals, figs_dir)
     sec = diagnosis_section(diag, dfigs)
-    sections.append(Section("diagnosis", "6. The sim-to-real gap" + ("" if model == "gorkov" else " (full-wave model)"),
+    sections.append(Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(model, model).split(' (')[0]} model)",
                             sec.reading, sec.figures, sec.tables, sec.numbers))
     sections += sections_after
     from cubedimer.atomic import write_json
