@@ -28,7 +28,7 @@ from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
-from .model_parameters import calibrate_model_parameter
+from .model_parameters import ParameterCalibration, calibrate_model_parameter
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import runs_needed, smallest_sign_flip_pvalue
@@ -155,6 +155,12 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
     out = {}
     for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
         if getattr(conditions, name) is not None:
+            continue
+        if not hi > lo * (1 + 1e-9):  # the model covers one value only: nothing to profile
+            out[name] = ParameterCalibration(name, float(default), float(lo), float("inf"), False,
+                                             f"the model's tables cover {name} = {lo:.3g} only: nothing to profile; "
+                                             f"the default {default:.3g} is kept", (lo, hi))
+            conditions = replace(conditions, **{name: float(default)})
             continue
         log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
 
