@@ -60,8 +60,8 @@ from acousim.fullwave.flux import ExteriorField, flux_height_structure, mirror_h
 from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
 from acousim.medium import Medium  # noqa: E402
 
-# two mirror-reduced solves of 1,284 DOFs, one unreduced solve of 324 and one flux evaluation: about 60 s after
-# bempp's compilation on two busy cores
+# two mirror-reduced solves of 1,284 DOFs, one unreduced solve of 324 and one flux evaluation: 34 s CPU after
+# bempp's compilation (57 s wall at load ~8 on 2 cores, NUMBA_NUM_THREADS=1)
 pytestmark = pytest.mark.slow
 
 MEDIUM = Medium()
