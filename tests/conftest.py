@@ -15,7 +15,7 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 BOUNDARY_ELEMENT_MODULES = frozenset({
     "tests/acousim/test_fullwave_sphere.py", "tests/acousim/test_fullwave_dimer.py",
     "tests/acousim/test_fullwave_flux.py", "tests/acousim/test_fullwave_cli.py",
-    "tests/acousim/test_fullwave_surrogate.py",
+    "tests/acousim/test_fullwave_surrogate.py", "tests/acousim/test_fullwave_interaction.py",
 })
 
 
