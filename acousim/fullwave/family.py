@@ -93,18 +93,20 @@ class FamilyTableError(ValueError):
     """A node table is corrupt or was built with other settings than the family's; one line naming the file."""
 
 
-def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0) -> DimerMeshSpec:
+def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: float = 1.0) -> DimerMeshSpec:
     """The gap-resolving mesh of the family nodes.
 
     The faces are those of ``mesh_family(0.5)`` (largest element 0.125 s, growth 1.6).  At the hinge edges the
     elements are ``g/2`` across (kept within [0.0025 s, 0.02 s]) and ``3 g`` along the hinge line (at most
     0.125 s), halved at the edges' ends: the aspect ratio of the elements that face each other across the gap
     is the same at every gap.  At g = 0.01 s this is the shipped default table's mesh (``TABLE_SPEC``), whose
-    hinge stiffness is within 1.6 % of its Richardson limit (docs/fullwave.md).
+    hinge stiffness is within 1.6 % of its Richardson limit (docs/fullwave.md).  ``refine`` scales the three
+    hinge sizes (not the faces) for the mesh-convergence study of each gap node.
     """
     r = float(gap) / float(side)
-    along = min(0.125, 3.0 * r)
-    return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius, h_hinge=min(max(0.5 * r, 0.0025), 0.02),
+    along = min(0.125, 3.0 * r) * refine
+    return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius,
+                         h_hinge=min(max(0.5 * r, 0.0025), 0.02) * refine,
                          h_max=0.125, h_along=along, h_corner=0.5 * along, growth=1.6)
 
 
@@ -413,10 +415,13 @@ class FullwaveFamily:
         acc = {"source": "family node" if on_node else "family interpolation", "family": str(self.directory),
                "family_range": self.describe_range(), "nodes_ks": list(self.ks_nodes),
                "nodes_gap_over_side": list(self.gap_nodes)}
-        if self.accuracy:
-            acc["interpolation_error"] = self.accuracy.get("summary", {})
+        summary = self.accuracy.get("summary", {})
+        if summary:
+            acc["interpolation_error"] = summary
+        stated = {"table_source": acc["source"], "family_range": acc["family_range"],
+                  "interpolation_error_q_y": summary.get("q_y"), "interpolation_error_q_theta": summary.get("q_theta")}
         return scaled_surrogate(coefs, self.theta_max, side, gap, medium, particle_density, pressure_amplitude_pa,
-                                gravity, settings={"n_half": len(coefs["qt"][0]) // 2, "family": True},
+                                gravity, settings={"n_half": len(coefs["qt"][0]) // 2, "family": True, **stated},
                                 build_accuracy=acc)
 
 
@@ -472,7 +477,9 @@ def fullwave_surrogate(conditions) -> FullwaveSurrogate:
     density, gravity, p0 = float(c.particle_density_kg_m3), float(c.gravity_m_s2), float(c.pressure_amplitude_pa)
     if _is_default_dimer(side, gap, medium, density, gravity):
         sur = default_fullwave_surrogate(p0)
-        return replace(sur, build_accuracy={**sur.build_accuracy, "source": "direct-solve table of the default dimer"})
+        source = "direct-solve table of the default dimer"
+        return replace(sur, build_accuracy={**sur.build_accuracy, "source": source},
+                       settings={**sur.settings, "table_source": source})
     return shipped_family().surrogate(side, gap, medium, density, p0, gravity)
 
 

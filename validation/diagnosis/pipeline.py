@@ -340,6 +340,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         calibration["drift"] = drift.to_dict()
     diagnosis = {
         "model": model_name,
+        "simulation": {k: v for k, v in model.record().items() if not isinstance(v, (list, dict))},
         "identified": identified,
         "calibration": calibration,
         "gap_before": gap_before,
