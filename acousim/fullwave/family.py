@@ -351,7 +351,11 @@ class FullwaveFamily:
             if len(lengths) != 1 or any(t.theta_max != self.theta_max for t in tables.values()):
                 raise FamilyTableError(f"{self.directory}: node tables with different theta series")
         acc = self.directory / "accuracy.json"
-        self.accuracy = json.loads(acc.read_text()) if acc.exists() else {}
+        try:
+            self.accuracy = json.loads(acc.read_text()) if acc.exists() else {}
+        except (OSError, ValueError) as exc:
+            raise FamilyTableError(f"{acc}: not readable ({type(exc).__name__}: {exc}); rerun python -m acousim "
+                                   f"family check") from None
 
     # -------------------------------------------------------------------------------- coverage
     @property
