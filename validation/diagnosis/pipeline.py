@@ -142,14 +142,18 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
 
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
                       mesh_size: float | None, model_name: str) -> tuple[dict, DiagnosisInternals]:
-    from cubedimer.dataset import load_dataset
+    from acousim.analytic import nominal_trap_frequency
+    from cubedimer.dataset import LoadConfig, load_dataset
     from cubedimer.meta import read_meta
 
     from ..simulation import model_from_meta
 
     log = logger.info if progress else logger.debug
     skip = logger.warning if progress else logger.debug
-    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
+    # the loader checks the physics bounds of any levitated dimer; with a meta.json also the Gor'kov estimate
+    # of the trap frequency at its nominal pressure
+    dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
+                           report=lambda m: skip("skipping %s", m))
     meta = read_meta(data_dir)
     model = model_from_meta(meta, mesh_size=mesh_size, model=model_name).interpolated()
     problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
