@@ -28,6 +28,7 @@ from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
+from .orientation import check_y_orientation
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import runs_needed, smallest_sign_flip_pvalue
@@ -62,6 +63,8 @@ class DiagnoseConfig:
         None: the pressure is taken as constant without testing
     discover : regress what remains after the candidates on the cubic library (:mod:`validation.diagnosis.discovery`)
     discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
+    check_orientation : test whether y points down (:mod:`validation.diagnosis.orientation`); if so, warn
+        (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
@@ -75,6 +78,7 @@ class DiagnoseConfig:
     drift: DriftSettings | None = DriftSettings()
     discover: bool = True
     discovery_min_improvement: float = 1e-3
+    check_orientation: bool = True
 
     def __post_init__(self):
         unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
@@ -157,6 +161,14 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     meta = read_meta(data_dir)
     model = model_from_meta(meta, mesh_size=mesh_size, model=model_name).interpolated()
     problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
+    data_warnings = []
+    if config.check_orientation:
+        orientation, flipped = check_y_orientation(problem, dataset, config.max_frames_per_run)
+        if orientation.inverted:  # a flipped axis is never reported as new physics: the diagnosis uses -y
+            warning = orientation.warning()
+            logger.warning("%s", warning["message"])
+            data_warnings.append(warning)
+            problem = flipped
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -298,6 +310,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "long_time": long_time,
         "remaining_gap": remaining,
         "identification_rounds": [r.to_dict() for r in ident.rounds],
+        "data_warnings": data_warnings,
         "skipped_files": dataset.skipped_files(),
         "glitch_frames_masked": dataset.n_glitches,
         "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,

@@ -94,8 +94,10 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     if skipped or diagnosis.get("glitch_frames_masked"):
         data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.get('glitch_frames_masked', 0)} tracking-glitch "
                      "frames masked. ")
+    # what the data suggest about how they were recorded comes first: it changes how everything after it reads
+    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.get("data_warnings") or [])
     reading = (
-        data_text + drift_text +
+        warnings_text + data_text + drift_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
         f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
