@@ -3,7 +3,7 @@
 * :func:`cube_potential_energy`: the Gor'kov energy of a cube of any orientation in the (X, Z)
   plane, from the exact Fourier transform of a cube (a product of sincs).
 * :func:`dimer_potential_energy` and :func:`dimer_generalized_forces`: the same for the
-  mirror-symmetric dimer of PHYSICS.md, with Q_theta by differentiating the closed form.
+  mirror-symmetric dimer of docs/conventions.md, with Q_theta by differentiating the closed form.
 * :func:`sphere_force_z`: volume-integrated force on a sphere, with its finite-size factor.
 * :func:`point_particle_force_z` and :func:`vertical_trap_frequency`; :func:`nominal_trap_frequency` of a
   data set's meta.json (the loader's plausibility estimate).

@@ -1,4 +1,4 @@
-"""Loading trajectory data sets (FORMATS.md) with the bad-input rules, and short-gap filling.
+"""Loading trajectory data sets (docs/formats.md) with the bad-input rules, and short-gap filling.
 
 A data set is a directory of CSV files (header with at least ``t``, ``y``, ``theta``; ``#``
 comment lines; extra columns ignored) and an optional ``meta.json``.  Every rule violation
@@ -42,7 +42,7 @@ class LoadConfig:
     max_missing_fraction : float
         Largest allowed fraction of missing frames per run.
     uniform_tol : float
-        Allowed relative deviation of any time step from the median step (FORMATS.md: 1 %).
+        Allowed relative deviation of any time step from the median step (docs/formats.md: 1 %).
     min_periods : float
         Minimum number of oscillation periods (of the dominant y frequency) a run must hold.
     glitches : GlitchConfig or None
@@ -123,7 +123,7 @@ class Dataset:
         return sum(r.n_glitches for r in self.runs)
 
     def skipped_files(self) -> list[dict[str, str]]:
-        """``[{"file": name, "reason": one line}, ...]`` (the ``skipped_files`` of FORMATS.md)."""
+        """``[{"file": name, "reason": one line}, ...]`` (the ``skipped_files`` of docs/formats.md)."""
         return [{"file": s.file, "reason": s.reason} for s in self.skipped]
 
 
@@ -502,7 +502,7 @@ def _csv_number(v: float, spec: str, missing: str) -> str:
 
 def format_run_csv(t: NDArray, y: NDArray, theta: NDArray, comments: tuple[str, ...] | list[str] = (),
                    t_decimals: int = 9, y_digits: int = 10, theta_decimals: int = 10, missing: str = "nan") -> str:
-    """The text of one run's CSV (FORMATS.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
+    """The text of one run's CSV (docs/formats.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
 
     Parameters
     ----------

@@ -24,7 +24,7 @@ __all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "
 
 logger = logging.getLogger(__name__)
 
-#: Defaults (PHYSICS.md section 1) of the keys of FORMATS.md, SI units.
+#: Defaults (docs/conventions.md section 1) of the keys of docs/formats.md, SI units.
 META_DEFAULTS: dict[str, float] = {
     "side_length_m": 500e-6,
     "particle_density_kg_m3": 2160.0,

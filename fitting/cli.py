@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
 * ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
-  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
+  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,

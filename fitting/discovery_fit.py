@@ -12,7 +12,7 @@ Steps of :func:`fit_discovery` (``FitConfig(method="discovery")``, the default o
    regression gave it, then those of :func:`fitting.pipeline.fallback_candidates`; the best sane one is
    re-optimised and ``model.json["fallback"]`` says so; with none, :class:`fitting.pipeline.NoSaneModelError`.
 4. Per run, least squares of the smoothed accelerations on the selected terms (one run at a time) gives
-   ``per_run`` and the across-run ``zscores`` of ``model.json`` (FORMATS.md); it is not refined per run.
+   ``per_run`` and the across-run ``zscores`` of ``model.json`` (docs/formats.md); it is not refined per run.
 5. Oracle standard errors of the final model's terms (:mod:`fitting.oracle`).
 """
 from __future__ import annotations

@@ -129,7 +129,7 @@ def _add_diagnose(sub) -> None:
             "Calibrate the simulation (Gor'kov or full-wave; pressure amplitude and y origin) to a data set, measure the gap "
             "between simulated and measured accelerations (and the long-time attractor, Poincare and frequency "
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
-            "effects of PHYSICS.md section 5 cause it, adding them greedily while a held-out improvement across runs "
+            "effects of docs/conventions.md section 5 cause it, adding them greedily while a held-out improvement across runs "
             "is significant (one-sided Wilcoxon). Writes diagnosis.json, figures and report.html into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,

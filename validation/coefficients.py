@@ -207,7 +207,7 @@ def compare_coefficients(
     Parameters
     ----------
     model : dict
-        The fitted model per FORMATS.md (``equations``, ``zscores``, ``per_run``).
+        The fitted model per docs/formats.md (``equations``, ``zscores``, ``per_run``).
     static_coefficients, static_std : dict equation -> term -> value
         Static least-squares coefficients and their standard errors (SI, y from Z_eq).
     origin_offset : float or "fitted-equilibrium"

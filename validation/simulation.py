@@ -1,10 +1,10 @@
 """The simulation model of a data set, built from the data set's ``meta.json``.
 
-Two simulation models (FORMATS.md ``--model``): ``"gorkov"``, the Gor'kov volume integral of PHYSICS.md
+Two simulation models (docs/formats.md ``--model``): ``"gorkov"``, the Gor'kov volume integral of docs/conventions.md
 section 3 (:class:`acousim.GorkovDimer`), and ``"fullwave"``, the boundary-element table of the default dimer
-(PHYSICS.md section 7, :class:`acousim.fullwave.FullwaveDimer`).
+(docs/conventions.md section 7, :class:`acousim.fullwave.FullwaveDimer`).
 
-Keys (all optional, FORMATS.md): side_length_m, particle_density_kg_m3, bulk_modulus_pa,
+Keys (all optional, docs/formats.md): side_length_m, particle_density_kg_m3, bulk_modulus_pa,
 frequency_hz, sound_speed_m_s, air_density_kg_m3, pressure_amplitude_pa (nominal).
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ SIMULATION_MODELS = ("gorkov", "fullwave")
 
 def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh_size: float | None = None,
                     model: str = "gorkov"):
-    """The simulation model of the experiment described by ``meta`` (PHYSICS.md defaults for missing keys).
+    """The simulation model of the experiment described by ``meta`` (docs/conventions.md defaults for missing keys).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Tests of the integral-form discovery with model-based states (fitting.discovery, fitting.model_states).
 
-The criterion of the slow tests, on data of sparse models of PHYSICS.md section 6's form at the paper's data
+The criterion of the slow tests, on data of sparse models of docs/conventions.md section 6's form at the paper's data
 size: every true term whose oracle z (|true coefficient| / standard error of integral-form least squares on the
 true support with the columns at the exact states) is >= 5 is selected, at most one spurious term over both
 equations, and every coefficient within max(10 %, 3 oracle standard errors).  Three oracle standard errors

@@ -1,7 +1,7 @@
 """Diagnose the sim-to-real gap: where it lies, which unmodelled effect causes it, how far it shrinks.
 
-"Sim" is the Gor'kov model of PHYSICS.md section 4 (or the full-wave model of section 7) calibrated to the data; "real" is any data set in
-the FORMATS.md format.  Every candidate effect of PHYSICS.md section 5 is linear in its parameters, so
+"Sim" is the Gor'kov model of docs/conventions.md section 4 (or the full-wave model of section 7) calibrated to the data; "real" is any data set in
+the docs/formats.md format.  Every candidate effect of docs/conventions.md section 5 is linear in its parameters, so
 every fit here is a linear least-squares problem at the measured states.  One module per step:
 
 * :mod:`~validation.diagnosis.preparation`: runs -> smoothed states, accelerations, noise levels and

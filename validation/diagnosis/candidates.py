@@ -1,4 +1,4 @@
-"""The candidate effects of PHYSICS.md section 5 as linear regressors of the accelerations.
+"""The candidate effects of docs/conventions.md section 5 as linear regressors of the accelerations.
 
 Every candidate effect is linear in its parameters, so its added accelerations at given states are
 ``effect_regressors(...) @ params`` and every fit of the diagnosis is a linear least-squares problem at
@@ -21,7 +21,7 @@ def _candidates() -> dict[str, tuple[str, ...]]:
     return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
 
 
-#: Candidate effects and their parameters (PHYSICS.md section 5, as defined in :mod:`acousim.effects`).
+#: Candidate effects and their parameters (docs/conventions.md section 5, as defined in :mod:`acousim.effects`).
 CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
@@ -50,7 +50,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         k of the standing wave [1/m].
     z_eq : float, optional
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
-        PHYSICS.md (default: the state's own y, i.e. Z_eq = Z_com - y).
+        docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
     from acousim.effects import EFFECT_TYPES
 

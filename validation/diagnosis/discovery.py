@@ -108,7 +108,7 @@ class Discovery:
                          self.selected, self.remaining)
 
     def to_dict(self) -> dict:
-        """``{"yddot": [...], "thetaddot": [...]}`` (FORMATS.md ``remaining_gap.discovered_terms``)."""
+        """``{"yddot": [...], "thetaddot": [...]}`` (docs/formats.md ``remaining_gap.discovered_terms``)."""
         return {e: [t.to_dict() for t in self.terms[e]] for e in EQUATIONS}
 
 

@@ -1,6 +1,6 @@
 """A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
 
-Output, ``diagnosis.json`` (FORMATS.md, extended)::
+Output, ``diagnosis.json`` (docs/formats.md, extended)::
 
     {"identified": [...], "calibration": {...}, "gap_before": g0, "gap_after": g1, "gap_definition": "...",
      "gap_components": [...], "gap_component_forms": {...}, "gap_per_run": {...}, "noise_floor": ...,
@@ -50,7 +50,7 @@ class DiagnoseConfig:
 
     Parameters
     ----------
-    candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
+    candidates : names of the candidate effects (default: all of docs/conventions.md section 5)
     alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
@@ -133,7 +133,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     Returns
     -------
     (diagnosis, internals)
-        The diagnosis.json document (FORMATS.md) and :class:`DiagnosisInternals` for figures.
+        The diagnosis.json document (docs/formats.md) and :class:`DiagnosisInternals` for figures.
 
     Runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`): the same numbers wherever it
     runs (here, in an executor task, on a dask worker), and faster for its many small factorisations.

@@ -41,7 +41,7 @@ def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta
     """Velocity-free thetaddot coefficients [SI] that the *identified* effects add to the static model: least
     squares of their accelerations at zero velocity on the velocity-free cubic monomials over the same
     box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
-    the calibrated Z_eq (PHYSICS.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
+    the calibrated Z_eq (docs/conventions.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
     kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
     from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
 
