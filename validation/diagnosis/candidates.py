@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
 def _candidates() -> dict[str, tuple[str, ...]]:
@@ -29,6 +29,29 @@ CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 LIBRARY_EQUIVALENTS: dict[str, dict[str, tuple[str, ...]]] = {
     "linear_damping": {"yddot": ("ydot",), "thetaddot": ("thetadot",)},
 }
+
+#: Library terms (per equation) that a candidate's columns reduce to near the levitation height, beyond the exact
+#: copies above: pair scattering's ``-kappa cos^2(k Z_com) theta`` is ``theta`` times a constant up to terms in
+#: ``y theta``; mirror asymmetry's ``beta0 + beta1 y`` and velocity coupling's ``y thetadot^2`` and
+#: ``y ydot thetadot`` (y from the calibrated levitation height, so ``1`` takes the origin's difference).  A
+#: discovered term that is one of them, beside the identified effect, splits the effect's parameter: the final joint
+#: model folds it into the effect (:func:`~validation.diagnosis.discovery.joint_estimates`).
+LEADING_LIBRARY_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
+    "pair_scattering": {"thetaddot": ("theta",)},
+    "mirror_asymmetry": {"thetaddot": ("1", "y")},
+    "velocity_coupling": {"thetaddot": ("y*thetadot^2", "y*ydot*thetadot")},
+}
+
+
+def own_library_columns(effects: Sequence[str]) -> dict[str, list[str]]:
+    """Per equation, the library terms that stand for the columns of ``effects`` (:data:`LIBRARY_EQUIVALENTS` and
+    :data:`LEADING_LIBRARY_TERMS`)."""
+    out: dict[str, list[str]] = {"yddot": [], "thetaddot": []}
+    for name in effects:
+        for table in (LIBRARY_EQUIVALENTS, LEADING_LIBRARY_TERMS):
+            for eq, terms in table.get(name, {}).items():
+                out[eq] += [t for t in terms if t not in out[eq]]
+    return out
 
 
 def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,

@@ -21,7 +21,7 @@ from acousim.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
-from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
+from .discovery import Discovery, discover_terms, discovered_equations, joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
@@ -31,7 +31,7 @@ from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, sca
 from .orientation import check_y_orientation
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
-from .statistics import runs_needed, smallest_sign_flip_pvalue
+from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
 
@@ -212,6 +212,9 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                 discovery = discover(final)
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
+    # the final model's parameters: the identified effects re-estimated together with the discovered terms
+    # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
+    joint_params, discovery, folded = joint_estimates(problem, final, discovery)
     # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
     # the others fitted on top of the identified set
     effects = []
@@ -220,9 +223,12 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         fit = fit_gap_model(problem, identified[: i + 1])
         g = scalar_gap(fit_gaps(runs, fit))
         test = ident.rounds[ident.identified.index(name)].candidates[name]
-        effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                        "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                        "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1})
+        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                 "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1}
+        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
+            entry["params_without_discovered_terms"] = final.effects[name]
+        effects.append(entry)
     others = []
     for name in config.candidates:
         if name in identified:
@@ -232,7 +238,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         test = last_tests.get(name)
         note = "fitted on top of the identified effects; not a significant held-out improvement"
         if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted (p = {replaced[name]:.2g}): "
+            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
                     "the discovered terms explain its share of the gap better")
         others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
                        "significant": False, "p_value": test.p_value if test else None,
@@ -256,10 +262,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "noise_floor": floor,
         "explained_within_noise": explained,
         "statement": (
-            "the calibrated simulation with the identified effects explains the data within its derivative noise"
+            ("the calibrated simulation with the identified effects explains the data within its derivative noise"
+             if identified else "the calibrated simulation explains the data within its derivative noise")
             if explained else
-            "a gap remains that no candidate effect explains: see localization.after for the terms, state-space "
-            "regions and time scales that carry it"),
+            "a gap remains that no candidate effect explains; the localization lists the library terms, "
+            "state-space regions and time scales that carry it"),
         "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,
@@ -267,13 +274,14 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "discovered_equations": discovered_equations(discovery),
         "discovery_selected": discovery.selected,
         "replaced_by_discovered_terms": [{"name": c, "p_value": p} for c, p in replaced.items()],
+        "folded_into_effects": {eq: t for eq, t in folded.items() if t},
     }
     if not discovery.empty:
         remaining["statement"] += "; the library terms that carry it: " + "; ".join(discovered_equations(discovery).values())
     if drift is not None and drift.detected:
         remaining["statement"] = (
             f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
-            f"{drift.time_scale_s:.2g} s, F-test p = {drift.p_value:.2g}); the simulation follows the drift, and on top of it "
+            f"{drift.time_scale_s:.2g} s, F-test {format_p(drift.p_value)}); the simulation follows the drift, and on top of it "
             + remaining["statement"])
     if ident.withheld:
         remaining["statement"] += (
