@@ -92,7 +92,10 @@ def report(request, tmp_path_factory):
     text = path.read_text()
     readings = {sid: html.unescape(r) for sid, r in re.findall(
         r'<section id="([^"]+)">.*?<p class="reading">(.*?)</p>', text, re.S)}
-    return readings, json.loads((base / "report" / "numbers.json").read_text()), text
+    numbers = json.loads((base / "report" / "numbers.json").read_text())
+    # the second case must exercise the sentences about identified effects
+    assert bool(numbers["diagnosis"]["identified"]) == bool(effects), numbers["diagnosis"]["identified"]
+    return readings, numbers, text
 
 
 def _number(pattern, text):
