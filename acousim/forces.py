@@ -1,4 +1,4 @@
-"""Gor'kov force, torque and generalised forces on the meshed cube dimer (PHYSICS.md sections 3-4).
+"""Gor'kov force, torque and generalised forces on the meshed cube dimer (docs/conventions.md sections 3-4).
 
 Every quantity is a volume integral over the tetrahedra of the two posed cube meshes, evaluated
 with a tetrahedral quadrature rule (:mod:`acousim.quadrature`).  Quadrature nodes are computed

@@ -1,6 +1,6 @@
 """``python -m acousim simulate``: synthetic field-drop experiments from the digital twin.
 
-Writes a trajectory data set (FORMATS.md: one ``runNN.csv`` per run with ``t, y, theta``, and
+Writes a trajectory data set (docs/formats.md: one ``runNN.csv`` per run with ``t, y, theta``, and
 ``meta.json`` with the nominal settings) plus ``truth.json`` (true pressure amplitude, effects,
 seed and every other setting) and ``truth_states.npz`` (exact states), atomically.  See
 :mod:`acousim.twin` and ``docs/twin.md``.
@@ -56,7 +56,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "simulate",
         help="synthetic field-drop experiments (digital twin) written as a trajectory data set",
         description="Simulate field-drop experiments of the cube dimer (Gor'kov or full-wave model plus any of the "
-        "PHYSICS.md section 5 effects) and write them as a FORMATS.md data set with truth.json. "
+        "docs/conventions.md section 5 effects) and write them as a docs/formats.md data set with truth.json. "
         "Without --effect (and --preset) no effect is on; noise options of 0 give exact samples.",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output data set folder (must be empty or absent)")
@@ -64,7 +64,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, metavar="S", help="master random seed (default 0)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME:param=value,...",
                    help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
-                   "parameters of PHYSICS.md section 5; parameters not given are 0")
+                   "parameters of docs/conventions.md section 5; parameters not given are 0")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="start from a documented preset (effects, pressure, drop ranges); --effect "
                    "entries then add to or replace its effects")

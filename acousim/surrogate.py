@@ -1,4 +1,4 @@
-"""A smooth, energy-consistent surrogate of the Gor'kov generalised forces (PHYSICS.md sections 3-4).
+"""A smooth, energy-consistent surrogate of the Gor'kov generalised forces (docs/conventions.md sections 3-4).
 
 Evaluating the mesh integral at every right-hand-side call of the equations of motion is far too
 slow, so the dynamics use a surrogate built from **one static sweep** of the mesh model

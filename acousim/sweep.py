@@ -1,12 +1,12 @@
 """Static force/torque sweeps over (theta, y) and the static coefficients fitted to them.
 
 A sweep evaluates the Gor'kov model (:class:`acousim.forces.GorkovDimer`) at zero velocity on a
-rectangular (theta, y) grid; its CSV has the FORMATS.md columns
+rectangular (theta, y) grid; its CSV has the docs/formats.md columns
 ``theta, y, potential, force_z, q_y, q_theta, yddot, thetaddot`` (J, N, N, N m, m/s^2, 1/s^2) plus
 ``z_com`` [m] (height above the pressure node).
 
 Static coefficients: ordinary least squares of the swept ``yddot`` and ``thetaddot`` on the
-velocity-free monomials of the library (theta and y up to degree 3, FORMATS.md term names), with
+velocity-free monomials of the library (theta and y up to degree 3, docs/formats.md term names), with
 y measured from Z_eq.  The model values are deterministic, so the "residual" is the truncation
 error of the cubic; the reported standard errors treat it as white noise
 (``sigma^2 (X^T X)^{-1}``, sigma^2 = RSS / (n - p)) and are therefore a measure of how well the
@@ -120,7 +120,7 @@ def static_sweep(
 
 
 def read_sweep_csv(path: str | os.PathLike) -> SweepResult:
-    """Read a sweep CSV written by :meth:`SweepResult.to_csv` (or any CSV with the FORMATS.md columns
+    """Read a sweep CSV written by :meth:`SweepResult.to_csv` (or any CSV with the docs/formats.md columns
     on a full rectangular grid).  Raises ValueError naming the file on bad input."""
     path = Path(path)
     settings: dict = {}
@@ -168,7 +168,7 @@ class StaticCoefficients:
 
     Attributes
     ----------
-    terms : list of term names (FORMATS.md), shared by both equations
+    terms : list of term names (docs/formats.md), shared by both equations
     coefficients, std_errors : dict equation -> dict term -> value [SI: (1/s^2 or m/s^2) / unit^powers]
     rms_residual : dict equation -> RMS residual of the fit [equation's units]
     relative_residual : dict equation -> RMS residual / RMS of the swept values

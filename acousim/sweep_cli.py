@@ -57,7 +57,7 @@ def add_parser(subparsers) -> None:
             "Evaluate the Gor'kov volume-integral model of the cube dimer at zero velocity on a (theta, y) "
             "grid and write a CSV with the columns theta, y, potential [J], force_z [N], q_y [N], "
             "q_theta [N m], yddot [m/s^2], thetaddot [1/s^2], z_com [m]. y is the height of the centre "
-            "of mass above the simulated equilibrium height Z_eq (PHYSICS.md section 2). Optionally "
+            "of mass above the simulated equilibrium height Z_eq (docs/conventions.md section 2). Optionally "
             "write the figures (restoring force and torque, thetaddot map), the static coefficients "
             "(least squares on the velocity-free cubic monomials) and a rendering of the posed mesh. "
             "With --model fullwave the full-wave (boundary-element) model is swept instead (docs/fullwave.md): the "

@@ -44,7 +44,7 @@ def default_wave():
 
 @pytest.fixture(scope="session")
 def default_model():
-    """The Gor'kov dimer at the PHYSICS.md defaults (500 um NaCl, 3 kPa, default mesh)."""
+    """The Gor'kov dimer at the docs/conventions.md defaults (500 um NaCl, 3 kPa, default mesh)."""
     from acousim.forces import GorkovDimer
 
     return GorkovDimer()

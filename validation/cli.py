@@ -130,18 +130,22 @@ def _add_diagnose(sub) -> None:
             "Calibrate the simulation (Gor'kov or full-wave; pressure amplitude and y origin) to a data set, measure the gap "
             "between simulated and measured accelerations (and the long-time attractor, Poincare and frequency "
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
-            "effects of PHYSICS.md section 5 cause it, adding them greedily while a held-out improvement across runs "
-            "is significant (one-sided Wilcoxon). Writes diagnosis.json, figures and report.html into --out."
+            "effects of docs/conventions.md section 5 cause it, adding them greedily while their improvement of held-out runs "
+            "(each run held out once, K-fold over runs) is significant (one-sided sign-flip test over runs, --alpha). "
+            "Tests whether y points down (data_warnings). Data format and conventions: docs/formats.md, "
+            "docs/conventions.md. Writes diagnosis.json, figures and report.html into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
+                   "optional meta.json (docs/formats.md)")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--alpha", type=float, default=0.01,
-                   help="significance level of the held-out one-sided sign-flip test of each effect; with n runs "
+                   help="significance level of the one-sided sign-flip test over runs of each effect's improvement of "
+                        "held-out runs; with n runs "
                         "its smallest p is 2^-n, so the default 0.01 needs at least 7 runs")
     p.add_argument("--min-improvement", type=float, default=0.05,
-                   help="smallest median held-out improvement counted, as a fraction of the current gap")
+                   help="smallest median improvement of held-out runs counted, as a fraction of the current gap")
     p.add_argument("--candidates", default=",".join(_candidate_names()),
                    help="comma-separated candidate effects")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
@@ -255,7 +259,8 @@ def _add_report(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
+                   "optional meta.json (docs/formats.md)")
     p.add_argument("--out", required=True, help="report directory")
     p.add_argument("--max-evals", type=positive_int, default=None,
                    help="evaluations of every long-time refinement: the fit's, and the re-optimisation of the "
@@ -266,7 +271,8 @@ def _add_report(sub) -> None:
                         "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
                         "see python -m fitting fit --help")
     p.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
-                   help="discovery only: keep the smallest support whose held-out error is within FRACTION of the best "
+                   help="discovery only: keep the smallest support whose held-out error (5-fold over runs) is within "
+                        "FRACTION of the best "
                         "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
                         "see python -m fitting fit --help")
     add_model_arguments(p)
@@ -303,7 +309,9 @@ def run_report(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="python -m validation",
-                           description="Bridge between fitted models and the Gor'kov simulation: coefficient comparison.")
+                           description="Bridge between fitted models and the simulation: coefficient comparison, sim-to-real gap "
+                                       "diagnosis, its blind check and the HTML report. Conventions: "
+                                       "docs/conventions.md; files: docs/formats.md.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     _add_compare(sub)
     _add_diagnose(sub)

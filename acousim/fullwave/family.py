@@ -1,6 +1,6 @@
 """The full-wave table family: every lab dimer from tables over the dimensionless parameters (ks, g/s).
 
-Scaling.  Rigid, immobile cubes in an inviscid medium (PHYSICS.md section 7) scatter a field that depends on
+Scaling.  Rigid, immobile cubes in an inviscid medium (docs/conventions.md section 7) scatter a field that depends on
 the geometry only through ``ks`` (wavenumber times side), ``g/s`` (hinge gap over side) and ``r_e/s`` (edge
 radius over side).  With the incident field ``p0 sin(kZ)`` and lengths measured in units of s, the
 surface pressure is ``p0 * P(x/s; ks, g/s)`` and the particle velocity ``p0/(rho0 c0) * V(x/s; ...)``, so the

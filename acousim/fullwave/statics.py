@@ -41,7 +41,7 @@ class TableMismatch(ValueError):
 
 @dataclass(frozen=True)
 class FullwaveInertia(SinusoidalInertia):
-    """Mass and hinge inertia of the full-wave table's dimer (hinge arm d + g/2; PHYSICS.md section 4).
+    """Mass and hinge inertia of the full-wave table's dimer (hinge arm d + g/2; docs/conventions.md section 4).
 
     Attributes
     ----------
@@ -160,7 +160,7 @@ class FullwaveDimer:
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
 
     def check_experiment(self, meta: dict) -> None:
-        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (FORMATS.md keys) the table was
+        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (docs/formats.md keys) the table was
         not built for (:meth:`FullwaveSurrogate.mismatch`)."""
         message = self.surrogate.mismatch(meta)
         if message is not None:

@@ -1,4 +1,4 @@
-"""The digital twin: synthetic field-drop experiments written as data sets (FORMATS.md).
+"""The digital twin: synthetic field-drop experiments written as data sets (docs/formats.md).
 
 * :mod:`acousim.twin.config` - settings: :class:`DropProtocol`, :class:`Camera`, :class:`TwinConfig`,
   presets (:data:`PAPER_LIKE`) and :class:`TwinError`;

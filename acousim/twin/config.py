@@ -154,7 +154,7 @@ class TwinConfig:
     pressure_amplitude_pa : float
         Nominal pressure amplitude p0 [Pa] (written to meta.json).
     pressure_error : float
-        The true p0 is drawn uniformly in nominal x [1 - e, 1 + e] (0: true = nominal); FORMATS.md
+        The true p0 is drawn uniformly in nominal x [1 - e, 1 + e] (0: true = nominal); docs/formats.md
         allows real data to be off by up to 10 %.
     effects : EffectSet
     protocol : DropProtocol

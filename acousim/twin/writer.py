@@ -1,7 +1,7 @@
-"""Writing a twin data set (FORMATS.md): run CSVs, ``meta.json``, ``truth.json`` and the exact states.
+"""Writing a twin data set (docs/formats.md): run CSVs, ``meta.json``, ``truth.json`` and the exact states.
 
 :func:`simulate_dataset` writes ``runNN.csv`` (columns ``t, y, theta``), ``meta.json`` (the
-*nominal* settings, FORMATS.md keys), ``truth.json`` (the true pressure, the effects with their
+*nominal* settings, docs/formats.md keys), ``truth.json`` (the true pressure, the effects with their
 parameters, the seed and every other setting, including each run's drawn initial conditions) and
 ``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics), into
 a temporary folder renamed into place at the end, so a failure leaves nothing behind.
@@ -28,7 +28,7 @@ __all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "w
 
 
 def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int) -> Path:
-    """Write the CSV of one run (FORMATS.md): comments, header ``t,y,theta``, one row per frame,
+    """Write the CSV of one run (docs/formats.md): comments, header ``t,y,theta``, one row per frame,
     missing frames as ``nan``."""
     comments = [f"acousim digital twin, run {index} of {total}: free oscillation after the field is back on at t = 0",
                 "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"]
@@ -37,7 +37,7 @@ def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int
 
 
 def meta_dict(config: TwinConfig, dynamics: DimerDynamics) -> dict:
-    """meta.json: the FORMATS.md keys with the *nominal* pressure amplitude."""
+    """meta.json: the docs/formats.md keys with the *nominal* pressure amplitude."""
     st = dynamics.force_model.settings
     return {
         "side_length_m": float(config.side),

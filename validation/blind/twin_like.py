@@ -1,7 +1,7 @@
 """Twin-like data sets with causes outside the candidates: a cubic hinge term, a y-dependent damping, a pressure
 drifting in time, optionally with candidate effects on top.
 
-The runs integrate the surrogate's equations of motion (PHYSICS.md section 4; the Gor'kov force and torque from the
+The runs integrate the surrogate's equations of motion (docs/conventions.md section 4; the Gor'kov force and torque from the
 default dimer's Chebyshev surrogate and :func:`acousim.equations.hinge_acceleration`) with classical RK4 at the
 frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 
@@ -11,7 +11,7 @@ frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 * ``-y_damping y^2 ydot`` [1/(m^2 s)] added to yddot, with y measured from the true equilibrium height,
 * the accelerations of candidate effects (:class:`acousim.effects.EffectSet`, y from the true equilibrium).
 
-The CSVs (FORMATS.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
+The CSVs (docs/formats.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
 equilibrium height and meta.json holds the nominal pressure.  The drops start at |y| of 80-150 um, so that
 each run's oscillation dominates its y spectrum (a drift of a few per cent moves the equilibrium by tens of
 micrometres).  Every random choice comes from ``seed``.

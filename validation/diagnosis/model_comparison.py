@@ -2,7 +2,7 @@
 
 :func:`compare_simulation_models` puts three calibrated simulations side by side on the same runs:
 
-* the Gor'kov model alone (PHYSICS.md section 3);
+* the Gor'kov model alone (docs/conventions.md section 3);
 * the Gor'kov model plus the phenomenological ``pair_scattering`` of section 5, its kappa fitted;
 * the full-wave model (section 7, :class:`acousim.fullwave.FullwaveDimer`), with no fitted stiffness.
 

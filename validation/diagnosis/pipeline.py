@@ -1,6 +1,6 @@
 """A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
 
-Output, ``diagnosis.json`` (FORMATS.md, extended)::
+Output, ``diagnosis.json`` (docs/formats.md, extended)::
 
     {"identified": [...], "calibration": {...}, "gap_before": g0, "gap_after": g1, "gap_definition": "...",
      "gap_components": [...], "gap_component_forms": {...}, "gap_per_run": {...}, "noise_floor": ...,
@@ -21,7 +21,7 @@ from acousim.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
-from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
+from .discovery import Discovery, discover_terms, discovered_equations, joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
@@ -29,9 +29,10 @@ from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
 from .model_parameters import ParameterCalibration, calibrate_model_parameter
+from .orientation import check_y_orientation
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
-from .statistics import runs_needed, smallest_sign_flip_pvalue
+from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
 
@@ -50,7 +51,7 @@ class DiagnoseConfig:
 
     Parameters
     ----------
-    candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
+    candidates : names of the candidate effects (default: all of docs/conventions.md section 5)
     alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
@@ -63,6 +64,8 @@ class DiagnoseConfig:
         None: the pressure is taken as constant without testing
     discover : regress what remains after the candidates on the cubic library (:mod:`validation.diagnosis.discovery`)
     discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
+    check_orientation : test whether y points down (:mod:`validation.diagnosis.orientation`); if so, warn
+        (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
@@ -76,6 +79,7 @@ class DiagnoseConfig:
     drift: DriftSettings | None = DriftSettings()
     discover: bool = True
     discovery_min_improvement: float = 1e-3
+    check_orientation: bool = True
 
     def __post_init__(self):
         unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
@@ -134,7 +138,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     Returns
     -------
     (diagnosis, internals)
-        The diagnosis.json document (FORMATS.md) and :class:`DiagnosisInternals` for figures.
+        The diagnosis.json document (docs/formats.md) and :class:`DiagnosisInternals` for figures.
 
     Runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`): the same numbers wherever it
     runs (here, in an executor task, on a dask worker), and faster for its many small factorisations.
@@ -196,8 +200,9 @@ def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
                       mesh_size: float | None, model_name: str, gap: float | None,
                       edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
+    from acousim.analytic import nominal_trap_frequency
     from acousim.models import static_model
-    from cubedimer.dataset import load_dataset
+    from cubedimer.dataset import LoadConfig, load_dataset
     from cubedimer.meta import read_meta
 
     from ..simulation import conditions_from_meta
@@ -206,13 +211,29 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     skip = logger.warning if progress else logger.debug
     meta = read_meta(data_dir)
     conditions = conditions_from_meta(meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
-    static_model(model_name, conditions)  # refuses a misfit (a gap with Gor'kov, a dimer outside the family) first
-    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
-    recorded = prepare_diagnosis_runs(dataset)
-    conditions, parameters = calibrate_model_parameters(model_name, conditions, recorded, config.max_frames_per_run,
-                                                        log)
-    model = static_model(model_name, conditions).interpolated()
-    problem = DiagnosisProblem.from_recorded(model, recorded, config.max_frames_per_run)
+    model = static_model(model_name, conditions)  # refuses a misfit (a gap with Gor'kov, a dimer outside the family)
+    # the loader checks the physics bounds of any levitated dimer; with a meta.json also the Gor'kov estimate
+    # of the trap frequency at its nominal pressure
+    dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
+                           report=lambda m: skip("skipping %s", m))
+    problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
+                                             config.max_frames_per_run)
+    data_warnings = []
+    if config.check_orientation:
+        orientation, flipped = check_y_orientation(problem, dataset, config.max_frames_per_run)
+        if orientation.inverted:  # a flipped axis is never reported as new physics: the diagnosis uses -y
+            warning = orientation.warning()
+            logger.warning("%s", warning["message"])
+            data_warnings.append(warning)
+            problem = flipped
+    # the model's own parameters the data may determine (the full-wave hinge gap), unless given
+    conditions, parameters = calibrate_model_parameters(model_name, conditions, problem.recorded_runs,
+                                                        config.max_frames_per_run, log)
+    if parameters:
+        model = static_model(model_name, conditions)
+        problem = DiagnosisProblem.from_recorded(model.interpolated(), problem.recorded_runs,
+                                                 config.max_frames_per_run)
+    model = problem.model
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -256,6 +277,9 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                 discovery = discover(final)
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
+    # the final model's parameters: the identified effects re-estimated together with the discovered terms
+    # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
+    joint_params, discovery, folded = joint_estimates(problem, final, discovery)
     # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
     # the others fitted on top of the identified set
     effects = []
@@ -264,9 +288,12 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         fit = fit_gap_model(problem, identified[: i + 1])
         g = scalar_gap(fit_gaps(runs, fit))
         test = ident.rounds[ident.identified.index(name)].candidates[name]
-        effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                        "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                        "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1})
+        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                 "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1}
+        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
+            entry["params_without_discovered_terms"] = final.effects[name]
+        effects.append(entry)
     others = []
     for name in config.candidates:
         if name in identified:
@@ -276,7 +303,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         test = last_tests.get(name)
         note = "fitted on top of the identified effects; not a significant held-out improvement"
         if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted (p = {replaced[name]:.2g}): "
+            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
                     "the discovered terms explain its share of the gap better")
         others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
                        "significant": False, "p_value": test.p_value if test else None,
@@ -300,10 +327,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "noise_floor": floor,
         "explained_within_noise": explained,
         "statement": (
-            "the calibrated simulation with the identified effects explains the data within its derivative noise"
+            ("the calibrated simulation with the identified effects explains the data within its derivative noise"
+             if identified else "the calibrated simulation explains the data within its derivative noise")
             if explained else
-            "a gap remains that no candidate effect explains: see localization.after for the terms, state-space "
-            "regions and time scales that carry it"),
+            "a gap remains that no candidate effect explains; the localization lists the library terms, "
+            "state-space regions and time scales that carry it"),
         "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,
@@ -311,13 +339,14 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "discovered_equations": discovered_equations(discovery),
         "discovery_selected": discovery.selected,
         "replaced_by_discovered_terms": [{"name": c, "p_value": p} for c, p in replaced.items()],
+        "folded_into_effects": {eq: t for eq, t in folded.items() if t},
     }
     if not discovery.empty:
         remaining["statement"] += "; the library terms that carry it: " + "; ".join(discovered_equations(discovery).values())
     if drift is not None and drift.detected:
         remaining["statement"] = (
             f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
-            f"{drift.time_scale_s:.2g} s, F-test p = {drift.p_value:.2g}); the simulation follows the drift, and on top of it "
+            f"{drift.time_scale_s:.2g} s, F-test {format_p(drift.p_value)}); the simulation follows the drift, and on top of it "
             + remaining["statement"])
     if ident.withheld:
         remaining["statement"] += (
@@ -356,6 +385,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "long_time": long_time,
         "remaining_gap": remaining,
         "identification_rounds": [r.to_dict() for r in ident.rounds],
+        "data_warnings": data_warnings,
         "skipped_files": dataset.skipped_files(),
         "glitch_frames_masked": dataset.n_glitches,
         "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,
