@@ -9,8 +9,9 @@ through these steps (:func:`measure_frames`):
    cube are left out), and the white pixel noise from the ring's spread.
    The coverage of every pixel is ``c = polarity (I - background) / contrast`` (0 background, 1 cube).
 2. **Particles.**  The pixels with ``c > 1/2``, labelled in 8-connected components.  Components larger
-   than ``min_area`` are particles: one (or two touching at the hinge, of similar size) is the dimer;
-   anything more is a third particle.  A dimer whose window reaches the border is out of view.
+   than ``min_area`` are particles: one (or two of similar size side by side, less than ``3 + 3 blur`` px
+   apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer; anything more
+   is a third particle.  A dimer whose window reaches the border is out of view.
 3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
    the edge window), unclipped: a symmetric point-spread function and white noise leave it unbiased.
 4. **First orientation.**  The dimer is split at its centroid column (the hinge; PHYSICS.md section 2: each
@@ -355,7 +356,7 @@ def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # prag
         res[8 + k] = delta
         res[12 + k] = nx * mx + nz * mzp
         res[16 + k] = width
-        wk = sss / (1.0 + beta * beta)
+        wk = sss * (1.0 + beta * beta)  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
         sw += wk
         swr += wk * _wrap(delta - gamma, 0.5 * math.pi)
         nf += 1
@@ -665,7 +666,7 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
         ratio = box[4] / box[9]
         gap_u = max(box[5] - box[1], box[0] - box[6])
         gap_v = max(box[7] - box[3], box[2] - box[8])
-        if ratio > 2.0 or gap_u > 3 or gap_v > 3:
+        if ratio > 2.0 or gap_u > 3.0 + 3.0 * blur or gap_v > 3:
             row[0] = 4
             return
         bu0 = min(bu0, int(box[5]))

@@ -96,7 +96,7 @@ class TrackConfig:
     max_edge_rms_factor: float = 4.0
     max_squareness: float = 0.05
     max_hinge_gap: float = 0.1
-    calibration_frames: int = 200
+    calibration_frames: int = 100
     batch: int = 1024
 
     def __post_init__(self) -> None:
@@ -358,7 +358,8 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
                         "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
                         "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
                         "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used},
-        "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square)) if square.size else None,
+        "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square))
+                                                    if np.isfinite(square).any() else None,
                                                     "p95_abs": float(np.nanpercentile(np.abs(square), 95))
                                                     if np.isfinite(square).any() else None,
                                                     "bound": config.max_squareness},
