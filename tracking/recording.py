@@ -142,12 +142,12 @@ def _read_video(path: Path) -> tuple[NDArray, dict]:
     import imageio_ffmpeg
 
     try:
-        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="gray")
+        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="gray", bpp=1)
         meta = next(gen)
         gen.close()
         deep = any(b in str(meta.get("pix_fmt", "")) for b in ("10", "12", "16"))
         pix, dtype = ("gray16le", np.uint16) if deep else ("gray", np.uint8)
-        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt=pix)
+        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt=pix, bpp=np.dtype(dtype).itemsize)
         meta = next(gen)
         w, h = (int(v) for v in meta["size"])
         frames = []
