@@ -229,6 +229,12 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                [[p.run.name, p.attractor.label, p.attractor.f_y, p.attractor.f_theta, p.attractor.amp_y * 1e6,
                  p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p in prepared])],
         {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": float(fy), "median_f_theta_hz": float(ft)}))
+    # the tracking, when the data set came from video (its own section module)
+    from .tracking_section import tracking_section
+
+    tracked = tracking_section(data_dir, figs_dir)
+    if tracked is not None:
+        sections.append(tracked)
     # 2 phase space
     pfig = phase_space_figures(prepared, res.model, figs_dir)
     loss = model_json["loss"]["final"]
