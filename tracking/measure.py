@@ -436,72 +436,67 @@ def _background(img, pol, bg_ref, contrast, slope_u, slope_v, out):  # pragma: n
 
 @njit(cache=True)
 def _particles(c, min_area, box):  # pragma: no cover - compiled
-    """Label the pixels with c > 1/2 (8-connected, union-find on provisional labels) and return the number of
-    components of at least ``min_area`` pixels; ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
+    """Label the pixels with c > 1/2 in 8-connected components (union-find over runs of such pixels along the
+    rows) and return the number of components of at least ``min_area`` pixels (-1: too many runs, a frame of
+    noise); ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
     h, w = c.shape
-    lab = np.zeros((h, w), np.int32)
-    cap = 4096
+    cap = 16384
+    rv = np.empty(cap, np.int32)
+    r0 = np.empty(cap, np.int32)
+    r1 = np.empty(cap, np.int32)
     parent = np.empty(cap, np.int32)
-    nl = 0
+    row_start = np.zeros(h + 1, np.int32)
+    n = 0
     for v in range(h):
-        for u in range(w):
-            if c[v, u] <= 0.5:
-                continue
-            best = 0
-            for k in range(4):
-                if k == 0:
-                    vv, uu = v - 1, u - 1
-                elif k == 1:
-                    vv, uu = v - 1, u
-                elif k == 2:
-                    vv, uu = v - 1, u + 1
-                else:
-                    vv, uu = v, u - 1
-                if vv < 0 or uu < 0 or uu >= w:
-                    continue
-                lj = lab[vv, uu]
-                if lj == 0:
-                    continue
-                rj = _find(parent, lj)
-                if best == 0:
-                    best = rj
-                elif rj != best:
-                    if rj < best:
-                        parent[best] = rj
-                        best = rj
+        row_start[v] = n
+        u = 0
+        while u < w:
+            if c[v, u] > 0.5:
+                a = u
+                while u + 1 < w and c[v, u + 1] > 0.5:
+                    u += 1
+                if n >= cap:
+                    return -1
+                rv[n] = v
+                r0[n] = a
+                r1[n] = u
+                parent[n] = n
+                n += 1
+            u += 1
+    row_start[h] = n
+    for v in range(1, h):
+        j = row_start[v - 1]
+        j_end = row_start[v]
+        for i in range(row_start[v], row_start[v + 1]):
+            # runs of the row above that touch run i (8-connected: overlap widened by one pixel)
+            while j < j_end and r1[j] < r0[i] - 1:
+                j += 1
+            k = j
+            while k < j_end and r0[k] <= r1[i] + 1:
+                a = _find(parent, i)
+                b = _find(parent, k)
+                if a != b:
+                    if a < b:
+                        parent[b] = a
                     else:
-                        parent[rj] = best
-            if best == 0:
-                nl += 1
-                if nl >= cap:
-                    return -1  # pure noise: no particle structure
-                parent[nl] = nl
-                best = nl
-            lab[v, u] = best
-    cnt = np.zeros(nl + 1, np.int64)
-    u0 = np.full(nl + 1, w, np.int64)
-    u1 = np.full(nl + 1, -1, np.int64)
-    v0 = np.full(nl + 1, h, np.int64)
-    v1 = np.full(nl + 1, -1, np.int64)
-    for v in range(h):
-        for u in range(w):
-            lj = lab[v, u]
-            if lj == 0:
-                continue
-            r = _find(parent, lj)
-            cnt[r] += 1
-            if u < u0[r]:
-                u0[r] = u
-            if u > u1[r]:
-                u1[r] = u
-            if v < v0[r]:
-                v0[r] = v
-            if v > v1[r]:
-                v1[r] = v
+                        parent[a] = b
+                k += 1
+    cnt = np.zeros(n, np.int64)
+    u0 = np.full(n, w, np.int64)
+    u1 = np.full(n, -1, np.int64)
+    v0 = np.full(n, h, np.int64)
+    v1 = np.full(n, -1, np.int64)
+    for i in range(n):
+        r = _find(parent, i)
+        cnt[r] += r1[i] - r0[i] + 1
+        u0[r] = min(u0[r], r0[i])
+        u1[r] = max(u1[r], r1[i])
+        v0[r] = min(v0[r], rv[i])
+        v1[r] = max(v1[r], rv[i])
     nbig = 0
     first = -1
     second = -1
-    for r in range(1, nl + 1):
+    for r in range(n):
         if cnt[r] >= min_area:
             nbig += 1
             if first < 0 or cnt[r] > cnt[first]:
@@ -522,40 +517,56 @@ def _particles(c, min_area, box):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _moments(c, u0, u1, v0, v1, u_split, mom):  # pragma: no cover - compiled
-    """Zeroth and first moments of the window and of its two halves (split at column ``u_split``), and the
-    sum of (v - mean)^2 over the window: ``mom`` = (s0, su, sv, A: m0, mu, mv, B: m0, mu, mv, svv)."""
-    for k in range(10):
+def _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom):  # pragma: no cover - compiled
+    """One pass over the window: per half (A: columns below ``u_split``, about (ua, vo); B: about (ub, vo)) the
+    coverage sum M0 and the complex moments M_k = sum c z^k, k = 1..4, with z = (u - u_o) + i (v_o - v).
+    ``mom`` = (A: M0, Re M1, Im M1, ..., Re M4, Im M4, B: the same): 18 numbers."""
+    for k in range(18):
         mom[k] = 0.0
     for v in range(v0, v1 + 1):
+        Z = vo - v
         for u in range(u0, u1 + 1):
-            cv = c[v, u]
-            j = 3 if u < u_split else 6
-            mom[j] += cv
-            mom[j + 1] += cv * u
-            mom[j + 2] += cv * v
-    for k in range(3):
-        mom[k] = mom[3 + k] + mom[6 + k]
+            x = c[v, u]
+            if u < u_split:
+                j = 0
+                X = u - ua
+            else:
+                j = 9
+                X = u - ub
+            # z, z^2, z^3, z^4 (real and imaginary parts)
+            a1, b1 = X, Z
+            a2 = X * X - Z * Z
+            b2 = 2.0 * X * Z
+            a3 = a2 * X - b2 * Z
+            b3 = a2 * Z + b2 * X
+            a4 = a2 * a2 - b2 * b2
+            b4 = 2.0 * a2 * b2
+            mom[j] += x
+            mom[j + 1] += x * a1
+            mom[j + 2] += x * b1
+            mom[j + 3] += x * a2
+            mom[j + 4] += x * b2
+            mom[j + 5] += x * a3
+            mom[j + 6] += x * b3
+            mom[j + 7] += x * a4
+            mom[j + 8] += x * b4
 
 
 @njit(cache=True)
-def _orientation4(c, u0, u1, v0, v1, u_split, left, cu, cv):  # pragma: no cover - compiled
-    """Face direction (mod pi/2) of the square in one half of the window from its fourth-order complex
-    moment about (cu, cv): for a square with faces along gamma, sum c (X + iZ)^4 = -(16/15) a^6 exp(4 i gamma)."""
-    re = 0.0
-    im = 0.0
-    for v in range(v0, v1 + 1):
-        Z = cv - v
-        Z2 = Z * Z
-        for u in range(u0, u1 + 1):
-            if (u < u_split) != left:
-                continue
-            x = c[v, u]
-            X = u - cu
-            X2 = X * X
-            re += x * (X2 * X2 - 6.0 * X2 * Z2 + Z2 * Z2)
-            im += x * (4.0 * X * Z * (X2 - Z2))
-    return 0.25 * (math.atan2(im, re) - math.pi)
+def _half(mom, j, uo, vo, cen):  # pragma: no cover - compiled
+    """Centroid (u, v) of one half into ``cen`` and the face direction (mod pi/2) of its square from the fourth-order
+    complex moment about that centroid: for a square with faces along gamma, sum c (z - z_c)^4 =
+    -(16/15) a^6 exp(4 i gamma)."""
+    m0 = mom[j]
+    m1 = complex(mom[j + 1], mom[j + 2])
+    m2 = complex(mom[j + 3], mom[j + 4])
+    m3 = complex(mom[j + 5], mom[j + 6])
+    m4 = complex(mom[j + 7], mom[j + 8])
+    d = m1 / m0
+    m4c = m4 - 4.0 * d * m3 + 6.0 * d * d * m2 - 4.0 * d * d * d * m1 + d * d * d * d * m0
+    cen[0] = uo + d.real
+    cen[1] = vo - d.imag
+    return 0.25 * (math.atan2(m4c.imag, m4c.real) - math.pi)
 
 
 @njit(cache=True)
@@ -681,17 +692,20 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     if u0 < _RING or v0 < _RING or u1 >= w - _RING or v1 >= h - _RING:
         row[0] = 3
         return
-    # ---- 3. centre of mass (the halves split at the bounding box's middle column, the hinge of a
-    #         mirror-symmetric dimer)
+    # ---- 3. centre of mass and 4. each half's first orientation, in one pass (the halves split at the bounding
+    #         box's middle column, the hinge of a mirror-symmetric dimer)
     u_split = 0.5 * (bu0 + bu1)
-    mom = np.zeros(10)
-    _moments(c, u0, u1, v0, v1, u_split, mom)
-    s0 = mom[0]
-    if s0 <= 0 or mom[3] <= 0 or mom[6] <= 0:
+    ua = 0.5 * (bu0 + u_split)
+    ub = 0.5 * (u_split + bu1)
+    vo = 0.5 * (bv0 + bv1)
+    mom = np.zeros(18)
+    _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom)
+    s0 = mom[0] + mom[9]
+    if s0 <= 0 or mom[0] <= 0 or mom[9] <= 0:
         row[0] = 2
         return
-    ucom = mom[1] / s0
-    vcom = mom[2] / s0
+    ucom = (mom[0] * ua + mom[1] + mom[9] * ub + mom[10]) / s0
+    vcom = vo - (mom[2] + mom[11]) / s0
     svv = 0.0
     for v in range(v0, v1 + 1):
         svv += (u1 - u0 + 1) * (v - vcom) ** 2
@@ -702,17 +716,12 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     if area_ref > 0 and abs(s0 / area_ref - 1.0) > area_tol:
         row[0] = 5
         return
-    # ---- 4. first orientation of each half from its fourth-order moment
     a_half = 0.5 * math.sqrt(0.5 * s0)
     d = a_half * math.sqrt(2.0)
     cen = np.zeros((2, 2))
     gam = np.zeros(2)
-    cen[0, 0] = mom[4] / mom[3]
-    cen[0, 1] = mom[5] / mom[3]
-    cen[1, 0] = mom[7] / mom[6]
-    cen[1, 1] = mom[8] / mom[6]
-    gam[0] = _orientation4(c, u0, u1, v0, v1, u_split, True, cen[0, 0], cen[0, 1])
-    gam[1] = _orientation4(c, u0, u1, v0, v1, u_split, False, cen[1, 0], cen[1, 1])
+    gam[0] = _half(mom, 0, ua, vo, cen[0])
+    gam[1] = _half(mom, 9, ub, vo, cen[1])
     # bends (step 6) and the sign of a bend near face contact from the hinge's height
     phiA = _wrap(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
     phiB = _wrap(0.25 * math.pi - gam[1], 0.5 * math.pi)
