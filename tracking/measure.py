@@ -48,7 +48,7 @@ __all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSetting
 #: Columns of a frame's measurement row (pixel units unless stated).
 COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
            "edge_width", "area", "tilt", "hinge_gap", "sigma_v", "sigma_theta", "side_a", "side_b", "pixel_noise",
-           "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background")
+           "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background", "squareness_sigma")
 _C = {name: i for i, name in enumerate(COLUMNS)}
 # column indices as module constants (the compiled kernel reads them as literals)
 _I_ALPHA = COLUMNS.index('alpha')
@@ -69,6 +69,7 @@ _I_SIDE_A = COLUMNS.index('side_a')
 _I_SIDE_B = COLUMNS.index('side_b')
 _I_SIGMA_THETA = COLUMNS.index('sigma_theta')
 _I_SIGMA_V = COLUMNS.index('sigma_v')
+_I_SQUARENESS_SIGMA = COLUMNS.index('squareness_sigma')
 _I_THETA = COLUMNS.index('theta')
 _I_TILT = COLUMNS.index('tilt')
 _I_U_A = COLUMNS.index('u_a')
@@ -214,11 +215,11 @@ def _find(parent, i):  # pragma: no cover - compiled
 def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
     """Edge fits of the four faces of one square (module docstring, step 5).
 
-    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 20):
+    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 24):
     0 gamma, 1 u centre, 2 v centre, 3 pooled rms residual [px], 4 weight sum (information of gamma per
     unit residual variance), 5 number of faces fitted, 6 max edge width [px], 7 half side estimate [px],
     8..11 fitted face directions [rad] (NaN if not fitted), 12..15 face offsets rho along their normals,
-    16..19 face edge widths.
+    16..19 face edge widths, 20..23 variances of the face directions [rad^2] (from each face's own residual).
     """
     clear = 3.0 * blur + 1.0
     X0 = uc
@@ -233,6 +234,7 @@ def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # prag
         res[8 + k] = np.nan
         res[12 + k] = np.nan
         res[16 + k] = np.nan
+        res[20 + k] = np.nan
     xs = np.empty(512)
     ys = np.empty(512)
     for k in range(4):
@@ -356,6 +358,7 @@ def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # prag
         res[8 + k] = delta
         res[12 + k] = nx * mx + nz * mzp
         res[16 + k] = width
+        res[20 + k] = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
         wk = sss * (1.0 + beta * beta)  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
         sw += wk
         swr += wk * _wrap(delta - gamma, 0.5 * math.pi)
@@ -589,6 +592,7 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
     """alpha_free, beta_free from the faces that meet at each hinge corner, fitted alone, and the distance
     between the two squares' hinge corners (written into ``row``)."""
     free_ok = True
+    var = 0.0
     dirs = np.zeros(4)  # A upper, A lower, B upper, B lower: directions pointing away from the hinge
     hx = np.zeros(2)
     hz = np.zeros(2)
@@ -621,9 +625,11 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
             continue
         dirs[2 * sq] = du_nom + _wrap(fu - du_nom, math.pi)
         dirs[2 * sq + 1] = dl_nom + _wrap(fl - dl_nom, math.pi)
+        var += (resA[20 + ku] + resA[20 + kl]) if sq == 0 else (resB[20 + ku] + resB[20 + kl])
     if free_ok:
         row[_I_ALPHA_FREE] = _wrap(dirs[0] - dirs[2], 2.0 * math.pi)
         row[_I_BETA_FREE] = _wrap(dirs[3] - dirs[1], 2.0 * math.pi)
+        row[_I_SQUARENESS_SIGMA] = math.sqrt(var)
     row[_I_HINGE_GAP] = math.sqrt((hx[0] - hx[1]) ** 2 + (hz[0] - hz[1]) ** 2)
 
 
@@ -744,8 +750,8 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     gam[0] = phiA + 0.75 * math.pi
     gam[1] = 0.25 * math.pi - phiB
     # ---- 5. edge fits, two passes
-    resA = np.empty(20)
-    resB = np.empty(20)
+    resA = np.empty(24)
+    resB = np.empty(24)
     for it in range(2):
         _fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
         _fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)

@@ -12,8 +12,8 @@
 3. **The recording's bounds.**  Measured frames whose edges are wider than the recording's median by more
    than the motion blur of ``max_motion_blur`` px (``width^2 - median^2 > L^2 / 12``), whose edge residual
    exceeds ``max_edge_rms_factor`` x its median (+ 0.05 px), whose hinge corners are not square within
-   ``max_squareness`` (``|alpha_free + beta_free - pi|``) or lie apart by more than ``max_hinge_gap`` of
-   the side are left unmeasured, with their reason.
+   ``max_squareness`` beyond five standard errors of the check (``|alpha_free + beta_free - pi| - 5 sigma``)
+   or lie apart by more than ``max_hinge_gap`` of the side are left unmeasured, with their reason.
 4. **y and theta.**  ``y = (origin_row - v_com) x pixel_size`` (image rows count down; ``up="bottom"``
    for an image whose rows count up flips y and theta), the origin row from ``origin_row``, else the one
    the file records, else the median centre-of-mass row of the measured frames among the first
@@ -263,7 +263,8 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     ok = status == 0
     rms = rows[:, _C["edge_rms"]]
     rms_ref = float(np.median(rms[ok])) if ok.any() else float("nan")
-    square = np.abs(rows[:, _C["alpha_free"]] + rows[:, _C["beta_free"]] - math.pi)
+    # the squareness check counts beyond its own noise (short hinge faces at large bends fit loosely)
+    square = np.abs(rows[:, _C["alpha_free"]] + rows[:, _C["beta_free"]] - math.pi) - 5.0 * rows[:, _C["squareness_sigma"]]
     side = 2.0 * rows[:, _C["half_side"]]
     poor = ok & ((rms > config.max_edge_rms_factor * rms_ref + 0.05) | (np.nan_to_num(square) > config.max_squareness)
                  | (rows[:, _C["hinge_gap"]] > config.max_hinge_gap * side))
