@@ -111,16 +111,21 @@ def _read_tiff(path: Path) -> tuple[NDArray, dict]:
 
     try:
         with tifffile.TiffFile(path) as tif:
-            shapes = {tuple(p.shape) for p in tif.pages}
-            if len(shapes) > 1:
-                first = tuple(tif.pages[0].shape)
-                other = next(s for s in (tuple(p.shape) for p in tif.pages) if s != first)
+            # tifffile groups consecutive pages of one shape into a series: several series of different frame
+            # sizes are frames of different sizes (reading the series, not every page, keeps this fast)
+            series = tif.series
+            if not series:
+                raise TrackingError(f"{path}: the TIFF holds no images")
+            sizes = [tuple(s.shape[-2:]) if s.shape[-1] not in (3, 4) else tuple(s.shape[-3:-1]) for s in series]
+            if len(set(sizes)) > 1:
+                first, other = sizes[0], next(z for z in sizes if z != sizes[0])
                 raise TrackingError(f"{path}: frames of different sizes ({first[1]} x {first[0]} px and "
                                     f"{other[1]} x {other[0]} px)")
-            shape = tif.pages[0].shape
-            _check_size(len(tif.pages), shape[0], shape[1] if len(shape) > 1 else 1,
-                        np.dtype(tif.pages[0].dtype).itemsize, path)
-            frames = tif.asarray(key=range(len(tif.pages))) if len(tif.pages) > 1 else tif.asarray()
+            n = sum(int(np.prod(s.shape)) for s in series) // int(np.prod(sizes[0]))
+            _check_size(n, sizes[0][0], sizes[0][1], np.dtype(series[0].dtype).itemsize, path)
+            parts = [np.asarray(s.asarray()) for s in series]
+            frames = parts[0] if len(parts) == 1 else np.concatenate(
+                [p.reshape((-1,) + p.shape[-3:] if p.shape[-1] in (3, 4) else (-1,) + p.shape[-2:]) for p in parts])
             meta: dict = {}
             for m in (tif.shaped_metadata or ()):
                 if isinstance(m, dict):
@@ -266,7 +271,8 @@ def _is_multipage_tiff(path: Path) -> bool:
 
     try:
         with tifffile.TiffFile(path) as tif:
-            return len(tif.pages) > 1
+            shape = tif.series[0].shape
+            return len(tif.series) > 1 or len(shape) >= 4 or (len(shape) == 3 and shape[-1] not in (3, 4))
     except Exception:  # not a TIFF: let reading it say so
         return False
 

@@ -324,8 +324,9 @@ def record_video(t: NDArray, y: NDArray, theta: NDArray, side: float, camera: Vi
 
 
 def write_video_tiff(path, frames: NDArray, fps: float, camera: VideoCamera, extra: dict | None = None) -> None:
-    """Write frames as a multi-page TIFF (zlib-compressed, lossless) that records its frame rate, pixel
-    size and levitation row in its description (JSON), atomically."""
+    """Write frames as a multi-page TIFF (uncompressed: image noise hardly compresses, and readers map it
+    straight into memory) that records its frame rate, pixel size and levitation row in its description
+    (JSON), atomically."""
     import tifffile
 
     from cubedimer.atomic import atomic_save
@@ -334,5 +335,4 @@ def write_video_tiff(path, frames: NDArray, fps: float, camera: VideoCamera, ext
     meta = {"fps": float(fps), "pixel_size_m": float(camera.pixel_size), "levitation_row_px": float(v0),
             "hinge_column_px": float(u0), "source": "acousim digital twin (synthetic video)"}
     meta.update(extra or {})
-    atomic_save(path, lambda tmp: tifffile.imwrite(tmp, frames, metadata=meta, compression="zlib",
-                                                   compressionargs={"level": 1}))
+    atomic_save(path, lambda tmp: tifffile.imwrite(tmp, frames, metadata=meta))

@@ -114,7 +114,8 @@ def test_folder_of_images_is_one_recording(tmp_path):
     assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6
 
 
-@pytest.mark.parametrize("case", ["not a video", "text as tiff", "fake cine", "different sizes", "no dimer",
+@pytest.mark.parametrize("case", ["not a video", "text as tiff", "fake cine", "different sizes", "different sizes (tiff)",
+                                  "no dimer",
                                   "unknown pixel size", "folder needs a directory"])
 def test_bad_input_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, capsys, case):
     out = tmp_path / "out" / "run.csv"
@@ -139,6 +140,14 @@ def test_bad_input_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, caps
         src.mkdir()
         iio.imwrite(src / "a1.png", np.full((50, 60), 200, np.uint8))
         iio.imwrite(src / "a2.png", np.full((52, 60), 200, np.uint8))
+        assert "frames of different sizes" in _fail([src, "--out", out, *args], capsys)
+    elif case == "different sizes (tiff)":
+        import tifffile
+
+        src = tmp_path / "pages.tif"
+        with tifffile.TiffWriter(src) as w:
+            w.write(np.full((3, 50, 60), 200, np.uint8))
+            w.write(np.full((2, 52, 60), 200, np.uint8))
         assert "frames of different sizes" in _fail([src, "--out", out, *args], capsys)
     elif case == "no dimer":
         rng = np.random.default_rng(0)
