@@ -146,8 +146,8 @@ def test_bad_input_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, caps
 
         src = tmp_path / "pages.tif"
         with tifffile.TiffWriter(src) as w:
-            w.write(np.full((3, 50, 60), 200, np.uint8))
-            w.write(np.full((2, 52, 60), 200, np.uint8))
+            w.write(np.full((4, 50, 60), 200, np.uint8), photometric="minisblack")
+            w.write(np.full((2, 52, 60), 200, np.uint8), photometric="minisblack")
         assert "frames of different sizes" in _fail([src, "--out", out, *args], capsys)
     elif case == "no dimer":
         rng = np.random.default_rng(0)
