@@ -438,35 +438,47 @@ def _background(img, pol, bg_ref, contrast, slope_u, slope_v, out):  # pragma: n
 
 
 @njit(cache=True)
-def _particles(c, min_area, box):  # pragma: no cover - compiled
-    """Label the pixels with c > 1/2 in 8-connected components (union-find over runs of such pixels along the
-    rows) and return the number of components of at least ``min_area`` pixels (-1: too many runs, a frame of
-    noise); ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
-    h, w = c.shape
-    cap = 16384
-    rv = np.empty(cap, np.int32)
-    r0 = np.empty(cap, np.int32)
-    r1 = np.empty(cap, np.int32)
-    parent = np.empty(cap, np.int32)
-    row_start = np.zeros(h + 1, np.int32)
+def _coverage_runs(img, base, slope_u, slope_v, inv, c, rv, r0, r1, row_start):  # pragma: no cover - compiled
+    """Coverage ``c = (img - background) inv`` of every pixel and, in the same pass, the runs of pixels with
+    c > 1/2 along the rows (row, first and last column; ``row_start[v]`` the first run of row v).  Returns the
+    number of runs, or -1 when there are more than the arrays hold (a frame of noise)."""
+    h, w = img.shape
+    uc0 = 0.5 * (w - 1)
+    vc0 = 0.5 * (h - 1)
+    cap = rv.size
     n = 0
     for v in range(h):
         row_start[v] = n
-        u = 0
-        while u < w:
-            if c[v, u] > 0.5:
-                a = u
-                while u + 1 < w and c[v, u + 1] > 0.5:
-                    u += 1
-                if n >= cap:
-                    return -1
-                rv[n] = v
-                r0[n] = a
-                r1[n] = u
-                parent[n] = n
+        b = base + slope_v * (v - vc0) - slope_u * uc0
+        inrun = False
+        for u in range(w):
+            x = (img[v, u] - b - slope_u * u) * inv
+            c[v, u] = x
+            if x > 0.5:
+                if not inrun:
+                    if n >= cap:
+                        return -1
+                    rv[n] = v
+                    r0[n] = u
+                    inrun = True
+            elif inrun:
+                r1[n] = u - 1
                 n += 1
-            u += 1
+                inrun = False
+        if inrun:
+            r1[n] = w - 1
+            n += 1
     row_start[h] = n
+    return n
+
+
+@njit(cache=True)
+def _particles(rv, r0, r1, row_start, n, h, w, min_area, box):  # pragma: no cover - compiled
+    """Join the runs of :func:`_coverage_runs` into 8-connected components (union-find) and return the number of
+    components of at least ``min_area`` pixels; ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
+    parent = np.empty(max(n, 1), np.int32)
+    for i in range(n):
+        parent[i] = i
     for v in range(1, h):
         j = row_start[v - 1]
         j_end = row_start[v]
@@ -484,11 +496,11 @@ def _particles(c, min_area, box):  # pragma: no cover - compiled
                     else:
                         parent[a] = b
                 k += 1
-    cnt = np.zeros(n, np.int64)
-    u0 = np.full(n, w, np.int64)
-    u1 = np.full(n, -1, np.int64)
-    v0 = np.full(n, h, np.int64)
-    v1 = np.full(n, -1, np.int64)
+    cnt = np.zeros(max(n, 1), np.int64)
+    u0 = np.full(max(n, 1), w, np.int64)
+    u1 = np.full(max(n, 1), -1, np.int64)
+    v0 = np.full(max(n, 1), h, np.int64)
+    v1 = np.full(max(n, 1), -1, np.int64)
     for i in range(n):
         r = _find(parent, i)
         cnt[r] += r1[i] - r0[i] + 1
@@ -520,39 +532,54 @@ def _particles(c, min_area, box):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _half_moments(c, ua, ub, v0, v1, uo, vo, mom, j):  # pragma: no cover - compiled
+    """M0 and the complex moments M_k = sum c z^k (k = 1..4, z = (u - uo) + i (vo - v)) of the columns
+    ``ua..ub`` and rows ``v0..v1``, into ``mom[j:j + 9]`` (M0, Re M1, Im M1, ..., Re M4, Im M4)."""
+    s0 = 0.0
+    s1r = 0.0
+    s1i = 0.0
+    s2r = 0.0
+    s2i = 0.0
+    s3r = 0.0
+    s3i = 0.0
+    s4r = 0.0
+    s4i = 0.0
+    for v in range(v0, v1 + 1):
+        Z = vo - v
+        Z2 = Z * Z
+        for u in range(ua, ub + 1):
+            x = c[v, u]
+            X = u - uo
+            a2 = X * X - Z2
+            b2 = 2.0 * X * Z
+            s0 += x
+            s1r += x * X
+            s1i += x * Z
+            s2r += x * a2
+            s2i += x * b2
+            s3r += x * (a2 * X - b2 * Z)
+            s3i += x * (a2 * Z + b2 * X)
+            s4r += x * (a2 * a2 - b2 * b2)
+            s4i += x * (2.0 * a2 * b2)
+    mom[j] = s0
+    mom[j + 1] = s1r
+    mom[j + 2] = s1i
+    mom[j + 3] = s2r
+    mom[j + 4] = s2i
+    mom[j + 5] = s3r
+    mom[j + 6] = s3i
+    mom[j + 7] = s4r
+    mom[j + 8] = s4i
+
+
+@njit(cache=True)
 def _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom):  # pragma: no cover - compiled
     """One pass over the window: per half (A: columns below ``u_split``, about (ua, vo); B: about (ub, vo)) the
     coverage sum M0 and the complex moments M_k = sum c z^k, k = 1..4, with z = (u - u_o) + i (v_o - v).
     ``mom`` = (A: M0, Re M1, Im M1, ..., Re M4, Im M4, B: the same): 18 numbers."""
-    for k in range(18):
-        mom[k] = 0.0
-    for v in range(v0, v1 + 1):
-        Z = vo - v
-        for u in range(u0, u1 + 1):
-            x = c[v, u]
-            if u < u_split:
-                j = 0
-                X = u - ua
-            else:
-                j = 9
-                X = u - ub
-            # z, z^2, z^3, z^4 (real and imaginary parts)
-            a1, b1 = X, Z
-            a2 = X * X - Z * Z
-            b2 = 2.0 * X * Z
-            a3 = a2 * X - b2 * Z
-            b3 = a2 * Z + b2 * X
-            a4 = a2 * a2 - b2 * b2
-            b4 = 2.0 * a2 * b2
-            mom[j] += x
-            mom[j + 1] += x * a1
-            mom[j + 2] += x * b1
-            mom[j + 3] += x * a2
-            mom[j + 4] += x * b2
-            mom[j + 5] += x * a3
-            mom[j + 6] += x * b3
-            mom[j + 7] += x * a4
-            mom[j + 8] += x * b4
+    us = int(math.ceil(u_split))
+    _half_moments(c, u0, us - 1, v0, v1, ua, vo, mom, 0)
+    _half_moments(c, us, u1, v0, v1, ub, vo, mom, 9)
 
 
 @njit(cache=True)
@@ -659,19 +686,18 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
         row[0] = 1
         return
     # ---- 2. coverage and particles
-    uc0 = 0.5 * (w - 1)
-    vc0 = 0.5 * (h - 1)
     c = np.empty((h, w), np.float32)
-    inv = pol / contrast
-    for v in range(h):
-        base = bgp[0] + slope_v * (v - vc0)
-        for u in range(w):
-            c[v, u] = (img[v, u] - base - slope_u * (u - uc0)) * inv
-    box = np.zeros(10)
-    nbig = _particles(c, min_area, box)
-    if nbig < 0:
+    cap = 16384
+    rv = np.empty(cap, np.int32)
+    r0 = np.empty(cap, np.int32)
+    r1 = np.empty(cap, np.int32)
+    row_start = np.empty(h + 1, np.int32)
+    nruns = _coverage_runs(img, bgp[0], slope_u, slope_v, pol / contrast, c, rv, r0, r1, row_start)
+    if nruns < 0:
         row[0] = 1
         return
+    box = np.zeros(10)
+    nbig = _particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
     if nbig == 0:
         row[0] = 2
         return
