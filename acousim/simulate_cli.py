@@ -14,6 +14,11 @@ Examples
     python -m acousim simulate --effect pair_scattering:kappa=12000 \\
         --effect linear_damping:gamma_y=0.3,gamma_theta=0.8 --duration 4 --fps 2000 \\
         --noise-y 1e-6 --noise-theta 0.005 --out data/two_effects
+    python -m acousim simulate --preset paper-like --runs 4 --duration 2 --video --out data/video_twin
+
+With ``--video`` each run's high-speed camera frames are written as well (``video/runNN.tif``, a
+multi-page TIFF that records its frame rate and pixel size, with the true motion in
+``video/runNN_truth.csv``); see :mod:`acousim.twin.video` and ``docs/tracking.md``.
 """
 from __future__ import annotations
 
@@ -24,7 +29,7 @@ from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, 
                            prepare_output_dir)
 from cubedimer.meta import check_meta_value
 
-__all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES"]
+__all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES", "MAX_VIDEO_FRAMES"]
 
 #: Most runs of one data set.
 MAX_RUNS = 10_000
@@ -32,6 +37,8 @@ MAX_RUNS = 10_000
 MAX_FRAMES_PER_RUN = 2_000_000
 #: Most frames of a data set: every run's states are held in memory before writing (~60 bytes a frame).
 MAX_FRAMES = 20_000_000
+#: Most rendered camera frames of one data set (--video): 50 runs of 4 s at 2,000 fps.
+MAX_VIDEO_FRAMES = 400_000
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -45,6 +52,28 @@ def _range(text: str) -> tuple[float, float]:
     except ValueError:
         pass
     raise argparse.ArgumentTypeError(f"expected MIN:MAX (or one value), got {text!r}")
+
+
+def _frame_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+        return w, h
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, e.g. 180x150, got {text!r}") from None
+
+
+def build_video_camera(args: argparse.Namespace):
+    """The :class:`~acousim.twin.video.VideoCamera` of parsed arguments, or None without ``--video``."""
+    if not getattr(args, "video", False):
+        return None
+    from .twin import TwinError, VideoCamera
+
+    try:
+        return VideoCamera(pixel_size=args.pixel_size, width=args.frame_size[0], height=args.frame_size[1],
+                           psf_sigma=args.psf, noise=args.image_noise, bit_depth=args.bit_depth,
+                           polarity=args.polarity, lost_frames=args.lost_frames)
+    except TwinError as exc:
+        raise UserInputError(str(exc)) from None
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -96,6 +125,25 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="also write the twin figures (time series and spectra, phase portraits, Poincare "
                    "map, phase-difference histogram) of this data set to DIR")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    v = p.add_argument_group("video (--video)", "The frames a high-speed camera looking along the hinge line records "
+                             "(orthographic side view, Gaussian point-spread function, white image noise), written "
+                             "per run to OUT/video/runNN.tif with the true t, y, theta in OUT/video/runNN_truth.csv; "
+                             "the frame rate is --fps. Read them back with python -m tracking.")
+    v.add_argument("--video", action="store_true", help="also write every run's camera frames")
+    v.add_argument("--pixel-size", type=float, default=10e-6, metavar="M",
+                   help="pixel size in the object plane [m] (default 10e-6)")
+    v.add_argument("--frame-size", type=_frame_size, default=(180, 150), metavar="WxH",
+                   help="frame width x height [px] (default 180x150)")
+    v.add_argument("--psf", type=float, default=1.0, metavar="PX",
+                   help="standard deviation of the Gaussian point-spread function [px] (default 1)")
+    v.add_argument("--image-noise", type=float, default=0.02, metavar="FRACTION",
+                   help="white image noise, standard deviation as a fraction of the cube/background contrast "
+                   "(default 0.02)")
+    v.add_argument("--bit-depth", type=int, choices=(8, 16), default=8, help="grey levels (default 8)")
+    v.add_argument("--polarity", choices=("dark", "bright"), default="dark",
+                   help="dark cubes on a bright background (shadowgraph, default) or bright on dark")
+    v.add_argument("--lost-frames", type=int, default=0, metavar="K",
+                   help="frames per run the camera loses, recorded all black (default 0)")
     add_executor_arguments(p)
     p.set_defaults(func=run)
     return p
@@ -146,6 +194,10 @@ def run(args: argparse.Namespace) -> int:
     from .twin import TwinError, check_output_dir, simulate_dataset
 
     config = build_config(args)
+    video = build_video_camera(args)
+    if video is not None:
+        check_limit("video frames (--runs x --duration x --fps)", config.runs * config.n_frames, MAX_VIDEO_FRAMES,
+                    "render fewer or shorter runs")
     try:
         check_output_dir(args.out, args.force)
         prepare_output_dir(args.out, "--out", moved_into_place=True)
@@ -153,11 +205,12 @@ def run(args: argparse.Namespace) -> int:
             check_output_dir(args.figures, True)
             prepare_output_dir(args.figures, "--figures", create=False)
         truth = simulate_dataset(config, args.out, executor_config(args), force=args.force,
-                                 progress=not args.no_progress)
+                                 progress=not args.no_progress, video=video)
     except TwinError as exc:
         raise UserInputError(str(exc)) from None
     print(f"wrote {config.runs} runs to {args.out} (true pressure amplitude {truth['pressure_amplitude_pa']:.1f} Pa, "
-          f"effects: {config.effects.describe()})", file=sys.stderr)
+          f"effects: {config.effects.describe()})" + (f"; camera frames in {args.out}/video/" if video else ""),
+          file=sys.stderr)
     if args.figures:
         from .twin import write_twin_figures
 

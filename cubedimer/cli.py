@@ -60,12 +60,12 @@ def join_negative_values(argv: list[str]) -> list[str]:
 
 
 def configure_logging(quiet: bool = False, verbose: bool = False) -> None:
-    """Send the suite's log records (loggers ``acousim``, ``fitting``, ``validation``, ``cubedimer``) to
+    """Send the suite's log records (loggers ``acousim``, ``fitting``, ``validation``, ``tracking``, ``cubedimer``) to
     stderr as plain lines; ``quiet`` keeps warnings and errors only, ``verbose`` adds debug lines."""
     level = logging.WARNING if quiet else (logging.DEBUG if verbose else logging.INFO)
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("[%(name)s] %(message)s"))
-    for name in ("acousim", "fitting", "validation", "cubedimer"):
+    for name in ("acousim", "fitting", "validation", "cubedimer", "tracking"):
         log = logging.getLogger(name)
         log.handlers[:] = [handler]
         log.setLevel(level)

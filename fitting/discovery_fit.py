@@ -82,7 +82,7 @@ def resolved_discovery(runs: Sequence, derivs: Sequence, config, log: Callable[[
     return disc, excluded[len(config.excluded):]
 
 
-def fit_discovery(prepared: Sequence, scales: Scales, config, log: Callable[[str], None]):
+def fit_discovery(prepared: Sequence, scales: Scales, config, log: Callable[[str], None], noise=None):
     """Steps 1-5 of the module docstring on prepared runs.
 
     Parameters
@@ -91,6 +91,8 @@ def fit_discovery(prepared: Sequence, scales: Scales, config, log: Callable[[str
     scales : Scales
     config : :class:`fitting.pipeline.FitConfig` with ``method == "discovery"``
     log : callable taking one message
+    noise : :class:`fitting.oracle.NoiseLevels`, optional
+        The oracle's tracking noise (default: estimated from the runs)
 
     Returns
     -------
@@ -130,7 +132,7 @@ def fit_discovery(prepared: Sequence, scales: Scales, config, log: Callable[[str
         joint_start, joint, fallback = _fall_back(joint, mask, stats, run_fits, None, derivs, scales, config, log,
                                                   first=first)
         mask = joint.model.support
-    oracle = _oracle(joint.model, prepared, log)
+    oracle = _oracle(joint.model, prepared, log, noise)
     return FitResult(runs=list(prepared), scales=scales, c0_joint=disc.model, run_fits=run_fits, stats=stats,
                      mask=mask, joint_start=joint_start, joint=joint, config=config,
                      mask_zscore=select_terms(stats, config.ensemble), rule="discovery", fallback=fallback,

@@ -31,8 +31,9 @@ difference of the two residual sums of squares is about ``dRSS + 2 sigma sqrt(dR
 normal), so even the best estimator prefers the alias with probability ``Phi(-alias_z / 2)``: 16 % at
 alias z 2, 2.3 % at 4.
 
-Noise floor: :func:`estimate_tracking_noise` estimates the white tracking noise of each coordinate
-from the fourth differences of the raw positions (the motion's share is ``(omega dt)^4`` of its
+Noise floor: a data set tracked from video records its tracking noise in ``meta.json``
+(:func:`recorded_tracking_noise`), which is used when present; otherwise :func:`estimate_tracking_noise`
+estimates the white tracking noise of each coordinate from the fourth differences of the raw positions (the motion's share is ``(omega dt)^4`` of its
 amplitude), with the median absolute deviation, so isolated tracking glitches do not inflate it.
 """
 from __future__ import annotations
@@ -54,6 +55,7 @@ if TYPE_CHECKING:
     from .derivatives import Derivatives
 
 __all__ = ["NoiseLevels", "OracleRun", "OracleTerm", "OracleResult", "RunPlan", "estimate_tracking_noise",
+           "recorded_tracking_noise",
            "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_aliases", "oracle_standard_errors",
            "plan_runs", "canonical_term", "METHOD"]
 
@@ -78,10 +80,13 @@ class NoiseLevels:
         Standard deviation of the y noise [m].
     sigma_theta : float
         Standard deviation of the theta noise [-].
+    source : str
+        Where the levels come from (written beside them in model.json).
     """
 
     sigma_y: float
     sigma_theta: float
+    source: str = "estimated from the data (fourth differences of the positions)"
 
     def __post_init__(self) -> None:
         for name in ("sigma_y", "sigma_theta"):
@@ -95,7 +100,22 @@ class NoiseLevels:
         return self.sigma_y if equation == "yddot" else self.sigma_theta
 
     def to_json(self) -> dict:
-        return {"sigma_y_m": self.sigma_y, "sigma_theta": self.sigma_theta}
+        return {"sigma_y_m": self.sigma_y, "sigma_theta": self.sigma_theta, "source": self.source}
+
+
+def recorded_tracking_noise(meta: Mapping) -> "NoiseLevels | None":
+    """The tracking noise a data set records in ``meta.json`` (the ``tracking`` block that ``python -m tracking``
+    writes: ``noise_y_m`` [m] and ``noise_theta`` [-], measured frame by frame from the images), or None when
+    it records none (or an unusable one).  When present it is the oracle's noise level: it is measured from the
+    images themselves, independently of the motion."""
+    block = meta.get("tracking") if isinstance(meta, Mapping) else None
+    if not isinstance(block, Mapping):
+        return None
+    try:
+        return NoiseLevels(float(block["noise_y_m"]), float(block["noise_theta"]),
+                           source="recorded by the tracking in meta.json (per-frame image-noise propagation)")
+    except (KeyError, TypeError, ValueError):
+        return None
 
 
 @dataclass(frozen=True)

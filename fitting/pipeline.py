@@ -44,7 +44,7 @@ from .integral_form import METHOD as INTEGRAL_METHOD, IntegralSelection, integra
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .losses import LossTerms
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales, damping_mask
-from .oracle import OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
+from .oracle import NoiseLevels, OracleResult, estimate_tracking_noise, oracle_standard_errors, recorded_tracking_noise, runs_from_data
 from .refine import JOINT_REFINE, Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import RegressionConfig, dataset_scales, fit_regression, scaled_data, scaled_library
 from .selection import SelectionConfig, SelectionResult, backward_elimination
@@ -230,12 +230,14 @@ def _fingerprint(p: PreparedRun, scales: Scales, config: FitConfig, candidates: 
 
 def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig = FitConfig(),
              executor: ExecutorConfig | None = None, cache_dir: str | os.PathLike | None = None,
-             progress: bool = True, log: Callable[[str], None] | None = None) -> FitResult:
-    """Steps 2-4 on prepared runs (see :func:`fit_dataset`); ``config.method`` chooses the method."""
+             progress: bool = True, log: Callable[[str], None] | None = None,
+             noise: NoiseLevels | None = None) -> FitResult:
+    """Steps 2-4 on prepared runs (see :func:`fit_dataset`); ``config.method`` chooses the method.  ``noise`` is the
+    oracle's tracking noise (default: estimated from the runs)."""
     log = log or (lambda m: None)
     if config.method == "discovery":
         from .discovery_fit import fit_discovery
-        return fit_discovery(prepared, scales, config, log)
+        return fit_discovery(prepared, scales, config, log, noise=noise)
     derivs = [p.derivs for p in prepared]
     try:
         integral = integral_form_selection([p.run for p in prepared], derivs, alpha=config.selection.alpha)
@@ -337,18 +339,20 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     if joint.loss_end.blown_up:
         joint_start, joint, fallback = _fall_back(joint, mask, stats, run_fits, integral, derivs, scales, config, log)
         mask = joint.model.support
-    oracle = _oracle(joint.model, prepared, log)
+    oracle = _oracle(joint.model, prepared, log, noise)
     return FitResult(runs=list(prepared), scales=scales, c0_joint=c0_joint, run_fits=run_fits, stats=stats,
                      mask=mask, joint_start=joint_start, joint=joint, config=config, mask_zscore=mask_z,
                      selection=selection, candidate_fit=cand_fit, rule=rule, integral_form=integral,
                      fallback=fallback, oracle=oracle)
 
 
-def _oracle(model: PolynomialModel, prepared: Sequence[PreparedRun], log: Callable[[str], None]) -> OracleResult | None:
-    """Oracle standard errors of ``model``'s terms on the runs at the data's estimated tracking noise."""
+def _oracle(model: PolynomialModel, prepared: Sequence[PreparedRun], log: Callable[[str], None],
+            noise: NoiseLevels | None = None) -> OracleResult | None:
+    """Oracle standard errors of ``model``'s terms on the runs at the tracking noise ``noise`` (the one the data
+    set records, :func:`fitting.oracle.recorded_tracking_noise`), else at the noise estimated from the runs."""
     derivs = [p.derivs for p in prepared]
     try:
-        noise = estimate_tracking_noise([p.run for p in prepared])
+        noise = noise or estimate_tracking_noise([p.run for p in prepared])
         res = oracle_standard_errors(model, runs_from_data(derivs), noise)
     except ValueError as err:
         log(f"oracle skipped: {err}")
@@ -525,7 +529,10 @@ def fit_dataset(data_dir: str | os.PathLike, out_dir: str | os.PathLike, config:
     log(f"{len(prepared)} runs loaded ({len(ds.skipped)} skipped, {ds.n_glitches} glitch frames masked); scales: y {scales.length_y:.3g} m, "
         f"theta {scales.length_theta:.3g}, time {scales.time:.3g} s")
     out = Path(out_dir)
-    res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log)
+    noise = recorded_tracking_noise(ds.meta)
+    if noise is not None:
+        log(f"oracle noise from meta.json's tracking block: {noise.sigma_y:.3g} m / {noise.sigma_theta:.3g}")
+    res = fit_runs(prepared, scales, config, executor, cache_dir=out / "runs", progress=progress, log=log, noise=noise)
     res = FitResult(**{**res.__dict__, "skipped": tuple(ds.skipped_files()), "n_glitches": ds.n_glitches})
     write_json(out / "model.json", model_json(res))
     if plots:

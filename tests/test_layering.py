@@ -1,7 +1,8 @@
 """The package layering contract, checked on the source (AST), so that it cannot regress.
 
 * ``cubedimer`` (the shared core) imports none of ``acousim``, ``fitting``, ``validation``;
-* ``acousim`` and ``fitting`` import neither each other nor ``validation``;
+* ``acousim`` and ``fitting`` import neither each other nor ``validation`` (nor ``tracking``);
+* ``tracking`` (camera frames to runs) imports only ``cubedimer`` from the suite;
 * ``validation`` may import all of them.
 
 Imports anywhere in a module count, including those inside functions.
@@ -14,11 +15,12 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("cubedimer", "acousim", "fitting", "validation")
+PACKAGES = ("cubedimer", "acousim", "fitting", "validation", "tracking")
 FORBIDDEN = {
-    "cubedimer": {"acousim", "fitting", "validation"},
-    "acousim": {"fitting", "validation"},
-    "fitting": {"acousim", "validation"},
+    "cubedimer": {"acousim", "fitting", "validation", "tracking"},
+    "acousim": {"fitting", "validation", "tracking"},
+    "fitting": {"acousim", "validation", "tracking"},
+    "tracking": {"acousim", "fitting", "validation"},
     "validation": set(),
 }
 

@@ -4,7 +4,10 @@
 *nominal* settings, docs/formats.md keys), ``truth.json`` (the true pressure, the effects with their
 parameters, the seed and every other setting, including each run's drawn initial conditions) and
 ``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics), into
-a temporary folder renamed into place at the end, so a failure leaves nothing behind.
+a temporary folder renamed into place at the end, so a failure leaves nothing behind.  With a
+:class:`~acousim.twin.video.VideoCamera` it also writes, per run, the frames the high-speed camera
+records (``video/runNN.tif``, :mod:`acousim.twin.video`) and the true ``t, y, theta`` beside them
+(``video/runNN_truth.csv``).
 """
 from __future__ import annotations
 
@@ -23,8 +26,10 @@ from ..dynamics import DimerDynamics
 from ..medium import ParticleMaterial
 from .config import TwinConfig, TwinError
 from .simulation import SimulatedRun, simulate_field_drop_runs
+from .video import VideoCamera, record_video, write_video_tiff
 
-__all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "write_run"]
+__all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "write_run", "write_run_video",
+           "video_seed"]
 
 
 def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int) -> Path:
@@ -34,6 +39,26 @@ def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int
                 "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"]
     return write_run_csv(path, run.t, run.y, run.theta, comments, t_decimals=9, y_digits=10, theta_decimals=10,
                          missing="nan")
+
+
+def video_seed(seed: int, index: int) -> np.random.SeedSequence:
+    """The image-noise stream of run ``index`` (0-based): independent of the runs' own streams."""
+    return np.random.SeedSequence(int(seed), spawn_key=(2, int(index)))
+
+
+def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, side: float, camera: VideoCamera,
+                    seed: np.random.SeedSequence | int) -> list[int]:
+    """Write one run's video (``stem.tif``) and its true ``t, y, theta`` (``stem_truth.csv``) into
+    ``directory``; returns the indices of the lost frames."""
+    directory = Path(directory)
+    frames, lost = record_video(run.t, run.state[:, 0], run.state[:, 2], side, camera, seed)
+    fps = 1.0 / float(run.t[1] - run.t[0])
+    write_video_tiff(directory / f"{stem}.tif", frames, fps, camera, {"side_length_m": float(side)})
+    write_run_csv(directory / f"{stem}_truth.csv", run.t, run.state[:, 0], run.state[:, 2],
+                  ["acousim digital twin: the true motion recorded in " + f"{stem}.tif (lost frames included)",
+                   "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"],
+                  t_decimals=9, y_digits=10, theta_decimals=10)
+    return [int(i) for i in lost]
 
 
 def meta_dict(config: TwinConfig, dynamics: DimerDynamics) -> dict:
@@ -91,8 +116,11 @@ def check_output_dir(out_dir: str | os.PathLike, force: bool = False) -> Path:
 
 
 def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=None, force: bool = False,
-                     progress: bool = True) -> dict:
+                     progress: bool = True, video: VideoCamera | None = None) -> dict:
     """Simulate and write a data set (see the module docstring); returns the truth dictionary.
+
+    With ``video``, every run's camera frames are written to ``out_dir/video/`` as well (module
+    docstring), and ``truth.json`` holds the camera settings and each run's lost frames under ``"video"``.
 
     Raises
     ------
@@ -111,6 +139,14 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
     try:
         for i, (f, r) in enumerate(zip(files, runs), 1):
             write_run(tmp / f, r, i, config.runs)
+        if video is not None:
+            lost = {}
+            for i, (f, r) in enumerate(zip(files, runs)):
+                lost[Path(f).stem] = write_run_video(tmp / "video", Path(f).stem, r, config.side, video,
+                                                     video_seed(config.seed, i))
+            truth["video"] = {**video.to_dict(), "fps": float(config.camera.fps), "lost_frames_per_run": lost,
+                              "files": [f"video/{Path(f).stem}.tif" for f in files]}
+            os.chmod(tmp / "video", default_dir_mode())
         write_json(tmp / "meta.json", meta_dict(config, dynamics))
         write_json(tmp / "truth.json", truth)
         states = {Path(f).stem: r.state for f, r in zip(files, runs)}

@@ -4,6 +4,7 @@
   diagnosis, the calibrated sweeps and the coefficient comparison of a data set and writes the report;
 * :mod:`validation.report.figures`: the report's figures of the data and the fitted model;
 * :mod:`validation.report.diagnosis_section`: the diagnosis's figures and report section;
+* :mod:`validation.report.tracking_section`: the tracking's section when the data set came from video;
 * :mod:`validation.report.html`: the self-contained HTML writer (:func:`write_report`);
 * :mod:`validation.report.browser_check`: render a report in headless Chromium and check it.
 """

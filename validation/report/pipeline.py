@@ -253,6 +253,12 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                  p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p, (py, pt) in zip(prepared, peaks)])],
         {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": fy, "median_f_theta_hz": ft,
          "frequency_resolution_hz": resolution}))
+    # the tracking, when the data set came from video (its own section module)
+    from .tracking_section import tracking_section
+
+    tracked = tracking_section(data_dir, figs_dir)
+    if tracked is not None:
+        sections.append(tracked)
     # 2 phase space
     pfig = phase_space_figures(prepared, res.model, figs_dir)
     loss = model_json["loss"]["final"]

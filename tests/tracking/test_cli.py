@@ -1,0 +1,165 @@
+"""``python -m tracking``: the FORMATS.md contract end to end, the readers, and bad input (one line, exit 2,
+nothing written)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from acousim.twin.video import VideoCamera
+from cubedimer.dataset import LoadConfig, load_dataset, load_run
+from tracking.cli import main
+
+from .conftest import FPS, motion, render
+
+CAM = VideoCamera(noise=0.02)
+#: reading a short clip: no minimum number of periods, no glitch masking (the tracked values are compared as they are)
+SHORT = LoadConfig(min_periods=0, glitches=None)
+
+
+def _fail(argv, capsys):
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("error: ") and "\n" not in err
+    return err
+
+
+def test_a_tiff_that_records_its_settings_gives_run_csv_and_run_json(tmp_path, write_tiff, capsys):
+    _, y, theta = motion(160, seed=41)
+    lost = [40, 41]
+    src = write_tiff("run07.tif", render(y, theta, CAM, seed=41, lost=lost), CAM)
+    out = tmp_path / "out" / "run07.csv"
+    assert main([str(src), "--out", str(out)]) == 0
+    text = out.read_text().splitlines()
+    assert any(line.startswith("# units:") for line in text) and "t,y,theta" in text
+    assert text[text.index("t,y,theta") + 1 + 40] == "0.020000000,,"  # a lost frame: empty values
+    run = json.loads(out.with_suffix(".json").read_text())
+    assert run["pixel_size_m"] == CAM.pixel_size and run["frame_rate_hz"] == FPS
+    assert run["frames_measured"] == 158 and run["frames_not_measured"] == 2 and run["not_measured"] == {"corrupt": 2}
+    assert run["y_origin"]["row_px"] == CAM.origin[1] and run["y_origin"]["from"] == "recorded in the file"
+    assert len(run["quality"]["edge_rms_px"]) == 160 and run["quality"]["edge_rms_px"][40] is None
+    assert 0 < run["noise_estimate"]["y_m"] < 1e-6 and 0 < run["noise_estimate"]["theta"] < 0.005
+    assert (out.parent / "run07.frame.png").exists() and run["example_frame"]["file"] == "run07.frame.png"
+    assert abs(run["calibration"]["side_length_m"] - 500e-6) < 5e-6  # the silhouette's area gives the side
+    loaded = load_run(out, SHORT)  # the loader reads it (and fills the two missing frames)
+    assert loaded.n_filled == 2
+
+
+def test_origin_from_the_first_frames_when_the_file_records_none(tmp_path, write_tiff, capsys):
+    n = 120
+    _, y, theta = motion(n, seed=42)
+    y[:50] = 0.0  # levitation before the drop
+    src = write_tiff("rec.tif", render(y, theta, CAM, seed=42), CAM, record=False)
+    out = tmp_path / "rec.csv"
+    assert main([str(src), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5"]) == 0
+    run = json.loads(out.with_suffix(".json").read_text())
+    assert abs(run["y_origin"]["row_px"] - CAM.origin[1]) < 0.02  # median of 50 frames of 0.01 px noise
+    assert run["y_origin"]["from"].startswith("median centre-of-mass row of the 50 measured frames")
+
+
+def test_folder_of_recordings_gives_a_dataset_the_loader_reads(tmp_path, write_tiff):
+    # 0.3 s at 2000 fps holds 6.6 periods of the 22 Hz trap: enough for the loader's checks (5 periods)
+    for k in (1, 2):
+        _, y, theta = motion(600, seed=50 + k)
+        write_tiff(f"run{k:02d}.tif", render(y, theta, CAM, seed=50 + k), CAM)
+    (tmp_path / "notes.txt").write_text("not a recording")
+    out = tmp_path / "tracked"
+    assert main([str(tmp_path), "--out", str(out), "--workers", "1"]) == 0
+    ds = load_dataset(out, strict=True)
+    assert [r.name for r in ds.runs] == ["run01.csv", "run02.csv"]
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["frame_rate_hz"] == FPS
+    tr = meta["tracking"]
+    assert tr["fraction_measured"] == 1.0 and tr["skipped"] == [] and len(tr["runs"]) == 2
+    assert 0 < tr["noise_y_m"] < 1e-6 and 0 < tr["noise_theta"] < 0.005
+    assert ds.meta["tracking"]["noise_theta"] == tr["noise_theta"]
+
+
+def test_lossless_video_file_through_ffmpeg(tmp_path, capsys):
+    import imageio_ffmpeg
+
+    _, y, theta = motion(100, seed=43)
+    frames = render(y, theta, CAM, seed=43)
+    path = tmp_path / "clip.mkv"
+    w = imageio_ffmpeg.write_frames(str(path), (CAM.width, CAM.height), pix_fmt_in="gray", pix_fmt_out="gray",
+                                    codec="ffv1", fps=25, macro_block_size=1, output_params=["-loglevel", "error"])
+    w.send(None)
+    for f in frames:
+        w.send(np.ascontiguousarray(f))
+    w.close()
+    out = tmp_path / "clip.csv"
+    # the container's 25 fps is a playback rate, not the camera's: the frame rate must be given
+    err = _fail([path, "--out", out, "--pixel-size", "1e-5"], capsys)
+    assert "unknown frame rate" in err and not out.exists()
+    assert main([str(path), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
+                 str(CAM.origin[1])]) == 0
+    run = load_run(out, SHORT)
+    assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6 and np.sqrt(np.mean((run.theta - theta) ** 2)) < 0.005
+
+
+def test_folder_of_images_is_one_recording(tmp_path):
+    import imageio.v3 as iio
+
+    _, y, theta = motion(60, seed=44)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, f in enumerate(render(y, theta, CAM, seed=44)):
+        iio.imwrite(folder / f"img{i}.png", f)  # natural order: img2 before img10
+    out = tmp_path / "frames.csv"
+    assert main([str(folder), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
+                 str(CAM.origin[1])]) == 0
+    run = load_run(out, SHORT)
+    assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6
+
+
+@pytest.mark.parametrize("case", ["not a video", "text as tiff", "fake cine", "different sizes", "different sizes (tiff)",
+                                  "no dimer",
+                                  "unknown pixel size", "folder needs a directory"])
+def test_bad_input_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, capsys, case):
+    out = tmp_path / "out" / "run.csv"
+    args = ["--fps", "2000", "--pixel-size", "1e-5"]
+    if case == "not a video":
+        src = tmp_path / "clip.mp4"
+        src.write_text("this is not a video\n")
+        err = _fail([src, "--out", out, *args], capsys)
+        assert "not a video file" in err
+    elif case == "text as tiff":
+        src = tmp_path / "frames.tif"
+        src.write_text("plain text\n")
+        assert "not a readable TIFF" in _fail([src, "--out", out, *args], capsys)
+    elif case == "fake cine":
+        src = tmp_path / "shot.cine"
+        src.write_bytes(b"\x00" * 64)
+        assert "not a readable Phantom .cine file" in _fail([src, "--out", out, *args], capsys)
+    elif case == "different sizes":
+        import imageio.v3 as iio
+
+        src = tmp_path / "imgs"
+        src.mkdir()
+        iio.imwrite(src / "a1.png", np.full((50, 60), 200, np.uint8))
+        iio.imwrite(src / "a2.png", np.full((52, 60), 200, np.uint8))
+        assert "frames of different sizes" in _fail([src, "--out", out, *args], capsys)
+    elif case == "different sizes (tiff)":
+        import tifffile
+
+        src = tmp_path / "pages.tif"
+        with tifffile.TiffWriter(src) as w:
+            w.write(np.full((4, 50, 60), 200, np.uint8), photometric="minisblack")
+            w.write(np.full((2, 52, 60), 200, np.uint8), photometric="minisblack")
+        assert "frames of different sizes" in _fail([src, "--out", out, *args], capsys)
+    elif case == "no dimer":
+        rng = np.random.default_rng(0)
+        src = write_tiff("empty.tif", np.clip(200 + 3 * rng.standard_normal((40, 150, 180)), 0, 255).astype(np.uint8), CAM)
+        assert "no dimer found" in _fail([src, "--out", out], capsys)
+    elif case == "unknown pixel size":
+        _, y, theta = motion(30, seed=45)
+        src = write_tiff("bare.tif", render(y, theta, CAM, seed=45), CAM, record=False)
+        assert "unknown pixel size" in _fail([src, "--out", out, "--fps", "2000"], capsys)
+    else:
+        _, y, theta = motion(30, seed=46)
+        write_tiff("r1.tif", render(y, theta, CAM, seed=46), CAM)
+        write_tiff("r2.tif", render(y, theta, CAM, seed=47), CAM)
+        assert "give --out DIR" in _fail([tmp_path, "--out", out], capsys)
+    assert not out.parent.exists() or not any(out.parent.iterdir())

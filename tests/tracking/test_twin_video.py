@@ -1,0 +1,35 @@
+"""The twin renders video (``python -m acousim simulate --video``) and the tracking reads it back: the chain
+twin -> camera frames -> tracking -> run CSV against the true motion written beside the frames."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from acousim.cli import main as acousim_main
+from cubedimer.dataset import LoadConfig, load_run
+from tracking.cli import main as tracking_main
+
+
+@pytest.mark.slow  # the twin's integration and rendering: about 10 s on an idle core
+def test_simulate_video_then_track_recovers_the_true_motion(tmp_path):
+    out = tmp_path / "twin"
+    assert acousim_main(["simulate", "--runs", "1", "--duration", "0.15", "--seed", "5", "--video", "--lost-frames", "3",
+                         "--polarity", "bright", "--bit-depth", "16", "--out", str(out), "--workers", "1",
+                         "--no-progress"]) == 0
+    truth = json.loads((out / "truth.json").read_text())["video"]
+    assert truth["polarity"] == "bright" and truth["bit_depth"] == 16 and truth["fps"] == 2000.0
+    lost = truth["lost_frames_per_run"]["run01"]
+    assert len(lost) == 3
+    tracked = tmp_path / "run01.csv"
+    assert tracking_main([str(out / "video" / "run01.tif"), "--out", str(tracked)]) == 0  # the file records fps, pixel size
+    info = json.loads(tracked.with_suffix(".json").read_text())
+    # a black lost frame on a dark background shows no particle
+    assert info["orientation"]["polarity"] == "bright" and info["not_measured"] == {"no_dimer": 3}
+    assert np.flatnonzero(np.array(info["quality"]["status"]) != 0).tolist() == lost
+    cfg = LoadConfig(min_periods=0, glitches=None, max_gap=10)
+    got, true = load_run(tracked, cfg), load_run(out / "video" / "run01_truth.csv", cfg)
+    keep = np.setdiff1d(np.arange(got.t.size), lost)  # the loader filled the lost frames
+    assert np.sqrt(np.mean((got.y[keep] - true.y[keep]) ** 2)) < 1e-6
+    assert np.sqrt(np.mean((got.theta[keep] - true.theta[keep]) ** 2)) < 0.005

@@ -1,0 +1,21 @@
+"""tracking: from high-speed video of the dimer to (t, y, theta).
+
+The front end of a real experiment: a camera looking along the hinge line records the two cubes as two
+squares sharing a corner; this package measures, in every frame, the centre-of-mass height ``y`` (from the
+silhouette, sub-pixel, positive up from the levitation height) and the bend ``theta = (alpha - beta) / pi``
+(from sub-pixel fits of the cubes' faces), and writes the FORMATS.md run CSV with a ``RUN.json`` of the
+settings, counts and per-frame quality (``python -m tracking``; ``docs/tracking.md``).
+
+* :mod:`tracking.recording` - reading video files, multi-page TIFF, Phantom .cine and folders of images;
+* :mod:`tracking.measure` - the compiled per-frame measurement;
+* :mod:`tracking.track` - calibration, batches, the recording's bounds, y and theta, noise estimates;
+* :mod:`tracking.output` - the run's CSV, RUN.json and example frame, or a data set with meta.json;
+* :mod:`tracking.cli` - the command.
+
+This package imports only :mod:`cubedimer` from the suite.
+"""
+from .recording import Recording, TrackingError, find_recordings, read_recording
+from .track import TrackConfig, TrackResult, track_recording
+
+__all__ = ["Recording", "TrackingError", "read_recording", "find_recordings", "TrackConfig", "TrackResult",
+           "track_recording"]

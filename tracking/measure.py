@@ -1,0 +1,826 @@
+"""The per-frame measurement of the dimer: compiled (numba), parallel over the frames of a batch.
+
+Image coordinates: pixel centres at integer ``(u, v)``, ``u`` the column (right) and ``v`` the row
+(counting down); the lab frame of the measurement has ``X = u`` and ``Z = -v`` (up).  Every frame goes
+through these steps (:func:`measure_frames`):
+
+1. **Background.**  The recording's background plane (its slopes, from calibration frames) with the
+   frame's own level, the mean over a ring of pixels along the frame's border (pixels that look like a
+   cube are left out), and the white pixel noise from the ring's spread.
+   The coverage of every pixel is ``c = polarity (I - background) / contrast`` (0 background, 1 cube).
+2. **Particles.**  The pixels with ``c > 1/2``, labelled in 8-connected components.  Components larger
+   than ``min_area`` are particles: one (or two of similar size side by side, less than ``3 + 3 blur`` px
+   apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer; anything more
+   is a third particle.  A dimer whose window reaches the border is out of view.
+3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
+   the edge window), unclipped: a symmetric point-spread function and white noise leave it unbiased.
+4. **First orientation.**  The dimer is split at its centroid column (the hinge; PHYSICS.md section 2: each
+   cube lies wholly on its side of it).  Each half's fourth-order complex moment ``sum c (X + iZ)^4``
+   about its own centroid gives the orientation of that square's faces modulo 90 degrees (a square's
+   second moments are isotropic and say nothing).
+5. **Edge fits.**  For each of the four faces of each square, sample lines cross the face (pixel columns
+   for faces flatter than 45 degrees, rows otherwise) away from its corners and from the other cube.  On
+   each sample line the coverage summed over a window of ``2 W + 1`` pixels across the edge is the length
+   of the line inside the cube, so the edge crossing is sub-pixel and unbiased for any symmetric blur.
+   A straight line fitted through the crossings gives the face's direction; the four faces of a square
+   (weighted by their information) give its orientation and, from the offsets of opposite faces, its
+   centre.  Two passes.
+6. **Angles.**  From the squares' orientations: cube B's bend ``phi_B = pi/4 - gamma_B`` and cube A's
+   ``phi_A = gamma_A - 3 pi/4`` (``gamma`` the direction of a face, counter-clockwise from +X), the opening
+   angles ``alpha = pi/2 + phi_A + phi_B`` above the hinge and ``beta = pi/2 - phi_A - phi_B`` below it,
+   ``theta = (alpha - beta) / pi``.  A frame with ``alpha <= 0`` or ``beta <= 0`` is impossible
+   (interpenetrating cubes) and is not measured, so ``|theta| < 1`` by construction.  The two faces
+   that meet at each hinge corner are also fitted alone: their angles ``alpha_free``, ``beta_free``
+   check ``alpha + beta = pi`` (each cube's hinge corner is square).
+
+The output of a frame is one row of :data:`COLUMNS`; ``status`` is one of :data:`STATUS`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+__all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads"]
+
+#: Columns of a frame's measurement row (pixel units unless stated).
+COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
+           "edge_width", "area", "tilt", "hinge_gap", "sigma_v", "sigma_theta", "side_a", "side_b", "pixel_noise",
+           "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background", "squareness_sigma")
+_C = {name: i for i, name in enumerate(COLUMNS)}
+# column indices as module constants (the compiled kernel reads them as literals)
+_I_ALPHA = COLUMNS.index('alpha')
+_I_ALPHA_FREE = COLUMNS.index('alpha_free')
+_I_AREA = COLUMNS.index('area')
+_I_BACKGROUND = COLUMNS.index('background')
+_I_BETA = COLUMNS.index('beta')
+_I_BETA_FREE = COLUMNS.index('beta_free')
+_I_EDGE_RMS = COLUMNS.index('edge_rms')
+_I_EDGE_WIDTH = COLUMNS.index('edge_width')
+_I_GAMMA_A = COLUMNS.index('gamma_a')
+_I_GAMMA_B = COLUMNS.index('gamma_b')
+_I_HALF_SIDE = COLUMNS.index('half_side')
+_I_HINGE_GAP = COLUMNS.index('hinge_gap')
+_I_N_FACES = COLUMNS.index('n_faces')
+_I_PIXEL_NOISE = COLUMNS.index('pixel_noise')
+_I_SIDE_A = COLUMNS.index('side_a')
+_I_SIDE_B = COLUMNS.index('side_b')
+_I_SIGMA_THETA = COLUMNS.index('sigma_theta')
+_I_SIGMA_V = COLUMNS.index('sigma_v')
+_I_SQUARENESS_SIGMA = COLUMNS.index('squareness_sigma')
+_I_THETA = COLUMNS.index('theta')
+_I_TILT = COLUMNS.index('tilt')
+_I_U_A = COLUMNS.index('u_a')
+_I_U_B = COLUMNS.index('u_b')
+_I_U_COM = COLUMNS.index('u_com')
+_I_V_A = COLUMNS.index('v_a')
+_I_V_B = COLUMNS.index('v_b')
+_I_V_COM = COLUMNS.index('v_com')
+NCOL = len(COLUMNS)
+
+#: Frame status codes; 0 is a measured frame.
+STATUS = {"measured": 0, "corrupt": 1, "no_dimer": 2, "out_of_view": 3, "third_particle": 4, "occlusion": 5,
+          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9}
+#: What each status means (RUN.json).
+STATUS_TEXT = {
+    "measured": "measured",
+    "corrupt": "blank or corrupt frame (background far from the recording's, or non-finite pixels)",
+    "no_dimer": "no particle in view",
+    "out_of_view": "the dimer touches the frame's border (partly out of view)",
+    "third_particle": "another particle in view, or the two cubes apart",
+    "occlusion": "the silhouette's area differs from the dimer's (occlusion or a particle touching it)",
+    "fit_failed": "too few edge samples on a cube's faces",
+    "faces_cross": "fitted faces cross (alpha <= 0 or beta <= 0): no physical bend",
+    "motion_blur": "edges wider than the recording's by more than the motion-blur bound",
+    "poor_fit": "edges not straight, hinge corners not square or not touching (beyond the bounds)",
+}
+
+
+class MeasureSettings:
+    """Numbers the compiled kernel needs, packed into one float array (:meth:`pack`).
+
+    Parameters
+    ----------
+    polarity : float
+        -1 for dark cubes on a bright background, +1 for bright cubes on a dark one.
+    background_ref : float
+        The recording's background grey level.
+    contrast : float
+        |cube level - background level| (grey levels).
+    edge_window : int
+        Half-length W of the window across an edge [px].
+    edge_blur : float
+        The recording's edge blur (standard deviation) [px]: sets the corner and hinge clearances.
+    min_area : float
+        Smallest component counted as a particle [px^2].
+    area_ref : float
+        The dimer's silhouette area [px^2] (0: not checked).
+    area_tolerance : float
+        Allowed relative deviation of a frame's area from ``area_ref``.
+    slope_u, slope_v : float
+        The recording's background gradient along columns and rows [grey levels / px], about the frame's
+        centre; each frame fits only its own background level (a per-frame gradient would add noise to y).
+    """
+
+    def __init__(self, polarity: float, background_ref: float, contrast: float, edge_window: int = 7,
+                 edge_blur: float = 1.5, min_area: float = 20.0, area_ref: float = 0.0, area_tolerance: float = 0.06,
+                 slope_u: float = 0.0, slope_v: float = 0.0):
+        self.slope_u = float(slope_u)
+        self.slope_v = float(slope_v)
+        self.polarity = float(polarity)
+        self.background_ref = float(background_ref)
+        self.contrast = float(contrast)
+        self.edge_window = int(edge_window)
+        self.edge_blur = float(edge_blur)
+        self.min_area = float(min_area)
+        self.area_ref = float(area_ref)
+        self.area_tolerance = float(area_tolerance)
+
+    def pack(self) -> NDArray[np.float64]:
+        return np.array([self.polarity, self.background_ref, self.contrast, self.edge_window, self.edge_blur,
+                         self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v], float)
+
+
+def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | None = None) -> NDArray[np.float64]:
+    """Measure every frame of a batch (module docstring).
+
+    Parameters
+    ----------
+    frames : ndarray (n, height, width)
+        Grey levels (any real or integer type).
+    settings : MeasureSettings
+    threads : int, optional
+        Threads sharing the batch (default :func:`numba_threads`).
+
+    Returns
+    -------
+    ndarray (n, len(COLUMNS)) float64
+        One row per frame; the columns of :data:`COLUMNS` (NaN where a frame was not measured that far).
+    """
+    f = np.ascontiguousarray(frames, dtype=np.float32)
+    if f.ndim != 3:
+        raise ValueError(f"frames must be (n, height, width), got shape {f.shape}")
+    out = np.full((f.shape[0], NCOL), np.nan)
+    prm = settings.pack()
+    n = f.shape[0]
+    threads = max(1, min(int(threads or numba_threads()), n // 32 or 1))
+    if threads == 1:
+        _measure_batch(f, prm, out)
+        return out
+    from concurrent.futures import ThreadPoolExecutor
+
+    edges = np.linspace(0, n, threads + 1).astype(int)
+    with ThreadPoolExecutor(threads) as pool:  # the compiled kernel releases the GIL
+        list(pool.map(lambda k: _measure_batch(f[edges[k]:edges[k + 1]], prm, out[edges[k]:edges[k + 1]]),
+                      range(threads)))
+    return out
+
+
+def numba_threads() -> int:
+    """Threads a batch is measured on: numba's thread count (``NUMBA_NUM_THREADS``, default one per core), or 1
+    inside a parallel task of :func:`cubedimer.executor.map_ordered` (the parallelism is then across tasks)."""
+    from cubedimer.executor import in_task
+
+    if in_task():
+        return 1
+    import numba
+
+    return int(numba.get_num_threads())
+
+
+# ---------------------------------------------------------------------------------------------- compiled kernel
+_RING = 2  # width of the border ring [px]
+
+
+@njit(cache=True)
+def _wrap(x, period):  # pragma: no cover - compiled
+    """x wrapped into (-period/2, period/2]."""
+    y = x - period * math.floor(x / period + 0.5)
+    if y <= -0.5 * period:
+        y += period
+    return y
+
+
+@njit(cache=True)
+def _find(parent, i):  # pragma: no cover - compiled
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True)
+def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
+    """Edge fits of the four faces of one square (module docstring, step 5).
+
+    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 24):
+    0 gamma, 1 u centre, 2 v centre, 3 pooled rms residual [px], 4 weight sum (information of gamma per
+    unit residual variance), 5 number of faces fitted, 6 max edge width [px], 7 half side estimate [px],
+    8..11 fitted face directions [rad] (NaN if not fitted), 12..15 face offsets rho along their normals,
+    16..19 face edge widths, 20..23 variances of the face directions [rad^2] (from each face's own residual).
+    """
+    clear = 3.0 * blur + 1.0
+    X0 = uc
+    Z0 = -vc
+    sw = 0.0
+    swr = 0.0
+    ss_res = 0.0
+    n_res = 0
+    nf = 0
+    wmax = 0.0
+    for k in range(4):
+        res[8 + k] = np.nan
+        res[12 + k] = np.nan
+        res[16 + k] = np.nan
+        res[20 + k] = np.nan
+    xs = np.empty(512)
+    ys = np.empty(512)
+    for k in range(4):
+        nu = gamma - 0.5 * math.pi + 0.5 * math.pi * k
+        nx = math.cos(nu)
+        nz = math.sin(nu)
+        rho = nx * X0 + nz * Z0 + a
+        px = X0 + a * nx
+        pz = Z0 + a * nz
+        cols = abs(nz) >= abs(nx)
+        cnt = 0
+        wsum = 0.0
+        if cols:
+            tx = -nz
+            margin = W * abs(nx) + 2.0 * blur + 1.0
+            lo = px - (a - margin) * abs(tx)
+            hi = px + (a - margin) * abs(tx)
+            if hi <= lo:
+                continue
+            for uu in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
+                if side > 0 and uu < u_split + clear:
+                    continue
+                if side < 0 and uu > u_split - clear:
+                    continue
+                if uu < 0 or uu >= w:
+                    continue
+                ze = (rho - nx * uu) / nz
+                ve = int(math.floor(-ze + 0.5))
+                v0 = ve - W
+                v1 = ve + W
+                if v0 < 0 or v1 >= h:
+                    continue
+                L = 0.0
+                q = 0.0
+                for vv in range(v0, v1 + 1):
+                    cv = c[vv, uu]
+                    L += cv
+                    q += cv * (1.0 - cv)
+                if nz > 0:
+                    vedge = (v1 + 0.5) - L
+                else:
+                    vedge = (v0 - 0.5) + L
+                if cnt < 512:
+                    xs[cnt] = uu
+                    ys[cnt] = -vedge
+                    cnt += 1
+                    wsum += q * abs(nz)
+        else:
+            tz = nx
+            margin = W * abs(nz) + 2.0 * blur + 1.0
+            lo = pz - (a - margin) * abs(tz)
+            hi = pz + (a - margin) * abs(tz)
+            if hi <= lo:
+                continue
+            for mz in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
+                vv = -mz
+                if vv < 0 or vv >= h:
+                    continue
+                xe = (rho - nz * mz) / nx
+                ue = int(math.floor(xe + 0.5))
+                u0 = ue - W
+                u1 = ue + W
+                if u0 < 0 or u1 >= w:
+                    continue
+                if side > 0 and u0 < u_split + clear:
+                    continue
+                if side < 0 and u1 > u_split - clear:
+                    continue
+                L = 0.0
+                q = 0.0
+                for uu in range(u0, u1 + 1):
+                    cv = c[vv, uu]
+                    L += cv
+                    q += cv * (1.0 - cv)
+                if nx > 0:
+                    uedge = (u0 - 0.5) + L
+                else:
+                    uedge = (u1 + 0.5) - L
+                if cnt < 512:
+                    xs[cnt] = mz
+                    ys[cnt] = uedge
+                    cnt += 1
+                    wsum += q * abs(nx)
+        if cnt < 5:
+            continue
+        # least squares r = alpha + beta s
+        sm = 0.0
+        rm = 0.0
+        for i in range(cnt):
+            sm += xs[i]
+            rm += ys[i]
+        sm /= cnt
+        rm /= cnt
+        sss = 0.0
+        ssr = 0.0
+        for i in range(cnt):
+            sss += (xs[i] - sm) ** 2
+            ssr += (xs[i] - sm) * (ys[i] - rm)
+        if sss <= 0:
+            continue
+        beta = ssr / sss
+        alpha0 = rm - beta * sm
+        rr = 0.0
+        for i in range(cnt):
+            e = ys[i] - alpha0 - beta * xs[i]
+            rr += e * e
+        norm = 1.0 / (1.0 + beta * beta)
+        ss_res += rr * norm
+        n_res += cnt - 2
+        if cols:
+            delta = math.atan(beta)
+            mx = sm
+            mzp = rm
+        else:
+            delta = math.atan2(1.0, beta)
+            mx = rm
+            mzp = sm
+        width = math.sqrt(math.pi) * wsum / cnt
+        if width > wmax:
+            wmax = width
+        res[8 + k] = delta
+        res[12 + k] = nx * mx + nz * mzp
+        res[16 + k] = width
+        res[20 + k] = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
+        wk = sss * (1.0 + beta * beta)  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
+        sw += wk
+        swr += wk * _wrap(delta - gamma, 0.5 * math.pi)
+        nf += 1
+    res[5] = nf
+    res[6] = wmax
+    if nf < 2 or sw <= 0:
+        res[0] = np.nan
+        return
+    g = gamma + swr / sw
+    res[0] = g
+    res[3] = math.sqrt(ss_res / n_res) if n_res > 0 else np.nan
+    res[4] = sw
+    # centre and half side from opposite faces
+    cu = uc
+    cv = vc
+    a_sum = 0.0
+    a_n = 0
+    n0x = math.cos(g - 0.5 * math.pi)
+    n0z = math.sin(g - 0.5 * math.pi)
+    n1x = -n0z
+    n1z = n0x
+    comp0 = n0x * X0 + n0z * Z0
+    comp1 = n1x * X0 + n1z * Z0
+    if not math.isnan(res[12]) and not math.isnan(res[14]):
+        comp0 = 0.5 * (res[12] - res[14])
+        a_sum += 0.5 * (res[12] + res[14])
+        a_n += 1
+    if not math.isnan(res[13]) and not math.isnan(res[15]):
+        comp1 = 0.5 * (res[13] - res[15])
+        a_sum += 0.5 * (res[13] + res[15])
+        a_n += 1
+    Xc = comp0 * n0x + comp1 * n1x
+    Zc = comp0 * n0z + comp1 * n1z
+    res[1] = Xc
+    res[2] = -Zc
+    res[7] = a_sum / a_n if a_n > 0 else np.nan
+
+
+@njit(cache=True)
+def _background(img, pol, bg_ref, contrast, slope_u, slope_v, out):  # pragma: no cover - compiled
+    """The frame's background level on the border ring, with the recording's plane slopes ``slope_u``,
+    ``slope_v`` (grey levels per pixel about the frame's centre): writes (offset, 0, 0, residual rms, status)
+    into ``out``; status 1 for a blank or corrupt frame (non-finite pixels, or a border that looks like a
+    cube nearly everywhere).  Pixels that look like a cube are left out."""
+    h, w = img.shape
+    uc0 = 0.5 * (w - 1)
+    vc0 = 0.5 * (h - 1)
+    n_all = 0
+    n = 0
+    s1 = 0.0
+    s2 = 0.0
+    out[4] = 0.0
+    for v in range(h):
+        edge_row = v < _RING or v >= h - _RING
+        for j in range(w if edge_row else 2 * _RING):
+            u = j if edge_row else (j if j < _RING else w - 2 * _RING + j)
+            val = img[v, u]
+            n_all += 1
+            if not math.isfinite(val):
+                out[4] = 1.0
+                return
+            x = val - slope_u * (u - uc0) - slope_v * (v - vc0)
+            if pol * (x - bg_ref) / contrast > 0.3:
+                continue
+            n += 1
+            s1 += x
+            s2 += x * x
+    if n < 0.3 * n_all:
+        out[4] = 1.0
+        return
+    m = s1 / n
+    out[0] = m
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = math.sqrt(max(s2 / n - m * m, 0.0) * n / max(1, n - 1))
+
+
+@njit(cache=True)
+def _coverage_runs(img, base, slope_u, slope_v, inv, c, rv, r0, r1, row_start):  # pragma: no cover - compiled
+    """Coverage ``c = (img - background) inv`` of every pixel and, in the same pass, the runs of pixels with
+    c > 1/2 along the rows (row, first and last column; ``row_start[v]`` the first run of row v).  Returns the
+    number of runs, or -1 when there are more than the arrays hold (a frame of noise)."""
+    h, w = img.shape
+    uc0 = 0.5 * (w - 1)
+    vc0 = 0.5 * (h - 1)
+    cap = rv.size
+    n = 0
+    for v in range(h):
+        row_start[v] = n
+        b = base + slope_v * (v - vc0) - slope_u * uc0
+        inrun = False
+        for u in range(w):
+            x = (img[v, u] - b - slope_u * u) * inv
+            c[v, u] = x
+            if x > 0.5:
+                if not inrun:
+                    if n >= cap:
+                        return -1
+                    rv[n] = v
+                    r0[n] = u
+                    inrun = True
+            elif inrun:
+                r1[n] = u - 1
+                n += 1
+                inrun = False
+        if inrun:
+            r1[n] = w - 1
+            n += 1
+    row_start[h] = n
+    return n
+
+
+@njit(cache=True)
+def _particles(rv, r0, r1, row_start, n, h, w, min_area, box):  # pragma: no cover - compiled
+    """Join the runs of :func:`_coverage_runs` into 8-connected components (union-find) and return the number of
+    components of at least ``min_area`` pixels; ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
+    parent = np.empty(max(n, 1), np.int32)
+    for i in range(n):
+        parent[i] = i
+    for v in range(1, h):
+        j = row_start[v - 1]
+        j_end = row_start[v]
+        for i in range(row_start[v], row_start[v + 1]):
+            # runs of the row above that touch run i (8-connected: overlap widened by one pixel)
+            while j < j_end and r1[j] < r0[i] - 1:
+                j += 1
+            k = j
+            while k < j_end and r0[k] <= r1[i] + 1:
+                a = _find(parent, i)
+                b = _find(parent, k)
+                if a != b:
+                    if a < b:
+                        parent[b] = a
+                    else:
+                        parent[a] = b
+                k += 1
+    cnt = np.zeros(max(n, 1), np.int64)
+    u0 = np.full(max(n, 1), w, np.int64)
+    u1 = np.full(max(n, 1), -1, np.int64)
+    v0 = np.full(max(n, 1), h, np.int64)
+    v1 = np.full(max(n, 1), -1, np.int64)
+    for i in range(n):
+        r = _find(parent, i)
+        cnt[r] += r1[i] - r0[i] + 1
+        u0[r] = min(u0[r], r0[i])
+        u1[r] = max(u1[r], r1[i])
+        v0[r] = min(v0[r], rv[i])
+        v1[r] = max(v1[r], rv[i])
+    nbig = 0
+    first = -1
+    second = -1
+    for r in range(n):
+        if cnt[r] >= min_area:
+            nbig += 1
+            if first < 0 or cnt[r] > cnt[first]:
+                second = first
+                first = r
+            elif second < 0 or cnt[r] > cnt[second]:
+                second = r
+    for j in range(2):
+        r = first if j == 0 else second
+        if r < 0:
+            continue
+        box[5 * j + 0] = u0[r]
+        box[5 * j + 1] = u1[r]
+        box[5 * j + 2] = v0[r]
+        box[5 * j + 3] = v1[r]
+        box[5 * j + 4] = cnt[r]
+    return nbig
+
+
+@njit(cache=True)
+def _half_moments(c, ua, ub, v0, v1, uo, vo, mom, j):  # pragma: no cover - compiled
+    """M0 and the complex moments M_k = sum c z^k (k = 1..4, z = (u - uo) + i (vo - v)) of the columns
+    ``ua..ub`` and rows ``v0..v1``, into ``mom[j:j + 9]`` (M0, Re M1, Im M1, ..., Re M4, Im M4)."""
+    s0 = 0.0
+    s1r = 0.0
+    s1i = 0.0
+    s2r = 0.0
+    s2i = 0.0
+    s3r = 0.0
+    s3i = 0.0
+    s4r = 0.0
+    s4i = 0.0
+    for v in range(v0, v1 + 1):
+        Z = vo - v
+        Z2 = Z * Z
+        for u in range(ua, ub + 1):
+            x = c[v, u]
+            X = u - uo
+            a2 = X * X - Z2
+            b2 = 2.0 * X * Z
+            s0 += x
+            s1r += x * X
+            s1i += x * Z
+            s2r += x * a2
+            s2i += x * b2
+            s3r += x * (a2 * X - b2 * Z)
+            s3i += x * (a2 * Z + b2 * X)
+            s4r += x * (a2 * a2 - b2 * b2)
+            s4i += x * (2.0 * a2 * b2)
+    mom[j] = s0
+    mom[j + 1] = s1r
+    mom[j + 2] = s1i
+    mom[j + 3] = s2r
+    mom[j + 4] = s2i
+    mom[j + 5] = s3r
+    mom[j + 6] = s3i
+    mom[j + 7] = s4r
+    mom[j + 8] = s4i
+
+
+@njit(cache=True)
+def _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom):  # pragma: no cover - compiled
+    """One pass over the window: per half (A: columns below ``u_split``, about (ua, vo); B: about (ub, vo)) the
+    coverage sum M0 and the complex moments M_k = sum c z^k, k = 1..4, with z = (u - u_o) + i (v_o - v).
+    ``mom`` = (A: M0, Re M1, Im M1, ..., Re M4, Im M4, B: the same): 18 numbers."""
+    us = int(math.ceil(u_split))
+    _half_moments(c, u0, us - 1, v0, v1, ua, vo, mom, 0)
+    _half_moments(c, us, u1, v0, v1, ub, vo, mom, 9)
+
+
+@njit(cache=True)
+def _half(mom, j, uo, vo, cen):  # pragma: no cover - compiled
+    """Centroid (u, v) of one half into ``cen`` and the face direction (mod pi/2) of its square from the fourth-order
+    complex moment about that centroid: for a square with faces along gamma, sum c (z - z_c)^4 =
+    -(16/15) a^6 exp(4 i gamma)."""
+    m0 = mom[j]
+    m1 = complex(mom[j + 1], mom[j + 2])
+    m2 = complex(mom[j + 3], mom[j + 4])
+    m3 = complex(mom[j + 5], mom[j + 6])
+    m4 = complex(mom[j + 7], mom[j + 8])
+    d = m1 / m0
+    m4c = m4 - 4.0 * d * m3 + 6.0 * d * d * m2 - 4.0 * d * d * d * m1 + d * d * d * d * m0
+    cen[0] = uo + d.real
+    cen[1] = vo - d.imag
+    return 0.25 * (math.atan2(m4c.imag, m4c.real) - math.pi)
+
+
+@njit(cache=True)
+def _hinge_corner(g, left):  # pragma: no cover - compiled
+    """Index k of the face whose corner with face k + 1 is the hinge corner: the rightmost corner of cube A
+    (``left``) or the leftmost of cube B, for a square with faces along ``g``."""
+    best = 0
+    bestx = 0.0
+    for k in range(4):
+        n1 = g - 0.5 * math.pi + 0.5 * math.pi * k
+        x = math.cos(n1) + math.cos(n1 + 0.5 * math.pi)
+        if k == 0 or (left and x > bestx) or ((not left) and x < bestx):
+            best = k
+            bestx = x
+    return best
+
+
+@njit(cache=True)
+def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - compiled
+    """alpha_free, beta_free from the faces that meet at each hinge corner, fitted alone, and the distance
+    between the two squares' hinge corners (written into ``row``)."""
+    free_ok = True
+    var = 0.0
+    dirs = np.zeros(4)  # A upper, A lower, B upper, B lower: directions pointing away from the hinge
+    hx = np.zeros(2)
+    hz = np.zeros(2)
+    for sq in range(2):
+        g = gam[sq]
+        k1 = _hinge_corner(g, sq == 0)
+        k2 = (k1 + 1) % 4
+        nu1 = g - 0.5 * math.pi + 0.5 * math.pi * k1
+        nu2 = nu1 + 0.5 * math.pi
+        hx[sq] = cen[sq, 0] + a_half * (math.cos(nu1) + math.cos(nu2))
+        hz[sq] = -cen[sq, 1] + a_half * (math.sin(nu1) + math.sin(nu2))
+        if math.sin(nu1) >= math.sin(nu2):
+            ku = k1
+            kl = k2
+            nuu = nu1
+            nul = nu2
+        else:
+            ku = k2
+            kl = k1
+            nuu = nu2
+            nul = nu1
+        # the upper face points away from the hinge at its normal turned by -pi/2 on cube B, +pi/2 on cube A
+        turn = 0.5 * math.pi if sq == 0 else -0.5 * math.pi
+        du_nom = nuu + turn
+        dl_nom = nul - turn
+        fu = resA[8 + ku] if sq == 0 else resB[8 + ku]
+        fl = resA[8 + kl] if sq == 0 else resB[8 + kl]
+        if math.isnan(fu) or math.isnan(fl):
+            free_ok = False
+            continue
+        dirs[2 * sq] = du_nom + _wrap(fu - du_nom, math.pi)
+        dirs[2 * sq + 1] = dl_nom + _wrap(fl - dl_nom, math.pi)
+        var += (resA[20 + ku] + resA[20 + kl]) if sq == 0 else (resB[20 + ku] + resB[20 + kl])
+    if free_ok:
+        row[_I_ALPHA_FREE] = _wrap(dirs[0] - dirs[2], 2.0 * math.pi)
+        row[_I_BETA_FREE] = _wrap(dirs[3] - dirs[1], 2.0 * math.pi)
+        row[_I_SQUARENESS_SIGMA] = math.sqrt(var)
+    row[_I_HINGE_GAP] = math.sqrt((hx[0] - hx[1]) ** 2 + (hz[0] - hz[1]) ** 2)
+
+
+@njit(cache=True)
+def _measure_one(img, prm, row):  # pragma: no cover - compiled
+    h, w = img.shape
+    pol = prm[0]
+    bg_ref = prm[1]
+    contrast = prm[2]
+    W = int(prm[3])
+    blur = prm[4]
+    min_area = prm[5]
+    area_ref = prm[6]
+    area_tol = prm[7]
+    slope_u = prm[8]
+    slope_v = prm[9]
+    # ---- 1. background level from the border ring (the slopes are the recording's)
+    bgp = np.zeros(5)
+    _background(img, pol, bg_ref, contrast, slope_u, slope_v, bgp)
+    if bgp[4] > 0:
+        row[0] = 1
+        return
+    sigma_pix = bgp[3] / contrast
+    row[_I_PIXEL_NOISE] = sigma_pix
+    row[_I_BACKGROUND] = bgp[0]
+    if abs(bgp[0] - bg_ref) > 0.25 * contrast:
+        row[0] = 1
+        return
+    # ---- 2. coverage and particles
+    c = np.empty((h, w), np.float32)
+    cap = 16384
+    rv = np.empty(cap, np.int32)
+    r0 = np.empty(cap, np.int32)
+    r1 = np.empty(cap, np.int32)
+    row_start = np.empty(h + 1, np.int32)
+    nruns = _coverage_runs(img, bgp[0], slope_u, slope_v, pol / contrast, c, rv, r0, r1, row_start)
+    if nruns < 0:
+        row[0] = 1
+        return
+    box = np.zeros(10)
+    nbig = _particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
+    if nbig == 0:
+        row[0] = 2
+        return
+    if nbig > 2:
+        row[0] = 4
+        return
+    bu0, bu1, bv0, bv1 = int(box[0]), int(box[1]), int(box[2]), int(box[3])
+    if nbig == 2:
+        ratio = box[4] / box[9]
+        gap_u = max(box[5] - box[1], box[0] - box[6])
+        gap_v = max(box[7] - box[3], box[2] - box[8])
+        if ratio > 2.0 or gap_u > 3.0 + 3.0 * blur or gap_v > 3:
+            row[0] = 4
+            return
+        bu0 = min(bu0, int(box[5]))
+        bu1 = max(bu1, int(box[6]))
+        bv0 = min(bv0, int(box[7]))
+        bv1 = max(bv1, int(box[8]))
+    M = W + 2
+    u0 = bu0 - M
+    u1 = bu1 + M
+    v0 = bv0 - M
+    v1 = bv1 + M
+    if u0 < _RING or v0 < _RING or u1 >= w - _RING or v1 >= h - _RING:
+        row[0] = 3
+        return
+    # ---- 3. centre of mass and 4. each half's first orientation, in one pass (the halves split at the bounding
+    #         box's middle column, the hinge of a mirror-symmetric dimer)
+    u_split = 0.5 * (bu0 + bu1)
+    ua = 0.5 * (bu0 + u_split)
+    ub = 0.5 * (u_split + bu1)
+    vo = 0.5 * (bv0 + bv1)
+    mom = np.zeros(18)
+    _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom)
+    s0 = mom[0] + mom[9]
+    if s0 <= 0 or mom[0] <= 0 or mom[9] <= 0:
+        row[0] = 2
+        return
+    ucom = (mom[0] * ua + mom[1] + mom[9] * ub + mom[10]) / s0
+    vcom = vo - (mom[2] + mom[11]) / s0
+    svv = 0.0
+    for v in range(v0, v1 + 1):
+        svv += (u1 - u0 + 1) * (v - vcom) ** 2
+    row[_I_V_COM] = vcom
+    row[_I_U_COM] = ucom
+    row[_I_AREA] = s0
+    row[_I_SIGMA_V] = sigma_pix * math.sqrt(svv) / s0
+    if area_ref > 0 and abs(s0 / area_ref - 1.0) > area_tol:
+        row[0] = 5
+        return
+    a_half = 0.5 * math.sqrt(0.5 * s0)
+    d = a_half * math.sqrt(2.0)
+    cen = np.zeros((2, 2))
+    gam = np.zeros(2)
+    gam[0] = _half(mom, 0, ua, vo, cen[0])
+    gam[1] = _half(mom, 9, ub, vo, cen[1])
+    # bends (step 6) and the sign of a bend near face contact from the hinge's height
+    phiA = _wrap(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
+    phiB = _wrap(0.25 * math.pi - gam[1], 0.5 * math.pi)
+    hz = 0.0
+    hn = 0.0
+    iu = int(math.floor(u_split + 0.5))
+    for u in range(iu - 1, iu + 2):
+        for v in range(v0, v1 + 1):
+            cv = c[v, u]
+            if cv > 0.1:
+                hz += cv * v
+                hn += cv
+    if hn > 0:
+        dz = vcom - hz / hn  # hinge above the centres (in Z) when positive
+        if abs(dz) > 0.3 * d:
+            if abs(phiA) > 0.5236 and phiA * dz < 0:
+                phiA -= math.copysign(0.5 * math.pi, phiA)
+            if abs(phiB) > 0.5236 and phiB * dz < 0:
+                phiB -= math.copysign(0.5 * math.pi, phiB)
+    gam[0] = phiA + 0.75 * math.pi
+    gam[1] = 0.25 * math.pi - phiB
+    # ---- 5. edge fits, two passes
+    resA = np.empty(24)
+    resB = np.empty(24)
+    for it in range(2):
+        _fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
+        _fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)
+        if math.isnan(resA[0]) or math.isnan(resB[0]):
+            row[0] = 6
+            return
+        gam[0] = resA[0]
+        gam[1] = resB[0]
+        cen[0, 0] = resA[1]
+        cen[0, 1] = resA[2]
+        cen[1, 0] = resB[1]
+        cen[1, 1] = resB[2]
+    phiA2 = phiA + _wrap(gam[0] - 0.75 * math.pi - phiA, 0.5 * math.pi)
+    phiB2 = phiB + _wrap(0.25 * math.pi - gam[1] - phiB, 0.5 * math.pi)
+    alpha = 0.5 * math.pi + phiA2 + phiB2
+    beta = 0.5 * math.pi - phiA2 - phiB2
+    row[_I_ALPHA] = alpha
+    row[_I_BETA] = beta
+    row[_I_TILT] = 0.5 * (phiA2 - phiB2)
+    row[_I_U_A] = cen[0, 0]
+    row[_I_V_A] = cen[0, 1]
+    row[_I_GAMMA_A] = gam[0]
+    row[_I_U_B] = cen[1, 0]
+    row[_I_V_B] = cen[1, 1]
+    row[_I_GAMMA_B] = gam[1]
+    row[_I_HALF_SIDE] = a_half
+    row[_I_SIDE_A] = 2.0 * resA[7]
+    row[_I_SIDE_B] = 2.0 * resB[7]
+    row[_I_N_FACES] = resA[5] + resB[5]
+    row[_I_EDGE_WIDTH] = max(resA[6], resB[6])
+    ra = resA[3]
+    rb = resB[3]
+    row[_I_EDGE_RMS] = math.sqrt(0.5 * (ra * ra + rb * rb))
+    row[_I_SIGMA_THETA] = (2.0 / math.pi) * math.sqrt(ra * ra / resA[4] + rb * rb / resB[4])
+    _hinge_geometry(gam, cen, a_half, resA, resB, row)
+    if alpha <= 0.0 or beta <= 0.0:
+        row[0] = 7
+        return
+    row[_I_THETA] = (alpha - beta) / math.pi
+    row[0] = 0
+
+
+@njit(cache=True, nogil=True)
+def _measure_batch(frames, prm, out):  # pragma: no cover - compiled
+    for i in range(frames.shape[0]):
+        _measure_one(frames[i], prm, out[i])

@@ -1,0 +1,389 @@
+"""Tracking one recording: calibration, the per-frame measurement in batches, the recording's bounds, y and theta.
+
+:func:`track_recording` turns a :class:`~tracking.recording.Recording` into a :class:`TrackResult`:
+
+1. **Calibration** on up to ``TrackConfig.calibration_frames`` frames spread over the recording: the
+   polarity (dark cubes on a bright background or bright on dark: the side of the grey-level histogram
+   the far tail lies on, by majority), the background level and its gradient (the border ring), the
+   cube/background contrast, then a first measurement of those frames for the dimer's silhouette area
+   and the edge blur, which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check.
+2. **Measurement** of every frame (:func:`tracking.measure.measure_frames`, batches of
+   ``TrackConfig.batch`` frames).
+3. **The recording's bounds.**  Measured frames whose edges are wider than the recording's median by more
+   than the motion blur of ``max_motion_blur`` px (``width^2 - median^2 > L^2 / 12``), whose edge residual
+   exceeds ``max_edge_rms_factor`` x its median (+ 0.05 px), whose hinge corners are not square within
+   ``max_squareness`` beyond five standard errors of the check (``|alpha_free + beta_free - pi| - 5 sigma``)
+   or lie apart by more than ``max_hinge_gap`` of the side are left unmeasured, with their reason.
+4. **y and theta.**  ``y = (origin_row - v_com) x pixel_size`` (image rows count down; ``up="bottom"``
+   for an image whose rows count up flips y and theta), the origin row from ``origin_row``, else the one
+   the file records, else the median centre-of-mass row of the measured frames among the first
+   ``origin_frames``; ``theta = (alpha - beta) / pi`` from the kernel.
+5. **Noise.**  Each measured frame's standard errors of y (the image noise of the border ring propagated
+   through the centroid) and theta (the edge residuals propagated through the face fits); the
+   recording's noise estimates are their RMS.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames
+from .recording import Recording, TrackingError
+
+__all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
+
+logger = logging.getLogger(__name__)
+
+#: ``TrackConfig.polarity`` choices.
+POLARITIES = ("auto", "dark", "bright")
+#: ``TrackConfig.up`` choices: which edge of the image is up in the lab.
+UP = ("top", "bottom")
+
+_C = {name: i for i, name in enumerate(COLUMNS)}
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    """Settings of the tracking.
+
+    Parameters
+    ----------
+    fps : float, optional
+        Frame rate [1/s]; required unless the file records it.
+    pixel_size : float, optional
+        Pixel size in the object plane [m]; required unless the file records it.
+    origin_frames : int
+        y = 0 is the median centre-of-mass height of the measured frames among the first ``origin_frames``
+        (the levitation before a field drop), unless an origin row is given or recorded.
+    origin_row : float, optional
+        Image row of the levitation height [px] (pixel centres at integer rows, counted from 0 at the top).
+    polarity : {"auto", "dark", "bright"}
+        Dark cubes on a bright background (shadowgraph), bright on dark, or detected.
+    up : {"top", "bottom"}
+        The image edge that is up in the lab: ``"top"`` (default) for images whose rows count down, as
+        cameras and image files store them; ``"bottom"`` for an image stored upside down.
+    edge_window : int, optional
+        Half-length of the window across an edge [px] (default: from the measured edge blur).
+    area_tolerance : float
+        Largest relative deviation of a frame's silhouette area from the recording's median.
+    max_motion_blur : float
+        Largest motion-blur length beyond the recording's typical edge blur [px].
+    max_edge_rms_factor : float
+        Largest edge residual as a multiple of the recording's median (plus 0.05 px).
+    max_squareness : float
+        Largest ``|alpha_free + beta_free - pi|`` of the faces meeting at the hinge [rad].
+    max_hinge_gap : float
+        Largest distance between the two cubes' hinge corners, as a fraction of the side.
+    calibration_frames : int
+        Frames (spread over the recording) used to calibrate.
+    batch : int
+        Frames measured per batch.
+    """
+
+    fps: float | None = None
+    pixel_size: float | None = None
+    origin_frames: int = 50
+    origin_row: float | None = None
+    polarity: str = "auto"
+    up: str = "top"
+    edge_window: int | None = None
+    area_tolerance: float = 0.06
+    max_motion_blur: float = 3.0
+    max_edge_rms_factor: float = 4.0
+    max_squareness: float = 0.05
+    max_hinge_gap: float = 0.1
+    calibration_frames: int = 100
+    batch: int = 1024
+
+    def __post_init__(self) -> None:
+        for name in ("fps", "pixel_size"):
+            v = getattr(self, name)
+            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise TrackingError(f"{name.replace('_', ' ')} must be a positive number, got {v!r}")
+        if self.pixel_size is not None and not 1e-9 < self.pixel_size < 1e-2:
+            raise TrackingError(f"pixel size {self.pixel_size!r} m is implausible: give metres per pixel in the object "
+                                "plane, e.g. 1e-5 for 10 um")
+        if int(self.origin_frames) != self.origin_frames or self.origin_frames < 1:
+            raise TrackingError(f"origin frames must be a whole number >= 1, got {self.origin_frames!r}")
+        if self.origin_row is not None and not math.isfinite(self.origin_row):
+            raise TrackingError(f"origin row must be finite, got {self.origin_row!r}")
+        if self.polarity not in POLARITIES:
+            raise TrackingError(f"polarity must be one of {', '.join(POLARITIES)}, got {self.polarity!r}")
+        if self.up not in UP:
+            raise TrackingError(f"up must be one of {', '.join(UP)}, got {self.up!r}")
+        if self.edge_window is not None and not 2 <= int(self.edge_window) <= 50:
+            raise TrackingError(f"edge window must lie in [2, 50] px, got {self.edge_window!r}")
+        for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise TrackingError(f"{name.replace('_', ' ')} must be positive, got {v!r}")
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What the calibration frames gave (grey levels in the recording's units, lengths in pixels)."""
+
+    polarity: str
+    polarity_from: str
+    background: float
+    contrast: float
+    slope_u: float
+    slope_v: float
+    edge_blur_px: float
+    edge_window_px: int
+    area_px2: float
+    frames_used: int
+
+    def settings(self, config: TrackConfig) -> MeasureSettings:
+        return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background, self.contrast,
+                               self.edge_window_px, self.edge_blur_px, max(9.0, 0.01 * self.area_px2), self.area_px2,
+                               config.area_tolerance, self.slope_u, self.slope_v)
+
+
+@dataclass(frozen=True, eq=False)
+class TrackResult:
+    """The tracked run.
+
+    Attributes
+    ----------
+    name : str
+    t, y, theta : ndarray (n,)
+        Times from 0 at the first frame [s], height above the levitation height [m] (up), bend [-]; NaN
+        in frames not measured.
+    status : ndarray (n,) int
+        :data:`tracking.measure.STATUS` code per frame.
+    rows : ndarray (n, len(COLUMNS))
+        The kernel's measurement of every frame (pixel units).
+    info : dict
+        The RUN.json document (:func:`tracking.output.run_json`'s content).
+    example : ndarray (height, width)
+        The raw grey frame chosen for the annotated figure (``info["example_frame"]``).
+    """
+
+    name: str
+    t: NDArray[np.float64]
+    y: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    status: NDArray[np.int64]
+    rows: NDArray[np.float64]
+    info: dict = field(default_factory=dict)
+    example: NDArray | None = None
+
+    @property
+    def n_measured(self) -> int:
+        return int(np.sum(self.status == 0))
+
+
+def _ring_mask(h: int, w: int, width: int = 2) -> NDArray[np.bool_]:
+    m = np.zeros((h, w), bool)
+    m[:width] = m[-width:] = True
+    m[:, :width] = m[:, -width:] = True
+    return m
+
+
+def calibrate(frames: NDArray, config: TrackConfig) -> Calibration:
+    """Polarity, grey levels, background gradient, edge blur and silhouette area (module docstring, step 1).
+
+    Raises
+    ------
+    TrackingError
+        When no calibration frame shows a dimer (``"no dimer found ..."``).
+    """
+    n = frames.shape[0]
+    idx = np.unique(np.linspace(0, n - 1, min(n, config.calibration_frames)).round().astype(int))
+    sample = frames[idx].astype(np.float32)
+    k, h, w = sample.shape
+    flat = sample.reshape(k, -1)
+    med = np.median(flat, axis=1)
+    lo, hi = np.percentile(flat, [0.5, 99.5], axis=1)
+    noise = 1.4826 * np.median(np.abs(np.diff(sample, axis=2)), axis=(1, 2)) / math.sqrt(2.0)
+    spread = np.maximum(med - lo, hi - med)
+    valid = np.isfinite(spread) & (spread > np.maximum(10.0 * noise, 1e-12))
+    if not valid.any():
+        raise TrackingError(f"no dimer found: none of {k} frames sampled over the recording shows an object "
+                            "against its background")
+    dark_votes = (med - lo > hi - med)[valid]
+    if config.polarity == "auto":
+        polarity, polarity_from = ("dark" if dark_votes.mean() >= 0.5 else "bright"), "detected"
+    else:
+        polarity, polarity_from = config.polarity, "option"
+    pol = -1.0 if polarity == "dark" else 1.0
+    background = float(np.median(med[valid]))
+    levels = []
+    for i in np.flatnonzero(valid):
+        mid = 0.5 * (med[i] + (lo[i] if polarity == "dark" else hi[i]))
+        obj = flat[i][flat[i] < mid] if polarity == "dark" else flat[i][flat[i] > mid]
+        if obj.size:
+            levels.append(float(np.median(obj)))
+    contrast = abs(float(np.median(levels)) - background) if levels else 0.0
+    if not contrast > 0:
+        raise TrackingError("no dimer found: the frames show no contrast between object and background")
+    # background gradient from the border rings of the calibration frames
+    ring = _ring_mask(h, w)
+    vv, uu = np.nonzero(ring)
+    A = np.stack([np.ones(vv.size), uu - 0.5 * (w - 1), vv - 0.5 * (h - 1)], axis=1)
+    slopes = []
+    for f in sample[valid]:
+        vals = f[ring]
+        keep = pol * (vals - background) / contrast < 0.3
+        if keep.sum() > 0.5 * vals.size:
+            coef = np.linalg.lstsq(A[keep], vals[keep], rcond=None)[0]
+            slopes.append(coef[1:])
+    su, sv = (np.median(np.array(slopes), axis=0) if slopes else (0.0, 0.0))
+    window = int(config.edge_window or 8)
+    first = Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), 1.5, window, 0.0, k)
+    rows = measure_frames(sample, first.settings(config))
+    ok = rows[:, 0] == 0
+    if not ok.any():
+        codes, counts = np.unique(rows[:, 0].astype(int), return_counts=True)
+        why = {v: s for s, v in STATUS.items()}[int(codes[np.argmax(counts)])]
+        raise TrackingError(f"no dimer found: none of {k} frames sampled over the recording could be measured "
+                            f"(mostly: {STATUS_TEXT[why]})")
+    area = float(np.median(rows[ok, _C["area"]]))
+    blur = float(np.median(rows[ok, _C["edge_width"]]))
+    if config.edge_window is None:
+        window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
+    return Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), blur, window, area,
+                       int(ok.sum()))
+
+
+def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
+    """Step 3 of the module docstring: the recording's bounds; returns the reference values used."""
+    ok = status == 0
+    if not ok.any():
+        return {}
+    width = rows[:, _C["edge_width"]]
+    w_ref = float(np.median(width[ok]))
+    blur = ok & (width ** 2 - w_ref ** 2 > config.max_motion_blur ** 2 / 12.0)
+    status[blur] = STATUS["motion_blur"]
+    ok = status == 0
+    rms = rows[:, _C["edge_rms"]]
+    rms_ref = float(np.median(rms[ok])) if ok.any() else float("nan")
+    # the squareness check counts beyond its own noise (short hinge faces at large bends fit loosely)
+    square = np.abs(rows[:, _C["alpha_free"]] + rows[:, _C["beta_free"]] - math.pi) - 5.0 * rows[:, _C["squareness_sigma"]]
+    side = 2.0 * rows[:, _C["half_side"]]
+    poor = ok & ((rms > config.max_edge_rms_factor * rms_ref + 0.05) | (np.nan_to_num(square) > config.max_squareness)
+                 | (rows[:, _C["hinge_gap"]] > config.max_hinge_gap * side))
+    status[poor] = STATUS["poor_fit"]
+    return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
+
+
+def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> TrackResult:
+    """Track one recording (module docstring).
+
+    Raises
+    ------
+    TrackingError
+        Unknown frame rate or pixel size, no dimer in any frame, no origin.
+    """
+    fps = config.fps or rec.fps
+    if fps is None:
+        raise TrackingError(f"{rec.path}: unknown frame rate: the file does not record the camera's; give --fps "
+                            "(frames per second)")
+    pixel = config.pixel_size or rec.pixel_size
+    if pixel is None:
+        raise TrackingError(f"{rec.path}: unknown pixel size: the file does not record one; give --pixel-size "
+                            "(metres per pixel in the object plane)")
+    frames = rec.frames
+    n, h, w = frames.shape
+    if h < 24 or w < 24:
+        raise TrackingError(f"{rec.path}: frames of {w} x {h} px are too small to hold a dimer")
+    try:
+        cal = calibrate(frames, config)
+    except TrackingError as exc:
+        raise TrackingError(f"{rec.path}: {exc}") from None
+    settings = cal.settings(config)
+    rows = np.empty((n, len(COLUMNS)))
+    for f0 in range(0, n, config.batch):
+        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings)
+    status = rows[:, 0].astype(np.int64)
+    refs = _flag(status, rows, config)
+    ok = status == 0
+    if not ok.any():
+        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured")
+    # ---- origin
+    if config.origin_row is not None:
+        origin, origin_from = float(config.origin_row), "option --origin-row"
+    elif rec.levitation_row is not None:
+        origin, origin_from = float(rec.levitation_row), "recorded in the file"
+    else:
+        first = np.flatnonzero(ok[: config.origin_frames])
+        if first.size == 0:
+            raise TrackingError(f"{rec.path}: none of the first {config.origin_frames} frames could be measured, so "
+                                "the levitation height is unknown; give --origin-row or more --origin-frames")
+        origin = float(np.median(rows[first, _C["v_com"]]))
+        origin_from = f"median centre-of-mass row of the {first.size} measured frames among the first {config.origin_frames}"
+    sign = 1.0 if config.up == "top" else -1.0
+    y = np.where(ok, sign * (origin - rows[:, _C["v_com"]]) * pixel, np.nan)
+    theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
+    t = np.arange(n) / float(fps)
+    sigma_y = float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel
+    sigma_theta = float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2)))
+    names = {v: k for k, v in STATUS.items()}
+    counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
+    # the example frame: a measured frame with a clear bend (90th percentile of |theta|)
+    meas = np.flatnonzero(ok)
+    target = np.quantile(np.abs(theta[meas]), 0.9)
+    ex = int(meas[np.argmin(np.abs(np.abs(theta[meas]) - target))])
+    r = rows[ex]
+    alpha, beta = (r[_C["alpha"]], r[_C["beta"]]) if sign > 0 else (r[_C["beta"]], r[_C["alpha"]])
+    square = rows[ok, _C["alpha_free"]] + rows[ok, _C["beta_free"]] - math.pi
+    info = {
+        "source": rec.path,
+        "format": rec.format,
+        "frames": int(n),
+        "frame_size_px": [int(w), int(h)],
+        "frame_rate_hz": float(fps),
+        "frame_rate_from": "option --fps" if config.fps else "recorded in the file",
+        "pixel_size_m": float(pixel),
+        "pixel_size_from": "option --pixel-size" if config.pixel_size else "recorded in the file",
+        "y_origin": {"row_px": origin, "from": origin_from,
+                     "convention": "y = (origin row - centre-of-mass row) x pixel size: positive up, image rows "
+                                   "counting down" if sign > 0 else
+                                   "y = (centre-of-mass row - origin row) x pixel size: the image is upside down "
+                                   "(--up bottom), theta's sign flipped with it"},
+        "orientation": {"up": config.up, "polarity": cal.polarity, "polarity_from": cal.polarity_from},
+        "frames_measured": int(ok.sum()),
+        "frames_not_measured": int(n - ok.sum()),
+        "fraction_measured": float(ok.mean()),
+        "not_measured": counts,
+        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta,
+                           "method": "RMS over the measured frames of each frame's standard error: the image noise "
+                                     "of the border ring through the centre of mass (y), the edge residuals through "
+                                     "the face fits (theta)"},
+        "calibration": {"background_level": cal.background, "contrast": cal.contrast,
+                        "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
+                        "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
+                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used},
+        "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square))
+                                                    if np.isfinite(square).any() else None,
+                                                    "p95_abs": float(np.nanpercentile(np.abs(square), 95))
+                                                    if np.isfinite(square).any() else None,
+                                                    "bound": config.max_squareness},
+                   "tilt_rad_median": float(np.median(rows[ok, _C["tilt"]])),
+                   "edge_rms_px_median": refs.get("edge_rms_px"), "edge_width_px_median": refs.get("edge_width_px")},
+        "quality": {"measure": "edge_rms_px: RMS distance [px] of the sub-pixel edge crossings from the fitted faces "
+                               "(about the image noise times the window's square root; larger for occlusions, "
+                               "bent or blurred edges); null where the frame was not measured",
+                    "edge_rms_px": [round(float(v), 4) if s == 0 else None
+                                    for v, s in zip(rows[:, _C["edge_rms"]], status)],
+                    "status": status.tolist(), "status_codes": {v: k for k, v in STATUS.items()},
+                    "status_text": STATUS_TEXT},
+        "example_frame": {"index": ex, "theta": float(theta[ex]), "alpha_rad": float(alpha), "beta_rad": float(beta),
+                          "centre_of_mass_px": [float(r[_C["u_com"]]), float(r[_C["v_com"]])],
+                          "half_side_px": float(r[_C["half_side"]]),
+                          "squares": [{"cube": "A", "centre_px": [float(r[_C["u_a"]]), float(r[_C["v_a"]])],
+                                       "face_direction_rad": float(r[_C["gamma_a"]])},
+                                      {"cube": "B", "centre_px": [float(r[_C["u_b"]]), float(r[_C["v_b"]])],
+                                       "face_direction_rad": float(r[_C["gamma_b"]])}],
+                          "convention": "pixel centres at integer (column, row), rows counting down; face directions "
+                                        "counter-clockwise from the +column axis with up = -row"},
+        "units": "SI (lengths in pixels where named _px, angles in radians)",
+    }
+    logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
+                ", ".join(f"{k} {v}" for k, v in counts.items()) or "all", sigma_y, sigma_theta)
+    return TrackResult(rec.name, t, y, theta, status, rows, info, np.array(frames[ex]))
