@@ -111,6 +111,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--thetadot-drop", type=_range, default=None, metavar="MIN:MAX",
                    help="hinge rate range when the field drops [1/s] (default -3:3)")
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m] (default 500e-6)")
+    p.add_argument("--frequency", type=float, default=45_650.0, metavar="HZ",
+                   help="drive frequency [Hz] (default 45650; with --side it sets ks, which the full-wave family "
+                        "covers from 0.3 to 0.65)")
     p.add_argument("--pressure", type=float, default=None, metavar="PA",
                    help="nominal pressure amplitude [Pa] written to meta.json (default 3000 or the preset's)")
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
@@ -162,6 +165,7 @@ def build_config(args: argparse.Namespace):
             check_limit("frames in the data set (--runs x --duration x --fps)", args.runs * frames, MAX_FRAMES,
                         "simulate fewer or shorter runs, or several data sets")
     check_meta_value("side_length_m", args.side, "--side")
+    check_meta_value("frequency_hz", args.frequency, "--frequency")
     if args.pressure is not None:
         check_meta_value("pressure_amplitude_pa", args.pressure, "--pressure")
     try:
@@ -183,7 +187,7 @@ def build_config(args: argparse.Namespace):
             runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=args.model,
-            gap=args.gap, edge_radius=args.edge_radius,
+            gap=args.gap, edge_radius=args.edge_radius, frequency=args.frequency,
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None

@@ -166,6 +166,8 @@ class TwinConfig:
         surrogate; ``"fullwave"``: the full-wave table of the dimer, from the table family).
     gap, edge_radius : float, optional
         Hinge gap and edge radius [m] of the full-wave model (None: 0.01 side and sharp edges).
+    frequency : float
+        Drive frequency [Hz] (the standing wave's; with the side it sets ks).
     max_step : float
         Longest internal RK4 step [s].
     preset : str, optional
@@ -187,6 +189,7 @@ class TwinConfig:
     force_model: str = "gorkov"
     gap: float | None = None
     edge_radius: float | None = None
+    frequency: float = 45_650.0
 
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 1:
@@ -226,7 +229,8 @@ class TwinConfig:
         """The experiment the force model is built for, at the nominal pressure amplitude."""
         try:
             return ExperimentConditions(side_length_m=self.side, pressure_amplitude_pa=self.pressure_amplitude_pa,
-                                        mesh_size_m=self.mesh_size, gap_m=self.gap, edge_radius_m=self.edge_radius)
+                                        mesh_size_m=self.mesh_size, gap_m=self.gap, edge_radius_m=self.edge_radius,
+                                        frequency_hz=self.frequency)
         except ValueError as exc:
             raise TwinError(str(exc)) from None
 
@@ -259,6 +263,8 @@ class TwinConfig:
             out["gap_m"] = float(self.gap)
         if self.edge_radius is not None:
             out["edge_radius_m"] = float(self.edge_radius)
+        if self.frequency != ExperimentConditions.frequency_hz:
+            out["frequency_hz"] = float(self.frequency)
         return out
 
 
