@@ -73,7 +73,7 @@ def _hinge_chi2(problem) -> tuple[float, int]:
 
 
 def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, build_problem,
-                              tolerance: float = 0.01) -> ParameterCalibration:
+                              tolerance: float = 0.01, label: str | None = None) -> ParameterCalibration:
     """Profile the model parameter ``name`` over [lo, hi] (log scale) on the hinge equation.
 
     Parameters
@@ -88,6 +88,8 @@ def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, b
         ``build_problem(value) -> DiagnosisProblem`` with the model rebuilt at that value.
     tolerance : float
         Absolute tolerance of the refinement in log(value).
+    label : str, optional
+        How the notes name the parameter (default: ``name``).
     """
     from scipy.optimize import minimize_scalar
 
@@ -122,16 +124,18 @@ def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, b
     se_u = float(np.sqrt(2.0 * inflation / curv)) if curv > 0 else float("inf")
     estimate = float(np.exp(u_star))
     std_error = estimate * se_u if np.isfinite(se_u) else float("inf")
+    what = label or name
     at_edge = u_star - np.log(lo) < 2 * tolerance or np.log(hi) - u_star < 2 * tolerance
     rel = std_error / estimate
     if at_edge:
-        note = (f"the data prefer {name} at the edge of the range [{lo:.3g}, {hi:.3g}] ({estimate:.3g}): outside what "
+        note = (f"the data prefer a {what} at the edge of the range [{lo:.3g}, {hi:.3g}] ({estimate:.3g}): outside what "
                 f"the model covers or not determined; the default {default:.3g} is kept")
     elif not rel < MAX_RELATIVE_ERROR:
-        note = (f"the data do not determine {name}: relative standard error {rel:.0%} (a flat hinge profile: too few "
-                f"runs, too small a hinge amplitude, or degenerate with the pressure); the default {default:.3g} is kept")
+        note = (f"the data do not determine the {what}: relative standard error {rel:.0%} (a flat hinge profile: too "
+                f"few runs, too small a hinge amplitude, or degenerate with the pressure); the default {default:.3g} is "
+                f"kept")
     else:
-        note = f"{name} calibrated from the hinge equation: {estimate:.4g} +- {std_error:.2g}"
+        note = f"the {what} calibrated from the hinge equation: {estimate:.4g} +- {std_error:.2g}"
     calibrated = bool(not at_edge and rel < MAX_RELATIVE_ERROR)
     profile = sorted((float(np.exp(u)), c / m) for u, (c, m) in cache.items())
     return ParameterCalibration(name, estimate if calibrated else float(default), estimate, std_error, calibrated,

@@ -149,6 +149,11 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
         return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model, gap, edge_radius)
 
 
+def _label(name: str) -> str:
+    """A model parameter's name in prose: the field without its unit (``gap_m`` -> ``gap``)."""
+    return name.rsplit("_", 1)[0].replace("_", " ")
+
+
 def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
                                log=logger.info) -> tuple[object, dict]:
     """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
@@ -162,8 +167,8 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
             continue
         if not hi > lo * (1 + 1e-9):  # the model covers one value only: nothing to profile
             out[name] = ParameterCalibration(name, float(default), float(lo), float("inf"), False,
-                                             f"the model's tables cover {name} = {lo:.3g} only: nothing to profile; "
-                                             f"the default {default:.3g} is kept", (lo, hi))
+                                             f"the model's tables cover one {_label(name)} ({lo:.3g}) only: nothing "
+                                             f"to profile; the default {default:.3g} is kept", (lo, hi))
             conditions = replace(conditions, **{name: float(default)})
             continue
         log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
@@ -172,7 +177,7 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
             sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
             return DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
 
-        pc = calibrate_model_parameter(name, lo, hi, default, build)
+        pc = calibrate_model_parameter(name, lo, hi, default, build, label=_label(name))
         log("%s", pc.note)
         out[name] = pc
         conditions = replace(conditions, **{name: pc.value})
@@ -191,7 +196,7 @@ def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
         out[name] = float(getattr(conditions, name))
         out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
         out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
-        out[f"{base}_note"] = pc.note if pc is not None else f"{name} fixed by the user"
+        out[f"{base}_note"] = pc.note if pc is not None else f"the {_label(name)} given by the user"
         if pc is not None:
             out[f"{base}_profile"] = pc.to_dict()
     return out

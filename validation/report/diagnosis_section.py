@@ -104,8 +104,17 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
                      "frames masked. ")
     # what the data suggest about how they were recorded comes first: it changes how everything after it reads
     warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.get("data_warnings") or [])
+    gap_text = ""
+    if "gap_m" in cal:  # the full-wave model's hinge gap: calibrated with its standard error, or why not
+        if cal.get("gap_calibrated"):
+            gap_text = (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
+                        f"{cal['gap_std_m'] * 1e6:.2g} um (an effective gap of the inviscid full-wave model). ")
+        else:
+            std = cal.get("gap_std_m")
+            gap_text = (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
+                        + (f" (standard error of the profile {std * 1e6:.2g} um)" if std else "") + ". ")
     reading = (
-        warnings_text + data_text + drift_text +
+        warnings_text + data_text + drift_text + gap_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
         f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
