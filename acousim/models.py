@@ -286,14 +286,19 @@ def _fullwave_static(c: ExperimentConditions):
 
 
 def _fullwave_gap_range(c: ExperimentConditions) -> dict:
-    """The hinge gaps [m] the shipped family covers at this dimer's ks, and the default gap 0.01 s."""
-    from .fullwave.family import DEFAULT_GAP_RATIO, shipped_family
+    """The hinge gaps [m] the shipped family covers at this dimer's ks, and the gap the model takes when the data
+    do not determine it: 0.01 s (the default dimer's direct table, or inside the family), else the covered gap
+    nearest to it."""
+    from .fullwave.family import DEFAULT_GAP_RATIO, _is_default_dimer, shipped_family
 
     fam = shipped_family()
     fam.check_covers(c.ks, fam.ranges()[1][0] if fam.ranges() else DEFAULT_GAP_RATIO)
     (_, _), (g0, g1) = fam.ranges()
     s = c.side_length_m
-    return {"gap_m": (g0 * s, g1 * s, DEFAULT_GAP_RATIO * s)}
+    default = DEFAULT_GAP_RATIO * s
+    if not _is_default_dimer(s, default, c.medium, c.particle_density_kg_m3, c.gravity_m_s2):
+        default = min(max(default, g0 * s), g1 * s)
+    return {"gap_m": (g0 * s, g1 * s, default)}
 
 
 register_force_model(ForceModelType(

@@ -206,7 +206,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                       mesh_size: float | None, model_name: str, gap: float | None,
                       edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
     from acousim.analytic import nominal_trap_frequency
-    from acousim.models import static_model
+    from acousim.models import force_model_type, static_model
     from cubedimer.dataset import LoadConfig, load_dataset
     from cubedimer.meta import read_meta
 
@@ -216,7 +216,12 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     skip = logger.warning if progress else logger.debug
     meta = read_meta(data_dir)
     conditions = conditions_from_meta(meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
-    model = static_model(model_name, conditions)  # refuses a misfit (a gap with Gor'kov, a dimer outside the family)
+    # refuses a misfit first (a gap with Gor'kov, a dimer outside the full-wave family); a parameter to be calibrated
+    # starts at the value the model takes by default
+    mtype = force_model_type(model_name)
+    mtype.check(conditions)
+    start = {n: d for n, (_, _, d) in mtype.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
+    model = static_model(model_name, replace(conditions, **start))
     # the loader checks the physics bounds of any levitated dimer; with a meta.json also the Gor'kov estimate
     # of the trap frequency at its nominal pressure
     dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
