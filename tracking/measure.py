@@ -38,6 +38,7 @@ The output of a frame is one row of :data:`COLUMNS`; ``status`` is one of :data:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -49,7 +50,6 @@ __all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSetting
 COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
            "edge_width", "area", "tilt", "hinge_gap", "sigma_v", "sigma_theta", "side_a", "side_b", "pixel_noise",
            "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background", "squareness_sigma")
-_C = {name: i for i, name in enumerate(COLUMNS)}
 # column indices as module constants (the compiled kernel reads them as literals)
 _I_ALPHA = COLUMNS.index('alpha')
 _I_ALPHA_FREE = COLUMNS.index('alpha_free')
@@ -98,8 +98,9 @@ STATUS_TEXT = {
 }
 
 
+@dataclass(frozen=True)
 class MeasureSettings:
-    """Numbers the compiled kernel needs, packed into one float array (:meth:`pack`).
+    """Numbers the compiled kernel needs (packed into one float array by :meth:`pack`).
 
     Parameters
     ----------
@@ -124,21 +125,27 @@ class MeasureSettings:
         centre; each frame fits only its own background level (a per-frame gradient would add noise to y).
     """
 
-    def __init__(self, polarity: float, background_ref: float, contrast: float, edge_window: int = 7,
-                 edge_blur: float = 1.5, min_area: float = 20.0, area_ref: float = 0.0, area_tolerance: float = 0.06,
-                 slope_u: float = 0.0, slope_v: float = 0.0):
-        self.slope_u = float(slope_u)
-        self.slope_v = float(slope_v)
-        self.polarity = float(polarity)
-        self.background_ref = float(background_ref)
-        self.contrast = float(contrast)
-        self.edge_window = int(edge_window)
-        self.edge_blur = float(edge_blur)
-        self.min_area = float(min_area)
-        self.area_ref = float(area_ref)
-        self.area_tolerance = float(area_tolerance)
+    polarity: float
+    background_ref: float
+    contrast: float
+    edge_window: int = 7
+    edge_blur: float = 1.5
+    min_area: float = 20.0
+    area_ref: float = 0.0
+    area_tolerance: float = 0.06
+    slope_u: float = 0.0
+    slope_v: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.polarity not in (-1.0, 1.0):
+            raise ValueError(f"polarity must be -1 (dark cubes) or +1 (bright cubes), got {self.polarity!r}")
+        if not (math.isfinite(self.contrast) and self.contrast > 0):
+            raise ValueError(f"contrast must be positive, got {self.contrast!r}")
+        if int(self.edge_window) != self.edge_window or self.edge_window < 2:
+            raise ValueError(f"edge window must be a whole number >= 2, got {self.edge_window!r}")
 
     def pack(self) -> NDArray[np.float64]:
+        """The settings in the order the kernel reads them."""
         return np.array([self.polarity, self.background_ref, self.contrast, self.edge_window, self.edge_blur,
                          self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v], float)
 
