@@ -230,7 +230,7 @@ def calibrate(frames: NDArray, config: TrackConfig) -> Calibration:
     vv, uu = np.nonzero(ring)
     A = np.stack([np.ones(vv.size), uu - 0.5 * (w - 1), vv - 0.5 * (h - 1)], axis=1)
     slopes = []
-    for f in stats[valid]:
+    for f in sample:  # every calibration frame: the gradient's median over frames is what y is sensitive to
         vals = f[ring]
         keep = pol * (vals - background) / contrast < 0.3
         if keep.sum() > 0.5 * vals.size:
