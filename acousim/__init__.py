@@ -1,6 +1,6 @@
 """acousim: the Gor'kov acoustic model of a levitated, hinged cube dimer.
 
-Physics follows ``shared/PHYSICS.md``; see the README for a tour.  Public API:
+Physics follows ``docs/conventions.md``; see the README for a tour.  Public API:
 
 * configuration: :class:`Medium`, :class:`ParticleMaterial`, :class:`StandingWave`, :class:`CubeDimer`
 * potential: :func:`gorkov_potential_density`, :func:`gorkov_potential_gradient`, :func:`contrast_factors`
@@ -11,7 +11,7 @@ Physics follows ``shared/PHYSICS.md``; see the README for a tour.  Public API:
 * force models: the :class:`ForceModel` protocol and its :class:`ForceCoefficients`; the Gor'kov
   :class:`ForceSurrogate` (:func:`build_surrogate`)
 * equations of motion: :func:`accelerations` (force model plus effects), :class:`DimerDynamics`
-  (integration), the effects of PHYSICS.md section 5 (:class:`EffectSet` and one class per effect)
+  (integration), the effects of docs/conventions.md section 5 (:class:`EffectSet` and one class per effect)
 * the digital twin (:mod:`acousim.twin`): :class:`TwinConfig`, :class:`Camera`, :class:`DropProtocol`,
   :func:`simulate_run`, :func:`simulate_dataset`, the ``PAPER_LIKE`` preset and :class:`TwinError`
 """

@@ -3,9 +3,10 @@
 * :func:`cube_potential_energy`: the Gor'kov energy of a cube of any orientation in the (X, Z)
   plane, from the exact Fourier transform of a cube (a product of sincs).
 * :func:`dimer_potential_energy` and :func:`dimer_generalized_forces`: the same for the
-  mirror-symmetric dimer of PHYSICS.md, with Q_theta by differentiating the closed form.
+  mirror-symmetric dimer of docs/conventions.md, with Q_theta by differentiating the closed form.
 * :func:`sphere_force_z`: volume-integrated force on a sphere, with its finite-size factor.
-* :func:`point_particle_force_z` and :func:`vertical_trap_frequency`.
+* :func:`point_particle_force_z` and :func:`vertical_trap_frequency`; :func:`nominal_trap_frequency` of a
+  data set's meta.json (the loader's plausibility estimate).
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ __all__ = [
     "sphere_force_z",
     "point_particle_force_z",
     "vertical_trap_frequency",
+    "nominal_trap_frequency",
 ]
 
 
@@ -121,3 +123,33 @@ def vertical_trap_frequency(mass: float, volume: float, wave: StandingWave, grav
         raise ValueError("field too weak to levitate the particle")
     stiffness = 2 * k * f0 * np.sqrt(1 - ratio**2)
     return float(np.sqrt(stiffness / mass) / (2 * np.pi))
+
+
+def nominal_trap_frequency(meta) -> float:
+    """Small-particle Gor'kov estimate of the vertical trap frequency [Hz] at a data set's nominal pressure.
+
+    ``meta`` is a validated meta.json mapping (:func:`cubedimer.meta.read_meta`; defaults stand in for missing
+    keys).  For a particle small against the wavelength, u(Z) = E [f1 sin^2 kZ - 3/2 f2 cos^2 kZ] per unit
+    volume with E = p0^2 / (4 rho0 c0^2); the levitation height solves E k (f1 + 3/2 f2) sin(-2 k Z_eq) = rho_p g
+    and the stiffness per unit mass there is omega^2 = 2 E k^2 (f1 + 3/2 f2) cos(2 k Z_eq) / rho_p.  Independent
+    of the particle's size and shape to leading order (the cube dimer's finite size lowers it by ~3 % at the
+    defaults).  NaN when the field cannot levitate the particle.  The data-set loader takes it as its
+    ``trap_frequency`` plausibility estimate (:class:`cubedimer.dataset.LoadConfig`).
+    """
+    import math
+
+    from cubedimer.meta import META_DEFAULTS
+
+    m = {**META_DEFAULTS, **dict(meta)}
+    rho0, c0, f = m["air_density_kg_m3"], m["sound_speed_m_s"], m["frequency_hz"]
+    rho_p, k_p, p0 = m["particle_density_kg_m3"], m["bulk_modulus_pa"], m["pressure_amplitude_pa"]
+    f1 = 1.0 - rho0 * c0**2 / k_p
+    f2 = 2.0 * (rho_p - rho0) / (2.0 * rho_p + rho0)
+    k = 2.0 * math.pi * f / c0
+    e = p0**2 / (4.0 * rho0 * c0**2)
+    strength = e * k * (f1 + 1.5 * f2)
+    s = rho_p * 9.81 / strength
+    if not 0 <= s < 1:
+        return float("nan")
+    omega2 = 2.0 * e * k**2 * (f1 + 1.5 * f2) * math.sqrt(1.0 - s * s) / rho_p
+    return math.sqrt(omega2) / (2.0 * math.pi)

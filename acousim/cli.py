@@ -15,6 +15,7 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> argparse.ArgumentParser:
     from . import simulate_cli, sweep_cli
     from .fullwave import cli as fullwave_cli
+    from .fullwave import family_cli
 
     parser = OneLineParser(
         prog="python -m acousim",
@@ -25,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep_cli.add_parser(sub)
     simulate_cli.add_parser(sub)
     fullwave_cli.add_parser(sub)
+    family_cli.add_parser(sub)
     return parser
 
 

@@ -1,4 +1,4 @@
-"""Geometry and inertia of the hinged cube dimer (PHYSICS.md sections 2 and 4).
+"""Geometry and inertia of the hinged cube dimer (docs/conventions.md sections 2 and 4).
 
 Conventions (lab frame: Z up, X horizontal in the image, Y along the hinge, camera looking along +Y):
 
@@ -66,7 +66,7 @@ class CubeDimer:
 
     @property
     def is_symmetric(self) -> bool:
-        """True when both cubes are equal (the PHYSICS.md dimer)."""
+        """True when both cubes are equal (the docs/conventions.md dimer)."""
         return self.side_a == self.side_b
 
     @property
@@ -149,7 +149,7 @@ class CubeDimer:
     def hinge_inertia(self, theta: ArrayLike) -> NDArray[np.float64]:
         """Inertia I(theta) of the bending coordinate [kg m^2] (theta is dimensionless).
 
-        For equal cubes ``I = (pi/4)^2 2 m s^2 (sin^2(phi)/2 + 1/6)`` (PHYSICS.md section 4): each
+        For equal cubes ``I = (pi/4)^2 2 m s^2 (sin^2(phi)/2 + 1/6)`` (docs/conventions.md section 4): each
         cube's rotation about its centre (m s^2 / 6) plus the horizontal motion of the centres.
         """
         phi = bend_angle(theta)

@@ -1,7 +1,7 @@
-"""The unmodelled effects of PHYSICS.md section 5 as composable, parameterised objects.
+"""The unmodelled effects of docs/conventions.md section 5 as composable, parameterised objects.
 
 Each effect is a frozen dataclass whose class attribute ``name`` and field names are exactly those
-of PHYSICS.md (they appear in files and reports); each adds terms to the accelerations
+of docs/conventions.md (they appear in files and reports); each adds terms to the accelerations
 ``(yddot, thetaddot)`` of the equations of motion:
 
 =====================  ===========================  ==========================================
@@ -131,7 +131,7 @@ class Effect:
 
     @classmethod
     def parameter_names(cls) -> tuple[str, ...]:
-        """The PHYSICS.md parameter names, in order."""
+        """The docs/conventions.md parameter names, in order."""
         return tuple(f.name for f in fields(cls))
 
     def params(self) -> dict[str, float]:
@@ -223,7 +223,7 @@ class VelocityCoupling(Effect):
     c6: float = 0.0
 
 
-#: name -> effect class, in PHYSICS.md order.
+#: name -> effect class, in docs/conventions.md order.
 EFFECT_TYPES: dict[str, type[Effect]] = {
     cls.name: cls for cls in (LinearDamping, QuadraticDrag, PairScattering, MirrorAsymmetry, VelocityCoupling)
 }
@@ -310,7 +310,7 @@ class EffectSet:
     Parameters
     ----------
     effects : tuple of Effect
-        Stored in PHYSICS.md order whatever the order given.
+        Stored in docs/conventions.md order whatever the order given.
     """
 
     effects: tuple[Effect, ...] = ()
@@ -348,7 +348,7 @@ class EffectSet:
         return cls(tuple(out))
 
     def to_dict(self) -> dict[str, dict[str, float]]:
-        """``{name: {param: value}}`` in PHYSICS.md order (the truth.json form)."""
+        """``{name: {param: value}}`` in docs/conventions.md order (the truth.json form)."""
         return {e.name: e.params() for e in self.effects}
 
     def merged(self, other: "EffectSet") -> "EffectSet":

@@ -1,4 +1,4 @@
-"""The equations of motion of the hinged cube dimer (PHYSICS.md section 4) plus the effects of section 5.
+"""The equations of motion of the hinged cube dimer (docs/conventions.md section 4) plus the effects of section 5.
 
 State ``x = [y, ydot, theta, thetadot]`` (m, m/s, -, 1/s).  With the field on, for any
 :class:`~acousim.force_model.ForceModel`::

@@ -1,4 +1,4 @@
-"""The single-node standing wave and the Gor'kov potential density (PHYSICS.md section 3).
+"""The single-node standing wave and the Gor'kov potential density (docs/conventions.md section 3).
 
 The pressure node is at Z = 0; ``p(Z, t) = p0 sin(kZ) cos(wt)``.  The Gor'kov potential energy per
 unit particle volume is::
@@ -27,7 +27,7 @@ class StandingWave:
     Parameters
     ----------
     pressure_amplitude_pa : float
-        Pressure amplitude p0 [Pa] (default 3 kPa, PHYSICS.md section 1).
+        Pressure amplitude p0 [Pa] (default 3 kPa, docs/conventions.md section 1).
     medium : Medium
         The fluid.
     material : ParticleMaterial

@@ -1,4 +1,4 @@
-"""What the equations of motion need from a force model (PHYSICS.md sections 3, 4 and 7).
+"""What the equations of motion need from a force model (docs/conventions.md sections 3, 4 and 7).
 
 A force model gives the generalised forces ``Q_y`` [N] and ``Q_theta`` [N m] of the dimer over
 (theta, y), with ``y`` measured from the equilibrium height ``Z_eq`` (< 0, below the pressure
@@ -94,7 +94,7 @@ class ForceModel(Protocol):
     two_k : float
         2k [1/m], the argument scale of the height structure.
     inertia_const, inertia_sin2 : float
-        ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)`` [kg m^2] (PHYSICS.md section 4).
+        ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)`` [kg m^2] (docs/conventions.md section 4).
     pressure_amplitude_pa : float
         p0 [Pa] the forces belong to.
     settings : dict
@@ -139,10 +139,14 @@ class ForceModel(Protocol):
         """y [m] of the barrier below the equilibrium (theta = 0) below which the dimer falls out."""
         ...
 
+    def provenance(self) -> dict:
+        """How the model was built (its build record and validity range), for truth.json."""
+        ...
+
 
 class SinusoidalInertia:
     """Methods of a force model whose inertia is ``I(theta) = inertia_const + inertia_sin2 sin^2(pi theta / 4)``
-    (PHYSICS.md section 4) and whose ``generalized_forces`` give (Q_y, Q_theta): the hinge inertia, its
+    (docs/conventions.md section 4) and whose ``generalized_forces`` give (Q_y, Q_theta): the hinge inertia, its
     derivative and the static accelerations, written once for every such model (a base of the surrogates)."""
 
     inertia_const: float

@@ -1,4 +1,4 @@
-"""Gor'kov force, torque and generalised forces on the meshed cube dimer (PHYSICS.md sections 3-4).
+"""Gor'kov force, torque and generalised forces on the meshed cube dimer (docs/conventions.md sections 3-4).
 
 Every quantity is a volume integral over the tetrahedra of the two posed cube meshes, evaluated
 with a tetrahedral quadrature rule (:mod:`acousim.quadrature`).  Quadrature nodes are computed
@@ -138,6 +138,13 @@ class GorkovDimer:
     >>> model.static_forces(theta=0.2, y=0.0).q_theta                      # doctest: +SKIP
     """
 
+    #: registry name (:mod:`acousim.models`)
+    name = "gorkov"
+    #: the forces derive from the acoustic potential U_ac
+    conservative = True
+    #: the model covers every bend |theta| < 1
+    theta_max = 1.0
+
     def __init__(
         self,
         dimer: CubeDimer | None = None,
@@ -179,6 +186,26 @@ class GorkovDimer:
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k not in ("equilibrium_height",)})
         new.wave = self.wave.with_pressure(pressure_amplitude_pa)
         return new
+
+    def record(self) -> dict:
+        """The settings that determine the model's numbers (written into sweep CSV headers and JSON files)."""
+        d, w = self.dimer, self.wave
+        return {
+            "model": self.name,
+            "side_a_m": d.side_a,
+            "side_b_m": d.side_b,
+            "particle_density_kg_m3": d.material.density_kg_m3,
+            "bulk_modulus_pa": d.material.bulk_modulus_pa,
+            "pressure_amplitude_pa": w.pressure_amplitude_pa,
+            "frequency_hz": w.medium.frequency_hz,
+            "sound_speed_m_s": w.medium.sound_speed_m_s,
+            "air_density_kg_m3": w.medium.density_kg_m3,
+            "mesh_size_m": self.mesh_size,
+            "quadrature_degree": self.quadrature_degree,
+            "n_tetrahedra": self.n_tetrahedra,
+            "equilibrium_height_m": self.equilibrium_height,
+            "gravity_m_s2": self.gravity,
+        }
 
     @property
     def cube_meshes(self) -> tuple:

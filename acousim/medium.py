@@ -1,6 +1,6 @@
 """Acoustic medium and particle material, and the Gor'kov contrast factors.
 
-Defaults are those of PHYSICS.md section 1 (air at room temperature, NaCl, the
+Defaults are those of docs/conventions.md section 1 (air at room temperature, NaCl, the
 source paper's 45.650 kHz levitator).
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 
 __all__ = ["Medium", "ParticleMaterial", "contrast_factors", "GRAVITY"]
 
-#: Standard gravity [m/s^2] (PHYSICS.md section 1).
+#: Standard gravity [m/s^2] (docs/conventions.md section 1).
 GRAVITY = 9.81
 
 

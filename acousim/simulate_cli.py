@@ -1,6 +1,6 @@
 """``python -m acousim simulate``: synthetic field-drop experiments from the digital twin.
 
-Writes a trajectory data set (FORMATS.md: one ``runNN.csv`` per run with ``t, y, theta``, and
+Writes a trajectory data set (docs/formats.md: one ``runNN.csv`` per run with ``t, y, theta``, and
 ``meta.json`` with the nominal settings) plus ``truth.json`` (true pressure amplitude, effects,
 seed and every other setting) and ``truth_states.npz`` (exact states), atomically.  See
 :mod:`acousim.twin` and ``docs/twin.md``.
@@ -78,13 +78,14 @@ def build_video_camera(args: argparse.Namespace):
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register the ``simulate`` subcommand."""
-    from .twin import FORCE_MODELS, PRESETS
+    from .models_cli import add_model_arguments
+    from .twin import PRESETS
 
     p = subparsers.add_parser(
         "simulate",
         help="synthetic field-drop experiments (digital twin) written as a trajectory data set",
         description="Simulate field-drop experiments of the cube dimer (Gor'kov or full-wave model plus any of the "
-        "PHYSICS.md section 5 effects) and write them as a FORMATS.md data set with truth.json. "
+        "docs/conventions.md section 5 effects) and write them as a docs/formats.md data set with truth.json. "
         "Without --effect (and --preset) no effect is on; noise options of 0 give exact samples.",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output data set folder (must be empty or absent)")
@@ -92,7 +93,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, metavar="S", help="master random seed (default 0)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME:param=value,...",
                    help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
-                   "parameters of PHYSICS.md section 5; parameters not given are 0")
+                   "parameters of docs/conventions.md section 5; parameters not given are 0")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="start from a documented preset (effects, pressure, drop ranges); --effect "
                    "entries then add to or replace its effects")
@@ -110,16 +111,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--thetadot-drop", type=_range, default=None, metavar="MIN:MAX",
                    help="hinge rate range when the field drops [1/s] (default -3:3)")
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m] (default 500e-6)")
+    p.add_argument("--frequency", type=float, default=45_650.0, metavar="HZ",
+                   help="drive frequency [Hz] (default 45650; with --side it sets ks, which the full-wave family "
+                        "covers from 0.3 to 0.65)")
     p.add_argument("--pressure", type=float, default=None, metavar="PA",
                    help="nominal pressure amplitude [Pa] written to meta.json (default 3000 or the preset's)")
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
-    p.add_argument("--model", choices=FORCE_MODELS, default="gorkov",
-                   help="acoustic force model: the Gor'kov volume integral, or the full-wave boundary-element "
-                   "surrogate of the default 500 um dimer (shipped table, docs/fullwave.md) (default gorkov)")
+    add_model_arguments(p)
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
-                   help="tetrahedron edge of the Gor'kov mesh model [m] (default 0.2 x side)")
+                   help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
     p.add_argument("--force", action="store_true", help="replace a non-empty output folder")
     p.add_argument("--figures", default=None, metavar="DIR",
@@ -163,6 +165,7 @@ def build_config(args: argparse.Namespace):
             check_limit("frames in the data set (--runs x --duration x --fps)", args.runs * frames, MAX_FRAMES,
                         "simulate fewer or shorter runs, or several data sets")
     check_meta_value("side_length_m", args.side, "--side")
+    check_meta_value("frequency_hz", args.frequency, "--frequency")
     if args.pressure is not None:
         check_meta_value("pressure_amplitude_pa", args.pressure, "--pressure")
     try:
@@ -184,6 +187,7 @@ def build_config(args: argparse.Namespace):
             runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=args.model,
+            gap=args.gap, edge_radius=args.edge_radius, frequency=args.frequency,
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None

@@ -1,4 +1,4 @@
-"""A smooth, energy-consistent surrogate of the Gor'kov generalised forces (PHYSICS.md sections 3-4).
+"""A smooth, energy-consistent surrogate of the Gor'kov generalised forces (docs/conventions.md sections 3-4).
 
 Evaluating the mesh integral at every right-hand-side call of the equations of motion is far too
 slow, so the dynamics use a surrogate built from **one static sweep** of the mesh model
@@ -35,7 +35,7 @@ then keeps only the even Chebyshev terms so that theta = 0 is an exactly invaria
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -228,6 +228,10 @@ class ForceSurrogate(SinusoidalInertia):
         w2 = np.array([k_y / self.mass, k_t / self.inertia_const])
         return tuple(float(np.sqrt(v) / (2 * np.pi)) if v > 0 else float("nan") for v in w2)
 
+    def provenance(self) -> dict:
+        """The build record (accuracy against the mesh model) and the interpolation box."""
+        return {"build_accuracy": self.build_accuracy, "box": asdict(self.box)}
+
     def escape_height(self) -> float:
         """y [m] of the potential barrier below the equilibrium (theta = 0): below it the dimer falls out."""
         b0 = float(cheb.chebval(0.0, np.asarray(self.beta)))
@@ -295,7 +299,7 @@ def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetr
         With ``build_accuracy`` holding the errors of Q_y and Q_theta against the swept columns
         (relative to their max over the sweep) and the separable-fit residual.
     """
-    from .sweep import static_sweep, sweep_settings
+    from .sweep import static_sweep
 
     n = box.n_theta
     nodes = np.cos(np.pi * (np.arange(n) + 0.5) / n)[::-1]  # Chebyshev points of the first kind, increasing
@@ -332,7 +336,7 @@ def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetr
         alpha=_as_tuple(series[0]), beta=_as_tuple(series[1]), gamma=_as_tuple(series[2]),
         two_k=two_k, wavenumber=float(model.wave.wavenumber), z_eq=float(z_eq), mass=dimer.total_mass,
         gravity=model.gravity, inertia_const=i0, inertia_sin2=i_sin2,
-        pressure_amplitude_pa=float(model.wave.pressure_amplitude_pa), settings=sweep_settings(model),
+        pressure_amplitude_pa=float(model.wave.pressure_amplitude_pa), settings=model.record(),
         box=box,
     )
     tt, yy = np.meshgrid(nodes, y, indexing="ij")

@@ -1,12 +1,12 @@
 """Static force/torque sweeps over (theta, y) and the static coefficients fitted to them.
 
 A sweep evaluates the Gor'kov model (:class:`acousim.forces.GorkovDimer`) at zero velocity on a
-rectangular (theta, y) grid; its CSV has the FORMATS.md columns
+rectangular (theta, y) grid; its CSV has the docs/formats.md columns
 ``theta, y, potential, force_z, q_y, q_theta, yddot, thetaddot`` (J, N, N, N m, m/s^2, 1/s^2) plus
 ``z_com`` [m] (height above the pressure node).
 
 Static coefficients: ordinary least squares of the swept ``yddot`` and ``thetaddot`` on the
-velocity-free monomials of the library (theta and y up to degree 3, FORMATS.md term names), with
+velocity-free monomials of the library (theta and y up to degree 3, docs/formats.md term names), with
 y measured from Z_eq.  The model values are deterministic, so the "residual" is the truncation
 error of the cubic; the reported standard errors treat it as white noise
 (``sigma^2 (X^T X)^{-1}``, sigma^2 = RSS / (n - p)) and are therefore a measure of how well the
@@ -83,15 +83,17 @@ class SweepResult:
 
 
 def static_sweep(
-    model: GorkovDimer,
+    model: "StaticModel",
     theta: ArrayLike,
     y: ArrayLike,
     progress: bool = False,
     chunk: int = 64,
 ) -> SweepResult:
-    """Evaluate the model on the grid ``theta x y`` (1-D arrays; theta dimensionless, y [m]).
+    """Evaluate a static model (:class:`acousim.models.StaticModel`: Gor'kov or full wave) on the grid
+    ``theta x y`` (1-D arrays; theta dimensionless, y [m] above the model's own Z_eq).
 
-    The orientation sums are computed once per theta value, vectorised over all quadrature
+    A model without a potential (``conservative = False``) leaves the ``potential`` column empty (NaN).  The
+    orientation sums are computed once per theta value, vectorised over all quadrature
     nodes, and combined with every y by broadcasting (see :mod:`acousim.forces`); ``chunk``
     theta values are processed at a time with an optional progress bar.
     """
@@ -101,10 +103,6 @@ def static_sweep(
         raise ValueError("theta and y grids must be 1-D")
     if np.any(np.abs(theta) >= 1):
         raise ValueError("theta must lie in (-1, 1)")
-    if hasattr(model, "as_force_model"):  # a static model backed by a table (acousim.fullwave.FullwaveDimer)
-        model = model.as_force_model()
-    if not hasattr(model, "integrals_at_height"):  # a surrogate force model (the full-wave table)
-        return _surrogate_sweep(model, theta, y)
     from tqdm.auto import tqdm
 
     z_eq = model.equilibrium_height
@@ -116,50 +114,13 @@ def static_sweep(
     cols = {name: np.concatenate([getattr(p, name) for p in parts], axis=0) for name in parts[0]._fields}
     tt, yy = np.meshgrid(theta, y, indexing="ij")
     cols["theta"], cols["y"], cols["z_com"] = tt, yy, yy + z_eq
-    settings = sweep_settings(model)
-    return SweepResult(theta, y, cols, settings)
-
-
-def _surrogate_sweep(model, theta: NDArray[np.float64], y: NDArray[np.float64]) -> SweepResult:
-    """The sweep of a force surrogate with ``force_z``, ``generalized_forces``, ``hinge_inertia``, ``mass``,
-    ``z_eq``, ``theta_max`` and ``settings`` (:class:`acousim.fullwave.FullwaveSurrogate`).  It has no
-    potential: that column is NaN (empty in the CSV)."""
-    if np.any(np.abs(theta) > model.theta_max):
-        raise ValueError(f"theta must lie within the surrogate's table, |theta| <= {model.theta_max:g}")
-    tt, yy = np.meshgrid(theta, y, indexing="ij")
-    q_y, q_theta = model.generalized_forces(tt, yy)
-    cols = {"theta": tt, "y": yy, "z_com": yy + model.z_eq, "potential": np.full(tt.shape, np.nan),
-            "force_z": model.force_z(tt, yy), "q_y": q_y, "q_theta": q_theta, "yddot": q_y / model.mass,
-            "thetaddot": q_theta / model.hinge_inertia(tt)}
-    return SweepResult(theta, y, cols, sweep_settings(model))
-
-
-def sweep_settings(model: GorkovDimer) -> dict:
-    """The model settings that determine a sweep (written into the CSV header and JSON), with ``model``
-    naming the force model (``gorkov`` or ``fullwave``)."""
-    if not hasattr(model, "integrals_at_height"):
-        return {"model": "fullwave", **model.settings, "equilibrium_height_m": model.z_eq}
-    d, w = model.dimer, model.wave
-    return {
-        "model": "gorkov",
-        "side_a_m": d.side_a,
-        "side_b_m": d.side_b,
-        "particle_density_kg_m3": d.material.density_kg_m3,
-        "bulk_modulus_pa": d.material.bulk_modulus_pa,
-        "pressure_amplitude_pa": w.pressure_amplitude_pa,
-        "frequency_hz": w.medium.frequency_hz,
-        "sound_speed_m_s": w.medium.sound_speed_m_s,
-        "air_density_kg_m3": w.medium.density_kg_m3,
-        "mesh_size_m": model.mesh_size,
-        "quadrature_degree": model.quadrature_degree,
-        "n_tetrahedra": model.n_tetrahedra,
-        "equilibrium_height_m": model.equilibrium_height,
-        "gravity_m_s2": model.gravity,
-    }
+    if not model.conservative:  # no potential (the full-wave forces): an empty column
+        cols["potential"] = np.full(tt.shape, np.nan)
+    return SweepResult(theta, y, cols, model.record())
 
 
 def read_sweep_csv(path: str | os.PathLike) -> SweepResult:
-    """Read a sweep CSV written by :meth:`SweepResult.to_csv` (or any CSV with the FORMATS.md columns
+    """Read a sweep CSV written by :meth:`SweepResult.to_csv` (or any CSV with the docs/formats.md columns
     on a full rectangular grid).  Raises ValueError naming the file on bad input."""
     path = Path(path)
     settings: dict = {}
@@ -207,7 +168,7 @@ class StaticCoefficients:
 
     Attributes
     ----------
-    terms : list of term names (FORMATS.md), shared by both equations
+    terms : list of term names (docs/formats.md), shared by both equations
     coefficients, std_errors : dict equation -> dict term -> value [SI: (1/s^2 or m/s^2) / unit^powers]
     rms_residual : dict equation -> RMS residual of the fit [equation's units]
     relative_residual : dict equation -> RMS residual / RMS of the swept values

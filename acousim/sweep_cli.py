@@ -1,4 +1,4 @@
-"""``python -m acousim sweep``: the static force/torque sweep of the Gor'kov model (FORMATS.md)."""
+"""``python -m acousim sweep``: the static force/torque sweep of any registered force model (docs/formats.md)."""
 from __future__ import annotations
 
 import argparse
@@ -8,6 +8,9 @@ import numpy as np
 
 from cubedimer.cli import UserInputError, check_limit, prepare_output_dir, prepare_output_file
 from cubedimer.meta import check_meta_value
+
+from .models import force_model_type
+from .models_cli import add_model_arguments, conditions_from_args, static_model_from_args
 
 __all__ = ["add_parser", "parse_range", "run_sweep", "MAX_AXIS_POINTS", "MAX_GRID_POINTS"]
 
@@ -54,24 +57,26 @@ def add_parser(subparsers) -> None:
             "Evaluate the Gor'kov volume-integral model of the cube dimer at zero velocity on a (theta, y) "
             "grid and write a CSV with the columns theta, y, potential [J], force_z [N], q_y [N], "
             "q_theta [N m], yddot [m/s^2], thetaddot [1/s^2], z_com [m]. y is the height of the centre "
-            "of mass above the simulated equilibrium height Z_eq (PHYSICS.md section 2). Optionally "
+            "of mass above the simulated equilibrium height Z_eq (docs/conventions.md section 2). Optionally "
             "write the figures (restoring force and torque, thetaddot map), the static coefficients "
             "(least squares on the velocity-free cubic monomials) and a rendering of the posed mesh. "
-            "With --model fullwave the full-wave (boundary-element) surrogate of the default 500 um dimer is "
-            "swept instead (shipped table, docs/fullwave.md; |theta| <= 0.9, no potential column)."
+            "With --model fullwave the full-wave (boundary-element) model is swept instead (docs/fullwave.md): the "
+            "direct-solve table of the default dimer, or any dimer of the table family (ks = k x side 0.3-0.65, "
+            "--gap 0.01-0.05 x side) scaled exactly in side, frequency and pressure; |theta| <= 0.9, no potential "
+            "column, the interpolation accuracy in the CSV header."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--theta", default=DEFAULT_THETA, metavar="START:STOP:N", help="bend grid, inside (-1, 1)")
     p.add_argument("--y", default=DEFAULT_Y, metavar="START:STOP:N", help="height grid [m] relative to Z_eq")
-    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
-                   help="force model: the Gor'kov volume integral, or the full-wave surrogate of the default dimer")
+    add_model_arguments(p)
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
     p.add_argument("--side-b", type=float, default=None, help="side of the second cube [m] (default: equal)")
     p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude p0 [Pa]")
     p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
     p.add_argument("--density", type=float, default=2160.0, help="particle density [kg/m^3]")
-    p.add_argument("--mesh-size", type=float, default=None, help="target tetrahedron edge length [m] (default: 0.2 x side)")
+    p.add_argument("--mesh-size", type=float, default=None,
+                   help="target tetrahedron edge length [m] (Gor'kov model; default: 0.2 x side)")
     p.add_argument("--quadrature-degree", type=int, default=2, help="quadrature degree per tetrahedron (>= 2)")
     p.add_argument("--out", required=True, help="output CSV file")
     p.add_argument("--plots", default=None, metavar="DIR", help="also write the sweep figures (PNG) into DIR")
@@ -110,12 +115,17 @@ def run_sweep(args: argparse.Namespace) -> int:
 
     from .sweep import fit_static_coefficients, static_sweep, taylor_coefficients
 
-    if args.model == "fullwave":
-        model = _fullwave_model(args, theta)
-        z_eq, size_note = model.z_eq, "full-wave surrogate"
-    else:
-        model = _gorkov_model(args)
-        z_eq, size_note = model.equilibrium_height, f"{model.n_tetrahedra} tetrahedra"
+    if args.render is not None and "render" not in force_model_type(args.model).capabilities:
+        raise UserInputError(f"--render draws the Gor'kov volume mesh; it does not apply to --model {args.model}")
+    model = static_model_from_args(args, conditions_from_args(
+        args, side_b_m=args.side_b, mesh_size_m=args.mesh_size,
+        quadrature_degree=args.quadrature_degree if args.quadrature_degree != 2 else None))
+    if np.any(np.abs(theta) > model.theta_max):
+        raise UserInputError(f"--theta {args.theta!r}: the {args.model} model covers |theta| <= {model.theta_max:g}")
+    z_eq = model.equilibrium_height
+    record = model.record()
+    size_note = (f"{record['n_tetrahedra']} tetrahedra" if "n_tetrahedra" in record
+                 else record.get("table_source", "full-wave table"))
     result = static_sweep(model, theta, y, progress=not args.quiet)
     result.to_csv(args.out)
     if not args.quiet:
@@ -140,46 +150,3 @@ def run_sweep(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"rendering -> {args.render}", file=sys.stderr)
     return 0
-
-
-def _fullwave_model(args: argparse.Namespace, theta: np.ndarray):
-    """The shipped full-wave surrogate at ``--pressure``; the dimer options must be the table's."""
-    from .fullwave import default_fullwave_surrogate
-
-    try:
-        sur = default_fullwave_surrogate(args.pressure)
-    except ValueError as exc:  # the field cannot levitate the dimer
-        raise UserInputError(str(exc)) from None
-    message = sur.mismatch({"side_length_m": args.side, "frequency_hz": args.frequency,
-                            "particle_density_kg_m3": args.density},
-                           names={"side_length_m": "--side", "frequency_hz": "--frequency",
-                                  "particle_density_kg_m3": "--density"})
-    if message is not None:
-        raise UserInputError(message)
-    for option, given in (("--side-b", args.side_b), ("--mesh-size", args.mesh_size), ("--render", args.render)):
-        if given is not None:
-            raise UserInputError(f"{option} applies to the Gor'kov model only, not to --model fullwave")
-    if np.any(np.abs(theta) > sur.theta_max):
-        raise UserInputError(f"--theta {args.theta!r}: the full-wave table covers |theta| <= {sur.theta_max:g}")
-    return sur
-
-
-def _gorkov_model(args: argparse.Namespace):
-    """The Gor'kov model of the options."""
-    from .dimer import CubeDimer
-    from .field import StandingWave
-    from .forces import GorkovDimer
-    from .medium import Medium, ParticleMaterial
-
-    material = ParticleMaterial(density_kg_m3=args.density)
-    dimer = CubeDimer(args.side, args.side_b, material)
-    wave = StandingWave(args.pressure, Medium(frequency_hz=args.frequency), material)
-    mesh_size = args.mesh_size if args.mesh_size is not None else 0.2 * min(dimer.sides)
-    if not 0.01 <= mesh_size / min(dimer.sides) <= 1.0:
-        raise UserInputError(f"--mesh-size {mesh_size:g} m must be between 0.01 and 1 times the cube side")
-    try:
-        model = GorkovDimer(dimer, wave, mesh_size=mesh_size, quadrature_degree=args.quadrature_degree)
-        model.equilibrium_height  # noqa: B018 (raises when the field cannot levitate the dimer)
-    except ValueError as exc:
-        raise UserInputError(str(exc)) from None
-    return model

@@ -176,7 +176,7 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
               f"paper's z-rule support: " + "; ".join(
                   f"{eq}: " + ", ".join(t for t, k in zip(TERMS, res.mask_zscore[q]) if k)
                   for q, eq in enumerate(("yddot", "thetaddot"))),
-              "", "### Baselines vs the two methods (truth: PHYSICS.md section 6 reduced model, 11 terms)", "",
+              "", "### Baselines vs the two methods (truth: docs/conventions.md section 6 reduced model, 11 terms)", "",
               "| method | missing true terms | spurious terms | median / max coefficient error on true terms | median shape error | median Poincare error | blown-up runs |",
               "|---|---|---|---|---|---|---|"]
     for name, m in models.items():

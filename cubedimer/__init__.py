@@ -3,7 +3,7 @@
 What more than one of the user-facing packages (``acousim``, ``fitting``, ``validation``) needs lives
 here, so that ``acousim`` and ``fitting`` never import each other:
 
-* :mod:`cubedimer.dataset` - the trajectory data-set format (FORMATS.md): loader, checks, gap filling
+* :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling
 * :mod:`cubedimer.meta` - the one validated reader of ``meta.json``
 * :mod:`cubedimer.terms` - term names and the cubic monomial library over [y, ydot, theta, thetadot]
 * :mod:`cubedimer.spectra`, :mod:`cubedimer.poincare`, :mod:`cubedimer.attractors` - signal analysis

@@ -1,4 +1,4 @@
-"""Loading trajectory data sets (FORMATS.md) with the bad-input rules, and short-gap filling.
+"""Loading trajectory data sets (docs/formats.md) with the bad-input rules, and short-gap filling.
 
 A data set is a directory of CSV files (header with at least ``t``, ``y``, ``theta``; ``#``
 comment lines; extra columns ignored) and an optional ``meta.json``.  Every rule violation
@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -41,15 +42,19 @@ class LoadConfig:
     max_missing_fraction : float
         Largest allowed fraction of missing frames per run.
     uniform_tol : float
-        Allowed relative deviation of any time step from the median step (FORMATS.md: 1 %).
+        Allowed relative deviation of any time step from the median step (docs/formats.md: 1 %).
     min_periods : float
         Minimum number of oscillation periods (of the dominant y frequency) a run must hold.
     glitches : GlitchConfig or None
         Isolated tracking glitches are found (:mod:`cubedimer.glitches`) and masked like missing
         frames; None keeps every frame.
     consistency : ConsistencyConfig or None
-        Runs that do not fit the rest of the set or meta.json (:mod:`cubedimer.consistency`) are
-        reported and skipped; None loads every readable run.
+        Runs that do not fit the rest of the set or the physics of levitation (:mod:`cubedimer.consistency`;
+        meta.json's constants or their defaults) are reported and skipped; None loads every readable run.
+    trap_frequency : callable or None
+        ``trap_frequency(meta) -> Hz``, a physics estimate of the vertical trap frequency at meta.json's
+        nominal pressure (e.g. :func:`acousim.analytic.nominal_trap_frequency`), checked when the data set
+        has a meta.json; None keeps the physics-free bound of 5-200 Hz only.
     """
 
     max_gap: int = 10
@@ -58,6 +63,7 @@ class LoadConfig:
     min_periods: float = 5.0
     glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
     consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
+    trap_frequency: Callable[[dict], float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +123,7 @@ class Dataset:
         return sum(r.n_glitches for r in self.runs)
 
     def skipped_files(self) -> list[dict[str, str]]:
-        """``[{"file": name, "reason": one line}, ...]`` (the ``skipped_files`` of FORMATS.md)."""
+        """``[{"file": name, "reason": one line}, ...]`` (the ``skipped_files`` of docs/formats.md)."""
         return [{"file": s.file, "reason": s.reason} for s in self.skipped]
 
 
@@ -173,10 +179,129 @@ def _echo(text: str) -> str:
     return repr(_cut(text))
 
 
-def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
-    """Read one CSV run, check it against FORMATS.md, fill short gaps.
+#: Column names a run must have (any order; ``frame`` may stand in for ``t``, see :func:`load_run`).
+REQUIRED_COLUMNS = ("t", "y", "theta")
 
-    The file is read as UTF-8 with or without a byte-order mark (spreadsheet programs write one).
+#: Unit labels read after a column name (``t [ms]``, ``y (um)``) and their factors to SI units.
+UNIT_FACTORS: dict[str, dict[str, float]] = {
+    "t": {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6},
+    "y": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6, "micron": 1e-6,
+          "microns": 1e-6, "nm": 1e-9},
+    "theta": {"-": 1.0, "1": 1.0, "": 1.0, "dimensionless": 1.0},
+    "frame": {"-": 1.0, "1": 1.0, "": 1.0, "frame": 1.0, "frames": 1.0, "#": 1.0},
+}
+
+#: Labels refused for a column, with the conversion to use (the label alone does not say what was measured).
+REFUSED_UNITS: dict[str, tuple[tuple[str, ...], str]] = {
+    "theta": (("deg", "degree", "degrees", "\u00b0", "rad", "radian", "radians"),
+              "theta is the dimensionless (alpha - beta)/pi: if the column holds alpha - beta in degrees divide "
+              "it by 180 (in radians: by pi), if it holds each cube's turn phi in degrees divide it by 45, and "
+              "label it 'theta [-]'"),
+    "y": (("px", "pixel", "pixels"),
+          "multiply y by the pixel size in metres (object plane) and label it 'y [m]'"),
+    "t": (("frame", "frames", "fps"),
+          "name the column 'frame' and give frame_rate_hz in meta.json, or divide by the frame rate"),
+}
+
+#: Column names labs use for the required quantities, with the name to use (a hint in the message only).
+COLUMN_HINTS = {"time": "t", "times": "t", "time_s": "t", "angle": "theta", "bend": "theta", "bending": "theta",
+                "alpha": "theta", "phi": "theta", "z": "y", "height": "y", "position": "y", "frames": "frame",
+                "frame_number": "frame"}
+
+_HEADER_CELL = re.compile(r"^\s*([^\[\(]*?)\s*(?:[\[\(]\s*(.*?)\s*[\]\)])?\s*$")
+
+
+def _separator(header: str) -> str:
+    """The field separator of a file, from its header: tab, ``;`` or ``,`` (docs/formats.md)."""
+    if "\t" in header:
+        return "\t"
+    if ";" in header:
+        return ";"
+    return ","
+
+
+def _parse_header(path: Path, header_line: int, header_text: str, sep: str) -> tuple[list[str], list[str | None]]:
+    """Column names (lower case, quotes stripped) and unit labels (None without a label) of a header row."""
+    names, units = [], []
+    for cell in header_text.split(sep):
+        cell = cell.strip().strip('"').strip("'").strip()
+        m = _HEADER_CELL.match(cell)
+        name, unit = (m.group(1), m.group(2)) if m else (cell, None)
+        names.append(name.strip().lower())
+        units.append(None if unit is None else unit.strip().lower())
+    return names, units
+
+
+def _unit_factor(path: Path, column: str, unit: str | None) -> float:
+    """The factor that takes a column with the unit label ``unit`` to SI (1 without a label).
+
+    Raises DatasetError for a label refused with its conversion or one this loader does not know."""
+    if unit is None:
+        return 1.0
+    refused, what_to_do = REFUSED_UNITS.get(column, ((), ""))
+    if unit in refused:
+        raise DatasetError(f"{path}: column '{column} [{unit}]': {what_to_do} (docs/conventions.md)")
+    table = UNIT_FACTORS[column]
+    if unit not in table:
+        known = ", ".join(k for k in table if k and not k.isdigit() and k not in ("-", "#"))
+        raise DatasetError(f"{path}: unknown unit label '{column} [{unit}]'; labels read for {column}: "
+                           f"{known or '-'} (docs/formats.md)")
+    return table[unit]
+
+
+def _missing_columns_message(path: Path, header_line: int, header_text: str, missing: list[str],
+                             names: list[str], frame_rate_hz: float | None) -> str:
+    hints = [f"'{n}' -> '{COLUMN_HINTS[n]}'" for n in names if n in COLUMN_HINTS and COLUMN_HINTS[n] in missing]
+    frame_note = ("; 'frame' (integer frame numbers) replaces t when meta.json gives frame_rate_hz"
+                  if "t" in missing else "")
+    if "t" in missing and "frame" in names and frame_rate_hz is None:
+        return (f"{path}: column 'frame' needs frame_rate_hz in meta.json (frames per second) to give the times; "
+                f"or write a column t in seconds (docs/formats.md)")
+    return (f"{path}: missing column{'s' if len(missing) > 1 else ''} {', '.join(repr(c) for c in missing)} "
+            f"(header on line {header_line}: {_echo(header_text)}); accepted names: t [s], y [m], theta [-], with "
+            f"an optional unit label such as 't [ms]'{frame_note}"
+            + (f"; rename {', '.join(hints)} if they hold those quantities" if hints else "")
+            + " (docs/formats.md)")
+
+
+def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
+                      ) -> tuple[NDArray, list[NDArray], list[int | None], int]:
+    """Insert missing rows where a time step is an integer multiple (2 or more) of the median frame interval
+    within ``tol`` of it: the rows of lost frames that a tracker left out.  Their values are missing
+    (NaN; filled later like any missing frame) and their times lie on the uniform grid."""
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    n = np.rint(dt / med)
+    lost = (n >= 2) & (np.abs(dt - n * med) <= tol * med)
+    if not lost.any():
+        return t, cols, line_no, 0
+    steps = np.where(lost, n, 1).astype(np.int64)
+    index = np.r_[0, np.cumsum(steps)]
+    size = int(index[-1]) + 1
+    grid = np.arange(size, dtype=float)
+    t_full = np.interp(grid, index, t)
+    out = []
+    for c in cols:
+        full = np.full(size, np.nan)
+        full[index] = c
+        out.append(full)
+    lines: list[int | None] = [None] * size
+    for i, k in zip(index, line_no):
+        lines[int(i)] = k
+    return t_full, out, lines, size - t.size
+
+
+def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None) -> Run:
+    """Read one CSV run, check it against the data-set format (docs/formats.md), fill short gaps.
+
+    What labs write is read: the file as UTF-8 with or without a byte-order mark, CRLF line endings, ``,``
+    ``;`` or tab separators (taken from the header row), a decimal comma when the separator is ``;`` or a
+    tab, unit labels after column names (``t [ms]``, ``y (um)``: converted to SI; labels that leave the
+    quantity open, such as ``theta [deg]`` or ``y [px]``, are refused with the conversion to use), a
+    ``frame`` column of integer frame numbers in place of ``t`` when ``frame_rate_hz`` is given (meta.json),
+    and omitted rows of lost frames (a time step that is an integer multiple of the frame interval: the
+    frames in between are missing and filled as such).
+
     Line numbers in messages are those of the file (comments and blank lines counted), and file
     content quoted in a message is cut to :data:`ECHO_LIMIT` characters.
 
@@ -195,20 +320,28 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
     if not lines:
         raise DatasetError(f"{path}: empty file (no header row)")
     header_line, header_text = lines[0]
-    header = [h.strip().lower() for h in header_text.split(",")]
-    for col in ("t", "y", "theta"):
-        if col not in header:
-            raise DatasetError(f"{path}: missing column {col!r} (header on line {header_line}: "
-                               f"{_echo(','.join(header))})")
-    idx = [header.index(c) for c in ("t", "y", "theta")]
+    sep = _separator(header_text)
+    decimal_comma = sep != ","
+    header, units = _parse_header(path, header_line, header_text, sep)
+    time_col = "t" if "t" in header else ("frame" if "frame" in header and frame_rate_hz else None)
+    missing = [c for c in REQUIRED_COLUMNS if c not in header and not (c == "t" and time_col == "frame")]
+    if missing:
+        raise DatasetError(_missing_columns_message(path, header_line, header_text, missing, header, frame_rate_hz))
+    used = [time_col, "y", "theta"]
+    idx = [header.index(c) for c in used]
+    factors = [_unit_factor(path, c, units[i]) for c, i in zip(used, idx)]
     rows, line_no = [], []
     for k, ln in lines[1:]:
-        parts = ln.split(",")
+        parts = ln.split(sep)
         if len(parts) < len(header):
-            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}")
+            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}"
+                               + ("; with a decimal comma the separator must be ';' or a tab" if sep == "," and
+                                  len(parts) > len(header) else ""))
         vals = []
         for i in idx:
-            s = parts[i].strip()
+            s = parts[i].strip().strip('"')
+            if decimal_comma:
+                s = s.replace(",", ".")
             try:
                 vals.append(float(s) if s else np.nan)
             except ValueError:
@@ -217,26 +350,39 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig()) -> Run:
         line_no.append(k)
     if len(rows) < 16:
         raise DatasetError(f"{path}: only {len(rows)} data rows; too short to hold {config.min_periods:g} oscillation periods")
-    a = np.asarray(rows, dtype=float)
+    a = np.asarray(rows, dtype=float) * np.asarray(factors)
     t, y, th = a[:, 0], a[:, 1], a[:, 2]
     if not np.all(np.isfinite(t)):
         k = int(np.flatnonzero(~np.isfinite(t))[0])
-        raise DatasetError(f"{path}: missing or non-finite time value on line {line_no[k]}")
+        raise DatasetError(f"{path}: missing or non-finite {time_col} value on line {line_no[k]}")
+    if time_col == "frame":
+        if np.any(np.abs(t - np.rint(t)) > 1e-6):
+            k = int(np.flatnonzero(np.abs(t - np.rint(t)) > 1e-6)[0])
+            raise DatasetError(f"{path}: frame numbers must be whole numbers ({_echo(str(t[k]))} on line {line_no[k]})")
+        t = np.rint(t) / float(frame_rate_hz)
     dt = np.diff(t)
     if np.any(dt <= 0):
         k = int(np.flatnonzero(dt <= 0)[0])
         raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (line {line_no[k + 1]})")
+    t, (y, th), line_no, n_lost = _fill_lost_frames(path, t, [y, th], line_no, config.uniform_tol)
+    if n_lost:
+        logger.info("%s: %d omitted frame(s) taken as missing", name, n_lost)
+    dt = np.diff(t)
     med = float(np.median(dt))
     dev = float(np.max(np.abs(dt - med)) / med)
     if dev > config.uniform_tol:
         k = int(np.argmax(np.abs(dt - med)))
         raise DatasetError(f"{path}: time is not uniformly sampled (step deviates {dev:.1%} from the median "
-                           f"{med:.4g} s on line {line_no[k + 1]}; allowed {config.uniform_tol:.0%})")
+                           f"{med:.4g} s on line {line_no[k + 1]}; allowed {config.uniform_tol:.0%}); write every "
+                           f"frame at its time, with empty y and theta where it was lost, or leave its row out "
+                           f"(docs/formats.md)")
     fin = np.isfinite(th)
     if fin.any() and np.any(np.abs(th[fin]) >= 1.0):
         k = int(np.flatnonzero(fin & (np.abs(np.where(fin, th, 0.0)) >= 1.0))[0])
-        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {np.max(np.abs(th[fin])):.4g}; "
-                           f"first on line {line_no[k]})")
+        worst = float(np.max(np.abs(th[fin])))
+        hint = ("; if it holds alpha - beta in degrees divide by 180 (docs/conventions.md)" if worst <= 180 else "")
+        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {worst:.4g}; first on line {line_no[k]}); "
+                           f"theta is the dimensionless (alpha - beta)/pi{hint}")
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
@@ -299,33 +445,49 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     meta = read_meta(p)
     report = report or _log_skip
     runs, skipped = [], []
+    # the skipped files are reported once the set is known to hold good runs: a set refused as a whole is
+    # one line (its error), not one line per file before it
+    pending: list[str] = []
 
     def skip(file: str, reason: str) -> None:
         if strict:
             raise DatasetError(f"{p / file}: {reason}")
         skipped.append(SkippedFile(file, reason))
-        report(f"{p / file}: {reason}")
+        pending.append(f"{p / file}: {reason}")
 
+    codes: dict[str, str] = {}
     for f in files:
         try:
-            runs.append(load_run(f, config))
+            runs.append(load_run(f, config, frame_rate_hz=meta.get("frame_rate_hz")))
         except DatasetError as exc:
             if strict:
                 raise
             prefix = f"{f}: "
             msg = str(exc)
             skipped.append(SkippedFile(f.name, msg[len(prefix):] if msg.startswith(prefix) else msg))
-            report(msg)
+            pending.append(msg)
     if config.consistency is not None and runs:
         features = [run_features(r.name, r.t, r.y) for r in runs]
-        # meta.json's constants are checked only when the data set has one (defaults prove nothing)
-        bad = {x.file: x.reason for x in check_consistency(features, meta if meta else None, config.consistency)}
+        # the physics bounds hold with or without meta.json (defaults stand in); the estimate of the trap
+        # frequency at the nominal pressure only when the data set states its constants
+        found = check_consistency(features, meta, config.consistency,
+                                  trap_frequency=config.trap_frequency if meta else None)
+        bad = {x.file: x.reason for x in found}
+        codes = {x.file: x.code for x in found}
         for r in runs:
             if r.name in bad:
                 skip(r.name, bad[r.name])
         runs = [r for r in runs if r.name not in bad]
     if not runs:
-        raise DatasetError(f"{p}: no usable runs ({len(skipped)} bad files)")
+        skipped.sort(key=lambda s: s.file)
+        first = skipped[0]
+        same = len(skipped) > 1 and (all(s.reason == first.reason for s in skipped) or (
+            first.file in codes and all(codes.get(s.file) == codes[first.file] for s in skipped)))
+        whole = ((f"every file fails the same check, e.g. {first.file}: {first.reason}") if same else
+                 f"{len(skipped)} bad file{'s' if len(skipped) > 1 else ''}, e.g. {first.file}: {first.reason}")
+        raise DatasetError(f"{p}: no usable runs: {whole}")
+    for message in pending:
+        report(message)
     skipped.sort(key=lambda s: s.file)
     return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped))
 
@@ -340,7 +502,7 @@ def _csv_number(v: float, spec: str, missing: str) -> str:
 
 def format_run_csv(t: NDArray, y: NDArray, theta: NDArray, comments: tuple[str, ...] | list[str] = (),
                    t_decimals: int = 9, y_digits: int = 10, theta_decimals: int = 10, missing: str = "nan") -> str:
-    """The text of one run's CSV (FORMATS.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
+    """The text of one run's CSV (docs/formats.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
 
     Parameters
     ----------

@@ -1,9 +1,11 @@
-"""The experiment's constants: one validated reader of a data set's ``meta.json`` (FORMATS.md).
+"""The experiment's constants: one validated reader of a data set's ``meta.json`` (docs/formats.md).
 
-Every key is optional; missing keys take the defaults of PHYSICS.md section 1.  A key that is
-present must be a real number (not a boolean, not a string), finite, and inside a physically
+Every key is optional; missing physical constants take the defaults of docs/conventions.md.  A key that
+is present must be a real number (not a boolean, not a string), finite, and inside a physically
 plausible range; otherwise :class:`~cubedimer.dataset.DatasetError` is raised with a one-line message
-naming the file, the key and what to do.  Keys this suite does not know are passed through.
+naming the file, the key and what to do.  Keys this suite does not know are passed through, with a
+warning on the ``cubedimer.meta`` logger that names them and the known keys (a misspelt key would
+otherwise be ignored without a word).
 """
 from __future__ import annotations
 
@@ -13,11 +15,16 @@ import os
 from pathlib import Path
 from typing import Any
 
+import logging
+
 from .dataset import DatasetError
 
-__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "read_meta", "validate_meta", "check_meta_value"]
+__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "META_TEXT_KEYS", "read_meta", "validate_meta",
+           "check_meta_value"]
 
-#: Defaults (PHYSICS.md section 1) of the keys of FORMATS.md, SI units.
+logger = logging.getLogger(__name__)
+
+#: Defaults (docs/conventions.md section 1) of the keys of docs/formats.md, SI units.
 META_DEFAULTS: dict[str, float] = {
     "side_length_m": 500e-6,
     "particle_density_kg_m3": 2160.0,
@@ -30,6 +37,13 @@ META_DEFAULTS: dict[str, float] = {
 
 META_KEYS: tuple[str, ...] = tuple(META_DEFAULTS)
 
+#: Keys that describe the recording rather than the physics (no default): ``frame_rate_hz`` turns a
+#: ``frame`` column into times.
+META_RECORDING_KEYS: tuple[str, ...] = ("frame_rate_hz",)
+
+#: Free-text keys a data set may carry for people (any JSON value; not read).
+META_TEXT_KEYS: tuple[str, ...] = ("source", "comment", "notes", "description")
+
 #: Open ranges a value must lie in (a generous envelope around acoustic levitation in air or water).
 META_RANGES: dict[str, tuple[float, float]] = {
     "side_length_m": (1e-7, 1e-2),
@@ -39,6 +53,7 @@ META_RANGES: dict[str, tuple[float, float]] = {
     "sound_speed_m_s": (10.0, 1e5),
     "air_density_kg_m3": (1e-3, 1e5),
     "pressure_amplitude_pa": (1e-3, 1e7),
+    "frame_rate_hz": (1e-3, 1e9),
 }
 
 
@@ -77,6 +92,10 @@ def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     for key in META_RANGES:
         if key in meta:
             out[key] = check_meta_value(key, meta[key], source)
+    unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS]
+    if unknown:
+        logger.warning("%s: unknown key(s) %s ignored; the known keys are %s (docs/formats.md)", source,
+                       ", ".join(repr(k) for k in unknown), ", ".join(META_RANGES))
     return out
 
 

@@ -1,4 +1,4 @@
-"""Poincare section y = 0 crossed downwards (ydot < 0) and the Poincare map (PHYSICS.md section 6).
+"""Poincare section y = 0 crossed downwards (ydot < 0) and the Poincare map (docs/conventions.md section 6).
 
 Crossing times are found by linear interpolation of y between the two frames that bracket the
 sign change (y[k] > 0 >= y[k+1]); near y = 0 the curvature of y is small (yddot ~ -omega^2 y),

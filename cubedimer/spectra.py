@@ -12,7 +12,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["amplitude_spectrum", "dominant_frequency", "phase_difference", "SpectralFeatures",
+__all__ = ["amplitude_spectrum", "dominant_frequency", "peak_frequency", "phase_difference", "SpectralFeatures",
            "spectral_features"]
 
 
@@ -90,6 +90,28 @@ def dominant_frequency(x: NDArray, dt: float, fmin: float = 0.0, *, prefer_above
             if a[k] >= prefer_above * a[j]:
                 return _peak(f, np.where(above, a, 0.0), fmin, refine)
     return _peak(f, a, 0.0, refine)
+
+
+def peak_frequency(x: NDArray, dt: float, fmin: float = 0.0, pad: int = 16) -> tuple[float, float]:
+    """The frequency [Hz] of the largest spectral peak of ``x`` (sampled every ``dt`` [s]) at or above ``fmin``,
+    read from the Hann-windowed spectrum zero-padded to ``pad`` times the length (bins of 1/(pad T)) and
+    refined by parabolic interpolation, with the record's resolution 1/T [Hz].
+
+    Zero-padding interpolates the spectrum between the record's own bins, so the peak is not pinned to a bin
+    centre (a 1.5 s record has bins 0.67 Hz apart); it does not make two peaks closer than about 2/T (the
+    Hann main lobe) separable, which is why the resolution is returned beside it.  (0, resolution) for a
+    constant signal.
+    """
+    x = np.asarray(x, float)
+    x = x - x.mean()
+    n = x.size
+    duration = n * dt
+    w, wsum = _hann(n)
+    m = int(pad) * n
+    a = 2.0 * np.abs(np.fft.rfft(x * w, m)) / wsum
+    f = np.fft.rfftfreq(m, dt)
+    # above the main lobe of the zero-frequency (mean-removed) leakage: 1/T
+    return _peak(f, a, max(fmin, 1.0 / duration)), 1.0 / duration
 
 
 def phase_difference(y: NDArray, theta: NDArray, dt: float, f: float | None = None) -> float:

@@ -1,6 +1,6 @@
-"""The cubic polynomial library over the state [y, ydot, theta, thetadot] (PHYSICS.md section 6).
+"""The cubic polynomial library over the state [y, ydot, theta, thetadot] (docs/conventions.md section 6).
 
-Term names follow FORMATS.md: factors in state order, joined by ``*``, powers as ``^n`` for
+Term names follow docs/formats.md: factors in state order, joined by ``*``, powers as ``^n`` for
 n >= 2, the constant as ``1``.  There are 35 monomials of degree <= 3 in four variables.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
 * ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
-  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (FORMATS.md), per-run caches in ``OUT_DIR/runs/``
+  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
@@ -157,18 +157,19 @@ def _add_plan(sub) -> None:
                    help="range of initial y amplitudes [m] (default 60e-6 150e-6)")
     p.add_argument("--theta-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
                    help="range of initial theta amplitudes [-] (default 0.08 0.4)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the reference runs")
     p.set_defaults(func=_cmd_plan)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers")
+    p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers. Data "
+                      "format: docs/formats.md; what y and theta are: docs/conventions.md.")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     f = sub.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
-    f.add_argument("data_dir")
+    f.add_argument("data_dir", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an optional meta.json (docs/formats.md)")
     f.add_argument("--out", required=True, help="output directory (model.json, plots, runs/ cache)")
     f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
-    f.add_argument("--no-plots", action="store_true")
+    f.add_argument("--no-plots", action="store_true", help="write model.json only, no PNG plots")
     f.add_argument("--quiet", action="store_true", help="no progress bar")
     f.add_argument("--method", choices=("discovery", "paper"), default="discovery",
                    help="'discovery' (default: integral-form discovery with model-based states, polished by the "
@@ -193,22 +194,22 @@ def build_parser() -> argparse.ArgumentParser:
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
     c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
-    c.add_argument("data_dir")
+    c.add_argument("data_dir", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an optional meta.json (docs/formats.md)")
     c.add_argument("--model", required=True, help="model.json written by `fit`")
-    c.add_argument("--out", required=True)
+    c.add_argument("--out", required=True, help="output directory (compare.json and plots)")
     c.add_argument("--drop", nargs="*", default=None, help="terms to drop, as eq:term (default: cross-coupling terms)")
     c.add_argument("--no-reoptimise", action="store_true", help="compare the variant without re-optimising it")
-    c.add_argument("--strict", action="store_true")
-    c.add_argument("--no-plots", action="store_true")
+    c.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
+    c.add_argument("--no-plots", action="store_true", help="write compare.json only, no PNG plots")
     c.set_defaults(func=_cmd_compare)
     s = sub.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
-    s.add_argument("out_dir")
-    s.add_argument("--runs", type=positive_int, default=15)
-    s.add_argument("--duration", type=positive_float, default=3.0, help="[s]")
-    s.add_argument("--fps", type=positive_float, default=1500.0)
-    s.add_argument("--noise-y", type=float, default=1e-6, help="[m]")
-    s.add_argument("--noise-theta", type=float, default=0.005)
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("out_dir", help="directory to write the run CSVs, meta.json and truth.json into")
+    s.add_argument("--runs", type=positive_int, default=15, help="number of runs")
+    s.add_argument("--duration", type=positive_float, default=3.0, help="length of each run [s]")
+    s.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
+    s.add_argument("--noise-y", type=float, default=1e-6, help="tracking noise of y [m] (standard deviation)")
+    s.add_argument("--noise-theta", type=float, default=0.005, help="tracking noise of theta [-] (standard deviation)")
+    s.add_argument("--seed", type=int, default=0, help="seed of the initial conditions and the noise")
     s.set_defaults(func=_cmd_synth)
     _add_plan(sub)
     return p

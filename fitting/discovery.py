@@ -123,6 +123,9 @@ class DiscoveryConfig:
     velocity_price : float or None
         Residual variances by which a velocity term must lower the residual sum of squares to replace a
         velocity-free term in a swap (None: z_alpha^2 at ``alpha``).
+    excluded : tuple of str
+        Library terms (``"EQUATION:TERM"``) the selection may not use (damping terms stay forced); the default
+        fit excludes the terms it found unresolvable from their aliases (:func:`fitting.discovery_fit.resolved_discovery`).
     """
 
     alpha: float = 0.01
@@ -140,6 +143,7 @@ class DiscoveryConfig:
     raw_positions: bool = True
     stepwise: bool = True
     velocity_price: float | None = None
+    excluded: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -153,6 +157,10 @@ class DiscoveryConfig:
             raise ValueError("max_iterations must be >= 0, n_folds >= 2 and selection_passes >= 1")
         if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
             raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
+        for spec in self.excluded:
+            eq, _, term = spec.partition(":")
+            if eq not in EQUATION_NAMES or term not in TERMS:
+                raise ValueError(f"excluded terms are EQUATION:TERM of the library, got {spec!r}")
 
 
 @dataclass(frozen=True)
@@ -311,6 +319,10 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], dts)]) for q in range(2)])
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
+    excluded = np.zeros((2, len(TERMS)), bool)
+    for spec in config.excluded:
+        eq, _, term = spec.partition(":")
+        excluded[EQUATION_NAMES.index(eq), TERMS.index(term)] = not forced[EQUATION_NAMES.index(eq), TERMS.index(term)]
     positions = (ys, ths)
 
     caches: list[dict] = [{}, {}]
@@ -322,7 +334,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
         for q in range(2):
             sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise,
-                                        config.velocity_price)
+                                        config.velocity_price, excluded[q] if excluded.any() else None)
             held_a = [float("nan")] * len(path)
             if config.heldout_prune:
                 sel, path_b, held_b = prune_heldout(designs[q], sel, forced[q], config.alpha, config.velocity_first,

@@ -205,7 +205,7 @@ def fit_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray], 
 
 
 def _is_velocity_term(name: str) -> bool:
-    """A library term with a velocity factor (FORMATS.md names); other names: contains "dot"."""
+    """A library term with a velocity factor (docs/formats.md names); other names: contains "dot"."""
     from cubedimer.terms import is_velocity_free
 
     try:

@@ -129,7 +129,7 @@ class PolynomialModel:
                 for q, eq in enumerate(EQUATION_NAMES)}
 
     def to_json(self) -> dict:
-        """The FORMATS.md model fragment: ``{"state": [...], "equations": {...}, "units": "SI"}``."""
+        """The docs/formats.md model fragment: ``{"state": [...], "equations": {...}, "units": "SI"}``."""
         return {"state": list(STATE_NAMES), "equations": self.equations(), "units": "SI"}
 
     @classmethod

@@ -441,7 +441,7 @@ def _fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics, run
 
 
 def model_json(res: FitResult) -> dict:
-    """The FORMATS.md ``model.json`` content (plus extra keys)."""
+    """The docs/formats.md ``model.json`` content (plus extra keys)."""
     eq_mask = {eq: [t for t, m in zip(TERMS, res.mask[q]) if m] for q, eq in enumerate(EQUATION_NAMES)}
     per_run = []
     for p, f, lt in zip(res.runs, res.run_fits, res.joint.per_run_end):

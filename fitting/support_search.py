@@ -172,20 +172,24 @@ def _eliminate(d: ReducedDesign, cols: Sequence[int], forced: NDArray[np.bool_],
 
 
 def select_support(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,
-                   stepwise: bool = True, velocity_price: float | None = None) -> tuple[list[int], list[list[int]]]:
-    """Backward elimination from the full library until Holm's rule declares every free term significant, then
-    stepwise additions and swaps (:func:`_stepwise`); returns the selection and the elimination path."""
+                   stepwise: bool = True, velocity_price: float | None = None,
+                   excluded: NDArray[np.bool_] | None = None) -> tuple[list[int], list[list[int]]]:
+    """Backward elimination from the full library (without the ``excluded`` columns) until Holm's rule declares
+    every free term significant, then stepwise additions and swaps (:func:`_stepwise`); returns the selection and
+    the elimination path.  Holm's rule keeps the whole library as its family (excluding a column never makes the
+    others easier to select)."""
     n_lib = d.total.shape[1] - 1
     n_hyp = int(n_lib - forced.sum())
     path: list[list[int]] = []
     cols: list[int] = []
-    for keep, absz in _eliminate(d, range(n_lib), forced, alpha, velocity_first):
+    start = [j for j in range(n_lib) if excluded is None or not excluded[j]]
+    for keep, absz in _eliminate(d, start, forced, alpha, velocity_first):
         path.append(keep)
         cols = keep
         if _holm_ok(absz, ~forced[keep], alpha, n_hyp):
             break
     if stepwise:
-        cols = _stepwise(d, cols, forced, alpha, n_hyp, velocity_price)
+        cols = _stepwise(d, cols, forced, alpha, n_hyp, velocity_price, excluded)
     return cols, path
 
 
@@ -204,7 +208,7 @@ def prune_heldout(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], 
 
 
 def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alpha: float, n_hyp: int,
-              velocity_price: float | None = None) -> list[int]:
+              velocity_price: float | None = None, excluded: NDArray[np.bool_] | None = None) -> list[int]:
     """Improve a support found by backward elimination.
 
     Moves, in this order of preference: add the most significant outside term if every term stays
@@ -276,7 +280,7 @@ def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alph
         return [t for _, t in sorted(out)]
 
     for _ in range(4 * n_lib):
-        outside = [j for j in range(n_lib) if j not in cols]
+        outside = [j for j in range(n_lib) if j not in cols and (excluded is None or not excluded[j])]
         free = [i for i in cols if not forced[i]]
         base = _rss(d, cols)
         s2 = base / max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)

@@ -1,7 +1,7 @@
 """Synthetic trajectory data sets from a known polynomial model (for recovery tests and benchmarks).
 
 Independent of ``acousim``: the generating model is any :class:`~fitting.model.PolynomialModel`,
-by default :func:`paper_reduced_model` (PHYSICS.md section 6) with realistic scales.
+by default :func:`paper_reduced_model` (docs/conventions.md section 6) with realistic scales.
 """
 from __future__ import annotations
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acousim.models_cli import add_model_arguments
 from cubedimer.cli import (OneLineParser, UserInputError, add_executor_arguments, check_limit, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 
@@ -129,25 +130,26 @@ def _add_diagnose(sub) -> None:
             "Calibrate the simulation (Gor'kov or full-wave; pressure amplitude and y origin) to a data set, measure the gap "
             "between simulated and measured accelerations (and the long-time attractor, Poincare and frequency "
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
-            "effects of PHYSICS.md section 5 cause it, adding them greedily while a held-out improvement across runs "
-            "is significant (one-sided Wilcoxon). Writes diagnosis.json, figures and report.html into --out."
+            "effects of docs/conventions.md section 5 cause it, adding them greedily while their improvement of held-out runs "
+            "(each run held out once, K-fold over runs) is significant (one-sided sign-flip test over runs, --alpha). "
+            "Tests whether y points down (data_warnings). Data format and conventions: docs/formats.md, "
+            "docs/conventions.md. Writes diagnosis.json, figures and report.html into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
+                   "optional meta.json (docs/formats.md)")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--alpha", type=float, default=0.01,
-                   help="significance level of the held-out one-sided sign-flip test of each effect; with n runs "
+                   help="significance level of the one-sided sign-flip test over runs of each effect's improvement of "
+                        "held-out runs; with n runs "
                         "its smallest p is 2^-n, so the default 0.01 needs at least 7 runs")
     p.add_argument("--min-improvement", type=float, default=0.05,
-                   help="smallest median held-out improvement counted, as a fraction of the current gap")
+                   help="smallest median improvement of held-out runs counted, as a fraction of the current gap")
     p.add_argument("--candidates", default=",".join(_candidate_names()),
                    help="comma-separated candidate effects")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
-    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
-                   help="the simulation model to calibrate: the Gor'kov volume integral, or the full-wave "
-                   "(boundary-element) table of the default 500 um dimer (docs/fullwave.md; the data's |theta| must "
-                   "stay within 0.9)")
+    add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
@@ -181,7 +183,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
         diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
-                                                model=args.model)
+                                                model=args.model, gap=args.gap, edge_radius=args.edge_radius)
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, internals, args.out)
@@ -257,7 +259,8 @@ def _add_report(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("data", metavar="DATA_DIR", help="data set directory (CSV runs + optional meta.json)")
+    p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
+                   "optional meta.json (docs/formats.md)")
     p.add_argument("--out", required=True, help="report directory")
     p.add_argument("--max-evals", type=positive_int, default=None,
                    help="evaluations of every long-time refinement: the fit's, and the re-optimisation of the "
@@ -268,12 +271,11 @@ def _add_report(sub) -> None:
                         "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
                         "see python -m fitting fit --help")
     p.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
-                   help="discovery only: keep the smallest support whose held-out error is within FRACTION of the best "
+                   help="discovery only: keep the smallest support whose held-out error (5-fold over runs) is within "
+                        "FRACTION of the best "
                         "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
                         "see python -m fitting fit --help")
-    p.add_argument("--model", choices=("gorkov", "fullwave"), default="gorkov",
-                   help="the simulation model the diagnosis (section 6) calibrates; the report puts the other one "
-                   "beside it (sections 4, 5 and 7) whenever the full-wave table of the default 500 um dimer applies")
+    add_model_arguments(p)
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
                            "and figures run in this process.")
@@ -281,7 +283,9 @@ def _add_report(sub) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
+    from acousim.fullwave.family import FamilyRangeError, FamilyTableError
     from acousim.fullwave.statics import TableMismatch
+    from acousim.models import ConditionError
     from cubedimer.dataset import DatasetError
 
     from .report.pipeline import build_report
@@ -297,15 +301,17 @@ def run_report(args: argparse.Namespace) -> int:
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
                      max_evals=args.max_evals, method=args.method, model=args.model,
-                     heldout_tolerance=args.heldout_tolerance)
-    except (DatasetError, TableMismatch) as exc:
+                     heldout_tolerance=args.heldout_tolerance, gap=args.gap, edge_radius=args.edge_radius)
+    except (DatasetError, TableMismatch, ConditionError, FamilyRangeError, FamilyTableError) as exc:
         raise UserInputError(str(exc)) from None
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="python -m validation",
-                           description="Bridge between fitted models and the Gor'kov simulation: coefficient comparison.")
+                           description="Bridge between fitted models and the simulation: coefficient comparison, sim-to-real gap "
+                                       "diagnosis, its blind check and the HTML report. Conventions: "
+                                       "docs/conventions.md; files: docs/formats.md.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     _add_compare(sub)
     _add_diagnose(sub)

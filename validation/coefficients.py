@@ -153,6 +153,9 @@ class TermComparison:
     #: which estimate ``signs_agree``, ``within_uncertainty`` and ``ratio`` use: "integral form" (the term is in
     #: the integral form's selected support), "ensemble" (ensemble mean and across-run std) or "none" (no verdict)
     verdict_from: str = "ensemble"
+    #: |estimate - simulated| in combined standard deviations (what ``within_uncertainty`` compares with n_sigma;
+    #: NaN without a verdict)
+    deviation_sigma: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -201,17 +204,21 @@ def compare_coefficients(
     origin_offset: float | str = "fitted-equilibrium",
     n_sigma: float = 2.0,
     static_box: dict | None = None,
+    origin_source: str = "user-given",
 ) -> CoefficientComparison:
     """Compare a fitted model (model.json contents) with static coefficients of a sweep.
 
     Parameters
     ----------
     model : dict
-        The fitted model per FORMATS.md (``equations``, ``zscores``, ``per_run``).
+        The fitted model per docs/formats.md (``equations``, ``zscores``, ``per_run``).
     static_coefficients, static_std : dict equation -> term -> value
         Static least-squares coefficients and their standard errors (SI, y from Z_eq).
     origin_offset : float or "fitted-equilibrium"
         delta [m] with ``y_sim = y_data + delta``; by default from the fitted yddot's root.
+    origin_source : str
+        Where a numeric ``origin_offset`` comes from, for the stated origin (``"user-given"`` on the command line,
+        ``"calibrated"`` when the diagnosis's calibration gives it).
     n_sigma : float
         Agreement criterion: |fitted - simulated| <= n_sigma x combined std.  For a term in the
         selected support of the pooled integral form (``model["integral_form"]``), fitted is that
@@ -226,7 +233,7 @@ def compare_coefficients(
                   "(simulated coefficients re-expanded about it)")
     else:
         delta = float(origin_offset)
-        origin = f"user-given origin offset: y_sim = y_data + delta, delta = {delta * 1e6:.2f} um"
+        origin = f"{origin_source} origin offset: y_sim = y_data + delta, delta = {delta * 1e6:.2f} um"
     stats = ensemble_statistics(model)
     integral = model.get("integral_form") or {}
     per_run_given = len(model.get("per_run") or []) >= 2
@@ -271,9 +278,10 @@ def compare_coefficients(
                 ratio = est / s if s != 0 else float("nan")
                 signs = None if (s == 0 or est == 0) else bool(np.sign(est) == np.sign(s))
                 within = bool(abs(est - s) <= n_sigma * comb_std) if comb_std > 0 else None
+                dev = float(abs(est - s) / comb_std) if comb_std > 0 else float("nan")
                 rows.append(TermComparison(eq, t, "static", t in model["equations"].get(eq, {}), fitted, st["mean"], st["std"],
                                            st["z"], s, s_std, ratio, signs, within, sens.get(t, 0.0) * 1e-6,
-                                           ig_val, ig_se, basis))
+                                           ig_val, ig_se, basis, dev))
             else:
                 rows.append(TermComparison(eq, t, "dynamic only: no static prediction", t in model["equations"].get(eq, {}),
                                            fitted, st["mean"], st["std"], st["z"], float("nan"), float("nan"), float("nan"),

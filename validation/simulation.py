@@ -1,26 +1,35 @@
-"""The simulation model of a data set, built from the data set's ``meta.json``.
+"""The simulation model of a data set, built from the data set's ``meta.json`` through the force-model registry.
 
-Two simulation models (FORMATS.md ``--model``): ``"gorkov"``, the Gor'kov volume integral of PHYSICS.md
-section 3 (:class:`acousim.GorkovDimer`), and ``"fullwave"``, the boundary-element table of the default dimer
-(PHYSICS.md section 7, :class:`acousim.fullwave.FullwaveDimer`).
+Every model of :mod:`acousim.models` can be the simulation (``--model``): ``"gorkov"``, the Gor'kov volume
+integral (docs/conventions.md, the acoustic model), and ``"fullwave"``, the boundary-element model of the dimer
+from the full-wave table family (docs/fullwave.md).
 
-Keys (all optional, FORMATS.md): side_length_m, particle_density_kg_m3, bulk_modulus_pa,
+Keys (all optional, docs/formats.md): side_length_m, particle_density_kg_m3, bulk_modulus_pa,
 frequency_hz, sound_speed_m_s, air_density_kg_m3, pressure_amplitude_pa (nominal).
 """
 from __future__ import annotations
 
-from acousim import CubeDimer, GorkovDimer, Medium, ParticleMaterial, StandingWave
+from acousim.models import ExperimentConditions, force_model_names, static_model
 from cubedimer.meta import META_DEFAULTS
 
-__all__ = ["model_from_meta", "SIMULATION_MODELS"]
+__all__ = ["model_from_meta", "simulation_models", "conditions_from_meta"]
 
-#: The simulation models a diagnosis or report can calibrate.
-SIMULATION_MODELS = ("gorkov", "fullwave")
+
+def simulation_models() -> tuple[str, ...]:
+    """The simulation models a diagnosis or report can calibrate (the registry's names)."""
+    return force_model_names()
+
+
+def conditions_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh_size: float | None = None,
+                         gap: float | None = None, edge_radius: float | None = None) -> ExperimentConditions:
+    """The experiment of ``meta`` (defaults for missing keys) with the given overrides (None: not set)."""
+    return ExperimentConditions.from_meta({**META_DEFAULTS, **meta}, pressure_amplitude_pa=pressure_amplitude_pa,
+                                          mesh_size_m=mesh_size, gap_m=gap, edge_radius_m=edge_radius)
 
 
 def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh_size: float | None = None,
-                    model: str = "gorkov"):
-    """The simulation model of the experiment described by ``meta`` (PHYSICS.md defaults for missing keys).
+                    model: str = "gorkov", gap: float | None = None, edge_radius: float | None = None):
+    """The static simulation model of the experiment described by ``meta``.
 
     Parameters
     ----------
@@ -29,40 +38,21 @@ def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh
     pressure_amplitude_pa : float, optional
         Overrides the nominal pressure [Pa] (e.g. a calibrated value).
     mesh_size : float, optional
-        Tetrahedron size of the Gor'kov model [m] (refused for the full-wave model).
-    model : {"gorkov", "fullwave"}
-        Which simulation model.
+        Tetrahedron size of the Gor'kov model [m] (refused by the full-wave model).
+    model : str
+        A registered model name (:func:`simulation_models`).
+    gap, edge_radius : float, optional
+        Hinge gap and edge radius [m] of the full-wave model (refused by the Gor'kov model).
 
     Returns
     -------
-    acousim.GorkovDimer or acousim.fullwave.FullwaveDimer
+    acousim.models.StaticModel
 
     Raises
     ------
     ValueError
-        Unknown model, or an experiment the full-wave table was not built for
-        (:class:`acousim.fullwave.statics.TableMismatch`, naming the setting).
+        Unknown model, an option the model does not take, or an experiment outside what the model covers
+        (one line, naming the setting).
     """
-    meta = {**META_DEFAULTS, **meta}
-    p0 = pressure_amplitude_pa if pressure_amplitude_pa is not None else meta["pressure_amplitude_pa"]
-    if model == "fullwave":
-        from acousim.fullwave.statics import default_fullwave_dimer
-
-        if mesh_size is not None:
-            raise ValueError("a mesh size applies to the Gor'kov model only, not to the full-wave table")
-        fw = default_fullwave_dimer(float(p0))
-        fw.check_experiment(meta)
-        return fw
-    if model != "gorkov":
-        raise ValueError(f"unknown simulation model {model!r}; choose one of {', '.join(SIMULATION_MODELS)}")
-    material = ParticleMaterial(
-        density_kg_m3=meta["particle_density_kg_m3"],
-        bulk_modulus_pa=meta["bulk_modulus_pa"],
-    )
-    medium = Medium(
-        frequency_hz=meta["frequency_hz"],
-        sound_speed_m_s=meta["sound_speed_m_s"],
-        density_kg_m3=meta["air_density_kg_m3"],
-    )
-    dimer = CubeDimer(meta["side_length_m"], material=material)
-    return GorkovDimer(dimer, StandingWave(p0, medium, material), mesh_size=mesh_size)
+    conditions = conditions_from_meta(meta, pressure_amplitude_pa, mesh_size, gap, edge_radius)
+    return static_model(model, conditions)

@@ -1,4 +1,4 @@
-"""Full-wave (boundary-element) scattering model of the cube dimer (PHYSICS.md section 7).
+"""Full-wave (boundary-element) scattering model of the cube dimer (docs/conventions.md section 7).
 
 * :func:`solve_scattering` (bempp-cl, Burton-Miller, P1) on any set of closed :class:`Body` surfaces, with
   :class:`HeightStructure` giving every force and torque as ``A + B cos(2kZ) + C sin(2kZ)``;

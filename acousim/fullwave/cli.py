@@ -1,4 +1,4 @@
-"""``python -m acousim force``: the full-wave radiation force and torque on every body of a surface mesh (FORMATS.md)."""
+"""``python -m acousim force``: the full-wave radiation force and torque on every body of a surface mesh (docs/formats.md)."""
 from __future__ import annotations
 
 import argparse
@@ -21,7 +21,7 @@ def add_parser(subparsers) -> None:
             "wave p0 sin(kZ) by every closed body (connected component) of a triangle surface mesh in any format "
             "trimesh reads (coordinates in metres), shifted up by --z above the pressure node. Writes JSON with "
             "each body's volume centroid [m], time-averaged radiation force [N] and torque about the centroid "
-            "[N m] (PHYSICS.md section 7), in the shifted mesh coordinates. Inviscid, free field, rigid and "
+            "[N m] (docs/conventions.md section 7), in the shifted mesh coordinates. Inviscid, free field, rigid and "
             "immobile bodies."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -54,7 +54,7 @@ def _load_mesh(path: str):
 
 
 def force_on_mesh(vertices, faces, z: float, pressure_amplitude_pa: float, medium, name: str = "mesh") -> dict:
-    """Force/torque JSON dict of FORMATS.md for a mesh [m] shifted up by ``z`` [m] (raises MeshError)."""
+    """Force/torque JSON dict of docs/formats.md for a mesh [m] shifted up by ``z`` [m] (raises MeshError)."""
     from .geometry import split_bodies
     from .solver import solve_scattering
 

@@ -1,6 +1,6 @@
 """Surface meshes for the full-wave model: the posed, gapped, graded cube dimer and arbitrary user meshes.
 
-Dimer (PHYSICS.md sections 2 and 7).  Each cube is meshed once in its body frame
+Dimer (docs/conventions.md sections 2 and 7).  Each cube is meshed once in its body frame
 ``(u, v, w) in [-s/2, s/2]^3`` with the hinge edge at ``u = -s/2, w = +s/2`` (parallel to v, the hinge
 line).  The faces are tensor-product grids of three one-dimensional node sets:
 

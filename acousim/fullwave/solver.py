@@ -1,4 +1,4 @@
-"""Sound-hard boundary-element scattering of the standing wave and the radiation force (PHYSICS.md section 7).
+"""Sound-hard boundary-element scattering of the standing wave and the radiation force (docs/conventions.md section 7).
 
 Method
 ------

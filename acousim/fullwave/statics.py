@@ -41,7 +41,7 @@ class TableMismatch(ValueError):
 
 @dataclass(frozen=True)
 class FullwaveInertia(SinusoidalInertia):
-    """Mass and hinge inertia of the full-wave table's dimer (hinge arm d + g/2; PHYSICS.md section 4).
+    """Mass and hinge inertia of the full-wave table's dimer (hinge arm d + g/2; docs/conventions.md section 4).
 
     Attributes
     ----------
@@ -70,6 +70,8 @@ class FullwaveDimer:
         The table at the nominal pressure of the experiment.
     """
 
+    #: registry name (:mod:`acousim.models`)
+    name = "fullwave"
     #: the forces need not derive from a potential: energy balances use the work along the path
     conservative = False
 
@@ -90,6 +92,10 @@ class FullwaveDimer:
     def settings(self) -> dict:
         """The table's settings (geometry, mesh, medium, pressure)."""
         return dict(self.surrogate.settings)
+
+    def record(self) -> dict:
+        """The table's settings (geometry, mesh or family, medium, pressure, accuracy source) and Z_eq."""
+        return {"model": self.name, **self.surrogate.settings, "equilibrium_height_m": self.surrogate.z_eq}
 
     @property
     def theta_max(self) -> float:
@@ -154,7 +160,7 @@ class FullwaveDimer:
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
 
     def check_experiment(self, meta: dict) -> None:
-        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (FORMATS.md keys) the table was
+        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (docs/formats.md keys) the table was
         not built for (:meth:`FullwaveSurrogate.mismatch`)."""
         message = self.surrogate.mismatch(meta)
         if message is not None:

@@ -1,4 +1,4 @@
-"""Full-wave force surrogate: Chebyshev series in theta of the exact height structure (PHYSICS.md section 7).
+"""Full-wave force surrogate: Chebyshev series in theta of the exact height structure (docs/conventions.md section 7).
 
 For every bend theta one boundary-element solve (two right-hand sides) gives the total vertical force
 and the bending generalised force as::
@@ -74,7 +74,7 @@ COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
 
-#: Experimental settings (FORMATS.md metadata key -> table settings key) a table is valid for only.
+#: Experimental settings (docs/formats.md metadata key -> table settings key) a table is valid for only.
 TABLE_CONDITIONS = {"side_length_m": "side_m", "particle_density_kg_m3": "particle_density_kg_m3",
                     "frequency_hz": "frequency_hz", "sound_speed_m_s": "sound_speed_m_s",
                     "air_density_kg_m3": "air_density_kg_m3"}
@@ -264,7 +264,7 @@ class FullwaveSurrogate(SinusoidalInertia):
         Parameters
         ----------
         conditions : dict
-            Experimental settings under their FORMATS.md metadata keys (:data:`TABLE_CONDITIONS`: side,
+            Experimental settings under their docs/formats.md metadata keys (:data:`TABLE_CONDITIONS`: side,
             particle density, frequency, sound speed, air density); other keys are ignored.
         names : dict, optional
             How to name a key in the message (e.g. ``{"side_length_m": "--side"}`` for a command-line option).
@@ -301,7 +301,7 @@ class FullwaveSurrogate(SinusoidalInertia):
         -------
         dict
             ``{"yddot": {"1", "y", "y^2"}, "thetaddot": {"1", "y", "theta", "y*theta", "y^2*theta", "y^2"}}`` in SI
-            units (FORMATS.md term names); I'(0) = 0, so thetaddot's derivatives are Q_theta's over I(0).
+            units (docs/formats.md term names); I'(0) = 0, so thetaddot's derivatives are Q_theta's over I(0).
         """
         i0 = self.inertia_const
         m = self.mass
@@ -359,6 +359,10 @@ class FullwaveSurrogate(SinusoidalInertia):
             if abs(v.imag) <= 1e-9 * abs(v.real) and v.real > 0:
                 out[slot] = float(np.sqrt(v.real) / (2 * np.pi))
         return out[0], out[1]
+
+    def provenance(self) -> dict:
+        """The build record (solves, DOFs, family interpolation source and accuracy) and the theta range."""
+        return {"build_accuracy": self.build_accuracy, "theta_max": self.theta_max}
 
     def escape_height(self) -> float:
         """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out."""

@@ -1,4 +1,4 @@
-"""The digital twin: synthetic field-drop experiments written as data sets (FORMATS.md).
+"""The digital twin: synthetic field-drop experiments written as data sets (docs/formats.md).
 
 * :mod:`acousim.twin.config` - settings: :class:`DropProtocol`, :class:`Camera`, :class:`TwinConfig`,
   presets (:data:`PAPER_LIKE`) and :class:`TwinError`;
@@ -9,14 +9,13 @@
 * :mod:`acousim.twin.video` - the high-speed camera: rendered frames of the dimer (:class:`VideoCamera`,
   :func:`record_video`).
 """
-from .config import FORCE_MODELS, PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
+from .config import PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
 from .figures import write_twin_figures
 from .simulation import SimulatedRun, run_seeds, simulate_field_drop_runs, simulate_run, true_pressure, twin_dynamics
 from .video import VideoCamera, dimer_squares, record_video, render_coverage, render_frames, write_video_tiff
 from .writer import check_output_dir, meta_dict, simulate_dataset, truth_dict, write_run, write_run_video
 
 __all__ = [
-    "FORCE_MODELS",
     "DropProtocol",
     "Camera",
     "TwinConfig",

@@ -16,11 +16,9 @@ from numpy.typing import NDArray
 
 from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
+from ..models import ExperimentConditions, force_model_names, force_model_type
 
-__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS", "FORCE_MODELS"]
-
-#: The acoustic force models a twin can run on (``--model`` of ``python -m acousim simulate``).
-FORCE_MODELS = ("gorkov", "fullwave")
+__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS"]
 
 
 class TwinError(ValueError):
@@ -156,17 +154,20 @@ class TwinConfig:
     pressure_amplitude_pa : float
         Nominal pressure amplitude p0 [Pa] (written to meta.json).
     pressure_error : float
-        The true p0 is drawn uniformly in nominal x [1 - e, 1 + e] (0: true = nominal); FORMATS.md
+        The true p0 is drawn uniformly in nominal x [1 - e, 1 + e] (0: true = nominal); docs/formats.md
         allows real data to be off by up to 10 %.
     effects : EffectSet
     protocol : DropProtocol
     camera : Camera
     mesh_size : float, optional
         Mesh edge [m] of the Gor'kov model behind the surrogate (default: the model's default).
-    force_model : {"gorkov", "fullwave"}
-        The acoustic force model: the Gor'kov surrogate (:func:`acousim.surrogate.cached_surrogate`) or
-        the full-wave boundary-element surrogate of the default dimer
-        (:func:`acousim.fullwave.default_fullwave_surrogate`, side 500 um only).
+    force_model : str
+        The acoustic force model, a name of the registry :mod:`acousim.models` (``"gorkov"``: the Gor'kov
+        surrogate; ``"fullwave"``: the full-wave table of the dimer, from the table family).
+    gap, edge_radius : float, optional
+        Hinge gap and edge radius [m] of the full-wave model (None: 0.01 side and sharp edges).
+    frequency : float
+        Drive frequency [Hz] (the standing wave's; with the side it sets ks).
     max_step : float
         Longest internal RK4 step [s].
     preset : str, optional
@@ -186,6 +187,9 @@ class TwinConfig:
     max_step: float = DEFAULT_MAX_STEP
     preset: str | None = None
     force_model: str = "gorkov"
+    gap: float | None = None
+    edge_radius: float | None = None
+    frequency: float = 45_650.0
 
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 1:
@@ -204,10 +208,10 @@ class TwinConfig:
             raise TwinError(f"mesh size must be positive, got {self.mesh_size!r} m")
         if not np.isfinite(self.max_step) or self.max_step <= 0:
             raise TwinError(f"max_step must be positive, got {self.max_step!r} s")
-        if self.force_model not in FORCE_MODELS:
-            raise TwinError(f"force model must be one of {', '.join(FORCE_MODELS)}, got {self.force_model!r}")
-        if self.force_model == "fullwave" and self.mesh_size is not None:
-            raise TwinError("mesh size applies to the Gor'kov model only, not to the full-wave model")
+        try:
+            force_model_type(self.force_model).check(self.conditions)
+        except ValueError as exc:
+            raise TwinError(str(exc)) from None
         n = int(round(self.duration * self.camera.fps))
         if n < 16:
             raise TwinError(f"{self.duration:g} s at {self.camera.fps:g} fps gives only {n} frames")
@@ -219,6 +223,16 @@ class TwinConfig:
                     protocol=preset.protocol, preset=preset.name)
         base.update(overrides)
         return cls(**base)
+
+    @property
+    def conditions(self) -> ExperimentConditions:
+        """The experiment the force model is built for, at the nominal pressure amplitude."""
+        try:
+            return ExperimentConditions(side_length_m=self.side, pressure_amplitude_pa=self.pressure_amplitude_pa,
+                                        mesh_size_m=self.mesh_size, gap_m=self.gap, edge_radius_m=self.edge_radius,
+                                        frequency_hz=self.frequency)
+        except ValueError as exc:
+            raise TwinError(str(exc)) from None
 
     @property
     def n_frames(self) -> int:
@@ -243,8 +257,14 @@ class TwinConfig:
             "max_step_s": float(self.max_step),
             "preset": self.preset,
         }
-        if self.force_model != "gorkov":
+        if self.force_model != force_model_names()[0]:  # listed when it is not the default model
             out["force_model"] = self.force_model
+        if self.gap is not None:
+            out["gap_m"] = float(self.gap)
+        if self.edge_radius is not None:
+            out["edge_radius_m"] = float(self.edge_radius)
+        if self.frequency != ExperimentConditions.frequency_hz:
+            out["frequency_hz"] = float(self.frequency)
         return out
 
 

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
-from ..surrogate import cached_surrogate
+from ..models import dynamic_model
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
 __all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
@@ -129,26 +129,12 @@ def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     """The true dynamics of a configuration and its true pressure amplitude [Pa]."""
     p_true = true_pressure(config.pressure_amplitude_pa, config.pressure_error, config.seed)
     try:
-        if config.force_model == "fullwave":
-            sur = _fullwave_model(config, p_true)
-        else:
-            sur = cached_surrogate(float(config.side), float(config.pressure_amplitude_pa), config.mesh_size)
-            if p_true != config.pressure_amplitude_pa:
-                sur = sur.with_pressure(p_true)
-    except ValueError as exc:  # the field cannot levitate the dimer
+        sur = dynamic_model(config.force_model, config.conditions)
+        if p_true != config.pressure_amplitude_pa:
+            sur = sur.with_pressure(p_true)
+    except ValueError as exc:  # the field cannot levitate the dimer, a dimer outside the full-wave family
         raise TwinError(str(exc)) from None
     return DimerDynamics(sur, config.effects), p_true
-
-
-def _fullwave_model(config: TwinConfig, p_true: float):
-    """The shipped full-wave table of the default dimer at the true pressure amplitude [Pa]."""
-    from ..fullwave import default_fullwave_surrogate
-
-    sur = default_fullwave_surrogate()
-    message = sur.mismatch({"side_length_m": config.side}, names={"side_length_m": "side"})
-    if message is not None:
-        raise TwinError(message)
-    return sur if p_true == sur.pressure_amplitude_pa else sur.with_pressure(p_true)
 
 
 def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool = True) -> tuple[list[SimulatedRun], DimerDynamics, float]:

@@ -1,7 +1,7 @@
-"""Writing a twin data set (FORMATS.md): run CSVs, ``meta.json``, ``truth.json`` and the exact states.
+"""Writing a twin data set (docs/formats.md): run CSVs, ``meta.json``, ``truth.json`` and the exact states.
 
 :func:`simulate_dataset` writes ``runNN.csv`` (columns ``t, y, theta``), ``meta.json`` (the
-*nominal* settings, FORMATS.md keys), ``truth.json`` (the true pressure, the effects with their
+*nominal* settings, docs/formats.md keys), ``truth.json`` (the true pressure, the effects with their
 parameters, the seed and every other setting, including each run's drawn initial conditions) and
 ``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics), into
 a temporary folder renamed into place at the end, so a failure leaves nothing behind.  With a
@@ -33,7 +33,7 @@ __all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "w
 
 
 def write_run(path: str | os.PathLike, run: SimulatedRun, index: int, total: int) -> Path:
-    """Write the CSV of one run (FORMATS.md): comments, header ``t,y,theta``, one row per frame,
+    """Write the CSV of one run (docs/formats.md): comments, header ``t,y,theta``, one row per frame,
     missing frames as ``nan``."""
     comments = [f"acousim digital twin, run {index} of {total}: free oscillation after the field is back on at t = 0",
                 "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"]
@@ -62,7 +62,7 @@ def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, 
 
 
 def meta_dict(config: TwinConfig, dynamics: DimerDynamics) -> dict:
-    """meta.json: the FORMATS.md keys with the *nominal* pressure amplitude."""
+    """meta.json: the docs/formats.md keys with the *nominal* pressure amplitude."""
     st = dynamics.force_model.settings
     return {
         "side_length_m": float(config.side),
@@ -92,10 +92,7 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         f"{config.force_model}_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
         "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
     }
-    if hasattr(fm, "build_accuracy") and hasattr(fm, "box"):  # the Gor'kov surrogate's own record
-        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "box": asdict(fm.box)}
-    elif config.force_model == "fullwave":  # the full-wave table's record and interpolation box
-        out["surrogate"] = {"build_accuracy": fm.build_accuracy, "theta_max": fm.theta_max}
+    out["surrogate"] = fm.provenance()
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],
         "runs_detail": [

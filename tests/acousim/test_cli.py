@@ -125,8 +125,12 @@ def test_fullwave_sweep_is_the_surrogate(tmp_path):
 
 
 @pytest.mark.parametrize("args,message", [
-    (["--mesh-size", "1e-4"], "Gor'kov model only"),
-    (["--side", "4e-4"], "tabulated for"),
+    (["--mesh-size", "1e-4"], "--mesh-size applies to --model gorkov only"),
+    (["--render", "x.png"], "does not apply to --model fullwave"),
+    (["--side", "1e-3"], "outside the full-wave family"),  # ks = 0.84
+    (["--gap", "-1e-6"], "--gap = -1e-06 must be positive"),
+    (["--gap", "nan"], "--gap = nan is not finite"),
+    (["--edge-radius", "1e-5"], "only sharp-edged tables"),
     (["--theta", "-0.95:0.95:3"], "covers |theta| <= 0.9"),
 ])
 def test_fullwave_sweep_refuses_what_the_table_does_not_cover(tmp_path, args, message):

@@ -1,4 +1,4 @@
-"""Dimer geometry (PHYSICS.md section 2) and the hinge inertia (section 4)."""
+"""Dimer geometry (docs/conventions.md section 2) and the hinge inertia (section 4)."""
 import numpy as np
 import pytest
 

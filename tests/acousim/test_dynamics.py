@@ -1,4 +1,4 @@
-"""Equations of motion (PHYSICS.md section 4), the force-model protocol and the physics checks of the twin."""
+"""Equations of motion (docs/conventions.md section 4), the force-model protocol and the physics checks of the twin."""
 import numpy as np
 import pytest
 from scipy.optimize import fsolve

@@ -1,4 +1,4 @@
-"""The unmodelled effects of PHYSICS.md section 5: names, parameters, formulas, parsing, composition."""
+"""The unmodelled effects of docs/conventions.md section 5: names, parameters, formulas, parsing, composition."""
 import numpy as np
 import pytest
 
@@ -11,7 +11,7 @@ from acousim.surrogate import cached_surrogate
 K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
 Z_EQ = -4.2888847763325813e-4  # default equilibrium height [m]
 
-# PHYSICS.md section 5, verbatim: names and parameter names are part of the file formats
+# docs/conventions.md section 5, verbatim: names and parameter names are part of the file formats
 PHYSICS_TABLE = {
     "linear_damping": ("gamma_y", "gamma_theta"),
     "quadratic_drag": ("c_y", "c_theta"),
@@ -27,7 +27,7 @@ def test_names_and_parameters_are_those_of_physics_md():
 
 
 def _expected(name, p, y, yd, th, thd):
-    """The PHYSICS.md formulas written out independently."""
+    """The docs/conventions.md formulas written out independently."""
     zero = 0.0 * y
     if name == "linear_damping":
         return -p["gamma_y"] * yd, -p["gamma_theta"] * thd
@@ -97,7 +97,7 @@ def test_regressors_are_the_linear_form_of_the_accelerations(effect):
     pred = reg @ effect.parameter_vector()
     np.testing.assert_allclose(pred[:, 0], ay, rtol=1e-14, atol=0)
     np.testing.assert_allclose(pred[:, 1], at, rtol=1e-14, atol=0)
-    # column j is the effect with parameter j at 1 and the others at 0, checked against PHYSICS.md
+    # column j is the effect with parameter j at 1 and the others at 0, checked against docs/conventions.md
     for j, p in enumerate(effect.parameter_names()):
         unit = {q: float(q == p) for q in effect.parameter_names()}
         ey, et = _expected(effect.name, unit, *x)
@@ -161,7 +161,7 @@ def test_any_subset_composes_additively():
 def test_parse_round_trip_and_order():
     s = EffectSet.parse(["velocity_coupling:c6=8e6", "pair_scattering:kappa=12000",
                          "linear_damping:gamma_y=0.3,gamma_theta=0.8"])
-    # stored in PHYSICS.md order; missing parameters are 0
+    # stored in docs/conventions.md order; missing parameters are 0
     assert s.names == ("linear_damping", "pair_scattering", "velocity_coupling")
     assert s.to_dict() == {"linear_damping": {"gamma_y": 0.3, "gamma_theta": 0.8},
                            "pair_scattering": {"kappa": 12000.0},

@@ -164,7 +164,7 @@ def test_vertical_trap_frequency(pressure):
 
 def test_default_sweep_agrees_with_independent_implementation(default_model):
     """Acceptance: the closed form of acousim.analytic (sinc-product Fourier transform of a cube) is an
-    implementation of PHYSICS.md independent of meshes and quadrature."""
+    implementation of docs/conventions.md independent of meshes and quadrature."""
     from acousim.sweep import static_sweep
     from acousim.sweep_cli import DEFAULT_THETA, DEFAULT_Y, parse_range
 

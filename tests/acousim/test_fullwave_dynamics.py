@@ -90,8 +90,9 @@ def test_simulate_on_the_fullwave_model(tmp_path, capsys, surrogate):
 
 
 @pytest.mark.parametrize("extra, fragment", [
-    (["--side", "400e-6"], "tabulated for side_length_m = 0.0005 only"),
-    (["--mesh-size", "1e-4"], "Gor'kov model only"),
+    (["--side", "1e-3"], "outside the full-wave family"),  # ks = 0.84
+    (["--mesh-size", "1e-4"], "--mesh-size applies to --model gorkov only"),
+    (["--gap", "0"], "--gap = 0.0 must be positive"),
     (["--model", "bem"], "invalid choice"),
 ])
 def test_simulate_fullwave_refusals_are_one_line(tmp_path, capsys, extra, fragment):

@@ -36,7 +36,7 @@ def king_force(ka: float, height: float) -> float:
 
 
 def gorkov_force(ka: float, height: float) -> float:
-    """-dU/dz for a rigid immobile sphere (f1 = f2 = 1, PHYSICS.md section 3)."""
+    """-dU/dz for a rigid immobile sphere (f1 = f2 = 1, docs/conventions.md section 3)."""
     k = MEDIUM.wavenumber
     vol = 4 / 3 * np.pi * (ka / k) ** 3
     e = P0**2 / (4 * MEDIUM.density_kg_m3 * MEDIUM.sound_speed_m_s**2)

@@ -85,3 +85,24 @@ def test_shipped_default_table():
 def test_build_rejects_bad_box():
     with pytest.raises(ValueError):
         build_fullwave_surrogate(COARSE_SPEC, theta_max=1.0)
+
+
+def test_dimensionless_coefficients_depend_on_ks_only(coarse_surrogate):
+    """The exact scaling of the table family (acousim.fullwave.family): a dimer 1.3 times larger at a frequency
+    chosen for the same ks, in air of another sound speed and density, has the same dimensionless coefficients
+    (forces in units of p0^2 s^2 / (rho0 c0^2), torques of p0^2 s^3 / (rho0 c0^2)), from direct solves."""
+    from dataclasses import replace
+
+    from acousim.fullwave.family import dimensionless_coefficients
+
+    sur, _ = coarse_surrogate
+    ks = sur.wavenumber * sur.settings["side_m"]
+    side, c0, rho0 = 1.3 * sur.settings["side_m"], 300.0, 1.0
+    medium = Medium(frequency_hz=ks * c0 / (2 * np.pi * side), sound_speed_m_s=c0, density_kg_m3=rho0)
+    spec = replace(TINY_BUILD["spec"], side=side, gap=1.3 * TINY_BUILD["spec"].gap)
+    other = build_fullwave_surrogate(spec, medium, pressure_amplitude_pa=2000.0,
+                                     **{k: v for k, v in TINY_BUILD.items() if k != "spec"})
+    a, b = dimensionless_coefficients(sur), dimensionless_coefficients(other)
+    for comp in ("fz", "qt"):
+        # the same mesh in units of s and the same ks: equal up to the solver's iterative/quadrature round-off
+        np.testing.assert_allclose(b[comp], a[comp], rtol=0, atol=1e-9 * np.abs(a[comp]).max())

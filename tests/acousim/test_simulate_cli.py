@@ -1,4 +1,4 @@
-"""``python -m acousim simulate``: the command contract of FORMATS.md."""
+"""``python -m acousim simulate``: the command contract of docs/formats.md."""
 import json
 import os
 import subprocess

@@ -69,7 +69,7 @@ def test_linear_frequencies_equal_swept_stiffnesses(default_model, surrogate):
     # the Taylor coefficients are a least-squares fit on a separate 17 x 17 sweep: agree to ~1e-8
     assert f_y == pytest.approx(np.sqrt(-taylor["yddot"]["y"]) / (2 * np.pi), rel=1e-6)
     assert f_t == pytest.approx(np.sqrt(-taylor["thetaddot"]["theta"]) / (2 * np.pi), rel=1e-6)
-    # PHYSICS.md: the Gor'kov hinge is soft, ~0.08 x the y frequency; f_y ~ 22 Hz at the defaults
+    # docs/conventions.md: the Gor'kov hinge is soft, ~0.08 x the y frequency; f_y ~ 22 Hz at the defaults
     assert 20 < f_y < 24 and 0.05 < f_t / f_y < 0.1
 
 

@@ -1,4 +1,4 @@
-"""The digital twin: field-drop protocol, camera, data sets (FORMATS.md) and their truth files."""
+"""The digital twin: field-drop protocol, camera, data sets (docs/formats.md) and their truth files."""
 import json
 
 import numpy as np

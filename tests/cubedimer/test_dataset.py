@@ -107,8 +107,10 @@ def test_long_garbage_is_cut_in_the_message(tmp_path):
     with pytest.raises(DatasetError) as err:
         load_run(p)
     msg = str(err.value)
-    assert "missing column 't'" in msg and "\u2026" in msg
-    assert len(msg) < 80 + len(str(p)) + 80  # the 80-character echo plus the file name and the wording
+    # every missing column at once, and the header echo cut
+    assert "missing columns 't', 'y', 'theta'" in msg and "\u2026" in msg
+    # the 80-character echo plus the file name and the wording (which names the accepted columns and the docs)
+    assert len(msg) < 80 + len(str(p)) + 260
 
 
 def test_upper_case_suffix_is_a_csv_file(tmp_path, sine_run, write_csv):

@@ -66,7 +66,7 @@ def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp
     assert d["selection"]["rule"] == "discovery" and d["discovery"]["converged"]
     assert d["integral_form"]["thetaddot"]["terms"] == d["discovery"]["thetaddot"]["terms"]
     assert d["fallback"] is None and not d["loss"]["final"]["blown_up"]
-    # oracle standard error beside every selected term; per-run entries and z-scores as FORMATS.md asks
+    # oracle standard error beside every selected term; per-run entries and z-scores as docs/formats.md asks
     for eq, terms in d["equations"].items():
         assert set(d["oracle"][eq]) == set(terms) and all(d["oracle"][eq][t]["std_error"] > 0 for t in terms)
         for t in terms:  # and the closest alias, never closer to zero than the term itself

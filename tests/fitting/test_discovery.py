@@ -1,6 +1,6 @@
 """Tests of the integral-form discovery with model-based states (fitting.discovery, fitting.model_states).
 
-The criterion of the slow tests, on data of sparse models of PHYSICS.md section 6's form at the paper's data
+The criterion of the slow tests, on data of sparse models of docs/conventions.md section 6's form at the paper's data
 size: every true term whose oracle z (|true coefficient| / standard error of integral-form least squares on the
 true support with the columns at the exact states) is >= 5 is selected, at most one spurious term over both
 equations, and every coefficient within max(10 %, 3 oracle standard errors).  Three oracle standard errors
@@ -196,3 +196,29 @@ def test_smoothed_columns_alone_miss_the_criterion_where_model_states_meet_it():
     with pytest.raises(AssertionError):
         _check(truth, first, se)
     _check(truth, discover_model(runs, derivs), se)
+
+
+def test_excluded_terms_are_not_selected_and_damping_stays_forced():
+    """The same 4 runs of 2 s: excluding a true term (y^2*theta, oracle z > 10) keeps it out of the support;
+    excluding a damping term changes nothing (damping terms are always kept)."""
+    truth = _truth(W_9, {"1": 0.1, "y^2": 9.5e6},
+                   {"1": 60.0, "y": 1.5e6, "y^2*theta": 2e10, "y*thetadot^2": 5e3, "y*ydot*thetadot": 8e6})
+    cfg = SyntheticConfig(n_runs=4, duration=2.0, noise_y=1e-6, noise_theta=0.002, seed=21)
+    runs, derivs, _ = _data(truth, cfg)
+    res = discover_model(runs, derivs, DiscoveryConfig(excluded=("thetaddot:y^2*theta", "yddot:ydot")))
+    assert not res.mask[1, TERMS.index("y^2*theta")] and res.mask[0, TERMS.index("ydot")]
+    with pytest.raises(ValueError, match="EQUATION:TERM"):
+        DiscoveryConfig(excluded=("thetaddot:theta^9",))
+
+
+def test_the_default_fit_keeps_every_resolved_term():
+    """On the same data every selected term is resolved from its alias (alias z far above 1): the resolution check
+    excludes nothing and the discovery is the plain one."""
+    from fitting.discovery_fit import resolved_discovery
+
+    truth = _truth(W_9, {"1": 0.1, "y^2": 9.5e6},
+                   {"1": 60.0, "y": 1.5e6, "y^2*theta": 2e10, "y*thetadot^2": 5e3, "y*ydot*thetadot": 8e6})
+    cfg = SyntheticConfig(n_runs=4, duration=2.0, noise_y=1e-6, noise_theta=0.002, seed=21)
+    runs, derivs, _ = _data(truth, cfg)
+    res, excluded = resolved_discovery(runs, derivs, DiscoveryConfig())
+    assert excluded == [] and np.array_equal(res.mask, truth.support)

@@ -75,8 +75,8 @@ def test_glitch_case_that_loses_accuracy_scores_as_lost(tmp_path):
     assert s["accuracy_lost"] == 1 and s["same_identified_rate"] == 0.5
 
 
-# a t in milliseconds is caught by the meta check first (its y frequency against the trap's), whose reason says "units of t"
-@pytest.mark.parametrize("slip, word", [("y_micrometres", "micrometres"), ("t_milliseconds", "units of t")])
+# a t in milliseconds is caught first by the physics bound on the vertical frequency (5-200 Hz), which names it
+@pytest.mark.parametrize("slip, word", [("y_micrometres", "micrometres"), ("t_milliseconds", "milliseconds")])
 def test_unit_slip_file_is_skipped_by_name(tmp_path, slip, word):
     """The loader names the slipped file; a diagnosis that skipped another file (or none) scores as not named."""
     from cubedimer.dataset import load_dataset

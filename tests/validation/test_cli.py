@@ -99,11 +99,21 @@ def test_diagnose_refuses_a_negative_practical_threshold_in_one_line(tmp_path, t
 
 @pytest.mark.parametrize("command", ["diagnose", "report"])
 def test_fullwave_model_refuses_another_experiment_in_one_line(tmp_path, tiny_data, capsys, command):
-    """The full-wave table belongs to the 500 um dimer: another side is named, nothing is written."""
-    (tiny_data / "meta.json").write_text('{"side_length_m": 4e-4}')
+    """A dimer outside the full-wave family (1 mm at 45.65 kHz: ks = 0.84) is named with the range and the build
+    command; nothing is written."""
+    (tiny_data / "meta.json").write_text('{"side_length_m": 1e-3}')
     assert main([command, str(tiny_data), "--out", str(tmp_path / "out"), "--model", "fullwave", "--quiet"]) == 2
     line = _one_line_error(capsys)
-    assert line.startswith("error: ") and "side_length_m" in line and "full-wave" in line
+    assert line.startswith("error: ") and "ks = 0.836" in line and "outside the full-wave family" in line
+    assert "python -m acousim family build" in line
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+@pytest.mark.parametrize("command", ["diagnose", "report"])
+def test_gap_with_the_gorkov_model_is_refused_in_one_line(tmp_path, tiny_data, capsys, command):
+    assert main([command, str(tiny_data), "--out", str(tmp_path / "out"), "--gap", "5e-6", "--quiet"]) == 2
+    line = _one_line_error(capsys)
+    assert line == "error: --gap applies to --model fullwave only, not to --model gorkov"
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 

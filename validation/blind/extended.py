@@ -286,8 +286,9 @@ def _run_unit_slip(case: dict, config: BlindConfig, data: Path, truth: dict) -> 
     return score_unit_slip(case, truth, diag, error, name)
 
 
-#: words of which a skip reason must hold one to name the unit of each slip (a t in milliseconds is caught by the
-#: meta check, "units of t", or by the cross-run check, "milliseconds")
+#: words of which a skip reason must hold one to name the unit of each slip (a t in milliseconds is named by the
+#: physics bound on the vertical frequency and by the cross-run check, "milliseconds"; "units of t" by the check
+#: against the Gor'kov trap frequency)
 _SLIP_WORDS = {"y_micrometres": ("micrometre",), "t_milliseconds": ("millisecond", "units of t")}
 
 

@@ -1,7 +1,7 @@
 """Twin-like data sets with causes outside the candidates: a cubic hinge term, a y-dependent damping, a pressure
 drifting in time, optionally with candidate effects on top.
 
-The runs integrate the surrogate's equations of motion (PHYSICS.md section 4; the Gor'kov force and torque from the
+The runs integrate the surrogate's equations of motion (docs/conventions.md section 4; the Gor'kov force and torque from the
 default dimer's Chebyshev surrogate and :func:`acousim.equations.hinge_acceleration`) with classical RK4 at the
 frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 
@@ -11,7 +11,7 @@ frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 * ``-y_damping y^2 ydot`` [1/(m^2 s)] added to yddot, with y measured from the true equilibrium height,
 * the accelerations of candidate effects (:class:`acousim.effects.EffectSet`, y from the true equilibrium).
 
-The CSVs (FORMATS.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
+The CSVs (docs/formats.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
 equilibrium height and meta.json holds the nominal pressure.  The drops start at |y| of 80-150 um, so that
 each run's oscillation dominates its y spectrum (a drift of a few per cent moves the equilibrium by tens of
 micrometres).  Every random choice comes from ``seed``.
@@ -36,7 +36,7 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
                             seed: int = 0, pressure_error: float = 0.0, drift: float = 0.0,
                             drift_period: tuple[float, float] = (1.5, 4.0), cubic_hinge: float = 0.0,
                             y_damping: float = 0.0, effects: dict | None = None,
-                            noise: tuple[float, float] = (1e-6, 0.005)) -> dict:
+                            noise: tuple[float, float] = (1e-6, 0.005), force_model=None) -> dict:
     """Write ``runs`` CSVs and meta.json into ``path`` (see the module docstring).
 
     Parameters
@@ -55,6 +55,10 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
         Candidate effects ``{name: {param: value}}`` (:meth:`acousim.effects.EffectSet.from_dict`).
     noise : (float, float)
         Tracking noise standard deviations of y [m] and theta [-].
+    force_model : acousim.ForceModel, optional
+        The acoustic forces at the nominal pressure (e.g. the full-wave model of another dimer,
+        :func:`acousim.models.dynamic_model`); default the Gor'kov surrogate of the default dimer.  meta.json then
+        records its side.
 
     Returns
     -------
@@ -75,14 +79,17 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
-    sur = cached_surrogate()
+    sur = cached_surrogate() if force_model is None else force_model
+    general = force_model is not None
+    heights = sur.force_coefficients() if general else None
     p_nom = sur.pressure_amplitude_pa
     p_true = p_nom * (1 + rng.uniform(-pressure_error, pressure_error))
     m, g, two_k, z_eq = sur.mass, sur.gravity, sur.two_k, sur.z_eq
     z_true = sur.with_pressure(p_true).z_eq  # equilibrium at the mean true pressure: the effects' y origin
     eff = EffectSet.from_dict(effects or {})
-    _, b, gm, da, db, dg = sur.coefficient_arrays()
-    coef = np.stack([b, gm, da, db, dg], axis=1)  # Chebyshev series in theta, one column per function
+    if not general:
+        _, b, gm, da, db, dg = sur.coefficient_arrays()
+        coef = np.stack([b, gm, da, db, dg], axis=1)  # Chebyshev series in theta, one column per function
     n = int(round(duration * fps))
     h = 1.0 / fps
     phase = rng.uniform(0, 2 * np.pi, runs)
@@ -96,11 +103,15 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
     def rhs(t, s):
         scale = (pressure(t) / p_nom) ** 2
         th = s[:, 2]
-        bv, gv, dav, dbv, dgv = cheb.chebval(th, coef)
-        c, sn = np.cos(two_k * (s[:, 0] + z_eq)), np.sin(two_k * (s[:, 0] + z_eq))
-        ay = scale * two_k * (bv * sn - gv * c) / m - g
-        at = hinge_acceleration(-scale * (dav + dbv * c + dgv * sn), sur.hinge_inertia(th),
-                                sur.hinge_inertia_derivative(th), s[:, 3]) - cubic_hinge * th**3
+        if general:  # (F_Z, Q_theta) from the model's height structure
+            fz, qt = heights.evaluate(th, s[:, 0] + z_eq, two_k)
+        else:  # the Gor'kov surrogate's potential series
+            bv, gv, dav, dbv, dgv = cheb.chebval(th, coef)
+            c, sn = np.cos(two_k * (s[:, 0] + z_eq)), np.sin(two_k * (s[:, 0] + z_eq))
+            fz, qt = two_k * (bv * sn - gv * c), -(dav + dbv * c + dgv * sn)
+        ay = scale * fz / m - g
+        at = hinge_acceleration(scale * qt, sur.hinge_inertia(th), sur.hinge_inertia_derivative(th),
+                                s[:, 3]) - cubic_hinge * th**3
         y_rel = s[:, 0] + z_eq - z_true
         ay = ay - y_damping * y_rel**2 * s[:, 1]
         if len(eff):
@@ -131,7 +142,15 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
                                               "units: t [s], y [m], theta [-]"], t_decimals=9, y_digits=10,
                       theta_decimals=10, missing="nan")
         files.append(name)
-    write_json(path / "meta.json", {"pressure_amplitude_pa": p_nom})
+    meta = {"pressure_amplitude_pa": p_nom}
+    if general:  # the dimer and the field of the given model
+        st = sur.settings
+        meta.update({k: float(st[sk]) for k, sk in (("side_length_m", "side_m"), ("frequency_hz", "frequency_hz"),
+                                                     ("sound_speed_m_s", "sound_speed_m_s"),
+                                                     ("air_density_kg_m3", "air_density_kg_m3"),
+                                                     ("particle_density_kg_m3", "particle_density_kg_m3"))
+                     if sk in st})
+    write_json(path / "meta.json", meta)
     p_t = pressure(t[:, None])  # (n, runs)
     return {"pressure_amplitude_pa": float(p_true), "period_s": period.tolist(), "phase": phase.tolist(),
             "relative_half_range": (0.5 * np.ptp(p_t, axis=0) / p_t.mean(axis=0)).tolist(),

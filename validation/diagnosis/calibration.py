@@ -35,7 +35,7 @@ CALIBRATED_ON = "yddot equation only (pressure and origin); see validation.diagn
 class Calibration:
     """Calibrated settings: pressure scale s = (p0 / p_nom)^2, the lab height z0 [m] of the data's y = 0,
     and the equilibrium height Z_eq [m] of the simulation at the calibrated pressure (the origin of
-    the effects' y, PHYSICS.md section 5)."""
+    the effects' y, docs/conventions.md section 5)."""
 
     pressure_scale: float
     z_origin_m: float

@@ -1,4 +1,4 @@
-"""The candidate effects of PHYSICS.md section 5 as linear regressors of the accelerations.
+"""The candidate effects of docs/conventions.md section 5 as linear regressors of the accelerations.
 
 Every candidate effect is linear in its parameters, so its added accelerations at given states are
 ``effect_regressors(...) @ params`` and every fit of the diagnosis is a linear least-squares problem at
@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
 def _candidates() -> dict[str, tuple[str, ...]]:
@@ -21,7 +21,7 @@ def _candidates() -> dict[str, tuple[str, ...]]:
     return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
 
 
-#: Candidate effects and their parameters (PHYSICS.md section 5, as defined in :mod:`acousim.effects`).
+#: Candidate effects and their parameters (docs/conventions.md section 5, as defined in :mod:`acousim.effects`).
 CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
@@ -29,6 +29,29 @@ CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
 LIBRARY_EQUIVALENTS: dict[str, dict[str, tuple[str, ...]]] = {
     "linear_damping": {"yddot": ("ydot",), "thetaddot": ("thetadot",)},
 }
+
+#: Library terms (per equation) that a candidate's columns reduce to near the levitation height, beyond the exact
+#: copies above: pair scattering's ``-kappa cos^2(k Z_com) theta`` is ``theta`` times a constant up to terms in
+#: ``y theta``; mirror asymmetry's ``beta0 + beta1 y`` and velocity coupling's ``y thetadot^2`` and
+#: ``y ydot thetadot`` (y from the calibrated levitation height, so ``1`` takes the origin's difference).  A
+#: discovered term that is one of them, beside the identified effect, splits the effect's parameter: the final joint
+#: model folds it into the effect (:func:`~validation.diagnosis.discovery.joint_estimates`).
+LEADING_LIBRARY_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
+    "pair_scattering": {"thetaddot": ("theta",)},
+    "mirror_asymmetry": {"thetaddot": ("1", "y")},
+    "velocity_coupling": {"thetaddot": ("y*thetadot^2", "y*ydot*thetadot")},
+}
+
+
+def own_library_columns(effects: Sequence[str]) -> dict[str, list[str]]:
+    """Per equation, the library terms that stand for the columns of ``effects`` (:data:`LIBRARY_EQUIVALENTS` and
+    :data:`LEADING_LIBRARY_TERMS`)."""
+    out: dict[str, list[str]] = {"yddot": [], "thetaddot": []}
+    for name in effects:
+        for table in (LIBRARY_EQUIVALENTS, LEADING_LIBRARY_TERMS):
+            for eq, terms in table.get(name, {}).items():
+                out[eq] += [t for t in terms if t not in out[eq]]
+    return out
 
 
 def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,
@@ -50,7 +73,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         k of the standing wave [1/m].
     z_eq : float, optional
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
-        PHYSICS.md (default: the state's own y, i.e. Z_eq = Z_com - y).
+        docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
     from acousim.effects import EFFECT_TYPES
 

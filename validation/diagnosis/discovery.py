@@ -42,7 +42,7 @@ held-out runs: a candidate that no longer improves held-out runs once the discov
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -55,7 +55,7 @@ from .simulation_model import SimulationTerms
 from .statistics import sign_flip_pvalue
 
 __all__ = ["DiscoveredTerm", "Discovery", "integral_residuals", "energy_balance_residuals", "dissipative_terms",
-           "discover_terms", "judge_candidates", "discovered_equations", "EQUATIONS"]
+           "discover_terms", "judge_candidates", "joint_estimates", "discovered_equations", "EQUATIONS"]
 
 logger = logging.getLogger(__name__)
 
@@ -108,7 +108,7 @@ class Discovery:
                          self.selected, self.remaining)
 
     def to_dict(self) -> dict:
-        """``{"yddot": [...], "thetaddot": [...]}`` (FORMATS.md ``remaining_gap.discovered_terms``)."""
+        """``{"yddot": [...], "thetaddot": [...]}`` (docs/formats.md ``remaining_gap.discovered_terms``)."""
         return {e: [t.to_dict() for t in self.terms[e]] for e in EQUATIONS}
 
 
@@ -554,6 +554,73 @@ def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], disco
             logger.info("%s is not named: the discovered terms explain its share of the gap on held-out runs (p = %.2g)", c, p)
             kept.remove(c)
     return kept, pvals
+
+
+def joint_estimates(problem: DiagnosisProblem, fit: GapFit, discovery: Discovery
+                    ) -> tuple[dict[str, dict[str, float]], Discovery, dict[str, list[str]]]:
+    """The final joint model: the identified effects' parameters and the discovered terms' coefficients estimated
+    together, without discovered copies of the effects' own columns.
+
+    The discovery fits its terms to the residual of ``fit`` (the calibrated simulation plus the identified effects,
+    fitted without them).  A term that only works together with a linear partner (a cubic hinge hardening beside
+    pair scattering, whose stiffness fitted alone absorbed part of the hardening) is found with that partner: a
+    library copy of the effect's own column (``theta``), which then carries part of the effect's parameter.  Here,
+    per equation with integral-form terms, the copies (:func:`~validation.diagnosis.candidates.own_library_columns`)
+    are dropped and the parameters of the effects acting on that equation and the remaining terms' coefficients are
+    one least-squares fit of the equation's integral form at the calibrated pressure and origin: the effect's column
+    takes the copy's place.  Parameters acting on no such equation keep ``fit``'s values, as do energy-balance terms.
+
+    Returns
+    -------
+    (effects, discovery, folded)
+        ``{name: {parameter: value}}`` of the final joint model, the discovery without the copies and with the joint
+        coefficients, and per equation the copies folded into the effects.
+    """
+    from cubedimer.terms import library_terms
+
+    from .candidates import CANDIDATE_EFFECTS, own_library_columns
+
+    names = list(fit.effects)
+    params = {n: dict(v) for n, v in fit.effects.items()}
+    terms_out = {eq: list(discovery.terms[eq]) for eq in EQUATIONS}
+    folded: dict[str, list[str]] = {eq: [] for eq in EQUATIONS}
+    if not names or not any(t.form == "integral" for eq in EQUATIONS for t in discovery.terms[eq]):
+        return params, discovery, folded
+    copies = own_library_columns(names)
+    slots = [(n, p) for n in names for p in CANDIDATE_EFFECTS[n]]
+    pv = fit.effect_parameter_vector(names)
+    terms = SimulationTerms(problem)
+    cal = fit.calibration
+    library = library_terms()
+    for q, eq in enumerate(EQUATIONS):
+        found = [t for t in discovery.terms[eq] if t.form == "integral"]
+        if not found:
+            continue
+        ecols = terms.integral_effect_columns(cal.z_origin_m, names, cal.equilibrium_height_m, q)
+        acting = np.flatnonzero(sum(np.sum(c * c, axis=0) for c in ecols) > 0)
+        if not acting.size:
+            continue
+        folded[eq] = [t.term for t in found if t.term in copies[eq]]
+        found = [t for t in found if t.term not in copies[eq]]
+        others = np.setdiff1d(np.arange(len(slots)), acting)
+        known = terms.integral_known(cal.z_origin_m, q)
+        idx = [library.index(t.term) for t in found]
+        dcols = _integrated(problem, [c[:, idx] for c in _library_columns(problem, q)], q)
+        cols, rhs = [], []
+        for r, kn, ec, dc in zip(problem.runs, known, ecols, dcols):
+            b = r.integral.target(q) - cal.pressure_scale * kn[0] - kn[1]
+            if others.size:
+                b = b - ec[:, others] @ pv[others]
+            cols.append(np.hstack([ec[:, acting], dc]))
+            rhs.append(b)
+        sol = _least_squares(cols, rhs)
+        for k, j in enumerate(acting):
+            n, p = slots[j]
+            params[n][p] = float(sol[k])
+        joint = dict(zip([t.term for t in found], sol[acting.size:].tolist()))
+        terms_out[eq] = [replace(t, coefficient=float(joint[t.term])) if t.term in joint else t
+                         for t in discovery.terms[eq] if not (t.form == "integral" and t.term in folded[eq])]
+    return params, Discovery(terms_out, discovery.selected, discovery.remaining), folded
 
 
 def discovered_equations(discovery: Discovery) -> dict[str, str]:

@@ -57,12 +57,16 @@ class DriftSettings:
     alpha : level of the F-test
     min_relative_amplitude : smallest relative pressure amplitude reported as a drift
     z0_window : the origin height is searched within +-z0_window [m] of the nominal Z_eq
+    max_nodes_per_run : most pressure nodes of one run; a longer run is refused with a message (a run of
+        hours is not a free oscillation after a field drop: its time is in other units), so that the
+        per-node fit (a dense column per node) stays bounded
     """
 
     window_s: float = 0.4
     alpha: float = DRIFT_ALPHA
     min_relative_amplitude: float = MIN_RELATIVE_AMPLITUDE
     z0_window: float = 4e-4
+    max_nodes_per_run: int = 200
 
     def __post_init__(self):
         if not self.window_s > 0:
@@ -71,6 +75,8 @@ class DriftSettings:
             raise ValueError(f"drift alpha must lie in (0, 1), got {self.alpha}")
         if not self.min_relative_amplitude >= 0:
             raise ValueError(f"min_relative_amplitude must be >= 0, got {self.min_relative_amplitude}")
+        if not self.max_nodes_per_run >= 2:
+            raise ValueError(f"max_nodes_per_run must be at least 2, got {self.max_nodes_per_run}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,8 +136,12 @@ class DriftTest:
         return out
 
 
-def _node_times(t0: float, t1: float, window_s: float) -> NDArray[np.float64]:
+def _node_times(t0: float, t1: float, window_s: float, max_nodes: int = 200, name: str = "a run") -> NDArray[np.float64]:
     k = max(2, int(round((t1 - t0) / window_s)) + 1)
+    if k > max_nodes:
+        raise ValueError(f"{name}: a time span of {t1 - t0:.4g} s needs {k} pressure-drift windows of {window_s:g} s "
+                         f"(at most {max_nodes}); a free oscillation after a field drop lasts seconds: is t in "
+                         f"seconds? (docs/conventions.md)")
     return np.linspace(t0, t1, k)
 
 
@@ -141,7 +151,8 @@ def _hat_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
     return np.column_stack([np.interp(t, nodes, eye[k]) for k in range(nodes.size)])
 
 
-def _designs(problem: DiagnosisProblem, z0: float, window_s: float) -> list[tuple[NDArray, NDArray, NDArray]]:
+def _designs(problem: DiagnosisProblem, z0: float, window_s: float,
+             max_nodes: int = 200) -> list[tuple[NDArray, NDArray, NDArray]]:
     """Per run: (columns P K[phi_k F_Z/M] (rows, K), target P y - P K[-g] (rows,), node times)."""
     model = problem.model
     mass, g = model.dimer.total_mass, model.gravity
@@ -149,7 +160,7 @@ def _designs(problem: DiagnosisProblem, z0: float, window_s: float) -> list[tupl
     for r in problem.runs:
         pi = r.integral
         t = pi.times
-        nodes = _node_times(t[0], t[-1], window_s)
+        nodes = _node_times(t[0], t[-1], window_s, max_nodes, r.name)
         st = model.integrals_at_height(pi.state[:, 2], z0 + pi.state[:, 0], problem.orientation_sums(pi))
         x = pi.columns(0, (st.force_z / mass)[:, None] * _hat_basis(t, nodes))
         b = pi.target(0) - pi.columns(0, np.full(t.shape, -g))
@@ -205,18 +216,20 @@ def detect_pressure_drift(problem: DiagnosisProblem, settings: DriftSettings = D
         return DriftTest(False, False, float("nan"), float("nan"), (0, 0), float("nan"), float("nan"), {},
                          float("nan"), settings)
     w = settings.window_s
+    for r in runs:  # refused before any fit: a bounded number of columns per run
+        _node_times(r.integral.times[0], r.integral.times[-1], w, settings.max_nodes_per_run, r.name)
     z_eq = problem.model.equilibrium_height
     bounds = (z_eq - settings.z0_window, min(z_eq + settings.z0_window, -1e-6))
 
     def search(per_node: bool) -> float:
-        res = minimize_scalar(lambda z: _rss(_designs(problem, z, w), per_node), bounds=bounds, method="bounded",
-                              options={"xatol": 1e-9})
+        res = minimize_scalar(lambda z: _rss(_designs(problem, z, w, settings.max_nodes_per_run), per_node), bounds=bounds, method="bounded",
+                              options={"xatol": 1e-9, "maxiter": 200})
         return float(res.x)
 
     z1 = search(True)
-    designs = _designs(problem, z1, w)
+    designs = _designs(problem, z1, w, settings.max_nodes_per_run)
     rss1 = _rss(designs, True)
-    rss0 = _rss(_designs(problem, search(False), w), False)
+    rss0 = _rss(_designs(problem, search(False), w, settings.max_nodes_per_run), False)
     n_rows = sum(b.size for _, b, _ in designs)
     n_win = sum(r.integral.starts(0).size for r in runs)
     p1 = sum(x.shape[1] for x, _, _ in designs) + 1

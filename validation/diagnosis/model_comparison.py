@@ -2,7 +2,7 @@
 
 :func:`compare_simulation_models` puts three calibrated simulations side by side on the same runs:
 
-* the Gor'kov model alone (PHYSICS.md section 3);
+* the Gor'kov model alone (docs/conventions.md section 3);
 * the Gor'kov model plus the phenomenological ``pair_scattering`` of section 5, its kappa fitted;
 * the full-wave model (section 7, :class:`acousim.fullwave.FullwaveDimer`), with no fitted stiffness.
 
@@ -102,7 +102,7 @@ def _row(name: str, problem: DiagnosisProblem, fit: GapFit, long_time_duration: 
 
 
 def compare_simulation_models(problem: DiagnosisProblem, meta: dict, base: GapFit | None = None,
-                              long_time_duration: float | None = 2.0) -> ModelComparison:
+                              long_time_duration: float | None = 2.0, gap: float | None = None) -> ModelComparison:
     """The gaps of the calibrated Gor'kov model, of Gor'kov + fitted pair scattering and of the full-wave model.
 
     Parameters
@@ -115,6 +115,8 @@ def compare_simulation_models(problem: DiagnosisProblem, meta: dict, base: GapFi
         The calibrated ``problem.model`` alone, when already fitted (the diagnosis's ``base``).
     long_time_duration : float or None
         Seconds of every run simulated for the long-time error [s]; None: skip it.
+    gap : float, optional
+        Hinge gap [m] of the full-wave model (default: its default, 0.01 side).
     """
     from acousim.fullwave.statics import FullwaveDimer
 
@@ -134,7 +136,7 @@ def compare_simulation_models(problem: DiagnosisProblem, meta: dict, base: GapFi
         problems["fullwave"] = problem
     else:
         try:
-            fw = model_from_meta(meta, model="fullwave")
+            fw = model_from_meta(meta, model="fullwave", gap=gap)
             fw.orientation_sums(np.concatenate([r.state[:, 2] for r in problem.recorded_runs]))  # the bend range
             problems["fullwave"] = sibling(fw)
         except ValueError as exc:

@@ -1,6 +1,6 @@
 """A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
 
-Output, ``diagnosis.json`` (FORMATS.md, extended)::
+Output, ``diagnosis.json`` (docs/formats.md, extended)::
 
     {"identified": [...], "calibration": {...}, "gap_before": g0, "gap_after": g1, "gap_definition": "...",
      "gap_components": [...], "gap_component_forms": {...}, "gap_per_run": {...}, "noise_floor": ...,
@@ -11,7 +11,7 @@ Output, ``diagnosis.json`` (FORMATS.md, extended)::
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 
@@ -21,16 +21,18 @@ from acousim.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
-from .discovery import Discovery, discover_terms, discovered_equations, judge_candidates
+from .discovery import Discovery, discover_terms, discovered_equations, joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
+from .model_parameters import ParameterCalibration, calibrate_model_parameter
+from .orientation import check_y_orientation
 from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
-from .statistics import runs_needed, smallest_sign_flip_pvalue
+from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
 
@@ -49,7 +51,7 @@ class DiagnoseConfig:
 
     Parameters
     ----------
-    candidates : names of the candidate effects (default: all of PHYSICS.md section 5)
+    candidates : names of the candidate effects (default: all of docs/conventions.md section 5)
     alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
@@ -62,6 +64,8 @@ class DiagnoseConfig:
         None: the pressure is taken as constant without testing
     discover : regress what remains after the candidates on the cubic library (:mod:`validation.diagnosis.discovery`)
     discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
+    check_orientation : test whether y points down (:mod:`validation.diagnosis.orientation`); if so, warn
+        (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
     candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
@@ -75,6 +79,7 @@ class DiagnoseConfig:
     drift: DriftSettings | None = DriftSettings()
     discover: bool = True
     discovery_min_improvement: float = 1e-3
+    check_orientation: bool = True
 
     def __post_init__(self):
         unknown = [c for c in self.candidates if c not in CANDIDATE_EFFECTS]
@@ -113,7 +118,8 @@ class DiagnosisInternals:
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
                      progress: bool = True, mesh_size: float | None = None,
-                     model: str = "gorkov") -> tuple[dict, DiagnosisInternals]:
+                     model: str = "gorkov", gap: float | None = None,
+                     edge_radius: float | None = None) -> tuple[dict, DiagnosisInternals]:
     """Diagnose a data set.
 
     Parameters
@@ -123,13 +129,16 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     strict : stop at the first bad file instead of skipping it
     progress : log the steps at INFO level (else DEBUG)
     mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
-    model : the simulation model, ``"gorkov"`` or ``"fullwave"`` (:func:`validation.simulation.model_from_meta`);
-        both are calibrated the same way (pressure amplitude and height origin)
+    model : the simulation model, a name of the registry :mod:`acousim.models` (``"gorkov"``, ``"fullwave"``);
+        every model is calibrated the same way (pressure amplitude and height origin), and a model's own
+        parameters that the data may determine (the full-wave hinge gap) are profiled unless given
+        (:mod:`validation.diagnosis.model_parameters`)
+    gap, edge_radius : hinge gap and edge radius of the full-wave model [m]; a given gap is not calibrated
 
     Returns
     -------
     (diagnosis, internals)
-        The diagnosis.json document (FORMATS.md) and :class:`DiagnosisInternals` for figures.
+        The diagnosis.json document (docs/formats.md) and :class:`DiagnosisInternals` for figures.
 
     Runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`): the same numbers wherever it
     runs (here, in an executor task, on a dask worker), and faster for its many small factorisations.
@@ -137,22 +146,104 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     from cubedimer.executor import single_blas_thread
 
     with single_blas_thread():
-        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model)
+        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model, gap, edge_radius)
+
+
+def _label(name: str) -> str:
+    """A model parameter's name in prose: the field without its unit (``gap_m`` -> ``gap``)."""
+    return name.rsplit("_", 1)[0].replace("_", " ")
+
+
+def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
+                               log=logger.info) -> tuple[object, dict]:
+    """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
+    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name."""
+    from acousim.models import force_model_type, static_model
+
+    mtype = force_model_type(model_name)
+    out = {}
+    for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
+        if getattr(conditions, name) is not None:
+            continue
+        if not hi > lo * (1 + 1e-9):  # the model covers one value only: nothing to profile
+            out[name] = ParameterCalibration(name, float(default), float(lo), float("inf"), False,
+                                             f"the model's tables cover one {_label(name)} ({lo:.3g}) only: nothing "
+                                             f"to profile; the default {default:.3g} is kept", (lo, hi))
+            conditions = replace(conditions, **{name: float(default)})
+            continue
+        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
+
+        def build(value: float, name=name):
+            sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
+            return DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
+
+        pc = calibrate_model_parameter(name, lo, hi, default, build, label=_label(name))
+        log("%s", pc.note)
+        out[name] = pc
+        conditions = replace(conditions, **{name: pc.value})
+    return conditions, out
+
+
+def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
+    """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
+    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable."""
+    from acousim.models import force_model_type
+
+    out = {}
+    for name in force_model_type(model_name).calibration_ranges(conditions):
+        base, unit = name.rsplit("_", 1)
+        pc = calibrated.get(name)
+        out[name] = float(getattr(conditions, name))
+        out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
+        out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
+        out[f"{base}_note"] = pc.note if pc is not None else f"the {_label(name)} given by the user"
+        if pc is not None:
+            out[f"{base}_profile"] = pc.to_dict()
+    return out
 
 
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
-                      mesh_size: float | None, model_name: str) -> tuple[dict, DiagnosisInternals]:
-    from cubedimer.dataset import load_dataset
+                      mesh_size: float | None, model_name: str, gap: float | None,
+                      edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
+    from acousim.analytic import nominal_trap_frequency
+    from acousim.models import force_model_type, static_model
+    from cubedimer.dataset import LoadConfig, load_dataset
     from cubedimer.meta import read_meta
 
-    from ..simulation import model_from_meta
+    from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
     skip = logger.warning if progress else logger.debug
-    dataset = load_dataset(data_dir, strict=strict, report=lambda m: skip("skipping %s", m))
     meta = read_meta(data_dir)
-    model = model_from_meta(meta, mesh_size=mesh_size, model=model_name).interpolated()
-    problem = DiagnosisProblem.from_recorded(model, prepare_diagnosis_runs(dataset), config.max_frames_per_run)
+    conditions = conditions_from_meta(meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
+    # refuses a misfit first (a gap with Gor'kov, a dimer outside the full-wave family); a parameter to be calibrated
+    # starts at the value the model takes by default
+    mtype = force_model_type(model_name)
+    mtype.check(conditions)
+    start = {n: d for n, (_, _, d) in mtype.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
+    model = static_model(model_name, replace(conditions, **start))
+    # the loader checks the physics bounds of any levitated dimer; with a meta.json also the Gor'kov estimate
+    # of the trap frequency at its nominal pressure
+    dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
+                           report=lambda m: skip("skipping %s", m))
+    problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
+                                             config.max_frames_per_run)
+    data_warnings = []
+    if config.check_orientation:
+        orientation, flipped = check_y_orientation(problem, dataset, config.max_frames_per_run)
+        if orientation.inverted:  # a flipped axis is never reported as new physics: the diagnosis uses -y
+            warning = orientation.warning()
+            logger.warning("%s", warning["message"])
+            data_warnings.append(warning)
+            problem = flipped
+    # the model's own parameters the data may determine (the full-wave hinge gap), unless given
+    conditions, parameters = calibrate_model_parameters(model_name, conditions, problem.recorded_runs,
+                                                        config.max_frames_per_run, log)
+    if parameters:
+        model = static_model(model_name, conditions)
+        problem = DiagnosisProblem.from_recorded(model.interpolated(), problem.recorded_runs,
+                                                 config.max_frames_per_run)
+    model = problem.model
     runs = problem.runs
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -196,6 +287,9 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                 discovery = discover(final)
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
+    # the final model's parameters: the identified effects re-estimated together with the discovered terms
+    # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
+    joint_params, discovery, folded = joint_estimates(problem, final, discovery)
     # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
     # the others fitted on top of the identified set
     effects = []
@@ -204,9 +298,12 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         fit = fit_gap_model(problem, identified[: i + 1])
         g = scalar_gap(fit_gaps(runs, fit))
         test = ident.rounds[ident.identified.index(name)].candidates[name]
-        effects.append({"name": name, "params": final.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                        "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                        "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1})
+        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                 "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1}
+        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
+            entry["params_without_discovered_terms"] = final.effects[name]
+        effects.append(entry)
     others = []
     for name in config.candidates:
         if name in identified:
@@ -216,7 +313,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         test = last_tests.get(name)
         note = "fitted on top of the identified effects; not a significant held-out improvement"
         if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted (p = {replaced[name]:.2g}): "
+            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
                     "the discovered terms explain its share of the gap better")
         others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
                        "significant": False, "p_value": test.p_value if test else None,
@@ -240,10 +337,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "noise_floor": floor,
         "explained_within_noise": explained,
         "statement": (
-            "the calibrated simulation with the identified effects explains the data within its derivative noise"
+            ("the calibrated simulation with the identified effects explains the data within its derivative noise"
+             if identified else "the calibrated simulation explains the data within its derivative noise")
             if explained else
-            "a gap remains that no candidate effect explains: see localization.after for the terms, state-space "
-            "regions and time scales that carry it"),
+            "a gap remains that no candidate effect explains; the localization lists the library terms, "
+            "state-space regions and time scales that carry it"),
         "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,
@@ -251,13 +349,14 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "discovered_equations": discovered_equations(discovery),
         "discovery_selected": discovery.selected,
         "replaced_by_discovered_terms": [{"name": c, "p_value": p} for c, p in replaced.items()],
+        "folded_into_effects": {eq: t for eq, t in folded.items() if t},
     }
     if not discovery.empty:
         remaining["statement"] += "; the library terms that carry it: " + "; ".join(discovered_equations(discovery).values())
     if drift is not None and drift.detected:
         remaining["statement"] = (
             f"the pressure drifts within runs (relative amplitude {100 * drift.relative_amplitude:.1f} %, time scale "
-            f"{drift.time_scale_s:.2g} s, F-test p = {drift.p_value:.2g}); the simulation follows the drift, and on top of it "
+            f"{drift.time_scale_s:.2g} s, F-test {format_p(drift.p_value)}); the simulation follows the drift, and on top of it "
             + remaining["statement"])
     if ident.withheld:
         remaining["statement"] += (
@@ -274,11 +373,13 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
         "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
         "calibrated_on": CALIBRATED_ON,
+        **_parameter_record(conditions, parameters, model_name),
     }
     if drift is not None:
         calibration["drift"] = drift.to_dict()
     diagnosis = {
         "model": model_name,
+        "simulation": {k: v for k, v in model.record().items() if not isinstance(v, (list, dict))},
         "identified": identified,
         "calibration": calibration,
         "gap_before": gap_before,
@@ -294,6 +395,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "long_time": long_time,
         "remaining_gap": remaining,
         "identification_rounds": [r.to_dict() for r in ident.rounds],
+        "data_warnings": data_warnings,
         "skipped_files": dataset.skipped_files(),
         "glitch_frames_masked": dataset.n_glitches,
         "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,

@@ -1,6 +1,6 @@
 """The simulation's accelerations, energies and integral-form columns at the measured states.
 
-:class:`SimulationTerms` wraps the simulation's equations of motion (the Gor'kov model of PHYSICS.md
+:class:`SimulationTerms` wraps the simulation's equations of motion (the Gor'kov model of docs/conventions.md
 section 4 at nominal pressure; the hinge's velocity term is :func:`acousim.equations.hinge_acceleration`, the
 effects' columns :meth:`acousim.effects.Effect.regressors`) for the diagnosis: per run, the
 acoustic force and torque, the potential for the energy balance, and the double integrals of the
@@ -29,7 +29,7 @@ ENERGY_WINDOW_S = 0.4
 class SimulationTerms:
     """Static Gor'kov terms at the data states for a fast (interpolated) model at nominal pressure.
 
-    Wraps the simulation's equations of motion (PHYSICS.md section 4, as :class:`acousim.GorkovDimer`
+    Wraps the simulation's equations of motion (docs/conventions.md section 4, as :class:`acousim.GorkovDimer`
     evaluates them) at the measured states of the problem's runs; computed values are cached per
     instance (one instance per fit).
     """
@@ -54,7 +54,7 @@ class SimulationTerms:
 
         Every acoustic quantity of the model at the data states (forces, torque, potential, and any linear
         map of them: smoothing, drift factor, integral-form columns) depends on the origin height z0 only
-        through the phase exp(2ik (z0 + y + offset)) of the standing wave's intensity (PHYSICS.md
+        through the phase exp(2ik (z0 + y + offset)) of the standing wave's intensity (docs/conventions.md
         section 3), so three evaluations give it at every z0 to round-off; the calibration's height search
         then costs no force evaluation.  Shared by the problem's subsets (the folds) for the same drift.
         """

@@ -11,7 +11,20 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["sign_flip_pvalue", "wilcoxon_greater_pvalue", "smallest_sign_flip_pvalue", "runs_needed"]
+__all__ = ["sign_flip_pvalue", "wilcoxon_greater_pvalue", "smallest_sign_flip_pvalue", "runs_needed", "format_p",
+           "P_FLOOR"]
+
+#: Below this a p-value is stated as a bound: double precision cannot tell smaller tail probabilities apart
+#: (1 - 1e-16 rounds to 1), and "p = 0" would read as a certainty no finite data give.
+P_FLOOR = 1e-16
+
+
+def format_p(p: float, digits: int = 2) -> str:
+    """A p-value as prose: ``"p = 0.034"``, or ``"p < 1e-16"`` below :data:`P_FLOOR` (never ``"p = 0"``)."""
+    p = float(p)
+    if not np.isfinite(p):
+        return "p undefined"
+    return f"p < {P_FLOOR:g}" if p < P_FLOOR else f"p = {p:.{digits}g}"
 
 
 def sign_flip_pvalue(diff: ArrayLike, n_random: int = 200_000, seed: int = 0) -> float:

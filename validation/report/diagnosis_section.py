@@ -8,6 +8,7 @@ import numpy as np
 
 from cubedimer.atomic import save_figure as _save
 
+from ..diagnosis.statistics import format_p
 from .html import Figure, Section, Table
 
 __all__ = ["diagnosis_figures", "diagnosis_section"]
@@ -83,7 +84,14 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
                      f"at least {settings['runs_needed']} runs are needed.")
     drift = cal.get("drift") or {}
     # a detected drift and the discovered terms are part of the remaining-gap statement; their tables are below
-    drift_text = f"No drift of the pressure within runs (F-test p = {drift['p_value']:.2g}). " if drift.get("tested") and not drift.get("detected") else ""
+    drift_text = ""
+    if drift.get("tested") and not drift.get("detected"):
+        if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
+            drift_text = (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
+                          f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
+                          "the simulation keeps one pressure. ")
+        else:
+            drift_text = f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
     found = ""
     replaced = rem.get("replaced_by_discovered_terms") or []
     if replaced:
@@ -94,13 +102,25 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     if skipped or diagnosis.get("glitch_frames_masked"):
         data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.get('glitch_frames_masked', 0)} tracking-glitch "
                      "frames masked. ")
+    # what the data suggest about how they were recorded comes first: it changes how everything after it reads
+    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.get("data_warnings") or [])
+    gap_text = ""
+    if "gap_m" in cal:  # the full-wave model's hinge gap: calibrated with its standard error, or why not
+        if cal.get("gap_calibrated"):
+            gap_text = (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
+                        f"{cal['gap_std_m'] * 1e6:.2g} um (an effective gap of the inviscid full-wave model). ")
+        else:
+            std = cal.get("gap_std_m")
+            gap_text = (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
+                        + (f" (standard error of the profile {std * 1e6:.2g} um)" if std else "") + ". ")
     reading = (
-        data_text + drift_text +
+        warnings_text + data_text + drift_text + gap_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
         f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
-        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} With them the gap is {100 * diagnosis['gap_after']:.1f} %: "
-        f"{rem['statement']}.{found}"
+        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
+        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: " if ident else "")
+        + f"{rem['statement'][0].upper()}{rem['statement'][1:]}.{found}"
     )
     rows = [[e["name"], "yes" if e["significant"] else "no",
              ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
@@ -122,5 +142,10 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
                             [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
     return Section("diagnosis", "Sim-to-real gap", reading, figures, tables,
                    {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident,
+                    "noise_floor": diagnosis["noise_floor"], "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
+                    "pressure_ratio": cal["pressure_ratio"],
+                    "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
+                    "effects": {e["name"]: e["params"] for e in diagnosis["effects"] if e["significant"]},
+                    "data_warnings": [w["code"] for w in diagnosis.get("data_warnings") or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..diagnosis.statistics import format_p
 from .html import Figure, Section, Table, write_report
 
 __all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
@@ -41,7 +42,7 @@ def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta
     """Velocity-free thetaddot coefficients [SI] that the *identified* effects add to the static model: least
     squares of their accelerations at zero velocity on the velocity-free cubic monomials over the same
     box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
-    the calibrated Z_eq (PHYSICS.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
+    the calibrated Z_eq (docs/conventions.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
     kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
     from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
 
@@ -77,10 +78,13 @@ def lead_term_reading(lead, n_sigma: float) -> str:
         z = lead.integral / lead.integral_std_error
         return (f"The theta*y^2 coupling: the pooled integral-form fit (position space, coefficients shared by all runs) "
                 f"selects it with {lead.integral:.3g} +- {lead.integral_std_error:.2g} (z = {z:.1f}), against the {sim}; "
-                f"they {verdict} ({n_sigma:g} sigma, ratio {lead.ratio:.2f}). The per-run acceleration fits ({ensemble}) "
+                f"they {verdict} ({n_sigma:g} sigma; ratio {lead.ratio:.4g}, {lead.deviation_sigma:.2g} combined standard "
+                f"deviations apart). The per-run acceleration fits ({ensemble}) "
                 "scatter from run to run far more than the pooled estimate's standard error, so the verdict uses the pooled estimate.")
     return (f"The theta*y^2 coupling: {ensemble}; the pooled integral-form fit does not select it; {sim}. "
-            f"On the ensemble statistics they {verdict} ({n_sigma:g} sigma).")
+            + (f"On the ensemble statistics they {verdict} ({n_sigma:g} sigma"
+               + (f"; {lead.deviation_sigma:.2g} combined standard deviations apart" if np.isfinite(lead.deviation_sigma)
+                  else "") + ")." if lead.signs_agree is not None else f"On the ensemble statistics they {verdict}."))
 
 
 def _scattering_section(models) -> Section:
@@ -93,8 +97,8 @@ def _scattering_section(models) -> Section:
     text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
             f"(pressure and origin) on the same runs. The Gor'kov model leaves a gap of {g0.gap:.3g}; with the phenomenological "
             f"pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
-    if "fullwave" in rows:
-        fw = rows["fullwave"]
+    fw = rows.get("fullwave")
+    if fw is not None:
         text += (f" The full-wave model, whose hinge comes from the boundary-element solution with no fitted stiffness, "
                  f"leaves {fw.gap:.3g} (y equation {fw.components[0]:.3g}, theta equation {fw.components[1]:.3g}, energy "
                  f"{fw.components[2]:.3g}). docs/fullwave.md states how far its hinge numbers are converged and verified.")
@@ -112,7 +116,8 @@ def _scattering_section(models) -> Section:
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None, method: str = "discovery",
-                 model: str = "gorkov", heldout_tolerance: float | None = None) -> Path:
+                 model: str = "gorkov", heldout_tolerance: float | None = None, gap: float | None = None,
+                 edge_radius: float | None = None) -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -129,12 +134,15 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
         stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
+    gap, edge_radius : hinge gap and edge radius [m] of the full-wave model; without ``gap`` a full-wave diagnosis
+        calibrates it from the data
 
     Returns
     -------
     Path of report.html
     """
     from acousim.render import render_dimer
+    from cubedimer.spectra import peak_frequency
     from acousim.sweep import fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
     from cubedimer.meta import read_meta
@@ -145,6 +153,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
 
     from ..coefficients import compare_coefficients
     from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose_dataset
+    from ..diagnosis.model_comparison import MODEL_LABELS
     from ..simulation import model_from_meta
     from .diagnosis_section import diagnosis_figures, diagnosis_section
     from .figures import data_figures, phase_space_figures, restoring_overlay_figure
@@ -154,8 +163,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     def say(message: str) -> None:
         logger.log(level, "%s", message)
 
-    if model == "fullwave":  # refuse another experiment before the long fit, not after it
-        model_from_meta(read_meta(data_dir), model="fullwave")
+    # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
+    # before the long fit, not after it
+    model_from_meta(read_meta(data_dir), model=model, gap=gap, edge_radius=edge_radius)
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -182,12 +192,15 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                              [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model)
+    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model, gap=gap,
+                                       edge_radius=edge_radius)
     meta = read_meta(data_dir)
+    # the full-wave model beside the diagnosis's one: at its calibrated (or given) gap
+    fw_gap = diag["calibration"].get("gap_m", gap)
     say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
-    models = compare_simulation_models(internals.problem, meta, base=internals.base)
+    models = compare_simulation_models(internals.problem, meta, base=internals.base, gap=fw_gap)
     # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
-    cals = {k: f.calibration for k, f in models.fits.items() if k in ("gorkov", "fullwave")}
+    cals = {k: f.calibration for k, f in models.fits.items() if k in MODEL_LABELS and "+" not in k}  # simulations
     cals[model] = internals.final.calibration
     cal = cals["gorkov"]
     say("4/5 sweeping the calibrated simulations and comparing coefficients")
@@ -202,12 +215,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         fit = fit_static_coefficients(static_sweep(simulation, np.linspace(-theta_max, theta_max, 41),
                                                    np.linspace(-y_max, y_max, 41)))
         return plot, compare_coefficients(model_json, fit.coefficients, fit.std_errors, origin_offset=offset,
-                                          static_box=fit.box)
+                                          static_box=fit.box, origin_source="calibrated (section 6)")
 
     sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
     fw_sweep, fw_cmp = None, None
-    if "fullwave" in cals:
-        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave")
+    if cals.get("fullwave") is not None:
+        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave",
+                                 gap=fw_gap)
         fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
     say("5/5 figures and the report")
     sections = []
@@ -216,19 +230,29 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     classes: dict[str, int] = {}
     for p in prepared:
         classes[p.attractor.label] = classes.get(p.attractor.label, 0) + 1
-    fy = np.median([p.f_y for p in prepared])
-    ft = np.median([p.attractor.f_theta for p in prepared])
+    peaks = [(peak_frequency(p.run.y, p.run.dt), peak_frequency(p.run.theta, p.run.dt)) for p in prepared]
+    fy = float(np.median([py[0] for py, _ in peaks]))
+    ft = float(np.median([pt[0] for _, pt in peaks]))
+    resolution = float(max(py[1] for py, _ in peaks))  # of the shortest run
+    # a peak closer to 0 than two resolution widths (the Hann main lobe) is not resolved from the slow motion
+    ft_text = (f"the hinge's spectrum peaks at a median {ft:.2f} Hz" if ft >= 2 * resolution else
+               f"the hinge's spectrum peaks at a median {ft:.2f} Hz, within two resolution widths of 0 Hz, so the runs are "
+               "too short to resolve the hinge frequency")
     sections.append(Section(
         "data", "1. The data",
-        f"{len(prepared)} runs ({len(res.skipped)} files skipped as unreadable or invalid). The vertical motion oscillates at "
-        f"a median {fy:.2f} Hz and the hinge at {ft:.2f} Hz; the spectra show whether theta carries the y frequency and its "
-        f"second harmonic (theta locked to y). The runs fall into the attractor classes "
+        f"{len(prepared)} runs ({len(res.skipped)} files skipped as unreadable or invalid). The vertical motion's spectrum "
+        f"peaks at a median {fy:.2f} Hz and {ft_text} (peaks of the zero-padded spectra; runs of "
+        f"{1 / resolution:.3g} s resolve {resolution:.2g} Hz); the spectra show whether theta carries the y frequency and "
+        "its second harmonic (theta locked to y). The runs fall into the attractor classes "
         + ", ".join(f"{k} ({v})" for k, v in classes.items()) + ", read from the phase of theta relative to y at f_y.",
         [Figure(p, c) for p, c in dfig],
-        [Table("Runs", ["file", "class", "f_y [Hz]", "f_theta [Hz]", "amplitude y [um]", "amplitude theta", "phase [deg]"],
-               [[p.run.name, p.attractor.label, p.attractor.f_y, p.attractor.f_theta, p.attractor.amp_y * 1e6,
-                 p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p in prepared])],
-        {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": float(fy), "median_f_theta_hz": float(ft)}))
+        [Table("Runs (frequencies: peaks of the zero-padded spectra, each run resolving 1/duration)",
+               ["file", "class", "f_y [Hz]", "f_theta [Hz]", "resolution [Hz]", "amplitude y [um]", "amplitude theta",
+                "phase [deg]"],
+               [[p.run.name, p.attractor.label, py[0], pt[0], py[1], p.attractor.amp_y * 1e6,
+                 p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p, (py, pt) in zip(prepared, peaks)])],
+        {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": fy, "median_f_theta_hz": ft,
+         "frequency_resolution_hz": resolution}))
     # the tracking, when the data set came from video (its own section module)
     from .tracking_section import tracking_section
 
@@ -259,9 +283,11 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                 Figure(fit_dir / "optimisation.png", "Optimisation trajectory of the long-time refinement.")]
     if cmp is not None and (fit_dir / "compare.png").exists():
         fit_figs.append(Figure(fit_dir / "compare.png", "Per-run errors of the minimal model and of its variant without cross-coupling terms."))
-    cmp_text = ("" if cmp is None else
-                f" Without its cross-coupling terms (re-optimised) the model's per-run errors are larger with one-sided Wilcoxon "
-                f"p = {cmp.shape_test.p_greater:.3g} (attractor shape) and p = {cmp.poincare_test.p_greater:.3g} (Poincare map).")
+    cmp_text = "" if cmp is None else (
+        " Without its cross-coupling terms (re-optimised) the model's per-run errors are "
+        + " and ".join(f"{'' if t.p_greater < 0.05 else 'not significantly '}larger for the {what} (one-sided "
+                       f"Wilcoxon {format_p(t.p_greater, 3)})"
+                       for t, what in ((cmp.shape_test, "attractor shape"), (cmp.poincare_test, "Poincare map"))) + ".")
     if model_json.get("method") == "discovery":
         fit_text, fit_table = _discovery_fit_text(model_json, eqs)
         if (fit_dir / "pareto.png").exists():
@@ -310,10 +336,15 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         "outside the model's torque curve, the hinge is held by something the model omits." + fw_text,
         [Figure(*overlay), Figure(render, "The posed dimer mesh (theta = 0.3) coloured by the Gor'kov potential density u.")],
         [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height,
-             "fullwave_calibrated_pressure_pa": cals["fullwave"].pressure_amplitude_pa if "fullwave" in cals else None}))
+             "fullwave_calibrated_pressure_pa": getattr(cals.get("fullwave"), "pressure_amplitude_pa", None)}))
     # 5 model vs simulation
     lead = coef_cmp.rows[0]
-    main_cmp = coef_cmp if model == "gorkov" else fw_cmp
+    comparisons = {"gorkov": coef_cmp, "fullwave": fw_cmp}
+    if comparisons.get(model) is None:  # any other registered model: its own calibrated sweep
+        own = model_from_meta(meta, pressure_amplitude_pa=cals[model].pressure_amplitude_pa, model=model,
+                              gap=gap, edge_radius=edge_radius)
+        comparisons[model] = sweep_and_compare(own, cals[model].origin_offset_m)[1]
+    main_cmp = comparisons[model]  # the diagnosis's model's comparison
     main_lead, main_cal = main_cmp.rows[0], cals[model]
     # what the identified effects add to the static theta*y^2 of the diagnosis's model (the diagnosis is section 6)
     added = effect_static_coefficients(diag, sim.wave.wavenumber, main_cal.equilibrium_height_m, theta_max, y_max)
@@ -325,7 +356,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
         effects_reading = (f" The effects identified in section 6 ({', '.join(diag['identified'])}) add {added['y^2*theta']:.3g} to the "
                            f"static theta*y^2 (least squares over the same box); with them the "
-                           f"{'Gor' + chr(39) + 'kov' if model == 'gorkov' else 'full-wave'} simulation predicts "
+                           f"{MODEL_LABELS.get(model, model).split(' (')[0]} simulation predicts "
                            f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
     fw_reading = ""
     fw_rows = {}
@@ -336,14 +367,16 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                       f"theta*y^2 (the paper's finite-element check), against the Gor'kov {lead.simulated:.3g}; its column "
                       "below is its own calibrated sweep over the same box.")
     header = ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
-              "simulated", "simulated std", "verdict from", "ratio", "signs agree", f"within {coef_cmp.n_sigma:g} sigma"]
+              "simulated", "simulated std", "verdict from", "ratio", "signs agree", "deviation [combined sigma]",
+              f"within {coef_cmp.n_sigma:g} sigma"]
     if fw_cmp is not None:
         header += ["full wave", "full-wave std"]
 
     def table_row(r) -> list:
         row = [r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
                r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
-               r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.within_uncertainty]
+               r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.deviation_sigma,
+               r.within_uncertainty]
         if fw_cmp is not None:
             f = fw_rows.get((r.equation, r.term))
             row += [f.simulated if f else None, f.simulated_std if f else None]
@@ -368,7 +401,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # 6 the gap
     dfigs = diagnosis_figures(diag, internals, figs_dir)
     sec = diagnosis_section(diag, dfigs)
-    sections.append(Section("diagnosis", "6. The sim-to-real gap" + ("" if model == "gorkov" else " (full-wave model)"),
+    sections.append(Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(model, model).split(' (')[0]} model)",
                             sec.reading, sec.figures, sec.tables, sec.numbers))
     sections += sections_after
     from cubedimer.atomic import write_json
@@ -404,6 +437,10 @@ def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
             "many noise standard deviations separate the support from the one where the term is replaced by its "
             "closest library rival: below about 3 no estimator tells the two apart reliably (the rival wins in "
             "Phi(-alias z / 2) of data sets).")
+    damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in model_json["equations"][eq]]
+    if damping and (model_json.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
+        text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
+                 "the source paper; Holm's rule selects the other terms.")
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "

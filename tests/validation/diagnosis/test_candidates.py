@@ -11,7 +11,7 @@ def test_regressors_are_linear_in_parameters(name, rng):
     z = rng.uniform(-5e-4, 0, 20)
     reg = effect_regressors(name, st, z, 836.0)
     assert reg.shape == (20, 2, len(CANDIDATE_EFFECTS[name]))
-    # PHYSICS.md section 5: which equation each parameter acts in
+    # docs/conventions.md section 5: which equation each parameter acts in
     acts_in_y = {"gamma_y", "c_y"}
     for j, p in enumerate(CANDIDATE_EFFECTS[name]):
         assert np.any(reg[:, 0, j] != 0) == (p in acts_in_y)

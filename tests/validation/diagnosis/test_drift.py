@@ -65,3 +65,20 @@ def test_drift_detected_then_effects_on_top(drift_dataset):
     assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
     assert "drifts" in diag["remaining_gap"]["statement"]
     assert diag["skipped_files"] == []
+
+
+def test_a_run_too_long_for_its_windows_is_refused_before_any_fit():
+    """The per-node fit has one dense column per node and run: a run needing more than ``max_nodes_per_run``
+    nodes (a time in milliseconds makes a 3-s run 3000 "s" long: 7,500 windows of 0.4 s) is refused with a
+    message before any fit, instead of building a design of that size.  Only the runs' names and integral-form
+    times are looked at before the refusal, so a stand-in problem carries just those."""
+    from types import SimpleNamespace
+
+    times = np.arange(6000) / 2.0  # 3 s of 2,000 fps written in milliseconds
+    run = SimpleNamespace(name="run01.csv", integral=SimpleNamespace(times=times, usable=True))
+    problem = SimpleNamespace(runs=[run])
+    with pytest.raises(ValueError, match="run01.csv: a time span of 3000 s needs 7500 pressure-drift windows .* "
+                                         "is t in seconds"):
+        detect_pressure_drift(problem)
+    with pytest.raises(ValueError):
+        DriftSettings(max_nodes_per_run=1)

@@ -82,7 +82,7 @@ def test_partly_corrupt_dataset(tmp_path):
     diag, _ = diagnose_dataset(data, FAST, progress=False)
     assert diag["identified"] == ["pair_scattering"]
     assert len(diag["skipped_files"]) == 2
-    assert {files[0].name, files[1].name} == {s["file"] for s in diag["skipped_files"]}  # FORMATS.md: {file, reason}
+    assert {files[0].name, files[1].name} == {s["file"] for s in diag["skipped_files"]}  # docs/formats.md: {file, reason}
     assert all(s["reason"] for s in diag["skipped_files"])
     assert len(diag["gap_per_run"]["runs"]) == 8
 
@@ -126,7 +126,7 @@ def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
 
 @pytest.mark.slow
 def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
-    """The command end to end on a small twin data set: diagnosis.json with the FORMATS.md keys, the report
+    """The command end to end on a small twin data set: diagnosis.json with the docs/formats.md keys, the report
     section with its figures, and the progress logged on stderr."""
     import subprocess
     import sys

@@ -1,0 +1,130 @@
+"""``python -m acousim family {build,info}``: the full-wave table family over (ks, g/s) (docs/fullwave.md)."""
+from __future__ import annotations
+
+import argparse
+import logging
+
+from cubedimer.cli import UserInputError, add_executor_arguments, executor_config
+
+from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
+                     FamilyRangeError, FamilyTableError, FullwaveFamily, build_family, family_nodes, node_path)
+
+__all__ = ["add_parser"]
+
+log = logging.getLogger(__name__)
+
+
+def _floats(text: str, option: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise UserInputError(f"{option} {text!r}: expected comma-separated numbers") from None
+    if not values:
+        raise UserInputError(f"{option}: no value given")
+    return values
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "family",
+        help="build or inspect the full-wave table family over (ks, g/s)",
+        description=(
+            "The full-wave model (boundary elements) depends on the dimer only through ks (wavenumber x side) and "
+            "g/s (hinge gap / side); side, frequency, sound speed, air density and pressure are exact scalings. "
+            "'build' computes the node tables (one Chebyshev-in-theta table per (ks, g/s), minutes to a quarter "
+            "of an hour each on 2 cores), resumably: nodes already on disk are kept, each finished node is "
+            "written at once. 'info' lists the nodes and the covered range."
+        ),
+    )
+    sub = p.add_subparsers(dest="family_command", required=True, metavar="ACTION")
+    b = sub.add_parser("build", help="build the missing node tables (resumable, parallel over nodes)",
+                       description="Build every missing node table of the grid --ks x --gap-ratio into --out. "
+                                   "Rerun the same command to resume an interrupted build.",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    b.add_argument("--out", default=str(FAMILY_DIR), help="directory of the node tables")
+    b.add_argument("--ks", default=",".join(f"{v:g}" for v in FAMILY_KS),
+                   help="ks nodes (wavenumber x side), comma-separated")
+    b.add_argument("--gap-ratio", default=",".join(f"{v:g}" for v in FAMILY_GAP_RATIOS),
+                   help="g/s nodes (hinge gap / side), comma-separated")
+    b.add_argument("--points", default=None, metavar="KS:G,...",
+                   help="build exactly these (ks, g/s) pairs instead of the grid --ks x --gap-ratio (e.g. check points "
+                        "between the nodes for 'check')")
+    b.add_argument("--n-half", type=int, default=FAMILY_BUILD["n_half"],
+                   help="boundary-element solves per node (theta > 0; the series has 2 n_half terms)")
+    b.add_argument("--theta-max", type=float, default=FAMILY_BUILD["theta_max"],
+                   help="half-width of the theta range of every node table")
+    b.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_executor_arguments(b, "One task is one node table.")
+    b.set_defaults(func=run_build)
+    c = sub.add_parser("check", help="measure the interpolation error against direct-solve tables between the nodes",
+                       description="Compare the family's interpolation with every check table it covers (tables built "
+                                   "with 'build --points' between the nodes, and the shipped default dimer's table) on "
+                                   "|theta| <= 0.9 and y -1.0..+0.8 mm, print the errors and write them to "
+                                   "FAMILY/accuracy.json, which every interpolated model then states.",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    c.add_argument("--family", default=str(FAMILY_DIR), help="directory of the node tables")
+    c.add_argument("--checks", default=str(FAMILY_DIR / "checks"), help="directory of the check tables")
+    c.set_defaults(func=run_check)
+    i = sub.add_parser("info", help="list the node tables and the range they cover")
+    i.add_argument("--family", default=str(FAMILY_DIR), help="directory of the node tables")
+    i.set_defaults(func=run_info)
+
+
+def run_build(args: argparse.Namespace) -> int:
+    if args.n_half < 2:
+        raise UserInputError(f"--n-half {args.n_half}: at least 2 solves are needed")
+    if not 0 < args.theta_max < 1:
+        raise UserInputError(f"--theta-max {args.theta_max}: must lie in (0, 1)")
+    try:
+        if args.points:
+            pairs = [p.split(":") for p in args.points.split(",") if p.strip()]
+            if any(len(p) != 2 for p in pairs):
+                raise UserInputError(f"--points {args.points!r}: expected KS:G pairs separated by commas")
+            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max) for k, g in pairs]
+        else:
+            nodes = family_nodes(_floats(args.ks, "--ks"), _floats(args.gap_ratio, "--gap-ratio"), args.n_half,
+                                 args.theta_max)
+    except ValueError as exc:
+        raise UserInputError(f"{exc} (options --ks / --gap-ratio / --points)") from None
+    summary = build_family(args.out, nodes, executor_config(args), progress=not args.no_progress)
+    built = [s for s in summary if s["built"]]
+    print(f"{len(nodes)} node table(s) in {args.out}: {len(built)} built now "
+          f"({sum(s['wall_s'] for s in built):.0f} s of work), {len(nodes) - len(built)} already there")
+    return 0
+
+
+def run_info(args: argparse.Namespace) -> int:
+    try:
+        fam = FullwaveFamily(args.family)
+    except FamilyTableError as exc:
+        raise UserInputError(str(exc)) from None
+    for (k, g), sur in sorted(fam.tables.items()):
+        ba = sur.build_accuracy
+        print(f"ks {k:.4f}  g/s {g:.5f}  {int(ba.get('dofs', 0)):5d} DOFs  {float(ba.get('wall_s', 0)):7.0f} s")
+    print(f"covers {fam.describe_range()}")
+    return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from cubedimer.atomic import write_json
+
+    from .family import family_accuracy, load_node
+    from .surrogate import DEFAULT_TABLE
+
+    try:
+        fam = FullwaveFamily(args.family)
+        checks = [load_node(p) for p in sorted(Path(args.checks).glob("*.json"))] + [load_node(DEFAULT_TABLE)]
+    except FamilyTableError as exc:
+        raise UserInputError(str(exc)) from None
+    if fam.empty:
+        raise UserInputError(f"{args.family}: {fam.describe_range()}; build the family first ({BUILD_HINT})")
+    acc = family_accuracy(fam, checks)
+    for r in acc["checks"]:
+        print(f"ks {r['ks']:.4f}  g/s {r['gap_over_side']:.4f}: Q_y {100 * r['q_y']:.3f} %, Q_theta "
+              f"{100 * r['q_theta']:.3f} % of max; f_y {100 * r['f_y']:+.3f} %, f_theta {100 * r['f_theta']:+.3f} %, "
+              f"stiffness {100 * r['stiffness']:+.3f} %")
+    write_json(Path(args.family) / "accuracy.json", acc)
+    print(f"{acc['summary']['n_checks']} check(s) inside {fam.describe_range()} -> {Path(args.family) / 'accuracy.json'}")
+    return 0

@@ -1,0 +1,306 @@
+"""The force models: one interface, one registry.
+
+Every command that simulates the dimer (``acousim sweep``, ``acousim simulate``, ``validation diagnose``,
+``validation report``) gets its model here, by name, from the experiment's conditions
+(:class:`ExperimentConditions`: the options or meta.json).  A model type (:class:`ForceModelType`) gives two
+views of the same physics:
+
+* the **static model** (:class:`StaticModel`): forces at absolute heights above the node, what the static
+  sweep and the sim-to-real diagnosis evaluate at every frame (:class:`acousim.GorkovDimer`,
+  :class:`acousim.fullwave.FullwaveDimer`);
+* the **force model** (:class:`acousim.ForceModel`): the height structure ``A + B cos 2kZ + C sin 2kZ`` with
+  Chebyshev-in-theta coefficients that the equations of motion and the twin integrate.
+
+A new force model is one module defining its two builders and one :func:`register_force_model` call (see
+docs/architecture.md); the commands' ``--model`` choices are :func:`force_model_names`, and no module outside
+this one branches on a model's name.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import Callable, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .force_model import ForceModel
+from .medium import GRAVITY, Medium, ParticleMaterial
+
+__all__ = ["ExperimentConditions", "StaticModel", "ForceModelType", "FORCE_MODEL_TYPES", "register_force_model",
+           "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError"]
+
+
+class ConditionError(ValueError):
+    """An experimental condition the chosen model cannot take (a gap with the Gor'kov model, a dimer outside the
+    full-wave family...); one line naming the condition."""
+
+
+#: How each condition is named on the command line (for one-line errors).
+OPTION_NAMES = {"side_length_m": "--side", "frequency_hz": "--frequency", "gap_m": "--gap",
+                "edge_radius_m": "--edge-radius", "mesh_size_m": "--mesh-size", "side_b_m": "--side-b",
+                "pressure_amplitude_pa": "--pressure", "particle_density_kg_m3": "--density",
+                "quadrature_degree": "--quadrature-degree"}
+#: The model-specific conditions (each model type takes some of them, :attr:`ForceModelType.options`).
+MODEL_OPTIONS = ("gap_m", "edge_radius_m", "mesh_size_m", "side_b_m", "quadrature_degree")
+
+
+@dataclass(frozen=True)
+class ExperimentConditions:
+    """The experiment a model is built for (SI units; defaults of the README's conventions, docs/conventions.md).
+
+    ``gap_m`` and ``edge_radius_m`` describe the hinge of the full-wave model (None: its default, 0.01 s and
+    sharp edges); ``mesh_size_m`` and ``side_b_m`` belong to the Gor'kov volume model (None: its defaults).
+    A model refuses conditions it does not take (:attr:`ForceModelType.options`).
+    """
+
+    side_length_m: float = 500e-6
+    particle_density_kg_m3: float = 2160.0
+    bulk_modulus_pa: float = 24.9e9
+    frequency_hz: float = 45_650.0
+    sound_speed_m_s: float = 343.0
+    air_density_kg_m3: float = 1.204
+    pressure_amplitude_pa: float = 3000.0
+    gravity_m_s2: float = GRAVITY
+    gap_m: float | None = None
+    edge_radius_m: float | None = None
+    mesh_size_m: float | None = None
+    side_b_m: float | None = None
+    quadrature_degree: int | None = None
+
+    def __post_init__(self) -> None:
+        for name, value in asdict(self).items():
+            if value is None:
+                continue
+            if not math.isfinite(float(value)):
+                raise ConditionError(f"{OPTION_NAMES.get(name, name)} = {value!r} is not finite")
+            if name == "quadrature_degree":
+                if int(value) != value or value < 2:
+                    raise ConditionError(f"--quadrature-degree must be an integer of at least 2, got {value!r}")
+            elif name == "edge_radius_m":
+                if value < 0:
+                    raise ConditionError(f"--edge-radius = {value!r} m must be >= 0")
+            elif value <= 0:
+                raise ConditionError(f"{OPTION_NAMES.get(name, name)} = {value!r} must be positive")
+        if self.gap_m is not None and self.gap_m > 0.5 * self.side_length_m:
+            raise ConditionError(f"--gap = {self.gap_m:g} m is more than half the side ({self.side_length_m:g} m)")
+
+    #: The meta.json keys (docs/formats.md) that map one to one onto fields.
+    META_FIELDS: ClassVar[tuple[str, ...]] = ("side_length_m", "particle_density_kg_m3", "bulk_modulus_pa",
+                                              "frequency_hz", "sound_speed_m_s", "air_density_kg_m3",
+                                              "pressure_amplitude_pa")
+
+    @classmethod
+    def from_meta(cls, meta: dict | None = None, **overrides) -> "ExperimentConditions":
+        """Conditions of a data set's meta.json (missing keys: defaults), with ``overrides`` (None values ignored)."""
+        values = {k: float(v) for k, v in (meta or {}).items() if k in cls.META_FIELDS and v is not None}
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**values)
+
+    @property
+    def medium(self) -> Medium:
+        return Medium(frequency_hz=self.frequency_hz, sound_speed_m_s=self.sound_speed_m_s,
+                      density_kg_m3=self.air_density_kg_m3)
+
+    @property
+    def material(self) -> ParticleMaterial:
+        return ParticleMaterial(density_kg_m3=self.particle_density_kg_m3, bulk_modulus_pa=self.bulk_modulus_pa)
+
+    @property
+    def ks(self) -> float:
+        """Wavenumber times side (dimensionless)."""
+        return self.medium.wavenumber * self.side_length_m
+
+    def with_pressure(self, pressure_amplitude_pa: float) -> "ExperimentConditions":
+        return replace(self, pressure_amplitude_pa=float(pressure_amplitude_pa))
+
+
+@runtime_checkable
+class StaticModel(Protocol):
+    """What the static sweep and the diagnosis need from a force model at absolute heights.
+
+    Attributes
+    ----------
+    name : str
+        The registry name (``"gorkov"``, ``"fullwave"``).
+    conservative : bool
+        Whether the forces derive from a potential (energy balances then use it; otherwise the work along the
+        path, and a sweep leaves its potential column empty).
+    equilibrium_height : float
+        Z_eq [m] (< 0) of the theta = 0 dimer.
+    dimer
+        Mass and hinge inertia: ``total_mass`` [kg] and ``hinge_inertia(theta)`` [kg m^2].
+    wave
+        The standing wave (pressure amplitude, medium, material).
+    gravity : float
+        g [m/s^2].
+    """
+
+    name: str
+    conservative: bool
+    gravity: float
+
+    @property
+    def equilibrium_height(self) -> float: ...
+
+    def orientation_sums(self, theta: ArrayLike) -> tuple: ...
+
+    def integrals_at_height(self, theta: ArrayLike, z_com: ArrayLike, orientation_sums: tuple | None = None): ...
+
+    def with_pressure(self, pressure_amplitude_pa: float) -> "StaticModel": ...
+
+    def interpolated(self) -> "StaticModel": ...
+
+    def record(self) -> dict:
+        """The model's settings (geometry, medium, mesh or table, pressure) for files and reports."""
+        ...
+
+
+@dataclass(frozen=True)
+class ForceModelType:
+    """One registered force model.
+
+    Parameters
+    ----------
+    name : str
+        The ``--model`` value.
+    summary : str
+        One line for ``--help``.
+    static : callable
+        ``static(conditions) -> StaticModel``.
+    dynamic : callable
+        ``dynamic(conditions) -> ForceModel`` (for the equations of motion and the twin).
+    options : frozenset of str
+        The model-specific :class:`ExperimentConditions` fields it takes (others must be None).
+    capabilities : frozenset of str
+        What else it offers: ``"render"`` (a volume mesh to draw), ``"potential"`` (forces from a potential).
+    calibratable : callable, optional
+        ``calibratable(conditions) -> {field: (lo, hi, default)}``: model parameters (fields of
+        :class:`ExperimentConditions`) that the data may determine, with the range the model covers and the value
+        it takes when they do not (the full-wave hinge gap); the diagnosis profiles each one the user left unset.
+    """
+
+    name: str
+    summary: str
+    static: Callable[[ExperimentConditions], StaticModel]
+    dynamic: Callable[[ExperimentConditions], ForceModel]
+    options: frozenset = field(default_factory=frozenset)
+    capabilities: frozenset = field(default_factory=frozenset)
+    calibratable: Callable[[ExperimentConditions], dict] | None = None
+
+    def calibration_ranges(self, conditions: ExperimentConditions) -> dict[str, tuple[float, float, float]]:
+        """``{field: (lo, hi, default)}`` of the parameters the data may determine ({} for none)."""
+        return {} if self.calibratable is None else dict(self.calibratable(conditions))
+
+    def check(self, conditions: ExperimentConditions) -> None:
+        """Refuse model-specific conditions this model does not take (one line naming the option)."""
+        for name in MODEL_OPTIONS:
+            if getattr(conditions, name) is not None and name not in self.options:
+                takers = [t.name for t in FORCE_MODEL_TYPES.values() if name in t.options]
+                raise ConditionError(f"{OPTION_NAMES[name]} applies to --model {' / '.join(takers) or '(none)'} only, "
+                                     f"not to --model {self.name}")
+
+
+#: The registry: model name -> :class:`ForceModelType`.
+FORCE_MODEL_TYPES: dict[str, ForceModelType] = {}
+
+
+def register_force_model(model_type: ForceModelType) -> ForceModelType:
+    """Add a model type to the registry (its name becomes a ``--model`` choice everywhere)."""
+    FORCE_MODEL_TYPES[model_type.name] = model_type
+    return model_type
+
+
+def force_model_names() -> tuple[str, ...]:
+    """The registered model names, in registration order (the first is the default)."""
+    return tuple(FORCE_MODEL_TYPES)
+
+
+def force_model_type(name: str) -> ForceModelType:
+    """The registered type called ``name`` (:class:`ConditionError` naming the choices otherwise)."""
+    try:
+        return FORCE_MODEL_TYPES[name]
+    except KeyError:
+        raise ConditionError(f"unknown force model {name!r}; choose one of {', '.join(FORCE_MODEL_TYPES)}") from None
+
+
+def static_model(name: str, conditions: ExperimentConditions) -> StaticModel:
+    """The static model ``name`` of ``conditions`` (checked first; :class:`ConditionError` on a misfit)."""
+    t = force_model_type(name)
+    t.check(conditions)
+    return t.static(conditions)
+
+
+def dynamic_model(name: str, conditions: ExperimentConditions) -> ForceModel:
+    """The force model ``name`` of ``conditions`` for the equations of motion (checked first)."""
+    t = force_model_type(name)
+    t.check(conditions)
+    return t.dynamic(conditions)
+
+
+# ---------------------------------------------------------------------------------------------- Gor'kov
+def _gorkov_static(c: ExperimentConditions):
+    from .dimer import CubeDimer
+    from .field import StandingWave
+    from .forces import DEFAULT_QUADRATURE_DEGREE, GorkovDimer
+
+    smallest = min(c.side_length_m, c.side_b_m or c.side_length_m)
+    if c.mesh_size_m is not None and not 0.01 <= c.mesh_size_m / smallest <= 1.0:
+        raise ConditionError(f"--mesh-size {c.mesh_size_m:g} m must be between 0.01 and 1 times the cube side")
+    dimer = CubeDimer(c.side_length_m, c.side_b_m, c.material)
+    model = GorkovDimer(dimer, StandingWave(c.pressure_amplitude_pa, c.medium, c.material), mesh_size=c.mesh_size_m,
+                        quadrature_degree=c.quadrature_degree or DEFAULT_QUADRATURE_DEGREE, gravity=c.gravity_m_s2)
+    model.equilibrium_height  # noqa: B018 (raises ValueError when the field cannot levitate the dimer)
+    return model
+
+
+def _gorkov_dynamic(c: ExperimentConditions):
+    from .surrogate import build_surrogate, cached_surrogate
+
+    if c.side_b_m is not None and c.side_b_m != c.side_length_m:
+        raise ConditionError("--side-b: the equations of motion take equal cubes only")
+    default_air = ExperimentConditions(side_length_m=c.side_length_m, pressure_amplitude_pa=c.pressure_amplitude_pa,
+                                       mesh_size_m=c.mesh_size_m)
+    if c == default_air:  # cached per process (the twin's usual case)
+        return cached_surrogate(float(c.side_length_m), float(c.pressure_amplitude_pa), c.mesh_size_m)
+    return build_surrogate(_gorkov_static(c))
+
+
+register_force_model(ForceModelType(
+    "gorkov", "the Gor'kov volume integral over tetrahedral meshes of the two cubes (small-particle limit)",
+    _gorkov_static, _gorkov_dynamic, frozenset({"mesh_size_m", "side_b_m", "quadrature_degree"}),
+    frozenset({"render", "potential"})))
+
+
+# ---------------------------------------------------------------------------------------------- full wave
+def _fullwave_dynamic(c: ExperimentConditions):
+    from .fullwave.family import fullwave_surrogate
+
+    return fullwave_surrogate(c)
+
+
+def _fullwave_static(c: ExperimentConditions):
+    from .fullwave.statics import FullwaveDimer
+
+    return FullwaveDimer(_fullwave_dynamic(c))
+
+
+def _fullwave_gap_range(c: ExperimentConditions) -> dict:
+    """The hinge gaps [m] the shipped family covers at this dimer's ks, and the gap the model takes when the data
+    do not determine it: 0.01 s (the default dimer's direct table, or inside the family), else the covered gap
+    nearest to it."""
+    from .fullwave.family import DEFAULT_GAP_RATIO, _is_default_dimer, shipped_family
+
+    fam = shipped_family()
+    fam.check_covers(c.ks, fam.ranges()[1][0] if fam.ranges() else DEFAULT_GAP_RATIO)
+    (_, _), (g0, g1) = fam.ranges()
+    s = c.side_length_m
+    default = DEFAULT_GAP_RATIO * s
+    if not _is_default_dimer(s, default, c.medium, c.particle_density_kg_m3, c.gravity_m_s2):
+        default = min(max(default, g0 * s), g1 * s)
+    return {"gap_m": (g0 * s, g1 * s, default)}
+
+
+register_force_model(ForceModelType(
+    "fullwave", "the full-wave (boundary-element) scattering by both cubes, from the table family over (ks, g/s)",
+    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range))

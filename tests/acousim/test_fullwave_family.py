@@ -1,0 +1,186 @@
+"""The full-wave table family: scaling, interpolation, coverage, refusals and the resumable build (no solve here;
+the scaling against direct solves is in test_fullwave_surrogate.py)."""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from acousim.fullwave import default_fullwave_surrogate
+from acousim.fullwave.family import (FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode, FamilyRangeError, FamilyTableError,
+                                     FullwaveFamily, build_family, dimensionless_coefficients, family_mesh_spec,
+                                     family_nodes, scaled_surrogate)
+from acousim.fullwave.geometry import TABLE_SPEC
+from acousim.medium import Medium
+from acousim.models import ConditionError, ExperimentConditions, dynamic_model, static_model
+
+from ..conftest import synthetic_reduced, write_synthetic_family
+
+
+def test_family_mesh_is_the_shipped_table_mesh_at_the_default_gap():
+    assert family_mesh_spec(500e-6, 5e-6) == TABLE_SPEC
+
+
+def test_family_mesh_keeps_the_hinge_aspect_ratio():
+    """Elements g/2 across and 3 g along the hinge at every gap node (up to the caps)."""
+    for g in FAMILY_GAP_RATIOS:
+        spec = family_mesh_spec(500e-6, g * 500e-6)
+        assert spec.h_hinge == pytest.approx(min(max(0.5 * g, 0.0025), 0.02))
+        assert spec.h_along == pytest.approx(min(3 * g, 0.125))
+
+
+def test_nodes_span_the_lab_range():
+    assert FAMILY_KS[0] == 0.3 and FAMILY_KS[-1] == 0.65 and len(FAMILY_KS) == 3
+    assert FAMILY_GAP_RATIOS[0] == 0.01 and FAMILY_GAP_RATIOS[-1] == 0.05
+    # the cheapest (largest gap) nodes are built first
+    order = [n.gap_ratio for n in family_nodes()]
+    assert order == sorted(order, reverse=True)
+
+
+def test_scaling_round_trip_is_exact():
+    """dimensionless -> physical at the table's own settings gives the table back (forces, Z_eq, inertia)."""
+    sur = default_fullwave_surrogate()
+    st = sur.settings
+    back = scaled_surrogate(dimensionless_coefficients(sur), sur.theta_max, st["side_m"], st["gap_m"], sur.medium,
+                            st["particle_density_kg_m3"], sur.pressure_amplitude_pa)
+    for comp in ("fz", "qt"):
+        np.testing.assert_allclose(np.array(back.coefficients[comp]), np.array(sur.coefficients[comp]), rtol=1e-13,
+                                   atol=0)
+    assert back.z_eq == pytest.approx(sur.z_eq, rel=1e-12)
+    assert back.inertia_const == pytest.approx(sur.inertia_const, rel=1e-12)
+    assert back.inertia_sin2 == pytest.approx(sur.inertia_sin2, rel=1e-12)
+    assert back.mass == pytest.approx(sur.mass, rel=1e-12)
+
+
+@pytest.mark.parametrize("factor", [0.8, 1.3])
+def test_scaling_in_side_and_frequency_at_fixed_ks(factor):
+    """Same ks, side times f: forces times f^2 (p0, rho0, c0 fixed), torques times f^3, mass times f^3; the
+    equilibrium sits at the same k Z_eq only where gravity is rescaled too, so compare the coefficients."""
+    sur = default_fullwave_surrogate()
+    st = sur.settings
+    d = dimensionless_coefficients(sur)
+    med = Medium(frequency_hz=sur.medium.frequency_hz / factor)
+    big = scaled_surrogate(d, sur.theta_max, st["side_m"] * factor, st["gap_m"] * factor, med)
+    np.testing.assert_allclose(np.array(big.coefficients["fz"]), factor**2 * np.array(sur.coefficients["fz"]),
+                               rtol=1e-12, atol=0)
+    np.testing.assert_allclose(np.array(big.coefficients["qt"]), factor**3 * np.array(sur.coefficients["qt"]),
+                               rtol=1e-12, atol=0)
+    assert big.mass == pytest.approx(factor**3 * sur.mass, rel=1e-12)
+    assert big.two_k == pytest.approx(sur.two_k / factor, rel=1e-12)
+
+
+def test_interpolation_reproduces_the_dependence_exactly(synthetic_family_dir):
+    """The synthetic family is quadratic in ks and log g/s: the 3 x 4 Lagrange interpolant is exact between nodes."""
+    fam = FullwaveFamily(synthetic_family_dir)
+    assert fam.ks_nodes == FAMILY_KS and fam.gap_nodes == FAMILY_GAP_RATIOS
+    for ks, g in ((0.33, 0.012), (0.418, 0.0224), (0.6, 0.041), (0.65, 0.05)):
+        got = fam.dimensionless(ks, g)
+        want = synthetic_reduced(ks, g)
+        for comp in ("fz", "qt"):
+            np.testing.assert_allclose(got[comp], want[comp], rtol=1e-11, atol=1e-13 * np.abs(want[comp]).max())
+
+
+def test_family_surrogate_of_a_lab_dimer(synthetic_family_dir):
+    """A 600 um dimer at 42 kHz: the physical surrogate is the scaled interpolant, with its accuracy record."""
+    fam = FullwaveFamily(synthetic_family_dir)
+    med = Medium(frequency_hz=42_000.0)
+    sur = fam.surrogate(600e-6, 12e-6, med)
+    ks = med.wavenumber * 600e-6
+    want = synthetic_reduced(ks, 0.02)
+    unit = 3000.0**2 * 600e-6**2 / (med.density_kg_m3 * med.sound_speed_m_s**2)
+    np.testing.assert_allclose(np.array(sur.coefficients["fz"]), unit * want["fz"], rtol=1e-11,
+                               atol=1e-13 * unit * np.abs(want["fz"]).max())
+    assert sur.build_accuracy["source"] == "family interpolation"
+    assert sur.settings["gap_m"] == 12e-6 and sur.settings["ks"] == pytest.approx(ks)
+    f_y, f_t = sur.linear_frequencies()
+    assert 5 < f_y < 200 and np.isfinite(f_t)
+
+
+@pytest.mark.parametrize("ks,g", [(0.25, 0.02), (0.7, 0.02), (0.4, 0.005), (0.4, 0.08)])
+def test_outside_the_family_is_refused_never_extrapolated(synthetic_family_dir, ks, g):
+    fam = FullwaveFamily(synthetic_family_dir)
+    with pytest.raises(FamilyRangeError) as err:
+        fam.dimensionless(ks, g)
+    msg = str(err.value)
+    assert "ks 0.3-0.65 and g/s 0.01-0.05" in msg and "python -m acousim family build" in msg
+    assert "\n" not in msg
+
+
+def test_partial_family_covers_its_complete_rows(tmp_path):
+    """Two complete gap rows and one incomplete one: the covered range is the complete rows' rectangle."""
+    write_synthetic_family(tmp_path, gap_nodes=FAMILY_GAP_RATIOS[2:])
+    write_synthetic_family(tmp_path, ks_nodes=FAMILY_KS[:2], gap_nodes=FAMILY_GAP_RATIOS[1:2])
+    fam = FullwaveFamily(tmp_path)
+    assert fam.gap_nodes == FAMILY_GAP_RATIOS[2:]
+    got = fam.dimensionless(0.5, 0.04)["qt"]
+    # two gap nodes: linear in log g, so not exact for the synthetic quadratic (but close)
+    np.testing.assert_allclose(got, synthetic_reduced(0.5, 0.04)["qt"], rtol=2e-3)
+    with pytest.raises(FamilyRangeError):
+        fam.dimensionless(0.5, 0.02)
+
+
+def test_corrupt_table_is_refused_by_name(tmp_path, synthetic_family_dir):
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, tmp_path / p.name)
+    bad = sorted(tmp_path.glob("*.json"))[3]
+    bad.write_text(bad.read_text()[:500])
+    with pytest.raises(FamilyTableError) as err:
+        FullwaveFamily(tmp_path)
+    assert bad.name in str(err.value) and "\n" not in str(err.value)
+
+
+def test_table_built_with_other_settings_is_refused(tmp_path, synthetic_family_dir):
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, tmp_path / p.name)
+    victim = sorted(tmp_path.glob("*.json"))[0]
+    d = json.loads(victim.read_text())
+    d["settings"]["h_along"] = 0.2  # another mesh rule
+    victim.write_text(json.dumps(d))
+    with pytest.raises(FamilyTableError, match="settings do not match"):
+        FullwaveFamily(tmp_path)
+
+
+def test_build_resumes_from_the_nodes_on_disk(tmp_path):
+    """Every node already there (with the right settings) is kept: nothing is solved."""
+    write_synthetic_family(tmp_path, ks_nodes=FAMILY_KS[:2], gap_nodes=FAMILY_GAP_RATIOS[-1:])
+    nodes = [FamilyNode(k, FAMILY_GAP_RATIOS[-1], n_half=7) for k in FAMILY_KS[:2]]
+    before = {p.name: p.stat().st_mtime_ns for p in tmp_path.glob("*.json")}
+    summary = build_family(tmp_path, nodes, progress=False)
+    assert [s["built"] for s in summary] == [False, False]
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.glob("*.json")} == before
+
+
+def test_registry_gives_the_family_dimer(use_synthetic_family):
+    c = ExperimentConditions(side_length_m=600e-6, frequency_hz=42_000.0, gap_m=10e-6)
+    fw = static_model("fullwave", c)
+    assert fw.name == "fullwave" and not fw.conservative
+    assert fw.record()["gap_m"] == 10e-6
+    dyn = dynamic_model("fullwave", c)
+    np.testing.assert_allclose(dyn.coefficients["qt"], fw.surrogate.coefficients["qt"], rtol=0)
+
+
+def test_the_default_dimer_keeps_its_direct_solve_table():
+    sur = dynamic_model("fullwave", ExperimentConditions())
+    assert sur.build_accuracy["source"] == "direct-solve table of the default dimer"
+    np.testing.assert_allclose(sur.coefficients["qt"], default_fullwave_surrogate().coefficients["qt"], rtol=0)
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    ({"gap_m": 5e-6}, "--gap applies to --model fullwave only"),
+    ({"edge_radius_m": 0.0}, "--edge-radius applies to --model fullwave only"),
+])
+def test_gorkov_refuses_hinge_options(kwargs, message):
+    with pytest.raises(ConditionError, match=message):
+        static_model("gorkov", ExperimentConditions(**kwargs))
+
+
+def test_family_info_command(synthetic_family_dir):
+    r = subprocess.run([sys.executable, "-m", "acousim", "family", "info", "--family", str(synthetic_family_dir)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "covers ks 0.3-0.65 and g/s 0.01-0.05" in r.stdout
+    assert len([l for l in r.stdout.splitlines() if l.startswith("ks ")]) == len(FAMILY_KS) * len(FAMILY_GAP_RATIOS)

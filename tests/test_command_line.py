@@ -1,0 +1,54 @@
+"""The command line as a user meets it: console scripts beside ``python -m``, and a help text for every option and
+argument of every command."""
+import argparse
+import importlib
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("acousim", "fitting", "validation")
+
+
+def _scripts() -> dict:
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        tomllib = pytest.importorskip("tomli")
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+
+
+def test_one_console_script_per_package_runs_its_cli():
+    scripts = _scripts()
+    assert {f"cubedimer-{p}": f"{p}.cli:main" for p in PACKAGES}.items() <= scripts.items()
+    for name, target in scripts.items():
+        module, func = target.split(":")
+        assert callable(getattr(importlib.import_module(module), func)), name
+
+
+def _actions(parser: argparse.ArgumentParser, path: list[str]):
+    for a in parser._actions:
+        if isinstance(a, argparse._SubParsersAction):
+            for name, sub in a.choices.items():
+                yield from _actions(sub, path + [name])
+        elif not isinstance(a, argparse._HelpAction):
+            yield " ".join(path), "/".join(a.option_strings) or a.dest, a.help
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_option_and_argument_has_a_help_text(package):
+    parser = importlib.import_module(f"{package}.cli").build_parser()
+    missing = [f"{cmd} {opt}" for cmd, opt, text in _actions(parser, [package])
+               if not text or text == argparse.SUPPRESS or not text.strip()]
+    assert not missing, missing
+
+
+@pytest.mark.parametrize("package", ["fitting", "validation"])
+def test_help_points_to_the_repository_docs(package, capsys):
+    main = importlib.import_module(f"{package}.cli").main
+    with pytest.raises(SystemExit) as exit_:
+        main(["--help"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out
+    assert "docs/formats.md" in out and "docs/conventions.md" in out
