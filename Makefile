@@ -7,7 +7,7 @@ OUT    ?= demo_output
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 export MPLBACKEND ?= Agg
 
-.PHONY: all demo test test-fast bench venv system-deps browser clean
+.PHONY: all demo demo-video test test-fast bench venv system-deps browser clean
 
 all: test
 
@@ -45,6 +45,16 @@ demo: venv
 	@echo "[demo 3/3] fit, compare, diagnose and report"
 	$(BIN)/python -m validation report $(OUT)/twin --out $(OUT)/report
 	@echo "demo written to $(OUT)/: open $(OUT)/report/report.html"
+
+# The same job from camera frames: the twin renders high-speed video, the tracking measures it, the report reads it.
+demo-video: venv
+	@echo "[demo-video 1/3] digital twin with its camera: 4 runs of 2 s as 180 x 150 px video (OUT/video_twin/video/)"
+	$(BIN)/python -m acousim simulate --preset paper-like --runs 4 --duration 2 --seed 3 --video --out $(OUT)/video_twin --force --no-progress
+	@echo "[demo-video 2/3] tracking: video to runs of (t, y, theta)"
+	$(BIN)/python -m tracking $(OUT)/video_twin/video --out $(OUT)/tracked --force
+	@echo "[demo-video 3/3] fit, compare, diagnose and report, with the tracking's section"
+	$(BIN)/python -m validation report $(OUT)/tracked --out $(OUT)/report_video
+	@echo "written to $(OUT)/: open $(OUT)/report_video/report.html"
 
 # One pytest worker per core (pytest-xdist), each test file on one worker so that module fixtures are built
 # once, and the boundary-element files together (tests/conftest.py); one numba thread per worker (the

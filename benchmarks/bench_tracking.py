@@ -196,10 +196,13 @@ def accuracy_figure(rows: list[dict], path) -> None:
 
 
 def main() -> str:
+    load = os.getloadavg()[0]
     sp = speed()
     rows = accuracy()
     lines = [f"## tracking: frames per second and accuracy on rendered 180 x 150 px frames ({os.cpu_count()} cores, "
              f"{sp['threads']} numba threads)", "",
+             f"Load average {load:.1f} when the run started (other work shares the cores: a second thread only helps "
+             "on idle cores).", "",
              "| implementation | frames / s |", "|---|---|"]
     for k, v in sp["rates"].items():
         lines.append(f"| {k} | {v:,.0f} |")

@@ -1,4 +1,4 @@
-"""The per-frame measurement of the dimer: compiled (numba), parallel over the frames of a batch.
+"""The per-frame measurement of the dimer: compiled (numba); a batch of frames is shared between threads.
 
 Image coordinates: pixel centres at integer ``(u, v)``, ``u`` the column (right) and ``v`` the row
 (counting down); the lab frame of the measurement has ``X = u`` and ``Z = -v`` (up).  Every frame goes
@@ -8,23 +8,26 @@ through these steps (:func:`measure_frames`):
    frame's own level, the mean over a ring of pixels along the frame's border (pixels that look like a
    cube are left out), and the white pixel noise from the ring's spread.
    The coverage of every pixel is ``c = polarity (I - background) / contrast`` (0 background, 1 cube).
-2. **Particles.**  The pixels with ``c > 1/2``, labelled in 8-connected components.  Components larger
+2. **Particles.**  The pixels with ``c > 1/2`` (found as runs along the rows in the same pass), joined in
+   8-connected components.  Components larger
    than ``min_area`` are particles: one (or two of similar size side by side, less than ``3 + 3 blur`` px
    apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer; anything more
    is a third particle.  A dimer whose window reaches the border is out of view.
 3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
    the edge window), unclipped: a symmetric point-spread function and white noise leave it unbiased.
-4. **First orientation.**  The dimer is split at its centroid column (the hinge; PHYSICS.md section 2: each
-   cube lies wholly on its side of it).  Each half's fourth-order complex moment ``sum c (X + iZ)^4``
-   about its own centroid gives the orientation of that square's faces modulo 90 degrees (a square's
-   second moments are isotropic and say nothing).
+4. **First orientation.**  The dimer is split at the middle column of its bounding box (the hinge of the
+   mirror-symmetric dimer; PHYSICS.md section 2: each cube lies wholly on its side of it).  Each half's
+   fourth-order complex moment ``sum c (X + iZ)^4`` about its own centroid gives the orientation of that
+   square's faces modulo 90 degrees (a square's second moments are isotropic and say nothing); the moments
+   of order 0-4 of both halves come from one pass over the window, shifted to each centroid exactly.
 5. **Edge fits.**  For each of the four faces of each square, sample lines cross the face (pixel columns
    for faces flatter than 45 degrees, rows otherwise) away from its corners and from the other cube.  On
    each sample line the coverage summed over a window of ``2 W + 1`` pixels across the edge is the length
    of the line inside the cube, so the edge crossing is sub-pixel and unbiased for any symmetric blur.
    A straight line fitted through the crossings gives the face's direction; the four faces of a square
-   (weighted by their information) give its orientation and, from the offsets of opposite faces, its
-   centre.  Two passes.
+   (weighted by their information, ``Sss (1 + slope^2)`` over the residual variance) give its orientation
+   and, from the offsets of opposite faces, its centre.  Two passes.  The hinge's height relative to the
+   centres settles the sign of a bend near face contact, where the orientations alone cannot.
 6. **Angles.**  From the squares' orientations: cube B's bend ``phi_B = pi/4 - gamma_B`` and cube A's
    ``phi_A = gamma_A - 3 pi/4`` (``gamma`` the direction of a face, counter-clockwise from +X), the opening
    angles ``alpha = pi/2 + phi_A + phi_B`` above the hinge and ``beta = pi/2 - phi_A - phi_B`` below it,
@@ -38,6 +41,7 @@ The output of a frame is one row of :data:`COLUMNS`; ``status`` is one of :data:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -49,7 +53,6 @@ __all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSetting
 COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
            "edge_width", "area", "tilt", "hinge_gap", "sigma_v", "sigma_theta", "side_a", "side_b", "pixel_noise",
            "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background", "squareness_sigma")
-_C = {name: i for i, name in enumerate(COLUMNS)}
 # column indices as module constants (the compiled kernel reads them as literals)
 _I_ALPHA = COLUMNS.index('alpha')
 _I_ALPHA_FREE = COLUMNS.index('alpha_free')
@@ -98,8 +101,9 @@ STATUS_TEXT = {
 }
 
 
+@dataclass(frozen=True)
 class MeasureSettings:
-    """Numbers the compiled kernel needs, packed into one float array (:meth:`pack`).
+    """Numbers the compiled kernel needs (packed into one float array by :meth:`pack`).
 
     Parameters
     ----------
@@ -124,21 +128,27 @@ class MeasureSettings:
         centre; each frame fits only its own background level (a per-frame gradient would add noise to y).
     """
 
-    def __init__(self, polarity: float, background_ref: float, contrast: float, edge_window: int = 7,
-                 edge_blur: float = 1.5, min_area: float = 20.0, area_ref: float = 0.0, area_tolerance: float = 0.06,
-                 slope_u: float = 0.0, slope_v: float = 0.0):
-        self.slope_u = float(slope_u)
-        self.slope_v = float(slope_v)
-        self.polarity = float(polarity)
-        self.background_ref = float(background_ref)
-        self.contrast = float(contrast)
-        self.edge_window = int(edge_window)
-        self.edge_blur = float(edge_blur)
-        self.min_area = float(min_area)
-        self.area_ref = float(area_ref)
-        self.area_tolerance = float(area_tolerance)
+    polarity: float
+    background_ref: float
+    contrast: float
+    edge_window: int = 7
+    edge_blur: float = 1.5
+    min_area: float = 20.0
+    area_ref: float = 0.0
+    area_tolerance: float = 0.06
+    slope_u: float = 0.0
+    slope_v: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.polarity not in (-1.0, 1.0):
+            raise ValueError(f"polarity must be -1 (dark cubes) or +1 (bright cubes), got {self.polarity!r}")
+        if not (math.isfinite(self.contrast) and self.contrast > 0):
+            raise ValueError(f"contrast must be positive, got {self.contrast!r}")
+        if int(self.edge_window) != self.edge_window or self.edge_window < 2:
+            raise ValueError(f"edge window must be a whole number >= 2, got {self.edge_window!r}")
 
     def pack(self) -> NDArray[np.float64]:
+        """The settings in the order the kernel reads them."""
         return np.array([self.polarity, self.background_ref, self.contrast, self.edge_window, self.edge_blur,
                          self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v], float)
 

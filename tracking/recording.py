@@ -212,7 +212,8 @@ def _image_files(folder: Path) -> list[Path]:
 def _read_folder(folder: Path) -> tuple[NDArray, dict]:
     files = _image_files(folder)
     if not files:
-        raise TrackingError(f"{folder}: no image files (PNG, TIFF, BMP, JPEG) in the folder")
+        raise TrackingError(f"{folder}: no recordings (video files, .cine, multi-page TIFF) and no image files (PNG, "
+                            "TIFF, BMP, JPEG) in the folder")
     first = _grey(_read_image(files[0]), files[0])
     if first.shape[0] != 1:
         raise TrackingError(f"{files[0]}: a multi-frame file inside a folder of images; give the file itself")
@@ -291,6 +292,10 @@ def find_recordings(folder: str | os.PathLike) -> list[Path] | None:
         s = f.suffix.lower()
         if f.is_file() and (s in VIDEO_SUFFIXES or s == ".cine" or (s in (".tif", ".tiff") and _is_multipage_tiff(f))):
             found.append(f)
-        elif f.is_dir() and _image_files(f):
-            found.append(f)
+        elif f.is_dir():
+            images = _image_files(f)
+            # a sub-folder of single images is a recording; one of multi-page TIFFs is a folder of recordings
+            # itself, given on its own
+            if images and not (images[0].suffix.lower() in (".tif", ".tiff") and _is_multipage_tiff(images[0])):
+                found.append(f)
     return found or None

@@ -163,3 +163,17 @@ def test_bad_input_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, caps
         write_tiff("r2.tif", render(y, theta, CAM, seed=47), CAM)
         assert "give --out DIR" in _fail([tmp_path, "--out", out], capsys)
     assert not out.parent.exists() or not any(out.parent.iterdir())
+
+
+def test_phantom_cine_records_its_frame_rate(tmp_path):
+    from .cine_file import write_cine
+
+    _, y, theta = motion(80, seed=48)
+    src = tmp_path / "shot.cine"
+    write_cine(src, render(y, theta, CAM, seed=48), 2000.0)
+    out = tmp_path / "shot.csv"
+    assert main([str(src), "--out", str(out), "--pixel-size", "1e-5", "--origin-row", str(CAM.origin[1])]) == 0
+    info = json.loads(out.with_suffix(".json").read_text())
+    assert info["format"] == "cine" and info["frame_rate_hz"] == 2000.0 and info["frame_rate_from"] == "recorded in the file"
+    run = load_run(out, SHORT)
+    assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6 and np.sqrt(np.mean((run.theta - theta) ** 2)) < 0.005
