@@ -3,7 +3,7 @@
 The front end of a real experiment: a camera looking along the hinge line records the two cubes as two
 squares sharing a corner; this package measures, in every frame, the centre-of-mass height ``y`` (from the
 silhouette, sub-pixel, positive up from the levitation height) and the bend ``theta = (alpha - beta) / pi``
-(from sub-pixel fits of the cubes' faces), and writes the FORMATS.md run CSV with a ``RUN.json`` of the
+(from sub-pixel fits of the cubes' faces), and writes the docs/formats.md run CSV with a ``RUN.json`` of the
 settings, counts and per-frame quality (``python -m tracking``; ``docs/tracking.md``).
 
 * :mod:`tracking.recording` - reading video files, multi-page TIFF, Phantom .cine and folders of images;

@@ -1,4 +1,4 @@
-"""``python -m tracking VIDEO --fps F --pixel-size P --out RUN.csv``: camera frames to a run (FORMATS.md).
+"""``python -m tracking VIDEO --fps F --pixel-size P --out RUN.csv``: camera frames to a run (docs/formats.md, docs/tracking.md).
 
 VIDEO is a video file, a multi-page TIFF, a Phantom ``.cine`` or a folder of images (one recording); with
 ``--out RUN.csv`` it gives ``RUN.csv`` (``t, y, theta``, empty where the dimer could not be measured),
@@ -33,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="python -m tracking",
         description="Measure the dimer's centre-of-mass height y and bending angle theta = (alpha - beta) / pi in every "
         "frame of a high-speed recording (camera looking along the hinge line; docs/tracking.md) and write a "
-        "FORMATS.md run (CSV + RUN.json), or a data set from a folder of recordings.",
+        "docs/formats.md run (CSV + RUN.json), or a data set from a folder of recordings.",
     )
     p.add_argument("video", metavar="VIDEO", help="video file (mp4, avi, mov, mkv, ...), multi-page TIFF, Phantom "
                    ".cine, a folder of images (one recording), or a folder of recordings (with --out DIR)")

@@ -16,7 +16,7 @@ through these steps (:func:`measure_frames`):
 3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
    the edge window), unclipped: a symmetric point-spread function and white noise leave it unbiased.
 4. **First orientation.**  The dimer is split at the middle column of its bounding box (the hinge of the
-   mirror-symmetric dimer; PHYSICS.md section 2: each cube lies wholly on its side of it).  Each half's
+   mirror-symmetric dimer; docs/conventions.md section 2: each cube lies wholly on its side of it).  Each half's
    fourth-order complex moment ``sum c (X + iZ)^4`` about its own centroid gives the orientation of that
    square's faces modulo 90 degrees (a square's second moments are isotropic and say nothing); the moments
    of order 0-4 of both halves come from one pass over the window, shifted to each centroid exactly.

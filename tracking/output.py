@@ -1,6 +1,6 @@
 """Writing what the tracking measured: one run's CSV, its RUN.json and example frame, or a data set.
 
-* one recording: ``RUN.csv`` (FORMATS.md: ``t`` from 0 at the first frame, ``y``, ``theta``, a
+* one recording: ``RUN.csv`` (docs/formats.md: ``t`` from 0 at the first frame, ``y``, ``theta``, a
   ``# units:`` comment line, empty values where the dimer could not be measured), ``RUN.json`` beside it
   (:attr:`tracking.track.TrackResult.info`) and ``RUN.frame.png``, the raw example frame the report
   annotates;

@@ -1,6 +1,6 @@
 """The twin's high-speed camera: the frames a camera looking along the hinge line would record.
 
-Geometry (PHYSICS.md section 2).  The camera looks along the hinge line, so the two cubes appear as two
+Geometry (docs/conventions.md section 2).  The camera looks along the hinge line, so the two cubes appear as two
 squares of side ``s`` that share a corner (the hinge).  In the lab frame (X to the right in the image,
 Z up) cube B (X > 0) is the diamond rotated clockwise by ``phi = pi theta / 4`` about its own centre, cube
 A its mirror image in X = 0; the centres sit at ``X = +-d cos(phi)``, ``Z = Z_com`` and the hinge at

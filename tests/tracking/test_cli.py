@@ -1,4 +1,4 @@
-"""``python -m tracking``: the FORMATS.md contract end to end, the readers, and bad input (one line, exit 2,
+"""``python -m tracking``: the docs/formats.md contract end to end, the readers, and bad input (one line, exit 2,
 nothing written)."""
 from __future__ import annotations
 
