@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("acousim", "fitting", "validation")
+PACKAGES = ("acousim", "fitting", "validation", "tracking")
 
 
 def _scripts() -> dict:
