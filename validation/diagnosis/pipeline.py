@@ -155,9 +155,12 @@ def _label(name: str) -> str:
 
 
 def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
-                               log=logger.info) -> tuple[object, dict]:
+                               log=logger.info, drift=None) -> tuple[object, dict]:
     """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
-    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name."""
+    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name.
+
+    ``drift`` (a :class:`~validation.diagnosis.drift.PressureDrift`) is followed by every trial model, so that a
+    pressure drifting within runs does not bias the hinge profile."""
     from acousim.models import force_model_type, static_model
 
     mtype = force_model_type(model_name)
@@ -175,7 +178,8 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
 
         def build(value: float, name=name):
             sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
-            return DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
+            trial = DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
+            return trial if drift is None else trial.with_drift(drift)
 
         pc = calibrate_model_parameter(name, lo, hi, default, build, label=_label(name))
         log("%s", pc.note)
@@ -236,9 +240,15 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
             logger.warning("%s", warning["message"])
             data_warnings.append(warning)
             problem = flipped
-    # the model's own parameters the data may determine (the full-wave hinge gap), unless given
+    # the model's own parameters the data may determine (the full-wave hinge gap), unless given; a pressure drift
+    # found with the starting model is followed by every trial model (it is detected again below on the final one)
+    calibrated_later = {n for n in mtype.calibration_ranges(conditions) if getattr(conditions, n) is None}
+    first_drift = None
+    if calibrated_later and config.drift is not None:
+        found = detect_pressure_drift(problem, config.drift)
+        first_drift = found.drift if found.detected else None
     conditions, parameters = calibrate_model_parameters(model_name, conditions, problem.recorded_runs,
-                                                        config.max_frames_per_run, log)
+                                                        config.max_frames_per_run, log, drift=first_drift)
     if parameters:
         model = static_model(model_name, conditions)
         problem = DiagnosisProblem.from_recorded(model.interpolated(), problem.recorded_runs,
