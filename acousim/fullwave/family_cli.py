@@ -123,7 +123,7 @@ def run_check(args: argparse.Namespace) -> int:
     acc = family_accuracy(fam, checks)
     for r in acc["checks"]:
         print(f"ks {r['ks']:.4f}  g/s {r['gap_over_side']:.4f}: Q_y {100 * r['q_y']:.3f} %, Q_theta "
-              f"{100 * r['q_theta']:.3f} % of max; f_y {100 * r['f_y']:+.3f} %, f_theta {100 * r['f_theta']:+.3f} %, "
+              f"{100 * r['q_theta']:.3f} % of max ({100 * r['q_theta_inner']:.3f} % over the inner 80 % of theta); f_y {100 * r['f_y']:+.3f} %, f_theta {100 * r['f_theta']:+.3f} %, "
               f"stiffness {100 * r['stiffness']:+.3f} %")
     write_json(Path(args.family) / "accuracy.json", acc)
     print(f"{acc['summary']['n_checks']} check(s) inside {fam.describe_range()} -> {Path(args.family) / 'accuracy.json'}")
