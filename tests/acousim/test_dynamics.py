@@ -70,6 +70,9 @@ class TabulatedForces:
     def escape_height(self):
         return self._sur.escape_height()
 
+    def provenance(self):
+        return {"source": "tabulated for the test"}
+
 
 # ---------------------------------------------------------------------- the force-model protocol
 def test_the_gorkov_surrogate_is_a_force_model(surrogate):
