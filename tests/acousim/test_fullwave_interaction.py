@@ -66,8 +66,9 @@ pytestmark = pytest.mark.slow
 
 MEDIUM = Medium()
 P0 = 3000.0
-#: (ka, kd) pairs: a = 60 um, d = 4a and 5a at the default 45.65 kHz.
-CASES = ((0.05, 0.2), (0.05, 0.25))
+#: (ka, kd) pairs: a = 60 um, d = 4a at the default 45.65 kHz, the closer of the two pairs measured (d = 5a:
+#: 0.9941, below); one solve of 1,284 DOFs keeps the boundary-element test unit short.
+CASES = ((0.05, 0.2),)
 #: 642 vertices per sphere; 162 vertices give BEM / formula = 0.962 and 0.951 (fails the 3 % target).
 SUBDIVISIONS = 3
 

@@ -55,7 +55,7 @@ def test_minimum_at_the_range_edge_is_not_called_calibrated(monkeypatch):
 
 @pytest.fixture(scope="module")
 def fullwave_twin(tmp_path_factory, synthetic_family_dir):
-    """8 runs on the full wave (synthetic family) of the default dimer with a 10 um gap (between the nodes
+    """8 runs of 2 s on the full wave (synthetic family) of the default dimer with a 10 um gap (between the nodes
     7.5 and 16.7 um) and linear damping, the true pressure 5 % off the nominal one."""
     from acousim.effects import EffectSet
     from acousim.fullwave.family import FAMILY_ENV
@@ -64,7 +64,7 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     mpatch = pytest.MonkeyPatch()
     mpatch.setenv(FAMILY_ENV, str(synthetic_family_dir))
     out = tmp_path_factory.mktemp("fw_twin")
-    cfg = TwinConfig(runs=8, duration=3.0, seed=11, force_model="fullwave", gap=10e-6, pressure_error=0.05,
+    cfg = TwinConfig(runs=8, duration=2.0, seed=11, force_model="fullwave", gap=10e-6, pressure_error=0.05,
                      effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=2.0"]))
     simulate_dataset(cfg, out, force=True, progress=False)
     yield out
@@ -92,7 +92,9 @@ def test_diagnosis_calibrates_the_gap_and_names_only_the_true_effect(fullwave_tw
 def test_a_given_gap_is_used_not_calibrated(fullwave_twin, use_synthetic_family):
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
-    d, _ = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False, discover=False), progress=False,
+    # the calibration only: one candidate, no discovery
+    d, _ = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False, discover=False,
+                                                          candidates=("linear_damping",)), progress=False,
                             model="fullwave", gap=13e-6)
     cal = d["calibration"]
     assert cal["gap_m"] == 13e-6 and cal["gap_calibrated"] is False and cal["gap_std_m"] is None
