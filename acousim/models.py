@@ -21,8 +21,7 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Callable, ClassVar, Protocol, runtime_checkable
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial

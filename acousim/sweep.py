@@ -19,6 +19,7 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,6 +28,9 @@ from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.terms import library_exponents, term_name
 
 from .forces import GorkovDimer
+
+if TYPE_CHECKING:
+    from .models import StaticModel
 
 __all__ = [
     "SweepResult",

@@ -16,10 +16,11 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Callable
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator
 
 __all__ = ["atomic_write_text", "write_json", "json_safe", "json_text", "atomic_save", "save_figure", "default_file_mode",
-           "default_dir_mode"]
+           "default_dir_mode", "atomic_directory"]
 
 
 def _umask() -> int:
@@ -68,6 +69,35 @@ def atomic_save(path: str | os.PathLike, writer: Callable[[str], Any]) -> None:
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        raise
+
+
+@contextmanager
+def atomic_directory(path: str | os.PathLike) -> Iterator[Path]:
+    """Build a directory in a temporary folder beside ``path`` and move it into place when the block ends.
+
+    Yields the temporary folder.  On success it gets an ordinary folder's mode and replaces ``path`` (an
+    existing ``path`` is moved aside first and removed after the swap); on any exception it is removed and
+    ``path`` is untouched.  The caller decides beforehand whether an existing ``path`` may be replaced.
+    """
+    import shutil
+
+    out = Path(path)
+    parent = out.absolute().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
+    try:
+        yield tmp
+        os.chmod(tmp, default_dir_mode())  # mkdtemp's folder is private; give it an ordinary folder's mode
+        if out.exists():
+            trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=parent))
+            os.replace(out, trash / out.name)
+            os.replace(tmp, out)
+            shutil.rmtree(trash, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 

@@ -14,13 +14,11 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import atomic_save, default_dir_mode, write_json
+from cubedimer.atomic import atomic_directory, atomic_save, write_json
 from cubedimer.dataset import write_run_csv
 
 from .track import TrackResult
@@ -85,10 +83,7 @@ def write_dataset(out_dir: str | os.PathLike, results: list[TrackResult], skippe
     """Write a data set of tracked runs (module docstring) into ``out_dir``, built beside it and renamed into
     place; an existing ``out_dir`` is replaced only with ``force``."""
     out = Path(out_dir)
-    parent = out.absolute().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
-    try:
+    with atomic_directory(out) as tmp:
         for r in results:
             write_run(tmp / f"{r.name}.csv", r)
         fps = sorted({r.info["frame_rate_hz"] for r in results})
@@ -97,15 +92,4 @@ def write_dataset(out_dir: str | os.PathLike, results: list[TrackResult], skippe
         if meta["frame_rate_hz"] is None:
             del meta["frame_rate_hz"]
         write_json(tmp / "meta.json", meta)
-        os.chmod(tmp, default_dir_mode())
-        if out.exists():
-            trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=parent))
-            os.replace(out, trash / out.name)
-            os.replace(tmp, out)
-            shutil.rmtree(trash, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out

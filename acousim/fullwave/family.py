@@ -43,7 +43,6 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from cubedimer.atomic import write_json
 from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..medium import GRAVITY, Medium

@@ -7,7 +7,7 @@ import logging
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config
 
 from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
-                     FamilyRangeError, FamilyTableError, FullwaveFamily, build_family, family_nodes, node_path)
+                     FamilyTableError, FullwaveFamily, build_family, family_nodes)
 
 __all__ = ["add_parser"]
 

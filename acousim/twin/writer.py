@@ -12,14 +12,11 @@ records (``video/runNN.tif``, :mod:`acousim.twin.video`) and the true ``t, y, th
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import atomic_save, default_dir_mode, write_json
+from cubedimer.atomic import atomic_directory, atomic_save, default_dir_mode, write_json
 from cubedimer.dataset import write_run_csv
 
 from ..dynamics import DimerDynamics
@@ -133,10 +130,7 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
     width = max(2, len(str(config.runs)))
     files = [f"run{i:0{width}d}.csv" for i in range(1, config.runs + 1)]
     truth = truth_dict(config, dynamics, p_true, runs, files)
-    parent = out.resolve().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
-    try:
+    with atomic_directory(out) as tmp:
         for i, (f, r) in enumerate(zip(files, runs), 1):
             write_run(tmp / f, r, i, config.runs)
         if video is not None:
@@ -151,15 +145,4 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
         write_json(tmp / "truth.json", truth)
         states = {Path(f).stem: r.state for f, r in zip(files, runs)}
         atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=runs[0].t, **states))
-        os.chmod(tmp, default_dir_mode())  # mkdtemp's folder is private; give it an ordinary folder's mode
-        if out.exists():
-            trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=parent))
-            os.replace(out, trash / out.name)
-            os.replace(tmp, out)
-            shutil.rmtree(trash, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return truth

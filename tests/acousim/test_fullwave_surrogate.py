@@ -89,20 +89,28 @@ def test_build_rejects_bad_box():
 
 def test_dimensionless_coefficients_depend_on_ks_only(coarse_surrogate):
     """The exact scaling of the table family (acousim.fullwave.family): a dimer 1.3 times larger at a frequency
-    chosen for the same ks, in air of another sound speed and density, has the same dimensionless coefficients
-    (forces in units of p0^2 s^2 / (rho0 c0^2), torques of p0^2 s^3 / (rho0 c0^2)), from direct solves."""
+    chosen for the same ks, in air of another sound speed and density and at another pressure, has the same
+    dimensionless (A, B, C) of F_Z and Q_theta (forces in units of p0^2 s^2 / (rho0 c0^2), torques of
+    p0^2 s^3 / (rho0 c0^2)): one direct solve at the tiny table's first theta node against that node."""
     from dataclasses import replace
 
-    from acousim.fullwave.family import dimensionless_coefficients
+    from acousim.fullwave.family import force_scale
+    from acousim.fullwave.geometry import dimer_bodies
+    from acousim.fullwave.solver import solve_scattering
+    from acousim.fullwave.surrogate import dimer_coefficients
 
     sur, _ = coarse_surrogate
-    ks = sur.wavenumber * sur.settings["side_m"]
-    side, c0, rho0 = 1.3 * sur.settings["side_m"], 300.0, 1.0
+    s0 = sur.settings["side_m"]
+    ks = sur.wavenumber * s0
+    side, c0, rho0, p0 = 1.3 * s0, 300.0, 1.0, 4000.0
     medium = Medium(frequency_hz=ks * c0 / (2 * np.pi * side), sound_speed_m_s=c0, density_kg_m3=rho0)
     spec = replace(TINY_BUILD["spec"], side=side, gap=1.3 * TINY_BUILD["spec"].gap)
-    other = build_fullwave_surrogate(spec, medium, pressure_amplitude_pa=4000.0,
-                                     **{k: v for k, v in TINY_BUILD.items() if k != "spec"})
-    a, b = dimensionless_coefficients(sur), dimensionless_coefficients(other)
-    for comp in ("fz", "qt"):
-        # the same mesh in units of s and the same ks: equal up to the solver's iterative/quadrature round-off
-        np.testing.assert_allclose(b[comp], a[comp], rtol=0, atol=1e-9 * np.abs(a[comp]).max())
+    i = len(sur.nodes["theta"]) // 2  # the first positive node
+    theta = sur.nodes["theta"][i]
+    other = dimer_coefficients(solve_scattering(dimer_bodies(theta, spec), medium), theta, spec, p0, "flux")
+    unit0, unit1 = force_scale(s0, sur.medium, sur.pressure_amplitude_pa), force_scale(side, medium, p0)
+    for comp, lever in (("fz", 1.0), ("qt", None)):
+        ref = np.asarray(sur.nodes[comp][i]) / (unit0 * (s0 if lever is None else 1.0))
+        got = np.asarray(other[comp]) / (unit1 * (side if lever is None else 1.0))
+        # the same mesh in units of s and the same ks: equal to the solver's round-off
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())

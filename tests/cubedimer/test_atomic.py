@@ -53,3 +53,28 @@ def test_failing_writer_leaves_old_file_and_no_temporary(tmp_path):
         atomic_save(target, boom)
     assert target.read_text() == "old\n"
     assert [p.name for p in tmp_path.iterdir()] == ["r.txt"]
+
+
+def test_atomic_directory_replaces_only_on_success(tmp_path):
+    """A folder built in the block replaces the old one when the block succeeds; on an error the old one stays
+    and no temporary folder is left behind."""
+    import os
+
+    import pytest
+
+    from cubedimer.atomic import atomic_directory, default_dir_mode
+
+    out = tmp_path / "set"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    with pytest.raises(RuntimeError):
+        with atomic_directory(out) as tmp:
+            (tmp / "new.txt").write_text("new")
+            raise RuntimeError("fails half-way")
+    assert sorted(p.name for p in out.iterdir()) == ["old.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
+    with atomic_directory(out) as tmp:
+        (tmp / "new.txt").write_text("new")
+    assert sorted(p.name for p in out.iterdir()) == ["new.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
+    assert os.stat(out).st_mode & 0o777 == default_dir_mode()

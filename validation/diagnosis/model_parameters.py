@@ -22,8 +22,7 @@ no false precision is reported.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
-from typing import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
