@@ -1,4 +1,4 @@
-"""acousim: the Gor'kov acoustic model of a levitated, hinged cube dimer.
+"""acousim: the physics of a levitated, hinged cube dimer: the Gor'kov model, the full-wave model and the twin.
 
 Physics follows ``docs/conventions.md``; see the README for a tour.  Public API:
 
@@ -9,7 +9,9 @@ Physics follows ``docs/conventions.md``; see the README for a tour.  Public API:
 * sweeps: :func:`static_sweep`, :func:`fit_static_coefficients`, :func:`taylor_coefficients`
 * closed-form references: :mod:`acousim.analytic`
 * force models: the :class:`ForceModel` protocol and its :class:`ForceCoefficients`; the Gor'kov
-  :class:`ForceSurrogate` (:func:`build_surrogate`)
+  :class:`ForceSurrogate` (:func:`build_surrogate`); the registry of force models (:mod:`acousim.models`:
+  :class:`ExperimentConditions`, :func:`static_model`, :func:`dynamic_model`, :func:`register_force_model`), with
+  the full-wave model of any lab dimer from the table family (:mod:`acousim.fullwave.family`)
 * equations of motion: :func:`accelerations` (force model plus effects), :class:`DimerDynamics`
   (integration), the effects of docs/conventions.md section 5 (:class:`EffectSet` and one class per effect)
 * the digital twin (:mod:`acousim.twin`): :class:`TwinConfig`, :class:`Camera`, :class:`DropProtocol`,
@@ -29,6 +31,8 @@ from .effects import (EFFECT_TYPES, EffectSet, LinearDamping, MirrorAsymmetry, P
 from .equations import accelerations
 from .dynamics import DimerDynamics, Trajectory
 from .twin import PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
+from .models import (ExperimentConditions, ForceModelType, StaticModel, dynamic_model, force_model_names,
+                     register_force_model, static_model)
 
 __all__ = [
     "CubeDimer",
@@ -77,4 +81,11 @@ __all__ = [
     "simulate_dataset",
     "simulate_run",
     "TwinError",
+    "ExperimentConditions",
+    "StaticModel",
+    "ForceModelType",
+    "register_force_model",
+    "force_model_names",
+    "static_model",
+    "dynamic_model",
 ]
