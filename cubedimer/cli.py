@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import re
 import sys
@@ -92,6 +93,17 @@ def positive_float(text: str) -> float:
     if not (v > 0 and v < float("inf")):
         raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
     return v
+
+
+def float_list(text: str, option: str) -> list[float]:
+    """Comma-separated finite, non-negative numbers of the option ``option``; one-line :class:`UserInputError`."""
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise UserInputError(f"{option} {text!r}: expected comma-separated numbers") from None
+    if not all(math.isfinite(v) and v >= 0 for v in values):
+        raise UserInputError(f"{option} {text!r}: values must be finite and non-negative")
+    return values
 
 
 def add_executor_arguments(parser: argparse.ArgumentParser, note: str | None = None) -> None:

@@ -24,7 +24,7 @@ from collections.abc import Callable
 
 import numpy as np
 from cubedimer.atomic import json_safe
-from cubedimer.cli import OneLineParser, UserInputError, prepare_output_file, run_cli
+from cubedimer.cli import OneLineParser, UserInputError, float_list, prepare_output_file, run_cli
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
@@ -199,16 +199,6 @@ def judge_convergence(values, refinement_ratio: float) -> dict:
             "converged": bool(monotone and order >= 1.0 and finest < CONVERGED_WITHIN)}
 
 
-def _floats(text: str, option: str) -> list[float]:
-    try:
-        values = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise UserInputError(f"{option} {text!r}: expected comma-separated numbers") from None
-    if not all(np.isfinite(v) and v >= 0 for v in values):
-        raise UserInputError(f"{option} {text!r}: values must be finite and non-negative")
-    return values
-
-
 def load_table(path: str) -> FullwaveSurrogate:
     """A surrogate table from ``path``, or a one-line :class:`UserInputError` naming the file."""
     try:
@@ -227,7 +217,7 @@ def _append(path: str, row: dict) -> None:
 def _run_check(args: argparse.Namespace, levels: list[float]) -> int:
     """The momentum-flux balance (per gap, at the first level) or the surrogate against direct solves."""
     if args.study == "flux":
-        for g in _floats(args.gaps, "--gaps"):
+        for g in float_list(args.gaps, "--gaps"):
             for row in flux_balance(mesh_family(levels[0], gap=g * 500e-6)):
                 row.update(level_q=levels[0], gap_over_side=g)
                 log.info("flux balance, q = %g, g = %g s, Z = %.2f mm: flux / surface F_Z = %.3f", levels[0], g,
@@ -236,7 +226,7 @@ def _run_check(args: argparse.Namespace, levels: list[float]) -> int:
         return 0
     log_row = lambda r: log.info("theta = %.3f: Q_y %.3f %%, Q_theta %.3f %% of max |Q| (%.0f s)", r["theta"],
                                  100 * r["q_y"], 100 * r["q_theta"], r["wall_s"])
-    thetas = _floats(args.thetas, "--thetas")
+    thetas = float_list(args.thetas, "--thetas")
     if args.table:
         row = surrogate_errors(thetas=thetas, surrogate=load_table(args.table), progress=log_row)
         row["table"] = str(args.table)
@@ -252,7 +242,7 @@ def _run_check(args: argparse.Namespace, levels: list[float]) -> int:
 
 def run_study(args: argparse.Namespace) -> int:
     """Run the chosen study, appending one JSON line per row to ``--out`` as each row finishes."""
-    levels = _floats(args.levels, "--levels")
+    levels = float_list(args.levels, "--levels")
     if not all(v > 0 for v in levels):
         raise UserInputError("--levels must be positive")
     prepare_output_file(args.out)
@@ -267,10 +257,10 @@ def run_study(args: argparse.Namespace) -> int:
     elif args.study == "mesh":
         rows = [("q", q, mesh_family(q, gap=args.gap * 500e-6)) for q in levels]
     elif args.study == "gap":
-        rows = [("gap_over_side", g, mesh_family(levels[0], gap=g * 500e-6)) for g in _floats(args.gaps, "--gaps")]
+        rows = [("gap_over_side", g, mesh_family(levels[0], gap=g * 500e-6)) for g in float_list(args.gaps, "--gaps")]
     else:
         rows = [("edge_radius_over_side", r, mesh_family(levels[0], gap=args.gap * 500e-6, edge_radius=r * 500e-6))
-                for r in _floats(args.radii, "--radii")]
+                for r in float_list(args.radii, "--radii")]
     stiffness = []
     for key, val, spec in rows:
         res = hinge_quantities(spec)

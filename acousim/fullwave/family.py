@@ -445,11 +445,16 @@ def shipped_family() -> FullwaveFamily:
     return _family(os.environ.get(FAMILY_ENV) or str(FAMILY_DIR))
 
 
-def _is_default_dimer(side: float, gap: float, medium: Medium, density: float, gravity: float) -> bool:
+@lru_cache(maxsize=1)
+def _default_table_settings() -> dict:
     from .surrogate import DEFAULT_TABLE
 
     with open(DEFAULT_TABLE) as fh:
-        st = json.load(fh)["settings"]
+        return json.load(fh)["settings"]
+
+
+def _is_default_dimer(side: float, gap: float, medium: Medium, density: float, gravity: float) -> bool:
+    st = _default_table_settings()
     pairs = ((side, st["side_m"]), (gap, st["gap_m"]), (medium.frequency_hz, st["frequency_hz"]),
              (medium.sound_speed_m_s, st["sound_speed_m_s"]), (medium.density_kg_m3, st["air_density_kg_m3"]),
              (density, st["particle_density_kg_m3"]), (gravity, st["gravity_m_s2"]))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from cubedimer.cli import UserInputError, add_executor_arguments, executor_config
+from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, float_list
 
 from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
                      FamilyTableError, FullwaveFamily, build_family, family_nodes)
@@ -12,16 +12,6 @@ from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FA
 __all__ = ["add_parser"]
 
 log = logging.getLogger(__name__)
-
-
-def _floats(text: str, option: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise UserInputError(f"{option} {text!r}: expected comma-separated numbers") from None
-    if not values:
-        raise UserInputError(f"{option}: no value given")
-    return values
 
 
 def add_parser(subparsers) -> None:
@@ -82,7 +72,7 @@ def run_build(args: argparse.Namespace) -> int:
                 raise UserInputError(f"--points {args.points!r}: expected KS:G pairs separated by commas")
             nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max) for k, g in pairs]
         else:
-            nodes = family_nodes(_floats(args.ks, "--ks"), _floats(args.gap_ratio, "--gap-ratio"), args.n_half,
+            nodes = family_nodes(float_list(args.ks, "--ks"), float_list(args.gap_ratio, "--gap-ratio"), args.n_half,
                                  args.theta_max)
     except ValueError as exc:
         raise UserInputError(f"{exc} (options --ks / --gap-ratio / --points)") from None
