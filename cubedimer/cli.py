@@ -29,7 +29,7 @@ from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
 __all__ = ["UserInputError", "OneLineParser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
-           "positive_int", "positive_float"]
+           "positive_int", "positive_float", "float_list"]
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf)")
 
