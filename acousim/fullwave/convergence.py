@@ -250,10 +250,11 @@ def run_study(args: argparse.Namespace) -> int:
         logging.getLogger(name).setLevel(logging.WARNING)
     if args.study in ("flux", "surrogate"):
         return _run_check(args, levels)
-    if args.study == "mesh" and args.mesh_rule == "family":
+    if args.study == "mesh" and args.mesh_rule in ("family", "family-uniform"):
         from .family import family_mesh_spec
 
-        rows = [("q", q, family_mesh_spec(500e-6, args.gap * 500e-6, refine=q)) for q in levels]
+        faces = args.mesh_rule == "family-uniform"
+        rows = [("q", q, family_mesh_spec(500e-6, args.gap * 500e-6, refine=q, refine_faces=faces)) for q in levels]
     elif args.study == "mesh":
         rows = [("q", q, mesh_family(q, gap=args.gap * 500e-6)) for q in levels]
     elif args.study == "gap":
@@ -289,9 +290,10 @@ def main(argv: list[str] | None = None) -> int:
                    "integrals against the momentum flux through an enclosing sphere (per gap); surrogate: the "
                    "coarse surrogate against direct solves")
     p.add_argument("--levels", default="1,0.7,0.5,0.35", help="mesh levels q (mesh study) or the one level used")
-    p.add_argument("--mesh-rule", choices=("uniform", "family"), default="uniform",
-                   help="mesh study: refine mesh_family(q) (every element size times q), or the family's gap-resolving "
-                        "mesh (acousim.fullwave.family.family_mesh_spec) with its hinge sizes times q")
+    p.add_argument("--mesh-rule", choices=("uniform", "family", "family-uniform"), default="uniform",
+                   help="mesh study: refine mesh_family(q) (every element size times q); the family's gap-resolving "
+                        "mesh (acousim.fullwave.family.family_mesh_spec) with its hinge sizes times q (family); or "
+                        "that mesh with every size, faces included, times q (family-uniform)")
     p.add_argument("--gaps", default="0.04,0.02,0.01,0.005", help="gaps as fractions of the side (gap, flux study)")
     p.add_argument("--gap", type=float, default=0.01, help="the gap as a fraction of the side (mesh, edge study)")
     p.add_argument("--radii", default="0,0.01,0.02,0.04", help="edge radii as fractions of the side (edge study)")

@@ -92,21 +92,26 @@ class FamilyTableError(ValueError):
     """A node table is corrupt or was built with other settings than the family's; one line naming the file."""
 
 
-def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: float = 1.0) -> DimerMeshSpec:
+def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: float = 1.0,
+                     refine_faces: bool = False) -> DimerMeshSpec:
     """The gap-resolving mesh of the family nodes.
 
     The faces are those of ``mesh_family(0.5)`` (largest element 0.125 s, growth 1.6).  At the hinge edges the
     elements are ``g/2`` across (kept within [0.0025 s, 0.02 s]) and ``3 g`` along the hinge line (at most
     0.125 s), halved at the edges' ends: the aspect ratio of the elements that face each other across the gap
     is the same at every gap.  At g = 0.01 s this is the shipped default table's mesh (``TABLE_SPEC``), whose
-    hinge stiffness is within 1.6 % of its Richardson limit (docs/fullwave.md).  ``refine`` scales the three
-    hinge sizes (not the faces) for the mesh-convergence study of each gap node.
+    hinge stiffness is within 1.6 % of its Richardson limit (docs/fullwave.md).
+
+    ``refine`` scales the three hinge sizes for the mesh-convergence study of each gap node; with
+    ``refine_faces`` it scales the faces' largest element as well (every size times ``refine``: a uniformly
+    refined sequence of the same mesh).
     """
     r = float(gap) / float(side)
     along = min(0.125, 3.0 * r) * refine
     return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius,
                          h_hinge=min(max(0.5 * r, 0.0025), 0.02) * refine,
-                         h_max=0.125, h_along=along, h_corner=0.5 * along, growth=1.6)
+                         h_max=0.125 * (refine if refine_faces else 1.0), h_along=along, h_corner=0.5 * along,
+                         growth=1.6)
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,18 @@ def test_family_mesh_keeps_the_hinge_aspect_ratio():
         assert spec.h_along == pytest.approx(min(3 * g, 0.125))
 
 
+@pytest.mark.parametrize("q", [1.4, 0.7])
+def test_uniformly_refined_family_mesh_scales_every_size(q):
+    """The convergence study's family-uniform sequence: faces and hinge sizes all times q; the hinge-only
+    sequence keeps the faces."""
+    base = family_mesh_spec(500e-6, 10e-6)
+    every = family_mesh_spec(500e-6, 10e-6, refine=q, refine_faces=True)
+    hinge = family_mesh_spec(500e-6, 10e-6, refine=q)
+    for name in ("h_hinge", "h_max", "h_along", "h_corner"):
+        assert getattr(every, name) == pytest.approx(q * getattr(base, name))
+    assert hinge.h_max == base.h_max and hinge.h_hinge == pytest.approx(q * base.h_hinge)
+
+
 def test_nodes_span_the_lab_range():
     assert FAMILY_KS[0] == 0.3 and FAMILY_KS[-1] == 0.65 and len(FAMILY_KS) == 3
     assert FAMILY_GAP_RATIOS[0] == 0.01 and FAMILY_GAP_RATIOS[-1] == 0.05
