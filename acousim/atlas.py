@@ -99,7 +99,7 @@ class AtlasConfig:
     theta_drop: tuple[float, ...]
     pressure_amplitude_pa: float = 6000.0
     frequency_hz: float = 45_650.0
-    duration: float = 6.0
+    duration: float = 8.0
     sample_rate: float = 1000.0
 
     def __post_init__(self) -> None:

@@ -62,7 +62,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--theta-drop", default="-0.2:0.2:9", metavar="MIN:MAX:N", help="hinge angles at the drop [-]")
     p.add_argument("--pressure", type=float, default=6000.0, help="pressure amplitude p0 [Pa]")
     p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
-    p.add_argument("--duration", type=float, default=6.0, help="recorded time after the field is back on [s]")
+    p.add_argument("--duration", type=float, default=8.0, help="recorded time after the field is back on [s]; the second half is classified")
     p.add_argument("--sample-rate", type=float, default=1000.0, help="samples per second of the classified motion")
     p.add_argument("--no-figures", action="store_true", help="write the table only")
     p.add_argument("--force", action="store_true", help="discard an atlas with other settings in --out")
