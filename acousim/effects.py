@@ -283,12 +283,11 @@ class AirDamping(Effect):
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Terms added to (yddot [m/s^2], thetaddot [1/s^2]) (numpy reference, arrays in SI)."""
-        (yd, th, thd, _), shape = _state_arrays(ydot, theta, thetadot, z_eq)
+        (_, yd, th, thd, _), shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
         yd, th, thd = (np.broadcast_to(a, shape).ravel() for a in (yd, th, thd))
         p = self.parameter_vector()
         out = np.array([_air_damping_terms(a, b, c, *p) for a, b, c in zip(yd, th, thd)]).reshape(shape + (2,))
-        ay = out[..., 0] + 0.0 * np.asarray(y, float)
-        return np.broadcast_to(ay, shape).copy(), out[..., 1]
+        return out[..., 0], out[..., 1]
 
 
 #: name -> effect class, in docs/conventions.md order.
