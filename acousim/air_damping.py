@@ -219,9 +219,10 @@ def hinge_damping_shape(theta, gap_ratio, sway_ratio, wedge_ratio):
     s2 = np.sin(phi) ** 2
     h0 = gap_ratio * np.cos(phi)
     wedges = 0.0
-    for opening in (0.5 * math.pi * (1.0 + theta), 0.5 * math.pi * (1.0 - theta)):
-        if opening > 0.0:  # |theta| < 1: both wedges are open
-            wedges += wedge_gap_factor(opening / h0) * stokes_corner_factor(opening) / opening ** 3
+    if wedge_ratio > 0.0 and h0 > 0.0:  # no wedge term without one (or without a gap to cut it off)
+        for opening in (0.5 * math.pi * (1.0 + theta), 0.5 * math.pi * (1.0 - theta)):
+            if opening > 0.0:  # |theta| < 1: both wedges are open
+                wedges += wedge_gap_factor(opening / h0) * stokes_corner_factor(opening) / opening ** 3
     return (1.0 + sway_ratio * s2 + wedge_ratio * wedges) / (1.0 + 3.0 * s2)
 
 

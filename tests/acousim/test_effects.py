@@ -225,3 +225,7 @@ def test_air_damping_is_computed_not_fitted():
     with pytest.raises(EffectError, match="gap_ratio"):
         AirDamping(gamma_theta=1.0, wedge_ratio=0.5, gap_ratio=0.0)
     assert AirDamping.acts_without_field and not AirDamping.candidate
+    # without the wedge term it is plain linear damping, also from the command-line form
+    e = parse_effect("air_damping:gamma_y=0.5,gamma_theta=1.0")
+    ay, at = e.accelerations(0.0, 0.1, 0.0, 2.0, K, Z_EQ)
+    assert (float(ay), float(at)) == (-0.05, -2.0)
