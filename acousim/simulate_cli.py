@@ -95,7 +95,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
                    "parameters of docs/conventions.md section 5; parameters not given are 0")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
-                   help="start from a documented preset (effects, pressure, drop ranges); --effect "
+                   help="start from a documented preset (effects, pressure, drop ranges and, for paper, the dimer, the "
+                   "full-wave model and the computed air damping; docs/twin.md); options given override it and --effect "
                    "entries then add to or replace its effects")
     p.add_argument("--duration", type=float, default=4.0, metavar="SEC", help="recorded time per run [s] (default 4)")
     p.add_argument("--fps", type=float, default=2000.0, help="camera frame rate [1/s] (default 2000)")
