@@ -197,7 +197,7 @@ def drop_and_settle(dynamics, t_off: float, theta_drop: float, duration: float, 
     The field is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting), then on for
     ``duration`` [s], sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
     ``{"outcome": "escaped" | "folded", "t_end_s": time after the field came back}`` for a run that left the trap
-    or whose faces touched (``t_end_s`` is NaN for a completed run).
+    or whose faces touched (``t_end_s`` is NaN for a completed run, ``-t_off`` for one lost during the drop).
     """
     x0 = np.array([0.0, 0.0, float(theta_drop), float(thetadot_drop)])
     if t_off > 0:
