@@ -26,11 +26,12 @@ from .quadrature import tetrahedral_quadrature, tetrahedron_rule
 from .sweep import SweepResult, fit_static_coefficients, read_sweep_csv, static_sweep, taylor_coefficients
 from .force_model import ForceCoefficients, ForceModel
 from .surrogate import ForceSurrogate, SurrogateBox, build_surrogate, cached_surrogate
-from .effects import (EFFECT_TYPES, EffectSet, LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag,
-                      VelocityCoupling, parse_effect)
+from .effects import (EFFECT_TYPES, AirDamping, EffectSet, LinearDamping, MirrorAsymmetry, PairScattering,
+                      QuadraticDrag, VelocityCoupling, parse_effect)
+from .air_damping import AirDampingRates, air_damping_for, air_damping_rates
 from .equations import accelerations
 from .dynamics import DimerDynamics, Trajectory
-from .twin import PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
+from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
 from .models import (ExperimentConditions, ForceModelType, StaticModel, dynamic_model, force_model_names,
                      register_force_model, static_model)
 
@@ -73,8 +74,13 @@ __all__ = [
     "PairScattering",
     "MirrorAsymmetry",
     "VelocityCoupling",
+    "AirDamping",
+    "AirDampingRates",
+    "air_damping_rates",
+    "air_damping_for",
     "parse_effect",
     "PAPER_LIKE",
+    "PAPER",
     "Camera",
     "DropProtocol",
     "TwinConfig",

@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate,force} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,atlas} ...``.
 
 Each subcommand lives in its own module and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -13,7 +13,7 @@ __all__ = ["main", "build_parser"]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import simulate_cli, sweep_cli
+    from . import atlas_cli, simulate_cli, sweep_cli
     from .fullwave import cli as fullwave_cli
     from .fullwave import family_cli
 
@@ -27,6 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     simulate_cli.add_parser(sub)
     fullwave_cli.add_parser(sub)
     family_cli.add_parser(sub)
+    atlas_cli.add_parser(sub)
     return parser
 
 

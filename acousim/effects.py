@@ -12,6 +12,9 @@ name                   parameters (SI)              adds to (yddot, thetaddot)
 ``pair_scattering``    kappa [1/s^2]                (0, -kappa cos^2(k Z_com) theta)
 ``mirror_asymmetry``   beta0 [1/s^2], beta1 [1/(m s^2)]  (0, beta0 + beta1 y)
 ``velocity_coupling``  c5, c6 [1/m]                 (0, c5 thetadot^2 y + c6 thetadot ydot y)
+``air_damping``        gamma_y, gamma_theta [1/s],  (-gamma_y ydot, -gamma_theta S(theta) thetadot)
+                       sway_ratio, wedge_ratio,
+                       gap_ratio [-]
 =====================  ===========================  ==========================================
 
 ``Z_com = Z_eq + y`` is measured from the pressure node.  An :class:`EffectSet` holds any subset
@@ -35,7 +38,13 @@ line in :func:`packed_effect_accelerations` (the tests compare the compiled sum 
 for every effect type).
 
 With the acoustic field off only the air's effects (``acts_without_field``: ``linear_damping``,
-``quadratic_drag``) act; :meth:`EffectSet.acting` selects them.
+``quadratic_drag``, ``air_damping``) act; :meth:`EffectSet.acting` selects them.
+
+``air_damping`` is the air's drag computed from the dimer's geometry and the air (:mod:`acousim.air_damping`,
+docs/damping.md), with the hinge's theta-dependence ``S(theta)`` of
+:func:`acousim.air_damping.hinge_damping_shape`.  It is not linear in ``gap_ratio`` and is not a candidate of
+the diagnosis (``candidate = False``; its fitted counterparts are ``linear_damping`` and ``quadratic_drag``):
+it has no :meth:`Effect.regressors`, and its compiled term is its own line of :func:`packed_effect_accelerations`.
 """
 from __future__ import annotations
 
@@ -47,6 +56,8 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .air_damping import hinge_damping_shape
+
 __all__ = [
     "Effect",
     "LinearDamping",
@@ -54,6 +65,7 @@ __all__ = [
     "PairScattering",
     "MirrorAsymmetry",
     "VelocityCoupling",
+    "AirDamping",
     "EffectSet",
     "EFFECT_TYPES",
     "PACKED_PARAMETERS",
@@ -113,6 +125,8 @@ class Effect:
     #: True when the columns depend on the height above the node itself (through ``wavenumber * (z_eq + y)``),
     #: not only on the state
     depends_on_node_height: ClassVar[bool] = False
+    #: True for effects the diagnosis fits as candidates (linear in every parameter, with regressors)
+    candidate: ClassVar[bool] = True
     #: regressor columns ``(y, ydot, theta, thetadot, wavenumber, z_eq) -> (yddot cols, thetaddot cols)``
     columns: ClassVar[Callable]
 
@@ -223,9 +237,63 @@ class VelocityCoupling(Effect):
     c6: float = 0.0
 
 
+def _air_damping_terms(ydot, theta, thetadot, gamma_y, gamma_theta, sway_ratio, wedge_ratio, gap_ratio):
+    """(yddot, thetaddot) terms of the air's computed drag (scalars; numba compiles the same source)."""
+    at = 0.0
+    if gamma_theta != 0.0:
+        at = -gamma_theta * hinge_damping_shape(theta, gap_ratio, sway_ratio, wedge_ratio) * thetadot
+    return -gamma_y * ydot, at
+
+
+@dataclass(frozen=True)
+class AirDamping(Effect):
+    """The air's drag computed from the geometry (docs/damping.md): (-gamma_y ydot, -gamma_theta S(theta) thetadot).
+
+    Build it with :meth:`from_rates` from :func:`acousim.air_damping.air_damping_rates`; the parameters are
+    gamma_y, gamma_theta [1/s] (hinge rate at theta = 0) and the dimensionless sway_ratio, wedge_ratio and
+    gap_ratio (g / s) of :func:`acousim.air_damping.hinge_damping_shape`.
+    """
+
+    name: ClassVar[str] = "air_damping"
+    _non_negative: ClassVar[tuple[str, ...]] = ("gamma_y", "gamma_theta", "sway_ratio", "wedge_ratio", "gap_ratio")
+    acts_without_field: ClassVar[bool] = True
+    candidate: ClassVar[bool] = False
+    gamma_y: float = 0.0
+    gamma_theta: float = 0.0
+    sway_ratio: float = 0.0
+    wedge_ratio: float = 0.0
+    gap_ratio: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.gamma_theta > 0 and self.wedge_ratio > 0 and self.gap_ratio <= 0:
+            raise EffectError("air_damping: gap_ratio must be > 0 when the wedge term is on")
+
+    @classmethod
+    def from_rates(cls, rates) -> "AirDamping":
+        """The effect of :class:`acousim.air_damping.AirDampingRates`."""
+        from .air_damping import air_damping_parameters
+
+        return cls(**air_damping_parameters(rates))
+
+    @classmethod
+    def regressors(cls, *args, **kwargs):
+        raise EffectError("air_damping is computed, not fitted: it has no regressors (fit linear_damping instead)")
+
+    def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
+                      wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Terms added to (yddot [m/s^2], thetaddot [1/s^2]) (numpy reference, arrays in SI)."""
+        (_, yd, th, thd, _), shape = _state_arrays(y, ydot, theta, thetadot, z_eq)
+        yd, th, thd = (np.broadcast_to(a, shape).ravel() for a in (yd, th, thd))
+        p = self.parameter_vector()
+        out = np.array([_air_damping_terms(a, b, c, *p) for a, b, c in zip(yd, th, thd)]).reshape(shape + (2,))
+        return out[..., 0], out[..., 1]
+
+
 #: name -> effect class, in docs/conventions.md order.
 EFFECT_TYPES: dict[str, type[Effect]] = {
-    cls.name: cls for cls in (LinearDamping, QuadraticDrag, PairScattering, MirrorAsymmetry, VelocityCoupling)
+    cls.name: cls for cls in (LinearDamping, QuadraticDrag, PairScattering, MirrorAsymmetry, VelocityCoupling,
+                              AirDamping)
 }
 
 #: (effect name, parameter name) of each entry of :meth:`EffectSet.packed`.
@@ -240,6 +308,7 @@ _quadratic_drag_kernel = nb.njit(cache=True)(_quadratic_drag_columns)
 _pair_scattering_kernel = nb.njit(cache=True)(_pair_scattering_columns)
 _mirror_asymmetry_kernel = nb.njit(cache=True)(_mirror_asymmetry_columns)
 _velocity_coupling_kernel = nb.njit(cache=True)(_velocity_coupling_columns)
+_air_damping_kernel = nb.njit(cache=True)(_air_damping_terms)
 
 
 @nb.njit(cache=True)
@@ -268,7 +337,9 @@ def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, pack
     ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
     cy, ct = _velocity_coupling_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
     ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    return ay, at
+    a, b = _air_damping_kernel(ydot, theta, thetadot, packed[i0], packed[i0 + 1], packed[i0 + 2], packed[i0 + 3],
+                               packed[i0 + 4])
+    return ay + a, at + b
 
 
 def parse_effect(spec: str) -> Effect:
@@ -393,7 +464,7 @@ class EffectSet:
 
     def regressors(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                    wavenumber: float, z_eq: float) -> NDArray[np.float64]:
-        """Every effect's :meth:`Effect.regressors` side by side: (..., 2, total parameters); the
+        """(Candidate effects only, :attr:`Effect.candidate`.)  Every effect's :meth:`Effect.regressors` side by side: (..., 2, total parameters); the
         set's accelerations are ``regressors @ parameter_vector()``."""
         shape = np.broadcast_shapes(*(np.shape(v) for v in (y, ydot, theta, thetadot, z_eq)))
         parts = [type(e).regressors(y, ydot, theta, thetadot, wavenumber, z_eq) for e in self.effects]

@@ -95,7 +95,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
                    "parameters of docs/conventions.md section 5; parameters not given are 0")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
-                   help="start from a documented preset (effects, pressure, drop ranges); --effect "
+                   help="start from a documented preset (effects, pressure, drop ranges and, for paper, the dimer, the "
+                   "full-wave model and the computed air damping; docs/twin.md); options given override it and --effect "
                    "entries then add to or replace its effects")
     p.add_argument("--duration", type=float, default=4.0, metavar="SEC", help="recorded time per run [s] (default 4)")
     p.add_argument("--fps", type=float, default=2000.0, help="camera frame rate [1/s] (default 2000)")
@@ -110,16 +111,19 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="hinge angle range when the field drops (default -0.3:0.3)")
     p.add_argument("--thetadot-drop", type=_range, default=None, metavar="MIN:MAX",
                    help="hinge rate range when the field drops [1/s] (default -3:3)")
-    p.add_argument("--side", type=float, default=500e-6, help="cube side [m] (default 500e-6)")
-    p.add_argument("--frequency", type=float, default=45_650.0, metavar="HZ",
-                   help="drive frequency [Hz] (default 45650; with --side it sets ks, which the full-wave family "
-                        "covers from 0.3 to 0.65)")
+    p.add_argument("--side", type=float, default=None, help="cube side [m] (default 500e-6 or the preset's)")
+    p.add_argument("--frequency", type=float, default=None, metavar="HZ",
+                   help="drive frequency [Hz] (default 45650 or the preset's; with --side it sets ks, which the "
+                        "full-wave family covers from 0.3 to 0.65)")
     p.add_argument("--pressure", type=float, default=None, metavar="PA",
                    help="nominal pressure amplitude [Pa] written to meta.json (default 3000 or the preset's)")
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
-    add_model_arguments(p)
+    add_model_arguments(p, default=None)
+    p.add_argument("--air-damping", action="store_true",
+                   help="add the air's drag computed from the dimer's geometry and the air (effect air_damping, "
+                   "docs/damping.md; the paper preset has it on)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
@@ -164,13 +168,18 @@ def build_config(args: argparse.Namespace):
         if args.runs > 0:
             check_limit("frames in the data set (--runs x --duration x --fps)", args.runs * frames, MAX_FRAMES,
                         "simulate fewer or shorter runs, or several data sets")
-    check_meta_value("side_length_m", args.side, "--side")
-    check_meta_value("frequency_hz", args.frequency, "--frequency")
+    preset = PRESETS[args.preset] if args.preset else None
+    dimer = preset.dimer_settings() if preset is not None else {}
+    side = args.side if args.side is not None else dimer.get("side", 500e-6)
+    frequency = args.frequency if args.frequency is not None else dimer.get("frequency", 45_650.0)
+    model = args.model if args.model is not None else dimer.get("force_model", "gorkov")
+    gap = args.gap if args.gap is not None else dimer.get("gap")
+    check_meta_value("side_length_m", side, "--side")
+    check_meta_value("frequency_hz", frequency, "--frequency")
     if args.pressure is not None:
         check_meta_value("pressure_amplitude_pa", args.pressure, "--pressure")
     try:
         effects = EffectSet.parse(args.effect)
-        preset = PRESETS[args.preset] if args.preset else None
         if preset is not None:
             effects = preset.effects.merged(effects)
         proto0 = preset.protocol if preset is not None else DropProtocol()
@@ -184,10 +193,11 @@ def build_config(args: argparse.Namespace):
         pressure = args.pressure if args.pressure is not None else (
             preset.pressure_amplitude_pa if preset is not None else 3000.0)
         return TwinConfig(
-            runs=args.runs, duration=args.duration, seed=args.seed, side=args.side, pressure_amplitude_pa=pressure,
+            runs=args.runs, duration=args.duration, seed=args.seed, side=side, pressure_amplitude_pa=pressure,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
-            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=args.model,
-            gap=args.gap, edge_radius=args.edge_radius, frequency=args.frequency,
+            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=model,
+            gap=gap, edge_radius=args.edge_radius, frequency=frequency,
+            air_damping=bool(args.air_damping or dimer.get("air_damping", False)),
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None
@@ -195,6 +205,7 @@ def build_config(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``python -m acousim simulate``; returns the exit code."""
+    from .effects import EffectSet
     from .twin import TwinError, check_output_dir, simulate_dataset
 
     config = build_config(args)
@@ -213,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     except TwinError as exc:
         raise UserInputError(str(exc)) from None
     print(f"wrote {config.runs} runs to {args.out} (true pressure amplitude {truth['pressure_amplitude_pa']:.1f} Pa, "
-          f"effects: {config.effects.describe()})" + (f"; camera frames in {args.out}/video/" if video else ""),
+          f"effects: {EffectSet.from_dict(truth['effects']).describe()})" + (f"; camera frames in {args.out}/video/" if video else ""),
           file=sys.stderr)
     if args.figures:
         from .twin import write_twin_figures

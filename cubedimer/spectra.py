@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["amplitude_spectrum", "dominant_frequency", "peak_frequency", "phase_difference", "SpectralFeatures",
-           "spectral_features"]
+           "spectral_features", "line_amplitude"]
 
 
 @lru_cache(maxsize=16)
@@ -152,3 +152,15 @@ def spectral_features(y: NDArray, theta: NDArray, dt: float) -> SpectralFeatures
     return SpectralFeatures(f_y=fy, f_theta=ft, amp_y=q(y), amp_theta=q(theta),
                             phase=phase_difference(y, theta, dt, fy),
                             theta_at_fy=float(np.interp(fy, f, a)))
+
+
+def line_amplitude(x: NDArray, dt: float, f: float, half_width_bins: int = 2) -> float:
+    """Amplitude of the spectral line of ``x`` (sampled every ``dt`` [s]) nearest ``f`` [Hz]: the largest
+    Hann-window amplitude (:func:`amplitude_spectrum`) within ``half_width_bins`` bins of ``f`` (units of x;
+    0 if ``f`` lies beyond the Nyquist frequency)."""
+    freqs, a = amplitude_spectrum(x, dt)
+    if not 0 <= f <= freqs[-1]:
+        return 0.0
+    df = freqs[1] - freqs[0]
+    near = np.abs(freqs - f) <= half_width_bins * df
+    return float(a[near].max()) if near.any() else 0.0

@@ -276,6 +276,8 @@ def _add_report(sub) -> None:
                         "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
                         "see python -m fitting fit --help")
     add_model_arguments(p)
+    p.add_argument("--atlas", default=None, metavar="ATLAS_DIR",
+                   help="also show an attractor atlas written by python -m acousim atlas (its atlas.json and figures)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The fit's per-run refinements are the parallel tasks; the diagnosis, sweep "
                            "and figures run in this process.")
@@ -296,12 +298,20 @@ def run_report(args: argparse.Namespace) -> int:
         FitConfig(method=args.method).with_heldout_tolerance(args.heldout_tolerance)
     except ValueError as exc:
         raise UserInputError(f"--heldout-tolerance {exc}") from None
+    if args.atlas is not None:  # before anything runs
+        from .report.atlas_section import AtlasSectionError, atlas_section
+
+        try:
+            atlas_section(args.atlas)
+        except AtlasSectionError as exc:
+            raise UserInputError(str(exc)) from None
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
                      max_evals=args.max_evals, method=args.method, model=args.model,
-                     heldout_tolerance=args.heldout_tolerance, gap=args.gap, edge_radius=args.edge_radius)
+                     heldout_tolerance=args.heldout_tolerance, gap=args.gap, edge_radius=args.edge_radius,
+                     atlas=args.atlas)
     except (DatasetError, TableMismatch, ConditionError, FamilyRangeError, FamilyTableError) as exc:
         raise UserInputError(str(exc)) from None
     return 0

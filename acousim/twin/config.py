@@ -18,7 +18,7 @@ from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..models import ExperimentConditions, force_model_names, force_model_type
 
-__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PRESETS"]
+__all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PAPER", "PRESETS"]
 
 
 class TwinError(ValueError):
@@ -128,13 +128,29 @@ class Camera:
 
 @dataclass(frozen=True)
 class TwinPreset:
-    """A named set of effects, pressure and protocol (e.g. :data:`PAPER_LIKE`)."""
+    """A named set of effects, pressure, protocol and dimer (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
+
+    ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default);
+    ``air_damping`` adds the air's computed drag (:func:`acousim.air_damping.air_damping_for`).
+    """
 
     name: str
     effects: EffectSet
     pressure_amplitude_pa: float = 3000.0
     protocol: DropProtocol = field(default_factory=DropProtocol)
     description: str = ""
+    force_model: str | None = None
+    side: float | None = None
+    gap: float | None = None
+    frequency: float | None = None
+    air_damping: bool = False
+
+    def dimer_settings(self) -> dict:
+        """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets)."""
+        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency") if getattr(self, k) is not None}
+        if self.air_damping:
+            out["air_damping"] = True
+        return out
 
 
 @dataclass(frozen=True)
@@ -172,6 +188,9 @@ class TwinConfig:
         Longest internal RK4 step [s].
     preset : str, optional
         Name of the preset these settings came from (bookkeeping only).
+    air_damping : bool
+        Add the air's drag computed from the dimer's geometry and the air (the effect ``air_damping``,
+        docs/damping.md) to ``effects``, unless they hold one already.
     """
 
     runs: int = 10
@@ -190,6 +209,7 @@ class TwinConfig:
     gap: float | None = None
     edge_radius: float | None = None
     frequency: float = 45_650.0
+    air_damping: bool = False
 
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 1:
@@ -220,7 +240,7 @@ class TwinConfig:
     def from_preset(cls, preset: TwinPreset, **overrides) -> "TwinConfig":
         """Settings of a preset (effects, pressure, protocol), with any field overridden."""
         base = dict(effects=preset.effects, pressure_amplitude_pa=preset.pressure_amplitude_pa,
-                    protocol=preset.protocol, preset=preset.name)
+                    protocol=preset.protocol, preset=preset.name, **preset.dimer_settings())
         base.update(overrides)
         return cls(**base)
 
@@ -265,11 +285,13 @@ class TwinConfig:
             out["edge_radius_m"] = float(self.edge_radius)
         if self.frequency != ExperimentConditions.frequency_hz:
             out["frequency_hz"] = float(self.frequency)
+        if self.air_damping:
+            out["air_damping"] = True
         return out
 
 
 # ---------------------------------------------------------------------- presets
-#: The "paper-like" twin of docs/twin.md.  pair_scattering tunes the hinge to just below the y
+#: The "paper-like" twin of docs/twin.md: *tuned* Gor'kov dynamics.  pair_scattering tunes the hinge to just below the y
 #: frequency (f_theta = 21.0 Hz vs f_y = 21.3-21.8 Hz), mirror_asymmetry's beta1 y term drives the
 #: hinge at f_y, y is weakly damped (amplitude decay time 20 s) and the hinge transient dies in
 #: ~1-2 s.  Over 200 drops: ~45 % lock anti-phase with a small hinge amplitude (~0.15), ~40 % lock
@@ -283,9 +305,31 @@ PAPER_LIKE = TwinPreset(
     )),
     pressure_amplitude_pa=3000.0,
     protocol=DropProtocol(t_off=(2.0e-3, 4.0e-3), theta_drop=(-0.3, 0.3), thetadot_drop=(-3.0, 3.0)),
-    description="hinge tuned just below the y frequency by pair scattering and driven at f_y by a "
-    "mirror asymmetry; weak damping: bistable in-phase (large) and anti-phase (small) locking, see docs/twin.md",
+    description="tuned Gor'kov dynamics: hinge tuned just below the y frequency by pair scattering and driven at "
+    "f_y by a mirror asymmetry; weak damping: bistable in-phase (large) and anti-phase (small) locking, see docs/twin.md",
+)
+
+#: The source paper's protocol on the physics, no tuned parameter (docs/twin.md, "The paper's protocol"): the
+#: full-wave model of a family dimer, the air's computed drag as the only damping, and the paper's 13 ms field
+#: drop of a dimer at rest.  The dimer is the family's 700 um, g = 0.05 s one at 45.65 kHz (ks 0.585), at
+#: 6 kPa: the family dimer and pressure in docs/twin.md's scan at which a 13 ms free fall neither throws the
+#: dimer out of the trap (it does below 5 kPa at every side) nor folds its hinge (500 um dimers fold: their
+#: hinge frequency is within 10 % of the vertical one, where the fall's 1.2 mm oscillation pumps the hinge
+#: parametrically).  The hinge starts at rest within +-0.02 of its static equilibrium (theta* = 0.018 at 6 kPa):
+#: the asymmetry of real cubes and traps.
+PAPER = TwinPreset(
+    name="paper",
+    effects=EffectSet(),
+    pressure_amplitude_pa=6000.0,
+    protocol=DropProtocol(t_off=(13.0e-3, 13.0e-3), theta_drop=(-0.002, 0.038), thetadot_drop=(0.0, 0.0)),
+    description="the paper's 13 ms field drop on the full-wave model of a 700 um dimer (g = 0.05 s) with the air's "
+    "computed damping and no tuned parameter, see docs/twin.md",
+    force_model="fullwave",
+    side=700e-6,
+    gap=35e-6,
+    frequency=45_650.0,
+    air_damping=True,
 )
 
 #: Presets by name (the ``--preset`` values of ``python -m acousim simulate``).
-PRESETS: dict[str, TwinPreset] = {PAPER_LIKE.name: PAPER_LIKE}
+PRESETS: dict[str, TwinPreset] = {PAPER_LIKE.name: PAPER_LIKE, PAPER.name: PAPER}

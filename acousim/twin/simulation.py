@@ -24,7 +24,9 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
 
+from ..air_damping import air_damping_for
 from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
+from ..effects import EffectSet
 from ..models import dynamic_model
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
@@ -126,15 +128,23 @@ def _run_task(item: tuple) -> SimulatedRun:
 
 
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
-    """The true dynamics of a configuration and its true pressure amplitude [Pa]."""
+    """The true dynamics of a configuration and its true pressure amplitude [Pa].
+
+    With ``config.air_damping`` the air's computed drag (:func:`acousim.air_damping.air_damping_for`, at the true
+    pressure's frequencies) is added to the effects, unless they already hold an ``air_damping``; the
+    dynamics' ``effects`` are then what truth.json records.
+    """
     p_true = true_pressure(config.pressure_amplitude_pa, config.pressure_error, config.seed)
+    effects = config.effects
     try:
         sur = dynamic_model(config.force_model, config.conditions)
         if p_true != config.pressure_amplitude_pa:
             sur = sur.with_pressure(p_true)
+        if config.air_damping and "air_damping" not in effects:
+            effects = effects.merged(EffectSet((air_damping_for(sur, config.conditions),)))
     except ValueError as exc:  # the field cannot levitate the dimer, a dimer outside the full-wave family
         raise TwinError(str(exc)) from None
-    return DimerDynamics(sur, config.effects), p_true
+    return DimerDynamics(sur, effects), p_true
 
 
 def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool = True) -> tuple[list[SimulatedRun], DimerDynamics, float]:

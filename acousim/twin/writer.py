@@ -81,7 +81,7 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
     f_y, f_theta = fm.linear_frequencies()
     out = {
         "pressure_amplitude_pa": float(p_true),
-        "effects": config.effects.to_dict(),
+        "effects": None,
         "seed": int(config.seed),
         **config.to_dict(),
         "equilibrium_height_m": float(fm.z_eq),
@@ -89,6 +89,7 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         f"{config.force_model}_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
         "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
     }
+    out["effects"] = dynamics.effects.to_dict()  # with the computed air damping when config.air_damping
     out["surrogate"] = fm.provenance()
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],

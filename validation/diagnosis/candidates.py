@@ -18,7 +18,7 @@ __all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", 
 def _candidates() -> dict[str, tuple[str, ...]]:
     from acousim.effects import EFFECT_TYPES
 
-    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
+    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items() if cls.candidate}
 
 
 #: Candidate effects and their parameters (docs/conventions.md section 5, as defined in :mod:`acousim.effects`).
@@ -77,7 +77,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
     """
     from acousim.effects import EFFECT_TYPES
 
-    if name not in EFFECT_TYPES:
+    if name not in CANDIDATE_EFFECTS:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)

@@ -39,7 +39,7 @@ __all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_di
 logger = logging.getLogger(__name__)
 
 #: The candidate dampings (the air's effects), judged together against discovered terms.
-AIR_DAMPINGS = tuple(n for n, t in EFFECT_TYPES.items() if t.acts_without_field)
+AIR_DAMPINGS = tuple(n for n, t in EFFECT_TYPES.items() if t.acts_without_field and t.candidate)
 
 #: A gap (in excess of the noise floor) below this is "explained within the noise".
 EXPLAINED_GAP = 0.01

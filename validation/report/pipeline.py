@@ -117,7 +117,7 @@ def _scattering_section(models) -> Section:
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None, method: str = "discovery",
                  model: str = "gorkov", heldout_tolerance: float | None = None, gap: float | None = None,
-                 edge_radius: float | None = None) -> Path:
+                 edge_radius: float | None = None, atlas: str | Path | None = None) -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -136,6 +136,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
     gap, edge_radius : hinge gap and edge radius [m] of the full-wave model; without ``gap`` a full-wave diagnosis
         calibrates it from the data
+    atlas : folder of an attractor atlas (``python -m acousim atlas``), shown as the last section
 
     Returns
     -------
@@ -404,6 +405,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     sections.append(Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(model, model).split(' (')[0]} model)",
                             sec.reading, sec.figures, sec.tables, sec.numbers))
     sections += sections_after
+    if atlas is not None:
+        from .atlas_section import atlas_section
+
+        sections.append(atlas_section(atlas))
     from cubedimer.atomic import write_json
 
     write_json(out / "diagnosis.json", diag)
