@@ -1,6 +1,6 @@
 """Data-driven model discovery for levitated cube dimers.
 
-Two methods (:class:`FitConfig` ``method``): ``"discovery"`` (default) selects and fits the terms of the
+Two registered methods (:data:`METHODS`, :class:`FitConfig` ``method``): ``"discovery"`` (default) selects and fits the terms of the
 35-term cubic library on the integral form pooled over runs, with model-based column states
 (:func:`discover_model`), then polishes the coefficients with the long-time refinement (attractor shape,
 Poincare map, frequency; nlopt) and checks the attractors; ``"paper"`` is the source paper's pipeline:
@@ -14,7 +14,13 @@ from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, se
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
 from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_aliases, oracle_standard_errors, plan_runs
-from .pipeline import METHODS, FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
+from .config import FitConfig
+from .fit_output import model_json, write_fit
+from .final_checks import NoSaneModelError
+from .methods import METHODS, FitContext, FittingMethod, register_method
+from .pipeline import fit_dataset, fit_runs, prepare_runs
+from .results import FitResult
+from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
 from .refine import RefineConfig, refine
 from .selection import SelectionConfig
 from .regression import RegressionConfig, fit_regression
@@ -26,7 +32,9 @@ __all__ = [
     "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
     "SelectionConfig", "DiscoveryConfig", "DiscoveryResult", "discover_model",
     "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_aliases", "oracle_standard_errors", "plan_runs",
-    "METHODS", "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
+    "METHODS", "FittingMethod", "FitContext", "register_method", "SELECTION_RULES", "SelectionRule",
+    "register_selection_rule", "FitConfig", "FitResult", "NoSaneModelError", "fit_dataset", "fit_runs", "prepare_runs",
+    "model_json", "write_fit",
     "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",
     "SyntheticConfig", "paper_reduced_model", "write_dataset",
 ]
