@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from .config_checks import check_fraction, check_non_negative, check_whole
 from .consistency import ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .spectra import dominant_frequency
@@ -64,6 +65,14 @@ class LoadConfig:
     glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
     consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
     trap_frequency: Callable[[dict], float] | None = None
+
+    def __post_init__(self) -> None:
+        check_whole(self, "max_gap", minimum=0)
+        check_fraction(self, "max_missing_fraction", closed=True)
+        check_fraction(self, "uniform_tol")
+        check_non_negative(self, "min_periods")
+        if self.trap_frequency is not None and not callable(self.trap_frequency):
+            raise ValueError(f"LoadConfig.trap_frequency must be callable or None, got {self.trap_frequency!r}")
 
 
 @dataclass(frozen=True, eq=False)
