@@ -198,23 +198,24 @@ class _Normal:
         :func:`fitting.integral_form.select_integral_form` (velocity terms dropped first while one is not
         significant at the Bonferroni level), on the normal equations.  Returns the kept column indices."""
         from cubedimer.terms import is_velocity_free
-        from fitting.multiple_testing import holm_z_threshold
+        from fitting.multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
         n_lib = len(names)
         allruns = range(self.bb.size)
-        keep = list(range(n_lib))
         velocity = np.array([not is_velocity_free(t) for t in names])
-        thresholds = np.array([holm_z_threshold(alpha, n_lib, k + 1) for k in range(n_lib)])
-        while keep:
+
+        def score(keep: list[int]):
+            if not keep:
+                return np.zeros(0), None
             coef = self.solve(allruns, keep)
             s2 = sum(self.rss(i, keep, coef) for i in allruns) / max(dof_base - len(keep), 1)
             se = np.sqrt(np.clip(np.diag(np.linalg.pinv(self.g.sum(axis=0)[np.ix_(keep, keep)])) * s2, 0, None))
-            absz = np.abs(np.nan_to_num(coef / np.where(se > 0, se, np.inf)))
-            if np.all(np.sort(absz)[::-1] >= thresholds[: len(keep)]):
+            return np.abs(np.nan_to_num(coef / np.where(se > 0, se, np.inf))), None
+
+        for keep, absz, _ in holm_backward_elimination(score, range(n_lib), velocity, np.ones(n_lib, bool),
+                                                       holm_z_threshold(alpha, n_lib, 1)):
+            if holm_all_significant(absz, alpha, n_lib):  # (vacuously so once every term is gone)
                 return keep
-            weak_velocity = velocity[keep] & (absz < thresholds[0])
-            pool = np.flatnonzero(weak_velocity) if weak_velocity.any() else np.arange(len(keep))
-            keep.pop(int(pool[np.argmin(absz[pool])]))
         return []
 
 
