@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.noise import white_noise_std
 from cubedimer.spectra import dominant_frequency
 from cubedimer.terms import EQUATION_NAMES, evaluate_library, parse_term
 from .integral_form import integral_columns, integral_window, window_starts
@@ -227,13 +228,8 @@ def canonical_term(spec: str) -> tuple[str, str]:
 
 
 def estimate_tracking_noise(runs: Sequence["Run"]) -> NoiseLevels:
-    """White tracking noise of y and theta from the data (module docstring).
-
-    The fourth difference ``x[i-2] - 4 x[i-1] + 6 x[i] - 4 x[i+1] + x[i+2]`` of white noise has the
-    standard deviation ``sqrt(70) sigma``, while that of the motion is ``(omega dt)^4`` times its
-    amplitude (7e-5 at 22 Hz and 1500 fps: 0.007 um on 100 um), so the scaled fourth differences of all
-    runs are the noise; sigma is their median absolute deviation times 1.4826 / sqrt(70), robust to
-    isolated tracking glitches (a glitch touches five differences).
+    """White tracking noise of y and theta from the data, pooled over the runs (:func:`cubedimer.noise.white_noise_std`:
+    the robust scale of the fourth differences).
 
     Parameters
     ----------
@@ -243,17 +239,7 @@ def estimate_tracking_noise(runs: Sequence["Run"]) -> NoiseLevels:
     -------
     NoiseLevels
     """
-    kernel = np.array([1.0, -4.0, 6.0, -4.0, 1.0]) / np.sqrt(70.0)
-    sig = []
-    for name in ("y", "theta"):
-        parts = [np.convolve(np.asarray(getattr(r, name), float), kernel, mode="valid") for r in runs]
-        x = np.concatenate(parts) if parts else np.zeros(0)
-        x = x[np.isfinite(x)]
-        if x.size == 0:
-            raise ValueError("no frames to estimate the tracking noise from")
-        mad = 1.4826 * float(np.median(np.abs(x - np.median(x))))
-        sig.append(mad if mad > 0 else max(float(np.std(x)), 1e-300))
-    return NoiseLevels(sig[0], sig[1])
+    return NoiseLevels(*(white_noise_std([getattr(r, name) for r in runs]) for name in ("y", "theta")))
 
 
 def runs_from_data(derivs: Sequence["Derivatives"], bound_factor: float = 5.0) -> list[OracleRun]:
