@@ -41,6 +41,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .meta import META_DEFAULTS
 from .noise import white_noise_std
 from .spectra import dominant_frequency
 
@@ -206,8 +207,6 @@ def _physics_problem(f: RunFeatures, meta: Mapping[str, float], c: ConsistencyCo
                      trap_frequency: Callable[[Mapping[str, float]], float] | None,
                      others_amplitude: float | None) -> Problem | None:
     """Rules any levitated dimer obeys (module docstring), with meta.json's constants or their defaults."""
-    from .meta import META_DEFAULTS
-
     m = {**META_DEFAULTS, **dict(meta)}
     wavelength = m["sound_speed_m_s"] / m["frequency_hz"]
     quarter = wavelength / 4.0

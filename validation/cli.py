@@ -172,7 +172,8 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .diagnosis import DiagnoseConfig, diagnose_dataset, write_diagnosis
+    from .diagnosis import DiagnoseConfig, diagnose_dataset
+    from .report.diagnosis_section import write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]

@@ -22,7 +22,7 @@ every fit here is a linear least-squares problem at the measured states.  One mo
   final joint model of the identified effects with them (:func:`joint_estimates`);
 * :mod:`~validation.diagnosis.localization`: where the residual lies (terms, regions, time scales);
 * :mod:`~validation.diagnosis.long_time`: attractor, Poincare and frequency errors;
-* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` and :func:`write_diagnosis`;
+* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` (its files: :func:`validation.report.write_diagnosis`);
 * :mod:`~validation.diagnosis.model_comparison`: the gaps of Gor'kov, Gor'kov + fitted pair scattering and
   the full-wave model side by side (:func:`compare_simulation_models`).
 
@@ -43,7 +43,7 @@ from .long_time import LongTimeGap, long_time_gaps
 from .model_comparison import ModelComparison, ModelGap, compare_simulation_models
 from .metrics import (GapComponent, fit_components, fit_gaps, gap_components, gap_definition, noise_floors,
                       scalar_gap, short_time_gaps)
-from .pipeline import EXPLAINED_GAP, DiagnoseConfig, DiagnosisInternals, diagnose_dataset, write_diagnosis
+from .pipeline import EXPLAINED_GAP, DiagnoseConfig, DiagnosisInternals, diagnose_dataset
 from .preparation import PositionIntegrals, RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import sign_flip_pvalue, wilcoxon_greater_pvalue
@@ -59,5 +59,5 @@ __all__ = [
     "PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps", "identify_effects",
     "localize_residuals", "LongTimeGap", "long_time_gaps", "ModelGap", "ModelComparison", "compare_simulation_models",
     "sign_flip_pvalue", "wilcoxon_greater_pvalue",
-    "DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP",
+    "DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP",
 ]

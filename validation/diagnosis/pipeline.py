@@ -1,4 +1,4 @@
-"""A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
+"""A data set's diagnosis from end to end: :func:`diagnose_dataset` (its files: :func:`validation.report.write_diagnosis`).
 
 Output, ``diagnosis.json`` (docs/formats.md, extended)::
 
@@ -34,7 +34,7 @@ from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP"]
 
 logger = logging.getLogger(__name__)
 
@@ -414,18 +414,3 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                      "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
     }
     return diagnosis, DiagnosisInternals(problem, base, final)
-
-
-def write_diagnosis(diagnosis: dict, internals: DiagnosisInternals, out_dir: str | Path) -> list[Path]:
-    """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``."""
-    from cubedimer.atomic import write_json
-
-    from ..report.diagnosis_section import diagnosis_figures, diagnosis_section
-    from ..report.html import write_report
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "diagnosis.json", diagnosis)
-    figs = diagnosis_figures(diagnosis, internals, out / "figures")
-    write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
-    return [out / "diagnosis.json", out / "report.html"]
