@@ -13,7 +13,8 @@ from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
 from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, select_terms, term_statistics
 from .losses import LossTerms, LossWeights
 from .model import PolynomialModel, Scales
-from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_aliases, oracle_standard_errors, plan_runs
+from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_aliases, oracle_standard_errors
+from .run_planning import plan_runs
 from .config import FitConfig
 from .fit_output import model_json, write_fit
 from .final_checks import NoSaneModelError

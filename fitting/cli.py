@@ -128,7 +128,8 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 def _cmd_plan(a: argparse.Namespace) -> int:
     from .model import PolynomialModel
-    from .oracle import NoiseLevels, plan_runs
+    from .oracle import NoiseLevels
+    from .run_planning import plan_runs
 
     try:
         model = PolynomialModel.from_json(str(a.model))

@@ -7,22 +7,36 @@ effect); this module only chooses the effects' y (measured from the calibrated e
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+from acousim.effects import EFFECT_TYPES
+
 __all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
-def _candidates() -> dict[str, tuple[str, ...]]:
-    from acousim.effects import EFFECT_TYPES
+class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
+    """Effect name -> its parameter names, read from :data:`acousim.effects.EFFECT_TYPES` on every access: the one
+    registry of effects, so that an effect registered there is a candidate of the diagnosis without a copy here."""
 
-    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items()}
+    def __getitem__(self, name: str) -> tuple[str, ...]:
+        return EFFECT_TYPES[name].parameter_names()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(EFFECT_TYPES))
+
+    def __len__(self) -> int:
+        return len(EFFECT_TYPES)
+
+    def __repr__(self) -> str:
+        return repr(dict(self))
 
 
-#: Candidate effects and their parameters (docs/conventions.md section 5, as defined in :mod:`acousim.effects`).
-CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
+#: Candidate effects and their parameters (docs/conventions.md section 5): every effect registered in
+#: :data:`acousim.effects.EFFECT_TYPES`.
+CANDIDATE_EFFECTS: Mapping[str, tuple[str, ...]] = _RegisteredEffects()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
 #: ``-gamma_y ydot`` and ``-gamma_theta thetadot``.  A candidate is not judged against its own copy.
@@ -75,8 +89,6 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
         docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
-    from acousim.effects import EFFECT_TYPES
-
     if name not in EFFECT_TYPES:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
     y, yd, th, thd = np.asarray(state, float).T

@@ -11,7 +11,7 @@ Output, ``diagnosis.json`` (docs/formats.md, extended)::
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -21,7 +21,8 @@ from acousim.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
-from .discovery import Discovery, discover_terms, discovered_equations, joint_estimates, judge_candidates
+from .discovery import Discovery, discover_terms, discovered_equations
+from .joint_model import joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
@@ -68,7 +69,7 @@ class DiagnoseConfig:
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
-    candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
+    candidates: tuple[str, ...] = field(default_factory=lambda: tuple(CANDIDATE_EFFECTS))
     alpha: float = 0.01
     min_relative_improvement: float = 0.05
     min_absolute_improvement: float = 5e-6

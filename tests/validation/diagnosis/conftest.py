@@ -3,7 +3,9 @@ twin-like data sets with causes outside the candidates (a drifting pressure, a c
 import numpy as np
 import pytest
 
-from validation.diagnosis import Calibration, DiagnosisProblem, RunAccelerations, predicted_accelerations
+from validation.diagnosis import Calibration, DiagnosisProblem
+from validation.diagnosis.gap_model import predicted_accelerations
+from validation.diagnosis.preparation import RunAccelerations
 
 
 @pytest.fixture(scope="module")

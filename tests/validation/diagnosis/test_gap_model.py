@@ -1,7 +1,9 @@
 """Calibration and effect fit on synthetic accelerations with known calibration and effects."""
 import numpy as np
 
-from validation.diagnosis import Calibration, DiagnosisProblem, fit_gap_model, fit_gaps
+from validation.diagnosis import Calibration, DiagnosisProblem
+from validation.diagnosis.gap_model import fit_gap_model
+from validation.diagnosis.metrics import fit_gaps
 
 
 def _fit(model, runs, effects=()):
