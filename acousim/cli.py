@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence} ...``.
 
 Each subcommand lives in its own module and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -15,7 +15,7 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> argparse.ArgumentParser:
     from . import simulate_cli, sweep_cli
     from .fullwave import cli as fullwave_cli
-    from .fullwave import family_cli, table_cli
+    from .fullwave import convergence, family_cli, table_cli
 
     parser = OneLineParser(
         prog="python -m acousim",
@@ -28,6 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     fullwave_cli.add_parser(sub)
     family_cli.add_parser(sub)
     table_cli.add_parser(sub)
+    convergence.add_parser(sub)
     return parser
 
 
