@@ -116,7 +116,17 @@ def test_a_registered_method_runs_end_to_end_through_the_command(dummy_method, s
     assert "polish" not in d["settings"] and "discovery" not in d["settings"]
 
 
-def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, small_dataset, monkeypatch):
+@pytest.fixture(scope="module")
+def two_short_runs(tmp_path_factory, truth):
+    """Two noisy 1-s runs: the least the paper's method fits (its ensemble needs two runs)."""
+    from fitting.synthetic import SyntheticConfig, write_dataset
+
+    d = tmp_path_factory.mktemp("two_runs")
+    write_dataset(d, truth, SyntheticConfig(n_runs=2, duration=1.0, seed=7))
+    return d
+
+
+def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_short_runs, monkeypatch):
     import fitting.paper_fit as paper_fit
 
     def no_cross_check(*a, **k):  # the pooled integral-form cross-check (9 s here) plays no part in the selection
@@ -126,7 +136,7 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, small_d
     cfg = FitConfig(method="paper", refine=RefineConfig(max_evals=8, horizons=(1.0,)),
                     joint=RefineConfig(max_evals=8, rel_bound=0.3, abs_bound=0.005, horizons=(1.0,)),
                     selection=SelectionConfig(rule=dummy_rule.name))
-    res = fit_dataset(small_dataset, cfg, progress=False)
+    res = fit_dataset(two_short_runs, cfg, progress=False)
     assert res.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
     assert not (res.mask & ~(LINEAR | damping_mask())).any()  # nothing beyond what the rule allows
     assert res.mask[0, TERMS.index("ydot")] and res.mask[1, TERMS.index("thetadot")]
