@@ -162,3 +162,22 @@ def test_no_import_cycles_between_subpackages(package):
     # the package's own top-level modules (group == package) import subpackages freely; only subpackage pairs count
     sub = {k: {d for d in v if d != package} for k, v in graph.items() if k != package}
     assert not _cycles(sub), f"import cycles between subpackages of {package}: {_cycles(sub)}"
+
+
+def test_parallel_work_goes_through_the_executor_seam():
+    """Processes and clusters are opened by cubedimer.executor only (map_ordered); the tracking's compiled
+    per-frame work shares a batch between threads of one process, which is not a pool of processes."""
+    seam = ROOT / "cubedimer" / "executor.py"
+    bad = {}
+    for f in sorted(f for p in PACKAGES for f in (ROOT / p).rglob("*.py")):
+        if f == seam:
+            continue
+        tree = ast.parse(f.read_text(encoding="utf-8"))
+        names = {a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names}
+        modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+        modules |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+        hits = sorted(({"multiprocessing", "dask.distributed", "joblib"} & {m.split(".")[0] if m.startswith(
+            ("multiprocessing", "joblib")) else m for m in modules}) | ({"ProcessPoolExecutor"} & names))
+        if hits:
+            bad[str(f.relative_to(ROOT))] = hits
+    assert not bad, f"parallel work outside cubedimer.executor.map_ordered: {bad}"
