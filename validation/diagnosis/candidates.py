@@ -49,7 +49,7 @@ LIBRARY_EQUIVALENTS: dict[str, dict[str, tuple[str, ...]]] = {
 #: ``y theta``; mirror asymmetry's ``beta0 + beta1 y`` and velocity coupling's ``y thetadot^2`` and
 #: ``y ydot thetadot`` (y from the calibrated levitation height, so ``1`` takes the origin's difference).  A
 #: discovered term that is one of them, beside the identified effect, splits the effect's parameter: the final joint
-#: model folds it into the effect (:func:`~validation.diagnosis.discovery.joint_estimates`).
+#: model folds it into the effect (:func:`~validation.diagnosis.joint_model.joint_estimates`).
 LEADING_LIBRARY_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
     "pair_scattering": {"thetaddot": ("theta",)},
     "mirror_asymmetry": {"thetaddot": ("1", "y")},
