@@ -17,25 +17,34 @@ from acousim.effects import EFFECT_TYPES
 __all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
+def _is_candidate(cls: type) -> bool:
+    """Whether the diagnosis fits the effect class (linear in every parameter; an effect computed from physics
+    sets ``candidate = False``)."""
+    return bool(getattr(cls, "candidate", True))
+
+
 class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
     """Effect name -> its parameter names, read from :data:`acousim.effects.EFFECT_TYPES` on every access: the one
     registry of effects, so that an effect registered there is a candidate of the diagnosis without a copy here."""
 
     def __getitem__(self, name: str) -> tuple[str, ...]:
-        return EFFECT_TYPES[name].parameter_names()
+        cls = EFFECT_TYPES[name]
+        if not _is_candidate(cls):
+            raise KeyError(name)
+        return cls.parameter_names()
 
     def __iter__(self) -> Iterator[str]:
-        return iter(list(EFFECT_TYPES))
+        return iter([n for n, cls in EFFECT_TYPES.items() if _is_candidate(cls)])
 
     def __len__(self) -> int:
-        return len(EFFECT_TYPES)
+        return sum(_is_candidate(cls) for cls in EFFECT_TYPES.values())
 
     def __repr__(self) -> str:
         return repr(dict(self))
 
 
 #: Candidate effects and their parameters (docs/conventions.md section 5): every effect registered in
-#: :data:`acousim.effects.EFFECT_TYPES`.
+#: :data:`acousim.effects.EFFECT_TYPES` that the diagnosis can fit (``candidate``, True unless the effect says not).
 CANDIDATE_EFFECTS: Mapping[str, tuple[str, ...]] = _RegisteredEffects()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
@@ -89,7 +98,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
         docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
-    if name not in EFFECT_TYPES:
+    if name not in CANDIDATE_EFFECTS:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
