@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .field import StandingWave
+from .medium import GRAVITY
 
 __all__ = [
     "cube_form_factor",
@@ -64,7 +65,7 @@ def dimer_potential_energy(side: float, theta: ArrayLike, z_com: ArrayLike, wave
 
 
 def dimer_generalized_forces(
-    side: float, theta: ArrayLike, z_com: ArrayLike, wave: StandingWave, density: float = 2160.0, gravity: float = 9.81
+    side: float, theta: ArrayLike, z_com: ArrayLike, wave: StandingWave, density: float = 2160.0, gravity: float = GRAVITY
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(F_Z [N], Q_y [N], Q_theta [N m]) of the symmetric dimer from the closed form.
 
@@ -109,7 +110,7 @@ def point_particle_force_z(volume: float, height: ArrayLike, wave: StandingWave)
     return -3 * wave.acoustic_contrast * volume * k * wave.acoustic_energy_density * np.sin(2 * k * np.asarray(height, float))
 
 
-def vertical_trap_frequency(mass: float, volume: float, wave: StandingWave, gravity: float = 9.81, size_factor: float = 1.0) -> float:
+def vertical_trap_frequency(mass: float, volume: float, wave: StandingWave, gravity: float = GRAVITY, size_factor: float = 1.0) -> float:
     """Small-amplitude vertical trap frequency [Hz] of a particle of ``mass`` and ``volume``.
 
     F_Z = -F0 sin(2kZ) with F0 = 3 Phi V k E_ac * size_factor; equilibrium sin(2kZ_eq) = -M g / F0;
@@ -148,7 +149,7 @@ def nominal_trap_frequency(meta) -> float:
     k = 2.0 * math.pi * f / c0
     e = p0**2 / (4.0 * rho0 * c0**2)
     strength = e * k * (f1 + 1.5 * f2)
-    s = rho_p * 9.81 / strength
+    s = rho_p * GRAVITY / strength
     if not 0 <= s < 1:
         return float("nan")
     omega2 = 2.0 * e * k**2 * (f1 + 1.5 * f2) * math.sqrt(1.0 - s * s) / rho_p

@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,atlas} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas} ...``.
 
 Each subcommand lives in its own module and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -15,18 +15,20 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> argparse.ArgumentParser:
     from . import atlas_cli, simulate_cli, sweep_cli
     from .fullwave import cli as fullwave_cli
-    from .fullwave import family_cli
+    from .fullwave import convergence, family_cli, table_cli
 
     parser = OneLineParser(
         prog="python -m acousim",
-        description="Gor'kov acoustic model of a levitated cube dimer: static force/torque sweeps "
-        "and synthetic experiments (digital twin).",
+        description="The physics of a levitated cube dimer (the Gor'kov and the full-wave force models): static "
+        "force/torque sweeps, synthetic experiments (digital twin), full-wave forces and tables.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     sweep_cli.add_parser(sub)
     simulate_cli.add_parser(sub)
     fullwave_cli.add_parser(sub)
     family_cli.add_parser(sub)
+    table_cli.add_parser(sub)
+    convergence.add_parser(sub)
     atlas_cli.add_parser(sub)
     return parser
 

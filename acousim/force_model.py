@@ -18,13 +18,14 @@ model gives Q_y and Q_theta directly (they need not derive from a potential).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
 
-__all__ = ["ForceCoefficients", "ForceModel", "SinusoidalInertia"]
+__all__ = ["ForceCoefficients", "ForceModel", "SinusoidalInertia", "levitation_height", "escape_height_below"]
 
 _FIELDS = ("q_y_a", "q_y_b", "q_y_c", "q_theta_a", "q_theta_b", "q_theta_c")
 
@@ -165,3 +166,43 @@ class SinusoidalInertia:
         """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
         q_y, q_t = self.generalized_forces(theta, y)
         return q_y / self.mass, q_t / self.hinge_inertia(theta)
+
+
+def levitation_height(force_z: Callable[[float], float], weight: float, two_k: float) -> float:
+    """Z_eq [m]: the height in (-lambda/8, 0) below the pressure node where the vertical acoustic force at
+    theta = 0 equals the weight (the one root-finding of every force model).
+
+    Parameters
+    ----------
+    force_z : callable
+        Vertical acoustic force [N] at theta = 0 and absolute height Z [m].
+    weight : float
+        M g [N].
+    two_k : float
+        2k [1/m] of the standing wave (lambda/8 = pi / (2 two_k)).
+
+    Raises
+    ------
+    ValueError
+        The force at -lambda/8 is below the weight: the field cannot levitate the dimer.
+    """
+    f = lambda z: force_z(z) - weight  # noqa: E731
+    lo = -np.pi / (2 * two_k)
+    if f(lo) < 0:
+        raise ValueError("the field cannot levitate the dimer at this pressure amplitude")
+    return float(brentq(f, lo, 0.0, xtol=1e-15, rtol=1e-14))
+
+
+def escape_height_below(force_z: Callable[[float], float], weight: float, two_k: float, z_eq: float) -> float:
+    """y [m] (from ``z_eq``) of the potential barrier below the equilibrium at theta = 0: below it the dimer falls out.
+
+    The upward net force ``force_z - weight`` is positive from Z_eq down past the force maximum near -lambda/8;
+    the barrier is its next zero, within the half period [-3 lambda/8, -lambda/8] where sin(2kZ) is monotonic.
+    Returns -inf when there is no sign change there (no barrier within the model's reach).
+    """
+    f = lambda z: force_z(z) - weight  # noqa: E731
+    quarter = np.pi / two_k  # lambda / 4
+    lo, hi = -1.5 * quarter, -0.5 * quarter
+    if f(lo) * f(hi) >= 0:
+        return float("-inf")
+    return float(brentq(f, lo, hi, xtol=1e-15)) - z_eq

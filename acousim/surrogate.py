@@ -41,11 +41,10 @@ from functools import lru_cache
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 
 from .dimer import CubeDimer
 from .field import StandingWave
-from .force_model import ForceCoefficients, SinusoidalInertia
+from .force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
 from .forces import GorkovDimer
 from .medium import GRAVITY
 
@@ -206,7 +205,7 @@ class ForceSurrogate(SinusoidalInertia):
         r = (p / self.pressure_amplitude_pa) ** 2
         b0 = r * float(cheb.chebval(0.0, np.asarray(self.beta)))
         g0 = r * float(cheb.chebval(0.0, np.asarray(self.gamma)))
-        z_eq = _equilibrium_height(b0, g0, self.two_k, self.mass * self.gravity)
+        z_eq = levitation_height(_vertical_force(b0, g0, self.two_k), self.mass * self.gravity, self.two_k)
         settings = dict(self.settings, pressure_amplitude_pa=p, equilibrium_height_m=z_eq)
         return ForceSurrogate(
             alpha=tuple(r * np.asarray(self.alpha)), beta=tuple(r * np.asarray(self.beta)),
@@ -233,18 +232,11 @@ class ForceSurrogate(SinusoidalInertia):
         return {"build_accuracy": self.build_accuracy, "box": asdict(self.box)}
 
     def escape_height(self) -> float:
-        """y [m] of the potential barrier below the equilibrium (theta = 0): below it the dimer falls out."""
+        """y [m] of the potential barrier below the equilibrium (theta = 0): below it the dimer falls out
+        (:func:`acousim.force_model.escape_height_below`)."""
         b0 = float(cheb.chebval(0.0, np.asarray(self.beta)))
         g0 = float(cheb.chebval(0.0, np.asarray(self.gamma)))
-        mg = self.mass * self.gravity
-        f = lambda z: self.two_k * (b0 * np.sin(self.two_k * z) - g0 * np.cos(self.two_k * z)) - mg
-        quarter = np.pi / self.two_k  # lambda / 4
-        # Q_y(0, Z) > 0 (upwards) from Z_eq down past the force maximum near -lambda/8; the barrier is
-        # the next zero, within the half period [-3 lambda/8, -lambda/8] where sin(2kZ) is monotonic
-        lo, hi = -1.5 * quarter, -0.5 * quarter
-        if f(lo) * f(hi) >= 0:
-            return float("-inf")
-        return float(brentq(f, lo, hi, xtol=1e-15)) - self.z_eq
+        return escape_height_below(_vertical_force(b0, g0, self.two_k), self.mass * self.gravity, self.two_k, self.z_eq)
 
     # ------------------------------------------------------------------ checks
     def accuracy(self, model: GorkovDimer, n_theta: int = 23, n_y: int = 19, seed: int = 0) -> dict:
@@ -271,13 +263,9 @@ class ForceSurrogate(SinusoidalInertia):
         }
 
 
-def _equilibrium_height(b0: float, g0: float, two_k: float, weight: float) -> float:
-    """Z where the theta = 0 acoustic force two_k (b0 sin 2kZ - g0 cos 2kZ) equals the weight, in (-lambda/8, 0)."""
-    f = lambda z: two_k * (b0 * np.sin(two_k * z) - g0 * np.cos(two_k * z)) - weight
-    lo = -np.pi / (2 * two_k)
-    if f(lo) < 0:
-        raise ValueError("the field cannot levitate the dimer at this pressure amplitude")
-    return float(brentq(f, lo, 0.0, xtol=1e-15, rtol=1e-14))
+def _vertical_force(b0: float, g0: float, two_k: float):
+    """The theta = 0 acoustic force two_k (b0 sin 2kZ - g0 cos 2kZ) [N] as a function of the height Z [m]."""
+    return lambda z: two_k * (b0 * np.sin(two_k * z) - g0 * np.cos(two_k * z))
 
 
 def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetric: bool | None = None) -> ForceSurrogate:

@@ -159,7 +159,8 @@ def run_baselines(case: Case, seed: int, paper: bool) -> list[MethodResult]:
     from cubedimer.executor import ExecutorConfig
     from cubedimer.spectra import dominant_frequency
     from fitting.discovery import DiscoveryConfig, discover_model
-    from fitting.pipeline import FitConfig, fit_runs, prepare_runs
+    from fitting.config import FitConfig
+    from fitting.pipeline import fit_runs, prepare_runs
     from fitting.regression import RegressionConfig, dataset_scales, fit_ensemble_regression, fit_regression
 
     truth, runs, derivs, _ = make_data(case, seed)

@@ -73,7 +73,8 @@ def main() -> str:
         return "## executor\n\nSkipped: dask.distributed is not installed (pip install 'cubedimer[dask]')."
 
     from cubedimer.executor import _Task
-    from validation.blind import BlindConfig, _case_task, draw_case
+    from validation.blind import BlindConfig, draw_case
+    from validation.blind.study import _case_task
 
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as d:

@@ -132,7 +132,9 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
     from fitting.ensemble import mean_pvalues
     from cubedimer.executor import ExecutorConfig
     from fitting.model import TERMS
-    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.config import FitConfig
+    from fitting.fit_output import write_fit
+    from fitting.pipeline import fit_dataset
     from fitting.regression import RegressionConfig, fit_ensemble_regression, fit_regression
     from fitting.selection import SelectionConfig
     from fitting.synthetic import SyntheticConfig, paper_reduced_model, write_dataset
@@ -143,16 +145,17 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
         write_dataset(data, truth, SyntheticConfig(n_runs=n_runs, seed=seed))
         t0 = time.perf_counter()
         paper = FitConfig(method="paper")
-        res = fit_dataset(data, out, paper, executor=ExecutorConfig(workers=workers), plots=True, progress=False)
+        res = fit_dataset(data, paper, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
+        write_fit(res, out)
         wall = time.perf_counter() - t0
         t0 = time.perf_counter()
-        res2 = fit_dataset(data, out, paper, executor=ExecutorConfig(workers=workers), plots=False, progress=False)
+        res2 = fit_dataset(data, paper, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
         wall_resume = time.perf_counter() - t0
         # the paper's z > 3 rule on the same (cached) per-run refinements, jointly re-optimised
         zcfg = FitConfig(method="paper", selection=SelectionConfig(rule="zscore"))
-        res_z = fit_dataset(data, out, zcfg, executor=ExecutorConfig(workers=workers), plots=False, progress=False)
+        res_z = fit_dataset(data, zcfg, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
         t0 = time.perf_counter()
-        res_d = fit_dataset(data, Path(tmp) / "out_discovery", FitConfig(), plots=False, progress=False)
+        res_d = fit_dataset(data, FitConfig(), progress=False)
         wall_discovery = time.perf_counter() - t0
     derivs = [p.derivs for p in res.runs]
     sc = res.scales

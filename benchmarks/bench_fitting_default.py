@@ -33,7 +33,8 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
     the fit (default: ``FitConfig()``) on one data set."""
     from cubedimer.dataset import Run
     from fitting.model import PolynomialModel
-    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.config import FitConfig
+    from fitting.pipeline import fit_dataset
     from fitting.synthetic import SyntheticConfig, write_dataset
 
     truth = PolynomialModel.from_equations(case.equations)
@@ -45,7 +46,7 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
     orc = oracle_result(truth, runs, [r["state"] for r in raw], (case.noise_y, case.noise_theta))
     se = oracle(truth, runs, [r["state"] for r in raw], (case.noise_y, case.noise_theta), orc)
     t0 = time.perf_counter()
-    res = fit_dataset(data, workdir / f"{case.name}-{seed}-out", config or FitConfig(), plots=False, progress=False)
+    res = fit_dataset(data, config or FitConfig(), progress=False)
     wall = time.perf_counter() - t0
     al = aliases(orc)
     before = score(truth, res.discovery, se, alias=al) if res.discovery is not None else None
@@ -55,13 +56,14 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
 def speed(n_runs: int, workdir: Path, seed: int = 0) -> tuple[float, float]:
     """Wall and CPU time [s] of the default fit (no plots) on ``n_runs`` runs of 3 s (paper's reduced model,
     1500 fps); the fit runs in one process, so on an idle machine the wall time is about the CPU time."""
-    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.config import FitConfig
+    from fitting.pipeline import fit_dataset
     from fitting.synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
     data = workdir / f"speed{n_runs}"
     write_dataset(data, paper_reduced_model(), SyntheticConfig(n_runs=n_runs, duration=3.0, seed=seed))
     t0, c0 = time.perf_counter(), time.process_time()
-    fit_dataset(data, workdir / f"speed{n_runs}-out", FitConfig(), plots=False, progress=False)
+    fit_dataset(data, FitConfig(), progress=False)
     return time.perf_counter() - t0, time.process_time() - c0
 
 

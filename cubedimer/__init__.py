@@ -1,10 +1,12 @@
 """cubedimer: the shared core of the cube-dimer suite.
 
-What more than one of the user-facing packages (``acousim``, ``fitting``, ``validation``) needs lives
+What more than one of the user-facing packages (``acousim``, ``fitting``, ``validation``, ``tracking``) needs lives
 here, so that ``acousim`` and ``fitting`` never import each other:
 
-* :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling
+* :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling;
+  :mod:`cubedimer.errors` - its one-line :class:`DatasetError`
 * :mod:`cubedimer.meta` - the one validated reader of ``meta.json``
+* :mod:`cubedimer.noise` - the one white tracking-noise estimate (fourth differences)
 * :mod:`cubedimer.terms` - term names and the cubic monomial library over [y, ydot, theta, thetadot]
 * :mod:`cubedimer.spectra`, :mod:`cubedimer.poincare`, :mod:`cubedimer.attractors` - signal analysis
   shared by the twin, the fit and the report
@@ -14,6 +16,8 @@ here, so that ``acousim`` and ``fitting`` never import each other:
 * :mod:`cubedimer.atomic` - atomic file output and the one JSON writer
 * :mod:`cubedimer.executor` - the seam for parallel work (local processes or a dask cluster)
 * :mod:`cubedimer.cli` - the command-line runner, shared options and one-line errors
+* :mod:`cubedimer.config_checks` - the construction-time checks of the frozen configs; :mod:`cubedimer.lazy` - the
+  one lazy-import mechanism of the package ``__init__`` modules
 
 This package imports none of the three user-facing packages.
 """

@@ -23,11 +23,12 @@ import re
 import sys
 import tempfile
 from pathlib import Path
+from typing import Callable, Sequence
 
 from .dataset import DatasetError
 from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
-__all__ = ["UserInputError", "OneLineParser", "run_cli", "configure_logging", "join_negative_values",
+__all__ = ["UserInputError", "OneLineParser", "command_parser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
            "positive_int", "positive_float", "float_list"]
 
@@ -219,10 +220,27 @@ def check_limit(what: str, value: float, limit: float, hint: str = "") -> None:
         raise UserInputError(f"{what} = {value:,.0f} exceeds the limit of {limit:,.0f}" + (f"; {hint}" if hint else ""))
 
 
-def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> int:
+def command_parser(prog: str, description: str,
+                   commands: Sequence[Callable[[argparse._SubParsersAction], None]]) -> OneLineParser:
+    """The parser of a package's command line: one sub-parser per ``add_parser(subparsers)`` function in ``commands``.
+
+    Every package's command module has this one shape: each command is a function that adds its sub-parser to
+    ``subparsers`` and sets ``func`` (the function :func:`run_cli` calls with the parsed arguments).
+    """
+    parser = OneLineParser(prog=prog, description=description)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
+    for add_parser in commands:
+        add_parser(sub)
+    return parser
+
+
+def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None,
+            errors: tuple[type[BaseException], ...] = ()) -> int:
     """Parse ``argv`` and run the chosen subcommand's ``func``: user errors become one line and exit 2.
 
-    The command runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`), as every
+    ``errors``: the package's library errors that mean "nothing can be written for this input" (e.g. the fit's
+    :class:`fitting.final_checks.NoSaneModelError`); they are reported like user errors, one line and exit
+    status 2.  The command runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`), as every
     executor task does: its numbers are then the same whether it runs here or inside a task, and the
     many small factorisations are faster so (parallel work goes through the executor's processes)."""
     args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
@@ -230,7 +248,7 @@ def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> i
     try:
         with single_blas_thread():
             return int(args.func(args) or 0)
-    except (UserInputError, DatasetError, ExecutorError) as exc:
+    except (UserInputError, DatasetError, ExecutorError, *errors) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

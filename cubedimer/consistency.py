@@ -41,6 +41,8 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .meta import META_DEFAULTS
+from .noise import white_noise_std
 from .spectra import dominant_frequency
 
 __all__ = ["ConsistencyConfig", "RunFeatures", "Inconsistency", "run_features", "check_consistency",
@@ -90,8 +92,8 @@ class RunFeatures:
     duration : float
         Time span [s].
     noise_y : float
-        Frame-to-frame tracking noise of y [m] (robust scale of the residual of a short cubic smoothing,
-        corrected for the filter).
+        Frame-to-frame tracking noise of y [m] (:func:`cubedimer.noise.white_noise_std`: the robust scale of its
+        fourth differences).
     y_median : float
         Median of y [m] (near 0: y is measured from the levitation height).
     """
@@ -118,15 +120,8 @@ class Inconsistency:
 
 
 def _noise_level(x: NDArray) -> float:
-    """Tracking noise [units of x]: the residual of a 7-frame cubic Savitzky-Golay smoothing, whose
-    white-noise gain is sqrt(1 - c0) with c0 = 1/3 + ... the centre weight (a projection)."""
-    from scipy.signal import savgol_coeffs, savgol_filter
-
-    if x.size < 15:
-        return float("nan")
-    r = x - savgol_filter(x, 7, 3)
-    c0 = float(savgol_coeffs(7, 3)[3])
-    return 1.4826 * float(np.median(np.abs(r - np.median(r)))) / math.sqrt(1.0 - c0)
+    """Tracking noise [units of x] (:func:`cubedimer.noise.white_noise_std`); NaN for fewer than 15 frames."""
+    return float("nan") if x.size < 15 else white_noise_std([x])
 
 
 #: A peak at five or more cycles per run is the oscillation when it reaches this fraction of a slower peak.
@@ -212,8 +207,6 @@ def _physics_problem(f: RunFeatures, meta: Mapping[str, float], c: ConsistencyCo
                      trap_frequency: Callable[[Mapping[str, float]], float] | None,
                      others_amplitude: float | None) -> Problem | None:
     """Rules any levitated dimer obeys (module docstring), with meta.json's constants or their defaults."""
-    from .meta import META_DEFAULTS
-
     m = {**META_DEFAULTS, **dict(meta)}
     wavelength = m["sound_speed_m_s"] / m["frequency_hz"]
     quarter = wavelength / 4.0

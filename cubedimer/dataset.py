@@ -17,6 +17,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from .config_checks import check_fraction, check_non_negative, check_whole
+from .errors import DatasetError
+from .meta import read_meta
 from .consistency import ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .spectra import dominant_frequency
@@ -24,10 +27,6 @@ from .spectra import dominant_frequency
 __all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
 
 logger = logging.getLogger(__name__)
-
-
-class DatasetError(ValueError):
-    """A bad input file; ``str(err)`` is a one-line message naming the file and the problem."""
 
 
 @dataclass(frozen=True)
@@ -64,6 +63,14 @@ class LoadConfig:
     glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
     consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
     trap_frequency: Callable[[dict], float] | None = None
+
+    def __post_init__(self) -> None:
+        check_whole(self, "max_gap", minimum=0)
+        check_fraction(self, "max_missing_fraction", closed=True)
+        check_fraction(self, "uniform_tol")
+        check_non_negative(self, "min_periods")
+        if self.trap_frequency is not None and not callable(self.trap_frequency):
+            raise ValueError(f"LoadConfig.trap_frequency must be callable or None, got {self.trap_frequency!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -440,8 +447,6 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     files = sorted(f for f in p.iterdir() if f.suffix.lower() == ".csv" and f.is_file())
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
-    from .meta import read_meta
-
     meta = read_meta(p)
     report = report or _log_skip
     runs, skipped = [], []

@@ -17,7 +17,7 @@ from typing import Any
 
 import logging
 
-from .dataset import DatasetError
+from .errors import DatasetError
 
 __all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "META_TEXT_KEYS", "read_meta", "validate_meta",
            "check_meta_value"]

@@ -1,32 +1,52 @@
-"""Data-driven model discovery for levitated cube dimers.
+"""Data-driven model discovery for levitated cube dimers (independent of ``acousim``).
 
-Two methods (:class:`FitConfig` ``method``): ``"discovery"`` (default) selects and fits the terms of the
-35-term cubic library on the integral form pooled over runs, with model-based column states
-(:func:`discover_model`), then polishes the coefficients with the long-time refinement (attractor shape,
-Poincare map, frequency; nlopt) and checks the attractors; ``"paper"`` is the source paper's pipeline:
-per-run sparse regression with pysindy (C0), long-time refinement per run, ensemble selection and joint
-re-optimisation of the minimal model.  Also: oracle standard errors and a run planner, paired model
-comparison, synthetic data.  Independent of ``acousim``.
+Two registered methods (:data:`METHODS`, :class:`FitConfig` ``method``): ``"discovery"`` (default) selects and
+fits the terms of the 35-term cubic library on the integral form pooled over runs, with model-based column states
+(:func:`discover_model`), then polishes the coefficients with the long-time refinement (attractor shape, Poincare
+map, frequency; nlopt) and checks the attractors; ``"paper"`` is the source paper's pipeline: per-run sparse
+regression with pysindy (C0), long-time refinement per run, ensemble selection by a registered rule
+(:data:`SELECTION_RULES`) and joint re-optimisation of the minimal model.  Public API:
+
+* fitting a data set: :func:`fit_dataset` (load and fit, no output files), :func:`fit_runs`, :func:`prepare_runs`,
+  :class:`FitConfig` and the stage configs, :class:`FitResult`, :func:`write_fit` (model.json and figures),
+  :class:`NoSaneModelError`;
+* the registries: :data:`METHODS`, :class:`FittingMethod`, :class:`FitContext`, :func:`register_method`;
+  :data:`SELECTION_RULES`, :class:`SelectionRule`, :func:`register_selection_rule`;
+* the model: :class:`PolynomialModel`, :class:`Scales`; the discovery: :func:`discover_model`;
+* oracle standard errors and the run planner: :class:`NoiseLevels`, :func:`oracle_standard_errors`,
+  :func:`plan_runs`;
+* paired comparison of a variant: :func:`compare_models`; synthetic data: :func:`paper_reduced_model`,
+  :func:`write_dataset`, :class:`SyntheticConfig`.
+
+The building blocks (regression, refinement, ensemble statistics, Holm's rule) are in their modules.
 """
-from .compare import compare_models, cross_coupling_mask, drop_terms, paired_wilcoxon
+from .compare import compare_models
+from .config import FitConfig
+from .derivatives import SmoothingConfig
 from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
-from .ensemble import EnsembleConfig, mean_pvalues, select_significant_terms, select_terms, term_statistics
-from .losses import LossTerms, LossWeights
+from .ensemble import EnsembleConfig
+from .final_checks import NoSaneModelError
+from .fit_output import write_fit
+from .losses import LossWeights
+from .methods import METHODS, FitContext, FittingMethod, register_method
 from .model import PolynomialModel, Scales
-from .oracle import NoiseLevels, OracleRun, estimate_tracking_noise, oracle_aliases, oracle_standard_errors, plan_runs
-from .pipeline import METHODS, FitConfig, FitResult, fit_dataset, fit_runs, prepare_runs
-from .refine import RefineConfig, refine
+from .oracle import NoiseLevels, oracle_standard_errors
+from .pipeline import fit_dataset, fit_runs, prepare_runs
+from .refine import RefineConfig
+from .regression import RegressionConfig
+from .results import FitResult
+from .run_planning import plan_runs
 from .selection import SelectionConfig
-from .regression import RegressionConfig, fit_regression
+from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
 from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
 __all__ = [
-    "PolynomialModel", "Scales",
-    "RegressionConfig", "fit_regression", "RefineConfig", "refine", "LossWeights", "LossTerms",
-    "EnsembleConfig", "term_statistics", "select_terms", "select_significant_terms", "mean_pvalues",
-    "SelectionConfig", "DiscoveryConfig", "DiscoveryResult", "discover_model",
-    "NoiseLevels", "OracleRun", "estimate_tracking_noise", "oracle_aliases", "oracle_standard_errors", "plan_runs",
-    "METHODS", "FitConfig", "FitResult", "fit_dataset", "fit_runs", "prepare_runs",
-    "compare_models", "cross_coupling_mask", "drop_terms", "paired_wilcoxon",
-    "SyntheticConfig", "paper_reduced_model", "write_dataset",
+    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "write_fit", "NoSaneModelError",
+    "SmoothingConfig", "RegressionConfig", "RefineConfig", "LossWeights", "EnsembleConfig", "SelectionConfig",
+    "DiscoveryConfig",
+    "METHODS", "FittingMethod", "FitContext", "register_method",
+    "SELECTION_RULES", "SelectionRule", "register_selection_rule",
+    "PolynomialModel", "Scales", "discover_model", "DiscoveryResult",
+    "NoiseLevels", "oracle_standard_errors", "plan_runs",
+    "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset",
 ]

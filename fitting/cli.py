@@ -21,10 +21,14 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from cubedimer.cli import (OneLineParser, add_executor_arguments, check_limit, executor_config, positive_float,
-                           positive_int, prepare_output_dir, run_cli)
+from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
+                           positive_float, positive_int, prepare_output_dir, run_cli)
+from .final_checks import NoSaneModelError
+from .methods import DEFAULT_METHOD, METHODS, methods_help
+from .selection_rules import SELECTION_RULES
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser", "COMMANDS", "add_fit_parser", "add_compare_parser", "add_synth_parser",
+           "add_plan_parser"]
 
 #: Most runs and frames per run of a synthetic data set (frames are held in memory before writing).
 MAX_SYNTH_RUNS = 10_000
@@ -36,13 +40,17 @@ def _log(msg: str) -> None:
 
 
 def _cmd_fit(a: argparse.Namespace) -> int:
-    from .pipeline import FitConfig, fit_dataset
-
-    from cubedimer.cli import UserInputError
+    from .config import FitConfig
+    from .fit_output import write_fit
+    from .pipeline import fit_dataset
+    from .selection_rules import SELECTION_RULES
 
     prepare_output_dir(a.out, "--out", create=False)
-    if a.method != "paper" and (a.selection or a.relative_threshold):
-        raise UserInputError("--selection and --relative-threshold apply to --method paper")
+    if a.selection and a.method not in SELECTION_RULES[a.selection].methods:
+        raise UserInputError(f"--selection {a.selection} applies to --method "
+                             f"{', '.join(SELECTION_RULES[a.selection].methods)}")
+    if a.method != "paper" and a.relative_threshold:
+        raise UserInputError("--relative-threshold applies to --method paper")
     try:
         cfg = FitConfig(method=a.method).with_heldout_tolerance(a.heldout_tolerance)
     except ValueError as exc:
@@ -53,14 +61,15 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, polish=replace(cfg.polish, max_evals=a.max_evals))
     if a.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
-    if getattr(a, "relative_threshold", False):
+    if a.relative_threshold:
         cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
-    if getattr(a, "selection", None):
+    if a.selection:
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
     t0 = time.perf_counter()
-    res = fit_dataset(a.data_dir, a.out, cfg, executor_config(a), strict=a.strict,
-                      plots=not a.no_plots, progress=not a.quiet, log=_log)
-    _log(f"wrote {Path(a.out) / 'model.json'} in {time.perf_counter() - t0:.1f} s")
+    res = fit_dataset(a.data_dir, cfg, executor_config(a), strict=a.strict, progress=not a.no_progress,
+                      cache_dir=Path(a.out) / "runs")
+    path = write_fit(res, a.out, plots=not a.no_plots)
+    _log(f"wrote {path} in {time.perf_counter() - t0:.1f} s")
     for eq, terms in res.model.equations().items():
         print(f"{eq} = " + " + ".join(f"({v:.6g}) {t}" for t, v in terms.items()))
     return 0
@@ -71,7 +80,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     from .compare import compare_models, cross_coupling_mask, drop_terms
     from cubedimer.dataset import DatasetError, load_dataset
     from .model import PolynomialModel, Scales
-    from .pipeline import FitConfig, prepare_runs
+    from .pipeline import prepare_runs
 
     prepare_output_dir(a.out, "--out", create=False)
     try:
@@ -118,9 +127,9 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 
 def _cmd_plan(a: argparse.Namespace) -> int:
-    from cubedimer.cli import UserInputError
     from .model import PolynomialModel
-    from .oracle import NoiseLevels, plan_runs
+    from .oracle import NoiseLevels
+    from .run_planning import plan_runs
 
     try:
         model = PolynomialModel.from_json(str(a.model))
@@ -136,11 +145,9 @@ def _cmd_plan(a: argparse.Namespace) -> int:
     return 0
 
 
-def _add_plan(sub) -> None:
+def add_plan_parser(subparsers) -> None:
     """``plan``: how many runs make a term resolvable (the oracle's experiment planner)."""
-    from cubedimer.cli import positive_float, positive_int
-
-    p = sub.add_parser("plan", help="how many runs make a term resolvable (oracle z of integral-form least squares)")
+    p = subparsers.add_parser("plan", help="how many runs make a term resolvable (oracle z of integral-form least squares)")
     p.add_argument("--model", required=True, help="model.json (fit's output or a truth.json)")
     p.add_argument("--term", required=True, help="EQUATION:TERM, e.g. thetaddot:y^2*theta")
     p.add_argument("--size", type=float, default=None, help="the term's coefficient [SI] (default: the model's)")
@@ -161,27 +168,21 @@ def _add_plan(sub) -> None:
     p.set_defaults(func=_cmd_plan)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = OneLineParser(prog="python -m fitting", description="Data-driven model discovery for cube dimers. Data "
-                      "format: docs/formats.md; what y and theta are: docs/conventions.md.")
-    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
-    f = sub.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
+def add_fit_parser(subparsers) -> None:
+    """``fit``: discover the minimal model of a data set."""
+    f = subparsers.add_parser("fit", help="discover the minimal model of a data set (steps 1-4)")
     f.add_argument("data_dir", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an optional meta.json (docs/formats.md)")
     f.add_argument("--out", required=True, help="output directory (model.json, plots, runs/ cache)")
     f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     f.add_argument("--no-plots", action="store_true", help="write model.json only, no PNG plots")
-    f.add_argument("--quiet", action="store_true", help="no progress bar")
-    f.add_argument("--method", choices=("discovery", "paper"), default="discovery",
-                   help="'discovery' (default: integral-form discovery with model-based states, polished by the "
-                        "long-time refinement) or 'paper' (per-run SINDy and long-time refinement, ensemble selection, "
-                        "joint re-optimisation of the minimal model)")
+    f.add_argument("--quiet", dest="no_progress", action="store_true", help="no progress bar")
+    f.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD, help=methods_help())
     f.add_argument("--max-evals", type=positive_int, default=None,
                    help="objective evaluations per run refinement (paper) or of the polish (discovery)")
     f.add_argument("--joint-max-evals", type=positive_int, default=None, help="evaluations of the joint re-optimisation")
-    f.add_argument("--selection", choices=("significance", "zscore", "backward"), default=None,
-                   help="term selection of --method paper: 'significance' (default: the mean coefficient across runs is "
-                        "significantly non-zero, t-test with Holm correction at 0.01), 'zscore' (the paper's "
-                        "z > 3 rule; always reported) or 'backward' (elimination on the joint long-time loss; slow)")
+    f.add_argument("--selection", choices=tuple(SELECTION_RULES), default=None,
+                   help="term selection of the per-run ensemble: " + "; ".join(
+                       f"'{r.name}' ({', '.join(r.methods)}): {r.summary}" for r in SELECTION_RULES.values()))
     f.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
                    help="discovery: keep the smallest support whose held-out error (5-fold over runs) is within FRACTION "
                         "of the best on the elimination path (default 0: the best itself, every term the data resolve). "
@@ -193,7 +194,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
-    c = sub.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
+
+
+def add_compare_parser(subparsers) -> None:
+    """``compare``: a model variant against the minimal model."""
+    c = subparsers.add_parser("compare", help="compare a model variant with the minimal model (step 5)")
     c.add_argument("data_dir", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an optional meta.json (docs/formats.md)")
     c.add_argument("--model", required=True, help="model.json written by `fit`")
     c.add_argument("--out", required=True, help="output directory (compare.json and plots)")
@@ -202,7 +207,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     c.add_argument("--no-plots", action="store_true", help="write compare.json only, no PNG plots")
     c.set_defaults(func=_cmd_compare)
-    s = sub.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
+
+
+def add_synth_parser(subparsers) -> None:
+    """``synth``: a synthetic data set from the paper's reduced model."""
+    s = subparsers.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
     s.add_argument("out_dir", help="directory to write the run CSVs, meta.json and truth.json into")
     s.add_argument("--runs", type=positive_int, default=15, help="number of runs")
     s.add_argument("--duration", type=positive_float, default=3.0, help="length of each run [s]")
@@ -211,9 +220,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--noise-theta", type=float, default=0.005, help="tracking noise of theta [-] (standard deviation)")
     s.add_argument("--seed", type=int, default=0, help="seed of the initial conditions and the noise")
     s.set_defaults(func=_cmd_synth)
-    _add_plan(sub)
-    return p
+
+
+#: The commands of ``python -m fitting``, in the order of the help.
+COMMANDS = (add_fit_parser, add_compare_parser, add_synth_parser, add_plan_parser)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m fitting`` (one ``add_parser`` function per command)."""
+    return command_parser("python -m fitting", "Data-driven model discovery for cube dimers. Data format: "
+                          "docs/formats.md; what y and theta are: docs/conventions.md.", COMMANDS)
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_cli(build_parser(), argv)
+    return run_cli(build_parser(), argv, errors=(NoSaneModelError,))

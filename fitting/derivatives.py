@@ -42,6 +42,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs, savgol_filter
 
+from cubedimer.config_checks import check_positive, check_whole
+
 __all__ = ["SmoothingConfig", "Derivatives", "savgol_window", "differentiate", "smooth_long_window", "noise_gain",
            "run_derivatives", "acceleration_kernel", "apply_acceleration_kernel"]
 
@@ -63,6 +65,14 @@ class SmoothingConfig:
     polyorder: int = 5
     window_periods: float = 0.75
     window: int | None = None
+
+    def __post_init__(self) -> None:
+        check_whole(self, "polyorder", minimum=3)
+        check_positive(self, "window_periods")
+        if self.window is not None:
+            check_whole(self, "window", minimum=self.polyorder + 2)
+            if self.window % 2 == 0:
+                raise ValueError(f"SmoothingConfig.window must be odd, got {self.window}")
 
 
 @dataclass(frozen=True, eq=False)

@@ -30,6 +30,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.config_checks import check_positive
 from cubedimer.terms import EQUATION_NAMES
 from .model import TERMS, PolynomialModel, damping_mask
 from .multiple_testing import holm_reject
@@ -46,6 +47,9 @@ class EnsembleConfig:
 
     z_threshold: float = 3.0
     keep_damping: bool = True
+
+    def __post_init__(self) -> None:
+        check_positive(self, "z_threshold")
 
 
 @dataclass(frozen=True, eq=False)

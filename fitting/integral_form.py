@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .multiple_testing import holm_z_threshold
+from .multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run
@@ -214,14 +214,6 @@ def _is_velocity_term(name: str) -> bool:
         return "dot" in name
 
 
-def _holm_rejects_all(z: NDArray, alpha: float, n_library: int) -> bool:
-    """True if Holm's rule over ``n_library`` hypotheses declares every one of the terms with ``z`` significant
-    (the terms not in ``z``, dropped before, count as the least significant ones)."""
-    az = np.sort(np.abs(np.nan_to_num(z, nan=0.0)))[::-1]
-    thr = np.array([holm_z_threshold(alpha, n_library, k + 1) for k in range(az.size)])
-    return bool(np.all(az >= thr))
-
-
 @dataclass(frozen=True)
 class IntegralSelection:
     """Sparse pooled fit of the integral form (:func:`select_integral_form`).
@@ -307,23 +299,23 @@ def select_integral_form(positions: Sequence[NDArray], columns: Sequence[NDArray
     X, b, n_win = _design(positions, columns, dts, windows, known, trim)
     if X.shape[1] != len(names):
         raise ValueError(f"{X.shape[1]} columns but {len(names)} term names")
-    keep = list(range(len(names)))
-    dropped: list[str] = []
+    velocity = np.array([_is_velocity_term(n) for n in names])
+
+    def score(cols: list[int]):
+        if not cols:
+            return np.zeros(0), None
+        fit = _ols(X[:, cols], b, n_win, int(max(windows)))
+        return np.abs(np.nan_to_num(fit.z, nan=0.0)), fit
+
+    keep: list[int] = list(range(len(names)))
+    dropped: list[str] = []  # in the order of elimination
     fit = None
-    while keep:
-        fit = _ols(X[:, keep], b, n_win, int(max(windows)))
-        if _holm_rejects_all(fit.z, alpha, len(names)):
+    for support, absz, fit in holm_backward_elimination(score, keep, velocity, np.ones(len(names), bool),
+                                                        holm_z_threshold(alpha, len(names), 1)):
+        dropped += [names[k] for k in keep if k not in support]
+        keep = support
+        if holm_all_significant(absz, alpha, len(names)):  # (vacuously so once every term is gone)
             break
-        absz = np.abs(np.nan_to_num(fit.z, nan=0.0))
-        # velocity terms earn their place first: while one is not significant even at the Bonferroni level,
-        # the least significant velocity term goes (a conservative field is the default hypothesis; on
-        # harmonic y motion y^2*theta and ydot^2*theta are nearly collinear and would otherwise be chosen
-        # between by noise)
-        velocity = np.array([_is_velocity_term(names[k]) for k in keep])
-        weak_velocity = velocity & (absz < holm_z_threshold(alpha, len(names), 1))
-        pool = np.flatnonzero(weak_velocity) if weak_velocity.any() else np.arange(len(keep))
-        worst = int(pool[np.argmin(absz[pool])])
-        dropped.append(names[keep.pop(worst)])
     window_s = float(np.median([w * dt for w, dt in zip(windows, dts)]))
     if not keep:
         dof = max(len(b) - 2 * n_win, 1)

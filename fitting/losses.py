@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.config_checks import check_non_negative, check_positive
 from cubedimer.poincare import poincare_section
 from cubedimer.spectra import dominant_frequency
 
@@ -74,6 +75,14 @@ class LossWeights:
     frequency: float = 1.0
     bound: float = 5.0
     penalty: float = 1e3
+
+    def __post_init__(self) -> None:
+        for name in ("shape", "poincare", "frequency"):
+            check_non_negative(self, name)
+        if self.shape + self.poincare + self.frequency == 0:
+            raise ValueError("LossWeights: at least one of shape, poincare, frequency must be positive")
+        check_positive(self, "bound")
+        check_positive(self, "penalty")
 
 
 @dataclass(frozen=True)

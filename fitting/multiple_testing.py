@@ -1,18 +1,25 @@
-"""Holm's step-down procedure: the one multiple-testing rule of the term selections.
+"""Holm's step-down procedure and the backward elimination along it: the one multiple-testing rule of the selections.
 
-Both selection rules of :mod:`fitting` (the significance of the ensemble mean across runs in
-:mod:`fitting.ensemble`, and the pooled integral-form selection in :mod:`fitting.integral_form`)
-control the family-wise error rate over the library terms with Holm's rule: sort the p-values,
+The selection rules of :mod:`fitting` (the significance of the ensemble mean across runs in
+:mod:`fitting.ensemble`, the pooled integral-form selection in :mod:`fitting.integral_form`, the discovery's
+support search in :mod:`fitting.support_search`) and the diagnosis's library search
+(:mod:`validation.diagnosis.discovery`) control the family-wise error rate over the library terms with Holm's rule: sort the p-values,
 reject the k-th smallest (k = 1, 2, ...) while ``p_(k) <= alpha / (m - k + 1)``, stop at the first
 that fails.  Hypotheses that were removed before testing (e.g. terms already eliminated) count as
-the least significant ones: pass their number in ``n_hypotheses``.
+the least significant ones: pass their number in ``n_hypotheses``.  :func:`holm_all_significant` is the one
+stopping check and :func:`holm_backward_elimination` the one elimination path (velocity terms first).
 """
 from __future__ import annotations
+
+from typing import Callable, Iterator, Sequence, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["holm_level", "holm_reject", "holm_z_threshold"]
+#: What a backward elimination's score function returns beside the |z| (e.g. the least-squares fit).
+Fit = TypeVar("Fit")
+
+__all__ = ["holm_level", "holm_reject", "holm_z_threshold", "holm_all_significant", "holm_backward_elimination"]
 
 
 def holm_level(alpha: float, n_hypotheses: int, rank: int) -> float:
@@ -60,3 +67,61 @@ def holm_z_threshold(alpha: float, n_hypotheses: int, rank: int) -> float:
     from scipy.special import ndtri
 
     return float(ndtri(1.0 - 0.5 * holm_level(alpha, n_hypotheses, rank)))
+
+
+def holm_all_significant(abs_z: ArrayLike, alpha: float, n_hypotheses: int) -> bool:
+    """Whether Holm's rule over ``n_hypotheses`` declares every one of the terms with two-sided normal ``|z|``
+    significant (the hypotheses not given, e.g. terms dropped before, count as the least significant ones).
+
+    Parameters
+    ----------
+    abs_z : array_like
+        |z| of the terms tested (NaN counts as 0).
+    alpha : float
+        Family-wise error rate.
+    n_hypotheses : int
+        Size of the family; 0 (nothing free to test) is vacuously significant.
+    """
+    from scipy.special import ndtr
+
+    if n_hypotheses == 0:
+        return True
+    z = np.nan_to_num(np.abs(np.asarray(abs_z, float)), nan=0.0)
+    return bool(holm_reject(2.0 * ndtr(-z), alpha, n_hypotheses).all())
+
+
+def holm_backward_elimination(score: Callable[[list[int]], tuple[NDArray[np.float64], Fit]], columns: Sequence[int],
+                              velocity: NDArray[np.bool_], removable: NDArray[np.bool_],
+                              velocity_z: float) -> Iterator[tuple[list[int], NDArray[np.float64], Fit]]:
+    """Backward elimination with velocity terms first: the one elimination path of the term selections.
+
+    Starting from ``columns``, yields ``(support, |z|, fit)`` of the current support (``score(support)``) before
+    every step; the caller stops where its rule is met (e.g. :func:`holm_all_significant`).  A step drops the
+    removable term of smallest |z|, except that while a removable velocity term is below ``velocity_z`` (the
+    Bonferroni level) the least significant velocity term goes: a conservative field is the default hypothesis,
+    and on harmonic y motion y^2*theta and ydot^2*theta are nearly collinear and would otherwise be chosen between
+    by noise.  Ends after the support in which nothing is removable (the forced terms, or none: ``score`` is then
+    called with an empty support).
+
+    Parameters
+    ----------
+    score : callable
+        ``score(support) -> (|z| per column of support, fit)`` (NaN-free |z|).
+    columns : sequence of int
+        The starting support (column indices).
+    velocity, removable : ndarray of bool, indexed by column
+        Which columns have a velocity factor; which may be dropped (the others are forced).
+    velocity_z : float
+        |z| below which a velocity term goes first (:func:`holm_z_threshold` at rank 1).
+    """
+    keep = list(columns)
+    while True:
+        absz, fit = score(keep)
+        yield list(keep), absz, fit
+        idx = np.asarray(keep, dtype=int)
+        free = np.flatnonzero(removable[idx])
+        if not free.size:
+            return
+        weak_velocity = free[velocity[idx][free] & (absz[free] < velocity_z)]
+        pool = weak_velocity if weak_velocity.size else free
+        keep.pop(int(pool[np.argmin(absz[pool])]))

@@ -17,10 +17,11 @@ from cubedimer.atomic import atomic_save
 from cubedimer.terms import EQUATION_NAMES
 from .discovery import KNEE_TOLERANCE
 from .model import TERMS
+from .results import RunFit
 
 if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
-    from .pipeline import FitResult
+    from .results import FitResult
 
 __all__ = ["plot_fit", "plot_comparison"]
 
@@ -52,16 +53,16 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
         ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
     axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
     rule = {"significance": "by the ensemble-mean t-test, Holm", "zscore": "by z > threshold",
-            "backward": "by backward elimination", "discovery": "by integral-form discovery"}.get(getattr(res, "rule", "zscore"), "")
+            "backward": "by backward elimination", "discovery": "by integral-form discovery"}.get(res.rule or res.method, "")
     axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
     paths.append(out / "zscores.png")
     _save(fig, paths[-1])
-    if getattr(res, "discovery", None) is not None:
+    if res.discovery is not None:
         paths.append(_plot_pareto(res.discovery, out / "pareto.png"))
     # coefficient distributions
     sel = [(q, j) for q in range(2) for j in range(len(TERMS)) if res.mask[q, j]]
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(sel)), 4))
-    c = np.array([f.refined.coef for f in res.run_fits])
+    c = np.array([f.model.coef for f in res.run_fits])
     for k, (q, j) in enumerate(sel):
         ref = res.model.coef[q, j] if res.model.coef[q, j] != 0 else 1.0
         ax.plot(np.full(c.shape[0], k) + np.linspace(-0.15, 0.15, c.shape[0]), c[:, q, j] / ref, "o", ms=3, alpha=0.7)
@@ -74,6 +75,8 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     # optimisation trajectory
     fig, ax = plt.subplots(figsize=(7, 4))
     for f in res.run_fits:
+        if not isinstance(f, RunFit):  # per-run results without an optimisation (the discovery's least squares)
+            continue
         ax.plot(np.minimum.accumulate(f.history), color="tab:gray", lw=0.6, alpha=0.6)
     ax.plot(np.minimum.accumulate(res.joint.history), color="tab:red", lw=1.5, label="joint (minimal model)")
     ax.set_yscale("log")

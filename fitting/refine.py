@@ -17,12 +17,17 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.config_checks import check_choice, check_non_negative, check_positive, check_whole
 from .derivatives import Derivatives
 from .integrate import integrate_batch
 from .losses import LossTerms, LossWeights, Reference, loss_terms, make_reference
 from .model import EXPONENTS, PolynomialModel, Scales
 
 __all__ = ["RefineConfig", "JOINT_REFINE", "RefineResult", "Objective", "scaled_reference", "refine", "default_substeps"]
+
+
+#: The nlopt local derivative-free algorithms :class:`RefineConfig` accepts.
+REFINE_ALGORITHMS = ("LN_BOBYQA", "LN_SBPLX", "LN_NELDERMEAD", "LN_COBYLA")
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,18 @@ class RefineConfig:
     h_omega: float = 0.05
     horizons: tuple[float, ...] = (0.25, 0.5, 1.0)
     weights: LossWeights = field(default_factory=LossWeights)
+
+    def __post_init__(self) -> None:
+        check_choice(self, "algorithm", REFINE_ALGORITHMS)
+        check_whole(self, "max_evals")
+        for name in ("rel_bound", "abs_bound", "initial_step", "h_omega"):
+            check_positive(self, name)
+        for name in ("xtol_rel", "ftol_rel"):
+            check_non_negative(self, name)
+        h = self.horizons
+        if not (isinstance(h, tuple) and h and all(isinstance(x, (int, float)) and 0 < x <= 1 for x in h)
+                and list(h) == sorted(h)):
+            raise ValueError(f"RefineConfig.horizons must be an increasing tuple of fractions in (0, 1], got {h!r}")
 
 
 #: A joint re-optimisation on all runs: of the minimal model (``FitConfig.joint``) and of a variant before it is

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .derivatives import Derivatives
+from cubedimer.config_checks import check_non_negative, check_positive, check_whole
 from cubedimer.terms import STATE_NAMES, parse_term
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 
@@ -55,6 +56,11 @@ class RegressionConfig:
     max_iter: int = 20
     matched_filter: bool = True
     relative_threshold: bool = False
+
+    def __post_init__(self) -> None:
+        check_positive(self, "threshold")
+        check_non_negative(self, "alpha")
+        check_whole(self, "max_iter")
 
 
 def dataset_scales(derivs: Sequence[Derivatives], f_y: Sequence[float]) -> Scales:

@@ -27,8 +27,9 @@ monomials (e.g. ``ydot^2`` vs ``y^2`` for a nearly harmonic y).
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +40,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.terms import EQUATION_NAMES
 from .model import TERMS, PolynomialModel, Scales, damping_mask
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
+from .selection_rules import DEFAULT_RULE, SELECTION_RULES
 
 def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[np.ndarray, np.ndarray]:
     """Copies of ``coef`` and ``mask`` with term j of equation q removed."""
@@ -49,6 +51,8 @@ def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[n
 
 
 __all__ = ["SelectionConfig", "SelectionStep", "SelectionResult", "backward_elimination"]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -81,7 +85,7 @@ class SelectionConfig:
     max_steps : int
     """
 
-    rule: str = "significance"
+    rule: str = DEFAULT_RULE
     alpha: float = 0.01
     n_try: int = 2
     screen: RefineConfig = field(default_factory=lambda: RefineConfig(
@@ -89,6 +93,16 @@ class SelectionConfig:
     forward: bool = False
     max_steps: int = 30
     prune: bool = False
+
+    def __post_init__(self) -> None:
+        if self.rule not in SELECTION_RULES:
+            raise ValueError(f"unknown selection rule {self.rule!r} (use one of {', '.join(SELECTION_RULES)})")
+        if not 0.0 < self.alpha < 1.0:
+            raise ValueError(f"selection alpha must lie in (0, 1), got {self.alpha}")
+        for name in ("n_try", "max_steps"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"selection {name} must be a whole number >= 1, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -134,13 +148,11 @@ def _per_run(obj_cache: dict, coef_si: NDArray, mask: NDArray, derivs, scales: S
 
 def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs: Sequence[Derivatives],
                          scales: Scales, config: SelectionConfig = SelectionConfig(),
-                         executor: ExecutorConfig | None = None,
-                         log: Callable[[str], None] | None = None) -> SelectionResult:
+                         executor: ExecutorConfig | None = None) -> SelectionResult:
     """Backward elimination (plus forward check) from ``model`` on ``mask`` (see module docstring).
 
     ``model`` should already be jointly optimised on ``mask`` (its loss is the first reference).
     """
-    log = log or (lambda m: None)
     derivs = list(derivs)
     keep = damping_mask()
     cur_mask = np.asarray(mask, bool) | keep
@@ -166,7 +178,8 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
         for (q, j), (c, loss) in zip(order, outs):
             w = paired_wilcoxon(loss, cur_loss)
             d = float(np.mean(loss) - np.mean(cur_loss))
-            log(f"  drop {name(q, j)}: mean loss {np.mean(cur_loss):.4g} -> {np.mean(loss):.4g}, p = {w.p_greater:.2g}")
+            logger.info("  drop %s: mean loss %.4g -> %.4g, p = %.2g", name(q, j), np.mean(cur_loss), np.mean(loss),
+                        w.p_greater)
             if w.p_greater >= config.alpha and (best is None or d < best[0]):
                 best = (d, q, j, c, loss, w.p_greater)
             else:
@@ -196,7 +209,8 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
         best = None
         for (q, j), (c, loss) in zip(dropped, outs):
             w = paired_wilcoxon(cur_loss, loss)  # H1: the smaller (current) model is worse
-            log(f"  add back {name(q, j)}: mean loss {np.mean(cur_loss):.4g} -> {np.mean(loss):.4g}, p = {w.p_greater:.2g}")
+            logger.info("  add back %s: mean loss %.4g -> %.4g, p = %.2g", name(q, j), np.mean(cur_loss), np.mean(loss),
+                        w.p_greater)
             ok = w.p_greater < config.alpha
             steps.append(SelectionStep("add" if ok else "reject-add", EQUATION_NAMES[q], TERMS[j],
                                        float(np.mean(cur_loss)), float(np.mean(loss)), w.p_greater))

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from cubedimer.terms import is_velocity_free
 from .integral_form import detrend_windows, integral_columns, window_starts
 from .model import TERMS
-from .multiple_testing import holm_reject, holm_z_threshold
+from .multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
 __all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "heldout_rms", "select_support",
            "prune_heldout"]
@@ -140,35 +140,24 @@ def _abs_z(d: ReducedDesign, cols: Sequence[int]) -> NDArray[np.float64]:
         return np.nan_to_num(np.abs(c / se), nan=0.0)
 
 
-def _holm_ok(absz: NDArray, free: NDArray[np.bool_], alpha: float, n_hyp: int) -> bool:
-    """Holm's rule over ``n_hyp`` hypotheses declares every free term significant."""
-    from scipy.special import ndtr
-
-    return n_hyp == 0 or bool(holm_reject(2.0 * ndtr(-absz[free]), alpha, n_hyp).all())
-
-
 def _rss(d: ReducedDesign, cols: Sequence[int]) -> float:
     return _lstsq(d.total, list(cols), covariance=False)[2] if len(cols) else float(d.total[:, -1] @ d.total[:, -1])
 
 
 def _eliminate(d: ReducedDesign, cols: Sequence[int], forced: NDArray[np.bool_], alpha: float, velocity_first: bool):
-    """Backward elimination from ``cols`` down to the forced terms: yields (support, |z|) before every step.
-    The least significant free term goes; with ``velocity_first`` velocity terms go first while one of them is
+    """Backward elimination from ``cols`` down to the forced terms (:func:`fitting.multiple_testing.holm_backward_elimination`):
+    yields (support, |z|) before every step; with ``velocity_first`` velocity terms go first while one of them is
     below the Bonferroni level."""
     n_hyp = max(int(forced.size - forced.sum()), 1)
-    keep = list(cols)
-    while True:
-        absz = _abs_z(d, keep)
-        yield list(keep), absz
-        free = ~forced[keep]
-        if not free.any():
-            return
-        pool = np.flatnonzero(free)
-        if velocity_first:
-            weak_v = pool[~_VELOCITY_FREE[np.array(keep)[pool]] & (absz[pool] < holm_z_threshold(alpha, n_hyp, 1))]
-            if weak_v.size:
-                pool = weak_v
-        keep.pop(int(pool[np.argmin(absz[pool])]))
+    velocity_z = holm_z_threshold(alpha, n_hyp, 1) if velocity_first else -np.inf
+    for keep, absz, _ in holm_backward_elimination(lambda k: (_abs_z(d, k), None), cols, ~_VELOCITY_FREE, ~forced,
+                                                   velocity_z):
+        yield keep, absz
+
+
+def _holm_ok(absz: NDArray, free: NDArray[np.bool_], alpha: float, n_hyp: int) -> bool:
+    """Holm's rule over ``n_hyp`` hypotheses declares every free term significant."""
+    return holm_all_significant(absz[free], alpha, n_hyp)
 
 
 def select_support(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,

@@ -52,3 +52,38 @@ def test_help_points_to_the_repository_docs(package, capsys):
     assert exit_.value.code == 0
     out = capsys.readouterr().out
     assert "docs/formats.md" in out and "docs/conventions.md" in out
+
+
+def _library_modules():
+    for package in ("cubedimer", *PACKAGES):
+        for f in sorted((ROOT / package).rglob("*.py")):
+            if not (f.name.endswith("cli.py") or f.name == "__main__.py"):
+                yield f
+
+
+def test_library_code_neither_configures_logging_nor_subclasses_the_command_line_errors():
+    """Library code logs and raises its own errors; only the command modules configure logging and map errors to
+    exit statuses (cubedimer.cli.run_cli)."""
+    import ast
+
+    bad = []
+    for f in _library_modules():
+        tree = ast.parse(f.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and node.attr == "basicConfig":
+                bad.append(f"{f.relative_to(ROOT)}: logging.basicConfig")
+            if isinstance(node, ast.ClassDef) and any(getattr(b, "id", None) == "UserInputError" for b in node.bases):
+                bad.append(f"{f.relative_to(ROOT)}: {node.name}(UserInputError)")
+    assert not bad, bad
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_command_module_builds_its_commands_from_add_parser_functions(package):
+    """One command-line shape: every sub-command of a package is registered by an ``add_parser(subparsers)``
+    function, so the parser has sub-commands (tracking's single command is the package's one exception)."""
+    parser = importlib.import_module(f"{package}.cli").build_parser()
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if package == "tracking":
+        assert not subs  # python -m tracking VIDEO: one command, no sub-commands
+    else:
+        assert len(subs) == 1 and len(subs[0].choices) >= 3

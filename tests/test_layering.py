@@ -10,6 +10,7 @@ Imports anywhere in a module count, including those inside functions.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -50,3 +51,133 @@ def test_package_imports_respect_the_layers(package):
     bad = {str(f.relative_to(ROOT)): sorted(imported_packages(f) & FORBIDDEN[package]) for f in files}
     bad = {k: v for k, v in bad.items() if v}
     assert not bad, f"{package} imports packages above or beside it: {bad}"
+
+
+# ---- no import cycles inside a package ----------------------------------------------------------------------------
+# Deferred imports (inside functions) count: a cycle hidden behind one still ties the modules together.  Imports under
+# ``if TYPE_CHECKING:`` never run and do not count.
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(f): f for p in PACKAGES for f in (ROOT / p).rglob("*.py")}
+
+
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        test = getattr(node, "test", None)
+        if isinstance(node, ast.If) and getattr(test, "id", getattr(test, "attr", None)) == "TYPE_CHECKING":
+            skip.update(id(n) for stmt in node.body for n in ast.walk(stmt))
+    return skip
+
+
+@functools.lru_cache(maxsize=None)
+def imported_modules(name: str, path: Path) -> frozenset[str]:
+    """The suite's modules that the module ``name`` (file ``path``) imports (``from . import x`` imports x only)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    skip = _type_checking_nodes(tree)
+    base = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+    out: set[str] = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            module = ".".join(base[:len(base) - node.level + 1] + [node.module] if node.module else
+                              base[:len(base) - node.level + 1]) if node.level else node.module
+            submodules = {f"{module}.{a.name}" for a in node.names} & MODULES.keys()
+            out.update(submodules)
+            if len(submodules) < len(node.names):
+                out.add(module)
+    return frozenset(out & MODULES.keys())
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one node (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_cycle_finder_sees_deferred_imports_and_ignores_type_checking(tmp_path):
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _cycles(graph) == [["a", "b", "c"]] and _cycles({"a": {"b"}, "b": set()}) == []
+    f = tmp_path / "m.py"
+    f.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .config import X\n"
+                 "def g():\n    from .meta import Y\n")
+    assert {m.split(".")[-1] for m in imported_modules("cubedimer.m", f)} == {"meta"}
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_no_import_cycles_between_modules_of_a_package(package):
+    graph = {m: {i for i in imported_modules(m, f) if i.split(".")[0] == package}
+             for m, f in MODULES.items() if m.split(".")[0] == package}
+    assert not _cycles(graph), f"import cycles in {package}: {_cycles(graph)}"
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_no_import_cycles_between_subpackages(package):
+    """validation.diagnosis and validation.report, say: one of them is built on the other, not both ways."""
+    def group(m: str) -> str:
+        parts = m.split(".")
+        return ".".join(parts[:2]) if len(parts) > 2 or (ROOT / Path(*parts) / "__init__.py").exists() else parts[0]
+
+    graph: dict[str, set[str]] = {}
+    for m, f in MODULES.items():
+        if m.split(".")[0] == package:
+            graph.setdefault(group(m), set()).update(group(i) for i in imported_modules(m, f)
+                                                     if i.split(".")[0] == package and group(i) != group(m))
+    for deps in list(graph.values()):
+        for d in deps:
+            graph.setdefault(d, set())
+    # the package's own top-level modules (group == package) import subpackages freely; only subpackage pairs count
+    sub = {k: {d for d in v if d != package} for k, v in graph.items() if k != package}
+    assert not _cycles(sub), f"import cycles between subpackages of {package}: {_cycles(sub)}"
+
+
+def test_parallel_work_goes_through_the_executor_seam():
+    """Processes and clusters are opened by cubedimer.executor only (map_ordered); the tracking's compiled
+    per-frame work shares a batch between threads of one process, which is not a pool of processes."""
+    seam = ROOT / "cubedimer" / "executor.py"
+    bad = {}
+    for f in sorted(f for p in PACKAGES for f in (ROOT / p).rglob("*.py")):
+        if f == seam:
+            continue
+        tree = ast.parse(f.read_text(encoding="utf-8"))
+        names = {a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names}
+        modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+        modules |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+        hits = sorted(({"multiprocessing", "dask.distributed", "joblib"} & {m.split(".")[0] if m.startswith(
+            ("multiprocessing", "joblib")) else m for m in modules}) | ({"ProcessPoolExecutor"} & names))
+        if hits:
+            bad[str(f.relative_to(ROOT))] = hits
+    assert not bad, f"parallel work outside cubedimer.executor.map_ordered: {bad}"

@@ -148,4 +148,6 @@ def run(a: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_cli(build_parser(), argv)
+    from .recording import TrackingError
+
+    return run_cli(build_parser(), argv, errors=(TrackingError,))

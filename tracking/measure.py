@@ -47,6 +47,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from .face_fit import fit_square, wrap_angle
+from .segmentation import BORDER_RING, background, coverage_runs, particles
+
 __all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads"]
 
 #: Columns of a frame's measurement row (pixel units unless stated).
@@ -201,346 +204,6 @@ def numba_threads() -> int:
 
 
 # ---------------------------------------------------------------------------------------------- compiled kernel
-_RING = 2  # width of the border ring [px]
-
-
-@njit(cache=True)
-def _wrap(x, period):  # pragma: no cover - compiled
-    """x wrapped into (-period/2, period/2]."""
-    y = x - period * math.floor(x / period + 0.5)
-    if y <= -0.5 * period:
-        y += period
-    return y
-
-
-@njit(cache=True)
-def _find(parent, i):  # pragma: no cover - compiled
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
-
-
-@njit(cache=True)
-def _fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
-    """Edge fits of the four faces of one square (module docstring, step 5).
-
-    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 24):
-    0 gamma, 1 u centre, 2 v centre, 3 pooled rms residual [px], 4 weight sum (information of gamma per
-    unit residual variance), 5 number of faces fitted, 6 max edge width [px], 7 half side estimate [px],
-    8..11 fitted face directions [rad] (NaN if not fitted), 12..15 face offsets rho along their normals,
-    16..19 face edge widths, 20..23 variances of the face directions [rad^2] (from each face's own residual).
-    """
-    clear = 3.0 * blur + 1.0
-    X0 = uc
-    Z0 = -vc
-    sw = 0.0
-    swr = 0.0
-    ss_res = 0.0
-    n_res = 0
-    nf = 0
-    wmax = 0.0
-    for k in range(4):
-        res[8 + k] = np.nan
-        res[12 + k] = np.nan
-        res[16 + k] = np.nan
-        res[20 + k] = np.nan
-    xs = np.empty(512)
-    ys = np.empty(512)
-    for k in range(4):
-        nu = gamma - 0.5 * math.pi + 0.5 * math.pi * k
-        nx = math.cos(nu)
-        nz = math.sin(nu)
-        rho = nx * X0 + nz * Z0 + a
-        px = X0 + a * nx
-        pz = Z0 + a * nz
-        cols = abs(nz) >= abs(nx)
-        cnt = 0
-        wsum = 0.0
-        if cols:
-            tx = -nz
-            margin = W * abs(nx) + 2.0 * blur + 1.0
-            lo = px - (a - margin) * abs(tx)
-            hi = px + (a - margin) * abs(tx)
-            if hi <= lo:
-                continue
-            for uu in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
-                if side > 0 and uu < u_split + clear:
-                    continue
-                if side < 0 and uu > u_split - clear:
-                    continue
-                if uu < 0 or uu >= w:
-                    continue
-                ze = (rho - nx * uu) / nz
-                ve = int(math.floor(-ze + 0.5))
-                v0 = ve - W
-                v1 = ve + W
-                if v0 < 0 or v1 >= h:
-                    continue
-                L = 0.0
-                q = 0.0
-                for vv in range(v0, v1 + 1):
-                    cv = c[vv, uu]
-                    L += cv
-                    q += cv * (1.0 - cv)
-                if nz > 0:
-                    vedge = (v1 + 0.5) - L
-                else:
-                    vedge = (v0 - 0.5) + L
-                if cnt < 512:
-                    xs[cnt] = uu
-                    ys[cnt] = -vedge
-                    cnt += 1
-                    wsum += q * abs(nz)
-        else:
-            tz = nx
-            margin = W * abs(nz) + 2.0 * blur + 1.0
-            lo = pz - (a - margin) * abs(tz)
-            hi = pz + (a - margin) * abs(tz)
-            if hi <= lo:
-                continue
-            for mz in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
-                vv = -mz
-                if vv < 0 or vv >= h:
-                    continue
-                xe = (rho - nz * mz) / nx
-                ue = int(math.floor(xe + 0.5))
-                u0 = ue - W
-                u1 = ue + W
-                if u0 < 0 or u1 >= w:
-                    continue
-                if side > 0 and u0 < u_split + clear:
-                    continue
-                if side < 0 and u1 > u_split - clear:
-                    continue
-                L = 0.0
-                q = 0.0
-                for uu in range(u0, u1 + 1):
-                    cv = c[vv, uu]
-                    L += cv
-                    q += cv * (1.0 - cv)
-                if nx > 0:
-                    uedge = (u0 - 0.5) + L
-                else:
-                    uedge = (u1 + 0.5) - L
-                if cnt < 512:
-                    xs[cnt] = mz
-                    ys[cnt] = uedge
-                    cnt += 1
-                    wsum += q * abs(nx)
-        if cnt < 5:
-            continue
-        # least squares r = alpha + beta s
-        sm = 0.0
-        rm = 0.0
-        for i in range(cnt):
-            sm += xs[i]
-            rm += ys[i]
-        sm /= cnt
-        rm /= cnt
-        sss = 0.0
-        ssr = 0.0
-        for i in range(cnt):
-            sss += (xs[i] - sm) ** 2
-            ssr += (xs[i] - sm) * (ys[i] - rm)
-        if sss <= 0:
-            continue
-        beta = ssr / sss
-        alpha0 = rm - beta * sm
-        rr = 0.0
-        for i in range(cnt):
-            e = ys[i] - alpha0 - beta * xs[i]
-            rr += e * e
-        norm = 1.0 / (1.0 + beta * beta)
-        ss_res += rr * norm
-        n_res += cnt - 2
-        if cols:
-            delta = math.atan(beta)
-            mx = sm
-            mzp = rm
-        else:
-            delta = math.atan2(1.0, beta)
-            mx = rm
-            mzp = sm
-        width = math.sqrt(math.pi) * wsum / cnt
-        if width > wmax:
-            wmax = width
-        res[8 + k] = delta
-        res[12 + k] = nx * mx + nz * mzp
-        res[16 + k] = width
-        res[20 + k] = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
-        wk = sss * (1.0 + beta * beta)  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
-        sw += wk
-        swr += wk * _wrap(delta - gamma, 0.5 * math.pi)
-        nf += 1
-    res[5] = nf
-    res[6] = wmax
-    if nf < 2 or sw <= 0:
-        res[0] = np.nan
-        return
-    g = gamma + swr / sw
-    res[0] = g
-    res[3] = math.sqrt(ss_res / n_res) if n_res > 0 else np.nan
-    res[4] = sw
-    # centre and half side from opposite faces
-    cu = uc
-    cv = vc
-    a_sum = 0.0
-    a_n = 0
-    n0x = math.cos(g - 0.5 * math.pi)
-    n0z = math.sin(g - 0.5 * math.pi)
-    n1x = -n0z
-    n1z = n0x
-    comp0 = n0x * X0 + n0z * Z0
-    comp1 = n1x * X0 + n1z * Z0
-    if not math.isnan(res[12]) and not math.isnan(res[14]):
-        comp0 = 0.5 * (res[12] - res[14])
-        a_sum += 0.5 * (res[12] + res[14])
-        a_n += 1
-    if not math.isnan(res[13]) and not math.isnan(res[15]):
-        comp1 = 0.5 * (res[13] - res[15])
-        a_sum += 0.5 * (res[13] + res[15])
-        a_n += 1
-    Xc = comp0 * n0x + comp1 * n1x
-    Zc = comp0 * n0z + comp1 * n1z
-    res[1] = Xc
-    res[2] = -Zc
-    res[7] = a_sum / a_n if a_n > 0 else np.nan
-
-
-@njit(cache=True)
-def _background(img, pol, bg_ref, contrast, slope_u, slope_v, out):  # pragma: no cover - compiled
-    """The frame's background level on the border ring, with the recording's plane slopes ``slope_u``,
-    ``slope_v`` (grey levels per pixel about the frame's centre): writes (offset, 0, 0, residual rms, status)
-    into ``out``; status 1 for a blank or corrupt frame (non-finite pixels, or a border that looks like a
-    cube nearly everywhere).  Pixels that look like a cube are left out."""
-    h, w = img.shape
-    uc0 = 0.5 * (w - 1)
-    vc0 = 0.5 * (h - 1)
-    n_all = 0
-    n = 0
-    s1 = 0.0
-    s2 = 0.0
-    out[4] = 0.0
-    for v in range(h):
-        edge_row = v < _RING or v >= h - _RING
-        for j in range(w if edge_row else 2 * _RING):
-            u = j if edge_row else (j if j < _RING else w - 2 * _RING + j)
-            val = img[v, u]
-            n_all += 1
-            if not math.isfinite(val):
-                out[4] = 1.0
-                return
-            x = val - slope_u * (u - uc0) - slope_v * (v - vc0)
-            if pol * (x - bg_ref) / contrast > 0.3:
-                continue
-            n += 1
-            s1 += x
-            s2 += x * x
-    if n < 0.3 * n_all:
-        out[4] = 1.0
-        return
-    m = s1 / n
-    out[0] = m
-    out[1] = 0.0
-    out[2] = 0.0
-    out[3] = math.sqrt(max(s2 / n - m * m, 0.0) * n / max(1, n - 1))
-
-
-@njit(cache=True)
-def _coverage_runs(img, base, slope_u, slope_v, inv, c, rv, r0, r1, row_start):  # pragma: no cover - compiled
-    """Coverage ``c = (img - background) inv`` of every pixel and, in the same pass, the runs of pixels with
-    c > 1/2 along the rows (row, first and last column; ``row_start[v]`` the first run of row v).  Returns the
-    number of runs, or -1 when there are more than the arrays hold (a frame of noise)."""
-    h, w = img.shape
-    uc0 = 0.5 * (w - 1)
-    vc0 = 0.5 * (h - 1)
-    cap = rv.size
-    n = 0
-    for v in range(h):
-        row_start[v] = n
-        b = base + slope_v * (v - vc0) - slope_u * uc0
-        inrun = False
-        for u in range(w):
-            x = (img[v, u] - b - slope_u * u) * inv
-            c[v, u] = x
-            if x > 0.5:
-                if not inrun:
-                    if n >= cap:
-                        return -1
-                    rv[n] = v
-                    r0[n] = u
-                    inrun = True
-            elif inrun:
-                r1[n] = u - 1
-                n += 1
-                inrun = False
-        if inrun:
-            r1[n] = w - 1
-            n += 1
-    row_start[h] = n
-    return n
-
-
-@njit(cache=True)
-def _particles(rv, r0, r1, row_start, n, h, w, min_area, box):  # pragma: no cover - compiled
-    """Join the runs of :func:`_coverage_runs` into 8-connected components (union-find) and return the number of
-    components of at least ``min_area`` pixels; ``box`` gets (u0, u1, v0, v1, area) of the largest two."""
-    parent = np.empty(max(n, 1), np.int32)
-    for i in range(n):
-        parent[i] = i
-    for v in range(1, h):
-        j = row_start[v - 1]
-        j_end = row_start[v]
-        for i in range(row_start[v], row_start[v + 1]):
-            # runs of the row above that touch run i (8-connected: overlap widened by one pixel)
-            while j < j_end and r1[j] < r0[i] - 1:
-                j += 1
-            k = j
-            while k < j_end and r0[k] <= r1[i] + 1:
-                a = _find(parent, i)
-                b = _find(parent, k)
-                if a != b:
-                    if a < b:
-                        parent[b] = a
-                    else:
-                        parent[a] = b
-                k += 1
-    cnt = np.zeros(max(n, 1), np.int64)
-    u0 = np.full(max(n, 1), w, np.int64)
-    u1 = np.full(max(n, 1), -1, np.int64)
-    v0 = np.full(max(n, 1), h, np.int64)
-    v1 = np.full(max(n, 1), -1, np.int64)
-    for i in range(n):
-        r = _find(parent, i)
-        cnt[r] += r1[i] - r0[i] + 1
-        u0[r] = min(u0[r], r0[i])
-        u1[r] = max(u1[r], r1[i])
-        v0[r] = min(v0[r], rv[i])
-        v1[r] = max(v1[r], rv[i])
-    nbig = 0
-    first = -1
-    second = -1
-    for r in range(n):
-        if cnt[r] >= min_area:
-            nbig += 1
-            if first < 0 or cnt[r] > cnt[first]:
-                second = first
-                first = r
-            elif second < 0 or cnt[r] > cnt[second]:
-                second = r
-    for j in range(2):
-        r = first if j == 0 else second
-        if r < 0:
-            continue
-        box[5 * j + 0] = u0[r]
-        box[5 * j + 1] = u1[r]
-        box[5 * j + 2] = v0[r]
-        box[5 * j + 3] = v1[r]
-        box[5 * j + 4] = cnt[r]
-    return nbig
-
-
 @njit(cache=True)
 def _half_moments(c, ua, ub, v0, v1, uo, vo, mom, j):  # pragma: no cover - compiled
     """M0 and the complex moments M_k = sum c z^k (k = 1..4, z = (u - uo) + i (vo - v)) of the columns
@@ -660,12 +323,12 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
         if math.isnan(fu) or math.isnan(fl):
             free_ok = False
             continue
-        dirs[2 * sq] = du_nom + _wrap(fu - du_nom, math.pi)
-        dirs[2 * sq + 1] = dl_nom + _wrap(fl - dl_nom, math.pi)
+        dirs[2 * sq] = du_nom + wrap_angle(fu - du_nom, math.pi)
+        dirs[2 * sq + 1] = dl_nom + wrap_angle(fl - dl_nom, math.pi)
         var += (resA[20 + ku] + resA[20 + kl]) if sq == 0 else (resB[20 + ku] + resB[20 + kl])
     if free_ok:
-        row[_I_ALPHA_FREE] = _wrap(dirs[0] - dirs[2], 2.0 * math.pi)
-        row[_I_BETA_FREE] = _wrap(dirs[3] - dirs[1], 2.0 * math.pi)
+        row[_I_ALPHA_FREE] = wrap_angle(dirs[0] - dirs[2], 2.0 * math.pi)
+        row[_I_BETA_FREE] = wrap_angle(dirs[3] - dirs[1], 2.0 * math.pi)
         row[_I_SQUARENESS_SIGMA] = math.sqrt(var)
     row[_I_HINGE_GAP] = math.sqrt((hx[0] - hx[1]) ** 2 + (hz[0] - hz[1]) ** 2)
 
@@ -685,7 +348,7 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     slope_v = prm[9]
     # ---- 1. background level from the border ring (the slopes are the recording's)
     bgp = np.zeros(5)
-    _background(img, pol, bg_ref, contrast, slope_u, slope_v, bgp)
+    background(img, pol, bg_ref, contrast, slope_u, slope_v, bgp)
     if bgp[4] > 0:
         row[0] = 1
         return
@@ -702,12 +365,12 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     r0 = np.empty(cap, np.int32)
     r1 = np.empty(cap, np.int32)
     row_start = np.empty(h + 1, np.int32)
-    nruns = _coverage_runs(img, bgp[0], slope_u, slope_v, pol / contrast, c, rv, r0, r1, row_start)
+    nruns = coverage_runs(img, bgp[0], slope_u, slope_v, pol / contrast, c, rv, r0, r1, row_start)
     if nruns < 0:
         row[0] = 1
         return
     box = np.zeros(10)
-    nbig = _particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
+    nbig = particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
     if nbig == 0:
         row[0] = 2
         return
@@ -731,7 +394,7 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     u1 = bu1 + M
     v0 = bv0 - M
     v1 = bv1 + M
-    if u0 < _RING or v0 < _RING or u1 >= w - _RING or v1 >= h - _RING:
+    if u0 < BORDER_RING or v0 < BORDER_RING or u1 >= w - BORDER_RING or v1 >= h - BORDER_RING:
         row[0] = 3
         return
     # ---- 3. centre of mass and 4. each half's first orientation, in one pass (the halves split at the bounding
@@ -765,8 +428,8 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     gam[0] = _half(mom, 0, ua, vo, cen[0])
     gam[1] = _half(mom, 9, ub, vo, cen[1])
     # bends (step 6) and the sign of a bend near face contact from the hinge's height
-    phiA = _wrap(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
-    phiB = _wrap(0.25 * math.pi - gam[1], 0.5 * math.pi)
+    phiA = wrap_angle(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
+    phiB = wrap_angle(0.25 * math.pi - gam[1], 0.5 * math.pi)
     hz = 0.0
     hn = 0.0
     iu = int(math.floor(u_split + 0.5))
@@ -789,8 +452,8 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     resA = np.empty(24)
     resB = np.empty(24)
     for it in range(2):
-        _fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
-        _fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)
+        fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
+        fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)
         if math.isnan(resA[0]) or math.isnan(resB[0]):
             row[0] = 6
             return
@@ -800,8 +463,8 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
         cen[0, 1] = resA[2]
         cen[1, 0] = resB[1]
         cen[1, 1] = resB[2]
-    phiA2 = phiA + _wrap(gam[0] - 0.75 * math.pi - phiA, 0.5 * math.pi)
-    phiB2 = phiB + _wrap(0.25 * math.pi - gam[1] - phiB, 0.5 * math.pi)
+    phiA2 = phiA + wrap_angle(gam[0] - 0.75 * math.pi - phiA, 0.5 * math.pi)
+    phiB2 = phiB + wrap_angle(0.25 * math.pi - gam[1] - phiB, 0.5 * math.pi)
     alpha = 0.5 * math.pi + phiA2 + phiB2
     beta = 0.5 * math.pi - phiA2 - phiB2
     row[_I_ALPHA] = alpha

@@ -22,7 +22,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from cubedimer.cli import UserInputError
 
 __all__ = ["TrackingError", "Recording", "read_recording", "find_recordings", "VIDEO_SUFFIXES", "IMAGE_SUFFIXES",
            "MAX_BYTES"]
@@ -37,8 +36,9 @@ IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".bmp", ".jpg", ".jpeg")
 MAX_BYTES = 4 * 1024 ** 3
 
 
-class TrackingError(UserInputError):
-    """A recording or option the tracking cannot use; ``str(err)`` is one line naming the file."""
+class TrackingError(ValueError):
+    """A recording or option the tracking cannot use; ``str(err)`` is one line naming the file (the command line
+    reports it as a user error, exit status 2)."""
 
 
 @dataclass(frozen=True, eq=False)

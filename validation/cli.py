@@ -9,17 +9,21 @@ from pathlib import Path
 import numpy as np
 
 from acousim.models_cli import add_model_arguments
-from cubedimer.cli import (OneLineParser, UserInputError, add_executor_arguments, check_limit, executor_config,
+from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
+from fitting.final_checks import NoSaneModelError
+from fitting.methods import DEFAULT_METHOD, METHODS, methods_help
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser", "COMMANDS", "add_compare_parser", "add_diagnose_parser", "add_blind_parser",
+           "add_report_parser"]
 
 #: Most cases of a blind study, and most simulated frames of one case (runs x duration x 2,000 fps).
 MAX_BLIND_CASES = 10_000
 MAX_BLIND_FRAMES_PER_CASE = 20_000_000
 
 
-def _add_compare(sub) -> None:
+def add_compare_parser(sub) -> None:
+    """``compare``: see its --help."""
     p = sub.add_parser(
         "compare",
         help="fitted coefficients against the simulated static coefficients",
@@ -122,7 +126,8 @@ def run_compare(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_diagnose(sub) -> None:
+def add_diagnose_parser(sub) -> None:
+    """``diagnose``: see its --help."""
     p = sub.add_parser(
         "diagnose",
         help="diagnose the sim-to-real gap of a data set",
@@ -167,7 +172,8 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .diagnosis import DiagnoseConfig, diagnose_dataset, write_diagnosis
+    from .diagnosis import DiagnoseConfig, diagnose_dataset
+    from .report.diagnosis_section import write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -193,7 +199,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_blind(sub) -> None:
+def add_blind_parser(sub) -> None:
+    """``blind``: see its --help."""
     p = sub.add_parser(
         "blind",
         help="blind check of the diagnosis on twin data sets with hidden effects",
@@ -247,7 +254,8 @@ def run_blind_cli(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_report(sub) -> None:
+def add_report_parser(sub) -> None:
+    """``report``: see its --help."""
     p = sub.add_parser(
         "report",
         help="the model-vs-simulation report of a data set (HTML with embedded figures)",
@@ -266,10 +274,8 @@ def _add_report(sub) -> None:
                    help="evaluations of every long-time refinement: the fit's, and the re-optimisation of the "
                         "model without cross-coupling terms it is compared with (default: 600 for the comparison, "
                         "the fitting default for the fit)")
-    p.add_argument("--method", choices=("discovery", "paper"), default="discovery",
-                   help="the fit's model discovery: integral-form discovery with a long-time polish, or the "
-                        "paper's pipeline (SINDy per run, long-time refinement, z-scores, minimal model); "
-                        "see python -m fitting fit --help")
+    p.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD,
+                   help="the fit's model discovery: " + methods_help() + "; see python -m fitting fit --help")
     p.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
                    help="discovery only: keep the smallest support whose held-out error (5-fold over runs) is within "
                         "FRACTION of the best "
@@ -292,7 +298,7 @@ def run_report(args: argparse.Namespace) -> int:
 
     from .report.pipeline import build_report
 
-    from fitting.pipeline import FitConfig
+    from fitting.config import FitConfig
 
     try:  # before anything runs; build_report applies it
         FitConfig(method=args.method).with_heldout_tolerance(args.heldout_tolerance)
@@ -317,18 +323,17 @@ def run_report(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The commands of ``python -m validation``, in the order of the help.
+COMMANDS = (add_compare_parser, add_diagnose_parser, add_blind_parser, add_report_parser)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(prog="python -m validation",
-                           description="Bridge between fitted models and the simulation: coefficient comparison, sim-to-real gap "
-                                       "diagnosis, its blind check and the HTML report. Conventions: "
-                                       "docs/conventions.md; files: docs/formats.md.")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
-    _add_compare(sub)
-    _add_diagnose(sub)
-    _add_blind(sub)
-    _add_report(sub)
-    return parser
+    """The parser of ``python -m validation`` (one ``add_parser`` function per command)."""
+    return command_parser("python -m validation",
+                          "Bridge between fitted models and the simulation: coefficient comparison, sim-to-real gap "
+                          "diagnosis, its blind check and the HTML report. Conventions: docs/conventions.md; files: "
+                          "docs/formats.md.", COMMANDS)
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_cli(build_parser(), argv)
+    return run_cli(build_parser(), argv, errors=(NoSaneModelError,))

@@ -7,7 +7,7 @@
   :func:`default_fullwave_surrogate`: the Chebyshev-in-theta force surrogate (same interface as
   :class:`acousim.surrogate.ForceSurrogate`, without a potential);
 * ``python -m acousim force`` (:mod:`acousim.fullwave.cli`) and the convergence study
-  (``python -m acousim.fullwave.convergence``).
+  (``python -m acousim convergence``).
 
 bempp-cl is imported lazily, at the first solve.
 """

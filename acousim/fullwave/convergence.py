@@ -10,7 +10,7 @@ exact height structure and the bend parity (A, B odd and C even in theta, see
 * the Taylor coefficients of thetaddot = Q_theta / I: ``1``, ``y``, ``theta``, ``y*theta``, ``y^2*theta``.
 
 The mesh study ends with :func:`judge_convergence` of the hinge stiffness (monotone corrections, observed
-order >= 1, finest two levels within 2 %).  Run ``python -m acousim.fullwave.convergence --help``; the
+order >= 1, finest two levels within 2 %).  Run ``python -m acousim convergence --help``; the
 tables of docs/fullwave.md were made with it.
 """
 from __future__ import annotations
@@ -18,13 +18,12 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import sys
 import time
 from collections.abc import Callable
 
 import numpy as np
 from cubedimer.atomic import json_safe
-from cubedimer.cli import OneLineParser, UserInputError, float_list, prepare_output_file, run_cli
+from cubedimer.cli import UserInputError, float_list, prepare_output_file
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
@@ -33,7 +32,7 @@ from .solver import solve_scattering
 from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
 
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "flux_balance", "surrogate_errors",
-           "CONVERGED_WITHIN", "main"]
+           "CONVERGED_WITHIN", "add_parser", "run_study"]
 
 #: The hinge stiffness counts as converged when the two finest levels agree within this fraction.
 CONVERGED_WITHIN = 0.02
@@ -281,10 +280,10 @@ def run_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m acousim.fullwave.convergence --study {mesh,gap,edge} --out FILE.jsonl [...]``."""
-    p = OneLineParser(prog="python -m acousim.fullwave.convergence", description=__doc__,
-                      formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_parser(subparsers) -> None:
+    """``python -m acousim convergence --study {mesh,gap,edge,flux,surrogate} --out FILE.jsonl [...]``."""
+    p = subparsers.add_parser("convergence", help="convergence studies of the full-wave model (mesh, gap, edge, flux, "
+                              "surrogate)", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--study", choices=("mesh", "gap", "edge", "flux", "surrogate"), required=True,
                    help="mesh, gap, edge: hinge quantities against mesh level, gap, edge radius; flux: surface "
                    "integrals against the momentum flux through an enclosing sphere (per gap); surrogate: the "
@@ -303,13 +302,3 @@ def main(argv: list[str] | None = None) -> int:
                    "building the coarse one")
     p.add_argument("--out", required=True, help="JSON lines output (appended per row)")
     p.set_defaults(func=run_study)
-    return run_cli(p, argv)
-
-
-if __name__ == "__main__":
-    import sys
-
-    # run the package's copy of this module, so that its log records go to the configured "acousim" logger
-    from acousim.fullwave.convergence import main as _main
-
-    sys.exit(_main())

@@ -485,7 +485,7 @@ def fullwave_surrogate(conditions) -> FullwaveSurrogate:
     gap = float(c.gap_m) if c.gap_m is not None else DEFAULT_GAP_RATIO * side
     if c.edge_radius_m:
         raise FamilyRangeError(f"--edge-radius = {c.edge_radius_m:g} m: only sharp-edged tables are shipped; build "
-                               f"one with python -m acousim.fullwave.surrogate --edge-radius R --side S --gap G --out FILE")
+                               f"one with python -m acousim table --edge-radius R --side S --gap G --out FILE")
     medium = c.medium
     density, gravity, p0 = float(c.particle_density_kg_m3), float(c.gravity_m_s2), float(c.pressure_amplitude_pa)
     if _is_default_dimer(side, gap, medium, density, gravity):

@@ -28,7 +28,6 @@ import hashlib
 import json
 import logging
 import os
-import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -37,11 +36,10 @@ from typing import Callable
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 
 from cubedimer.atomic import write_json
 
-from ..force_model import ForceCoefficients, SinusoidalInertia
+from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
 from ..medium import GRAVITY, Medium
 from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm, hinge_edge_b,
                        rounded_cube_volume)
@@ -278,7 +276,7 @@ class FullwaveSurrogate(SinusoidalInertia):
             given, tabulated = float(conditions[key]), float(self.settings[table_key])
             if not np.isclose(given, tabulated, rtol=TABLE_RTOL, atol=0.0):
                 return (f"{names.get(key, key)} = {given:g}: the full-wave model is tabulated for {key} = "
-                        f"{tabulated:g} only (build another table with python -m acousim.fullwave.surrogate)")
+                        f"{tabulated:g} only (build another table with python -m acousim table)")
         return None
 
     def with_pressure(self, pressure_amplitude_pa: float) -> "FullwaveSurrogate":
@@ -365,14 +363,10 @@ class FullwaveSurrogate(SinusoidalInertia):
         return {"build_accuracy": self.build_accuracy, "theta_max": self.theta_max}
 
     def escape_height(self) -> float:
-        """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out."""
-        mg = self.mass * self.gravity
-        f = lambda z: float(self._harmonic(0.0, z - self.z_eq, "fz")) - mg
-        quarter = np.pi / self.two_k
-        lo, hi = -1.5 * quarter, -0.5 * quarter
-        if f(lo) * f(hi) >= 0:
-            return float("-inf")
-        return float(brentq(f, lo, hi, xtol=1e-15)) - self.z_eq
+        """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out
+        (:func:`acousim.force_model.escape_height_below`)."""
+        return escape_height_below(lambda z: float(self._harmonic(0.0, z - self.z_eq, "fz")), self.mass * self.gravity,
+                                   self.two_k, self.z_eq)
 
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict:
@@ -408,13 +402,9 @@ class FullwaveSurrogate(SinusoidalInertia):
 
 
 def _equilibrium_height(sur: FullwaveSurrogate) -> float:
-    """Z in (-lambda/8, 0) where F_Z(0, Z) = M g."""
-    mg = sur.mass * sur.gravity
-    f = lambda z: float(sur._harmonic(0.0, z - sur.z_eq, "fz")) - mg
-    lo = -np.pi / (2 * sur.two_k)
-    if f(lo) < 0:
-        raise ValueError("the field cannot levitate the dimer at this pressure amplitude")
-    return float(brentq(f, lo, 0.0, xtol=1e-15, rtol=1e-14))
+    """Z in (-lambda/8, 0) where F_Z(0, Z) = M g (:func:`acousim.force_model.levitation_height`)."""
+    return levitation_height(lambda z: float(sur._harmonic(0.0, z - sur.z_eq, "fz")), sur.mass * sur.gravity,
+                             sur.two_k)
 
 
 def chebyshev_half_nodes(n_half: int) -> NDArray[np.float64]:
@@ -593,50 +583,3 @@ def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> Fullwav
 def coarse_fullwave_surrogate(**kwargs) -> FullwaveSurrogate:
     """The coarse variant (:data:`COARSE_BUILD`), cached on disk like any other."""
     return cached_fullwave_surrogate(**{**COARSE_BUILD, **kwargs})
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m acousim.fullwave.surrogate --out FILE [--level Q] [--n-half N] [--theta-max T] [--gap G]``."""
-    import argparse
-
-    from .geometry import hinge_refined_spec, mesh_family
-
-    p = argparse.ArgumentParser(prog="python -m acousim.fullwave.surrogate",
-                                description="Build a full-wave surrogate table (JSON) of the cube dimer.")
-    p.add_argument("--out", required=True, help="output JSON")
-    p.add_argument("--level", type=float, default=None,
-                   help="mesh level q of mesh_family (1: coarse, 0.5: standard); default: the shipped table's mesh, "
-                        "refined along the hinge line (hinge_refined_spec)")
-    p.add_argument("--n-half", type=int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
-    p.add_argument("--theta-max", type=float, default=DEFAULT_BUILD["theta_max"], help="interpolation half-width")
-    p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
-    p.add_argument("--gap", type=float, default=None, help="hinge gap [m] (default 0.01 side)")
-    p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
-    p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude [Pa]")
-    p.add_argument("--forces", choices=FORCE_METHODS, default="flux",
-                   help="force integration: momentum flux away from the cubes, or surface tractions (docs/fullwave.md)")
-    args = p.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    for name in ("bempp", "numba"):
-        logging.getLogger(name).setLevel(logging.WARNING)
-    if args.level is None:  # with the default geometry this is TABLE_SPEC, the shipped table's mesh
-        spec = hinge_refined_spec(side=args.side, gap=args.gap, edge_radius=args.edge_radius)
-    else:
-        spec = mesh_family(args.level, side=args.side, gap=args.gap, edge_radius=args.edge_radius)
-    sur = build_fullwave_surrogate(spec, n_half=args.n_half, theta_max=args.theta_max,
-                                   pressure_amplitude_pa=args.pressure, forces=args.forces)
-    sur.build_accuracy["command"] = "python -m acousim.fullwave.surrogate " + " ".join(argv if argv is not None else sys.argv[1:])
-    sur.save(args.out)
-    f_y, f_t = sur.linear_frequencies()
-    log.info("wrote %s: %d DOFs, %d solves, %.0f s; f_y %.3f Hz, f_theta %.3f Hz", args.out, sur.build_accuracy["dofs"],
-             args.n_half, sur.build_accuracy["wall_s"], f_y, f_t)
-    return 0
-
-
-if __name__ == "__main__":
-    import sys
-
-    # run the package's copy of this module, so that its log records go to the configured "acousim" logger
-    from acousim.fullwave.surrogate import main as _main
-
-    sys.exit(_main())

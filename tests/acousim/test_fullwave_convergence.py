@@ -1,5 +1,5 @@
 """The mesh-convergence judgement of the full-wave hinge (the study itself runs outside the test suite:
-``python -m acousim.fullwave.convergence --study mesh``, results in docs/fullwave.md)."""
+``python -m acousim convergence --study mesh``, results in docs/fullwave.md)."""
 from __future__ import annotations
 
 import numpy as np

@@ -2,7 +2,7 @@
 
 These are identities of the geometry and of the linear algebra, true on any mesh, so they are checked on
 the coarsest graded dimer mesh (``mesh_family(2)``, 264 DOFs); the physics of the hinge (convergence,
-gap) is studied by ``python -m acousim.fullwave.convergence`` and stated in docs/fullwave.md."""
+gap) is studied by ``python -m acousim convergence`` and stated in docs/fullwave.md."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,6 +1,6 @@
 """Full-wave surrogate: caching, exact symmetry and scalings, the interface, the shipped default table.
 
-The accuracy of the surrogate against direct solves is a study (``python -m acousim.fullwave.convergence
+The accuracy of the surrogate against direct solves is a study (``python -m acousim convergence
 --study surrogate``, numbers in docs/fullwave.md); here a tiny build (two solves on the coarsest mesh) checks
 everything that holds for any build."""
 from __future__ import annotations

@@ -10,7 +10,8 @@ import pytest
 from cubedimer.dataset import write_run_csv
 from fitting.cli import main
 from fitting.model import TERMS, PolynomialModel
-from fitting.pipeline import FitConfig, fit_dataset
+from fitting.config import FitConfig
+from fitting.pipeline import fit_dataset
 from fitting.refine import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
 
@@ -82,8 +83,7 @@ def test_default_fit_with_tracking_glitches_meets_the_criterion(tmp_path):
     # model keeps its restoring term (the glitch-free support), integrates over every run and meets the criterion
     raw = generate_runs(TRUTH, CFG)
     data = _write(tmp_path / "glitchy", raw, glitches_per_run=6, size=100 * CFG.noise_y, seed=3)
-    res = fit_dataset(data, tmp_path / "out", FitConfig(polish=RefineConfig(max_evals=40)), plots=False,
-                      progress=False)
+    res = fit_dataset(data, FitConfig(polish=RefineConfig(max_evals=40)), progress=False)
     assert res.n_glitches >= 6 * CFG.n_runs
     assert res.fallback is None and not res.joint.loss_end.blown_up
     runs = [type("R", (), {"dt": float(r["t"][1] - r["t"][0])}) for r in raw]

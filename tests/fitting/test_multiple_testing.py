@@ -38,3 +38,31 @@ def test_family_wise_error_under_the_global_null():
     rng = np.random.default_rng(0)
     hits = sum(holm_reject(rng.uniform(size=20), 0.05).any() for _ in range(2000))
     assert hits / 2000 <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / 2000)
+
+
+def test_holm_all_significant_is_holm_reject_on_two_sided_normal_p_values():
+    from scipy.special import ndtr
+
+    from fitting.multiple_testing import holm_all_significant
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        z = np.abs(rng.normal(0, 4, size=rng.integers(1, 8)))
+        n = int(z.size + rng.integers(0, 30))
+        assert holm_all_significant(z, 0.01, n) == bool(holm_reject(2 * ndtr(-z), 0.01, n).all())
+    assert holm_all_significant(np.zeros(0), 0.01, 35) and holm_all_significant([0.1], 0.01, 0)
+    assert not holm_all_significant([np.nan], 0.01, 1)  # NaN counts as z = 0
+
+
+def test_backward_elimination_drops_weak_velocity_terms_first_and_keeps_forced_ones():
+    from fitting.multiple_testing import holm_backward_elimination
+
+    # columns: 0 y (z 10), 1 ydot (velocity, z 2), 2 y^2 (z 1), 3 forced damping ydot (velocity, z 0.5)
+    z = np.array([10.0, 2.0, 1.0, 0.5])
+    velocity = np.array([False, True, False, True])
+    removable = np.array([True, True, True, False])
+    path = [k for k, _, _ in holm_backward_elimination(lambda k: (z[k], None), [0, 1, 2, 3], velocity, removable, 3.0)]
+    # ydot goes before the less significant y^2 (a velocity term below the Bonferroni z = 3); the forced one stays
+    assert path == [[0, 1, 2, 3], [0, 2, 3], [0, 3], [3]]
+    path = [k for k, _, _ in holm_backward_elimination(lambda k: (z[k], None), [0, 1, 2, 3], velocity, removable, -np.inf)]
+    assert path[1] == [0, 1, 3]  # without the velocity preference the smallest |z| goes

@@ -10,8 +10,8 @@ from cubedimer.terms import EQUATION_NAMES, evaluate_library
 from fitting.cli import main
 from fitting.integral_form import detrend_windows, fit_integral_form, integral_columns, integral_window, window_starts
 from fitting.model import TERMS
-from fitting.oracle import (NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise, oracle_standard_errors,
-                            plan_runs)
+from fitting.oracle import NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise, oracle_standard_errors
+from fitting.run_planning import plan_runs
 from fitting.pipeline import prepare_runs
 from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model, write_dataset
 

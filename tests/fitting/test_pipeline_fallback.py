@@ -4,7 +4,9 @@ import json
 import numpy as np
 import pytest
 
-import fitting.pipeline as pipeline
+import fitting.paper_fit as paper_fit
+import fitting.selection_rules as selection_rules
+from fitting.final_checks import MAX_SANE_LOSS
 from fitting.cli import main
 from fitting.model import TERMS
 
@@ -23,7 +25,7 @@ def _mask(terms):
 
 @pytest.fixture
 def lost_restoring_term(monkeypatch):
-    monkeypatch.setattr(pipeline, "select_significant_terms", lambda *a, **k: _mask(NO_RESTORING))
+    monkeypatch.setattr(selection_rules, "select_significant_terms", lambda *a, **k: _mask(NO_RESTORING))
 
 
 FAST = ["--method", "paper", "--no-plots", "--quiet", "--workers", "1", "--max-evals", "24", "--joint-max-evals", "24"]
@@ -43,7 +45,7 @@ def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, 
     assert fb["blown_up_model"]["loss"]["blown_up"] and set(fb["blown_up_model"]["equations"]["yddot"]) == set(
         NO_RESTORING["yddot"])
     # what is written integrates over every run, has the restoring term, and selected_terms is its support
-    assert not d["loss"]["final"]["blown_up"] and d["loss"]["final"]["total"] < pipeline.MAX_SANE_LOSS
+    assert not d["loss"]["final"]["blown_up"] and d["loss"]["final"]["total"] < MAX_SANE_LOSS
     assert not any(r["loss_minimal_model"]["blown_up"] for r in d["per_run"])
     assert d["equations"]["yddot"]["y"] < 0
     assert d["selected_terms"] == {eq: list(t) for eq, t in d["equations"].items()}
@@ -56,7 +58,7 @@ def test_nothing_sane_exits_2_and_writes_no_model(small_dataset, tmp_path, lost_
     def too_short(*a, **k):
         raise ValueError("runs shorter than one window")
 
-    monkeypatch.setattr(pipeline, "integral_form_selection", too_short)  # no pooled integral-form model to fall back on
+    monkeypatch.setattr(paper_fit, "integral_form_selection", too_short)  # no pooled integral-form model to fall back on
     out = tmp_path / "out"
     assert main(["fit", str(small_dataset), "--out", str(out)] + FAST) == 2
     assert not (out / "model.json").exists()

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 import pytest
 
 from cubedimer.dataset import Dataset
-from fitting import pipeline
+from fitting import final_checks, pipeline
 from fitting.oracle import NoiseLevels, OracleResult, recorded_tracking_noise
 
 TRACKED = {"frame_rate_hz": 2000.0, "tracking": {"noise_y_m": 1.2e-7, "noise_theta": 6.0e-4, "fraction_measured": 1.0}}
@@ -24,16 +24,16 @@ def test_recorded_noise_is_read_from_the_tracking_block():
 
 def test_the_oracle_takes_the_given_noise_instead_of_estimating_it(monkeypatch):
     seen = {}
-    monkeypatch.setattr(pipeline, "estimate_tracking_noise", lambda runs: pytest.fail("estimated although given"))
-    monkeypatch.setattr(pipeline, "runs_from_data", lambda derivs: [])
+    monkeypatch.setattr(final_checks, "estimate_tracking_noise", lambda runs: pytest.fail("estimated although given"))
+    monkeypatch.setattr(final_checks, "runs_from_data", lambda derivs: [])
 
     def fake(model, runs, noise):
         seen["noise"] = noise
         return OracleResult({}, noise, 0, 0, {})
 
-    monkeypatch.setattr(pipeline, "oracle_standard_errors", fake)
+    monkeypatch.setattr(final_checks, "oracle_standard_errors", fake)
     given = recorded_tracking_noise(TRACKED)
-    res = pipeline._oracle(None, [SimpleNamespace(derivs=None, run=None)], lambda m: None, given)
+    res = final_checks.final_oracle(None, [SimpleNamespace(derivs=None, run=None)], given)
     assert seen["noise"] is given and res.noise is given
 
 
@@ -50,10 +50,10 @@ def test_fit_dataset_passes_the_recorded_noise_on(monkeypatch, tmp_path):
 
     monkeypatch.setattr(pipeline, "fit_runs", fit_runs)
     with pytest.raises(Stop) as info:
-        pipeline.fit_dataset(tmp_path, tmp_path / "fit", plots=False)
+        pipeline.fit_dataset(tmp_path)
     assert info.value.args[0] == recorded_tracking_noise(TRACKED)
     # without the block, nothing is passed and the fit estimates the noise itself
     monkeypatch.setattr(pipeline, "load_dataset", lambda *a, **k: Dataset(str(tmp_path), runs, {}))
     with pytest.raises(Stop) as info:
-        pipeline.fit_dataset(tmp_path, tmp_path / "fit", plots=False)
+        pipeline.fit_dataset(tmp_path)
     assert info.value.args[0] is None

@@ -11,7 +11,8 @@ import pytest
 from fitting.compare import paired_wilcoxon
 from cubedimer.executor import ExecutorConfig
 from fitting.model import TERMS
-from fitting.pipeline import FitConfig, fit_dataset
+from fitting.config import FitConfig
+from fitting.pipeline import fit_dataset
 from fitting.synthetic import SyntheticConfig, write_dataset
 
 pytestmark = pytest.mark.slow
@@ -22,7 +23,8 @@ def recovery(tmp_path_factory, truth):
     data = tmp_path_factory.mktemp("recovery_data")
     write_dataset(data, truth, SyntheticConfig(n_runs=20, seed=11))
     out = tmp_path_factory.mktemp("recovery_out")
-    return fit_dataset(data, out, FitConfig(method="paper"), executor=ExecutorConfig(workers=2), plots=False, progress=False)
+    return fit_dataset(data, FitConfig(method="paper"), executor=ExecutorConfig(workers=2), progress=False,
+                       cache_dir=out / "runs")
 
 
 def test_refined_beat_regression_only_on_shape(recovery):

@@ -19,10 +19,12 @@ every fit here is a linear least-squares problem at the measured states.  One mo
 * :mod:`~validation.diagnosis.statistics` and :mod:`~validation.diagnosis.identification`: held-out
   (K-fold) identification with the sign-flip test and practical thresholds;
 * :mod:`~validation.diagnosis.discovery`: the library terms that carry what no candidate explains, and the
-  final joint model of the identified effects with them (:func:`joint_estimates`);
+  energy-balance form of the dissipations;
+* :mod:`~validation.diagnosis.joint_model`: the identified candidates judged against the discovered terms, and the
+  final joint model of the identified effects with them (:func:`~validation.diagnosis.joint_model.joint_estimates`);
 * :mod:`~validation.diagnosis.localization`: where the residual lies (terms, regions, time scales);
 * :mod:`~validation.diagnosis.long_time`: attractor, Poincare and frequency errors;
-* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` and :func:`write_diagnosis`;
+* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` (its files: :func:`validation.report.write_diagnosis`);
 * :mod:`~validation.diagnosis.model_comparison`: the gaps of Gor'kov, Gor'kov + fitted pair scattering and
   the full-wave model side by side (:func:`compare_simulation_models`).
 
@@ -30,34 +32,19 @@ The method, its tests and the blind check are described in docs/diagnosis.md.
 """
 from __future__ import annotations
 
-from .calibration import Calibration, calibrate
+from .calibration import Calibration
 from .candidates import CANDIDATE_EFFECTS, effect_regressors
-from .discovery import (DiscoveredTerm, Discovery, discover_terms, discovered_equations, dissipative_terms,
-                        joint_estimates, judge_candidates)
-from .drift import DriftSettings, DriftTest, PressureDrift, detect_pressure_drift
-from .gap_model import EnergyResidual, GapFit, IntegralResidual, apply_gap_model, fit_gap_model, predicted_accelerations
-from .identification import (CandidateTest, Identification, IdentificationRound, PracticalThresholds, held_out_gaps,
-                             identify_effects)
-from .localization import localize_residuals
-from .long_time import LongTimeGap, long_time_gaps
+from .discovery import Discovery
+from .drift import PressureDrift
+from .gap_model import GapFit
+from .identification import Identification
+from .long_time import LongTimeGap
 from .model_comparison import ModelComparison, ModelGap, compare_simulation_models
-from .metrics import (GapComponent, fit_components, fit_gaps, gap_components, gap_definition, noise_floors,
-                      scalar_gap, short_time_gaps)
-from .pipeline import EXPLAINED_GAP, DiagnoseConfig, DiagnosisInternals, diagnose_dataset, write_diagnosis
-from .preparation import PositionIntegrals, RunAccelerations, prepare_diagnosis_runs
+from .pipeline import DiagnoseConfig, DiagnosisInternals, EXPLAINED_GAP, diagnose_dataset
 from .problem import DiagnosisProblem
-from .statistics import sign_flip_pvalue, wilcoxon_greater_pvalue
 
 __all__ = [
-    "CANDIDATE_EFFECTS", "effect_regressors",
-    "RunAccelerations", "PositionIntegrals", "prepare_diagnosis_runs", "DiagnosisProblem",
-    "Calibration", "calibrate",
-    "DiscoveredTerm", "Discovery", "discover_terms", "dissipative_terms", "discovered_equations", "judge_candidates", "joint_estimates",
-    "DriftSettings", "DriftTest", "PressureDrift", "detect_pressure_drift",
-    "GapFit", "EnergyResidual", "IntegralResidual", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
-    "GapComponent", "gap_components", "fit_components", "gap_definition", "short_time_gaps", "noise_floors", "fit_gaps", "scalar_gap",
-    "PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps", "identify_effects",
-    "localize_residuals", "LongTimeGap", "long_time_gaps", "ModelGap", "ModelComparison", "compare_simulation_models",
-    "sign_flip_pvalue", "wilcoxon_greater_pvalue",
-    "DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP",
+    "diagnose_dataset", "DiagnoseConfig", "DiagnosisInternals", "EXPLAINED_GAP", "CANDIDATE_EFFECTS", "effect_regressors",
+    "compare_simulation_models", "ModelComparison", "ModelGap", "DiagnosisProblem", "GapFit", "Calibration",
+    "Identification", "Discovery", "PressureDrift", "LongTimeGap",
 ]

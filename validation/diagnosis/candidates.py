@@ -7,22 +7,45 @@ effect); this module only chooses the effects' y (measured from the calibrated e
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+from acousim.effects import EFFECT_TYPES
+
 __all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
-def _candidates() -> dict[str, tuple[str, ...]]:
-    from acousim.effects import EFFECT_TYPES
+def _is_candidate(cls: type) -> bool:
+    """Whether the diagnosis fits the effect class (linear in every parameter; an effect computed from physics
+    sets ``candidate = False``)."""
+    return bool(getattr(cls, "candidate", True))
 
-    return {name: cls.parameter_names() for name, cls in EFFECT_TYPES.items() if cls.candidate}
+
+class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
+    """Effect name -> its parameter names, read from :data:`acousim.effects.EFFECT_TYPES` on every access: the one
+    registry of effects, so that an effect registered there is a candidate of the diagnosis without a copy here."""
+
+    def __getitem__(self, name: str) -> tuple[str, ...]:
+        cls = EFFECT_TYPES[name]
+        if not _is_candidate(cls):
+            raise KeyError(name)
+        return cls.parameter_names()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([n for n, cls in EFFECT_TYPES.items() if _is_candidate(cls)])
+
+    def __len__(self) -> int:
+        return sum(_is_candidate(cls) for cls in EFFECT_TYPES.values())
+
+    def __repr__(self) -> str:
+        return repr(dict(self))
 
 
-#: Candidate effects and their parameters (docs/conventions.md section 5, as defined in :mod:`acousim.effects`).
-CANDIDATE_EFFECTS: dict[str, tuple[str, ...]] = _candidates()
+#: Candidate effects and their parameters (docs/conventions.md section 5): every effect registered in
+#: :data:`acousim.effects.EFFECT_TYPES` that the diagnosis can fit (``candidate``, True unless the effect says not).
+CANDIDATE_EFFECTS: Mapping[str, tuple[str, ...]] = _RegisteredEffects()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
 #: ``-gamma_y ydot`` and ``-gamma_theta thetadot``.  A candidate is not judged against its own copy.
@@ -35,7 +58,7 @@ LIBRARY_EQUIVALENTS: dict[str, dict[str, tuple[str, ...]]] = {
 #: ``y theta``; mirror asymmetry's ``beta0 + beta1 y`` and velocity coupling's ``y thetadot^2`` and
 #: ``y ydot thetadot`` (y from the calibrated levitation height, so ``1`` takes the origin's difference).  A
 #: discovered term that is one of them, beside the identified effect, splits the effect's parameter: the final joint
-#: model folds it into the effect (:func:`~validation.diagnosis.discovery.joint_estimates`).
+#: model folds it into the effect (:func:`~validation.diagnosis.joint_model.joint_estimates`).
 LEADING_LIBRARY_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
     "pair_scattering": {"thetaddot": ("theta",)},
     "mirror_asymmetry": {"thetaddot": ("1", "y")},
@@ -75,8 +98,6 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
         docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
     """
-    from acousim.effects import EFFECT_TYPES
-
     if name not in CANDIDATE_EFFECTS:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
     y, yd, th, thd = np.asarray(state, float).T

@@ -143,7 +143,7 @@ def held_out_gaps(problem: DiagnosisProblem, effects: Sequence[str], folds: int 
     return out
 
 
-def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] = tuple(CANDIDATE_EFFECTS),
+def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] | None = None,
                      alpha: float = 0.01, thresholds: PracticalThresholds = PracticalThresholds(),
                      progress: bool = True) -> Identification:
     """Greedy, held-out identification of the effects present (module docstring).
@@ -160,7 +160,7 @@ def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] = tupl
     ----------
     problem : DiagnosisProblem
         At least 3 runs.
-    candidates : names from CANDIDATE_EFFECTS
+    candidates : names from CANDIDATE_EFFECTS (default: all of them)
     alpha : float
         Significance level of the sign-flip test.
     thresholds : PracticalThresholds
@@ -175,7 +175,7 @@ def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] = tupl
     rounds: list[IdentificationRound] = []
     current_c = held_out_gaps(problem, chosen)
     current = current_c.mean(axis=1)
-    remaining = list(candidates)
+    remaining = list(CANDIDATE_EFFECTS if candidates is None else candidates)
     while remaining:
         tests: dict[str, CandidateTest] = {}
         base, base_gap = list(chosen), float(np.mean(current))

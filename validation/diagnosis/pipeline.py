@@ -1,4 +1,4 @@
-"""A data set's diagnosis from end to end: :func:`diagnose_dataset` and :func:`write_diagnosis`.
+"""A data set's diagnosis from end to end: :func:`diagnose_dataset` (its files: :func:`validation.report.write_diagnosis`).
 
 Output, ``diagnosis.json`` (docs/formats.md, extended)::
 
@@ -11,7 +11,7 @@ Output, ``diagnosis.json`` (docs/formats.md, extended)::
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -21,7 +21,8 @@ from acousim.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
-from .discovery import Discovery, discover_terms, discovered_equations, joint_estimates, judge_candidates
+from .discovery import Discovery, discover_terms, discovered_equations
+from .joint_model import joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
 from .identification import PracticalThresholds, identify_effects
@@ -34,7 +35,7 @@ from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "write_diagnosis", "EXPLAINED_GAP"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP"]
 
 logger = logging.getLogger(__name__)
 
@@ -68,7 +69,7 @@ class DiagnoseConfig:
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
-    candidates: tuple[str, ...] = tuple(CANDIDATE_EFFECTS)
+    candidates: tuple[str, ...] = field(default_factory=lambda: tuple(CANDIDATE_EFFECTS))
     alpha: float = 0.01
     min_relative_improvement: float = 0.05
     min_absolute_improvement: float = 5e-6
@@ -414,18 +415,3 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                      "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
     }
     return diagnosis, DiagnosisInternals(problem, base, final)
-
-
-def write_diagnosis(diagnosis: dict, internals: DiagnosisInternals, out_dir: str | Path) -> list[Path]:
-    """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``."""
-    from cubedimer.atomic import write_json
-
-    from ..report.diagnosis_section import diagnosis_figures, diagnosis_section
-    from ..report.html import write_report
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "diagnosis.json", diagnosis)
-    figs = diagnosis_figures(diagnosis, internals, out / "figures")
-    write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
-    return [out / "diagnosis.json", out / "report.html"]

@@ -172,7 +172,9 @@ def derivative_noise(run, d, polyorder: int) -> tuple[NDArray[np.float64], NDArr
 
     Tracking noise sigma is estimated from raw minus smoothed position (its variance is
     sigma^2 (1 - c0), c0 the filter's central weight); the k-th derivative's noise is then
-    sigma * ||c_k|| (:func:`fitting.derivatives.noise_gain`).
+    sigma * ||c_k|| (:func:`fitting.derivatives.noise_gain`).  This is the noise as the run's own
+    Savitzky-Golay window sees it (what the derivative variances need), not the robust white-noise estimate of
+    the data set (:func:`cubedimer.noise.white_noise_std`); the diagnosis's weights and numbers are built on it.
 
     Parameters
     ----------

@@ -10,18 +10,13 @@
 """
 from __future__ import annotations
 
+from cubedimer.lazy import lazy_attributes
+
 from .html import Figure, Section, Table, format_number, write_report
 
-__all__ = ["build_report", "write_report", "Figure", "Section", "Table", "format_number", "check_report_in_browser"]
+__all__ = ["build_report", "write_report", "write_diagnosis", "Figure", "Section", "Table", "format_number",
+           "check_report_in_browser"]
 
 
-def __getattr__(name: str):
-    if name == "build_report":
-        from .pipeline import build_report
-
-        return build_report
-    if name == "check_report_in_browser":
-        from .browser_check import check_report_in_browser
-
-        return check_report_in_browser
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, {"build_report": ".pipeline", "write_diagnosis": ".diagnosis_section",
+                                         "check_report_in_browser": ".browser_check"})

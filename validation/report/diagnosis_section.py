@@ -1,5 +1,6 @@
 """The diagnosis as a report section: its figures (gap by candidate, residual maps before and after,
-residual by library term) and its reading paragraph and table, from diagnosis.json."""
+residual by library term) and its reading paragraph and table, from diagnosis.json; and the diagnose command's
+files (:func:`write_diagnosis`)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,7 +12,24 @@ from cubedimer.atomic import save_figure as _save
 from ..diagnosis.statistics import format_p
 from .html import Figure, Section, Table
 
-__all__ = ["diagnosis_figures", "diagnosis_section"]
+__all__ = ["diagnosis_figures", "diagnosis_section", "write_diagnosis"]
+
+
+def write_diagnosis(diagnosis: dict, internals, out_dir: str | Path) -> list[Path]:
+    """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``.
+
+    ``diagnosis`` and ``internals`` are what :func:`validation.diagnosis.diagnose_dataset` returns; returns the
+    paths of diagnosis.json and report.html."""
+    from cubedimer.atomic import write_json
+
+    from .html import write_report
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "diagnosis.json", diagnosis)
+    figs = diagnosis_figures(diagnosis, internals, out / "figures")
+    write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
+    return [out / "diagnosis.json", out / "report.html"]
 
 
 def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[Figure]:

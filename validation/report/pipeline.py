@@ -130,7 +130,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         of a fallback's joint re-optimisation) for ``"discovery"``, and of the re-optimisation of the variant
         without cross-coupling terms (section 3);
         default: the fitting and comparison defaults
-    method : the fit's model-discovery method (:data:`fitting.pipeline.METHODS`)
+    method : the fit's model-discovery method (:data:`fitting.methods.METHODS`)
     model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
         stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
@@ -148,7 +148,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from cubedimer.executor import ExecutorConfig
     from cubedimer.meta import read_meta
     from fitting.compare import compare_models, cross_coupling_mask
-    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.config import FitConfig
+    from fitting.fit_output import write_fit
+    from fitting.pipeline import fit_dataset
     from fitting.refine import JOINT_REFINE
     from fitting.plots import plot_comparison
 
@@ -177,8 +179,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                          joint=replace(config.joint, max_evals=max_evals))
     say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
                                     else "integral-form discovery with held-out selection, long-time polish") + ")")
-    res = fit_dataset(data_dir, fit_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler),
-                      progress=progress, log=say)
+    res = fit_dataset(data_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
+                      cache_dir=fit_dir / "runs")
+    write_fit(res, fit_dir)
     import json
 
     model_json = json.loads((fit_dir / "model.json").read_text())

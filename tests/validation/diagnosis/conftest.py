@@ -1,9 +1,16 @@
 """Synthetic runs of the calibrated simulation (plus effects) with known truth, shared by the diagnosis tests, and
 twin-like data sets with causes outside the candidates (a drifting pressure, a cubic hinge term)."""
+from dataclasses import dataclass
+from typing import Callable, ClassVar
+
 import numpy as np
 import pytest
 
-from validation.diagnosis import Calibration, DiagnosisProblem, RunAccelerations, predicted_accelerations
+from acousim.effects import EFFECT_TYPES, Effect
+
+from validation.diagnosis import Calibration, DiagnosisProblem
+from validation.diagnosis.gap_model import predicted_accelerations
+from validation.diagnosis.preparation import RunAccelerations
 
 
 @pytest.fixture(scope="module")
@@ -114,3 +121,25 @@ def clean_dataset(tmp_path_factory):
     """(data directory, truth): 8 runs of 3 s of the surrogate alone (a constant pressure off nominal)."""
     path = tmp_path_factory.mktemp("twin_like") / "clean"
     return path, write_twin_like_dataset(path, seed=1)
+
+
+# ---- a dummy effect, registered for one test (the effect registry's promise) ----------------------------------
+
+def _constant_push_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    """thetaddot += push (a constant torque per inertia); nothing in yddot."""
+    return (0.0,), (1.0,)
+
+
+@dataclass(frozen=True)
+class ConstantPush(Effect):
+    """A dummy effect: a constant hinge torque, thetaddot += push [1/s^2]."""
+
+    name: ClassVar[str] = "constant_push"
+    columns: ClassVar[Callable] = staticmethod(_constant_push_columns)
+    push: float = 0.0
+
+
+@pytest.fixture
+def registered_push(monkeypatch):
+    monkeypatch.setitem(EFFECT_TYPES, ConstantPush.name, ConstantPush)
+    return ConstantPush

@@ -3,9 +3,11 @@ candidate; nothing is discovered on clean data."""
 import numpy as np
 import pytest
 
-from validation.diagnosis import (DiagnoseConfig, DiagnosisProblem, DiscoveredTerm, Discovery, diagnose_dataset,
-                                  discover_terms, discovered_equations, fit_gap_model, judge_candidates,
-                                  prepare_diagnosis_runs)
+from validation.diagnosis import DiagnoseConfig, DiagnosisProblem, Discovery, diagnose_dataset
+from validation.diagnosis.discovery import DiscoveredTerm, discover_terms, discovered_equations
+from validation.diagnosis.gap_model import fit_gap_model
+from validation.diagnosis.joint_model import judge_candidates
+from validation.diagnosis.preparation import prepare_diagnosis_runs
 from validation.diagnosis.discovery import _Normal
 
 FAST = DiagnoseConfig(long_time=False)

@@ -3,8 +3,9 @@ none is reported on data at a constant pressure."""
 import numpy as np
 import pytest
 
-from validation.diagnosis import (EXPLAINED_GAP, DiagnoseConfig, DiagnosisProblem, DriftSettings, PressureDrift,
-                                  detect_pressure_drift, diagnose_dataset, prepare_diagnosis_runs)
+from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, DiagnosisProblem, PressureDrift, diagnose_dataset
+from validation.diagnosis.drift import DriftSettings, detect_pressure_drift
+from validation.diagnosis.preparation import prepare_diagnosis_runs
 
 FAST = DiagnoseConfig(long_time=False)
 

@@ -1,7 +1,10 @@
 """Calibration and effect fit on synthetic accelerations with known calibration and effects."""
 import numpy as np
+import pytest
 
-from validation.diagnosis import Calibration, DiagnosisProblem, fit_gap_model, fit_gaps
+from validation.diagnosis import Calibration, DiagnosisProblem
+from validation.diagnosis.gap_model import fit_gap_model
+from validation.diagnosis.metrics import fit_gaps
 
 
 def _fit(model, runs, effects=()):
@@ -38,3 +41,17 @@ def test_energy_balance_finds_weak_damping(fast_model, synthetic_runs):
     no_damping = _fit(fast_model, runs, ["pair_scattering"])
     energy_gap = lambda f: np.mean(fit_gaps(runs, f)[:, 2])  # noqa: E731
     assert energy_gap(no_damping) > 10 * energy_gap(fit)
+
+
+def test_a_registered_effect_is_fitted_by_the_diagnosis(registered_push, fast_model, synthetic_runs):
+    """A dummy effect registered in acousim.effects.EFFECT_TYPES (a constant hinge push) is a candidate of the
+    diagnosis's effect fit with no further code: runs whose hinge feels it give back its parameter."""
+    from validation.diagnosis.preparation import RunAccelerations
+
+    truth = Calibration.at(fast_model, 1.0, fast_model.equilibrium_height)
+    runs = synthetic_runs(fast_model, truth, {}, n_runs=4, duration=0.8)
+    push = 40.0  # [1/s^2]: 0.8 times the thetaddot noise (50 1/s^2) on each of the 1600 samples
+    pushed = [RunAccelerations(r.name, r.t, r.state, r.accel + np.array([0.0, push])) for r in runs]
+    fit = fit_gap_model(DiagnosisProblem(fast_model, pushed), ["constant_push"])
+    # the standard error of a mean of 1600 samples at noise 50 is 1.25 1/s^2: 4 of them
+    assert fit.effects["constant_push"]["push"] == pytest.approx(push, abs=5.0)

@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from validation.diagnosis import (Calibration, DiagnosisProblem, EnergyResidual, GapFit, IntegralResidual,
-                                  RunAccelerations, fit_components, fit_gap_model, fit_gaps, gap_components,
-                                  gap_definition, short_time_gaps)
+from validation.diagnosis import Calibration, DiagnosisProblem, GapFit
+from validation.diagnosis.gap_model import EnergyResidual, IntegralResidual, fit_gap_model
+from validation.diagnosis.metrics import fit_components, fit_gaps, gap_components, gap_definition, short_time_gaps
+from validation.diagnosis.preparation import RunAccelerations
 
 
 def _runs_and_residuals(seed=0, n_runs=3, n=200):

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from validation.diagnosis import RunAccelerations
+from validation.diagnosis.preparation import RunAccelerations
 
 
 @pytest.mark.parametrize("step", [1, 2, 4])

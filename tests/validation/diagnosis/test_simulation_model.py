@@ -3,7 +3,8 @@ origin height), and the calibration's reduced height search against the plain le
 import numpy as np
 import pytest
 
-from validation.diagnosis import DiagnosisProblem, prepare_diagnosis_runs
+from validation.diagnosis import DiagnosisProblem
+from validation.diagnosis.preparation import prepare_diagnosis_runs
 from validation.diagnosis.calibration import calibrate, vertical_system
 from validation.diagnosis.drift import PressureDrift
 from validation.diagnosis.simulation_model import SimulationTerms

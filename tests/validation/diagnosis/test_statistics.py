@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from validation.diagnosis import sign_flip_pvalue
+from validation.diagnosis.statistics import sign_flip_pvalue
 from validation.diagnosis.statistics import runs_needed, smallest_sign_flip_pvalue
 
 

@@ -88,7 +88,9 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     """With velocity_coupling on, the fit finds velocity terms and the comparison lists them as dynamic only."""
     from acousim import GorkovDimer, fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
-    from fitting.pipeline import FitConfig, fit_dataset
+    from fitting.config import FitConfig
+    from fitting.fit_output import write_fit
+    from fitting.pipeline import fit_dataset
     from dataclasses import replace
     from validation.coefficients import compare_coefficients
 
@@ -96,7 +98,7 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     data = _twin(tmp_path / "data", {"pair_scattering": {"kappa": 12000.0}, "velocity_coupling": {"c5": 1.5e4, "c6": 3e6}}, seed=8)
     cfg = FitConfig()
     cfg = replace(cfg, refine=replace(cfg.refine, max_evals=150), joint=replace(cfg.joint, max_evals=150))
-    fit_dataset(data, tmp_path / "fit", cfg, ExecutorConfig(workers=2), progress=False, plots=False)
+    write_fit(fit_dataset(data, cfg, ExecutorConfig(workers=2), progress=False), tmp_path / "fit", plots=False)
     model = json.loads((tmp_path / "fit" / "model.json").read_text())
     sw = static_sweep(GorkovDimer(), np.linspace(-0.4, 0.4, 21), np.linspace(-2e-4, 2e-4, 21))
     st = fit_static_coefficients(sw)

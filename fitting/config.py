@@ -1,0 +1,66 @@
+"""The settings of a fit, :class:`FitConfig`: one frozen, self-validating config per stage and the method's name."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from cubedimer.attractors import ClassifyConfig
+from cubedimer.dataset import LoadConfig
+from .derivatives import SmoothingConfig
+from .discovery import DiscoveryConfig
+from .ensemble import EnsembleConfig
+from .methods import DEFAULT_METHOD, METHODS
+from .refine import JOINT_REFINE, RefineConfig
+from .regression import RegressionConfig
+from .selection import SelectionConfig
+
+__all__ = ["FitConfig"]
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """All settings of the pipeline (every stage has its own frozen config).
+
+    Raises
+    ------
+    ValueError
+        One line, on construction: a method that is not registered (:data:`fitting.methods.METHODS`) or a
+        non-positive ``polish_se``.
+    """
+
+    load: LoadConfig = field(default_factory=LoadConfig)
+    smoothing: SmoothingConfig = field(default_factory=SmoothingConfig)
+    regression: RegressionConfig = field(default_factory=RegressionConfig)
+    refine: RefineConfig = field(default_factory=RefineConfig)
+    joint: RefineConfig = JOINT_REFINE
+    ensemble: EnsembleConfig = field(default_factory=EnsembleConfig)
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
+    #: joint refinement of the whole candidate support (start of the backward elimination)
+    candidate_joint: RefineConfig = field(default_factory=lambda: RefineConfig(
+        max_evals=300, rel_bound=0.3, abs_bound=0.005, horizons=(0.5, 1.0)))
+    classify: ClassifyConfig = field(default_factory=ClassifyConfig)
+    #: the registered method (:data:`fitting.methods.METHODS`): ``"discovery"``: integral-form discovery
+    #: (:func:`fitting.discovery.discover_model`) selects and fits the model, the long-time refinement polishes it
+    #: inside a box of ``polish_se`` of its standard errors; ``"paper"``: per-run SINDy and long-time refinement,
+    #: ensemble selection (``selection.rule``), joint re-optimisation of the minimal model
+    method: str = DEFAULT_METHOD
+    discovery: DiscoveryConfig = field(default_factory=DiscoveryConfig)
+    #: long-time polish of the discovered model (method "discovery")
+    polish: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=150))
+    #: half-width of the polish box in the discovery's standard errors
+    polish_se: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ValueError(f"unknown method {self.method!r} (use one of {', '.join(METHODS)})")
+        if not self.polish_se > 0:
+            raise ValueError(f"polish_se must be positive, got {self.polish_se}")
+
+    def with_heldout_tolerance(self, tolerance: float | None) -> "FitConfig":
+        """This configuration with the discovery's practical threshold ``DiscoveryConfig.heldout_tolerance`` (None:
+        unchanged); ValueError for the paper's method or a tolerance outside [0, 1)."""
+        if tolerance is None:
+            return self
+        if self.method != "discovery" or not 0.0 <= tolerance < 1.0:
+            raise ValueError(f"{tolerance:g}: needs a fraction in [0, 1) and --method discovery (0.002 keeps the "
+                             "smallest support within 0.2 % of the best held-out error)")
+        return replace(self, discovery=replace(self.discovery, heldout_tolerance=float(tolerance)))

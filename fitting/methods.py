@@ -1,0 +1,114 @@
+"""The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
+
+A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
+lists it) and ``fit(prepared, scales, config, context)``, which turns prepared runs into one
+:class:`fitting.results.FitResult`.  It is registered once with :func:`register_method`; the fit command,
+the report command and :func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's
+``solve_ivp`` ``METHODS``), so a registered method is selectable everywhere without further changes.
+
+The built-in entries are ``"discovery"`` (:mod:`fitting.discovery_fit`, the default) and ``"paper"``
+(:mod:`fitting.paper_fit`); importing :mod:`fitting` registers both.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, Sequence, runtime_checkable
+
+from cubedimer.executor import ExecutorConfig
+
+if TYPE_CHECKING:  # annotations only: the registry imports no implementation
+    from .config import FitConfig
+    from .model import Scales
+    from .oracle import NoiseLevels
+    from .results import FitResult, PreparedRun
+
+__all__ = ["FitContext", "FittingMethod", "METHODS", "DEFAULT_METHOD", "register_method", "method_names",
+           "get_method", "methods_help"]
+
+#: The method a fit uses unless told otherwise.
+DEFAULT_METHOD = "discovery"
+
+
+@dataclass(frozen=True)
+class FitContext:
+    """Where and how a method runs (everything but the data and the settings).
+
+    Parameters
+    ----------
+    executor : ExecutorConfig, optional
+        Where parallel work runs (:func:`cubedimer.executor.map_ordered`; default: local processes).
+    cache_dir : path-like, optional
+        Directory of per-run results that a rerun resumes from (methods that have per-run work; None: no cache).
+    progress : bool
+        Show progress bars of parallel work.
+    noise : NoiseLevels, optional
+        Tracking noise of the data for the oracle standard errors (default: estimated from the runs).
+    """
+
+    executor: ExecutorConfig | None = None
+    cache_dir: str | os.PathLike | None = None
+    progress: bool = True
+    noise: "NoiseLevels | None" = None
+
+
+@runtime_checkable
+class FittingMethod(Protocol):
+    """A model-discovery method.
+
+    Attributes
+    ----------
+    name : str
+        The registry key (``--method NAME``).
+    summary : str
+        One sentence for the command-line help.
+    private_settings : tuple of str
+        :class:`~fitting.config.FitConfig` fields only this method reads; the ``settings`` recorded in
+        another method's model.json leave them out.
+    """
+
+    name: str
+    summary: str
+    private_settings: tuple[str, ...]
+
+    def fit(self, prepared: "Sequence[PreparedRun]", scales: "Scales", config: "FitConfig",
+            context: FitContext) -> "FitResult":
+        """Select and fit the model of the prepared runs; the result has every field the method produces."""
+        ...
+
+
+#: name -> method, in registration order (the default first).
+METHODS: dict[str, FittingMethod] = {}
+
+
+def register_method(method: FittingMethod) -> FittingMethod:
+    """Add ``method`` to :data:`METHODS` under ``method.name`` (replacing an entry of that name); returns it.
+
+    Raises
+    ------
+    TypeError
+        ``method`` does not satisfy :class:`FittingMethod`.
+    """
+    if not isinstance(method, FittingMethod) or not isinstance(method.name, str) or not method.name:
+        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, fit)")
+    METHODS[method.name] = method
+    return method
+
+
+def method_names() -> tuple[str, ...]:
+    """The registered method names (the ``--method`` choices)."""
+    return tuple(METHODS)
+
+
+def get_method(name: str) -> FittingMethod:
+    """The registered method ``name``; ValueError (one line, listing the choices) if there is none."""
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ValueError(f"unknown method {name!r} (use one of {', '.join(METHODS)})") from None
+
+
+def methods_help() -> str:
+    """``'name' (summary), ...`` of every registered method, for a command's ``--method`` help."""
+    return "; ".join(f"'{m.name}'{' (default)' if m.name == DEFAULT_METHOD else ''}: {m.summary}"
+                     for m in METHODS.values())

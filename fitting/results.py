@@ -1,0 +1,179 @@
+"""What a fit produces: prepared runs, per-run results of each method and the one :class:`FitResult`."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence, Union
+
+import numpy as np
+
+from cubedimer.attractors import AttractorClass
+from cubedimer.dataset import Run
+from .config import FitConfig
+from .derivatives import Derivatives
+from .discovery import DiscoveryResult
+from .ensemble import TermStatistics
+from .integral_form import IntegralSelection
+from .losses import LossTerms
+from .model import PolynomialModel, Scales
+from .oracle import OracleResult
+from .refine import RefineResult
+from .selection import SelectionResult
+
+__all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "FitResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedRun:
+    """A loaded run with its derivatives and attractor class."""
+
+    run: Run
+    derivs: Derivatives
+    f_y: float
+    attractor: AttractorClass
+
+
+@dataclass(frozen=True, eq=False)
+class RunFit:
+    """Per-run result of the paper's method: regression model C0 and its long-time refinement."""
+
+    name: str
+    c0: PolynomialModel
+    refined: PolynomialModel
+    loss_c0: LossTerms
+    loss_refined: LossTerms
+    history: np.ndarray
+    n_evals: int
+    status: int
+
+    @property
+    def model(self) -> PolynomialModel:
+        """The run's model: the refined one."""
+        return self.refined
+
+    @property
+    def regression(self) -> PolynomialModel:
+        """The run's regression model (C0)."""
+        return self.c0
+
+    def to_json(self) -> dict:
+        """Everything, for the resume cache (with the optimisation history)."""
+        return {"file": self.name, "equations": self.refined.equations(), "c0": self.c0.equations(),
+                "loss_c0": self.loss_c0.to_dict(), "loss_refined": self.loss_refined.to_dict(),
+                "n_evals": self.n_evals, "nlopt_status": self.status, "history": self.history.tolist()}
+
+    def model_json(self) -> dict:
+        """The run's ``per_run`` entry of model.json (the cache entry without the history)."""
+        d = self.to_json()
+        d.pop("history")
+        return d
+
+    @classmethod
+    def from_json(cls, d: dict) -> "RunFit":
+        return cls(name=d["file"], c0=PolynomialModel.from_equations(d["c0"]),
+                   refined=PolynomialModel.from_equations(d["equations"]),
+                   loss_c0=LossTerms(**d["loss_c0"]), loss_refined=LossTerms(**d["loss_refined"]),
+                   history=np.asarray(d["history"], float), n_evals=int(d["n_evals"]),
+                   status=int(d["nlopt_status"]))
+
+
+@dataclass(frozen=True, eq=False)
+class RunEstimate:
+    """Per-run result of the discovery: least squares of the smoothed accelerations on the selected terms.
+
+    Attributes
+    ----------
+    name : str
+        The run's file name.
+    model : PolynomialModel
+        The run's least-squares coefficients on the pooled model's support (SI).
+    loss : LossTerms
+        Long-time loss of the pooled discovered model on this run.
+    """
+
+    name: str
+    model: PolynomialModel
+    loss: LossTerms
+
+    @property
+    def regression(self) -> PolynomialModel:
+        """The run's regression model: its least squares."""
+        return self.model
+
+    def model_json(self) -> dict:
+        """The run's ``per_run`` entry of model.json."""
+        return {"file": self.name, "equations": self.model.equations(),
+                "fit": "least squares of the smoothed accelerations on the selected terms (this run alone)"}
+
+
+#: A method's per-run result (each has ``name``, ``model``, ``regression`` and ``model_json()``).
+PerRunResult = Union[RunFit, RunEstimate]
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """Everything a fitting method produced.
+
+    Attributes
+    ----------
+    runs : list of PreparedRun
+    scales : Scales
+    pooled_regression : PolynomialModel
+        The regression on all runs pooled that the method starts from (paper: the joint SINDy C0;
+        discovery: the integral-form least squares of the discovered support).
+    run_fits : list of RunFit or RunEstimate
+        One per run, of the method's kind.
+    stats : TermStatistics
+        Across-run statistics of the per-run models.
+    mask : ndarray of bool, shape (2, 35)
+        The final model's support.
+    joint_start, joint : PolynomialModel, RefineResult
+        Start and result of the final joint long-time optimisation (re-optimisation or polish).
+    config : FitConfig
+    mask_zscore : ndarray of bool
+        The paper's rule (z > threshold plus damping terms) on the per-run models, always reported.
+    rule : str or None
+        The selection rule that produced ``mask`` (:data:`fitting.selection_rules.SELECTION_RULES`); None when the
+        method selects the terms itself (the discovery).
+    selection, candidate_fit : optional
+        Backward elimination and the joint fit of its candidate support (rules that eliminate), else None.
+    integral_form : dict or None
+        The pooled integral-form cross-check per equation (paper's method), else None.
+    discovery : DiscoveryResult or None
+        The integral-form discovery (method "discovery"), else None.
+    fallback : dict or None
+        When the selected model blew up: ``{"reason", "used", "blown_up_model", "candidates"}``.
+    oracle : OracleResult or None
+        Oracle standard errors of the final model's terms at the data's tracking noise.
+    skipped, n_glitches :
+        Files the loader skipped (with reasons) and glitch frames it masked (set by :func:`fitting.fit_dataset`).
+    """
+
+    runs: list[PreparedRun]
+    scales: Scales
+    pooled_regression: PolynomialModel
+    run_fits: Sequence[PerRunResult]
+    stats: TermStatistics
+    mask: np.ndarray
+    joint_start: PolynomialModel
+    joint: RefineResult
+    config: FitConfig
+    mask_zscore: np.ndarray
+    rule: str | None = None
+    selection: SelectionResult | None = None
+    candidate_fit: RefineResult | None = None
+    integral_form: dict[str, IntegralSelection] | None = None
+    discovery: DiscoveryResult | None = None
+    fallback: dict | None = None
+    oracle: OracleResult | None = None
+    skipped: tuple[dict, ...] = ()
+    n_glitches: int = 0
+
+    @property
+    def model(self) -> PolynomialModel:
+        """The final model, jointly optimised (SI)."""
+        return self.joint.model
+
+    @property
+    def method(self) -> str:
+        """The method that produced the result."""
+        return self.config.method

@@ -1,0 +1,159 @@
+"""The registry of term-selection rules of the per-run ensemble: what ``SelectionConfig.rule`` and ``--selection`` choose.
+
+A rule is an object satisfying :class:`SelectionRule`: a name, a one-line summary, the fitting methods it
+applies to (:data:`fitting.methods.METHODS`; the discovery selects its terms itself, on the held-out path),
+whether it is followed by backward elimination on the joint long-time loss, and ``support(evidence, config)``,
+the support mask from the per-run fits.  :class:`fitting.selection.SelectionConfig` checks its ``rule`` against
+:data:`SELECTION_RULES` on construction (before any work), and the fit command offers the registered names.
+
+Built-in rules (method ``"paper"``): ``"significance"`` (default; the ensemble mean significantly non-zero,
+t-test with Holm's rule, :func:`fitting.ensemble.select_significant_terms`), ``"zscore"`` (the paper's z > 3
+rule, :func:`fitting.ensemble.select_terms`) and ``"backward"`` (backward elimination on the joint loss,
+:func:`fitting.selection.backward_elimination`, from the candidate support).
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cubedimer.terms import EQUATION_NAMES
+from .ensemble import EnsembleConfig, TermStatistics, select_significant_terms
+from .model import TERMS
+
+if TYPE_CHECKING:  # annotations only
+    from .selection import SelectionConfig
+
+__all__ = ["SelectionEvidence", "SelectionRule", "SELECTION_RULES", "DEFAULT_RULE", "register_selection_rule",
+           "selection_rule_names", "support_text"]
+
+logger = logging.getLogger(__name__)
+
+#: The rule of ``SelectionConfig()``.
+DEFAULT_RULE = "significance"
+
+
+def support_text(mask: NDArray[np.bool_]) -> str:
+    """``"yddot: t1, t2; thetaddot: ..."`` of a support mask (2, 35), for log lines."""
+    return "; ".join(f"{eq}: " + ", ".join(t for t, k in zip(TERMS, mask[q]) if k) for q, eq in enumerate(EQUATION_NAMES))
+
+
+@dataclass(frozen=True, eq=False)
+class SelectionEvidence:
+    """What a rule selects from.
+
+    Attributes
+    ----------
+    stats : TermStatistics
+        Across-run statistics of the per-run refined models.
+    mask_zscore : ndarray of bool (2, 35)
+        The paper's z-score rule on them (always computed).
+    candidates : ndarray of bool (2, 35)
+        The candidate support: the pooled regression's support plus the damping terms.
+    ensemble : EnsembleConfig
+    """
+
+    stats: TermStatistics
+    mask_zscore: NDArray[np.bool_]
+    candidates: NDArray[np.bool_]
+    ensemble: EnsembleConfig
+
+
+@runtime_checkable
+class SelectionRule(Protocol):
+    """A term-selection rule (module docstring).
+
+    Attributes
+    ----------
+    name : str
+    summary : str
+        One sentence for the command-line help.
+    methods : tuple of str
+        The fitting methods the rule applies to.
+    """
+
+    name: str
+    summary: str
+    methods: tuple[str, ...]
+
+    def eliminates(self, config: "SelectionConfig") -> bool:
+        """Whether backward elimination on the joint loss follows ``support``."""
+        ...
+
+    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+        """The selected support (2, 35) (the start of the elimination when ``eliminates``)."""
+        ...
+
+
+#: name -> rule, in registration order.
+SELECTION_RULES: dict[str, SelectionRule] = {}
+
+
+def register_selection_rule(rule: SelectionRule) -> SelectionRule:
+    """Add ``rule`` to :data:`SELECTION_RULES` under ``rule.name``; returns it (TypeError if it is not a rule)."""
+    if not isinstance(rule, SelectionRule) or not isinstance(rule.name, str) or not rule.name:
+        raise TypeError(f"{rule!r} is not a SelectionRule (name, summary, methods, eliminates, support)")
+    SELECTION_RULES[rule.name] = rule
+    return rule
+
+
+def selection_rule_names(method: str | None = None) -> tuple[str, ...]:
+    """The registered rule names (those applying to ``method`` if given)."""
+    return tuple(n for n, r in SELECTION_RULES.items() if method is None or method in r.methods)
+
+
+@dataclass(frozen=True)
+class SignificanceRule:
+    """Terms whose mean coefficient across runs is significantly non-zero (t-test, Holm at ``alpha``), plus damping;
+    followed by backward elimination when ``SelectionConfig.prune``."""
+
+    name: str = "significance"
+    summary: str = ("the mean coefficient across runs is significantly non-zero (t-test with Holm correction at "
+                    "0.01; default)")
+    methods: tuple[str, ...] = ("paper",)
+
+    def eliminates(self, config: "SelectionConfig") -> bool:
+        return bool(config.prune)
+
+    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+        mask = select_significant_terms(evidence.stats, config.alpha, evidence.ensemble.keep_damping)
+        logger.info("significant ensemble means (t-test, Holm, alpha = %g): %d terms: %s", config.alpha,
+                    int(mask.sum()), support_text(mask))
+        return mask
+
+
+@dataclass(frozen=True)
+class ZScoreRule:
+    """The paper's rule: z > ``EnsembleConfig.z_threshold`` plus the damping terms."""
+
+    name: str = "zscore"
+    summary: str = "the paper's z > 3 rule (always reported)"
+    methods: tuple[str, ...] = ("paper",)
+
+    def eliminates(self, config: "SelectionConfig") -> bool:
+        return False
+
+    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+        return evidence.mask_zscore
+
+
+@dataclass(frozen=True)
+class BackwardRule:
+    """Backward elimination on the joint long-time loss from the candidate support and the z-rule's terms."""
+
+    name: str = "backward"
+    summary: str = "elimination on the joint long-time loss (slow)"
+    methods: tuple[str, ...] = ("paper",)
+
+    def eliminates(self, config: "SelectionConfig") -> bool:
+        return True
+
+    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+        return evidence.candidates | evidence.mask_zscore
+
+
+for _rule in (SignificanceRule(), ZScoreRule(), BackwardRule()):
+    register_selection_rule(_rule)
