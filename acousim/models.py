@@ -123,8 +123,9 @@ class StaticModel(Protocol):
     name : str
         The registry name (``"gorkov"``, ``"fullwave"``).
     conservative : bool
-        Whether the forces derive from a potential (energy balances then use it; otherwise the work along the
-        path, and a sweep leaves its potential column empty).
+        Whether the forces derive from a potential (energy balances then use it; otherwise ``potential`` is a
+        path potential whose theta-derivative is exactly -Q_theta, and energy balances add the work along the path
+        of the vertical force's remainder F_Z + dU/dZ; a sweep leaves its potential column empty).
     equilibrium_height : float
         Z_eq [m] (< 0) of the theta = 0 dimer.
     dimer

@@ -15,7 +15,9 @@ across to (theta, Z)::
     U(theta, Z) = C_F(0) cos(2kZ) / (2k) - int_0^theta Q_theta(theta', Z) dtheta'
 
 (A_F and B_F vanish at theta = 0 by the bend parity).  It is the potential when the forces have one.
-The energy balance itself takes the work of the forces along the measured path, which needs none.
+The torque is its exact theta-derivative, Q_theta = -dU/dtheta, so only the vertical force can differ from
+-dU/dZ; the diagnosis's energy balance takes U at the states plus the work of that remainder along the measured
+path (:class:`validation.diagnosis.simulation_model.SimulationTerms`).
 """
 from __future__ import annotations
 
