@@ -71,4 +71,4 @@ bench: venv
 	$(BIN)/python -m benchmarks --out benchmarks/results.md
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache "$${XDG_CACHE_HOME:-$$HOME/.cache}/cubedimer/numba"

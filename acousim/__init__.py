@@ -18,6 +18,7 @@ Gor'kov potential density, the tetrahedral quadrature or one class per effect, a
   :func:`simulate_run`, :func:`simulate_dataset`, the ``PAPER`` (physics only) and ``PAPER_LIKE`` (tuned) presets and :class:`TwinError`
 * closed-form references: :mod:`acousim.analytic`
 """
+import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
 from .dimer import CubeDimer
 from .field import StandingWave
 from .forces import GorkovDimer
@@ -25,9 +26,9 @@ from .medium import Medium, ParticleMaterial
 from .sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 from .force_model import ForceModel
 from .surrogate import ForceSurrogate, build_surrogate, cached_surrogate
-from .effects import EFFECT_TYPES, EffectSet, parse_effect
+from .effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect
 from .dynamics import DimerDynamics
-from .air_damping import air_damping_for, air_damping_rates
+from .air_damping import air_damping_rates
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
 from .models import (ExperimentConditions, ForceModelType, StaticModel, dynamic_model, force_model_names,
                      register_force_model, static_model)

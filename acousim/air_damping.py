@@ -47,7 +47,6 @@ __all__ = [
     "AirDampingRates",
     "air_damping_rates",
     "air_damping_parameters",
-    "air_damping_for",
 ]
 
 #: Dynamic viscosity of air at 20-25 C [Pa s].
@@ -353,33 +352,3 @@ def air_damping_parameters(rates: AirDampingRates) -> dict[str, float]:
     """The ``air_damping`` effect's parameters (docs/conventions.md section 5) of computed rates."""
     return {"gamma_y": rates.gamma_y, "gamma_theta": rates.gamma_theta, "sway_ratio": rates.sway_ratio,
             "wedge_ratio": rates.wedge_ratio, "gap_ratio": rates.gap_ratio}
-
-
-def air_damping_for(force_model, conditions):
-    """The ``air_damping`` effect of a dimer: :func:`air_damping_rates` at the force model's own small-oscillation
-    frequencies (``linear_frequencies()``; a mode without one, e.g. an unstable hinge, is taken at the other's).
-
-    Parameters
-    ----------
-    force_model : acousim.ForceModel
-        The dimer's dynamic force model (its frequencies set the Stokes layers).
-    conditions : acousim.models.ExperimentConditions
-        Side, densities and the hinge gap (None: the full-wave default 0.01 side; a Gor'kov dimer has no gap of
-        its own and takes the same).
-
-    Returns
-    -------
-    acousim.effects.AirDamping
-    """
-    from .effects import AirDamping
-
-    f_y, f_theta = force_model.linear_frequencies()
-    if not math.isfinite(f_y):
-        raise ValueError("air damping: the model has no vertical trap frequency (the field does not hold the dimer)")
-    if not math.isfinite(f_theta):
-        f_theta = f_y
-    side = conditions.side_length_m
-    gap = conditions.gap_m if conditions.gap_m is not None else 0.01 * side
-    rates = air_damping_rates(side, gap, f_y, f_theta, particle_density=conditions.particle_density_kg_m3,
-                              air_density=conditions.air_density_kg_m3)
-    return AirDamping.from_rates(rates)

@@ -140,7 +140,7 @@ def atlas_dynamics(side: float, gap_ratio: float, pressure_amplitude_pa: float, 
     ValueError
         A dimer outside the table family, or a field that does not hold it (one line).
     """
-    from .air_damping import air_damping_for
+    from .effects import air_damping_for
     from .dynamics import DimerDynamics
     from .effects import EffectSet
     from .models import ExperimentConditions, dynamic_model
@@ -305,5 +305,5 @@ def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorCon
     if figures:
         from .atlas_figures import write_atlas_figures
 
-        write_atlas_figures(config, rows, out)
+        write_atlas_figures(config, rows, out, OUTCOMES)
     return result

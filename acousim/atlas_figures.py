@@ -17,27 +17,26 @@ __all__ = ["OUTCOME_COLORS", "write_atlas_figures"]
 OUTCOME_COLORS = {"escaped": "white", "folded": "black", **CLASS_COLORS}
 
 
-def write_atlas_figures(config, rows: list[dict], out: str | Path) -> list[Path]:
+def write_atlas_figures(config, rows: list[dict], out: str | Path, outcomes: tuple[str, ...]) -> list[Path]:
     """``basin_<dimer>.png`` (outcome over drop duration x hinge angle, long-lived cells marked) per dimer and
-    ``phase_histogram.png`` (the settled y-theta phase of the locked cells, per dimer); returns the paths."""
+    ``phase_histogram.png`` (the settled y-theta phase of the locked cells, per dimer); returns the paths.
+    ``outcomes`` are the outcome names in colour-map order (``acousim.atlas.OUTCOMES``)."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from .atlas import OUTCOMES
-
     out = Path(out)
     paths = []
-    cmap = ListedColormap([OUTCOME_COLORS[o] for o in OUTCOMES])
+    cmap = ListedColormap([OUTCOME_COLORS[o] for o in outcomes])
     t_ms = np.asarray(config.t_off) * 1e3
     th = np.asarray(config.theta_drop)
     for d, dimer in enumerate(config.dimers):
         grid = np.full((len(th), len(t_ms)), np.nan)
         mine = [r for r in rows if r["index"][0] == d]
         for r in mine:
-            grid[r["index"][2], r["index"][1]] = OUTCOMES.index(r["outcome"])
+            grid[r["index"][2], r["index"][1]] = outcomes.index(r["outcome"])
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
-        ax.pcolormesh(_edges(t_ms), _edges(th), grid, cmap=cmap, vmin=-0.5, vmax=len(OUTCOMES) - 0.5,
+        ax.pcolormesh(_edges(t_ms), _edges(th), grid, cmap=cmap, vmin=-0.5, vmax=len(outcomes) - 0.5,
                       edgecolors="0.7", linewidth=0.3)
         for r in mine:
             if r.get("long_lived"):
@@ -46,7 +45,7 @@ def write_atlas_figures(config, rows: list[dict], out: str | Path) -> list[Path]
         ax.set_ylabel("hinge angle at the drop theta_drop")
         ax.set_title(f"{dimer.side * 1e6:.0f} um, g/s = {dimer.gap_ratio:g}, p0 = {config.pressure_amplitude_pa / 1e3:g} kPa"
                      " (dots: long-lived)", fontsize=9)
-        present = [o for o in OUTCOMES if any(r["outcome"] == o for r in mine)]
+        present = [o for o in outcomes if any(r["outcome"] == o for r in mine)]
         ax.legend(handles=[Patch(facecolor=OUTCOME_COLORS[o], edgecolor="0.5", label=o) for o in present],
                   fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()

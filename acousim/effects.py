@@ -56,7 +56,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .air_damping import hinge_damping_shape
+from .air_damping import air_damping_rates, hinge_damping_shape
 
 __all__ = [
     "Effect",
@@ -68,6 +68,7 @@ __all__ = [
     "AirDamping",
     "EffectSet",
     "EFFECT_TYPES",
+    "air_damping_for",
     "PACKED_PARAMETERS",
     "parse_effect",
     "packed_effect_accelerations",
@@ -492,3 +493,31 @@ class EffectSet:
             return "none"
         return ", ".join(f"{e.name}(" + ", ".join(f"{k}={v:g}" for k, v in e.params().items()) + ")"
                          for e in self.effects)
+
+
+def air_damping_for(force_model, conditions):
+    """The ``air_damping`` effect of a dimer: :func:`acousim.air_damping.air_damping_rates` at the force model's own small-oscillation
+    frequencies (``linear_frequencies()``; a mode without one, e.g. an unstable hinge, is taken at the other's).
+
+    Parameters
+    ----------
+    force_model : acousim.ForceModel
+        The dimer's dynamic force model (its frequencies set the Stokes layers).
+    conditions : acousim.models.ExperimentConditions
+        Side, densities and the hinge gap (None: the full-wave default 0.01 side; a Gor'kov dimer has no gap of
+        its own and takes the same).
+
+    Returns
+    -------
+    acousim.effects.AirDamping
+    """
+    f_y, f_theta = force_model.linear_frequencies()
+    if not math.isfinite(f_y):
+        raise ValueError("air damping: the model has no vertical trap frequency (the field does not hold the dimer)")
+    if not math.isfinite(f_theta):
+        f_theta = f_y
+    side = conditions.side_length_m
+    gap = conditions.gap_m if conditions.gap_m is not None else 0.01 * side
+    rates = air_damping_rates(side, gap, f_y, f_theta, particle_density=conditions.particle_density_kg_m3,
+                              air_density=conditions.air_density_kg_m3)
+    return AirDamping.from_rates(rates)

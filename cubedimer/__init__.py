@@ -19,8 +19,14 @@ here, so that ``acousim`` and ``fitting`` never import each other:
 * :mod:`cubedimer.config_checks` - the construction-time checks of the frozen configs; :mod:`cubedimer.lazy` - the
   one lazy-import mechanism of the package ``__init__`` modules
 
+* :mod:`cubedimer.compile_cache` - numba's on-disk cache keyed by the suite's sources (set up on import)
+
 This package imports none of the three user-facing packages.
 """
+from .compile_cache import configure_compile_cache
+
+configure_compile_cache()  # before any compiled function of the suite is defined
+
 from .atomic import atomic_save, atomic_write_text, json_safe, save_figure, write_json
 from .dataset import Dataset, DatasetError, LoadConfig, Run, load_dataset, load_run
 from .executor import ExecutorConfig, map_ordered

@@ -131,7 +131,7 @@ class TwinPreset:
     """A named set of effects, pressure, protocol and dimer (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
 
     ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default);
-    ``air_damping`` adds the air's computed drag (:func:`acousim.air_damping.air_damping_for`).
+    ``air_damping`` adds the air's computed drag (:func:`acousim.effects.air_damping_for`).
     """
 
     name: str

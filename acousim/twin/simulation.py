@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
 
-from ..air_damping import air_damping_for
+from ..effects import air_damping_for
 from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
 from ..effects import EffectSet
 from ..models import dynamic_model
@@ -130,7 +130,7 @@ def _run_task(item: tuple) -> SimulatedRun:
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     """The true dynamics of a configuration and its true pressure amplitude [Pa].
 
-    With ``config.air_damping`` the air's computed drag (:func:`acousim.air_damping.air_damping_for`, at the true
+    With ``config.air_damping`` the air's computed drag (:func:`acousim.effects.air_damping_for`, at the true
     pressure's frequencies) is added to the effects, unless they already hold an ``air_damping``; the
     dynamics' ``effects`` are then what truth.json records.
     """

@@ -121,7 +121,7 @@ def test_rates_of_the_paper_dimer():
 def test_the_twin_loses_energy_at_the_computed_rate():
     """With only the air's damping, a small vertical oscillation (theta = 0 stays 0 in the Gor'kov model) loses its
     energy at exp(-gamma_y t): the effect enters the compiled equations of motion as -gamma_y ydot."""
-    from acousim.air_damping import air_damping_for
+    from acousim.effects import air_damping_for
     from acousim.dynamics import DimerDynamics
     from acousim.effects import EffectSet
     from acousim.models import ExperimentConditions

@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from acousim.air_damping import air_damping_for
+from acousim.effects import air_damping_for
 from acousim.twin import PAPER, PAPER_LIKE, TwinConfig, simulate_dataset, twin_dynamics
 from acousim.twin.simulation import simulate_field_drop_runs
 from cubedimer.executor import ExecutorConfig

@@ -1,0 +1,67 @@
+"""numba's on-disk cache of the suite's compiled kernels, keyed by the suite's sources.
+
+numba validates a cached kernel only against the source file that defines it.  The suite's compiled entry
+points inline functions from other files (the RK4 kernel binds the equations of motion, which bind every effect's
+accelerations), so after an update of one of those files a kernel cached before it would still be loaded, and
+would integrate the old equations.  The suite therefore caches into a folder named by a fingerprint of all its
+sources: any change of any source file gives a fresh folder, and a kernel is never reused across versions.
+
+The folder is ``$NUMBA_CACHE_DIR/cubedimer-<fingerprint>`` when ``NUMBA_CACHE_DIR`` is set, else
+``$XDG_CACHE_HOME/cubedimer/numba/cubedimer-<fingerprint>`` (``~/.cache`` by default; the system's temporary
+folder when that cannot be written).  ``make clean`` removes the default folder.
+
+:func:`configure_compile_cache` runs when :mod:`cubedimer` is imported, which every package of the suite does
+before it defines a compiled function.
+"""
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["SUITE_PACKAGES", "source_fingerprint", "compile_cache_dir", "configure_compile_cache"]
+
+log = logging.getLogger(__name__)
+
+#: The packages whose sources make the fingerprint (every package that defines or binds a compiled function).
+SUITE_PACKAGES = ("cubedimer", "acousim", "fitting", "tracking", "validation")
+
+_SUITE_ROOT = Path(__file__).resolve().parents[1]
+
+
+def source_fingerprint(root: Path = _SUITE_ROOT, packages: tuple[str, ...] = SUITE_PACKAGES) -> str:
+    """A 16-hex-digit digest of the path and content of every ``.py`` file of ``packages`` under ``root``."""
+    digest = hashlib.sha1()
+    for package in packages:
+        for path in sorted((Path(root) / package).rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode())
+            digest.update(b"\0")
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def compile_cache_dir(fingerprint: str | None = None) -> Path:
+    """The cache folder of this version of the sources (module docstring)."""
+    name = f"cubedimer-{fingerprint or source_fingerprint()}"
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / name
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cubedimer" / "numba"
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        if not os.access(base, os.W_OK):
+            raise PermissionError(str(base))
+    except OSError:
+        base = Path(tempfile.gettempdir()) / "cubedimer-numba"
+    return base / name
+
+
+def configure_compile_cache() -> Path:
+    """Point numba's cache at :func:`compile_cache_dir`; returns the folder."""
+    from numba.core import config
+
+    folder = compile_cache_dir()
+    config.CACHE_DIR = str(folder)
+    log.debug("numba cache: %s", folder)
+    return folder
