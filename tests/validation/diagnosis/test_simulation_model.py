@@ -82,7 +82,7 @@ def test_energy_balance_closes_on_a_fullwave_path_with_damping():
     from acousim import DimerDynamics, EffectSet
     from acousim.models import ExperimentConditions, static_model
 
-    from validation.diagnosis import RunAccelerations
+    from validation.diagnosis.preparation import RunAccelerations
 
     model = static_model("fullwave", ExperimentConditions())
     assert not model.conservative
