@@ -60,6 +60,11 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
+#: The family directory's record of the mesh-convergence study per gap row (``python -m acousim convergence --study
+#: mesh --mesh-rule family-uniform``): ``{"gap_rows": [{"gap_over_side", "stated_error", ...}]}``.
+MESH_CONVERGENCE_FILE = "mesh_convergence.json"
+
+
 def _lobatto(lo: float, hi: float, n: int) -> tuple[float, ...]:
     x = np.cos(np.pi * np.arange(n)[::-1] / (n - 1))
     return tuple(float(v) for v in 0.5 * (lo + hi) + 0.5 * (hi - lo) * x)
@@ -334,6 +339,7 @@ class FullwaveFamily:
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
             tables[(node.ks, node.gap_ratio)] = sur
         self.tables = tables
+        self.mesh_errors: dict[float, float] = {}
         ks = sorted({k for k, _ in tables})
         gaps = sorted({g for _, g in tables})
         complete = [g for g in gaps if all((k, g) in tables for k in ks)]
@@ -360,6 +366,12 @@ class FullwaveFamily:
         except (OSError, ValueError) as exc:
             raise FamilyTableError(f"{acc}: not readable ({type(exc).__name__}: {exc}); rerun python -m acousim "
                                    f"family check") from None
+        mesh = self.directory / MESH_CONVERGENCE_FILE
+        try:
+            rows = json.loads(mesh.read_text())["gap_rows"] if mesh.exists() else []
+            self.mesh_errors = {float(r["gap_over_side"]): float(r["stated_error"]) for r in rows}
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise FamilyTableError(f"{mesh}: not readable ({type(exc).__name__}: {exc})") from None
 
     # -------------------------------------------------------------------------------- coverage
     @property
@@ -409,6 +421,17 @@ class FullwaveFamily:
             else np.ones(1)
         return {c: _KS_POWER[c](ks) * np.einsum("i,j,ijkl->kl", wk, wg, self._reduced[c]) for c in _COMPONENTS}
 
+    def mesh_error(self, gap_ratio: float) -> float | None:
+        """The stated mesh error of the hinge stiffness at ``gap_ratio`` (fraction): the larger of the two gap rows
+        around it (``mesh_convergence.json``, docs/fullwave.md); None when a row has no study."""
+        g = np.array(self.gap_nodes)
+        around = g[(g >= gap_ratio * (1 - 1e-9)) & (g <= gap_ratio * (1 + 1e-9))]
+        if around.size == 0:
+            i = int(np.clip(np.searchsorted(g, gap_ratio), 1, g.size - 1))
+            around = g[i - 1:i + 1]
+        errors = [next((e for r, e in self.mesh_errors.items() if np.isclose(r, v, rtol=1e-4)), None) for v in around]
+        return None if not errors or any(e is None for e in errors) else max(errors)
+
     def surrogate(self, side: float, gap: float, medium: Medium = Medium(), particle_density: float = 2160.0,
                   pressure_amplitude_pa: float = 3000.0, gravity: float = GRAVITY) -> FullwaveSurrogate:
         """The full-wave surrogate of a dimer of side ``side`` [m] with hinge gap ``gap`` [m] in ``medium``.
@@ -427,7 +450,8 @@ class FullwaveFamily:
         if summary:
             acc["interpolation_error"] = summary
         stated = {"table_source": acc["source"], "family_range": acc["family_range"],
-                  "interpolation_error_q_y": summary.get("q_y"), "interpolation_error_q_theta": summary.get("q_theta")}
+                  "interpolation_error_q_y": summary.get("q_y"), "interpolation_error_q_theta": summary.get("q_theta"),
+                  "mesh_error_hinge_stiffness": self.mesh_error(ratio)}
         return scaled_surrogate(coefs, self.theta_max, side, gap, medium, particle_density, pressure_amplitude_pa,
                                 gravity, settings={"n_half": len(coefs["qt"][0]) // 2, "family": True, **stated},
                                 build_accuracy=acc)

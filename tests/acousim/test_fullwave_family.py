@@ -112,6 +112,26 @@ def test_family_surrogate_of_a_lab_dimer(synthetic_family_dir):
     assert 5 < f_y < 200 and np.isfinite(f_t)
 
 
+def test_interpolated_model_states_the_mesh_error_of_its_gap_rows(tmp_path, synthetic_family_dir):
+    """mesh_convergence.json's stated error per gap row reaches the model's settings: the larger of the two rows
+    around the gap, the row's own on a node, and None when a row has no study."""
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, tmp_path / p.name)
+    g = FAMILY_GAP_RATIOS
+    rows = [{"gap_over_side": g[0], "stated_error": 0.016}, {"gap_over_side": g[1], "stated_error": 0.03},
+            {"gap_over_side": g[2], "stated_error": 0.027}]
+    (tmp_path / "mesh_convergence.json").write_text(json.dumps({"gap_rows": rows}))
+    fam = FullwaveFamily(tmp_path)
+    med = Medium()
+    side = 0.45 / med.wavenumber
+    assert fam.surrogate(side, 0.012 * side, med).settings["mesh_error_hinge_stiffness"] == 0.03
+    assert fam.mesh_error(g[2]) == 0.027  # on a node: that row's
+    assert fam.mesh_error(0.04) is None  # the g/s = 0.05 row has no study here
+    (tmp_path / "mesh_convergence.json").write_text("{")
+    with pytest.raises(FamilyTableError, match="mesh_convergence.json"):
+        FullwaveFamily(tmp_path)
+
+
 @pytest.mark.parametrize("ks,g", [(0.25, 0.02), (0.7, 0.02), (0.4, 0.005), (0.4, 0.08)])
 def test_outside_the_family_is_refused_never_extrapolated(synthetic_family_dir, ks, g):
     fam = FullwaveFamily(synthetic_family_dir)
