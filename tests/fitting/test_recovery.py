@@ -23,7 +23,7 @@ def recovery(tmp_path_factory, truth):
     data = tmp_path_factory.mktemp("recovery_data")
     write_dataset(data, truth, SyntheticConfig(n_runs=20, seed=11))
     out = tmp_path_factory.mktemp("recovery_out")
-    return fit_dataset(data, FitConfig(method="paper"), executor=ExecutorConfig(workers=2), progress=False,
+    return fit_dataset(data, FitConfig(method="paper"), executor=ExecutorConfig(workers=1), progress=False,
                        cache_dir=out / "runs")
 
 

@@ -29,7 +29,7 @@ def damping_report(tmp_path_factory):
 
     base = tmp_path_factory.mktemp("report")
     data = _twin(base / "data", {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
-    return build_report(data, base / "report", workers=2, progress=False, max_evals=150)
+    return build_report(data, base / "report", workers=1, progress=False, max_evals=150)
 
 
 @pytest.mark.slow
@@ -98,7 +98,7 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     data = _twin(tmp_path / "data", {"pair_scattering": {"kappa": 12000.0}, "velocity_coupling": {"c5": 1.5e4, "c6": 3e6}}, seed=8)
     cfg = FitConfig()
     cfg = replace(cfg, refine=replace(cfg.refine, max_evals=150), joint=replace(cfg.joint, max_evals=150))
-    write_fit(fit_dataset(data, cfg, ExecutorConfig(workers=2), progress=False), tmp_path / "fit", plots=False)
+    write_fit(fit_dataset(data, cfg, ExecutorConfig(workers=1), progress=False), tmp_path / "fit", plots=False)
     model = json.loads((tmp_path / "fit" / "model.json").read_text())
     sw = static_sweep(GorkovDimer(), np.linspace(-0.4, 0.4, 21), np.linspace(-2e-4, 2e-4, 21))
     st = fit_static_coefficients(sw)
