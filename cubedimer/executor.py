@@ -56,10 +56,15 @@ class ExecutorConfig:
     scheduler : str, optional
         Address of a dask.distributed scheduler; overrides ``workers``.  Defaults to the
         environment variable ``CUBEDIMER_SCHEDULER`` when set.
+    start_method : {None, "fork", "spawn", "forkserver"}
+        How local worker processes start (None: the platform's default, ``fork`` on Linux).  Work whose libraries
+        start OpenMP threads in the calling process (bempp-cl's numba-parallel assembly) needs ``spawn``: a process
+        that has used GNU OpenMP is terminated by ``fork``.
     """
 
     workers: int | None = None
     scheduler: str | None = None
+    start_method: str | None = None
 
     def __post_init__(self) -> None:
         if self.workers is not None and (isinstance(self.workers, bool) or not isinstance(self.workers, numbers.Integral)
@@ -67,6 +72,8 @@ class ExecutorConfig:
             raise ValueError(f"workers must be a whole number >= 1, got {self.workers!r}")
         if self.scheduler is not None and not isinstance(self.scheduler, str):
             raise ValueError(f"scheduler must be an address string, got {self.scheduler!r}")
+        if self.start_method not in (None, "fork", "spawn", "forkserver"):
+            raise ValueError(f"start_method must be None, 'fork', 'spawn' or 'forkserver', got {self.start_method!r}")
 
     def resolved_scheduler(self) -> str | None:
         return self.scheduler or os.environ.get("CUBEDIMER_SCHEDULER") or None
@@ -202,7 +209,8 @@ def map_ordered(
                     on_result(i, results[i])
                 bar.update()
             return results
-        with ProcessPoolExecutor(max_workers=min(requested, len(items))) as pool:
+        context = multiprocessing.get_context(config.start_method) if config.start_method else None
+        with ProcessPoolExecutor(max_workers=min(requested, len(items)), mp_context=context) as pool:
             futures = {pool.submit(task, it): i for i, it in enumerate(items)}
             try:
                 for fut in as_completed(futures):

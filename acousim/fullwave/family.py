@@ -238,8 +238,13 @@ def build_family(directory: str | os.PathLike = FAMILY_DIR, nodes: Sequence[Fami
     """Build every missing node table of ``nodes`` (default: the whole family) into ``directory``.
 
     Resumable: nodes whose table exists with the right settings are skipped; each finished node is on disk at
-    once.  Parallel over nodes through :func:`cubedimer.executor.map_ordered` (local processes or dask).
+    once.  Parallel over nodes through :func:`cubedimer.executor.map_ordered` (local processes or dask); local
+    processes are spawned, not forked (``ExecutorConfig.start_method``): a process that has already assembled a
+    boundary-element matrix runs GNU OpenMP threads, and forking it kills the pool.
     """
+    config = config or ExecutorConfig()
+    if config.start_method is None:
+        config = replace(config, start_method="spawn")
     nodes = list(nodes if nodes is not None else family_nodes())
     Path(directory).mkdir(parents=True, exist_ok=True)
     done = [n for n in nodes if node_path(directory, n).exists()]

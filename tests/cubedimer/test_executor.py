@@ -140,3 +140,13 @@ def test_blas_threads_restored_after_the_tasks():
     with threadpool_limits(2):
         map_ordered(_blas_threads, range(2), ExecutorConfig(workers=1), progress=False)
         assert all(n == 2 for n in _blas_threads(0)), _blas_threads(0)
+
+
+def test_spawned_workers_give_the_same_results():
+    """``start_method="spawn"`` (the family build's: a process running OpenMP threads cannot be forked)."""
+    assert map_ordered(abs, [-3, -1, -2], ExecutorConfig(workers=2, start_method="spawn"), progress=False) == [3, 1, 2]
+
+
+def test_an_unknown_start_method_is_refused():
+    with pytest.raises(ValueError, match="start_method"):
+        ExecutorConfig(start_method="thread")
