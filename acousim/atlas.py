@@ -140,9 +140,8 @@ def atlas_dynamics(side: float, gap_ratio: float, pressure_amplitude_pa: float, 
     ValueError
         A dimer outside the table family, or a field that does not hold it (one line).
     """
-    from .effects import air_damping_for
     from .dynamics import DimerDynamics
-    from .effects import EffectSet
+    from .effects import EffectSet, air_damping_for
     from .models import ExperimentConditions, dynamic_model
 
     conditions = ExperimentConditions(side_length_m=side, gap_m=gap_ratio * side, frequency_hz=frequency_hz,

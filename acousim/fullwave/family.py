@@ -344,7 +344,6 @@ class FullwaveFamily:
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
             tables[(node.ks, node.gap_ratio)] = sur
         self.tables = tables
-        self.mesh_errors: dict[float, float] = {}
         ks = sorted({k for k, _ in tables})
         gaps = sorted({g for _, g in tables})
         complete = [g for g in gaps if all((k, g) in tables for k in ks)]
@@ -374,7 +373,7 @@ class FullwaveFamily:
         mesh = self.directory / MESH_CONVERGENCE_FILE
         try:
             rows = json.loads(mesh.read_text())["gap_rows"] if mesh.exists() else []
-            self.mesh_errors = {float(r["gap_over_side"]): float(r["stated_error"]) for r in rows}
+            self.mesh_errors: dict[float, float] = {float(r["gap_over_side"]): float(r["stated_error"]) for r in rows}
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise FamilyTableError(f"{mesh}: not readable ({type(exc).__name__}: {exc})") from None
 

@@ -24,9 +24,8 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
 
-from ..effects import air_damping_for
 from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
-from ..effects import EffectSet
+from ..effects import EffectSet, air_damping_for
 from ..models import dynamic_model
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
