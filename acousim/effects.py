@@ -31,11 +31,14 @@ accelerations are ``sum_j p_j column_j``.  The same function serves
 * the linear fits of the diagnosis (:meth:`Effect.regressors`: the design-matrix columns);
 * the compiled equations of motion: numba compiles the same source for scalars, and
   :func:`packed_effect_accelerations` sums every effect over the flat parameter vector
-  :meth:`EffectSet.packed` (order :data:`PACKED_PARAMETERS`; absent effects contribute zeros).
+  :meth:`EffectSet.packed` (order :func:`packed_parameters`; absent effects contribute zeros).
 
-A new effect is a subclass with its ``columns`` function, an entry in :data:`EFFECT_TYPES` and one
-line in :func:`packed_effect_accelerations` (the tests compare the compiled sum with the numpy one
-for every effect type).
+A new effect is a subclass with its ``columns`` function, registered with :func:`register_effect`.  Nothing else
+is needed for the twin to integrate it: the compiled sum calls the compiled ``columns`` of every registered effect
+that has no line of its own (:func:`registered_effect_kernels`).  The effects of docs/conventions.md have their own
+lines (:data:`COMPILED_EFFECTS`), so that the equations of motion with them are compiled once and cached on disk; a
+new effect that is used often earns such a line too (the tests compare the compiled sum with the numpy one for
+every effect type).
 
 With the acoustic field off only the air's effects (``acts_without_field``: ``linear_damping``,
 ``quadratic_drag``, ``air_damping``) act; :meth:`EffectSet.acting` selects them.
@@ -54,6 +57,7 @@ from typing import Callable, ClassVar, Iterable, Mapping
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 from numpy.typing import ArrayLike, NDArray
 
 from .air_damping import air_damping_rates, hinge_damping_shape
@@ -68,6 +72,10 @@ __all__ = [
     "AirDamping",
     "EffectSet",
     "EFFECT_TYPES",
+    "COMPILED_EFFECTS",
+    "register_effect",
+    "packed_parameters",
+    "registered_effect_kernels",
     "air_damping_for",
     "PACKED_PARAMETERS",
     "parse_effect",
@@ -291,16 +299,71 @@ class AirDamping(Effect):
         return out[..., 0], out[..., 1]
 
 
-#: name -> effect class, in docs/conventions.md order.
+#: name -> effect class, in docs/conventions.md order.  Add an effect with :func:`register_effect`.
 EFFECT_TYPES: dict[str, type[Effect]] = {
     cls.name: cls for cls in (LinearDamping, QuadraticDrag, PairScattering, MirrorAsymmetry, VelocityCoupling,
                               AirDamping)
 }
 
-#: (effect name, parameter name) of each entry of :meth:`EffectSet.packed`.
+#: The effects with a line of their own in :func:`packed_effect_accelerations` (compiled once and cached on disk).
+COMPILED_EFFECTS: tuple[str, ...] = tuple(EFFECT_TYPES)
+
+#: (effect name, parameter name) of the compiled effects' slots, the start of every :meth:`EffectSet.packed`.
 PACKED_PARAMETERS: tuple[tuple[str, str], ...] = tuple(
     (name, p) for name, cls in EFFECT_TYPES.items() for p in cls.parameter_names()
 )
+
+
+def register_effect(cls: type[Effect]) -> type[Effect]:
+    """Add an effect class to :data:`EFFECT_TYPES` (usable as a class decorator); returns ``cls``.
+
+    The class needs a new ``name``, float parameters as dataclass fields and a ``columns`` function that numba can
+    compile (module docstring).  From then on the equations of motion and the twin integrate it (through
+    :func:`registered_effect_kernels`), the diagnosis fits it when ``candidate`` is true, and ``--effect NAME:...``
+    parses it.
+
+    Raises
+    ------
+    EffectError
+        Not an :class:`Effect` subclass, no ``name`` or ``columns``, or a name already registered.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Effect)):
+        raise EffectError(f"not an Effect subclass: {cls!r}")
+    if not cls.name or not getattr(cls, "columns", None):
+        raise EffectError(f"{cls.__name__}: an effect needs a name and a columns function")
+    if cls.name in EFFECT_TYPES:
+        raise EffectError(f"effect {cls.name!r} is registered already")
+    EFFECT_TYPES[cls.name] = cls
+    return cls
+
+
+def packed_parameters() -> tuple[tuple[str, str], ...]:
+    """(effect name, parameter name) of each entry of :meth:`EffectSet.packed`: :data:`PACKED_PARAMETERS`, then
+    the parameters of every registered effect without a compiled line, in registry order."""
+    return PACKED_PARAMETERS + tuple((name, p) for name, cls in EFFECT_TYPES.items() if name not in COMPILED_EFFECTS
+                                     for p in cls.parameter_names())
+
+
+_REGISTERED_KERNELS: dict[type, Callable] = {}
+
+
+def registered_effect_kernels() -> tuple:
+    """The compiled ``columns`` of every registered effect without a line in :func:`packed_effect_accelerations`,
+    in registry order (the last argument of that function; empty for the effects of docs/conventions.md).
+
+    Each is compiled once per process.  A kernel passed this way is called through numba's first-class functions,
+    so the equations of motion that take it compile anew in each process; a line in
+    :func:`packed_effect_accelerations` (and the name in :data:`COMPILED_EFFECTS`) makes an effect as fast as the
+    built-in ones.
+    """
+    out = []
+    for name, cls in EFFECT_TYPES.items():
+        if name in COMPILED_EFFECTS:
+            continue
+        if cls not in _REGISTERED_KERNELS:
+            _REGISTERED_KERNELS[cls] = nb.njit(cls.columns)
+        out.append(_REGISTERED_KERNELS[cls])
+    return tuple(out)
 
 
 # ---------------------------------------------------------------------- the compiled sum
@@ -321,10 +384,33 @@ def _add_columns(ay, at, cy, ct, p, i0):
     return ay, at, i0 + len(cy)
 
 
+def _registered_effects_sum(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
+    """Compiled only (its implementation is the overload below): the summed terms of the registered effects'
+    ``kernels`` from slot ``i0`` of ``packed``."""
+    raise NotImplementedError("compiled only")
+
+
+@overload(_registered_effects_sum)
+def _registered_effects_sum_impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
+    # one specialisation per tuple type: the first kernel, then the rest (recursion on the tuple's type)
+    if len(kernels) == 0:
+        def impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
+            return 0.0, 0.0
+        return impl
+
+    def impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
+        cy, ct = kernels[0](y, ydot, theta, thetadot, wavenumber, z_eq)
+        ay, at, i1 = _add_columns(0.0, 0.0, cy, ct, packed, i0)
+        by, bt = _registered_effects_sum(kernels[1:], y, ydot, theta, thetadot, wavenumber, z_eq, packed, i1)
+        return ay + by, at + bt
+    return impl
+
+
 @nb.njit(cache=True)
-def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, packed):
+def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, packed, registered):
     """Compiled: the summed effect terms (yddot, thetaddot) of one state for the parameter vector
-    ``packed`` (:meth:`EffectSet.packed`, order :data:`PACKED_PARAMETERS`)."""
+    ``packed`` (:meth:`EffectSet.packed`, order :func:`packed_parameters`) and the kernels of the registered
+    effects without a line here (:func:`registered_effect_kernels`; ``()`` when there are none)."""
     ay = 0.0
     at = 0.0
     i0 = 0
@@ -340,7 +426,8 @@ def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, pack
     ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
     a, b = _air_damping_kernel(ydot, theta, thetadot, packed[i0], packed[i0 + 1], packed[i0 + 2], packed[i0 + 3],
                                packed[i0 + 4])
-    return ay + a, at + b
+    ry, rt = _registered_effects_sum(registered, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0 + 5)
+    return ay + a + ry, at + b + rt
 
 
 def parse_effect(spec: str) -> Effect:
@@ -472,9 +559,9 @@ class EffectSet:
         return np.concatenate(parts, axis=-1) if parts else np.zeros(shape + (2, 0))
 
     def packed(self) -> NDArray[np.float64]:
-        """Flat parameter vector in the order of :data:`PACKED_PARAMETERS` (absent effects: 0)."""
+        """Flat parameter vector in the order of :func:`packed_parameters` (absent effects: 0)."""
         d = self.to_dict()
-        return np.array([d.get(name, {}).get(p, 0.0) for name, p in PACKED_PARAMETERS], float)
+        return np.array([d.get(name, {}).get(p, 0.0) for name, p in packed_parameters()], float)
 
     def accelerations(self, y: ArrayLike, ydot: ArrayLike, theta: ArrayLike, thetadot: ArrayLike,
                       wavenumber: float, z_eq: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

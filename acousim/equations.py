@@ -20,8 +20,9 @@ This module is the one place where a force model and effects become acceleration
 * :func:`field_on_acceleration` / :func:`field_off_acceleration`: the compiled per-state
   accelerations ``accel(y, ydot, theta, thetadot, args)`` that :func:`cubedimer.rk4.rk4` integrates,
   with ``args = kernel_arguments(force_model, effects, field_on)``: the six Chebyshev series of
-  :meth:`~acousim.force_model.ForceModel.force_coefficients`, the scalar parameters and the packed
-  effect parameters (:meth:`~acousim.effects.EffectSet.packed`).
+  :meth:`~acousim.force_model.ForceModel.force_coefficients`, the scalar parameters, the packed
+  effect parameters (:meth:`~acousim.effects.EffectSet.packed`) and the compiled columns of the registered effects
+  beyond docs/conventions.md (:func:`~acousim.effects.registered_effect_kernels`, usually none).
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .effects import EffectSet, packed_effect_accelerations
+from .effects import EffectSet, packed_effect_accelerations, registered_effect_kernels
 from .force_model import ForceModel
 
 __all__ = [
@@ -96,12 +97,13 @@ def accelerations(force_model: ForceModel, effects: EffectSet, state: ArrayLike,
 
 def kernel_arguments(force_model: ForceModel, effects: EffectSet, field_on: bool = True) -> tuple:
     """The ``args`` tuple of :func:`field_on_acceleration` / :func:`field_off_acceleration`:
-    (A_y, B_y, C_y, A_theta, B_theta, C_theta, scalar parameters, packed effect parameters)."""
+    (A_y, B_y, C_y, A_theta, B_theta, C_theta, scalar parameters, packed effect parameters, registered effect
+    kernels)."""
     fm = force_model
     par = np.array([fm.two_k, fm.z_eq, fm.mass, fm.mass * fm.gravity, fm.inertia_const, fm.inertia_sin2,
                     fm.wavenumber, fm.gravity], float)
     eff = np.ascontiguousarray(effects.acting(field_on).packed())
-    return tuple(fm.force_coefficients().as_tuple()) + (par, eff)
+    return tuple(fm.force_coefficients().as_tuple()) + (par, eff, registered_effect_kernels())
 
 
 @nb.njit(cache=True)
@@ -128,23 +130,23 @@ def _inertia(theta, par):
 @nb.njit(cache=True)
 def field_on_acceleration(y, ydot, theta, thetadot, args):
     """Compiled (yddot, thetaddot) of one state with the field on; ``args`` from :func:`kernel_arguments`."""
-    a_y, b_y, c_y, a_t, b_t, c_t, par, eff = args
+    a_y, b_y, c_y, a_t, b_t, c_t, par, eff, registered = args
     inertia, d_inertia = _inertia(theta, par)
     z = par[_P_ZEQ] + y
     c = np.cos(par[_P_TWO_K] * z)
     s = np.sin(par[_P_TWO_K] * z)
     q_y = _chebval(a_y, theta) + _chebval(b_y, theta) * c + _chebval(c_y, theta) * s - par[_P_MG]
     q_t = _chebval(a_t, theta) + _chebval(b_t, theta) * c + _chebval(c_t, theta) * s
-    ey, et = packed_effect_accelerations(y, ydot, theta, thetadot, par[_P_K], par[_P_ZEQ], eff)
+    ey, et = packed_effect_accelerations(y, ydot, theta, thetadot, par[_P_K], par[_P_ZEQ], eff, registered)
     return q_y / par[_P_MASS] + ey, _hinge_acceleration(q_t, inertia, d_inertia, thetadot) + et
 
 
 @nb.njit(cache=True)
 def field_off_acceleration(y, ydot, theta, thetadot, args):
     """Compiled (yddot, thetaddot) of one state with the field off (``args`` built with ``field_on=False``)."""
-    par, eff = args[6], args[7]
+    par, eff, registered = args[6], args[7], args[8]
     inertia, d_inertia = _inertia(theta, par)
-    ey, et = packed_effect_accelerations(y, ydot, theta, thetadot, par[_P_K], par[_P_ZEQ], eff)
+    ey, et = packed_effect_accelerations(y, ydot, theta, thetadot, par[_P_K], par[_P_ZEQ], eff, registered)
     return -par[_P_G] + ey, _hinge_acceleration(0.0, inertia, d_inertia, thetadot) + et
 
 

@@ -1,12 +1,16 @@
 """The unmodelled effects of docs/conventions.md section 5: names, parameters, formulas, parsing, composition."""
+from dataclasses import dataclass
+from typing import Callable, ClassVar
+
 import numpy as np
 import pytest
 
 from acousim.dynamics import DimerDynamics
 from acousim.air_damping import hinge_damping_shape
-from acousim.effects import (EFFECT_TYPES, PACKED_PARAMETERS, AirDamping, EffectError, EffectSet, LinearDamping,
-                             MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling, packed_effect_accelerations,
-                             parse_effect)
+from acousim.effects import (EFFECT_TYPES, PACKED_PARAMETERS, AirDamping, Effect, EffectError, EffectSet,
+                             LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling,
+                             packed_effect_accelerations, packed_parameters, parse_effect, register_effect,
+                             registered_effect_kernels)
 from acousim.surrogate import cached_surrogate
 
 K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
@@ -144,7 +148,7 @@ def test_compiled_sum_uses_every_effect_definition(name):
     effect = next(e for e in EXAMPLES if e.name == name)
     packed = EffectSet((effect,)).packed()
     for y, yd, th, thd in zip(*_states(7, 10)):
-        got = packed_effect_accelerations(y, yd, th, thd, K, Z_EQ, packed)
+        got = packed_effect_accelerations(y, yd, th, thd, K, Z_EQ, packed, ())
         exp = effect.accelerations(y, yd, th, thd, K, Z_EQ)
         # same columns, same products; only the order of the additions of zeros may differ
         np.testing.assert_allclose(got, [float(exp[0]), float(exp[1])], rtol=1e-14, atol=1e-300)
@@ -229,3 +233,66 @@ def test_air_damping_is_computed_not_fitted():
     e = parse_effect("air_damping:gamma_y=0.5,gamma_theta=1.0")
     ay, at = e.accelerations(0.0, 0.1, 0.0, 2.0, K, Z_EQ)
     assert (float(ay), float(at)) == (-0.05, -2.0)
+
+
+# ---- a new effect through the registry alone --------------------------------------------------------------------
+
+def _hardening_columns(y, ydot, theta, thetadot, wavenumber, z_eq):
+    """A cubic stiffening of the trap and of the hinge: (-a y^3, -b theta^3)."""
+    return (-y * y * y, 0.0), (0.0, -theta * theta * theta)
+
+
+@dataclass(frozen=True)
+class CubicHardening(Effect):
+    """A test effect that is not in docs/conventions.md: yddot += -a y^3, thetaddot += -b theta^3."""
+
+    name: ClassVar[str] = "cubic_hardening"
+    columns: ClassVar[Callable] = staticmethod(_hardening_columns)
+    a: float = 0.0
+    b: float = 0.0
+
+
+@pytest.fixture
+def registered_hardening():
+    register_effect(CubicHardening)
+    yield CubicHardening
+    EFFECT_TYPES.pop(CubicHardening.name)
+
+
+def test_register_effect_refuses_what_it_cannot_integrate(registered_hardening):
+    with pytest.raises(EffectError, match="registered already"):
+        register_effect(CubicHardening)
+    with pytest.raises(EffectError, match="not an Effect subclass"):
+        register_effect(dict)
+    assert parse_effect("cubic_hardening:b=2").params() == {"a": 0.0, "b": 2.0}
+
+
+def test_a_registered_effect_gets_the_slots_after_the_compiled_ones(registered_hardening):
+    assert packed_parameters() == PACKED_PARAMETERS + (("cubic_hardening", "a"), ("cubic_hardening", "b"))
+    s = EffectSet((PairScattering(kappa=3.0), CubicHardening(a=1e9, b=40.0)))
+    assert s.packed().tolist()[-2:] == [1e9, 40.0]
+    assert s.packed()[PACKED_PARAMETERS.index(("pair_scattering", "kappa"))] == 3.0
+    assert len(registered_effect_kernels()) == 1
+
+
+def test_a_registered_effect_is_integrated_by_the_equations_of_motion(registered_hardening):
+    """No line of code beyond the class and its registration: the compiled equations of motion (the twin's) add
+    the new effect exactly as its numpy definition does, beside a compiled one."""
+    effect = CubicHardening(a=3e9, b=4e4)
+    effects = EffectSet((LinearDamping(gamma_y=0.3, gamma_theta=0.8), effect))
+    packed, kernels = effects.packed(), registered_effect_kernels()
+    for y, yd, th, thd in zip(*_states(8, 11)):
+        got = packed_effect_accelerations(y, yd, th, thd, K, Z_EQ, packed, kernels)
+        exp = effects.accelerations(y, yd, th, thd, K, Z_EQ)
+        # the same products summed in another order: round-off only
+        np.testing.assert_allclose(got, [float(exp[0]), float(exp[1])], rtol=1e-13, atol=1e-300)
+    dyn = DimerDynamics(cached_surrogate(), effects)
+    bare = DimerDynamics(cached_surrogate(), EffectSet((LinearDamping(gamma_y=0.3, gamma_theta=0.8),)))
+    x = np.array([1e-4, 0.01, 0.4, 3.0])
+    d_new, d_bare = dyn.rhs(0.0, x), bare.rhs(0.0, x)
+    # the difference of the two right-hand sides is exactly the new effect's term (-a y^3, -b theta^3)
+    np.testing.assert_allclose(d_new[[1, 3]] - d_bare[[1, 3]], [-3e9 * 1e-12, -4e4 * 0.064], rtol=1e-9)
+    # and the twin's integrator runs it: the hardened hinge, started at rest at theta = 0.4, keeps its energy
+    # bounded and swings back through theta = 0 within a period
+    traj = dyn.integrate([0.0, 0.0, 0.4, 0.0], 0.2, 1e-4)
+    assert traj.ok and traj.state[:, 2].min() < 0.0
