@@ -51,7 +51,7 @@ demo-video: venv
 	@echo "[demo-video 1/3] digital twin with its camera: 4 runs of 2 s as 180 x 150 px video (OUT/video_twin/video/)"
 	$(BIN)/python -m acousim simulate --preset paper-like --runs 4 --duration 2 --seed 3 --video --out $(OUT)/video_twin --force --no-progress
 	@echo "[demo-video 2/3] tracking: video to runs of (t, y, theta)"
-	$(BIN)/python -m tracking $(OUT)/video_twin/video --out $(OUT)/tracked --force
+	$(BIN)/python -m tracking track $(OUT)/video_twin/video --out $(OUT)/tracked --force
 	@echo "[demo-video 3/3] fit, compare, diagnose and report, with the tracking's section"
 	$(BIN)/python -m validation report $(OUT)/tracked --out $(OUT)/report_video
 	@echo "written to $(OUT)/: open $(OUT)/report_video/report.html"

@@ -7,30 +7,25 @@ from __future__ import annotations
 
 import argparse
 
-from cubedimer.cli import OneLineParser, run_cli
+from cubedimer.cli import command_parser, run_cli
 
-__all__ = ["main", "build_parser"]
+from . import atlas_cli, simulate_cli, sweep_cli
+from .fullwave import cli as fullwave_cli
+from .fullwave import convergence, family_cli, table_cli
+
+__all__ = ["main", "build_parser", "COMMANDS"]
+
+#: The commands of ``python -m acousim``, in the order of the help.
+COMMANDS = (sweep_cli.add_parser, simulate_cli.add_parser, fullwave_cli.add_parser, family_cli.add_parser,
+            table_cli.add_parser, convergence.add_parser, atlas_cli.add_parser)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import atlas_cli, simulate_cli, sweep_cli
-    from .fullwave import cli as fullwave_cli
-    from .fullwave import convergence, family_cli, table_cli
-
-    parser = OneLineParser(
-        prog="python -m acousim",
-        description="The physics of a levitated cube dimer (the Gor'kov and the full-wave force models): static "
-        "force/torque sweeps, synthetic experiments (digital twin), full-wave forces and tables.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
-    sweep_cli.add_parser(sub)
-    simulate_cli.add_parser(sub)
-    fullwave_cli.add_parser(sub)
-    family_cli.add_parser(sub)
-    table_cli.add_parser(sub)
-    convergence.add_parser(sub)
-    atlas_cli.add_parser(sub)
-    return parser
+    """The parser of ``python -m acousim`` (one ``add_parser`` function per command)."""
+    return command_parser("python -m acousim",
+                          "The physics of a levitated cube dimer (the Gor'kov and the full-wave force models): static "
+                          "force/torque sweeps, synthetic experiments (digital twin), full-wave forces and tables. "
+                          "Conventions: docs/conventions.md; files: docs/formats.md.", COMMANDS)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -135,7 +135,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     v = p.add_argument_group("video (--video)", "The frames a high-speed camera looking along the hinge line records "
                              "(orthographic side view, Gaussian point-spread function, white image noise), written "
                              "per run to OUT/video/runNN.tif with the true t, y, theta in OUT/video/runNN_truth.csv; "
-                             "the frame rate is --fps. Read them back with python -m tracking.")
+                             "the frame rate is --fps. Read them back with python -m tracking track.")
     v.add_argument("--video", action="store_true", help="also write every run's camera frames")
     v.add_argument("--pixel-size", type=float, default=10e-6, metavar="M",
                    help="pixel size in the object plane [m] (default 10e-6)")

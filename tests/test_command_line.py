@@ -80,10 +80,14 @@ def test_library_code_neither_configures_logging_nor_subclasses_the_command_line
 @pytest.mark.parametrize("package", PACKAGES)
 def test_every_command_module_builds_its_commands_from_add_parser_functions(package):
     """One command-line shape: every sub-command of a package is registered by an ``add_parser(subparsers)``
-    function, so the parser has sub-commands (tracking's single command is the package's one exception)."""
-    parser = importlib.import_module(f"{package}.cli").build_parser()
+    function listed in the command module's ``COMMANDS`` and added by :func:`cubedimer.cli.command_parser`."""
+    module = importlib.import_module(f"{package}.cli")
+    parser = module.build_parser()
     subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-    if package == "tracking":
-        assert not subs  # python -m tracking VIDEO: one command, no sub-commands
-    else:
-        assert len(subs) == 1 and len(subs[0].choices) >= 3
+    assert len(subs) == 1 and len(subs[0].choices) >= 2
+    # every command comes from one add_parser function of COMMANDS: a parser built from COMMANDS alone has them all
+    from cubedimer.cli import command_parser
+
+    rebuilt = command_parser("x", "x", module.COMMANDS)
+    assert [a for a in rebuilt._actions if isinstance(a, argparse._SubParsersAction)][0].choices.keys() == \
+        subs[0].choices.keys()

@@ -1,15 +1,22 @@
-"""``python -m tracking VIDEO --fps F --pixel-size P --out RUN.csv``: camera frames to a run (docs/formats.md, docs/tracking.md).
+"""Command line of tracking: ``python -m tracking {track,inspect} ...`` (docs/formats.md, docs/tracking.md).
 
-VIDEO is a video file, a multi-page TIFF, a Phantom ``.cine`` or a folder of images (one recording); with
-``--out RUN.csv`` it gives ``RUN.csv`` (``t, y, theta``, empty where the dimer could not be measured),
+``python -m tracking track VIDEO --fps F --pixel-size P --out RUN.csv``: camera frames to a run.  VIDEO is a
+video file, a multi-page TIFF, a Phantom ``.cine`` or a folder of images (one recording); with ``--out RUN.csv``
+it gives ``RUN.csv`` (``t, y, theta``, empty where the dimer could not be measured),
 ``RUN.json`` (pixel size, frame rate, y origin, counts of frames measured and not, per-frame quality,
 noise estimates) and ``RUN.frame.png`` (the example frame).  A folder of recordings (video files, ``.cine``
 files, multi-page TIFFs, sub-folders of images) with ``--out DIR`` gives a data set: those files per
 recording plus ``meta.json``; the recordings are tracked through :func:`cubedimer.executor.map_ordered`
 (``--workers``, ``--scheduler``).  See ``docs/tracking.md``.
 
+``python -m tracking inspect VIDEO``: what the file records (frames, size, grey levels, frame rate, pixel size,
+levitation row) and what the calibration of ``track`` finds in it (polarity, contrast, edge blur, the silhouette's
+area and the cube side it implies), without measuring every frame and without writing anything: the check to run
+before tracking a new camera's files.
+
 Bad input (not a recording, frames of different sizes, no dimer in any frame, an unknown frame rate or
-pixel size) gets a one-line error, exit status 2 and no output.
+pixel size) gets a one-line error, exit status 2 and no output.  Each command is an ``add_parser(subparsers)``
+function, listed in :data:`COMMANDS`; the runner is :func:`cubedimer.cli.run_cli`.
 """
 from __future__ import annotations
 
@@ -18,25 +25,30 @@ import logging
 import sys
 from pathlib import Path
 
-from cubedimer.cli import (OneLineParser, UserInputError, add_executor_arguments, executor_config, positive_float,
+from cubedimer.cli import (UserInputError, add_executor_arguments, command_parser, executor_config, positive_float,
                            positive_int, prepare_output_dir, prepare_output_file, run_cli)
 
-__all__ = ["main", "build_parser", "run"]
+__all__ = ["main", "build_parser", "run", "COMMANDS", "add_track_parser", "add_inspect_parser"]
 
 logger = logging.getLogger("tracking")
 
 
-def build_parser() -> argparse.ArgumentParser:
+_VIDEO_HELP = ("video file (mp4, avi, mov, mkv, ...), multi-page TIFF, Phantom .cine, a folder of images (one "
+               "recording), or a folder of recordings (with --out DIR)")
+
+
+def add_track_parser(sub) -> None:
+    """``track``: see its --help."""
     from .track import POLARITIES, UP
 
-    p = OneLineParser(
-        prog="python -m tracking",
+    p = sub.add_parser(
+        "track",
+        help="camera frames to runs of (t, y, theta)",
         description="Measure the dimer's centre-of-mass height y and bending angle theta = (alpha - beta) / pi in every "
         "frame of a high-speed recording (camera looking along the hinge line; docs/tracking.md) and write a "
         "docs/formats.md run (CSV + RUN.json), or a data set from a folder of recordings.",
     )
-    p.add_argument("video", metavar="VIDEO", help="video file (mp4, avi, mov, mkv, ...), multi-page TIFF, Phantom "
-                   ".cine, a folder of images (one recording), or a folder of recordings (with --out DIR)")
+    p.add_argument("video", metavar="VIDEO", help=_VIDEO_HELP)
     p.add_argument("--out", required=True, metavar="RUN.csv|DIR",
                    help="the run's CSV (RUN.json and RUN.frame.png are written beside it), or a data-set folder")
     p.add_argument("--fps", type=positive_float, default=None,
@@ -71,7 +83,39 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="warnings and errors only")
     add_executor_arguments(p, "Each recording of a folder is one task.")
     p.set_defaults(func=run)
-    return p
+
+
+def add_inspect_parser(sub) -> None:
+    """``inspect``: see its --help."""
+    from .track import POLARITIES
+
+    p = sub.add_parser(
+        "inspect",
+        help="what a recording holds and what the tracking's calibration finds in it (writes nothing)",
+        description="Read one recording and report what the file records (frames, frame size, grey levels, frame rate, "
+        "pixel size, levitation row) and what the calibration of `track` finds in frames sampled over it: the "
+        "polarity, the contrast against the background noise, the edge blur, the silhouette's area and the cube "
+        "side it implies. Nothing is measured frame by frame and nothing is written: run it on a new camera's "
+        "files before `track`, to see which of --fps and --pixel-size `track` will need.",
+    )
+    p.add_argument("video", metavar="VIDEO", help="one recording: video file, multi-page TIFF, Phantom .cine or a "
+                   "folder of images")
+    p.add_argument("--polarity", choices=POLARITIES, default="auto",
+                   help="dark cubes on a bright background, bright on dark, or detect (default)")
+    p.add_argument("--quiet", action="store_true", help="warnings and errors only")
+    p.set_defaults(func=inspect)
+
+
+#: The commands of ``python -m tracking``, in the order of the help.
+COMMANDS = (add_track_parser, add_inspect_parser)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m tracking`` (one ``add_parser`` function per command)."""
+    return command_parser("python -m tracking",
+                          "Camera frames of a levitated cube dimer to runs of (t, y, theta): `track` measures, "
+                          "`inspect` shows what a recording holds. Conventions: docs/conventions.md; files: "
+                          "docs/formats.md; method and accuracy: docs/tracking.md.", COMMANDS)
 
 
 def _config(a: argparse.Namespace):
@@ -94,8 +138,40 @@ def _track_task(item):
         return str(exc)
 
 
+def inspect(a: argparse.Namespace) -> int:
+    """``python -m tracking inspect``: prints the recording's summary to standard output; returns the exit code."""
+    import numpy as np
+
+    from .recording import TrackingError, read_recording
+    from .track import TrackConfig, calibrate
+
+    src = Path(a.video)
+    if not src.exists():
+        raise TrackingError(f"{src}: does not exist")
+    rec = read_recording(src)
+    n, h, w = rec.frames.shape
+    frames = rec.frames
+    lines = [f"{src}: {rec.format}, {n} frames of {w} x {h} px, {frames.dtype} grey levels "
+             f"{float(np.min(frames[0])):g}-{float(np.max(frames[0])):g} in the first frame"]
+    lines.append("frame rate: " + (f"{rec.fps:g} frames/s (recorded in the file)" if rec.fps else
+                                   "not recorded: give track --fps"))
+    lines.append("pixel size: " + (f"{rec.pixel_size:g} m/px (recorded in the file)" if rec.pixel_size else
+                                   "not recorded: give track --pixel-size"))
+    if rec.levitation_row is not None:
+        lines.append(f"levitation row: {rec.levitation_row:g} px (recorded in the file)")
+    cal = calibrate(frames, TrackConfig(polarity=a.polarity))
+    side_px = float(np.sqrt(cal.area_px2 / 2.0))  # two cubes of side s seen along the hinge: area 2 s^2
+    lines.append(f"polarity: {cal.polarity} cubes ({cal.polarity_from}); contrast {cal.contrast:.4g} grey levels "
+                 f"over a background of {cal.background:.4g}")
+    lines.append(f"silhouette: {cal.area_px2:.0f} px^2 in {cal.frames_used} sampled frames, a cube side of "
+                 f"{side_px:.1f} px" + (f" = {side_px * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else ""))
+    lines.append(f"edge blur: {cal.edge_blur_px:.2f} px (track's edge window: {cal.edge_window_px} px)")
+    print("\n".join(lines))
+    return 0
+
+
 def run(a: argparse.Namespace) -> int:
-    """Entry point of ``python -m tracking``; returns the exit code."""
+    """``python -m tracking track``; returns the exit code."""
     from .output import write_dataset, write_run
     from .recording import TrackingError, find_recordings, read_recording
     from .track import track_recording

@@ -19,7 +19,7 @@ SHORT = LoadConfig(min_periods=0, glitches=None)
 
 
 def _fail(argv, capsys):
-    code = main([str(a) for a in argv])
+    code = main(["track"] + [str(a) for a in argv])
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert err.startswith("error: ") and "\n" not in err
@@ -31,7 +31,7 @@ def test_a_tiff_that_records_its_settings_gives_run_csv_and_run_json(tmp_path, w
     lost = [40, 41]
     src = write_tiff("run07.tif", render(y, theta, CAM, seed=41, lost=lost), CAM)
     out = tmp_path / "out" / "run07.csv"
-    assert main([str(src), "--out", str(out)]) == 0
+    assert main(["track", str(src), "--out", str(out)]) == 0
     text = out.read_text().splitlines()
     assert any(line.startswith("# units:") for line in text) and "t,y,theta" in text
     assert text[text.index("t,y,theta") + 1 + 40] == "0.020000000,,"  # a lost frame: empty values
@@ -53,7 +53,7 @@ def test_origin_from_the_first_frames_when_the_file_records_none(tmp_path, write
     y[:50] = 0.0  # levitation before the drop
     src = write_tiff("rec.tif", render(y, theta, CAM, seed=42), CAM, record=False)
     out = tmp_path / "rec.csv"
-    assert main([str(src), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5"]) == 0
+    assert main(["track", str(src), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5"]) == 0
     run = json.loads(out.with_suffix(".json").read_text())
     assert abs(run["y_origin"]["row_px"] - CAM.origin[1]) < 0.02  # median of 50 frames of 0.01 px noise
     assert run["y_origin"]["from"].startswith("median centre-of-mass row of the 50 measured frames")
@@ -66,7 +66,7 @@ def test_folder_of_recordings_gives_a_dataset_the_loader_reads(tmp_path, write_t
         write_tiff(f"run{k:02d}.tif", render(y, theta, CAM, seed=50 + k), CAM)
     (tmp_path / "notes.txt").write_text("not a recording")
     out = tmp_path / "tracked"
-    assert main([str(tmp_path), "--out", str(out), "--workers", "1"]) == 0
+    assert main(["track", str(tmp_path), "--out", str(out), "--workers", "1"]) == 0
     ds = load_dataset(out, strict=True)
     assert [r.name for r in ds.runs] == ["run01.csv", "run02.csv"]
     meta = json.loads((out / "meta.json").read_text())
@@ -93,7 +93,7 @@ def test_lossless_video_file_through_ffmpeg(tmp_path, capsys):
     # the container's 25 fps is a playback rate, not the camera's: the frame rate must be given
     err = _fail([path, "--out", out, "--pixel-size", "1e-5"], capsys)
     assert "unknown frame rate" in err and not out.exists()
-    assert main([str(path), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
+    assert main(["track", str(path), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
                  str(CAM.origin[1])]) == 0
     run = load_run(out, SHORT)
     assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6 and np.sqrt(np.mean((run.theta - theta) ** 2)) < 0.005
@@ -108,7 +108,7 @@ def test_folder_of_images_is_one_recording(tmp_path):
     for i, f in enumerate(render(y, theta, CAM, seed=44)):
         iio.imwrite(folder / f"img{i}.png", f)  # natural order: img2 before img10
     out = tmp_path / "frames.csv"
-    assert main([str(folder), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
+    assert main(["track", str(folder), "--out", str(out), "--fps", "2000", "--pixel-size", "1e-5", "--origin-row",
                  str(CAM.origin[1])]) == 0
     run = load_run(out, SHORT)
     assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6
@@ -172,8 +172,35 @@ def test_phantom_cine_records_its_frame_rate(tmp_path):
     src = tmp_path / "shot.cine"
     write_cine(src, render(y, theta, CAM, seed=48), 2000.0)
     out = tmp_path / "shot.csv"
-    assert main([str(src), "--out", str(out), "--pixel-size", "1e-5", "--origin-row", str(CAM.origin[1])]) == 0
+    assert main(["track", str(src), "--out", str(out), "--pixel-size", "1e-5", "--origin-row", str(CAM.origin[1])]) == 0
     info = json.loads(out.with_suffix(".json").read_text())
     assert info["format"] == "cine" and info["frame_rate_hz"] == 2000.0 and info["frame_rate_from"] == "recorded in the file"
     run = load_run(out, SHORT)
     assert np.sqrt(np.mean((run.y - y) ** 2)) < 1e-6 and np.sqrt(np.mean((run.theta - theta) ** 2)) < 0.005
+
+
+@pytest.mark.parametrize("record", [True, False])
+def test_inspect_reports_what_the_file_records_and_the_calibration(tmp_path, write_tiff, capsys, record):
+    """``inspect`` reads, calibrates and writes nothing: the recorded settings (or what track will need), the
+    detected polarity and the cube side from the silhouette (500 um cubes at 10 um/px: 50 px)."""
+    _, y, theta = motion(60, seed=43)
+    src = write_tiff("clip.tif", render(y, theta, CAM, seed=43), CAM, record=record)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(["inspect", str(src)]) == 0
+    out = capsys.readouterr().out
+    assert "60 frames" in out and "polarity: dark cubes (detected)" in out
+    if record:
+        assert f"{FPS:g} frames/s (recorded in the file)" in out and "levitation row" in out
+        side_um = float(out.split(" px = ")[1].split(" um")[0])
+        assert abs(side_um - 500.0) <= 5.0  # the same 1 % as the tracked run's side (test above)
+    else:
+        assert "not recorded: give track --fps" in out and "not recorded: give track --pixel-size" in out
+    side_px = float(out.split("a cube side of ")[1].split(" px")[0])
+    assert abs(side_px - 50.0) <= 0.5
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
+def test_inspect_refuses_a_missing_file(tmp_path, capsys):
+    code = main(["inspect", str(tmp_path / "none.tif")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err == f"error: {tmp_path / 'none.tif'}: does not exist"

@@ -23,7 +23,7 @@ def test_simulate_video_then_track_recovers_the_true_motion(tmp_path):
     lost = truth["lost_frames_per_run"]["run01"]
     assert len(lost) == 3
     tracked = tmp_path / "run01.csv"
-    assert tracking_main([str(out / "video" / "run01.tif"), "--out", str(tracked)]) == 0  # the file records fps, pixel size
+    assert tracking_main(["track", str(out / "video" / "run01.tif"), "--out", str(tracked)]) == 0  # the file records fps, pixel size
     info = json.loads(tracked.with_suffix(".json").read_text())
     # a black lost frame on a dark background shows no particle
     assert info["orientation"]["polarity"] == "bright" and info["not_measured"] == {"no_dimer": 3}

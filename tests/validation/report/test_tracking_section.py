@@ -18,7 +18,7 @@ def test_a_tracked_dataset_gets_the_section_with_an_annotated_frame(tmp_path):
         frames, _ = record_video(t, 60e-6 * np.cos(2 * np.pi * 22 * t + k), 0.4 * np.sin(2 * np.pi * 3 * t + k), 500e-6, cam, k)
         write_video_tiff(videos / f"run{k}.tif", frames, 2000.0, cam)
     data = tmp_path / "data"
-    assert track([str(videos), "--out", str(data), "--workers", "1"]) == 0
+    assert track(["track", str(videos), "--out", str(data), "--workers", "1"]) == 0
     sec = tracking_section(data, tmp_path / "figs")
     meta = json.loads((data / "meta.json").read_text())["tracking"]
     assert sec.id == "tracking"
