@@ -12,7 +12,8 @@ Gor'kov potential density, the tetrahedral quadrature or one class per effect, a
   :func:`register_force_model`, :func:`force_model_names`), with the full-wave model of any lab dimer from the
   table family (:mod:`acousim.fullwave`)
 * equations of motion: :class:`DimerDynamics` (force model plus effects, integration); the effects of
-  docs/conventions.md section 5: the registry :data:`EFFECT_TYPES`, :class:`EffectSet`, :func:`parse_effect`;
+  docs/conventions.md section 5: the registry :data:`EFFECT_TYPES` (:func:`register_effect` adds one),
+  :class:`EffectSet`, :func:`parse_effect`;
   the air's damping from geometry (:func:`air_damping_rates`, :func:`air_damping_for`, docs/damping.md)
 * the digital twin (:mod:`acousim.twin`): :class:`TwinConfig`, :class:`Camera`, :class:`DropProtocol`,
   :func:`simulate_run`, :func:`simulate_dataset`, the ``PAPER`` (physics only) and ``PAPER_LIKE`` (tuned) presets and :class:`TwinError`
@@ -26,7 +27,7 @@ from .medium import Medium, ParticleMaterial
 from .sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 from .force_model import ForceModel
 from .surrogate import ForceSurrogate, build_surrogate, cached_surrogate
-from .effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect
+from .effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
 from .dynamics import DimerDynamics
 from .air_damping import air_damping_rates
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
@@ -39,6 +40,6 @@ __all__ = [
     "ForceModel", "ForceSurrogate", "build_surrogate", "cached_surrogate",
     "ExperimentConditions", "StaticModel", "ForceModelType", "register_force_model", "force_model_names",
     "static_model", "dynamic_model",
-    "DimerDynamics", "EFFECT_TYPES", "EffectSet", "parse_effect", "air_damping_rates", "air_damping_for",
+    "DimerDynamics", "EFFECT_TYPES", "EffectSet", "parse_effect", "register_effect", "air_damping_rates", "air_damping_for",
     "PAPER", "PAPER_LIKE", "Camera", "DropProtocol", "TwinConfig", "simulate_dataset", "simulate_run", "TwinError",
 ]

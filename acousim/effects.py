@@ -30,12 +30,12 @@ accelerations are ``sum_j p_j column_j``.  The same function serves
   :meth:`EffectSet.regressors`, :meth:`EffectSet.accelerations`), on arrays;
 * the linear fits of the diagnosis (:meth:`Effect.regressors`: the design-matrix columns);
 * the compiled equations of motion: numba compiles the same source for scalars, and
-  :func:`packed_effect_accelerations` sums every effect over the flat parameter vector
+  :func:`acousim.compiled_effects.packed_effect_accelerations` sums every effect over the flat parameter vector
   :meth:`EffectSet.packed` (order :func:`packed_parameters`; absent effects contribute zeros).
 
 A new effect is a subclass with its ``columns`` function, registered with :func:`register_effect`.  Nothing else
-is needed for the twin to integrate it: the compiled sum calls the compiled ``columns`` of every registered effect
-that has no line of its own (:func:`registered_effect_kernels`).  The effects of docs/conventions.md have their own
+is needed for the twin to integrate it: the compiled sum (:mod:`acousim.compiled_effects`) calls the compiled
+``columns`` of every registered effect that has no line of its own.  The effects of docs/conventions.md have their own
 lines (:data:`COMPILED_EFFECTS`), so that the equations of motion with them are compiled once and cached on disk; a
 new effect that is used often earns such a line too (the tests compare the compiled sum with the numpy one for
 every effect type).
@@ -47,7 +47,8 @@ With the acoustic field off only the air's effects (``acts_without_field``: ``li
 docs/damping.md), with the hinge's theta-dependence ``S(theta)`` of
 :func:`acousim.air_damping.hinge_damping_shape`.  It is not linear in ``gap_ratio`` and is not a candidate of
 the diagnosis (``candidate = False``; its fitted counterparts are ``linear_damping`` and ``quadratic_drag``):
-it has no :meth:`Effect.regressors`, and its compiled term is its own line of :func:`packed_effect_accelerations`.
+it has no :meth:`Effect.regressors`, and its compiled term is its own line of
+:func:`acousim.compiled_effects.packed_effect_accelerations`.
 """
 from __future__ import annotations
 
@@ -55,9 +56,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Callable, ClassVar, Iterable, Mapping
 
-import numba as nb
 import numpy as np
-from numba.extending import overload
 from numpy.typing import ArrayLike, NDArray
 
 from .air_damping import air_damping_rates, hinge_damping_shape
@@ -75,11 +74,9 @@ __all__ = [
     "COMPILED_EFFECTS",
     "register_effect",
     "packed_parameters",
-    "registered_effect_kernels",
     "air_damping_for",
     "PACKED_PARAMETERS",
     "parse_effect",
-    "packed_effect_accelerations",
     "EffectError",
 ]
 
@@ -305,7 +302,8 @@ EFFECT_TYPES: dict[str, type[Effect]] = {
                               AirDamping)
 }
 
-#: The effects with a line of their own in :func:`packed_effect_accelerations` (compiled once and cached on disk).
+#: The effects with a line of their own in :func:`acousim.compiled_effects.packed_effect_accelerations` (compiled
+#: once and cached on disk).
 COMPILED_EFFECTS: tuple[str, ...] = tuple(EFFECT_TYPES)
 
 #: (effect name, parameter name) of the compiled effects' slots, the start of every :meth:`EffectSet.packed`.
@@ -319,7 +317,7 @@ def register_effect(cls: type[Effect]) -> type[Effect]:
 
     The class needs a new ``name``, float parameters as dataclass fields and a ``columns`` function that numba can
     compile (module docstring).  From then on the equations of motion and the twin integrate it (through
-    :func:`registered_effect_kernels`), the diagnosis fits it when ``candidate`` is true, and ``--effect NAME:...``
+    :func:`acousim.compiled_effects.registered_effect_kernels`), the diagnosis fits it when ``candidate`` is true, and ``--effect NAME:...``
     parses it.
 
     Raises
@@ -342,92 +340,6 @@ def packed_parameters() -> tuple[tuple[str, str], ...]:
     the parameters of every registered effect without a compiled line, in registry order."""
     return PACKED_PARAMETERS + tuple((name, p) for name, cls in EFFECT_TYPES.items() if name not in COMPILED_EFFECTS
                                      for p in cls.parameter_names())
-
-
-_REGISTERED_KERNELS: dict[type, Callable] = {}
-
-
-def registered_effect_kernels() -> tuple:
-    """The compiled ``columns`` of every registered effect without a line in :func:`packed_effect_accelerations`,
-    in registry order (the last argument of that function; empty for the effects of docs/conventions.md).
-
-    Each is compiled once per process.  A kernel passed this way is called through numba's first-class functions,
-    so the equations of motion that take it compile anew in each process; a line in
-    :func:`packed_effect_accelerations` (and the name in :data:`COMPILED_EFFECTS`) makes an effect as fast as the
-    built-in ones.
-    """
-    out = []
-    for name, cls in EFFECT_TYPES.items():
-        if name in COMPILED_EFFECTS:
-            continue
-        if cls not in _REGISTERED_KERNELS:
-            _REGISTERED_KERNELS[cls] = nb.njit(cls.columns)
-        out.append(_REGISTERED_KERNELS[cls])
-    return tuple(out)
-
-
-# ---------------------------------------------------------------------- the compiled sum
-_linear_damping_kernel = nb.njit(cache=True)(_linear_damping_columns)
-_quadratic_drag_kernel = nb.njit(cache=True)(_quadratic_drag_columns)
-_pair_scattering_kernel = nb.njit(cache=True)(_pair_scattering_columns)
-_mirror_asymmetry_kernel = nb.njit(cache=True)(_mirror_asymmetry_columns)
-_velocity_coupling_kernel = nb.njit(cache=True)(_velocity_coupling_columns)
-_air_damping_kernel = nb.njit(cache=True)(_air_damping_terms)
-
-
-@nb.njit(cache=True)
-def _add_columns(ay, at, cy, ct, p, i0):
-    """(ay + sum_j p[i0 + j] cy[j], at + sum_j p[i0 + j] ct[j], i0 + number of columns)."""
-    for j in range(len(cy)):
-        ay += p[i0 + j] * cy[j]
-        at += p[i0 + j] * ct[j]
-    return ay, at, i0 + len(cy)
-
-
-def _registered_effects_sum(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
-    """Compiled only (its implementation is the overload below): the summed terms of the registered effects'
-    ``kernels`` from slot ``i0`` of ``packed``."""
-    raise NotImplementedError("compiled only")
-
-
-@overload(_registered_effects_sum)
-def _registered_effects_sum_impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
-    # one specialisation per tuple type: the first kernel, then the rest (recursion on the tuple's type)
-    if len(kernels) == 0:
-        def impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
-            return 0.0, 0.0
-        return impl
-
-    def impl(kernels, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0):
-        cy, ct = kernels[0](y, ydot, theta, thetadot, wavenumber, z_eq)
-        ay, at, i1 = _add_columns(0.0, 0.0, cy, ct, packed, i0)
-        by, bt = _registered_effects_sum(kernels[1:], y, ydot, theta, thetadot, wavenumber, z_eq, packed, i1)
-        return ay + by, at + bt
-    return impl
-
-
-@nb.njit(cache=True)
-def packed_effect_accelerations(y, ydot, theta, thetadot, wavenumber, z_eq, packed, registered):
-    """Compiled: the summed effect terms (yddot, thetaddot) of one state for the parameter vector
-    ``packed`` (:meth:`EffectSet.packed`, order :func:`packed_parameters`) and the kernels of the registered
-    effects without a line here (:func:`registered_effect_kernels`; ``()`` when there are none)."""
-    ay = 0.0
-    at = 0.0
-    i0 = 0
-    cy, ct = _linear_damping_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
-    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    cy, ct = _quadratic_drag_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
-    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    cy, ct = _pair_scattering_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
-    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    cy, ct = _mirror_asymmetry_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
-    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    cy, ct = _velocity_coupling_kernel(y, ydot, theta, thetadot, wavenumber, z_eq)
-    ay, at, i0 = _add_columns(ay, at, cy, ct, packed, i0)
-    a, b = _air_damping_kernel(ydot, theta, thetadot, packed[i0], packed[i0 + 1], packed[i0 + 2], packed[i0 + 3],
-                               packed[i0 + 4])
-    ry, rt = _registered_effects_sum(registered, y, ydot, theta, thetadot, wavenumber, z_eq, packed, i0 + 5)
-    return ay + a + ry, at + b + rt
 
 
 def parse_effect(spec: str) -> Effect:

@@ -22,7 +22,7 @@ This module is the one place where a force model and effects become acceleration
   with ``args = kernel_arguments(force_model, effects, field_on)``: the six Chebyshev series of
   :meth:`~acousim.force_model.ForceModel.force_coefficients`, the scalar parameters, the packed
   effect parameters (:meth:`~acousim.effects.EffectSet.packed`) and the compiled columns of the registered effects
-  beyond docs/conventions.md (:func:`~acousim.effects.registered_effect_kernels`, usually none).
+  beyond docs/conventions.md (:func:`~acousim.compiled_effects.registered_effect_kernels`, usually none).
 """
 from __future__ import annotations
 
@@ -30,7 +30,8 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .effects import EffectSet, packed_effect_accelerations, registered_effect_kernels
+from .compiled_effects import packed_effect_accelerations, registered_effect_kernels
+from .effects import EffectSet
 from .force_model import ForceModel
 
 __all__ = [

@@ -7,10 +7,10 @@ import pytest
 
 from acousim.dynamics import DimerDynamics
 from acousim.air_damping import hinge_damping_shape
+from acousim.compiled_effects import packed_effect_accelerations, registered_effect_kernels
 from acousim.effects import (EFFECT_TYPES, PACKED_PARAMETERS, AirDamping, Effect, EffectError, EffectSet,
                              LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling,
-                             packed_effect_accelerations, packed_parameters, parse_effect, register_effect,
-                             registered_effect_kernels)
+                             packed_parameters, parse_effect, register_effect)
 from acousim.surrogate import cached_surrogate
 
 K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
