@@ -9,12 +9,17 @@ Examples
 --------
 ::
 
-    python -m acousim simulate --runs 12 --seed 1 --out data/twin
+    python -m acousim simulate --runs 12 --seed 1 --out data/twin      # the air's computed damping only
+    python -m acousim simulate --runs 12 --seed 1 --no-air-damping --out data/inviscid
     python -m acousim simulate --preset paper-like --runs 20 --pressure-error 0.08 --out data/paper_like
     python -m acousim simulate --effect pair_scattering:kappa=12000 \\
         --effect linear_damping:gamma_y=0.3,gamma_theta=0.8 --duration 4 --fps 2000 \\
         --noise-y 1e-6 --noise-theta 0.005 --out data/two_effects
     python -m acousim simulate --preset paper-like --runs 4 --duration 2 --video --out data/video_twin
+
+Every twin has the air's drag computed from the dimer's geometry (effect ``air_damping``, docs/damping.md) unless
+``--no-air-damping`` is given or the preset leaves it out (``paper-like``, whose tuned linear damping is the total);
+``truth.json`` records ``"air_damping"`` (true or false) and the computed parameters under ``effects``.
 
 With ``--video`` each run's high-speed camera frames are written as well (``video/runNN.tif``, a
 multi-page TIFF that records its frame rate and pixel size, with the true motion in
@@ -86,7 +91,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         help="synthetic field-drop experiments (digital twin) written as a trajectory data set",
         description="Simulate field-drop experiments of the cube dimer (Gor'kov or full-wave model plus any of the "
         "docs/conventions.md section 5 effects) and write them as a docs/formats.md data set with truth.json. "
-        "Without --effect (and --preset) no effect is on; noise options of 0 give exact samples.",
+        "The air's drag computed from the dimer's geometry (effect air_damping, docs/damping.md) is on by default "
+        "(--no-air-damping: off); without --effect (and --preset) it is the only effect. Noise options of 0 give "
+        "exact samples.",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output data set folder (must be empty or absent)")
     p.add_argument("--runs", type=int, default=10, metavar="N", help="number of runs (default 10)")
@@ -95,9 +102,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="switch on an effect (repeatable), e.g. pair_scattering:kappa=12000; names and "
                    "parameters of docs/conventions.md section 5; parameters not given are 0")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
-                   help="start from a documented preset (effects, pressure, drop ranges and, for paper, the dimer, the "
-                   "full-wave model and the computed air damping; docs/twin.md); options given override it and --effect "
-                   "entries then add to or replace its effects")
+                   help="start from a documented preset (effects, pressure, drop ranges and, for paper, the dimer and the "
+                   "full-wave model; docs/twin.md); options given override it and --effect entries then add to or replace "
+                   "its effects. paper-like's tuned linear damping is its total damping: the air's computed drag is off there")
     p.add_argument("--duration", type=float, default=4.0, metavar="SEC", help="recorded time per run [s] (default 4)")
     p.add_argument("--fps", type=float, default=2000.0, help="camera frame rate [1/s] (default 2000)")
     p.add_argument("--noise-y", type=float, default=1e-6, metavar="METRES",
@@ -121,9 +128,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
     add_model_arguments(p, default=None)
-    p.add_argument("--air-damping", action="store_true",
-                   help="add the air's drag computed from the dimer's geometry and the air (effect air_damping, "
-                   "docs/damping.md; the paper preset has it on)")
+    p.add_argument("--no-air-damping", action="store_true",
+                   help="leave out the air's drag computed from the dimer's geometry and the air (effect air_damping, "
+                   "docs/damping.md), which every twin has by default: the inviscid dimer, damped only by --effect "
+                   "(the paper-like preset has it off, its linear damping being the tuned total)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
@@ -197,7 +205,7 @@ def build_config(args: argparse.Namespace):
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=model,
             gap=gap, edge_radius=args.edge_radius, frequency=frequency,
-            air_damping=bool(args.air_damping or dimer.get("air_damping", False)),
+            air_damping=not args.no_air_damping and dimer.get("air_damping", True),
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None

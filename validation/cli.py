@@ -207,7 +207,8 @@ def add_blind_parser(sub) -> None:
         description=(
             "Generate N data sets per case kind, diagnose each without access to its truth and score it. Candidate "
             "cases: a hidden random choice of no effect, one or two effects (random strengths from weak to strong) "
-            "and a random pressure error; scored by identification (exact-set rate by number of effects, per-effect "
+            "and a random pressure error, on the twin without the air's computed damping (the drawn effects are the "
+            "whole truth); scored by identification (exact-set rate by number of effects, per-effect "
             "precision and recall), parameter errors, shrink and false positives. Further kinds: an effect outside "
             "the candidates (not forced onto a candidate, leading discovered term), a drifting pressure (detected), "
             "tracking glitches (against the same case without them) and a file in the wrong units (skipped by name). "

@@ -130,8 +130,10 @@ class Camera:
 class TwinPreset:
     """A named set of effects, pressure, protocol and dimer (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
 
-    ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default);
-    ``air_damping`` adds the air's computed drag (:func:`acousim.effects.air_damping_for`).
+    ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default).
+    ``air_damping`` adds the air's computed drag (:func:`acousim.effects.air_damping_for`), as every twin does by
+    default; a preset whose ``effects`` hold a tuned *total* damping (a ``linear_damping`` standing for all of the
+    air's drag) sets it False, so that the air is not counted twice.
     """
 
     name: str
@@ -143,13 +145,13 @@ class TwinPreset:
     side: float | None = None
     gap: float | None = None
     frequency: float | None = None
-    air_damping: bool = False
+    air_damping: bool = True
 
     def dimer_settings(self) -> dict:
-        """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets)."""
+        """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets, and
+        ``air_damping`` always)."""
         out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency") if getattr(self, k) is not None}
-        if self.air_damping:
-            out["air_damping"] = True
+        out["air_damping"] = bool(self.air_damping)
         return out
 
 
@@ -190,7 +192,10 @@ class TwinConfig:
         Name of the preset these settings came from (bookkeeping only).
     air_damping : bool
         Add the air's drag computed from the dimer's geometry and the air (the effect ``air_damping``,
-        docs/damping.md) to ``effects``, unless they hold one already.
+        docs/damping.md) to ``effects``, unless they hold one already.  On by default: a twin of an experiment
+        in air has it, and ``effects`` then add what the air's drag misses.  False gives the inviscid dimer with
+        no damping beyond ``effects`` (what a study that draws its damping itself, or a tuned total damping such
+        as :data:`PAPER_LIKE`'s, needs).
     """
 
     runs: int = 10
@@ -209,7 +214,7 @@ class TwinConfig:
     gap: float | None = None
     edge_radius: float | None = None
     frequency: float = 45_650.0
-    air_damping: bool = False
+    air_damping: bool = True
 
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 1:
@@ -260,7 +265,8 @@ class TwinConfig:
         return int(round(self.duration * self.camera.fps))
 
     def to_dict(self) -> dict:
-        """JSON-ready settings (SI units); ``force_model`` is listed when it is not the Gor'kov default."""
+        """JSON-ready settings (SI units); ``force_model`` is listed when it is not the Gor'kov default, ``air_damping``
+        always (true or false)."""
         out = {
             "runs": int(self.runs),
             "duration_s": float(self.duration),
@@ -285,8 +291,7 @@ class TwinConfig:
             out["edge_radius_m"] = float(self.edge_radius)
         if self.frequency != ExperimentConditions.frequency_hz:
             out["frequency_hz"] = float(self.frequency)
-        if self.air_damping:
-            out["air_damping"] = True
+        out["air_damping"] = bool(self.air_damping)
         return out
 
 
@@ -295,7 +300,8 @@ class TwinConfig:
 #: frequency (f_theta = 21.0 Hz vs f_y = 21.3-21.8 Hz), mirror_asymmetry's beta1 y term drives the
 #: hinge at f_y, y is weakly damped (amplitude decay time 20 s) and the hinge transient dies in
 #: ~1-2 s.  Over 200 drops: ~45 % lock anti-phase with a small hinge amplitude (~0.15), ~40 % lock
-#: in-phase with a large one (~0.65), ~15 % have not settled after 4 s; never a failed run.
+#: in-phase with a large one (~0.65), ~15 % have not settled after 4 s; never a failed run.  Its linear_damping is
+#: the tuned *total* damping, so the air's computed drag is off (``air_damping=False``): counted twice otherwise.
 PAPER_LIKE = TwinPreset(
     name="paper-like",
     effects=EffectSet((
@@ -306,7 +312,9 @@ PAPER_LIKE = TwinPreset(
     pressure_amplitude_pa=3000.0,
     protocol=DropProtocol(t_off=(2.0e-3, 4.0e-3), theta_drop=(-0.3, 0.3), thetadot_drop=(-3.0, 3.0)),
     description="tuned Gor'kov dynamics: hinge tuned just below the y frequency by pair scattering and driven at "
-    "f_y by a mirror asymmetry; weak damping: bistable in-phase (large) and anti-phase (small) locking, see docs/twin.md",
+    "f_y by a mirror asymmetry; weak damping: bistable in-phase (large) and anti-phase (small) locking, see docs/twin.md; "
+    "its tuned linear damping is the total damping, so the air's computed drag is off",
+    air_damping=False,
 )
 
 #: The source paper's protocol on the physics, no tuned parameter (docs/twin.md, "The paper's protocol"): the

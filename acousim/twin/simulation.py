@@ -129,7 +129,7 @@ def _run_task(item: tuple) -> SimulatedRun:
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     """The true dynamics of a configuration and its true pressure amplitude [Pa].
 
-    With ``config.air_damping`` the air's computed drag (:func:`acousim.effects.air_damping_for`, at the true
+    With ``config.air_damping`` (the default) the air's computed drag (:func:`acousim.effects.air_damping_for`, at the true
     pressure's frequencies) is added to the effects, unless they already hold an ``air_damping``; the
     dynamics' ``effects`` are then what truth.json records.
     """

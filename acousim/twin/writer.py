@@ -89,7 +89,7 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         f"{config.force_model}_linear_frequencies_hz": {"y": f_y, "theta": f_theta},
         "model": {k: v for k, v in fm.settings.items() if k not in ("pressure_amplitude_pa", "equilibrium_height_m")},
     }
-    out["effects"] = dynamics.effects.to_dict()  # with the computed air damping when config.air_damping
+    out["effects"] = dynamics.effects.to_dict()  # with the computed air damping unless config.air_damping is False
     out["surrogate"] = fm.provenance()
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],

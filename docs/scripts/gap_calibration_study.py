@@ -3,6 +3,8 @@
 Each case is a twin-like data set (validation.blind.write_twin_like_dataset) made on the full-wave model of a
 dimer between the family's nodes, with linear damping and, in every other case, a pressure drifting within
 runs; the diagnosis then calibrates the gap without knowing it.  Prints one markdown row per case.
+The data have no air damping (the twin-like generator integrates the given effects only): the drawn
+linear damping is the only damping, so the numbers in docs/fullwave.md are measured without the air's drag.
 
     python docs/scripts/gap_calibration_study.py --seeds 31 32 33 --out /tmp/gapstudy
 """
@@ -22,7 +24,7 @@ from validation.blind import write_twin_like_dataset
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
 
-EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}
+EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}  # the only damping (no air_damping)
 
 
 def gorkov_identified(seed: int, drift: float, out: Path) -> list:

@@ -109,7 +109,7 @@ def test_simulate_fullwave_refusals_are_one_line(tmp_path, capsys, extra, fragme
 
 
 def test_gorkov_remains_the_default_and_is_not_recorded():
-    """The default twin configuration is unchanged, so Gor'kov data sets stay byte-identical."""
+    """The Gor'kov model stays the twin's default force model, and truth.json names the model only when it is another."""
     from acousim.twin import TwinConfig, TwinError
 
     assert TwinConfig().force_model == "gorkov"

@@ -52,4 +52,28 @@ def test_the_command_takes_the_preset_dimer(tmp_path):
                                       "--out", str(tmp_path / "x")])
     assert (build_config(args).side, build_config(args).gap) == (600e-6, 18e-6)  # options override the preset
     plain = build_config(build_parser().parse_args(["simulate", "--out", str(tmp_path / "y")]))
-    assert (plain.force_model, plain.side, plain.air_damping) == ("gorkov", 500e-6, False)
+    assert (plain.force_model, plain.side, plain.air_damping) == ("gorkov", 500e-6, True)  # air damping by default
+
+
+@pytest.mark.parametrize("argv, air", [
+    ([], True),                                             # the twin's default damping: the air's
+    (["--no-air-damping"], False),                          # the inviscid dimer
+    (["--preset", "paper"], True),
+    (["--preset", "paper", "--no-air-damping"], False),
+    (["--preset", "paper-like"], False),                    # its tuned linear damping is the total: not twice
+    (["--preset", "paper-like", "--model", "fullwave"], False),
+])
+def test_the_command_adds_the_air_damping_unless_switched_off_or_tuned(tmp_path, argv, air):
+    from acousim.cli import build_parser
+    from acousim.simulate_cli import build_config
+
+    cfg = build_config(build_parser().parse_args(["simulate", *argv, "--out", str(tmp_path / "x")]))
+    assert cfg.air_damping is air and cfg.to_dict()["air_damping"] is air
+
+
+def test_air_damping_is_the_default_of_the_configuration_and_of_presets():
+    assert TwinConfig().air_damping and TwinConfig().to_dict()["air_damping"] is True
+    assert TwinConfig(air_damping=False).to_dict()["air_damping"] is False
+    assert PAPER.air_damping and not PAPER_LIKE.air_damping
+    assert TwinConfig.from_preset(PAPER_LIKE).air_damping is False
+    assert TwinConfig.from_preset(PAPER_LIKE, air_damping=True).air_damping is True  # an override still wins

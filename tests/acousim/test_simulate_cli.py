@@ -25,6 +25,8 @@ def test_simulate_writes_a_loadable_dataset_with_truth(tmp_path, capsys):
     ds = load_dataset(out, strict=True)
     assert len(ds.runs) == 3 and ds.meta["pressure_amplitude_pa"] == 3000.0
     truth = json.loads((out / "truth.json").read_text())
+    air = truth["effects"].pop("air_damping")  # the default: the air's computed drag, on top of the effects given
+    assert truth["air_damping"] is True and air["gamma_y"] > 0 and air["gamma_theta"] > 0
     assert truth["effects"] == {"linear_damping": {"gamma_y": 0.3, "gamma_theta": 0.8},
                                 "pair_scattering": {"kappa": 12000.0}}
     assert truth["seed"] == 7 and truth["camera"]["noise_y_m"] == 2e-6 and truth["camera"]["noise_theta"] == 0.01
@@ -34,9 +36,19 @@ def test_simulate_writes_a_loadable_dataset_with_truth(tmp_path, capsys):
     assert "wrote 3 runs" in capsys.readouterr().err
 
 
-def test_without_effect_no_effect_is_on(tmp_path):
+def test_without_effect_the_air_damping_alone_is_on_and_no_air_damping_switches_it_off(tmp_path):
+    from acousim.effects import air_damping_for
+    from acousim.twin import TwinConfig, twin_dynamics
+
     assert main(["simulate", "--runs", "1", "--out", str(tmp_path / "d"), *FAST]) == 0
-    assert json.loads((tmp_path / "d" / "truth.json").read_text())["effects"] == {}
+    truth = json.loads((tmp_path / "d" / "truth.json").read_text())
+    dyn, _ = twin_dynamics(TwinConfig())
+    # the twin's default damping is the air's drag computed from the default dimer (docs/damping.md)
+    assert truth["air_damping"] is True
+    assert truth["effects"] == {"air_damping": air_damping_for(dyn.force_model, TwinConfig().conditions).params()}
+    assert main(["simulate", "--runs", "1", "--out", str(tmp_path / "e"), *FAST, "--no-air-damping"]) == 0
+    truth = json.loads((tmp_path / "e" / "truth.json").read_text())
+    assert truth["air_damping"] is False and truth["effects"] == {}  # the inviscid dimer: no effect at all
 
 
 def test_preset_and_override(tmp_path):
@@ -47,7 +59,8 @@ def test_preset_and_override(tmp_path):
     truth = json.loads((tmp_path / "d" / "truth.json").read_text())
     expected = PAPER_LIKE.effects.to_dict()
     expected["linear_damping"] = {"gamma_y": 1.0, "gamma_theta": 0.0}
-    assert truth["effects"] == expected and truth["preset"] == "paper-like"
+    # paper-like's tuned linear damping is its total damping: no computed air damping on top
+    assert truth["effects"] == expected and truth["preset"] == "paper-like" and truth["air_damping"] is False
 
 
 @pytest.mark.parametrize(

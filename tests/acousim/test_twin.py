@@ -1,5 +1,6 @@
 """The digital twin: field-drop protocol, camera, data sets (docs/formats.md) and their truth files."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -54,8 +55,13 @@ def test_truth_reproduces_the_settings(dataset):
     out, cfg, _ = dataset
     truth = json.loads((out / "truth.json").read_text())
     assert truth["seed"] == cfg.seed and truth["runs"] == cfg.runs
+    # the default twin has the air's computed damping: recorded as a setting and with its parameters among the
+    # effects, computed at the true pressure's frequencies (docs/damping.md)
+    dyn, _ = twin_dynamics(cfg)
+    assert truth["air_damping"] is True
     assert truth["effects"] == {"linear_damping": {"gamma_y": 0.3, "gamma_theta": 0.8},
-                                "pair_scattering": {"kappa": 12000.0}}
+                                "pair_scattering": {"kappa": 12000.0},
+                                "air_damping": dyn.effects["air_damping"].params()}
     rebuilt = TwinConfig(
         runs=truth["runs"], duration=truth["duration_s"], seed=truth["seed"], side=truth["side_length_m"],
         pressure_amplitude_pa=truth["nominal_pressure_amplitude_pa"], pressure_error=truth["pressure_error"],
@@ -63,9 +69,10 @@ def test_truth_reproduces_the_settings(dataset):
         protocol=DropProtocol(**truth["protocol"]),
         camera=Camera(fps=truth["camera"]["fps"], noise_y=truth["camera"]["noise_y_m"],
                       noise_theta=truth["camera"]["noise_theta"], missing_frames=truth["camera"]["missing_frames"]),
-        mesh_size=truth["mesh_size_m"], max_step=truth["max_step_s"],
+        mesh_size=truth["mesh_size_m"], max_step=truth["max_step_s"], air_damping=truth["air_damping"],
     )
-    assert rebuilt == cfg
+    # the recorded effects hold the computed air damping, which the rebuilt twin keeps instead of computing it again
+    assert rebuilt == replace(cfg, effects=EffectSet.from_dict(truth["effects"]))
     # and re-simulating from the truth file reproduces the data exactly
     runs, _, _ = simulate_field_drop_runs(rebuilt, SERIAL, progress=False)
     states = np.load(out / "truth_states.npz")
@@ -112,7 +119,8 @@ def test_zero_noise_gives_exact_samples(tmp_path):
 # ---------------------------------------------------------------------- protocol and camera
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_field_drop_protocol_start_state(seed):
-    dyn, _ = twin_dynamics(_small(effects=EffectSet()))
+    # no air damping: the drop is then an exact free fall with a free hinge (the air's drag acts during the drop)
+    dyn, _ = twin_dynamics(_small(effects=EffectSet(), air_damping=False))
     proto = DropProtocol(t_off=(2e-3, 5e-3), theta_drop=(-0.4, 0.4), thetadot_drop=(-5, 5))
     run = simulate_run(dyn, proto, Camera(fps=1000.0, noise_y=0, noise_theta=0, missing_frames=0), 0.2, seed)
     t_off = run.drop["t_off_s"]
@@ -203,6 +211,9 @@ def test_paper_like_preset_is_documented_and_simulates():
     runs, dyn, p = simulate_field_drop_runs(cfg, SERIAL, progress=False)
     assert p == PAPER_LIKE.pressure_amplitude_pa and cfg.preset == "paper-like"
     assert "pair_scattering" in PAPER_LIKE.effects and PAPER_LIKE.description
+    # its tuned linear damping is the total damping: the air's computed drag is not added on top
+    assert not PAPER_LIKE.air_damping and not cfg.air_damping and "air_damping" not in dyn.effects
+    assert dyn.effects == PAPER_LIKE.effects and "linear_damping" in dyn.effects
     assert all(np.all(np.isfinite(r.state)) for r in runs)
 
 

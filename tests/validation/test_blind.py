@@ -21,3 +21,17 @@ def test_blind_draws_are_seeded_and_scored():
     s = summarize([r])
     assert s["per_effect"]["linear_damping"]["fp"] == 1 and s["per_effect"]["pair_scattering"]["recall"] == 1.0
     assert s["median_shrink_with_effect"] == pytest.approx(0.95)
+
+
+def test_blind_twin_cases_are_inviscid_apart_from_the_drawn_effects(tmp_path, monkeypatch):
+    """The blind study's twin runs without the air's computed damping: the drawn effects are the whole truth it
+    scores (a case of no effect must be the dimer with no effect, not with the air's drag the diagnosis would name)."""
+    import acousim.twin
+    from validation.blind import BlindConfig
+    from validation.blind.candidates import generate_twin_case
+
+    seen = []
+    monkeypatch.setattr(acousim.twin, "simulate_dataset", lambda twin, *a, **k: seen.append(twin))
+    case = {"index": 0, "effects": {}, "pressure_error": 0.0, "twin_seed": 1}
+    assert generate_twin_case(case, BlindConfig(cases=1, runs=3, duration=1.0), tmp_path / "d") == (None, 0)
+    assert len(seen) == 1 and seen[0].air_damping is False and len(seen[0].effects) == 0

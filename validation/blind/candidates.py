@@ -5,6 +5,10 @@ Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilit
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
 within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
+
+The twin runs without the air's computed damping (``TwinConfig(air_damping=False)``): the drawn effects are
+the whole truth, a case of no effect is the inviscid dimer, and a drawn ``linear_damping`` is the only damping,
+so that every score compares the diagnosis with exactly what was drawn (docs/blind/*).
 """
 from __future__ import annotations
 
@@ -73,9 +77,10 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path) -> tuple[str
         shutil.rmtree(data)
     generation_error, retries = None, 0
     for retries in range(5):
+        # inviscid on purpose: the drawn effects are the truth the study scores (module docstring)
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
                           pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]),
-                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]))
+                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]), air_damping=False)
         try:
             simulate_dataset(twin, data, progress=False, force=True)
             return None, retries

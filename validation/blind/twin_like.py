@@ -12,7 +12,9 @@ frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 * the accelerations of candidate effects (:class:`acousim.effects.EffectSet`, y from the true equilibrium).
 
 The CSVs (docs/formats.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
-equilibrium height and meta.json holds the nominal pressure.  The drops start at |y| of 80-150 um, so that
+equilibrium height and meta.json holds the nominal pressure.  There is no damping beyond the effects given:
+unlike :class:`acousim.twin.TwinConfig`, whose default adds the air's computed drag, these data sets are inviscid
+apart from their candidate effects and ``y_damping``.  The drops start at |y| of 80-150 um, so that
 each run's oscillation dominates its y spectrum (a drift of a few per cent moves the equilibrium by tens of
 micrometres).  Every random choice comes from ``seed``.
 """

@@ -56,7 +56,7 @@ def test_minimum_at_the_range_edge_is_not_called_calibrated(monkeypatch):
 @pytest.fixture(scope="module")
 def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     """8 runs of 2 s on the full wave (synthetic family) of the default dimer with a 10 um gap (between the nodes
-    7.5 and 16.7 um) and linear damping, the true pressure 5 % off the nominal one."""
+    7.5 and 16.7 um) and linear damping as the only damping, the true pressure 5 % off the nominal one."""
     from acousim.effects import EffectSet
     from acousim.fullwave.family import FAMILY_ENV
     from acousim.twin import TwinConfig, simulate_dataset
@@ -64,8 +64,9 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     mpatch = pytest.MonkeyPatch()
     mpatch.setenv(FAMILY_ENV, str(synthetic_family_dir))
     out = tmp_path_factory.mktemp("fw_twin")
+    # no air damping: the linear damping is the only effect, the one the diagnosis must name alone
     cfg = TwinConfig(runs=8, duration=2.0, seed=11, force_model="fullwave", gap=10e-6, pressure_error=0.05,
-                     effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=2.0"]))
+                     effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=2.0"]), air_damping=False)
     simulate_dataset(cfg, out, force=True, progress=False)
     yield out
     mpatch.undo()

@@ -26,9 +26,10 @@ def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0)
     data = tmp_path / "data"
     from acousim.twin import DropProtocol
 
-    # drops of moderate angle and rate: the soft Gor'kov hinge plus an effect must not reach theta = +-1
+    # drops of moderate angle and rate: the soft Gor'kov hinge plus an effect must not reach theta = +-1; no air
+    # damping: the drawn effect is the only one, so the diagnosis must name it alone (and nothing on no effect)
     cfg = TwinConfig(runs=runs, duration=duration, seed=seed, pressure_error=pressure_error,
-                     effects=EffectSet.from_dict(effects),
+                     effects=EffectSet.from_dict(effects), air_damping=False,
                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
     truth = simulate_dataset(cfg, data, progress=False)
     (data / "truth.json").rename(tmp_path / "truth.json")  # the diagnosis is blind

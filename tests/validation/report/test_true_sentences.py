@@ -66,7 +66,8 @@ def _twin(path, runs, duration, effects):
     from acousim.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
 
-    cfg = TwinConfig(runs=runs, duration=duration, seed=4, effects=EffectSet.from_dict(effects),
+    # no air damping: the cases' effects are the only ones ("damping-free" is the inviscid dimer)
+    cfg = TwinConfig(runs=runs, duration=duration, seed=4, effects=EffectSet.from_dict(effects), air_damping=False,
                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
     simulate_dataset(cfg, path, progress=False)
     (path / "truth.json").rename(path.parent / "truth.json")
