@@ -1,6 +1,7 @@
 """Spurious terms of the default selection near parametric resonance (docs/fitting.md, "Near parametric resonance").
 
-PYTHONPATH=. python docs/scripts/resonance_false_positives.py [--cases res43 ...] [--seeds 1101 ...] [--no-natural-window]
+PYTHONPATH=. python docs/scripts/resonance_false_positives.py [--cases res43 ...] [--seeds 1101 ...]
+                                                               [--no-natural-window]
 
 Sparse truths of docs/conventions.md section 6's form with the hinge near twice the y frequency (f_y = 22 Hz,
 f_theta = 43 or 44 Hz) and strong hinge damping (thetadot coefficient -3 or -6 1/s), so that y^2*theta pumps the
@@ -82,7 +83,8 @@ def main(argv: list[str] | None = None) -> int:
     from fitting.discovery import DiscoveryConfig
 
     config = DiscoveryConfig(natural_periods=None) if args.no_natural_window else DiscoveryConfig()
-    print("| case | seed | spurious terms (fit z; own oracle z; alias, alias z) | true terms lost | criterion | CPU [s] |")
+    print("| case | seed | spurious terms (fit z; own oracle z; alias, alias z) | true terms lost | criterion | "
+          "CPU [s] |")
     print("|---|---|---|---|---|---|")
     totals = {}
     for name in args.cases:
