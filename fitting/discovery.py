@@ -5,7 +5,10 @@ Method
 1. **Integral form, pooled over runs** (:mod:`fitting.integral_form`): per window of 0.75 of the
    coordinate's dominant period, the measured position minus its straight line is regressed on the
    detrended double integrals of the 35 library columns.  The residual is the white tracking noise,
-   so least squares is efficient and its standard errors are honest.
+   so least squares is efficient and its standard errors are honest.  From the second pass on, a window is
+   at most ``natural_periods`` (0.875) periods of the equation's natural frequency (:func:`natural_windows`):
+   a hinge driven at f_y near f_theta = 2 f_y moves at half its natural frequency, and longer windows let
+   the raw positions' noise in the stiffness column into the residual.
 2. **Selection** on each equation, in three steps.  (a) Backward elimination from the full library,
    dropping the least significant term (velocity terms first while one is below the Bonferroni level),
    until Holm's rule (:func:`fitting.multiple_testing.holm_reject`, family-wise ``alpha`` over the
@@ -58,8 +61,8 @@ if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
-__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "METHOD",
-           "KNEE_TOLERANCE"]
+__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "natural_windows",
+           "METHOD", "KNEE_TOLERANCE"]
 
 log = logging.getLogger(__name__)
 
@@ -68,8 +71,9 @@ log = logging.getLogger(__name__)
 KNEE_TOLERANCE = 0.002
 
 #: One-line description of the method (written next to the result).
-METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, Numerov-corrected "
-          "double integrals); per equation backward elimination from the 35-term library until Holm's rule at "
+METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, in the model passes "
+          "at most 0.875 periods of the equation's natural frequency; Numerov-corrected double integrals); per "
+          "equation backward elimination from the 35-term library until Holm's rule at "
           "family-wise alpha declares every remaining term significant, stepwise additions, swaps and two-for-one "
           "merges that keep every term significant, then the support with the smallest held-out error (K-fold over "
           "runs) on the continued elimination path; damping terms always kept; repeated with the columns at the raw "
@@ -123,6 +127,16 @@ class DiscoveryConfig:
     velocity_price : float or None
         Residual variances by which a velocity term must lower the residual sum of squares to replace a
         velocity-free term in a swap (None: z_alpha^2 at ``alpha``).
+    natural_periods : float or None
+        From the second pass on, an equation's windows are at most this many periods of its natural frequency
+        (``sqrt(-stiffness) / 2 pi``: the y coefficient of yddot, the theta coefficient of thetaddot, of the first
+        pass), also below the lower bound of ``window_bounds_s``; None: the dominant frequency alone.  The raw
+        positions' white noise averages out in the double integral only over windows below about one period of the
+        equation's stiffness.  A strongly damped hinge near f_theta = 2 f_y, driven by y, moves at f_y: 0.75 of its
+        dominant period is 1.5 natural periods, and even the 25-ms floor is 1.07 periods of a 43-Hz hinge.  There
+        the theta residual came out 3.6 % above the tracking noise and up to 5 spurious thetaddot terms per data set
+        were selected at z 3.8-5.8 (a constant, theta^3, y^2, y*thetadot, ...).  0.875 is the floor's own share of
+        the 35-Hz hinge it was chosen on (docs/fitting.md, "Near parametric resonance").
     """
 
     alpha: float = 0.01
@@ -140,6 +154,7 @@ class DiscoveryConfig:
     raw_positions: bool = True
     stepwise: bool = True
     velocity_price: float | None = None
+    natural_periods: float | None = 0.875
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -153,6 +168,8 @@ class DiscoveryConfig:
             raise ValueError("max_iterations must be >= 0, n_folds >= 2 and selection_passes >= 1")
         if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
             raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
+        if self.natural_periods is not None and not self.natural_periods > 0:
+            raise ValueError(f"natural_periods must be positive or None, got {self.natural_periods}")
 
 
 @dataclass(frozen=True)
@@ -274,6 +291,27 @@ class DiscoveryResult:
                 "iterations": [it.to_json() for it in self.iterations], "converged": self.converged}
 
 
+#: The stiffness term of each equation (its natural frequency is sqrt(-coefficient) / 2 pi).
+_STIFFNESS = (TERMS.index("y"), TERMS.index("theta"))
+
+
+def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequence[float],
+                    config: DiscoveryConfig) -> list[list[int]]:
+    """Per equation and run, the window [frames] shortened to at most ``config.natural_periods`` periods of the
+    equation's natural frequency ``sqrt(-coef[stiffness]) / 2 pi``, also below the lower bound of
+    ``config.window_bounds_s``; unchanged for an equation without a restoring stiffness."""
+    out = []
+    for q in range(2):
+        k = -float(coef[q, _STIFFNESS[q]])
+        if not k > 0:
+            out.append(list(windows[q]))
+            continue
+        f_nat = np.sqrt(k) / (2.0 * np.pi)
+        cap = [integral_window(dt, f_nat, config.natural_periods, (dt, config.window_bounds_s[1])) for dt in dts]
+        out.append([min(int(w), c) for w, c in zip(windows[q], cap)])
+    return out
+
+
 # ---- the discovery loop ----------------------------------------------------------------------------------------
 def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
                    config: DiscoveryConfig = DiscoveryConfig()) -> DiscoveryResult:
@@ -308,7 +346,6 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         edges.append(edge)
     windows = [[integral_window(dt, f[q], config.window_periods, config.window_bounds_s) for f, dt in zip(freqs, dts)]
                for q in range(2)]
-    window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], dts)]) for q in range(2)])
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
     positions = (ys, ths)
@@ -346,6 +383,8 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     masks: list[NDArray] = []
     for it in range(config.max_iterations + 1):
         t0 = time.perf_counter()
+        if it == 1 and config.natural_periods is not None:
+            windows = natural_windows(coef, windows, dts, config)
         if it > 0:
             sigma = (float(res_std[0]), float(res_std[1]))
             estimate = model_states(PolynomialModel(coef), dts, ys, ths, first, seg_len, sigma, config.segments,
@@ -385,6 +424,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
             converged = True
             break
         prev = (coef, se, mask)
+    window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], dts)]) for q in range(2)])
     pareto = {}
     for q, eq in enumerate(EQUATION_NAMES):
         path, held, sel = fronts[q]

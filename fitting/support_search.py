@@ -65,21 +65,21 @@ _VELOCITY_FREE = np.array([is_velocity_free(t) for t in TERMS])
 
 def reduced_design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Sequence[float],
                    windows: Sequence[int], trims: Sequence[int], cache: dict | None = None) -> ReducedDesign:
-    """R factors of the integral-form design of one equation.  ``cache`` (run index -> (trim, columns)) keeps
-    the integrated velocity-free columns between passes whose position states are the same (raw) data."""
+    """R factors of the integral-form design of one equation.  ``cache`` (run index -> ((trim, window), columns))
+    keeps the integrated velocity-free columns between passes whose position states are the same (raw) data."""
     rs, rows, wins = [], [], []
     for i, (x, f, dt, w, tr) in enumerate(zip(positions, library, dts, windows, trims)):
         starts = window_starts(len(x), int(w), int(tr))
         if starts.size == 0:
             continue
         X = np.empty((starts.size * int(w), f.shape[1]))
-        hit = cache is not None and i in cache and cache[i][0] == tr
+        hit = cache is not None and i in cache and cache[i][0] == (tr, int(w))
         cols = ~_VELOCITY_FREE if hit else np.ones(f.shape[1], bool)
         X[:, cols] = integral_columns(numerov_columns(f[:, cols]), dt, starts, int(w))
         if hit:
             X[:, _VELOCITY_FREE] = cache[i][1]
         elif cache is not None:
-            cache[i] = (tr, X[:, _VELOCITY_FREE].copy())
+            cache[i] = ((tr, int(w)), X[:, _VELOCITY_FREE].copy())
         b = detrend_windows(x, starts, int(w))
         rs.append(_r_factor([np.column_stack([X, b])]))
         rows.append(X.shape[0])

@@ -15,7 +15,7 @@ import pytest
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
 from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model
+from fitting.discovery import DiscoveryConfig, discover_model, natural_windows
 from fitting.support_search import numerov_columns
 from fitting.integral_form import detrend_windows, integral_columns, window_starts
 from fitting.model import TERMS, PolynomialModel
@@ -123,6 +123,23 @@ def test_config_validates_itself():
         SegmentConfig(bounds_s=(0.5, 0.1))
 
 
+def test_windows_are_capped_at_the_natural_period():
+    """The model passes' windows: at most 0.875 periods of each equation's natural frequency, also below the 25-ms
+    floor; unchanged where the dominant window is shorter or the equation has no restoring stiffness."""
+    cfg = DiscoveryConfig()
+    dt = 1 / 1500
+    coef = np.zeros((2, len(TERMS)))
+    coef[0, TERMS.index("y")] = -W_Y ** 2
+    coef[1, TERMS.index("theta")] = -(2 * np.pi * 43.0) ** 2
+    # y: 0.75 periods at 22 Hz (51 frames) is within 0.875 natural periods; theta moving at f_y (51 frames) gets
+    # 0.875 / 43 Hz = 30.5 frames, below the 25-ms floor (38 frames)
+    assert natural_windows(coef, [[51, 51], [51, 38]], [dt, dt], cfg) == [[51, 51], [31, 31]]
+    coef[1, TERMS.index("theta")] = 5.0  # no restoring stiffness: the dominant frequency alone
+    assert natural_windows(coef, [[51], [51]], [dt], cfg)[1] == [51]
+    with pytest.raises(ValueError):
+        DiscoveryConfig(natural_periods=0.0)
+
+
 def test_small_data_set_gives_the_true_support_and_a_pareto_front():
     # 4 runs of 2 s, low noise: every term of the paper's reduced model has oracle z > 10
     truth = _truth(W_9, {"1": 0.1, "y^2": 9.5e6},
@@ -196,3 +213,29 @@ def test_smoothed_columns_alone_miss_the_criterion_where_model_states_meet_it():
     with pytest.raises(AssertionError):
         _check(truth, first, se)
     _check(truth, discover_model(runs, derivs), se)
+
+
+def _resonance_case():
+    """A hinge at 43 Hz, 1 Hz below 2 f_y, with thetadot -6 1/s and the couplings of the 35-Hz benchmark truth
+    (docs/scripts/resonance_false_positives.py, case res43strong, seed 1107)."""
+    truth = PolynomialModel.from_equations({
+        "yddot": {"y": -W_Y ** 2, "y^2": -9.5e6, "ydot": -0.4},
+        "thetaddot": {"theta": -(2 * np.pi * 43.0) ** 2, "y": 5.0e6, "y^2*theta": 2.0e11, "thetadot": -6.0,
+                      "y*thetadot^2": -1.5e3, "y*ydot*thetadot": 5.0e6}})
+    return truth, SyntheticConfig(n_runs=12, duration=3.0, fps=1500.0, noise_y=1.5e-6, noise_theta=0.003, seed=1107)
+
+
+@pytest.mark.slow
+def test_near_parametric_resonance_the_default_selects_at_most_one_spurious_term():
+    """Near f_theta = 2 f_y the hinge's windows from its dominant frequency (the 25-ms floor: 1.09 periods of the
+    43-Hz hinge) let the raw positions' noise, double integrated over more than a period of the hinge's stiffness,
+    into the residual.  Without the natural-period cap this set selects 4 spurious thetaddot terms (1, y^2, y^3,
+    theta^3 at z 4.3-5.2); with it (0.875 periods, 20.7 ms) the benchmark's criterion holds: at most one spurious
+    term, every true term of oracle z >= 5, coefficients within max(10 %, 3 oracle SE) (module docstring)."""
+    truth, cfg = _resonance_case()
+    runs, derivs, exact = _data(truth, cfg)
+    se = _oracle_se(truth, runs, exact, cfg)
+    _check(truth, discover_model(runs, derivs), se)
+    old = discover_model(runs, derivs, DiscoveryConfig(natural_periods=None))
+    # the old windows: more than one spurious term (4 measured), so _check fails there
+    assert int((old.mask & ~truth.support).sum()) >= 2
