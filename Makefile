@@ -57,9 +57,10 @@ demo-video: venv
 	@echo "written to $(OUT)/: open $(OUT)/report_video/report.html"
 
 # One pytest worker per core (pytest-xdist), each test file on one worker so that module fixtures are built
-# once, and the boundary-element files together (tests/conftest.py); one numba thread per worker (the
-# boundary-element assembly is numba-parallel).
-PYTEST := NUMBA_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadfile
+# once, and the boundary-element files together (tests/conftest.py); one numba and one BLAS thread per worker
+# (the boundary-element assembly is numba-parallel; the workers already keep every core busy, and more threads
+# per worker only compete for them).
+PYTEST := NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadfile
 
 test: venv browser
 	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) $(PYTEST)

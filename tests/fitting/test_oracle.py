@@ -127,10 +127,14 @@ def test_alias_z_predicts_how_often_least_squares_prefers_the_alias():
     n_draws = 4000
     pos = [r["state"][:, 2][:, None] + noise.sigma_theta * rng.standard_normal((r["t"].size, n_draws)) for r in gen]
     rss = []
+    b = None
     for names in (support, rival):
         columns = [evaluate_library(r["state"])[:, [TERMS.index(t) for t in names]] for r in gen]
-        X, b = _stacked(pos, columns, windows)
-        rss.append(np.sum((b - X @ _lstsq(X, b)) ** 2, axis=0) / noise.sigma_theta ** 2)
+        X, targets = _stacked(pos if b is None else [p[:, :1] for p in pos], columns, windows)
+        b = targets if b is None else b  # the targets are the positions' alone: the same for both supports
+        # the least-squares residual is b minus its projection on the columns' span (Q of a thin QR of X)
+        q = np.linalg.qr(X, mode="reduced")[0]
+        rss.append(np.sum((b - q @ (q.T @ b)) ** 2, axis=0) / noise.sigma_theta ** 2)
     gain = rss[1] - rss[0]
     # the mean of 4000 draws scatters by 2 alias_z / sqrt(4000) = 0.03 alias_z; allow 10 % of alias_z^2 + 0.3
     assert abs(np.mean(gain) - term.alias_z ** 2) < 0.1 * term.alias_z ** 2 + 0.3
