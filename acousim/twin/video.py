@@ -203,7 +203,8 @@ def render_coverage(centres: NDArray, angles: NDArray, half_sides, shape: tuple[
     centres = np.ascontiguousarray(centres, float)
     angles = np.ascontiguousarray(angles, float)
     n, k = angles.shape
-    halves = np.ascontiguousarray(np.broadcast_to(np.asarray(half_sides, float), (k,)))
+    # writeable (a broadcast is read-only, another array type to numba: a second compiled specialisation)
+    halves = np.require(np.broadcast_to(np.asarray(half_sides, float), (k,)), requirements=("C", "W"))
     m = int(subsamples)
     s_eff = math.sqrt(sigma ** 2 + 1.0 / (12.0 * m * m))
     out = np.zeros((n, int(shape[0]), int(shape[1])), np.float32)
