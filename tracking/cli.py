@@ -226,4 +226,12 @@ def run(a: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     from .recording import TrackingError
 
-    return run_cli(build_parser(), argv, errors=(TrackingError,))
+    parser = build_parser()
+    commands = next(a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args and not args[0].startswith("-") and args[0] not in commands and Path(args[0]).exists():
+        # a recording where the command belongs: say which command measures it
+        print(f"error: {args[0]} is a recording, not a command: measure it with python -m tracking track "
+              f"{args[0]} --out ... (or look at it first with python -m tracking inspect {args[0]})", file=sys.stderr)
+        return 2
+    return run_cli(parser, args, errors=(TrackingError,))

@@ -204,3 +204,12 @@ def test_inspect_refuses_a_missing_file(tmp_path, capsys):
     code = main(["inspect", str(tmp_path / "none.tif")])
     err = capsys.readouterr().err.strip()
     assert code == 2 and err == f"error: {tmp_path / 'none.tif'}: does not exist"
+
+
+def test_a_recording_given_without_a_command_names_the_command(tmp_path, write_tiff, capsys):
+    _, y, theta = motion(20, seed=44)
+    src = write_tiff("old_style.tif", render(y, theta, CAM, seed=44), CAM)
+    assert main([str(src), "--out", str(tmp_path / "x.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and f"python -m tracking track {src}" in err
+    assert not (tmp_path / "x.csv").exists()
