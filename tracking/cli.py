@@ -33,13 +33,17 @@ __all__ = ["main", "build_parser", "run", "COMMANDS", "add_track_parser", "add_i
 logger = logging.getLogger("tracking")
 
 
-_VIDEO_HELP = ("video file (mp4, avi, mov, mkv, ...), multi-page TIFF, Phantom .cine, a folder of images (one "
-               "recording), or a folder of recordings (with --out DIR)")
+def _add_polarity_argument(p: argparse.ArgumentParser) -> None:
+    """``--polarity``, the same for every command that calibrates a recording."""
+    from .track import POLARITIES
+
+    p.add_argument("--polarity", choices=POLARITIES, default="auto",
+                   help="dark cubes on a bright background (shadowgraph), bright on dark, or detect (default)")
 
 
 def add_track_parser(sub) -> None:
     """``track``: see its --help."""
-    from .track import POLARITIES, UP
+    from .track import UP
 
     p = sub.add_parser(
         "track",
@@ -48,7 +52,8 @@ def add_track_parser(sub) -> None:
         "frame of a high-speed recording (camera looking along the hinge line; docs/tracking.md) and write a "
         "docs/formats.md run (CSV + RUN.json), or a data set from a folder of recordings.",
     )
-    p.add_argument("video", metavar="VIDEO", help=_VIDEO_HELP)
+    p.add_argument("video", metavar="VIDEO", help="video file (mp4, avi, mov, mkv, ...), multi-page TIFF, Phantom "
+                   ".cine, a folder of images (one recording), or a folder of recordings (with --out DIR)")
     p.add_argument("--out", required=True, metavar="RUN.csv|DIR",
                    help="the run's CSV (RUN.json and RUN.frame.png are written beside it), or a data-set folder")
     p.add_argument("--fps", type=positive_float, default=None,
@@ -63,8 +68,7 @@ def add_track_parser(sub) -> None:
     p.add_argument("--origin-row", type=float, default=None, metavar="R",
                    help="the levitation height as an image row [px, rows counted from 0 at the top, pixel centres "
                    "at whole numbers]; overrides --origin-frames and a row the file records")
-    p.add_argument("--polarity", choices=POLARITIES, default="auto",
-                   help="dark cubes on a bright background (shadowgraph), bright on dark, or detect (default)")
+    _add_polarity_argument(p)
     p.add_argument("--up", choices=UP, default="top",
                    help="the image edge that is up in the lab (default top: rows count down, as cameras store "
                    "them); bottom for an image stored upside down, which flips y and theta")
@@ -87,8 +91,6 @@ def add_track_parser(sub) -> None:
 
 def add_inspect_parser(sub) -> None:
     """``inspect``: see its --help."""
-    from .track import POLARITIES
-
     p = sub.add_parser(
         "inspect",
         help="what a recording holds and what the tracking's calibration finds in it (writes nothing)",
@@ -100,8 +102,7 @@ def add_inspect_parser(sub) -> None:
     )
     p.add_argument("video", metavar="VIDEO", help="one recording: video file, multi-page TIFF, Phantom .cine or a "
                    "folder of images")
-    p.add_argument("--polarity", choices=POLARITIES, default="auto",
-                   help="dark cubes on a bright background, bright on dark, or detect (default)")
+    _add_polarity_argument(p)
     p.add_argument("--quiet", action="store_true", help="warnings and errors only")
     p.set_defaults(func=inspect)
 
@@ -142,13 +143,11 @@ def inspect(a: argparse.Namespace) -> int:
     """``python -m tracking inspect``: prints the recording's summary to standard output; returns the exit code."""
     import numpy as np
 
-    from .recording import TrackingError, read_recording
+    from .recording import read_recording
     from .track import TrackConfig, calibrate
 
     src = Path(a.video)
-    if not src.exists():
-        raise TrackingError(f"{src}: does not exist")
-    rec = read_recording(src)
+    rec = read_recording(src)  # names a missing or unreadable file
     n, h, w = rec.frames.shape
     frames = rec.frames
     lines = [f"{src}: {rec.format}, {n} frames of {w} x {h} px, {frames.dtype} grey levels "

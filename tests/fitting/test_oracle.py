@@ -31,14 +31,20 @@ def clean(model):
                                                 missing_frames=0, seed=5))
 
 
+def _design(columns, windows):
+    """The integral form's detrended design, stacked over the runs."""
+    return np.concatenate([integral_columns(f, 1.0 / FPS, window_starts(len(f), w), w)
+                           for f, w in zip(columns, windows)])
+
+
+def _targets(positions, windows):
+    """The integral form's detrended targets, stacked over the runs ((rows, draws) for positions (n, draws))."""
+    return np.concatenate([detrend_windows(x, window_starts(len(x), w), w) for x, w in zip(positions, windows)])
+
+
 def _stacked(positions, columns, windows):
-    """The integral form's detrended design and targets (targets (rows, draws) for positions (n, draws))."""
-    X, b = [], []
-    for x, f, w in zip(positions, columns, windows):
-        starts = window_starts(len(x), w)
-        X.append(integral_columns(f, 1.0 / FPS, starts, w))
-        b.append(detrend_windows(x, starts, w))
-    return np.concatenate(X), np.concatenate(b)
+    """The integral form's detrended design and targets."""
+    return _design(columns, windows), _targets(positions, windows)
 
 
 def _lstsq(X, b):
@@ -126,14 +132,12 @@ def test_alias_z_predicts_how_often_least_squares_prefers_the_alias():
     rng = np.random.default_rng(7)
     n_draws = 4000
     pos = [r["state"][:, 2][:, None] + noise.sigma_theta * rng.standard_normal((r["t"].size, n_draws)) for r in gen]
+    b = _targets(pos, windows)  # the positions' alone: the same for both supports
     rss = []
-    b = None
     for names in (support, rival):
         columns = [evaluate_library(r["state"])[:, [TERMS.index(t) for t in names]] for r in gen]
-        X, targets = _stacked(pos if b is None else [p[:, :1] for p in pos], columns, windows)
-        b = targets if b is None else b  # the targets are the positions' alone: the same for both supports
         # the least-squares residual is b minus its projection on the columns' span (Q of a thin QR of X)
-        q = np.linalg.qr(X, mode="reduced")[0]
+        q = np.linalg.qr(_design(columns, windows), mode="reduced")[0]
         rss.append(np.sum((b - q @ (q.T @ b)) ** 2, axis=0) / noise.sigma_theta ** 2)
     gain = rss[1] - rss[0]
     # the mean of 4000 draws scatters by 2 alias_z / sqrt(4000) = 0.03 alias_z; allow 10 % of alias_z^2 + 0.3
