@@ -20,7 +20,7 @@ from scipy.interpolate import PchipInterpolator
 from .config_checks import check_fraction, check_non_negative, check_whole
 from .errors import DatasetError
 from .meta import read_meta
-from .consistency import ConsistencyConfig, check_consistency, run_features
+from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .spectra import dominant_frequency
 
@@ -170,11 +170,6 @@ def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tup
 
 #: Longest piece of a file's content echoed into an error message [characters].
 ECHO_LIMIT = 80
-
-#: Height of the largest peak at or above the ``min_periods`` frequency, relative to the overall largest
-#: peak, above which that peak is taken for the oscillation rather than a slow drift below it.
-DRIFT_PROMINENCE = 0.3
-
 
 def _cut(text: str, limit: int = ECHO_LIMIT) -> str:
     """``text`` cut to at most ``limit`` characters, an ellipsis marking the cut."""
@@ -398,7 +393,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
     duration = t[-1] - t[0]
     f = dominant_frequency(y, duration / (t.size - 1), config.min_periods / duration if duration > 0 else 0.0,
-                           prefer_above=DRIFT_PROMINENCE, refine=False)
+                           prefer_above=SLOW_PEAK_FRACTION, refine=False)
     if f <= 0 or duration * f < config.min_periods:
         raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
                            f"({duration:.3g} s at a dominant y frequency of {f:.3g} Hz)")

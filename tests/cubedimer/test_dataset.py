@@ -157,6 +157,25 @@ def test_slow_drift_below_the_oscillation_is_not_taken_for_it(tmp_path, write_cs
     assert run.t.size == 2000
 
 
+def test_a_drifting_pressure_with_a_decayed_oscillation_keeps_the_run(tmp_path, write_csv):
+    """A 4 % pressure drift (period 2 s) moves the height by +-35 um, while the oscillation has decayed to 12 um:
+    its spectral line is a sixth of the drift's.  The loader and the consistency check read the same run with the
+    same rule (:data:`cubedimer.consistency.SLOW_PEAK_FRACTION`): the oscillation, not the drift, sets f_y, and
+    the run is kept.  (With a loader threshold of 0.3, such runs of a drifting twin were refused as too short.)"""
+    from cubedimer.consistency import SLOW_PEAK_FRACTION, run_features
+    from cubedimer.spectra import amplitude_spectrum
+
+    t = np.arange(4500) / 1500.0
+    y = 35e-6 * np.sin(2 * np.pi * t / 2.0 + 0.4) + 12e-6 * np.exp(-0.5 * t) * np.cos(2 * np.pi * 21.0 * t)
+    f, a = amplitude_spectrum(y, t[1])
+    a[0] = 0.0
+    line_over_drift = a[f >= 5 / 3].max() / a.max()
+    assert SLOW_PEAK_FRACTION < line_over_drift < 0.3  # the case this test is about
+    run = load_run(write_csv(tmp_path / "drift.csv", t, y, 0.1 * np.sin(2 * np.pi * 9 * t)))
+    assert run.t.size == t.size
+    assert run_features("drift.csv", t, y).f_y == pytest.approx(21.0, abs=0.1)
+
+
 def _noisy_runs(n, seed, duration=3.0, fps=1500.0):
     """n decaying 21.8-Hz runs with 1.5 um / 0.003 tracking noise, as (t, y, theta)."""
     rng = np.random.default_rng(seed)
