@@ -27,16 +27,18 @@ from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}  # the only damping (no air_damping) by default
 
 
-def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECTS) -> list:
+def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECTS, runs: int = 8,
+                      duration: float = 3.0) -> list:
     """What the diagnosis names on the Gor'kov twin of the same case (same seed, effects and drift)."""
-    write_twin_like_dataset(out, runs=8, duration=3.0, seed=seed, pressure_error=0.05, drift=drift, effects=effects)
+    write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift, effects=effects)
     d, _ = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="gorkov")
     return d["identified"]
 
 
-def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, effects: dict = EFFECTS) -> dict:
+def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, effects: dict = EFFECTS,
+             runs: int = 8, duration: float = 3.0) -> dict:
     fm = dynamic_model("fullwave", ExperimentConditions(side_length_m=side, gap_m=gap_ratio * side))
-    truth = write_twin_like_dataset(out, runs=8, duration=3.0, seed=seed, pressure_error=0.05, drift=drift,
+    truth = write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift,
                                     effects=effects, force_model=fm)
     t0 = time.perf_counter()
     d, _ = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
@@ -50,7 +52,8 @@ def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, 
             "damping": next((e["params"] for e in d["effects"] if e["name"] == "linear_damping"), None),
             "pressure_error": cal["pressure_amplitude_pa"] / truth["pressure_amplitude_pa"] - 1,
             "wall_s": time.perf_counter() - t0,
-            "gorkov_identified": gorkov_identified(seed, drift, out.with_name(out.name + "_gorkov"), effects)}
+            "gorkov_identified": gorkov_identified(seed, drift, out.with_name(out.name + "_gorkov"), effects,
+                                                   runs, duration)}
 
 
 def main() -> None:
@@ -60,6 +63,8 @@ def main() -> None:
                    help="the linear damping's y rate [1/s] (default %(default)s)")
     p.add_argument("--gamma-theta", type=float, default=EFFECTS["linear_damping"]["gamma_theta"],
                    help="the linear damping's hinge rate [1/s] (default %(default)s)")
+    p.add_argument("--runs", type=int, default=8, help="runs per data set (default %(default)s)")
+    p.add_argument("--duration", type=float, default=3.0, help="seconds per run (default %(default)s)")
     p.add_argument("--out", default=None, help="keep the data sets here (default: a temporary folder)")
     p.add_argument("--json", default=None, help="also write the rows as JSON")
     args = p.parse_args()
@@ -80,7 +85,7 @@ def main() -> None:
             for g in gaps:
                 drift = 0.04 if i % 2 else 0.0
                 i += 1
-                r = run_case(side, g, seed, drift, root / f"case{i:03d}", effects)
+                r = run_case(side, g, seed, drift, root / f"case{i:03d}", effects, args.runs, args.duration)
                 rows.append(r)
                 damping = "-" if r["damping"] is None else ", ".join(f"{v:.3g}" for v in r["damping"].values())
                 print(f"| {r['side_um']:.0f} | {r['ks']:.3f} | {r['gap_true_um']:.2f} | {r['gap_um']:.2f} | "

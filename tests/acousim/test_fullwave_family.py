@@ -132,6 +132,25 @@ def test_interpolated_model_states_the_mesh_error_of_its_gap_rows(tmp_path, synt
         FullwaveFamily(tmp_path)
 
 
+def test_shipped_mesh_errors_are_no_smaller_than_the_measured_discrepancy():
+    """The error each shipped gap row states is at least the distance of the family's mesh level from the finest
+    level measured there (uniformly refined rows), so that refining further can only confirm or raise it; a row
+    called converged has its finest two levels within 2 %.  Every gap node of the shipped family has a study."""
+    from acousim.fullwave.family import MESH_CONVERGENCE_FILE, shipped_family
+
+    fam = shipped_family()
+    rows = json.loads((fam.directory / MESH_CONVERGENCE_FILE).read_text())["gap_rows"]
+    assert sorted(r["gap_over_side"] for r in rows) == pytest.approx(sorted(fam.gap_nodes), rel=1e-3)
+    for r in rows:
+        k = np.asarray(r["stiffness_nm"])
+        assert np.all(k < 0)  # a restoring hinge at every level
+        if r["levels_q"] is not None:
+            family = k[r["levels_q"].index(r["family_level_q"])]
+            assert r["stated_error"] >= abs(1 - family / k[-1]) - 5e-5  # 5e-5: the stated error is rounded to 1e-4
+        if r["converged"]:
+            assert abs(1 - k[-2] / k[-1]) <= 0.02
+
+
 @pytest.mark.parametrize("ks,g", [(0.25, 0.02), (0.7, 0.02), (0.4, 0.005), (0.4, 0.08)])
 def test_outside_the_family_is_refused_never_extrapolated(synthetic_family_dir, ks, g):
     fam = FullwaveFamily(synthetic_family_dir)

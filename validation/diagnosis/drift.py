@@ -53,20 +53,22 @@ class DriftSettings:
 
     Parameters
     ----------
-    window_s : spacing of the pressure's nodes within each run [s]
+    window_s : spacing of the pressure's nodes within each run [s].  0.3 s puts five nodes on a drift of period
+        1.5 s; with 0.4 s the spline's error through the nodes (three times larger, ~h^4) still left the energy
+        balance of a weak damping under a 4 % drift with a spurious ``ydot*theta`` (docs/fullwave.md)
     alpha : level of the F-test
     min_relative_amplitude : smallest relative pressure amplitude reported as a drift
     z0_window : the origin height is searched within +-z0_window [m] of the nominal Z_eq
-    max_nodes_per_run : most pressure nodes of one run; a longer run is refused with a message (a run of
+    max_nodes_per_run : most pressure nodes of one run (270: runs up to 80 s); a longer run is refused with a message (a run of
         hours is not a free oscillation after a field drop: its time is in other units), so that the
         per-node fit (a dense column per node) stays bounded
     """
 
-    window_s: float = 0.4
+    window_s: float = 0.3
     alpha: float = DRIFT_ALPHA
     min_relative_amplitude: float = MIN_RELATIVE_AMPLITUDE
     z0_window: float = 4e-4
-    max_nodes_per_run: int = 200
+    max_nodes_per_run: int = 270
 
     def __post_init__(self):
         if not self.window_s > 0:
@@ -136,7 +138,7 @@ class DriftTest:
         return out
 
 
-def _node_times(t0: float, t1: float, window_s: float, max_nodes: int = 200, name: str = "a run") -> NDArray[np.float64]:
+def _node_times(t0: float, t1: float, window_s: float, max_nodes: int = 270, name: str = "a run") -> NDArray[np.float64]:
     k = max(2, int(round((t1 - t0) / window_s)) + 1)
     if k > max_nodes:
         raise ValueError(f"{name}: a time span of {t1 - t0:.4g} s needs {k} pressure-drift windows of {window_s:g} s "
@@ -150,10 +152,10 @@ def drift_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
     (a parabola through 3, the straight line through 2), constant beyond the end nodes.  Rows sum to 1.
 
     A spline rather than straight lines between the nodes: through the values of a sinusoidal drift of period T
-    at nodes 0.375 s apart (a 3 s run), straight lines miss it by an rms 15 % of its amplitude at T = 1.5 s and
-    2.2 % at 4 s (error ~h^2), the spline by 4.2 % and 0.08 % (~h^4; tests/validation/diagnosis/test_drift.py).
-    The energy balance integrates that error along the path: straight lines left a drift's representation
-    error of the size of a weak damping's work there (docs/fullwave.md).
+    at nodes 0.3 s apart, straight lines miss it by an rms 9.8 % of its amplitude at T = 1.5 s and 1.4 % at 4 s
+    (error ~h^2), the spline by 1.6 % and 0.03 % (~h^4; tests/validation/diagnosis/test_drift.py).  The energy
+    balance integrates that error along the path, where it competes with a weak damping's work
+    (docs/fullwave.md).
     """
     from scipy.interpolate import CubicSpline
 
@@ -170,7 +172,7 @@ def drift_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
 
 
 def _designs(problem: DiagnosisProblem, z0: float, window_s: float,
-             max_nodes: int = 200) -> list[tuple[NDArray, NDArray, NDArray]]:
+             max_nodes: int = 270) -> list[tuple[NDArray, NDArray, NDArray]]:
     """Per run: (columns P K[phi_k F_Z/M] (rows, K), target P y - P K[-g] (rows,), node times)."""
     model = problem.model
     mass, g = model.dimer.total_mass, model.gravity
