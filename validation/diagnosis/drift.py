@@ -59,9 +59,9 @@ class DriftSettings:
     alpha : level of the F-test
     min_relative_amplitude : smallest relative pressure amplitude reported as a drift
     z0_window : the origin height is searched within +-z0_window [m] of the nominal Z_eq
-    max_nodes_per_run : most pressure nodes of one run (270: runs up to 80 s); a longer run is refused with a message (a run of
-        hours is not a free oscillation after a field drop: its time is in other units), so that the
-        per-node fit (a dense column per node) stays bounded
+    max_nodes_per_run : most pressure nodes of one run (270: runs up to 80 s); a longer run is refused with a
+        message (a run of hours is not a free oscillation after a field drop: its time is in other units), so
+        that the per-node fit (a dense column per node) stays bounded
     """
 
     window_s: float = 0.3
