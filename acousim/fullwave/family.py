@@ -48,7 +48,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
 from .surrogate import (_COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate,
-                        build_settings_of)
+                        build_settings_of, FLUX_DISC_POINTS)
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
@@ -81,7 +81,7 @@ FAMILY_GAP_RATIOS: tuple[float, ...] = tuple(round(float(np.exp(v)), 6)
 #: Where the shipped node tables live.
 FAMILY_DIR = Path(__file__).resolve().parent.parent / "data" / "fullwave_family"
 #: Theta series of every node: n_half solves on |theta| <= theta_max (2 n_half Chebyshev terms).
-FAMILY_BUILD = {"n_half": 6, "theta_max": 0.9}
+FAMILY_BUILD = {"n_half": 6, "theta_max": 0.9, "flux_disc_points": FLUX_DISC_POINTS}
 #: The physical settings the nodes are built at (any others follow by the exact scaling).
 REFERENCE = {"side_m": 500e-6, "sound_speed_m_s": 343.0, "air_density_kg_m3": 1.204,
              "particle_density_kg_m3": 2160.0, "pressure_amplitude_pa": 3000.0}
@@ -127,12 +127,15 @@ class FamilyNode:
     gap_ratio: float
     n_half: int = FAMILY_BUILD["n_half"]
     theta_max: float = FAMILY_BUILD["theta_max"]
+    flux_disc_points: int = FAMILY_BUILD["flux_disc_points"]
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.ks) and 0.05 <= self.ks <= 2.0):
             raise ValueError(f"ks must lie in [0.05, 2], got {self.ks!r}")
         if not (np.isfinite(self.gap_ratio) and 0.0 < self.gap_ratio <= 0.5):
             raise ValueError(f"g/s must lie in (0, 0.5], got {self.gap_ratio!r}")
+        if not (isinstance(self.flux_disc_points, (int, np.integer)) and 2 <= self.flux_disc_points <= 32):
+            raise ValueError(f"flux disc points must be a whole number in 2..32, got {self.flux_disc_points!r}")
 
     @property
     def medium(self) -> Medium:
@@ -151,7 +154,7 @@ class FamilyNode:
         from .surrogate import build_settings
 
         return build_settings(self.spec, self.medium, REFERENCE["particle_density_kg_m3"], self.n_half,
-                              self.theta_max, "flux")
+                              self.theta_max, "flux", self.flux_disc_points)
 
     @property
     def name(self) -> str:
@@ -166,6 +169,8 @@ def node_path(directory: str | os.PathLike, node: FamilyNode) -> Path:
 def _matches(sur: FullwaveSurrogate, node: FamilyNode) -> bool:
     exp = node.expected_settings()
     got = build_settings_of(sur)
+    if got.get("flux_disc_points") != exp.get("flux_disc_points"):  # a key only when not the default
+        return False
     for k, v in exp.items():
         g = got.get(k)
         if isinstance(v, float):
@@ -212,7 +217,8 @@ def build_family_node(node: FamilyNode, directory: str | os.PathLike) -> dict:
         logging.getLogger(name).setLevel(logging.WARNING)
     t0 = time.perf_counter()
     sur = build_fullwave_surrogate(node.spec, node.medium, REFERENCE["particle_density_kg_m3"],
-                                   REFERENCE["pressure_amplitude_pa"], GRAVITY, node.n_half, node.theta_max)
+                                   REFERENCE["pressure_amplitude_pa"], GRAVITY, node.n_half, node.theta_max,
+                                   flux_disc_points=node.flux_disc_points)
     sur.build_accuracy.update(ks=node.ks, gap_ratio=node.gap_ratio, family_node=node.name,
                               command=f"{BUILD_HINT} (node {node.name})")
     sur.save(path)
@@ -227,10 +233,12 @@ def _build_task(item: tuple) -> dict:
 
 
 def family_nodes(ks: Sequence[float] = FAMILY_KS, gap_ratios: Sequence[float] = FAMILY_GAP_RATIOS,
-                 n_half: int = FAMILY_BUILD["n_half"], theta_max: float = FAMILY_BUILD["theta_max"]) -> list[FamilyNode]:
+                 n_half: int = FAMILY_BUILD["n_half"], theta_max: float = FAMILY_BUILD["theta_max"],
+                 flux_disc_points: int = FAMILY_BUILD["flux_disc_points"]) -> list[FamilyNode]:
     """The grid's nodes in build order: the cheapest (largest gap) first, so that a partial build covers a
     rectangle of the family as early as possible."""
-    return [FamilyNode(float(k), float(g), n_half, theta_max) for g in sorted(gap_ratios, reverse=True) for k in ks]
+    return [FamilyNode(float(k), float(g), n_half, theta_max, flux_disc_points)
+            for g in sorted(gap_ratios, reverse=True) for k in ks]
 
 
 def build_family(directory: str | os.PathLike = FAMILY_DIR, nodes: Sequence[FamilyNode] | None = None,
@@ -338,7 +346,8 @@ class FullwaveFamily:
             if "ks" not in ba or "gap_ratio" not in ba:
                 raise FamilyTableError(f"{path}: not a family node (no ks / gap_ratio in its build record)")
             node = FamilyNode(float(ba["ks"]), float(ba["gap_ratio"]), int(sur.settings["n_half"]),
-                              float(sur.settings["theta_max"]))
+                              float(sur.settings["theta_max"]),
+                              int(sur.settings.get("flux_disc_points", FLUX_DISC_POINTS)))
             if path.name != node_path(self.directory, node).name or not _matches(sur, node):
                 raise FamilyTableError(f"{path}: its settings do not match its node {node.name} (file renamed or "
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
@@ -364,6 +373,10 @@ class FullwaveFamily:
             lengths = {len(np.asarray(t.coefficients["qt"][0])) for t in tables.values()}
             if len(lengths) != 1 or any(t.theta_max != self.theta_max for t in tables.values()):
                 raise FamilyTableError(f"{self.directory}: node tables with different theta series")
+            points = {int(t.settings.get("flux_disc_points", FLUX_DISC_POINTS)) for t in tables.values()}
+            if len(points) != 1:
+                raise FamilyTableError(f"{self.directory}: node tables built with different flux quadratures "
+                                       f"({sorted(points)} disc points per panel); rebuild them with {BUILD_HINT}")
         acc = self.directory / "accuracy.json"
         try:
             self.accuracy = json.loads(acc.read_text()) if acc.exists() else {}

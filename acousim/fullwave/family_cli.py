@@ -43,6 +43,9 @@ def add_parser(subparsers) -> None:
                    help="boundary-element solves per node (theta > 0; the series has 2 n_half terms)")
     b.add_argument("--theta-max", type=float, default=FAMILY_BUILD["theta_max"],
                    help="half-width of the theta range of every node table")
+    b.add_argument("--flux-disc-points", type=int, default=FAMILY_BUILD["flux_disc_points"],
+                   help="Gauss points per panel of the flux surface's mirror disc (12 converge the hinge torque at "
+                        "the folding barrier, docs/fullwave.md; existing tables built otherwise are rebuilt)")
     b.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_executor_arguments(b, "One task is one node table.")
     b.set_defaults(func=run_build)
@@ -65,15 +68,19 @@ def run_build(args: argparse.Namespace) -> int:
         raise UserInputError(f"--n-half {args.n_half}: at least 2 solves are needed")
     if not 0 < args.theta_max < 1:
         raise UserInputError(f"--theta-max {args.theta_max}: must lie in (0, 1)")
+    if not 2 <= args.flux_disc_points <= 32:
+        raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in 2..32 (the tables: 6; "
+                             f"12 converge the folding barrier)")
     try:
         if args.points:
             pairs = [p.split(":") for p in args.points.split(",") if p.strip()]
             if any(len(p) != 2 for p in pairs):
                 raise UserInputError(f"--points {args.points!r}: expected KS:G pairs separated by commas")
-            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max) for k, g in pairs]
+            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max, args.flux_disc_points)
+                     for k, g in pairs]
         else:
             nodes = family_nodes(float_list(args.ks, "--ks"), float_list(args.gap_ratio, "--gap-ratio"), args.n_half,
-                                 args.theta_max)
+                                 args.theta_max, args.flux_disc_points)
     except ValueError as exc:
         raise UserInputError(f"{exc} (options --ks / --gap-ratio / --points)") from None
     summary = build_family(args.out, nodes, executor_config(args), progress=not args.no_progress)

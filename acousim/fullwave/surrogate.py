@@ -54,6 +54,7 @@ __all__ = [
     "dimer_generalized_coefficients",
     "dimer_flux_coefficients",
     "dimer_coefficients",
+    "FLUX_DISC_POINTS",
     "FORCE_METHODS",
     "DEFAULT_TABLE",
     "DEFAULT_BUILD",
@@ -106,19 +107,28 @@ def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm:
     return {"fz": fz, "qt": qt}
 
 
-def cube_b_flux_surface(solution, theta: float, spec: DimerMeshSpec, n_polar: int = 20):
+#: Gauss points per panel of the mirror disc of the flux surface (:func:`cube_b_flux_surface`) unless a table's
+#: settings say otherwise.  6 leave the hinge torque 3-5 % off at the folding barrier (theta ~ 0.9, where the disc
+#: runs through a 9-degree wedge) and converge it below |theta| = 0.72; 12 converge it to 0.03 % at theta = 0.89
+#: for 4 times the flux's cost (docs/fullwave.md, "The cause").
+FLUX_DISC_POINTS = 6
+
+
+def cube_b_flux_surface(solution, theta: float, spec: DimerMeshSpec, n_polar: int = 20,
+                        disc_points: int = FLUX_DISC_POINTS):
     """The closed surface around cube B of :func:`dimer_flux_coefficients`: the half sphere X > 0 of 1.6 times
-    the farthest vertex's radius, closed by the mirror disc X = 0 graded towards cube B's hinge edge."""
+    the farthest vertex's radius, closed by the mirror disc X = 0 graded towards cube B's hinge edge, with
+    ``disc_points`` Gauss points per disc panel."""
     from .flux import mirror_half_surface
 
     radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
     # cube B's hinge edge (body frame u = -s/2, w = +s/2) posed as dimer_bodies poses the cube
     x_h, _, z_h = hinge_edge_b(theta, spec)
-    return mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar)
+    return mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar, n_gauss=disc_points)
 
 
-def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
-                            pressure_amplitude_pa: float = 1.0, n_polar: int = 20) -> dict[str, NDArray[np.float64]]:
+def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec, pressure_amplitude_pa: float = 1.0,
+                            n_polar: int = 20, disc_points: int = FLUX_DISC_POINTS) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from momentum fluxes (:mod:`acousim.fullwave.flux`).
 
     Cube B's force and torque are the flux through the half sphere X > 0 closed by the mirror disc X = 0 (through
@@ -132,7 +142,7 @@ def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec,
     arm = hinge_arm(spec)
     cube_b = solution.bodies[1]
     phi = np.pi * float(theta) / 4
-    surface = cube_b_flux_surface(solution, theta, spec, n_polar)
+    surface = cube_b_flux_surface(solution, theta, spec, n_polar, disc_points)
     force, torque = flux_height_structure(ExteriorField(solution), surface, cube_b.centre, med.density_kg_m3,
                                           med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, pressure_amplitude_pa)
     # mirror images: F_A = (-F_B,X, F_B,Y, F_B,Z), tau_A,Y = -tau_B,Y
@@ -146,10 +156,10 @@ FORCE_METHODS = ("flux", "surface")
 
 
 def dimer_coefficients(solution, theta: float, spec: DimerMeshSpec, pressure_amplitude_pa: float,
-                       forces: str = "flux") -> dict[str, NDArray[np.float64]]:
+                       forces: str = "flux", flux_disc_points: int = FLUX_DISC_POINTS) -> dict[str, NDArray[np.float64]]:
     """(A, B, C) of F_Z and Q_theta of one solved dimer pose, by ``forces`` (:data:`FORCE_METHODS`)."""
     if forces == "flux":
-        return dimer_flux_coefficients(solution, theta, spec, pressure_amplitude_pa)
+        return dimer_flux_coefficients(solution, theta, spec, pressure_amplitude_pa, disc_points=flux_disc_points)
     if forces == "surface":
         return dimer_generalized_coefficients(solution.height_structure(pressure_amplitude_pa), theta, hinge_arm(spec))
     raise ValueError(f"unknown force method {forces!r}; choose one of {', '.join(FORCE_METHODS)}")
@@ -415,13 +425,19 @@ def chebyshev_half_nodes(n_half: int) -> NDArray[np.float64]:
 
 
 def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: int, theta_max: float,
-                   forces: str = "flux") -> dict:
-    """The settings a table is keyed by (pressure excluded: tables are rescaled exactly)."""
-    return {
+                   forces: str = "flux", flux_disc_points: int = FLUX_DISC_POINTS) -> dict:
+    """The settings a table is keyed by (pressure excluded: tables are rescaled exactly).
+
+    ``flux_disc_points`` is a key only when it differs from :data:`FLUX_DISC_POINTS` (with ``forces="flux"``), so
+    that tables built before it was a setting keep their keys and file names."""
+    out = {
         **spec.settings(), "frequency_hz": medium.frequency_hz, "sound_speed_m_s": medium.sound_speed_m_s,
         "air_density_kg_m3": medium.density_kg_m3, "particle_density_kg_m3": float(density),
         "n_half": int(n_half), "theta_max": float(theta_max), "forces": str(forces),
     }
+    if forces == "flux" and int(flux_disc_points) != FLUX_DISC_POINTS:
+        out["flux_disc_points"] = int(flux_disc_points)
+    return out
 
 
 def build_fullwave_surrogate(
@@ -434,6 +450,7 @@ def build_fullwave_surrogate(
     theta_max: float = 0.9,
     progress: Callable[[int, int, float], None] | None = None,
     forces: str = "flux",
+    flux_disc_points: int = FLUX_DISC_POINTS,
 ) -> FullwaveSurrogate:
     """Build the surrogate from ``n_half`` boundary-element solves (theta > 0), mirrored by symmetry.
 
@@ -457,6 +474,8 @@ def build_fullwave_surrogate(
         Called as ``progress(i, n_half, seconds)`` after each solve.
     forces : {"flux", "surface"}
         How forces and torques are integrated (:data:`FORCE_METHODS`).
+    flux_disc_points : int
+        Gauss points per panel of the flux surface's mirror disc (:data:`FLUX_DISC_POINTS`).
 
     Returns
     -------
@@ -476,7 +495,7 @@ def build_fullwave_surrogate(
         bodies = dimer_bodies(t * theta_max, spec)
         sol = solve_scattering(bodies, medium)
         dofs = sol.n_dofs
-        gen = dimer_coefficients(sol, t * theta_max, spec, pressure_amplitude_pa, forces)
+        gen = dimer_coefficients(sol, t * theta_max, spec, pressure_amplitude_pa, forces, flux_disc_points)
         for c in _COMPONENTS:
             vals[c][i] = gen[c]
         timings.append(time.perf_counter() - t0)
@@ -503,7 +522,7 @@ def build_fullwave_surrogate(
     # I = (pi/4)^2 [2 (m s^2/6) + 2 m arm^2 sin^2 phi] (sharp-cube moment of inertia about the centre)
     i_const = (np.pi / 4) ** 2 * 2 * m * s**2 / 6
     i_sin2 = (np.pi / 4) ** 2 * 2 * m * arm**2
-    settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces)
+    settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces, flux_disc_points)
     settings.update(pressure_amplitude_pa=float(pressure_amplitude_pa), gravity_m_s2=float(gravity), model="fullwave")
     sur = FullwaveSurrogate(
         coefficients=coefs, theta_max=float(theta_max), two_k=2 * medium.wavenumber, wavenumber=medium.wavenumber,
@@ -571,7 +590,10 @@ def build_settings_of(sur: FullwaveSurrogate) -> dict:
     """The keyed build settings stored in a table."""
     s = sur.settings
     keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5))
-    return {k: s.get(k) for k in keys}
+    out = {k: s.get(k) for k in keys}
+    if s.get("flux_disc_points", FLUX_DISC_POINTS) != FLUX_DISC_POINTS:
+        out["flux_disc_points"] = int(s["flux_disc_points"])
+    return out
 
 
 def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> FullwaveSurrogate:

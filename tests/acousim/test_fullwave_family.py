@@ -13,7 +13,7 @@ import pytest
 from acousim.fullwave import default_fullwave_surrogate
 from acousim.fullwave.family import (FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode, FamilyRangeError, FamilyTableError,
                                      FullwaveFamily, build_family, dimensionless_coefficients, family_mesh_spec,
-                                     family_nodes, scaled_surrogate)
+                                     family_nodes, load_node, node_path, scaled_surrogate)
 from acousim.fullwave.geometry import TABLE_SPEC
 from acousim.medium import Medium
 from acousim.models import ConditionError, ExperimentConditions, dynamic_model, static_model
@@ -129,6 +129,37 @@ def test_interpolated_model_states_the_mesh_error_of_its_gap_rows(tmp_path, synt
     assert fam.mesh_error(0.04) is None  # the g/s = 0.05 row has no study here
     (tmp_path / "mesh_convergence.json").write_text("{")
     with pytest.raises(FamilyTableError, match="mesh_convergence.json"):
+        FullwaveFamily(tmp_path)
+
+
+def test_flux_disc_quadrature_is_a_keyed_build_setting(tmp_path, synthetic_family_dir):
+    """The flux disc's Gauss points per panel key a table only when they differ from the default, so tables built
+    before it was a setting keep their keys (and cache names); a node asking for another quadrature refuses such a
+    table by name (``build`` then rebuilds it), and a family mixing quadratures is refused."""
+    from acousim.fullwave.surrogate import FLUX_DISC_POINTS, build_settings, build_settings_of
+
+    n_half = default_fullwave_surrogate().settings["n_half"]  # as the synthetic family's tables
+    node6 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9)
+    node12 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9, flux_disc_points=12)
+    assert node6.flux_disc_points == FLUX_DISC_POINTS == 6
+    assert "flux_disc_points" not in node6.expected_settings()
+    assert node12.expected_settings()["flux_disc_points"] == 12
+    assert "flux_disc_points" not in build_settings(TABLE_SPEC, Medium(), 2160.0, 6, 0.9, "surface", 12)
+    with pytest.raises(ValueError, match="flux disc points"):
+        FamilyNode(0.3, 0.02, flux_disc_points=1)
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, tmp_path / p.name)
+    path = node_path(tmp_path, node6)
+    assert build_settings_of(load_node(path, node6)).get("flux_disc_points") is None  # no key: the default
+    with pytest.raises(FamilyTableError, match="built with other settings"):
+        load_node(path, node12)
+    table = json.loads(path.read_text())
+    table["settings"]["flux_disc_points"] = 12
+    path.write_text(json.dumps(table))
+    assert build_settings_of(load_node(path, node12))["flux_disc_points"] == 12
+    with pytest.raises(FamilyTableError, match="built with other settings"):
+        load_node(path, node6)
+    with pytest.raises(FamilyTableError, match="different flux quadratures"):
         FullwaveFamily(tmp_path)
 
 
