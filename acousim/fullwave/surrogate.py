@@ -41,8 +41,9 @@ from cubedimer.atomic import write_json
 
 from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
 from ..medium import GRAVITY, Medium
-from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm, hinge_edge_b,
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
                        rounded_cube_volume)
+from .flux import FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
 from .solver import HeightStructure, solve_scattering
 
 __all__ = [
@@ -105,49 +106,6 @@ def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm:
         for t, f in ((hs.torque_a, hs.force_a), (hs.torque_b, hs.force_b), (hs.torque_c, hs.force_c))
     ])
     return {"fz": fz, "qt": qt}
-
-
-#: Gauss points per panel of the mirror disc of the flux surface (:func:`cube_b_flux_surface`) unless a table's
-#: settings say otherwise.  6 leave the hinge torque 3-5 % off at the folding barrier (theta ~ 0.9, where the disc
-#: runs through a 9-degree wedge) and converge it below |theta| = 0.72; 12 converge it to 0.03 % at theta = 0.89
-#: for 4 times the flux's cost (docs/fullwave.md, "The cause").
-FLUX_DISC_POINTS = 6
-
-
-def cube_b_flux_surface(solution, theta: float, spec: DimerMeshSpec, n_polar: int = 20,
-                        disc_points: int = FLUX_DISC_POINTS):
-    """The closed surface around cube B of :func:`dimer_flux_coefficients`: the half sphere X > 0 of 1.6 times
-    the farthest vertex's radius, closed by the mirror disc X = 0 graded towards cube B's hinge edge, with
-    ``disc_points`` Gauss points per disc panel."""
-    from .flux import mirror_half_surface
-
-    radius = 1.6 * float(np.max(np.linalg.norm(solution.vertices, axis=1)))
-    # cube B's hinge edge (body frame u = -s/2, w = +s/2) posed as dimer_bodies poses the cube
-    x_h, _, z_h = hinge_edge_b(theta, spec)
-    return mirror_half_surface(radius, z_h, 0.5 * spec.side, h0=0.3 * x_h, n_polar=n_polar, n_gauss=disc_points)
-
-
-def dimer_flux_coefficients(solution, theta: float, spec: DimerMeshSpec, pressure_amplitude_pa: float = 1.0,
-                            n_polar: int = 20, disc_points: int = FLUX_DISC_POINTS) -> dict[str, NDArray[np.float64]]:
-    """(A, B, C) of the total F_Z [N] and of Q_theta [N m] from momentum fluxes (:mod:`acousim.fullwave.flux`).
-
-    Cube B's force and torque are the flux through the half sphere X > 0 closed by the mirror disc X = 0 (through
-    the hinge gap); cube A's are their mirror images.  Q_theta as in :func:`dimer_generalized_coefficients`.
-    The sphere's radius is 1.6 times the farthest vertex; the disc's first panels are 0.3 times the distance
-    from the hinge edge to the disc.
-    """
-    from .flux import ExteriorField, flux_height_structure
-
-    med = solution.medium
-    arm = hinge_arm(spec)
-    cube_b = solution.bodies[1]
-    phi = np.pi * float(theta) / 4
-    surface = cube_b_flux_surface(solution, theta, spec, n_polar, disc_points)
-    force, torque = flux_height_structure(ExteriorField(solution), surface, cube_b.centre, med.density_kg_m3,
-                                          med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, pressure_amplitude_pa)
-    # mirror images: F_A = (-F_B,X, F_B,Y, F_B,Z), tau_A,Y = -tau_B,Y
-    qt = (np.pi / 4) * (2.0 * torque[:, 1] - arm * np.sin(phi) * 2.0 * force[:, 0])
-    return {"fz": 2.0 * force[:, 2], "qt": qt, "fx_b": force[:, 0]}
 
 
 #: How a table's forces and torques are integrated: the momentum flux through surfaces away from the cubes

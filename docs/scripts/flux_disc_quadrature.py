@@ -23,28 +23,18 @@ import numpy as np
 
 
 def pose_torques(ks: float, gap_ratio: float, theta: float, refine: float, disc_points: list[int]) -> dict[int, list]:
-    """{disc points: [A, B, C] of Q_theta [N m]} of one solve."""
+    """{disc points: [A, B, C] of Q_theta [N m]} of one solve (the tables' flux, ``dimer_flux_coefficients``)."""
     from acousim.fullwave.family import REFERENCE, FamilyNode, family_mesh_spec
-    from acousim.fullwave.flux import ExteriorField, flux_height_structure, mirror_half_surface
-    from acousim.fullwave.geometry import dimer_bodies, hinge_arm, hinge_edge_b
+    from acousim.fullwave.flux import dimer_flux_coefficients
+    from acousim.fullwave.geometry import dimer_bodies
     from acousim.fullwave.solver import solve_scattering
 
     node = FamilyNode(ks, gap_ratio)
     side = REFERENCE["side_m"]
     spec = family_mesh_spec(side, gap_ratio * side, refine=refine, refine_faces=True)
     sol = solve_scattering(dimer_bodies(theta, spec), node.medium)
-    med, field = sol.medium, ExteriorField(sol)
-    radius = 1.6 * float(np.max(np.linalg.norm(sol.vertices, axis=1)))  # as cube_b_flux_surface
-    x_h, _, z_h = hinge_edge_b(theta, spec)
-    out = {}
-    for n in disc_points:
-        surface = mirror_half_surface(radius, z_h, 0.5 * side, h0=0.3 * x_h, n_polar=20, n_gauss=n)
-        force, torque = flux_height_structure(field, surface, sol.bodies[1].centre, med.density_kg_m3,
-                                              med.sound_speed_m_s, 2 * np.pi * med.frequency_hz,
-                                              REFERENCE["pressure_amplitude_pa"])
-        phi = np.pi * theta / 4  # as dimer_flux_coefficients
-        out[n] = ((np.pi / 4) * (2.0 * torque[:, 1] - hinge_arm(spec) * np.sin(phi) * 2.0 * force[:, 0])).tolist()
-    return out
+    return {n: dimer_flux_coefficients(sol, theta, spec, REFERENCE["pressure_amplitude_pa"], disc_points=n)["qt"].tolist()
+            for n in disc_points}
 
 
 def cubic_miss(values: dict[float, np.ndarray], nodes: list[float], target: float, check: Path) -> float:

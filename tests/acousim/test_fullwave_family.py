@@ -136,7 +136,8 @@ def test_flux_disc_quadrature_is_a_keyed_build_setting(tmp_path, synthetic_famil
     """The flux disc's Gauss points per panel key a table only when they differ from the default, so tables built
     before it was a setting keep their keys (and cache names); a node asking for another quadrature refuses such a
     table by name (``build`` then rebuilds it), and a family mixing quadratures is refused."""
-    from acousim.fullwave.surrogate import FLUX_DISC_POINTS, build_settings, build_settings_of
+    from acousim.fullwave.flux import FLUX_DISC_POINTS
+    from acousim.fullwave.surrogate import build_settings, build_settings_of
 
     n_half = default_fullwave_surrogate().settings["n_half"]  # as the synthetic family's tables
     node6 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9)
