@@ -21,7 +21,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["SUITE_PACKAGES", "source_fingerprint", "compile_cache_dir", "configure_compile_cache"]
+__all__ = ["SUITE_PACKAGES", "source_fingerprint", "compile_cache_dir", "configure_compile_cache", "kernel_array"]
 
 log = logging.getLogger(__name__)
 
@@ -65,3 +65,12 @@ def configure_compile_cache() -> Path:
     config.CACHE_DIR = str(folder)
     log.debug("numba cache: %s", folder)
     return folder
+
+
+def kernel_array(a, dtype=float):
+    """``a`` as a C-contiguous, writeable array of ``dtype`` (a copy only where needed), for the arguments of a
+    compiled entry point.  numba compiles one specialisation per array type, and read-only arrays (broadcasts,
+    frozen inputs) are another type: passing every argument through here compiles each entry point once."""
+    import numpy as np
+
+    return np.require(a, dtype=dtype, requirements=("C", "W"))

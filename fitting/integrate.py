@@ -22,6 +22,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.compile_cache import kernel_array
 from cubedimer.rk4 import rk4
 
 __all__ = ["integrate", "integrate_batch", "rhs"]
@@ -71,17 +72,10 @@ def _integrate_many(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid
         n_valid[b] = _integrate_one(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps, bounds[b], out[b])
 
 
-def _kernel_array(a, dtype=float) -> NDArray:
-    """``a`` as a C-contiguous, writeable array of ``dtype`` (a copy only where needed).  numba compiles one
-    specialisation per array type, and read-only arrays (broadcasts, frozen inputs) are another type: every
-    argument of the compiled entry points goes through here, so that each is compiled once."""
-    return np.require(a, dtype=dtype, requirements=("C", "W"))
-
-
 def _as_bound(bound, n: int | None = None) -> NDArray[np.float64]:
     if bound is None:
         bound = np.inf
-    return _kernel_array(np.broadcast_to(np.asarray(bound, dtype=float), (4,) if n is None else (n, 4)))
+    return kernel_array(np.broadcast_to(np.asarray(bound, dtype=float), (4,) if n is None else (n, 4)))
 
 
 def integrate(
@@ -119,11 +113,11 @@ def integrate(
     n_valid : int
         Number of valid rows (``n_out`` unless the model left the bound).
     """
-    exps = _kernel_array(exps, np.int64)
+    exps = kernel_array(exps, np.int64)
     if exps.max(initial=0) > _MAXPOW:
         raise ValueError(f"monomial powers above {_MAXPOW} are not supported")
     out = np.full((int(n_out), 4), np.nan)
-    nv = _integrate_one(_kernel_array(coef), exps, _kernel_array(x0), float(dt), int(n_out), int(substeps),
+    nv = _integrate_one(kernel_array(coef), exps, kernel_array(x0), float(dt), int(n_out), int(substeps),
                         _as_bound(bound), out)
     return out, int(nv)
 
@@ -157,17 +151,17 @@ def integrate_batch(
     traj : ndarray, shape (B, max(n_out), 4)
     n_valid : ndarray of int, shape (B,)
     """
-    x0s = _kernel_array(np.atleast_2d(x0s))
+    x0s = kernel_array(np.atleast_2d(x0s))
     B = x0s.shape[0]
     coefs = np.asarray(coefs, dtype=float)
     if coefs.ndim == 2:
         coefs = np.broadcast_to(coefs, (B,) + coefs.shape)
-    coefs = _kernel_array(coefs)
-    dts = _kernel_array(np.broadcast_to(np.asarray(dt, dtype=float), (B,)))
-    n_outs = _kernel_array(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)), np.int64)
+    coefs = kernel_array(coefs)
+    dts = kernel_array(np.broadcast_to(np.asarray(dt, dtype=float), (B,)))
+    n_outs = kernel_array(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)), np.int64)
     out = np.full((B, int(n_outs.max()), 4), np.nan)
     n_valid = np.zeros(B, dtype=np.int64)
-    _integrate_many(coefs, _kernel_array(exps, np.int64), x0s, dts, n_outs, int(substeps), _as_bound(bound, B), out,
+    _integrate_many(coefs, kernel_array(exps, np.int64), x0s, dts, n_outs, int(substeps), _as_bound(bound, B), out,
                     n_valid)
     return out, n_valid
 

@@ -169,10 +169,8 @@ def node_path(directory: str | os.PathLike, node: FamilyNode) -> Path:
 def _matches(sur: FullwaveSurrogate, node: FamilyNode) -> bool:
     exp = node.expected_settings()
     got = build_settings_of(sur)
-    if got.get("flux_disc_points") != exp.get("flux_disc_points"):  # a key only when not the default
-        return False
-    for k, v in exp.items():
-        g = got.get(k)
+    for k in exp.keys() | got.keys():  # both ways: a setting keyed only when not its default (flux_disc_points)
+        v, g = exp.get(k), got.get(k)
         if isinstance(v, float):
             if g is None or not np.isclose(float(g), v, rtol=1e-9, atol=0.0):
                 return False
@@ -339,7 +337,7 @@ class FullwaveFamily:
 
     def __init__(self, directory: str | os.PathLike = FAMILY_DIR):
         self.directory = Path(directory)
-        tables = {}
+        tables, quadratures = {}, set()
         for path in sorted(self.directory.glob("ks*_g*.json")):
             sur = load_node(path)
             ba = sur.build_accuracy
@@ -347,11 +345,12 @@ class FullwaveFamily:
                 raise FamilyTableError(f"{path}: not a family node (no ks / gap_ratio in its build record)")
             node = FamilyNode(float(ba["ks"]), float(ba["gap_ratio"]), int(sur.settings["n_half"]),
                               float(sur.settings["theta_max"]),
-                              int(sur.settings.get("flux_disc_points", FLUX_DISC_POINTS)))
+                              int(build_settings_of(sur).get("flux_disc_points", FLUX_DISC_POINTS)))
             if path.name != node_path(self.directory, node).name or not _matches(sur, node):
                 raise FamilyTableError(f"{path}: its settings do not match its node {node.name} (file renamed or "
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
             tables[(node.ks, node.gap_ratio)] = sur
+            quadratures.add(node.flux_disc_points)
         self.tables = tables
         ks = sorted({k for k, _ in tables})
         gaps = sorted({g for _, g in tables})
@@ -373,10 +372,9 @@ class FullwaveFamily:
             lengths = {len(np.asarray(t.coefficients["qt"][0])) for t in tables.values()}
             if len(lengths) != 1 or any(t.theta_max != self.theta_max for t in tables.values()):
                 raise FamilyTableError(f"{self.directory}: node tables with different theta series")
-            points = {int(t.settings.get("flux_disc_points", FLUX_DISC_POINTS)) for t in tables.values()}
-            if len(points) != 1:
+            if len(quadratures) != 1:
                 raise FamilyTableError(f"{self.directory}: node tables built with different flux quadratures "
-                                       f"({sorted(points)} disc points per panel); rebuild them with {BUILD_HINT}")
+                                       f"({sorted(quadratures)} disc points per panel); rebuild them with {BUILD_HINT}")
         acc = self.directory / "accuracy.json"
         try:
             self.accuracy = json.loads(acc.read_text()) if acc.exists() else {}

@@ -31,6 +31,8 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from cubedimer.compile_cache import kernel_array
+
 from .config import TwinError
 
 __all__ = ["VideoCamera", "dimer_squares", "render_coverage", "render_frames", "record_video", "write_video_tiff",
@@ -203,8 +205,7 @@ def render_coverage(centres: NDArray, angles: NDArray, half_sides, shape: tuple[
     centres = np.ascontiguousarray(centres, float)
     angles = np.ascontiguousarray(angles, float)
     n, k = angles.shape
-    # writeable (a broadcast is read-only, another array type to numba: a second compiled specialisation)
-    halves = np.require(np.broadcast_to(np.asarray(half_sides, float), (k,)), requirements=("C", "W"))
+    halves = kernel_array(np.broadcast_to(np.asarray(half_sides, float), (k,)))
     m = int(subsamples)
     s_eff = math.sqrt(sigma ** 2 + 1.0 / (12.0 * m * m))
     out = np.zeros((n, int(shape[0]), int(shape[1])), np.float32)

@@ -161,13 +161,7 @@ def drift_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
 
     nodes = np.asarray(nodes, float)
     tc = np.clip(np.asarray(t, float), nodes[0], nodes[-1])
-    if nodes.size < 3:
-        eye = np.eye(nodes.size)
-        return np.column_stack([np.interp(tc, nodes, eye[k]) for k in range(nodes.size)])
-    if nodes.size == 3:  # not-a-knot through 3 points is their parabola
-        basis = [np.prod([(tc - nodes[j]) / (nodes[k] - nodes[j]) for j in range(3) if j != k], axis=0)
-                 for k in range(3)]
-        return np.column_stack(basis)
+    # scipy's not-a-knot spline is the parabola through 3 points and the line through 2
     return CubicSpline(nodes, np.eye(nodes.size), bc_type="not-a-knot", axis=0)(tc)
 
 
