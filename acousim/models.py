@@ -178,6 +178,11 @@ class ForceModelType:
         ``calibratable(conditions) -> {field: (lo, hi, default)}``: model parameters (fields of
         :class:`ExperimentConditions`) that the data may determine, with the range the model covers and the value
         it takes when they do not (the full-wave hinge gap); the diagnosis profiles each one the user left unset.
+    parameter_model_error : callable, optional
+        ``parameter_model_error(conditions) -> {field: fraction}``: the relative error of each calibratable
+        parameter at ``conditions`` that the model's own stated error implies (a systematic error that no amount of
+        data reduces: the full-wave gap inherits the family's stated hinge-stiffness error through the stiffness's
+        logarithmic sensitivity to the gap); a field may map to None when the model states no error there.
     """
 
     name: str
@@ -187,6 +192,7 @@ class ForceModelType:
     options: frozenset = field(default_factory=frozenset)
     capabilities: frozenset = field(default_factory=frozenset)
     calibratable: Callable[[ExperimentConditions], dict] | None = None
+    parameter_model_error: Callable[[ExperimentConditions], dict] | None = None
 
     def calibration_ranges(self, conditions: ExperimentConditions) -> dict[str, tuple[float, float, float]]:
         """``{field: (lo, hi, default)}`` of the parameters the data may determine ({} for none)."""
@@ -285,6 +291,27 @@ def _fullwave_static(c: ExperimentConditions):
     return FullwaveDimer(_fullwave_dynamic(c))
 
 
+#: Relative step in the gap of the hinge stiffness's logarithmic sensitivity d ln k / d ln g.
+GAP_SENSITIVITY_STEP = 0.05
+
+
+def _fullwave_gap_model_error(c: ExperimentConditions) -> dict:
+    """The gap's relative error implied by the stated error e of the hinge stiffness k at the dimer's gap (the
+    family's mesh error plus its interpolation error): e / |d ln k / d ln g|, the derivative by central differences
+    over +-5 % in g (one-sided at an end of the family's range); None when the family states no mesh error there."""
+    lo, hi, _ = _fullwave_gap_range(c)["gap_m"]
+    g = float(c.gap_m)
+    sur = _fullwave_dynamic(c)
+    mesh, interp = sur.settings.get("mesh_error_hinge_stiffness"), sur.settings.get("interpolation_error_hinge_stiffness")
+    if mesh is None:
+        return {"gap_m": None}
+    g_up, g_dn = min(g * (1 + GAP_SENSITIVITY_STEP), hi), max(g * (1 - GAP_SENSITIVITY_STEP), lo)
+    k_up, k_dn = (abs(_fullwave_dynamic(replace(c, gap_m=v)).hinge_stiffness()) for v in (g_up, g_dn))
+    slope = abs(math.log(k_up / k_dn) / math.log(g_up / g_dn))
+    error = float(mesh) + float(interp or 0.0)
+    return {"gap_m": error / slope if slope > 0 else float("inf")}
+
+
 def _fullwave_gap_range(c: ExperimentConditions) -> dict:
     """The hinge gaps [m] the shipped family covers at this dimer's ks, and the gap the model takes when the data
     do not determine it: 0.01 s (the default dimer's direct table, or inside the family), else the covered gap
@@ -303,4 +330,5 @@ def _fullwave_gap_range(c: ExperimentConditions) -> dict:
 
 register_force_model(ForceModelType(
     "fullwave", "the full-wave (boundary-element) scattering by both cubes, from the table family over (ks, g/s)",
-    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range))
+    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range,
+    parameter_model_error=_fullwave_gap_model_error))

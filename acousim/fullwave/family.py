@@ -48,7 +48,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
 from .surrogate import (_COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate,
-                        build_settings_of, FLUX_DISC_POINTS)
+                        build_settings_of, FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS)
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
@@ -345,7 +345,7 @@ class FullwaveFamily:
                 raise FamilyTableError(f"{path}: not a family node (no ks / gap_ratio in its build record)")
             node = FamilyNode(float(ba["ks"]), float(ba["gap_ratio"]), int(sur.settings["n_half"]),
                               float(sur.settings["theta_max"]),
-                              int(build_settings_of(sur).get("flux_disc_points", FLUX_DISC_POINTS)))
+                              int(build_settings_of(sur).get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS)))
             if path.name != node_path(self.directory, node).name or not _matches(sur, node):
                 raise FamilyTableError(f"{path}: its settings do not match its node {node.name} (file renamed or "
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
@@ -466,6 +466,7 @@ class FullwaveFamily:
             acc["interpolation_error"] = summary
         stated = {"table_source": acc["source"], "family_range": acc["family_range"],
                   "interpolation_error_q_y": summary.get("q_y"), "interpolation_error_q_theta": summary.get("q_theta"),
+                  "interpolation_error_hinge_stiffness": summary.get("stiffness"),
                   "mesh_error_hinge_stiffness": self.mesh_error(ratio)}
         return scaled_surrogate(coefs, self.theta_max, side, gap, medium, particle_density, pressure_amplitude_pa,
                                 gravity, settings={"n_half": len(coefs["qt"][0]) // 2, "family": True, **stated},
@@ -587,7 +588,8 @@ def family_accuracy(family: FullwaveFamily, checks: Sequence[FullwaveSurrogate])
     summary = {"q_y": max((r["q_y"] for r in rows), default=None),
                "q_theta": max((r["q_theta"] for r in rows), default=None),
                "q_theta_inner": max((r["q_theta_inner"] for r in rows), default=None),
-               "f_theta": max((abs(r["f_theta"]) for r in rows), default=None), "n_checks": len(rows),
+               "f_theta": max((abs(r["f_theta"]) for r in rows), default=None),
+               "stiffness": max((abs(r["stiffness"]) for r in rows), default=None), "n_checks": len(rows),
                "family_range": family.describe_range(),
                "note": "the largest errors of the family's interpolation against direct-solve tables between its "
                        "nodes, relative to max |Q| over |theta| <= 0.9 and y -1.0..+0.8 mm (docs/fullwave.md)"}

@@ -45,7 +45,8 @@ def add_parser(subparsers) -> None:
                    help="half-width of the theta range of every node table")
     b.add_argument("--flux-disc-points", type=int, default=FAMILY_BUILD["flux_disc_points"],
                    help="Gauss points per panel of the flux surface's mirror disc (12 converge the hinge torque at "
-                        "the folding barrier, docs/fullwave.md; existing tables built otherwise are rebuilt)")
+                        "the folding barrier, 6 leave it 3-5 %% off there, docs/fullwave.md; existing tables built "
+                        "otherwise are rebuilt)")
     b.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_executor_arguments(b, "One task is one node table.")
     b.set_defaults(func=run_build)
@@ -69,8 +70,8 @@ def run_build(args: argparse.Namespace) -> int:
     if not 0 < args.theta_max < 1:
         raise UserInputError(f"--theta-max {args.theta_max}: must lie in (0, 1)")
     if not 2 <= args.flux_disc_points <= 32:
-        raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in 2..32 (the tables: 6; "
-                             f"12 converge the folding barrier)")
+        raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in 2..32 (the shipped "
+                             f"family: {FAMILY_BUILD['flux_disc_points']}, which converge the folding barrier)")
     try:
         if args.points:
             pairs = [p.split(":") for p in args.points.split(",") if p.strip()]

@@ -37,7 +37,7 @@ from .geometry import DimerMeshSpec, hinge_arm, hinge_edge_b
 from .solver import ScatteringSolution, triangle_rule
 
 __all__ = ["double_layer_potential", "ExteriorField", "FluxSurface", "enclosing_sphere_surface", "mirror_half_surface",
-           "flux_height_structure", "FLUX_DISC_POINTS", "cube_b_flux_surface", "dimer_flux_coefficients"]
+           "flux_height_structure", "FLUX_DISC_POINTS", "UNKEYED_FLUX_DISC_POINTS", "cube_b_flux_surface", "dimer_flux_coefficients"]
 
 
 _INV_4PI = 1.0 / (4.0 * np.pi)
@@ -349,11 +349,14 @@ def flux_height_structure(field: ExteriorField, surface: FluxSurface, centre, de
     return force, torque
 
 
-#: Gauss points per panel of the mirror disc of the flux surface (:func:`cube_b_flux_surface`) unless a table's
-#: settings say otherwise.  6 leave the hinge torque 3-5 % off at the folding barrier (theta ~ 0.9, where the disc
-#: runs through a 9-degree wedge) and converge it below |theta| = 0.72; 12 converge it to 0.03 % at theta = 0.89
-#: for 4 times the flux's cost (docs/fullwave.md, "The cause").
-FLUX_DISC_POINTS = 6
+#: Gauss points per panel of the mirror disc of the flux surface (:func:`cube_b_flux_surface`) for every new
+#: build.  At the folding barrier (theta ~ 0.9) the disc runs through a 9-degree wedge between the inner faces:
+#: 12 points converge the hinge torque there to 0.03 %, where 6 leave it 3-5 % off (below |theta| = 0.72 both
+#: agree to 0.1 %); the flux costs 4 times as much with 12 (docs/fullwave.md, "The cause").
+FLUX_DISC_POINTS = 12
+#: The disc's points of a table whose settings carry no ``flux_disc_points``: tables are keyed by it only when it
+#: differs from this value, so that the keys and file names of tables built with 6 points stay what they were.
+UNKEYED_FLUX_DISC_POINTS = 6
 
 
 def cube_b_flux_surface(solution: ScatteringSolution, theta: float, spec: DimerMeshSpec, n_polar: int = 20,

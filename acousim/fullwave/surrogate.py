@@ -43,7 +43,7 @@ from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_be
 from ..medium import GRAVITY, Medium
 from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
                        rounded_cube_volume)
-from .flux import FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
+from .flux import FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
 from .solver import HeightStructure, solve_scattering
 
 __all__ = [
@@ -56,6 +56,7 @@ __all__ = [
     "dimer_flux_coefficients",
     "dimer_coefficients",
     "FLUX_DISC_POINTS",
+    "UNKEYED_FLUX_DISC_POINTS",
     "FORCE_METHODS",
     "DEFAULT_TABLE",
     "DEFAULT_BUILD",
@@ -386,14 +387,14 @@ def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: 
                    forces: str = "flux", flux_disc_points: int = FLUX_DISC_POINTS) -> dict:
     """The settings a table is keyed by (pressure excluded: tables are rescaled exactly).
 
-    ``flux_disc_points`` is a key only when it differs from :data:`FLUX_DISC_POINTS` (with ``forces="flux"``), so
-    that tables built before it was a setting keep their keys and file names."""
+    ``flux_disc_points`` is a key only when it differs from :data:`UNKEYED_FLUX_DISC_POINTS` (6, with
+    ``forces="flux"``), so that tables built with 6 points keep their keys and file names."""
     out = {
         **spec.settings(), "frequency_hz": medium.frequency_hz, "sound_speed_m_s": medium.sound_speed_m_s,
         "air_density_kg_m3": medium.density_kg_m3, "particle_density_kg_m3": float(density),
         "n_half": int(n_half), "theta_max": float(theta_max), "forces": str(forces),
     }
-    if forces == "flux" and int(flux_disc_points) != FLUX_DISC_POINTS:
+    if forces == "flux" and int(flux_disc_points) != UNKEYED_FLUX_DISC_POINTS:
         out["flux_disc_points"] = int(flux_disc_points)
     return out
 
@@ -547,9 +548,9 @@ def cached_fullwave_surrogate(
 def build_settings_of(sur: FullwaveSurrogate) -> dict:
     """The keyed build settings stored in a table."""
     s = sur.settings
-    keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5))
+    keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5, flux_disc_points=UNKEYED_FLUX_DISC_POINTS))
     out = {k: s.get(k) for k in keys}
-    if s.get("flux_disc_points", FLUX_DISC_POINTS) != FLUX_DISC_POINTS:
+    if s.get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS) != UNKEYED_FLUX_DISC_POINTS:
         out["flux_disc_points"] = int(s["flux_disc_points"])
     return out
 

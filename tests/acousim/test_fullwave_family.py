@@ -133,33 +133,34 @@ def test_interpolated_model_states_the_mesh_error_of_its_gap_rows(tmp_path, synt
 
 
 def test_flux_disc_quadrature_is_a_keyed_build_setting(tmp_path, synthetic_family_dir):
-    """The flux disc's Gauss points per panel key a table only when they differ from the default, so tables built
-    before it was a setting keep their keys (and cache names); a node asking for another quadrature refuses such a
+    """The flux disc's Gauss points per panel key a table only when they differ from 6, so tables built with 6
+    keep their keys (and cache names) and read as 6; new nodes default to the converged 12 and refuse a 6-point
     table by name (``build`` then rebuilds it), and a family mixing quadratures is refused."""
-    from acousim.fullwave.flux import FLUX_DISC_POINTS
+    from acousim.fullwave.flux import FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS
     from acousim.fullwave.surrogate import build_settings, build_settings_of
 
+    assert (FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS) == (12, 6)
     n_half = default_fullwave_surrogate().settings["n_half"]  # as the synthetic family's tables
-    node6 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9)
-    node12 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9, flux_disc_points=12)
-    assert node6.flux_disc_points == FLUX_DISC_POINTS == 6
-    assert "flux_disc_points" not in node6.expected_settings()
+    node12 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9)
+    node6 = FamilyNode(FAMILY_KS[0], FAMILY_GAP_RATIOS[0], n_half, 0.9, flux_disc_points=6)
+    assert node12.flux_disc_points == 12
     assert node12.expected_settings()["flux_disc_points"] == 12
+    assert "flux_disc_points" not in node6.expected_settings()
     assert "flux_disc_points" not in build_settings(TABLE_SPEC, Medium(), 2160.0, 6, 0.9, "surface", 12)
     with pytest.raises(ValueError, match="flux disc points"):
         FamilyNode(0.3, 0.02, flux_disc_points=1)
     for p in synthetic_family_dir.glob("*.json"):
         shutil.copy(p, tmp_path / p.name)
-    path = node_path(tmp_path, node6)
-    assert build_settings_of(load_node(path, node6)).get("flux_disc_points") is None  # no key: the default
-    with pytest.raises(FamilyTableError, match="built with other settings"):
-        load_node(path, node12)
-    table = json.loads(path.read_text())
-    table["settings"]["flux_disc_points"] = 12
-    path.write_text(json.dumps(table))
+    path = node_path(tmp_path, node12)
     assert build_settings_of(load_node(path, node12))["flux_disc_points"] == 12
     with pytest.raises(FamilyTableError, match="built with other settings"):
         load_node(path, node6)
+    table = json.loads(path.read_text())
+    del table["settings"]["flux_disc_points"]  # a table from before the setting: 6 points
+    path.write_text(json.dumps(table))
+    assert build_settings_of(load_node(path, node6)).get("flux_disc_points") is None
+    with pytest.raises(FamilyTableError, match="built with other settings"):
+        load_node(path, node12)
     with pytest.raises(FamilyTableError, match="different flux quadratures"):
         FullwaveFamily(tmp_path)
 
@@ -244,6 +245,38 @@ def test_registry_gives_the_family_dimer(use_synthetic_family):
     assert fw.record()["gap_m"] == 10e-6
     dyn = dynamic_model("fullwave", c)
     np.testing.assert_allclose(dyn.coefficients["qt"], fw.surrogate.coefficients["qt"], rtol=0)
+
+
+def test_gap_model_error_is_the_stiffness_error_over_its_gap_sensitivity(tmp_path, synthetic_family_dir, monkeypatch):
+    """The gap's systematic error from the family's stated hinge-stiffness error e (mesh + interpolation):
+    e / |d ln k / d ln g|.  In the synthetic family k is proportional to 1 + a L + b L^2 (L = log(g / 0.01 s)), so
+    the sensitivity is (a + 2 b L) / (1 + a L + b L^2) exactly; none is stated where the family has no mesh study."""
+    from acousim.fullwave.family import FAMILY_ENV
+    from acousim.models import force_model_type
+
+    from ..conftest import SYNTHETIC_FAMILY
+
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, tmp_path / p.name)
+    g = FAMILY_GAP_RATIOS
+    rows = [{"gap_over_side": v, "stated_error": e} for v, e in zip(g, (0.016, 0.028, 0.031, 0.0024))]
+    (tmp_path / "mesh_convergence.json").write_text(json.dumps({"gap_rows": rows}))
+    (tmp_path / "accuracy.json").write_text(json.dumps({"checks": [], "summary": {"stiffness": 0.011}}))
+    monkeypatch.setenv(FAMILY_ENV, str(tmp_path))
+    c = ExperimentConditions(side_length_m=600e-6, gap_m=0.02 * 600e-6)
+    rel = force_model_type("fullwave").parameter_model_error(c)["gap_m"]
+    a, b, L = SYNTHETIC_FAMILY["gap_slope"], SYNTHETIC_FAMILY["gap_curv"], np.log(2.0)
+    slope = (a + 2 * b * L) / (1 + a * L + b * L**2)
+    # the rows around g/s = 0.02 state 2.8 and 3.1 %: the larger; the sensitivity by central differences over
+    # +-5 % in g, whose error on this smooth log-quadratic is below 1e-4 of it
+    np.testing.assert_allclose(rel, (0.031 + 0.011) / abs(slope), rtol=1e-3)
+    partial = tmp_path / "partial"  # another directory: the family is read anew
+    partial.mkdir()
+    for p in synthetic_family_dir.glob("*.json"):
+        shutil.copy(p, partial / p.name)
+    (partial / "mesh_convergence.json").write_text(json.dumps({"gap_rows": rows[:2]}))
+    monkeypatch.setenv(FAMILY_ENV, str(partial))
+    assert force_model_type("fullwave").parameter_model_error(c)["gap_m"] is None
 
 
 def test_the_default_dimer_keeps_its_direct_solve_table():

@@ -191,16 +191,27 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
 
 def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
     """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
-    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable."""
+    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable, and
+    ``gap_model_error_m`` for a calibrated one whose model states its error (the systematic error the model's own
+    stated accuracy implies; None otherwise)."""
     from acousim.models import force_model_type
 
+    mtype = force_model_type(model_name)
     out = {}
-    for name in force_model_type(model_name).calibration_ranges(conditions):
+    model_errors = None
+    for name in mtype.calibration_ranges(conditions):
         base, unit = name.rsplit("_", 1)
         pc = calibrated.get(name)
         out[name] = float(getattr(conditions, name))
         out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
         out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
+        model_error = None
+        if pc is not None and pc.calibrated and mtype.parameter_model_error is not None:
+            if model_errors is None:
+                model_errors = mtype.parameter_model_error(conditions)
+            rel = model_errors.get(name)
+            model_error = None if rel is None or not np.isfinite(rel) else float(rel) * out[name]
+        out[f"{base}_model_error_{unit}"] = model_error
         out[f"{base}_note"] = pc.note if pc is not None else f"the {_label(name)} given by the user"
         if pc is not None:
             out[f"{base}_profile"] = pc.to_dict()

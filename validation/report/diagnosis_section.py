@@ -125,8 +125,13 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     gap_text = ""
     if "gap_m" in cal:  # the full-wave model's hinge gap: calibrated with its standard error, or why not
         if cal.get("gap_calibrated"):
+            model_error = cal.get("gap_model_error_m")
             gap_text = (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
-                        f"{cal['gap_std_m'] * 1e6:.2g} um (an effective gap of the inviscid full-wave model). ")
+                        f"{cal['gap_std_m'] * 1e6:.2g} um (standard error; an effective gap of the inviscid full-wave "
+                        "model)"
+                        + (f", and +- {model_error * 1e6:.2g} um more from the model's own stated accuracy of the hinge "
+                           "stiffness (mesh and interpolation of the table family), which more data do not reduce"
+                           if model_error else "") + ". ")
         else:
             std = cal.get("gap_std_m")
             gap_text = (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
