@@ -519,6 +519,7 @@ def cached_fullwave_surrogate(
     theta_max: float = 0.9,
     cache_dir: str | os.PathLike | None = None,
     forces: str = "flux",
+    flux_disc_points: int = FLUX_DISC_POINTS,
 ) -> FullwaveSurrogate:
     """The surrogate for these settings: the shipped default table, a cached table, or a new build (saved).
 
@@ -528,7 +529,7 @@ def cached_fullwave_surrogate(
     Tables are keyed by geometry, mesh, medium, density and build settings; the pressure amplitude is
     applied afterwards by the exact p0^2 scaling.
     """
-    key_settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces)
+    key_settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces, flux_disc_points)
     candidates = [DEFAULT_TABLE, Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"]
     for path in candidates:
         if path.exists():
@@ -537,7 +538,7 @@ def cached_fullwave_surrogate(
                 log.debug("full-wave surrogate from %s", path)
                 return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
     sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half, theta_max,
-                                   forces=forces)
+                                   forces=forces, flux_disc_points=flux_disc_points)
     try:
         sur.save(candidates[1])
     except OSError as exc:  # read-only install: keep the result in memory only
