@@ -29,8 +29,7 @@ from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
 from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
-from .surrogate import (COARSE_BUILD, UNKEYED_FLUX_DISC_POINTS, FullwaveSurrogate, build_fullwave_surrogate,
-                        dimer_coefficients)
+from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
 
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "flux_balance", "surrogate_errors",
            "CONVERGED_WITHIN", "add_parser", "run_study"]
@@ -153,8 +152,6 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
     else:
         sur = surrogate.with_pressure(pressure_amplitude_pa)
     spec, forces = DimerMeshSpec.from_settings(sur.settings), sur.settings.get("forces", "flux")
-    # the direct solves integrate the flux as the table did
-    disc_points = int(sur.settings.get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS))
     y = np.asarray(y, float)
     tt, yy = np.meshgrid(np.linspace(-sur.theta_max, sur.theta_max, 19), y, indexing="ij")
     qy_box, qt_box = (np.max(np.abs(q)) for q in sur.generalized_forces(tt, yy))
@@ -162,7 +159,7 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
     for theta in thetas:
         t0 = time.perf_counter()
         sol = solve_scattering(dimer_bodies(theta, spec), sur.medium)
-        g = dimer_coefficients(sol, theta, spec, pressure_amplitude_pa, forces, disc_points)
+        g = dimer_coefficients(sol, theta, spec, pressure_amplitude_pa, forces, sur.flux_disc_points)  # as the table
         ph = sur.two_k * (y + sur.z_eq)
         direct = {c: g[c][0] + g[c][1] * np.cos(ph) + g[c][2] * np.sin(ph) for c in ("fz", "qt")}
         q_y, q_t = sur.generalized_forces(theta, y)

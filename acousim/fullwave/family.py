@@ -48,7 +48,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
 from .surrogate import (_COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate,
-                        build_settings_of, FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS)
+                        build_settings_of, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE)
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
@@ -134,8 +134,9 @@ class FamilyNode:
             raise ValueError(f"ks must lie in [0.05, 2], got {self.ks!r}")
         if not (np.isfinite(self.gap_ratio) and 0.0 < self.gap_ratio <= 0.5):
             raise ValueError(f"g/s must lie in (0, 0.5], got {self.gap_ratio!r}")
-        if not (isinstance(self.flux_disc_points, (int, np.integer)) and 2 <= self.flux_disc_points <= 32):
-            raise ValueError(f"flux disc points must be a whole number in 2..32, got {self.flux_disc_points!r}")
+        lo, hi = FLUX_DISC_POINTS_RANGE
+        if not (isinstance(self.flux_disc_points, (int, np.integer)) and lo <= self.flux_disc_points <= hi):
+            raise ValueError(f"flux disc points must be a whole number in {lo}..{hi}, got {self.flux_disc_points!r}")
 
     @property
     def medium(self) -> Medium:
@@ -345,7 +346,7 @@ class FullwaveFamily:
                 raise FamilyTableError(f"{path}: not a family node (no ks / gap_ratio in its build record)")
             node = FamilyNode(float(ba["ks"]), float(ba["gap_ratio"]), int(sur.settings["n_half"]),
                               float(sur.settings["theta_max"]),
-                              int(build_settings_of(sur).get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS)))
+                              sur.flux_disc_points)
             if path.name != node_path(self.directory, node).name or not _matches(sur, node):
                 raise FamilyTableError(f"{path}: its settings do not match its node {node.name} (file renamed or "
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")

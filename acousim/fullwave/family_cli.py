@@ -6,6 +6,8 @@ import logging
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, float_list
 
+from .flux import FLUX_DISC_POINTS_RANGE
+
 from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
                      FamilyTableError, FullwaveFamily, build_family, family_nodes)
 
@@ -69,8 +71,9 @@ def run_build(args: argparse.Namespace) -> int:
         raise UserInputError(f"--n-half {args.n_half}: at least 2 solves are needed")
     if not 0 < args.theta_max < 1:
         raise UserInputError(f"--theta-max {args.theta_max}: must lie in (0, 1)")
-    if not 2 <= args.flux_disc_points <= 32:
-        raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in 2..32 (the shipped "
+    lo, hi = FLUX_DISC_POINTS_RANGE
+    if not lo <= args.flux_disc_points <= hi:
+        raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in {lo}..{hi} (the shipped "
                              f"family: {FAMILY_BUILD['flux_disc_points']}, which converge the folding barrier)")
     try:
         if args.points:

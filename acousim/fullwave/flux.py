@@ -37,7 +37,8 @@ from .geometry import DimerMeshSpec, hinge_arm, hinge_edge_b
 from .solver import ScatteringSolution, triangle_rule
 
 __all__ = ["double_layer_potential", "ExteriorField", "FluxSurface", "enclosing_sphere_surface", "mirror_half_surface",
-           "flux_height_structure", "FLUX_DISC_POINTS", "UNKEYED_FLUX_DISC_POINTS", "cube_b_flux_surface", "dimer_flux_coefficients"]
+           "flux_height_structure", "FLUX_DISC_POINTS", "UNKEYED_FLUX_DISC_POINTS", "FLUX_DISC_POINTS_RANGE",
+           "cube_b_flux_surface", "dimer_flux_coefficients"]
 
 
 _INV_4PI = 1.0 / (4.0 * np.pi)
@@ -357,6 +358,8 @@ FLUX_DISC_POINTS = 12
 #: The disc's points of a table whose settings carry no ``flux_disc_points``: tables are keyed by it only when it
 #: differs from this value, so that the keys and file names of tables built with 6 points stay what they were.
 UNKEYED_FLUX_DISC_POINTS = 6
+#: The disc's points a build accepts (inclusive).
+FLUX_DISC_POINTS_RANGE = (2, 32)
 
 
 def cube_b_flux_surface(solution: ScatteringSolution, theta: float, spec: DimerMeshSpec, n_polar: int = 20,

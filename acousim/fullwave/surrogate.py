@@ -43,7 +43,7 @@ from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_be
 from ..medium import GRAVITY, Medium
 from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
                        rounded_cube_volume)
-from .flux import FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
+from .flux import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, UNKEYED_FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
 from .solver import HeightStructure, solve_scattering
 
 __all__ = [
@@ -57,6 +57,7 @@ __all__ = [
     "dimer_coefficients",
     "FLUX_DISC_POINTS",
     "UNKEYED_FLUX_DISC_POINTS",
+    "FLUX_DISC_POINTS_RANGE",
     "FORCE_METHODS",
     "DEFAULT_TABLE",
     "DEFAULT_BUILD",
@@ -172,6 +173,12 @@ class FullwaveSurrogate(SinusoidalInertia):
     settings: dict = field(default_factory=dict, compare=False, hash=False)
     build_accuracy: dict = field(default_factory=dict, compare=False, hash=False)
     nodes: dict = field(default_factory=dict, compare=False, hash=False)
+
+    @property
+    def flux_disc_points(self) -> int:
+        """Gauss points per panel of the flux surface's mirror disc the table was built with (6 when its settings
+        carry no ``flux_disc_points``: :data:`UNKEYED_FLUX_DISC_POINTS`)."""
+        return int(self.settings.get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS))
 
     # ------------------------------------------------------------------ coefficient functions
     def coefficient_values(self, theta: ArrayLike, component: str, derivative: int = 0) -> NDArray[np.float64]:
@@ -551,8 +558,8 @@ def build_settings_of(sur: FullwaveSurrogate) -> dict:
     s = sur.settings
     keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5, flux_disc_points=UNKEYED_FLUX_DISC_POINTS))
     out = {k: s.get(k) for k in keys}
-    if s.get("flux_disc_points", UNKEYED_FLUX_DISC_POINTS) != UNKEYED_FLUX_DISC_POINTS:
-        out["flux_disc_points"] = int(s["flux_disc_points"])
+    if sur.flux_disc_points != UNKEYED_FLUX_DISC_POINTS:
+        out["flux_disc_points"] = sur.flux_disc_points
     return out
 
 

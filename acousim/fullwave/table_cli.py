@@ -6,7 +6,7 @@ import logging
 
 from cubedimer.cli import positive_float, positive_int, prepare_output_file
 
-from .surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FORCE_METHODS, build_fullwave_surrogate
+from .surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, FORCE_METHODS, build_fullwave_surrogate
 
 __all__ = ["add_parser"]
 
@@ -37,9 +37,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--pressure", type=positive_float, default=3000.0, help="pressure amplitude [Pa]")
     p.add_argument("--forces", choices=FORCE_METHODS, default="flux",
                    help="force integration: momentum flux away from the cubes, or surface tractions (docs/fullwave.md)")
-    p.add_argument("--flux-disc-points", type=int, default=FLUX_DISC_POINTS, choices=range(2, 33), metavar="N",
-                   help="Gauss points per panel of the flux surface's mirror disc, 2..32 (12 converge the hinge torque "
-                        "at the folding barrier, 6 leave it 3-5 %% off there; docs/fullwave.md)")
+    lo, hi = FLUX_DISC_POINTS_RANGE
+    p.add_argument("--flux-disc-points", type=int, default=FLUX_DISC_POINTS, choices=range(lo, hi + 1), metavar="N",
+                   help=f"Gauss points per panel of the flux surface's mirror disc, {lo}..{hi} (12 converge the hinge "
+                        "torque at the folding barrier, 6 leave it 3-5 %% off there; docs/fullwave.md)")
     p.set_defaults(func=run_table)
 
 

@@ -139,8 +139,11 @@ def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, b
         raise ValueError(f"{name}: the range must satisfy 0 < lo < hi, got ({lo!r}, {hi!r})")
     cache: dict[float, tuple[NDArray[np.float64], int]] = {}
 
+    def in_range(u: float) -> float:  # the trial value actually evaluated (and the cache's key)
+        return float(np.clip(u, np.log(lo), np.log(hi)))
+
     def chi2(u: float) -> float:
-        u = float(np.clip(u, np.log(lo), np.log(hi)))
+        u = in_range(u)
         if u not in cache:
             per_run, rows = _hinge_chi2(build_problem(float(np.exp(u))))
             cache[u] = (np.atleast_1d(np.asarray(per_run, dtype=float)), int(rows))
@@ -153,17 +156,17 @@ def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, b
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
     res = minimize_scalar(chi2, bounds=(a, b), method="bounded", options={"xatol": tolerance})
     u_star = float(res.x) if res.fun <= values[i] else float(grid[i])
-    c_min, n = chi2(u_star), cache[float(np.clip(u_star, np.log(lo), np.log(hi)))][1]
-    # curvature by central differences (one-sided at an edge), step 0.05 in log (5 %)
+    c_min, n = chi2(u_star), cache[in_range(u_star)][1]
+    # curvature from the parabola through three trial values 0.05 apart in log (5 %; one-sided at an edge)
     h = 0.05
     up, dn = min(u_star + h, np.log(hi)), max(u_star - h, np.log(lo))
     se_jack = float("nan")
     if up - u_star > 0.5 * h and u_star - dn > 0.5 * h:
-        curv = (chi2(up) - 2 * c_min + chi2(dn)) / ((up - u_star) * (u_star - dn))
-        trials = (dn, float(np.clip(u_star, np.log(lo), np.log(hi))), up)
-        per_run = np.array([cache[float(np.clip(t, np.log(lo), np.log(hi)))][0] for t in trials])
+        trials = np.array([dn, in_range(u_star), up])
+        _, curv = _parabola_vertex(trials, np.array([chi2(t) for t in trials]))
+        per_run = np.array([cache[in_range(t)][0] for t in trials])
         if per_run.shape[1] >= JACKKNIFE_MIN_RUNS:
-            se_jack = jackknife_log_error(np.array(trials), per_run)
+            se_jack = jackknife_log_error(trials, per_run)
     else:  # at an edge: the second difference one-sided
         s = 1.0 if up - u_star > 0.5 * h else -1.0
         u1, u2 = u_star + s * h, u_star + 2 * s * h
