@@ -46,6 +46,7 @@ def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, 
     discovered = [t["term"] for eq in d["remaining_gap"]["discovered_terms"].values() for t in eq]
     return {"side_um": side * 1e6, "ks": fm.wavenumber * side, "gap_true_um": gap_ratio * side * 1e6,
             "gap_um": cal["gap_m"] * 1e6, "gap_std_um": (cal["gap_std_m"] or float("nan")) * 1e6,
+            "gap_model_error_um": (cal.get("gap_model_error_m") or float("nan")) * 1e6,
             "calibrated": cal["gap_calibrated"], "seed": seed, "drift": drift,
             "drift_detected": bool(cal.get("drift", {}).get("detected", False)), "identified": d["identified"],
             "discovered": discovered,
@@ -76,9 +77,10 @@ def main() -> None:
     gaps = sorted({float(np.sqrt(a * b)) for a, b in zip(fam.gap_nodes[:-1], fam.gap_nodes[1:])}) or [g0]
     root = Path(args.out) if args.out else Path(tempfile.mkdtemp())
     rows = []
-    print("| side [um] | ks | true g [um] | calibrated g [um] | std [um] | calibrated | seed | drift | drift found | "
+    print("| side [um] | ks | true g [um] | calibrated g [um] | std [um] | (g - true) / std | model error [um] | "
+          "calibrated | seed | drift | drift found | "
           "identified | gamma_y, gamma_theta [1/s] | same case on Gor'kov: identified | discovered | p0 error | wall [s] |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     i = 0
     for seed in args.seeds:
         for side in sides:
@@ -88,8 +90,9 @@ def main() -> None:
                 r = run_case(side, g, seed, drift, root / f"case{i:03d}", effects, args.runs, args.duration)
                 rows.append(r)
                 damping = "-" if r["damping"] is None else ", ".join(f"{v:.3g}" for v in r["damping"].values())
-                print(f"| {r['side_um']:.0f} | {r['ks']:.3f} | {r['gap_true_um']:.2f} | {r['gap_um']:.2f} | "
-                      f"{r['gap_std_um']:.2g} | {r['calibrated']} | {seed} | {drift:g} | {r['drift_detected']} | "
+                print(f"| {r['side_um']:.0f} | {r['ks']:.3f} | {r['gap_true_um']:.2f} | {r['gap_um']:.3f} | "
+                      f"{r['gap_std_um']:.2g} | {(r['gap_um'] - r['gap_true_um']) / r['gap_std_um']:+.1f} | "
+                      f"{r['gap_model_error_um']:.2g} | {r['calibrated']} | {seed} | {drift:g} | {r['drift_detected']} | "
                       f"{', '.join(r['identified']) or '-'} | {damping} | {', '.join(r['gorkov_identified']) or '-'} | "
                       f"{', '.join(r['discovered']) or '-'} | "
                       f"{100 * r['pressure_error']:+.2f} % | {r['wall_s']:.0f} |", flush=True)
@@ -97,6 +100,11 @@ def main() -> None:
     print(f"\ngap error: median {100 * np.median(np.abs(err)):.1f} %, max {100 * np.max(np.abs(err)):.1f} %, "
           f"within 20 %: {int(np.sum(np.abs(err) <= 0.2))}/{len(rows)}; calibrated: "
           f"{sum(r['calibrated'] for r in rows)}/{len(rows)}")
+    z = np.array([(r["gap_um"] - r["gap_true_um"]) / r["gap_std_um"] for r in rows])
+    drifting = np.array([r["drift"] > 0 for r in rows])
+    print(f"(g - true) / std: within 2 in {int(np.sum(np.abs(z) <= 2))}/{len(rows)}; largest |.| "
+          f"{np.max(np.abs(z[~drifting]), initial=0):.1f} without a drift, {np.max(np.abs(z[drifting]), initial=0):.1f} "
+          f"with one; estimate below the truth in {int(np.sum(z < 0))}/{len(rows)}")
     exact = sum(r["identified"] == list(effects) and not r["discovered"] for r in rows)
     exact_gorkov = sum(r["gorkov_identified"] == list(effects) for r in rows)
     print(f"effects named exactly (the damping, nothing else named or discovered): {exact}/{len(rows)} on the full "
