@@ -16,6 +16,7 @@ approximation; :meth:`GorkovDimer.direct_integrals` evaluates it node by node fo
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -45,6 +46,10 @@ __all__ = [
 DEFAULT_MESH_FRACTION = 0.2
 #: Default quadrature degree per tetrahedron.
 DEFAULT_QUADRATURE_DEGREE = 2
+#: Chebyshev interpolants of the orientation sums by what they depend on (GorkovDimer._interpolant_key): a
+#: diagnosis, a sweep or a study that builds the same model again reuses them (1.5 s each at the default mesh).
+_INTERPOLANTS: dict = {}
+_INTERPOLANTS_KEPT = 8
 
 
 class StaticForces(NamedTuple):
@@ -233,14 +238,31 @@ class GorkovDimer:
         """
         from numpy.polynomial import chebyshev as cheb
 
-        nodes = np.cos(np.pi * (np.arange(n_theta) + 0.5) / n_theta)
-        sums = self._exact_orientation_sums(nodes)
-        coefs = tuple(cheb.chebfit(nodes, s.reshape(n_theta, -1), n_theta - 1) for s in sums)
+        key = self._interpolant_key(n_theta)
+        coefs = _INTERPOLANTS.get(key)
+        if coefs is None:
+            nodes = np.cos(np.pi * (np.arange(n_theta) + 0.5) / n_theta)
+            sums = self._exact_orientation_sums(nodes)
+            coefs = tuple(cheb.chebfit(nodes, s.reshape(n_theta, -1), n_theta - 1) for s in sums)
+            for c in coefs:
+                c.flags.writeable = False
+            _INTERPOLANTS[key] = coefs
+            while len(_INTERPOLANTS) > _INTERPOLANTS_KEPT:
+                _INTERPOLANTS.pop(next(iter(_INTERPOLANTS)))
         new = object.__new__(GorkovDimer)
         new.__dict__.update(self.__dict__)
         new.__dict__.pop("equilibrium_height", None)
         new._interpolant = coefs
         return new
+
+    def _interpolant_key(self, n_theta: int) -> tuple:
+        """What the orientation sums depend on: the dimer (its hinge geometry), 2k and the quadrature nodes and
+        weights themselves (by digest), so that equal models built anew share one interpolant."""
+        digest = hashlib.blake2b(digest_size=16)
+        for cube in self._nodes:
+            digest.update(np.ascontiguousarray(cube.nodes, dtype=float).tobytes())
+            digest.update(np.ascontiguousarray(cube.weights, dtype=float).tobytes())
+        return (self.dimer, float(2.0 * self.wave.wavenumber), int(n_theta), digest.hexdigest())
 
     def _orientation_sums(self, theta: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
         coefs = self.__dict__.get("_interpolant")

@@ -37,6 +37,7 @@ is larger, so regression drops ``w // 2`` frames at each end (:attr:`Derivatives
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -127,10 +128,19 @@ def acceleration_kernel(window: int, polyorder: int, dt: float) -> NDArray[np.fl
 
     ``G = cumsum(cumsum(c2)) dt^2`` of the second-derivative weights ``c2`` ends in two zeros (``c2``
     annihilates constants and lines); ``K`` is ``G`` without them, centred (module docstring).
+    The kernel is computed once per (window, polyorder, dt) and returned read-only (a diagnosis filters
+    thousands of model columns with the same few kernels).
     """
+    return _acceleration_kernel(int(window), int(polyorder), float(dt))
+
+
+@lru_cache(maxsize=64)
+def _acceleration_kernel(window: int, polyorder: int, dt: float) -> NDArray[np.float64]:
     c2 = savgol_coeffs(window, polyorder, deriv=2, delta=dt, use="conv")
     g = np.cumsum(np.cumsum(c2)) * dt * dt
-    return np.concatenate([[0.0], g[:-2], [0.0]])
+    kernel = np.concatenate([[0.0], g[:-2], [0.0]])
+    kernel.flags.writeable = False
+    return kernel
 
 
 def apply_acceleration_kernel(x: NDArray, kernel: NDArray) -> NDArray[np.float64]:

@@ -20,7 +20,7 @@ def add_parser(subparsers) -> None:
         help="build one full-wave surrogate table (JSON) of a cube dimer",
         description=("Solve the scattering by both cubes with boundary elements at n-half orientations (theta > 0) and "
                      "write the Chebyshev-in-theta table of the forces and torque that the full-wave model reads "
-                     "(acousim/data/fullwave_default.json is one). Minutes to a quarter of an hour on 2 cores; "
+                     "(acousim/data/fullwave_default.json is one). About 20 minutes on 2 cores at the default mesh; "
                      "docs/fullwave.md."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )

@@ -212,3 +212,23 @@ def test_interpolated_model_matches_exact(default_model, rng):
     # too few nodes is visibly worse: the check can fail
     coarse = default_model.interpolated(6).static_forces(th, y).q_theta
     assert np.abs(coarse - b.q_theta).max() > 1e-8 * np.abs(b.q_theta).max()
+
+
+def test_interpolant_is_shared_only_by_equal_models(default_model, rng):
+    """A model built anew with the same dimer, frequency and mesh reuses the interpolant (the same arrays); one at
+    another frequency or mesh gets its own, which matches its own exact sums (a shared one would be off by the
+    change in 2k, far beyond round-off)."""
+    from acousim.field import StandingWave
+    from acousim.forces import GorkovDimer
+    from acousim.medium import Medium
+
+    again = GorkovDimer().interpolated(64)
+    assert again._interpolant[0] is default_model.interpolated(64)._interpolant[0]
+    th, y = rng.uniform(-0.9, 0.9, 40), rng.uniform(-3e-4, 3e-4, 40)
+    for other in (GorkovDimer(wave=StandingWave(medium=Medium(frequency_hz=41000.0))),
+                  GorkovDimer(mesh_size=0.3 * default_model.dimer.side_a)):
+        fast = other.interpolated(64)
+        assert fast._interpolant[0] is not again._interpolant[0]
+        exact = other.static_forces(th, y).q_theta
+        # round-off of a 64-node Chebyshev series of analytic sums (as in the test above)
+        np.testing.assert_allclose(fast.static_forces(th, y).q_theta, exact, atol=1e-10 * np.abs(exact).max())

@@ -17,6 +17,7 @@ from acousim.fullwave.surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FullwaveSu
                                         build_fullwave_surrogate, build_settings_of, build_settings,
                                         cached_fullwave_surrogate, default_fullwave_surrogate)
 from acousim.medium import Medium  # noqa: E402
+from acousim.fullwave.flux import FLUX_DISC_POINTS  # noqa: E402
 
 #: Two solves (theta = 0.34 and 0.83) on the coarsest graded mesh (264 DOFs), forces from the momentum flux as in
 #: the shipped table (about 6 s per solve after bempp's compilation).
@@ -74,14 +75,13 @@ def test_coarse_surrogate_interface(coarse_surrogate):
 
 
 def test_shipped_default_table():
-    """The table in the repository is the default build (settings as DEFAULT_BUILD) with the flux disc at 6 Gauss
-    points per panel (no key in its settings; docs/fullwave.md states what 12 change at its gap)."""
+    """The table in the repository is the default build (settings as DEFAULT_BUILD, the flux disc at the default
+    12 Gauss points per panel), so that a default request finds it instead of building one."""
     assert DEFAULT_TABLE.exists()
     sur = default_fullwave_surrogate()
     b = DEFAULT_BUILD
-    assert build_settings_of(sur) == build_settings(b["spec"], Medium(), 2160.0, b["n_half"], b["theta_max"],
-                                                    flux_disc_points=6)
-    assert "flux_disc_points" not in sur.settings
+    assert build_settings_of(sur) == build_settings(b["spec"], Medium(), 2160.0, b["n_half"], b["theta_max"])
+    assert sur.flux_disc_points == FLUX_DISC_POINTS == 12
     _check_common(sur)
     tay = sur.taylor_coefficients()
     assert tay["thetaddot"]["theta"] < 0  # the full-wave hinge is restoring
