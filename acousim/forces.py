@@ -17,6 +17,7 @@ approximation; :meth:`GorkovDimer.direct_integrals` evaluates it node by node fo
 from __future__ import annotations
 
 import hashlib
+import threading
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -50,6 +51,7 @@ DEFAULT_QUADRATURE_DEGREE = 2
 #: diagnosis, a sweep or a study that builds the same model again reuses them (1.5 s each at the default mesh).
 _INTERPOLANTS: dict = {}
 _INTERPOLANTS_KEPT = 8
+_INTERPOLANTS_LOCK = threading.Lock()  # threaded executors (dask workers) share the cache
 
 
 class StaticForces(NamedTuple):
@@ -246,9 +248,10 @@ class GorkovDimer:
             coefs = tuple(cheb.chebfit(nodes, s.reshape(n_theta, -1), n_theta - 1) for s in sums)
             for c in coefs:
                 c.flags.writeable = False
-            _INTERPOLANTS[key] = coefs
-            while len(_INTERPOLANTS) > _INTERPOLANTS_KEPT:
-                _INTERPOLANTS.pop(next(iter(_INTERPOLANTS)))
+            with _INTERPOLANTS_LOCK:
+                _INTERPOLANTS[key] = coefs
+                while len(_INTERPOLANTS) > _INTERPOLANTS_KEPT:
+                    _INTERPOLANTS.pop(next(iter(_INTERPOLANTS)))
         new = object.__new__(GorkovDimer)
         new.__dict__.update(self.__dict__)
         new.__dict__.pop("equilibrium_height", None)
