@@ -6,10 +6,9 @@ import logging
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, float_list
 
-from .flux import FLUX_DISC_POINTS_RANGE
-
 from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
                      FamilyTableError, FullwaveFamily, build_family, family_nodes)
+from .flux import FLUX_DISC_POINTS_RANGE
 
 __all__ = ["add_parser"]
 

@@ -13,11 +13,10 @@ import pytest
 pytest.importorskip("bempp_cl")
 
 from acousim.fullwave.geometry import COARSE_SPEC, mesh_family  # noqa: E402
-from acousim.fullwave.surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FullwaveSurrogate,  # noqa: E402
+from acousim.fullwave.surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FLUX_DISC_POINTS, FullwaveSurrogate,  # noqa: E402
                                         build_fullwave_surrogate, build_settings_of, build_settings,
                                         cached_fullwave_surrogate, default_fullwave_surrogate)
 from acousim.medium import Medium  # noqa: E402
-from acousim.fullwave.flux import FLUX_DISC_POINTS  # noqa: E402
 
 #: Two solves (theta = 0.34 and 0.83) on the coarsest graded mesh (264 DOFs), forces from the momentum flux as in
 #: the shipped table (about 6 s per solve after bempp's compilation).
