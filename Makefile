@@ -7,7 +7,7 @@ OUT    ?= demo_output
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 export MPLBACKEND ?= Agg
 
-.PHONY: all demo demo-video test test-fast bench venv system-deps browser clean
+.PHONY: all demo demo-video test test-durations test-fast bench venv system-deps browser clean
 
 all: test
 
@@ -64,6 +64,12 @@ PYTEST := NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/py
 
 test: venv browser
 	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) $(PYTEST)
+
+# the seconds of each test unit from this checkout's last full `make test`, committed so that a fresh clone's
+# `make test` also starts the longest units first (tests/conftest.py)
+test-durations:
+	@test -f .pytest_cache/v/cubedimer/unit_seconds || { echo "run make test first"; exit 2; }
+	cp .pytest_cache/v/cubedimer/unit_seconds tests/unit_durations.json
 
 test-fast: venv
 	$(PYTEST) -m "not slow"

@@ -1,7 +1,9 @@
 """Shared fixtures for the whole suite."""
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,20 +21,84 @@ BOUNDARY_ELEMENT_MODULES = frozenset({
 })
 
 
+#: Measured seconds of each scheduling unit (a module, or the boundary-element group), so that ``make test`` starts
+#: the longest units first; refreshed from the last full run by ``make test-durations``.
+UNIT_DURATIONS_FILE = Path(__file__).with_name("unit_durations.json")
+_CACHE_KEY = "cubedimer/unit_seconds"
+
+
+def scheduling_unit(module: str) -> str:
+    """The unit ``make test`` sends to one worker: the module, or ``"boundary-elements"`` for
+    :data:`BOUNDARY_ELEMENT_MODULES`."""
+    return "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
+
+
+def longest_first(units: list[str], seconds: dict[str, float], counts: dict[str, int]) -> list[str]:
+    """``units`` by decreasing expected duration: the measured seconds where known, else 1 s per test (a module
+    with no record is new or renamed, and usually small).  Longest-first keeps a long module from starting last
+    while the other worker idles."""
+    return sorted(units, key=lambda u: -float(seconds.get(u, counts.get(u, 1))))
+
+
+def _recorded_seconds(config) -> dict[str, float]:
+    """This checkout's last full run (pytest's cache), over the committed measurement."""
+    out: dict[str, float] = {}
+    try:
+        out.update(json.loads(UNIT_DURATIONS_FILE.read_text()))
+    except (OSError, ValueError):
+        pass
+    cache = getattr(config, "cache", None)
+    if cache is not None:
+        out.update(cache.get(_CACHE_KEY, {}) or {})
+    return out
+
+
 @pytest.hookimpl(optionalhook=True)  # a plain pytest without pytest-xdist ignores it
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadfile``, with the boundary-element modules as one unit (pytest-xdist's ``xdist_group`` marks
-    would do this with ``--dist loadgroup``, but that mode silently stops grouping on pytest 9.2)."""
+    would do this with ``--dist loadgroup``, but that mode silently stops grouping on pytest 9.2), and the units
+    sent longest first (:func:`longest_first`)."""
     if config.getoption("dist") != "loadfile":
         return None
     from xdist.scheduler import LoadFileScheduling
 
-    class _BoundaryElementsTogether(LoadFileScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            module = super()._split_scope(nodeid)
-            return "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
+    class _LongestFirst(LoadFileScheduling):
+        _ordered = False
 
-    return _BoundaryElementsTogether(config, log)
+        def _split_scope(self, nodeid: str) -> str:
+            return scheduling_unit(super()._split_scope(nodeid))
+
+        def _assign_work_unit(self, node) -> None:
+            if not self._ordered:
+                self._ordered = True
+                counts = {u: len(ids) for u, ids in self.workqueue.items()}
+                order = longest_first(list(self.workqueue), _recorded_seconds(self.config), counts)
+                for unit in order:
+                    self.workqueue.move_to_end(unit)
+            super()._assign_work_unit(node)
+
+    return _LongestFirst(config, log)
+
+
+_unit_seconds: dict[str, float] = {}
+
+
+def pytest_runtest_logreport(report) -> None:
+    """Sum each unit's test time (setup, call and teardown), on the controller of an xdist run or a plain run."""
+    module = report.nodeid.split("::", 1)[0]
+    _unit_seconds[scheduling_unit(module)] = _unit_seconds.get(scheduling_unit(module), 0.0) + float(report.duration)
+
+
+def pytest_sessionfinish(session, exitstatus) -> None:
+    """Keep the units' seconds of a whole-suite run (not of a selection) in pytest's cache for the next schedule."""
+    config = session.config
+    if getattr(config, "workerinput", None) is not None or config.cache is None:
+        return
+    if any(a.rstrip("/") != "tests" for a in config.args) or config.getoption("markexpr", "") \
+            or config.getoption("keyword", "") or exitstatus not in (0, 1):
+        return
+    if session.testscollected and _unit_seconds:
+        config.cache.set(_CACHE_KEY, {u: round(s, 1) for u, s in sorted(_unit_seconds.items())})
 
 
 @pytest.fixture(scope="session")

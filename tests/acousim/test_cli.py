@@ -8,13 +8,29 @@ import pytest
 COLUMNS = ["theta", "y", "potential", "force_z", "q_y", "q_theta", "yddot", "thetaddot"]
 
 
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "acousim", *args], capture_output=True, text=True, cwd=cwd)
+@pytest.fixture
+def run(capsys):
+    """``python -m acousim ARGS`` in this process (its ``main``, with argparse's exits caught): the same code path
+    as the command line without a Python start and the imports for every case (the first test runs the real
+    command in a subprocess)."""
+    from acousim.cli import main
+
+    def _run(*args: str) -> subprocess.CompletedProcess:
+        capsys.readouterr()
+        try:
+            code = main(list(args))
+        except SystemExit as exc:  # argparse: --help and usage errors
+            code = exc.code if isinstance(exc.code, int) else 1
+        cap = capsys.readouterr()
+        return subprocess.CompletedProcess(["acousim", *args], code, cap.out, cap.err)
+
+    return _run
 
 
 def test_sweep_writes_documented_columns(tmp_path):
     out = tmp_path / "s.csv"
-    r = run("sweep", "--theta", "-0.5:0.5:5", "--y", "-1e-4:1e-4:3", "--out", str(out), "--quiet")
+    r = subprocess.run([sys.executable, "-m", "acousim", "sweep", "--theta", "-0.5:0.5:5", "--y", "-1e-4:1e-4:3",
+                        "--out", str(out), "--quiet"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     rows = [l for l in out.read_text().splitlines() if not l.startswith("#")]
     header = rows[0].split(",")
@@ -25,7 +41,7 @@ def test_sweep_writes_documented_columns(tmp_path):
     np.testing.assert_allclose(np.unique(data[:, 0]), np.linspace(-0.5, 0.5, 5))
 
 
-def test_sweep_with_all_outputs(tmp_path):
+def test_sweep_with_all_outputs(run, tmp_path):
     r = run("sweep", "--theta", "-0.6:0.6:9", "--y", "-1e-4:1e-4:9", "--out", str(tmp_path / "s.csv"),
             "--coefficients", str(tmp_path / "c.json"), "--plots", str(tmp_path / "fig"), "--quiet")
     assert r.returncode == 0, r.stderr
@@ -46,7 +62,7 @@ def test_sweep_with_all_outputs(tmp_path):
         (["--nonsense"], "unrecognized"),
     ],
 )
-def test_bad_arguments_fail_cleanly(tmp_path, args, message):
+def test_bad_arguments_fail_cleanly(run, tmp_path, args, message):
     out = tmp_path / "s.csv"
     cov = tmp_path / "c.json"
     r = run("sweep", *args, "--out", str(out), "--coefficients", str(cov))
@@ -58,7 +74,7 @@ def test_bad_arguments_fail_cleanly(tmp_path, args, message):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_help_explains_units():
+def test_help_explains_units(run):
     r = run("sweep", "--help")
     assert r.returncode == 0 and "q_theta [N m]" in r.stdout
 
@@ -72,7 +88,7 @@ def test_help_explains_units():
         (["--density", "1e9"], "particle_density_kg_m3"),
     ],
 )
-def test_sizes_and_implausible_values_are_refused_in_one_line(tmp_path, args, message):
+def test_sizes_and_implausible_values_are_refused_in_one_line(run, tmp_path, args, message):
     r = run("sweep", *args, "--out", str(tmp_path / "s.csv"))
     lines = [l for l in r.stderr.strip().splitlines() if l.strip()]
     assert r.returncode == 2 and len(lines) == 1 and message in lines[0], r.stderr
@@ -80,7 +96,7 @@ def test_sizes_and_implausible_values_are_refused_in_one_line(tmp_path, args, me
 
 
 @pytest.mark.parametrize("option", ["--out", "--coefficients", "--render", "--plots"])
-def test_unwritable_output_is_refused_before_computing(tmp_path, option):
+def test_unwritable_output_is_refused_before_computing(run, tmp_path, option):
     """A path under a file cannot be created, even by root (who ignores permission bits)."""
     blocker = tmp_path / "file"
     blocker.write_text("x")
@@ -93,7 +109,7 @@ def test_unwritable_output_is_refused_before_computing(tmp_path, option):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # nothing computed or written
 
 
-def test_fullwave_sweep_is_the_surrogate(tmp_path):
+def test_fullwave_sweep_is_the_surrogate(run, tmp_path):
     """``--model fullwave`` sweeps the shipped full-wave surrogate: its values on the grid, an empty potential
     column, the model named in the header, and static coefficients whose small-box limit is the surrogate's own
     Taylor expansion."""
@@ -133,7 +149,7 @@ def test_fullwave_sweep_is_the_surrogate(tmp_path):
     (["--edge-radius", "1e-5"], "only sharp-edged tables"),
     (["--theta", "-0.95:0.95:3"], "covers |theta| <= 0.9"),
 ])
-def test_fullwave_sweep_refuses_what_the_table_does_not_cover(tmp_path, args, message):
+def test_fullwave_sweep_refuses_what_the_table_does_not_cover(run, tmp_path, args, message):
     out = tmp_path / "s.csv"
     r = run("sweep", "--model", "fullwave", *args, "--out", str(out))
     assert r.returncode != 0

@@ -1,0 +1,26 @@
+"""``make test``'s schedule: the boundary-element modules travel as one unit, and units start longest first."""
+import json
+
+from tests.conftest import BOUNDARY_ELEMENT_MODULES, UNIT_DURATIONS_FILE, longest_first, scheduling_unit
+
+
+def test_boundary_element_modules_are_one_unit():
+    assert {scheduling_unit(m) for m in BOUNDARY_ELEMENT_MODULES} == {"boundary-elements"}
+    assert scheduling_unit("tests/fitting/test_recovery.py") == "tests/fitting/test_recovery.py"
+
+
+def test_longest_first_uses_seconds_then_test_counts():
+    seconds = {"a.py": 5.0, "b.py": 120.0, "c.py": 0.5}
+    counts = {"a.py": 40, "b.py": 4, "c.py": 10, "new.py": 30}
+    # b by its seconds first; a new module without a record counts 1 s per test (30 s), ahead of a (5 s)
+    assert longest_first(["a.py", "b.py", "c.py", "new.py"], seconds, counts) == ["b.py", "new.py", "a.py", "c.py"]
+
+
+def test_committed_durations_name_existing_units():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    recorded = json.loads(UNIT_DURATIONS_FILE.read_text())
+    assert recorded and all(v >= 0 for v in recorded.values())
+    stale = [u for u in recorded if u != "boundary-elements" and not (root / u).exists()]
+    assert not stale, f"{stale}: refresh with make test-durations"
