@@ -1,9 +1,11 @@
 """numba's cache folder follows the suite's sources (cubedimer.compile_cache)."""
+import os
+import time
 from pathlib import Path
 
 import pytest
 
-from cubedimer.compile_cache import compile_cache_dir, source_fingerprint
+from cubedimer.compile_cache import STALE_AFTER_DAYS, compile_cache_dir, prune_stale_caches, source_fingerprint
 
 
 @pytest.fixture
@@ -41,3 +43,21 @@ def test_the_suite_caches_into_the_folder_of_its_sources(monkeypatch, tmp_path):
     assert Path(config.CACHE_DIR).name == f"cubedimer-{source_fingerprint()}"
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert compile_cache_dir() == tmp_path / f"cubedimer-{source_fingerprint()}"
+
+
+def test_folders_of_other_versions_unused_for_a_week_are_removed(tmp_path):
+    now = time.time()
+    day = 86400.0
+    folders = {}
+    for name, age_days in (("cubedimer-current", 30), ("cubedimer-old", STALE_AFTER_DAYS + 1),
+                           ("cubedimer-recent", STALE_AFTER_DAYS - 1), ("someone-else", 30)):
+        d = tmp_path / name
+        (d / "sub").mkdir(parents=True)
+        (d / "sub" / "kernel.nbi").write_bytes(b"x")
+        os.utime(d, (now - age_days * day, now - age_days * day))
+        folders[name] = d
+    removed = prune_stale_caches(folders["cubedimer-current"], now=now)
+    assert removed == [folders["cubedimer-old"]]
+    # the current version's folder however old, another version's recent one and a folder not ours are kept
+    assert all(folders[n].exists() for n in ("cubedimer-current", "cubedimer-recent", "someone-else"))
+    assert not folders["cubedimer-old"].exists()
