@@ -146,8 +146,10 @@ def hinge_refined_spec(side: float = 500e-6, gap: float | None = None, edge_radi
     g/2 across (kept within [0.0025 s, 0.02 s]), 0.03 s along and 0.015 s at the edges' ends (4,216 DOFs for the
     default dimer).
 
-    The 5 um default gap needs the refinement along the hinge line: there the hinge stiffness converges
-    monotonically, and this mesh is within about 1 % of its Richardson limit (docs/fullwave.md).
+    The 5 um default gap needs the refinement along the hinge line: with the faces fixed, the hinge stiffness
+    converges monotonically there, and this mesh is within about 1 % of that Richardson limit.  Refining the faces
+    as well raises the stiffness further (by 2 % for faces of 0.0625 s): docs/fullwave.md states the mesh error
+    as measured.
     """
     g = 0.01 * side if gap is None else float(gap)
     return DimerMeshSpec(side=side, gap=g, edge_radius=edge_radius, h_hinge=min(max(0.5 * g / side, 0.0025), 0.02),

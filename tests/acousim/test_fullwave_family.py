@@ -300,3 +300,15 @@ def test_family_info_command(synthetic_family_dir):
     assert r.returncode == 0, r.stderr
     assert "covers ks 0.3-0.65 and g/s 0.01-0.05" in r.stdout
     assert len([l for l in r.stdout.splitlines() if l.startswith("ks ")]) == len(FAMILY_KS) * len(FAMILY_GAP_RATIOS)
+
+
+def test_the_default_dimers_direct_table_states_its_gap_rows_mesh_error():
+    """The default dimer's own table is built on the family's mesh at g = 0.01 s, so it states that row's error."""
+    from acousim.fullwave.family import MESH_CONVERGENCE_FILE, fullwave_surrogate, shipped_family
+    from acousim.models import ExperimentConditions
+
+    sur = fullwave_surrogate(ExperimentConditions())
+    assert sur.settings["table_source"] == "direct-solve table of the default dimer"
+    rows = json.loads((shipped_family().directory / MESH_CONVERGENCE_FILE).read_text())["gap_rows"]
+    row = next(r for r in rows if r["gap_over_side"] == pytest.approx(0.01))
+    assert sur.settings["mesh_error_hinge_stiffness"] == row["stated_error"]
