@@ -85,8 +85,8 @@ _unit_seconds: dict[str, float] = {}
 
 def pytest_runtest_logreport(report) -> None:
     """Sum each unit's test time (setup, call and teardown), on the controller of an xdist run or a plain run."""
-    module = report.nodeid.split("::", 1)[0]
-    _unit_seconds[scheduling_unit(module)] = _unit_seconds.get(scheduling_unit(module), 0.0) + float(report.duration)
+    unit = scheduling_unit(report.nodeid.split("::", 1)[0])
+    _unit_seconds[unit] = _unit_seconds.get(unit, 0.0) + float(report.duration)
 
 
 def pytest_sessionfinish(session, exitstatus) -> None:
