@@ -533,8 +533,7 @@ def fullwave_surrogate(conditions) -> FullwaveSurrogate:
     if _is_default_dimer(side, gap, medium, density, gravity):
         sur = default_fullwave_surrogate(p0)
         source = "direct-solve table of the default dimer"
-        # its mesh is the family's at g = 0.01 s, so it carries the shipped study's error of that gap row (the
-        # shipped one even when CUBEDIMER_FULLWAVE_FAMILY names another family: the table is shipped beside it)
+        # built on the shipped family's mesh at g = 0.01 s: that row's error, whatever family the environment names
         mesh_error = _family(str(FAMILY_DIR)).mesh_error(DEFAULT_GAP_RATIO)
         return replace(sur, build_accuracy={**sur.build_accuracy, "source": source},
                        settings={**sur.settings, "table_source": source, "mesh_error_hinge_stiffness": mesh_error})
