@@ -16,12 +16,14 @@ tables of docs/fullwave.md were made with it.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import time
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 from cubedimer.atomic import json_safe
 from cubedimer.cli import UserInputError, float_list, prepare_output_file
 
@@ -31,11 +33,13 @@ from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
 from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
 
-__all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "flux_balance", "surrogate_errors",
-           "CONVERGED_WITHIN", "add_parser", "run_study"]
+__all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "richardson_limit", "stated_mesh_error",
+           "flux_balance", "surrogate_errors", "CONVERGED_WITHIN", "EDGE_GRADED_H_EDGE", "add_parser", "run_study"]
 
 #: The hinge stiffness counts as converged when the two finest levels agree within this fraction.
 CONVERGED_WITHIN = 0.02
+#: Element size at every cube edge, as a fraction of the side, of level q = 1 of ``--mesh-rule family-edges``.
+EDGE_GRADED_H_EDGE = 0.02
 
 log = logging.getLogger(__name__)
 
@@ -198,6 +202,73 @@ def judge_convergence(values, refinement_ratio: float) -> dict:
             "converged": bool(monotone and order >= 1.0 and finest < CONVERGED_WITHIN)}
 
 
+def richardson_limit(levels_q, values) -> dict:
+    """The mesh-converged limit of a quantity on meshes with every element size times ``levels_q`` (coarse to fine).
+
+    Fits ``v(q) = v_inf + C q^p`` exactly through the finest three levels (the ratios of the levels need not be
+    equal).  The fit is only meaningful where the corrections shrink monotonically (``p > 0``); with four or more
+    levels, the finest level is also predicted from the three before it, which tests the fit's premise that the
+    sequence is already asymptotic.
+
+    Returns
+    -------
+    dict
+        ``limit`` (v_inf), ``order`` (p), ``finest_error`` (|v_finest / v_inf - 1|); with four levels or more,
+        ``predicted_finest`` and ``prediction_error`` (relative to the limit) of the fit through the three coarser.
+
+    Raises
+    ------
+    ValueError
+        With fewer than three levels, or when the finest three corrections do not shrink (no positive order).
+    """
+    q = np.asarray(levels_q, float)
+    v = np.asarray(values, float)
+    if q.size < 3 or q.size != v.size:
+        raise ValueError("need at least three mesh levels, one value each")
+
+    def fit(q3: NDArray, v3: NDArray) -> tuple[float, float, float]:
+        d1, d2 = v3[1] - v3[0], v3[2] - v3[1]
+        ratio = d2 / d1 if d1 != 0 else np.inf
+
+        def mismatch(p: float) -> float:
+            return (q3[1] ** p - q3[2] ** p) / (q3[0] ** p - q3[1] ** p) - ratio
+
+        lo, hi = 1e-3, 12.0
+        if not 0 < ratio < np.inf or mismatch(lo) * mismatch(hi) > 0:
+            raise ValueError(f"the corrections {d1:.4g}, {d2:.4g} do not shrink like a power of the mesh size")
+        from scipy.optimize import brentq
+
+        p = brentq(mismatch, lo, hi, xtol=1e-12)  # the mismatch falls monotonically in p
+        c = d2 / (q3[2] ** p - q3[1] ** p)
+        return float(v3[2] - c * q3[2] ** p), float(p), float(c)
+
+    limit, order, _ = fit(q[-3:], v[-3:])
+    out = {"limit": limit, "order": order, "finest_error": float(abs(v[-1] / limit - 1.0))}
+    if q.size >= 4:
+        lim3, p3, c3 = fit(q[-4:-1], v[-4:-1])
+        pred = lim3 + c3 * q[-1] ** p3
+        out.update(predicted_finest=float(pred), prediction_error=float(abs(pred - v[-1]) / abs(limit)))
+    return out
+
+
+def stated_mesh_error(family_value: float, levels_q, values) -> dict:
+    """The mesh error to state for a value computed on a coarser mesh (``family_value``), from a refined sequence.
+
+    The error is the value's distance from the Richardson limit of the sequence (:func:`richardson_limit`) plus
+    the extrapolation's own size (the limit's distance from the finest level): a limit reached by extrapolating
+    far is trusted less.
+
+    Returns
+    -------
+    dict
+        ``stated_error`` (relative to the limit) and the fit of :func:`richardson_limit`.
+    """
+    fit = richardson_limit(levels_q, values)
+    limit = fit["limit"]
+    error = abs(family_value / limit - 1.0) + fit["finest_error"]
+    return {"stated_error": float(error), **fit}
+
+
 def load_table(path: str) -> FullwaveSurrogate:
     """A surrogate table from ``path``, or a one-line :class:`UserInputError` naming the file."""
     try:
@@ -249,11 +320,13 @@ def run_study(args: argparse.Namespace) -> int:
         logging.getLogger(name).setLevel(logging.WARNING)
     if args.study in ("flux", "surrogate"):
         return _run_check(args, levels)
-    if args.study == "mesh" and args.mesh_rule in ("family", "family-uniform"):
+    if args.study == "mesh" and args.mesh_rule in ("family", "family-uniform", "family-edges"):
         from .family import family_mesh_spec
 
-        faces = args.mesh_rule == "family-uniform"
+        faces = args.mesh_rule != "family"
         rows = [("q", q, family_mesh_spec(500e-6, args.gap * 500e-6, refine=q, refine_faces=faces)) for q in levels]
+        if args.mesh_rule == "family-edges":
+            rows = [(key, q, dataclasses.replace(spec, h_edge=EDGE_GRADED_H_EDGE * q)) for key, q, spec in rows]
     elif args.study == "mesh":
         rows = [("q", q, mesh_family(q, gap=args.gap * 500e-6)) for q in levels]
     elif args.study == "gap":
@@ -277,6 +350,13 @@ def run_study(args: argparse.Namespace) -> int:
                  "finest two levels %.2f %% apart: %s", args.levels, ratio,
                  ", ".join(f"{c:+.2%}" for c in verdict["corrections"]), verdict["monotone"], verdict["order"],
                  100 * verdict["finest_difference"], "converged" if verdict["converged"] else "NOT converged")
+        try:
+            fit = richardson_limit(levels, stiffness)
+        except ValueError as exc:
+            log.info("no Richardson limit: %s", exc)
+        else:
+            log.info("Richardson limit of the finest three levels %.5g N m (order %.2f); the finest level is %.2f %% from it",
+                     fit["limit"], fit["order"], 100 * fit["finest_error"])
     return 0
 
 
@@ -289,10 +369,11 @@ def add_parser(subparsers) -> None:
                    "integrals against the momentum flux through an enclosing sphere (per gap); surrogate: the "
                    "coarse surrogate against direct solves")
     p.add_argument("--levels", default="1,0.7,0.5,0.35", help="mesh levels q (mesh study) or the one level used")
-    p.add_argument("--mesh-rule", choices=("uniform", "family", "family-uniform"), default="uniform",
+    p.add_argument("--mesh-rule", choices=("uniform", "family", "family-uniform", "family-edges"), default="uniform",
                    help="mesh study: refine mesh_family(q) (every element size times q); the family's gap-resolving "
-                        "mesh (acousim.fullwave.family.family_mesh_spec) with its hinge sizes times q (family); or "
-                        "that mesh with every size, faces included, times q (family-uniform)")
+                        "mesh (acousim.fullwave.family.family_mesh_spec) with its hinge sizes times q (family); "
+                        "that mesh with every size, faces included, times q (family-uniform); or that mesh graded "
+                        "towards all twelve edges of each cube as well, from 0.02 q s (family-edges)")
     p.add_argument("--gaps", default="0.04,0.02,0.01,0.005", help="gaps as fractions of the side (gap, flux study)")
     p.add_argument("--gap", type=float, default=0.01, help="the gap as a fraction of the side (mesh, edge study)")
     p.add_argument("--radii", default="0,0.01,0.02,0.04", help="edge radii as fractions of the side (edge study)")

@@ -79,6 +79,9 @@ class DimerMeshSpec:
         Element size along v at the two ends of the hinge edge, as a fraction of s.
     growth : float
         Ratio of neighbouring element sizes in the graded directions (> 1).
+    h_edge : float or None
+        Element size at every edge of the cube, as a fraction of s, graded away with ``growth`` (None: only the
+        hinge edge is graded).  The field of a sharp cube is singular at all twelve edges (``|v| ~ r^-1/3``).
     """
 
     side: float = 500e-6
@@ -89,6 +92,7 @@ class DimerMeshSpec:
     h_along: float = 0.1
     h_corner: float = 0.03
     growth: float = 1.4
+    h_edge: float | None = None
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.side) or self.side <= 0:
@@ -99,26 +103,32 @@ class DimerMeshSpec:
             raise ValueError(f"gap must be >= 0, got {self.gap!r} m")
         if not 0 <= self.edge_radius < 0.25 * self.side:
             raise ValueError(f"edge radius must lie in [0, s/4), got {self.edge_radius!r} m")
-        for name in ("h_hinge", "h_max", "h_along", "h_corner"):
+        for name in ("h_hinge", "h_max", "h_along", "h_corner", "h_edge"):
             v = getattr(self, name)
+            if v is None and name == "h_edge":
+                continue
             if not 0 < v <= 0.5:
                 raise ValueError(f"{name} must lie in (0, 0.5] (fraction of the side), got {v!r}")
         if not 1.0 < self.growth <= 3.0:
             raise ValueError(f"growth must lie in (1, 3], got {self.growth!r}")
 
     def settings(self) -> dict:
-        """The spec as a JSON-ready dict (all lengths in metres or fractions of the side)."""
-        return {
+        """The spec as a JSON-ready dict (all lengths in metres or fractions of the side; ``h_edge`` only when set)."""
+        out = {
             "side_m": float(self.side), "gap_m": float(self.gap), "edge_radius_m": float(self.edge_radius),
             "h_hinge": self.h_hinge, "h_max": self.h_max, "h_along": self.h_along, "h_corner": self.h_corner,
             "growth": self.growth,
         }
+        if self.h_edge is not None:
+            out["h_edge"] = self.h_edge
+        return out
 
     @classmethod
     def from_settings(cls, settings: dict) -> "DimerMeshSpec":
         """The spec of :meth:`settings` (extra keys, such as a table's medium settings, are ignored)."""
+        h_edge = settings.get("h_edge")
         return cls(side=float(settings["side_m"]), gap=float(settings["gap_m"]),
-                   edge_radius=float(settings["edge_radius_m"]),
+                   edge_radius=float(settings["edge_radius_m"]), h_edge=None if h_edge is None else float(h_edge),
                    **{k: float(settings[k]) for k in ("h_hinge", "h_max", "h_along", "h_corner", "growth")})
 
 
@@ -202,10 +212,15 @@ def _axis_nodes(spec: DimerMeshSpec, kind: str) -> NDArray[np.float64]:
         if r > 0 and kind != "along":  # resolve the rounded hinge edge; other arcs take the local size
             d_hinge = x if kind == "to_minus" else 1.0 - x
             h = min(h, h_round + g * max(0.0, d_hinge - r))
+        if spec.h_edge is not None:  # every edge of the cube: both ends of every axis
+            h = min(h, spec.h_edge + g * min(x, 1.0 - x))
         # never step over more than what the far end allows
         return max(h, 1e-6)
 
-    if kind == "to_plus":  # march from the fine end
+    if spec.h_edge is not None:  # fine at both ends: march from each end to the middle
+        left = graded_nodes(0.5, size)
+        x = np.concatenate([left, 1.0 - graded_nodes(0.5, lambda t: size(1.0 - t))[::-1][1:]])
+    elif kind == "to_plus":  # march from the fine end
         x = 1.0 - graded_nodes(1.0, lambda t: size(1.0 - t))[::-1]
     elif kind == "along":  # half from the end to the middle, mirrored: an even number of intervals
         half = graded_nodes(0.5, size)

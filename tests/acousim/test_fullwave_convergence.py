@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from acousim.fullwave.convergence import CONVERGED_WITHIN, judge_convergence
+from acousim.fullwave.convergence import CONVERGED_WITHIN, judge_convergence, richardson_limit
 
 
 def test_second_order_sequence_is_converged():
@@ -47,3 +47,24 @@ def test_measured_surface_traction_hinge_is_not_converged():
 def test_needs_three_levels():
     with pytest.raises(ValueError):
         judge_convergence([1.0, 1.1], 1.4)
+
+
+@pytest.mark.parametrize("order", [0.7, 1.3, 2.0])
+def test_richardson_limit_recovers_a_power_law_on_unequal_levels(order):
+    """v(q) = v0 (1 + 0.05 q^p) on q = 1, 0.7, 0.5, 0.35: the limit and the order are recovered to rounding, and the
+    finest level is predicted exactly from the three before it."""
+    q = np.array([1.0, 0.7, 0.5, 0.35])
+    v = -2.9e-10 * (1 + 0.05 * q**order)
+    fit = richardson_limit(q, v)
+    # three equations, three unknowns solved by a root finder to 1e-12 in p: rounding-level agreement
+    np.testing.assert_allclose(fit["limit"], -2.9e-10, rtol=1e-9)
+    np.testing.assert_allclose(fit["order"], order, rtol=1e-8)
+    np.testing.assert_allclose(fit["finest_error"], 0.05 * 0.35**order, rtol=1e-6)
+    assert fit["prediction_error"] < 1e-10
+
+
+@pytest.mark.parametrize("values", [[1.0, 1.1, 1.3], [1.0, 1.1, 1.05], [1.0, 1.0, 1.1]])
+def test_richardson_limit_refuses_corrections_that_do_not_shrink(values):
+    """Growing, sign-changing or zero-then-nonzero corrections have no positive order: no limit is claimed."""
+    with pytest.raises(ValueError, match="do not shrink"):
+        richardson_limit([1.0, 0.7, 0.5], values)

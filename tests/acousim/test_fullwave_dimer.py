@@ -67,6 +67,30 @@ def test_hinge_refined_mesh_resolves_the_gap(gap_fraction):
         assert sum(len(b.vertices) for b in dimer_bodies(0.2, spec)) == 4216
 
 
+@pytest.mark.parametrize("h_edge", [0.04, 0.01])
+def test_edge_graded_mesh_resolves_every_edge(h_edge):
+    """With ``h_edge`` every axis is graded to h_edge at both ends (all twelve edges), the hinge edge keeps its
+    own finer size, the mesh stays closed, and its settings survive the round trip; without it the mesh is
+    unchanged."""
+    import dataclasses
+
+    from acousim.fullwave.geometry import DimerMeshSpec
+
+    spec = dataclasses.replace(COARSE_SPEC, h_edge=h_edge)
+    v, f = cube_body_mesh(spec)
+    check_closed_oriented(v, f)
+    for axis in range(3):
+        nodes = np.unique(np.round(v[:, axis] / spec.side, 9))
+        first, last = nodes[1] - nodes[0], nodes[-1] - nodes[-2]
+        hinge_end = {0: spec.h_hinge, 1: spec.h_corner, 2: spec.h_hinge}[axis]
+        ends = sorted([first, last])
+        assert np.isclose(ends[0], min(h_edge, hinge_end), rtol=1e-6)
+        assert ends[1] <= h_edge * (1 + 1e-6)
+    assert DimerMeshSpec.from_settings(spec.settings()) == spec
+    assert "h_edge" not in COARSE_SPEC.settings()
+    assert DimerMeshSpec.from_settings(COARSE_SPEC.settings()) == COARSE_SPEC
+
+
 def test_mirror_symmetry_between_cubes(coarse_pair):
     """Cube A is the mirror image of B in X = 0: F_A = (-Fx, Fy, Fz)_B and tau_A = (tx, -ty, -tz)_B;
     the Y-mirror of the whole dimer kills F_Y, tau_X and tau_Z.  Checked on the unreduced solve (where
