@@ -6,6 +6,9 @@ line).  The faces are tensor-product grids of three one-dimensional node sets:
 
 * along u and w: graded geometrically from ``h_hinge`` at the hinge-edge end to ``h_max``;
 * along v (the hinge line): ``h_along``, refined to ``h_corner`` at both ends (the hinge-edge corners);
+* with ``h_edge`` set, every node set is also graded from ``h_edge`` at both of its ends, so that all twelve edges
+  of the cube are resolved, not only the hinge edge (the field is singular at every edge of a sharp cube; the
+  hinge stiffness converges monotonically only on such meshes, docs/fullwave.md);
 * with an edge radius ``r_e > 0`` the u and w node sets are also refined to ``r_e pi / 8`` within ``r_e`` of
   the hinge edge, and the cube surface is mapped onto the rounded cube by the closest-point map of the
   inner box.  The arcs of the other edges are resolved only by the local element size (they matter far

@@ -167,8 +167,10 @@ def test_flux_disc_quadrature_is_a_keyed_build_setting(tmp_path, synthetic_famil
 
 def test_shipped_mesh_errors_are_no_smaller_than_the_measured_discrepancy():
     """The error each shipped gap row states is at least the distance of the family's mesh level from the finest
-    level measured there (uniformly refined rows), so that refining further can only confirm or raise it; a row
-    called converged has its finest two levels within 2 %.  Every gap node of the shipped family has a study."""
+    level measured there (uniformly refined rows), and, where the edge-graded sequence has a Richardson limit, the
+    family's distance from that limit plus the extrapolation (``stated_mesh_error``); a row called converged has its
+    finest two levels within 2 %.  Every gap node of the shipped family has a study."""
+    from acousim.fullwave.convergence import stated_mesh_error
     from acousim.fullwave.family import MESH_CONVERGENCE_FILE, shipped_family
 
     fam = shipped_family()
@@ -182,6 +184,15 @@ def test_shipped_mesh_errors_are_no_smaller_than_the_measured_discrepancy():
             assert r["stated_error"] >= abs(1 - family / k[-1]) - 5e-5  # 5e-5: the stated error is rounded to 1e-4
         if r["converged"]:
             assert abs(1 - k[-2] / k[-1]) <= 0.02
+        edge = r.get("edge_graded")
+        if edge is not None:
+            family = k[r["levels_q"].index(r["family_level_q"])]  # no less than its distance from the finest
+            assert r["stated_error"] >= abs(1 - family / edge["stiffness_nm"][-1]) - 5e-5
+        if edge is not None and edge.get("richardson") is not None:  # the edge-graded sequence's limit, recomputed
+            restated = stated_mesh_error(family, edge["levels_q"], edge["stiffness_nm"])
+            np.testing.assert_allclose(edge["richardson"]["limit"], restated["limit"], rtol=1e-9)
+            assert r["stated_error"] >= restated["stated_error"] - 5e-5
+            assert np.all(np.diff(np.abs(edge["stiffness_nm"][-3:])) > 0)  # the fit's levels stiffen monotonically
 
 
 @pytest.mark.parametrize("ks,g", [(0.25, 0.02), (0.7, 0.02), (0.4, 0.005), (0.4, 0.08)])
