@@ -92,7 +92,7 @@ def pytest_runtest_logreport(report) -> None:
 def pytest_sessionfinish(session, exitstatus) -> None:
     """Keep the units' seconds of a whole-suite run (not of a selection) in pytest's cache for the next schedule."""
     config = session.config
-    if getattr(config, "workerinput", None) is not None or config.cache is None:
+    if getattr(config, "workerinput", None) is not None or getattr(config, "cache", None) is None:
         return
     if any(a.rstrip("/") != "tests" for a in config.args) or config.getoption("markexpr", "") \
             or config.getoption("keyword", "") or exitstatus not in (0, 1):

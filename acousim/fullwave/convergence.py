@@ -214,7 +214,8 @@ def richardson_limit(levels_q, values) -> dict:
     -------
     dict
         ``limit`` (v_inf), ``order`` (p), ``finest_error`` (|v_finest / v_inf - 1|); with four levels or more,
-        ``predicted_finest`` and ``prediction_error`` (relative to the limit) of the fit through the three coarser.
+        ``predicted_finest`` and ``prediction_error`` (relative to the limit) of the fit through the three coarser
+        (None when their corrections do not shrink).
 
     Raises
     ------
@@ -245,9 +246,13 @@ def richardson_limit(levels_q, values) -> dict:
     limit, order, _ = fit(q[-3:], v[-3:])
     out = {"limit": limit, "order": order, "finest_error": float(abs(v[-1] / limit - 1.0))}
     if q.size >= 4:
-        lim3, p3, c3 = fit(q[-4:-1], v[-4:-1])
-        pred = lim3 + c3 * q[-1] ** p3
-        out.update(predicted_finest=float(pred), prediction_error=float(abs(pred - v[-1]) / abs(limit)))
+        try:
+            lim3, p3, c3 = fit(q[-4:-1], v[-4:-1])
+        except ValueError:  # the coarser three are not yet asymptotic: no prediction to test
+            out.update(predicted_finest=None, prediction_error=None)
+        else:
+            pred = lim3 + c3 * q[-1] ** p3
+            out.update(predicted_finest=float(pred), prediction_error=float(abs(pred - v[-1]) / abs(limit)))
     return out
 
 

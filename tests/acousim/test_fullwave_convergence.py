@@ -82,3 +82,11 @@ def test_edge_graded_levels_at_g_0p05_converge_and_predict_their_finest_level():
     assert fit["prediction_error"] < 2e-3
     assert fit["finest_error"] < 0.01
     assert abs(-2.8301e-10 / fit["limit"] - 1) > CONVERGED_WITHIN
+
+
+def test_richardson_limit_without_an_asymptotic_coarse_triple_makes_no_prediction():
+    """The measured g/s = 0.01 edge-graded levels (q = 1.4, 1, 0.7, 0.5): q = 1.4 and 1 agree to 0.01 %, so the three
+    coarser levels have no power law and nothing is predicted; the finest three do (+0.73 %, +0.26 %), order > 2."""
+    fit = richardson_limit([1.4, 1.0, 0.7, 0.5], [-5.5098e-10, -5.5104e-10, -5.5504e-10, -5.5650e-10])
+    assert fit["predicted_finest"] is None and fit["prediction_error"] is None
+    assert fit["order"] > 2 and fit["finest_error"] < 0.005
