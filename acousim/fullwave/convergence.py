@@ -24,6 +24,7 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import brentq
 from cubedimer.atomic import json_safe
 from cubedimer.cli import UserInputError, float_list, prepare_output_file
 
@@ -237,8 +238,6 @@ def richardson_limit(levels_q, values) -> dict:
         lo, hi = 1e-3, 12.0
         if not 0 < ratio < np.inf or mismatch(lo) * mismatch(hi) > 0:
             raise ValueError(f"the corrections {d1:.4g}, {d2:.4g} do not shrink like a power of the mesh size")
-        from scipy.optimize import brentq
-
         p = brentq(mismatch, lo, hi, xtol=1e-12)  # the mismatch falls monotonically in p
         c = d2 / (q3[2] ** p - q3[1] ** p)
         return float(v3[2] - c * q3[2] ** p), float(p), float(c)
