@@ -194,12 +194,14 @@ def synthetic_reduced(ks: float, gap_ratio: float) -> dict:
     return {"fz": base["fz"] / ks0 * ks * fk, "qt": base["qt"] * fk * fg}
 
 
-def write_synthetic_family(directory, ks_nodes=None, gap_nodes=None) -> list:
-    """Node tables of the synthetic family in ``directory`` (the family's node grid by default); no solve."""
+def write_synthetic_family(directory, ks_nodes=None, gap_nodes=None, edge_graded: bool = False) -> list:
+    """Node tables of the synthetic family in ``directory`` (the family's node grid by default); no solve.
+    ``edge_graded``: the tables claim the edge-graded meshes of the family's levels (else the hinge-graded mesh)."""
     from dataclasses import replace as dc_replace
 
     from acousim.fullwave.family import (FAMILY_GAP_RATIOS, FAMILY_KS, REFERENCE, FamilyNode, node_path,
                                          scaled_surrogate)
+    from acousim.fullwave.family_grid import family_mesh_level
 
     from acousim.fullwave import default_fullwave_surrogate
 
@@ -207,7 +209,8 @@ def write_synthetic_family(directory, ks_nodes=None, gap_nodes=None) -> list:
     paths = []
     for g in gap_nodes or FAMILY_GAP_RATIOS:
         for k in ks_nodes or FAMILY_KS:
-            node = FamilyNode(k, g, n_half=n_half, theta_max=0.9)
+            node = FamilyNode(k, g, n_half=n_half, theta_max=0.9,
+                              mesh_level=family_mesh_level(g) if edge_graded else None)
             s = REFERENCE["side_m"]
             sur = scaled_surrogate(synthetic_reduced(k, g), 0.9, s, g * s, node.medium,
                                    REFERENCE["particle_density_kg_m3"], REFERENCE["pressure_amplitude_pa"])

@@ -16,20 +16,20 @@ tables of docs/fullwave.md were made with it.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import logging
 import time
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.optimize import brentq
 from cubedimer.atomic import json_safe
 from cubedimer.cli import UserInputError, float_list, prepare_output_file
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
+from .mesh_record import (CONVERGED_WITHIN, judge_convergence, merge_edge_graded_study,  # noqa: F401 (re-exported)
+                          richardson_limit, stated_mesh_error)
+from .family_grid import EDGE_GRADED_H_EDGE, edge_graded_mesh_spec, family_mesh_spec
 from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
 from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
@@ -37,10 +37,6 @@ from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "richardson_limit", "stated_mesh_error",
            "flux_balance", "surrogate_errors", "CONVERGED_WITHIN", "EDGE_GRADED_H_EDGE", "add_parser", "run_study"]
 
-#: The hinge stiffness counts as converged when the two finest levels agree within this fraction.
-CONVERGED_WITHIN = 0.02
-#: Element size at every cube edge, as a fraction of the side, of level q = 1 of ``--mesh-rule family-edges``.
-EDGE_GRADED_H_EDGE = 0.02
 
 log = logging.getLogger(__name__)
 
@@ -179,100 +175,6 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
             "thetas": [float(t) for t in thetas], "per_theta": rows}
 
 
-def judge_convergence(values, refinement_ratio: float) -> dict:
-    """Judge a quantity computed on three or more successively refined meshes (coarse to fine).
-
-    The required behaviour: the corrections between levels shrink monotonically, the observed order
-    ``log(|d_(i)| / |d_(i+1)|) / log(refinement_ratio)`` of the last two corrections is at least 1, and the
-    finest two levels agree within :data:`CONVERGED_WITHIN`.
-
-    Returns
-    -------
-    dict
-        ``corrections`` (relative to the finer level), ``monotone``, ``order``, ``finest_difference``
-        and ``converged`` (all three criteria met).
-    """
-    v = np.asarray(values, float)
-    if v.size < 3:
-        raise ValueError("need at least three mesh levels")
-    d = np.diff(v)
-    monotone = bool(np.all(np.abs(d[1:]) < np.abs(d[:-1])))
-    order = float(np.log(abs(d[-2]) / abs(d[-1])) / np.log(refinement_ratio)) if d[-1] != 0 else float("inf")
-    finest = float(abs(d[-1] / v[-1]))
-    return {"corrections": (d / v[1:]).tolist(), "monotone": monotone, "order": order, "finest_difference": finest,
-            "converged": bool(monotone and order >= 1.0 and finest < CONVERGED_WITHIN)}
-
-
-def richardson_limit(levels_q, values) -> dict:
-    """The mesh-converged limit of a quantity on meshes with every element size times ``levels_q`` (coarse to fine).
-
-    Fits ``v(q) = v_inf + C q^p`` exactly through the finest three levels (the ratios of the levels need not be
-    equal).  The fit is only meaningful where the corrections shrink monotonically (``p > 0``); with four or more
-    levels, the finest level is also predicted from the three before it, which tests the fit's premise that the
-    sequence is already asymptotic.
-
-    Returns
-    -------
-    dict
-        ``limit`` (v_inf), ``order`` (p), ``finest_error`` (|v_finest / v_inf - 1|); with four levels or more,
-        ``predicted_finest`` and ``prediction_error`` (relative to the limit) of the fit through the three coarser
-        (None when their corrections do not shrink).
-
-    Raises
-    ------
-    ValueError
-        With fewer than three levels, or when the finest three corrections do not shrink (no positive order).
-    """
-    q = np.asarray(levels_q, float)
-    v = np.asarray(values, float)
-    if q.size < 3 or q.size != v.size:
-        raise ValueError("need at least three mesh levels, one value each")
-
-    def fit(q3: NDArray, v3: NDArray) -> tuple[float, float, float]:
-        d1, d2 = v3[1] - v3[0], v3[2] - v3[1]
-        ratio = d2 / d1 if d1 != 0 else np.inf
-
-        def mismatch(p: float) -> float:
-            return (q3[1] ** p - q3[2] ** p) / (q3[0] ** p - q3[1] ** p) - ratio
-
-        lo, hi = 1e-3, 12.0
-        if not 0 < ratio < np.inf or mismatch(lo) * mismatch(hi) > 0:
-            raise ValueError(f"the corrections {d1:.4g}, {d2:.4g} do not shrink like a power of the mesh size")
-        p = brentq(mismatch, lo, hi, xtol=1e-12)  # the mismatch falls monotonically in p
-        c = d2 / (q3[2] ** p - q3[1] ** p)
-        return float(v3[2] - c * q3[2] ** p), float(p), float(c)
-
-    limit, order, _ = fit(q[-3:], v[-3:])
-    out = {"limit": limit, "order": order, "finest_error": float(abs(v[-1] / limit - 1.0))}
-    if q.size >= 4:
-        try:
-            lim3, p3, c3 = fit(q[-4:-1], v[-4:-1])
-        except ValueError:  # the coarser three are not yet asymptotic: no prediction to test
-            out.update(predicted_finest=None, prediction_error=None)
-        else:
-            pred = lim3 + c3 * q[-1] ** p3
-            out.update(predicted_finest=float(pred), prediction_error=float(abs(pred - v[-1]) / abs(limit)))
-    return out
-
-
-def stated_mesh_error(family_value: float, levels_q, values) -> dict:
-    """The mesh error to state for a value computed on a coarser mesh (``family_value``), from a refined sequence.
-
-    The error is the value's distance from the Richardson limit of the sequence (:func:`richardson_limit`) plus
-    the extrapolation's own size (the limit's distance from the finest level): a limit reached by extrapolating
-    far is trusted less.
-
-    Returns
-    -------
-    dict
-        ``stated_error`` (relative to the limit) and the fit of :func:`richardson_limit`.
-    """
-    fit = richardson_limit(levels_q, values)
-    limit = fit["limit"]
-    error = abs(family_value / limit - 1.0) + fit["finest_error"]
-    return {"stated_error": float(error), **fit}
-
-
 def load_table(path: str) -> FullwaveSurrogate:
     """A surrogate table from ``path``, or a one-line :class:`UserInputError` naming the file."""
     try:
@@ -324,13 +226,11 @@ def run_study(args: argparse.Namespace) -> int:
         logging.getLogger(name).setLevel(logging.WARNING)
     if args.study in ("flux", "surrogate"):
         return _run_check(args, levels)
-    if args.study == "mesh" and args.mesh_rule in ("family", "family-uniform", "family-edges"):
-        from .family import family_mesh_spec
-
+    if args.study == "mesh" and args.mesh_rule == "family-edges":
+        rows = [("q", q, edge_graded_mesh_spec(500e-6, args.gap * 500e-6, q)) for q in levels]
+    elif args.study == "mesh" and args.mesh_rule in ("family", "family-uniform"):
         faces = args.mesh_rule != "family"
         rows = [("q", q, family_mesh_spec(500e-6, args.gap * 500e-6, refine=q, refine_faces=faces)) for q in levels]
-        if args.mesh_rule == "family-edges":
-            rows = [(key, q, dataclasses.replace(spec, h_edge=EDGE_GRADED_H_EDGE * q)) for key, q, spec in rows]
     elif args.study == "mesh":
         rows = [("q", q, mesh_family(q, gap=args.gap * 500e-6)) for q in levels]
     elif args.study == "gap":
@@ -338,11 +238,19 @@ def run_study(args: argparse.Namespace) -> int:
     else:
         rows = [("edge_radius_over_side", r, mesh_family(levels[0], gap=args.gap * 500e-6, edge_radius=r * 500e-6))
                 for r in float_list(args.radii, "--radii")]
-    stiffness = []
+    if args.merge_into and not (args.study == "mesh" and args.mesh_rule == "family-edges" and len(levels) >= 3):
+        raise UserInputError("--merge-into: only a mesh study with --mesh-rule family-edges and at least three --levels "
+                             "is merged into a family's record")
+    if args.merge_into and args.family_level is not None and not any(np.isclose(args.family_level, levels, rtol=1e-9)):
+        raise UserInputError(f"--family-level {args.family_level:g}: must be one of --levels {args.levels}")
+    stiffness, done = [], []
     for key, val, spec in rows:
         res = hinge_quantities(spec)
         res[key] = val
         res["level_q"] = levels[0] if args.study != "mesh" else val
+        if args.study in ("mesh", "edge"):
+            res.update(gap_over_side=args.gap, mesh_rule=args.mesh_rule)
+        done.append(res)
         log.info("%s = %g: %d DOFs, stiffness %.5g N m, f_theta %.3f Hz, f_y %.3f Hz, y^2*theta %.4g, %.0f s", key, val,
                  res["dofs"], res["stiffness_nm"], res["f_theta_hz"], res["f_y_hz"], res["thetaddot"]["y^2*theta"], res["wall_s"])
         _append(args.out, res)
@@ -361,6 +269,10 @@ def run_study(args: argparse.Namespace) -> int:
         else:
             log.info("Richardson limit of the finest three levels %.5g N m (order %.2f); the finest level is %.2f %% from it",
                      fit["limit"], fit["order"], 100 * fit["finest_error"])
+    if args.merge_into:
+        row = merge_edge_graded_study(args.merge_into, args.gap, done, args.family_level)
+        log.info("merged into %s: g/s = %g states a hinge-stiffness mesh error of %.2f %%", args.merge_into, args.gap,
+                 100 * row["stated_error"])
     return 0
 
 
@@ -386,4 +298,10 @@ def add_parser(subparsers) -> None:
                    help="surrogate study: check this table (e.g. acousim/data/fullwave_default.json) instead of "
                    "building the coarse one")
     p.add_argument("--out", required=True, help="JSON lines output (appended per row)")
+    p.add_argument("--merge-into", default=None, metavar="FILE",
+                   help="mesh study with --mesh-rule family-edges: merge the finished study into a family's "
+                        "mesh_convergence.json (its gap row's edge_graded entry and stated error; written atomically)")
+    p.add_argument("--family-level", type=float, default=None, metavar="Q",
+                   help="with --merge-into: the family is built on the edge-graded mesh at this level (one of "
+                        "--levels); its stated error is measured from it")
     p.set_defaults(func=run_study)

@@ -35,7 +35,7 @@ import json
 import logging
 import os
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Sequence
@@ -46,126 +46,20 @@ from numpy.typing import NDArray
 from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..medium import GRAVITY, Medium
+from .family_grid import (BUILD_HINT, EDGE_GRADED_FAMILY_DIR, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
+                          MESH_CONVERGENCE_FILE, REFERENCE, FamilyNode, FamilyRangeError, FamilyTableError,
+                          family_mesh_spec, family_nodes, node_path)
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
-from .surrogate import (_COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate,
-                        build_settings_of, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE)
+from .surrogate import _COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate, build_settings_of
 
 __all__ = [
-    "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
+    "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "EDGE_GRADED_FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
     "family_mesh_spec", "FamilyNode", "node_path", "family_nodes", "load_node", "force_scale", "build_family_node", "build_family",
     "dimensionless_coefficients", "scaled_surrogate", "FullwaveFamily", "FamilyRangeError", "FamilyTableError",
     "BUILD_HINT", "interpolation_errors", "family_accuracy", "fullwave_surrogate", "shipped_family", "FAMILY_ENV", "DEFAULT_GAP_RATIO",
 ]
 
 log = logging.getLogger(__name__)
-
-
-#: The family directory's record of the mesh-convergence study per gap row (``python -m acousim convergence --study
-#: mesh --mesh-rule family-uniform``): ``{"gap_rows": [{"gap_over_side", "stated_error", ...}]}``.
-MESH_CONVERGENCE_FILE = "mesh_convergence.json"
-
-
-def _lobatto(lo: float, hi: float, n: int) -> tuple[float, ...]:
-    x = np.cos(np.pi * np.arange(n)[::-1] / (n - 1))
-    return tuple(float(v) for v in 0.5 * (lo + hi) + 0.5 * (hi - lo) * x)
-
-
-#: ks nodes (sides 400-700 um at 40-50 kHz).  Chosen from measured interpolation errors: on the g/s = 0.05 row of
-#: the 4-point Chebyshev-Lobatto grid (0.3, 0.3875, 0.5625, 0.65), the quadratic through three of the nodes reproduces
-#: the left-out interior one within 1.2e-4 (F_Z) and 8.3e-4 (Q_theta) of their maxima over |theta| <= 0.9 and every
-#: height below the node, so three nodes suffice; the fourth (0.5625) is kept as a check point (docs/fullwave.md).
-FAMILY_KS: tuple[float, ...] = (0.3, 0.3875, 0.65)
-#: g/s nodes: 4 Chebyshev-Lobatto points in log(g/s) on [0.01, 0.05].
-FAMILY_GAP_RATIOS: tuple[float, ...] = tuple(round(float(np.exp(v)), 6)
-                                             for v in _lobatto(np.log(0.01), np.log(0.05), 4))
-#: Where the shipped node tables live.
-FAMILY_DIR = Path(__file__).resolve().parent.parent / "data" / "fullwave_family"
-#: Theta series of every node: n_half solves on |theta| <= theta_max (2 n_half Chebyshev terms).
-FAMILY_BUILD = {"n_half": 6, "theta_max": 0.9, "flux_disc_points": FLUX_DISC_POINTS}
-#: The physical settings the nodes are built at (any others follow by the exact scaling).
-REFERENCE = {"side_m": 500e-6, "sound_speed_m_s": 343.0, "air_density_kg_m3": 1.204,
-             "particle_density_kg_m3": 2160.0, "pressure_amplitude_pa": 3000.0}
-#: The command that builds tables (named in every out-of-range message).
-BUILD_HINT = "python -m acousim family build"
-
-
-class FamilyRangeError(ValueError):
-    """A condition lies outside what the shipped (or given) family covers; one line."""
-
-
-class FamilyTableError(ValueError):
-    """A node table is corrupt or was built with other settings than the family's; one line naming the file."""
-
-
-def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: float = 1.0,
-                     refine_faces: bool = False) -> DimerMeshSpec:
-    """The gap-resolving mesh of the family nodes.
-
-    The faces are those of ``mesh_family(0.5)`` (largest element 0.125 s, growth 1.6).  At the hinge edges the
-    elements are ``g/2`` across (kept within [0.0025 s, 0.02 s]) and ``3 g`` along the hinge line (at most
-    0.125 s), halved at the edges' ends: the aspect ratio of the elements that face each other across the gap
-    is the same at every gap.  At g = 0.01 s this is the shipped default table's mesh (``TABLE_SPEC``).  The hinge
-    stiffness on these meshes is not converged under refinement of the faces; each gap row's measured mesh error
-    is in ``mesh_convergence.json`` (docs/fullwave.md).
-
-    ``refine`` scales the three hinge sizes for the mesh-convergence study of each gap node; with
-    ``refine_faces`` it scales the faces' largest element as well (every size times ``refine``: a uniformly
-    refined sequence of the same mesh).
-    """
-    r = float(gap) / float(side)
-    along = min(0.125, 3.0 * r) * refine
-    return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius,
-                         h_hinge=min(max(0.5 * r, 0.0025), 0.02) * refine,
-                         h_max=0.125 * (refine if refine_faces else 1.0), h_along=along, h_corner=0.5 * along,
-                         growth=1.6)
-
-
-@dataclass(frozen=True)
-class FamilyNode:
-    """One family node: the dimensionless parameters and the build settings."""
-
-    ks: float
-    gap_ratio: float
-    n_half: int = FAMILY_BUILD["n_half"]
-    theta_max: float = FAMILY_BUILD["theta_max"]
-    flux_disc_points: int = FAMILY_BUILD["flux_disc_points"]
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.ks) and 0.05 <= self.ks <= 2.0):
-            raise ValueError(f"ks must lie in [0.05, 2], got {self.ks!r}")
-        if not (np.isfinite(self.gap_ratio) and 0.0 < self.gap_ratio <= 0.5):
-            raise ValueError(f"g/s must lie in (0, 0.5], got {self.gap_ratio!r}")
-        lo, hi = FLUX_DISC_POINTS_RANGE
-        if not (isinstance(self.flux_disc_points, (int, np.integer)) and lo <= self.flux_disc_points <= hi):
-            raise ValueError(f"flux disc points must be a whole number in {lo}..{hi}, got {self.flux_disc_points!r}")
-
-    @property
-    def medium(self) -> Medium:
-        """The reference air at the frequency that gives this ks on the reference side."""
-        s, c = REFERENCE["side_m"], REFERENCE["sound_speed_m_s"]
-        return Medium(frequency_hz=self.ks * c / (2 * np.pi * s), sound_speed_m_s=c,
-                      density_kg_m3=REFERENCE["air_density_kg_m3"])
-
-    @property
-    def spec(self) -> DimerMeshSpec:
-        s = REFERENCE["side_m"]
-        return family_mesh_spec(s, self.gap_ratio * s)
-
-    def expected_settings(self) -> dict:
-        """The keyed build settings a table of this node must carry."""
-        from .surrogate import build_settings
-
-        return build_settings(self.spec, self.medium, REFERENCE["particle_density_kg_m3"], self.n_half,
-                              self.theta_max, "flux", self.flux_disc_points)
-
-    @property
-    def name(self) -> str:
-        return f"ks{self.ks:.4f}_g{self.gap_ratio:.5f}"
-
-
-def node_path(directory: str | os.PathLike, node: FamilyNode) -> Path:
-    """The node's table file in ``directory``."""
-    return Path(directory) / f"{node.name}.json"
 
 
 def _matches(sur: FullwaveSurrogate, node: FamilyNode) -> bool:
@@ -219,7 +113,7 @@ def build_family_node(node: FamilyNode, directory: str | os.PathLike) -> dict:
     sur = build_fullwave_surrogate(node.spec, node.medium, REFERENCE["particle_density_kg_m3"],
                                    REFERENCE["pressure_amplitude_pa"], GRAVITY, node.n_half, node.theta_max,
                                    flux_disc_points=node.flux_disc_points)
-    sur.build_accuracy.update(ks=node.ks, gap_ratio=node.gap_ratio, family_node=node.name,
+    sur.build_accuracy.update(ks=node.ks, gap_ratio=node.gap_ratio, family_node=node.name, mesh_level=node.mesh_level,
                               command=f"{BUILD_HINT} (node {node.name})")
     sur.save(path)
     wall = time.perf_counter() - t0
@@ -232,18 +126,9 @@ def _build_task(item: tuple) -> dict:
     return build_family_node(node, directory)
 
 
-def family_nodes(ks: Sequence[float] = FAMILY_KS, gap_ratios: Sequence[float] = FAMILY_GAP_RATIOS,
-                 n_half: int = FAMILY_BUILD["n_half"], theta_max: float = FAMILY_BUILD["theta_max"],
-                 flux_disc_points: int = FAMILY_BUILD["flux_disc_points"]) -> list[FamilyNode]:
-    """The grid's nodes in build order: the cheapest (largest gap) first, so that a partial build covers a
-    rectangle of the family as early as possible."""
-    return [FamilyNode(float(k), float(g), n_half, theta_max, flux_disc_points)
-            for g in sorted(gap_ratios, reverse=True) for k in ks]
-
-
-def build_family(directory: str | os.PathLike = FAMILY_DIR, nodes: Sequence[FamilyNode] | None = None,
+def build_family(directory: str | os.PathLike = EDGE_GRADED_FAMILY_DIR, nodes: Sequence[FamilyNode] | None = None,
                  config: ExecutorConfig | None = None, progress: bool = True) -> list[dict]:
-    """Build every missing node table of ``nodes`` (default: the whole family) into ``directory``.
+    """Build every missing node table of ``nodes`` (default: the whole edge-graded family) into ``directory``.
 
     Resumable: nodes whose table exists with the right settings are skipped; each finished node is on disk at
     once.  Parallel over nodes through :func:`cubedimer.executor.map_ordered` (local processes or dask); local
@@ -339,20 +224,19 @@ class FullwaveFamily:
 
     def __init__(self, directory: str | os.PathLike = FAMILY_DIR):
         self.directory = Path(directory)
-        tables, quadratures = {}, set()
+        tables, quadratures, rules = {}, set(), set()
         for path in sorted(self.directory.glob("ks*_g*.json")):
             sur = load_node(path)
             ba = sur.build_accuracy
             if "ks" not in ba or "gap_ratio" not in ba:
                 raise FamilyTableError(f"{path}: not a family node (no ks / gap_ratio in its build record)")
-            node = FamilyNode(float(ba["ks"]), float(ba["gap_ratio"]), int(sur.settings["n_half"]),
-                              float(sur.settings["theta_max"]),
-                              sur.flux_disc_points)
+            node = FamilyNode.from_table(sur)
             if path.name != node_path(self.directory, node).name or not _matches(sur, node):
                 raise FamilyTableError(f"{path}: its settings do not match its node {node.name} (file renamed or "
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
             tables[(node.ks, node.gap_ratio)] = sur
             quadratures.add(node.flux_disc_points)
+            rules.add(node.mesh_level is None)
         self.tables = tables
         ks = sorted({k for k, _ in tables})
         gaps = sorted({g for _, g in tables})
@@ -374,6 +258,9 @@ class FullwaveFamily:
             lengths = {len(np.asarray(t.coefficients["qt"][0])) for t in tables.values()}
             if len(lengths) != 1 or any(t.theta_max != self.theta_max for t in tables.values()):
                 raise FamilyTableError(f"{self.directory}: node tables with different theta series")
+            if len(rules) != 1:
+                raise FamilyTableError(f"{self.directory}: node tables on hinge-graded and on edge-graded meshes mixed; "
+                                       f"a family is built on one mesh rule ({BUILD_HINT} --out NEW_DIR)")
             if len(quadratures) != 1:
                 raise FamilyTableError(f"{self.directory}: node tables built with different flux quadratures "
                                        f"({sorted(quadratures)} disc points per panel); rebuild them with {BUILD_HINT}")

@@ -6,8 +6,9 @@ import logging
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, float_list
 
-from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode,
-                     FamilyTableError, FullwaveFamily, build_family, family_nodes)
+from .family import (BUILD_HINT, EDGE_GRADED_FAMILY_DIR, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
+                     FamilyNode, FamilyTableError, FullwaveFamily, build_family, family_nodes)
+from .family_grid import FAMILY_MESH_LEVELS, family_mesh_level
 from .flux import FLUX_DISC_POINTS_RANGE
 
 __all__ = ["add_parser"]
@@ -32,7 +33,12 @@ def add_parser(subparsers) -> None:
                        description="Build every missing node table of the grid --ks x --gap-ratio into --out. "
                                    "Rerun the same command to resume an interrupted build.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    b.add_argument("--out", default=str(FAMILY_DIR), help="directory of the node tables")
+    b.add_argument("--out", default=str(EDGE_GRADED_FAMILY_DIR), help="directory of the node tables")
+    b.add_argument("--mesh", choices=("edges", "hinge"), default="edges",
+                   help="edges: meshes graded towards all twelve edges of each cube, at the level q of each gap ("
+                        + ", ".join(f"g/s {g:g}: q {q:g}" for g, q in FAMILY_MESH_LEVELS)
+                        + "; interpolated in log g/s between them), whose hinge stiffness is within 2 %% of its "
+                          "mesh-converged limit; hinge: graded towards the hinge edges only (3-4 %% soft)")
     b.add_argument("--ks", default=",".join(f"{v:g}" for v in FAMILY_KS),
                    help="ks nodes (wavenumber x side), comma-separated")
     b.add_argument("--gap-ratio", default=",".join(f"{v:g}" for v in FAMILY_GAP_RATIOS),
@@ -79,11 +85,13 @@ def run_build(args: argparse.Namespace) -> int:
             pairs = [p.split(":") for p in args.points.split(",") if p.strip()]
             if any(len(p) != 2 for p in pairs):
                 raise UserInputError(f"--points {args.points!r}: expected KS:G pairs separated by commas")
-            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max, args.flux_disc_points)
+            edges = args.mesh == "edges"
+            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max, args.flux_disc_points,
+                                family_mesh_level(float(g)) if edges else None)
                      for k, g in pairs]
         else:
             nodes = family_nodes(float_list(args.ks, "--ks"), float_list(args.gap_ratio, "--gap-ratio"), args.n_half,
-                                 args.theta_max, args.flux_disc_points)
+                                 args.theta_max, args.flux_disc_points, edge_graded=args.mesh == "edges")
     except ValueError as exc:
         raise UserInputError(f"{exc} (options --ks / --gap-ratio / --points)") from None
     summary = build_family(args.out, nodes, executor_config(args), progress=not args.no_progress)

@@ -10,7 +10,9 @@ Burton-Miller boundary integral equation of the second kind reads::
     (I/2 - D - (i/k) W) p = p_in - (i/k) dp_in/dn        on S
 
 discretised with continuous piecewise-linear (P1) elements and Galerkin testing, assembled densely
-(numba backend) and LU-factorised once.
+and LU-factorised once.  The dense assembly runs on bempp-cl's OpenCL backend when an OpenCL CPU driver is
+installed (``pip install cubedimer[opencl]``: pyopencl and pocl), otherwise on its numba backend; both give the
+same matrix to rounding (:func:`assembly_device`).
 
 Exact height structure
 ----------------------
@@ -36,8 +38,11 @@ triangle).  ``|p|^2`` and the lever arm are integrated with a 6-point, degree-4 
 """
 from __future__ import annotations
 
+import functools
 import logging
+import os
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -52,6 +57,8 @@ __all__ = [
     "HeightStructure",
     "ScatteringSolution",
     "solve_scattering",
+    "assembly_device",
+    "BEM_DEVICE_ENV",
     "surface_force_density",
     "triangle_rule",
 ]
@@ -301,6 +308,44 @@ def _rhs(space_vertices: NDArray, faces: NDArray, k: float) -> NDArray[np.comple
     return out
 
 
+#: Environment variable choosing the dense assembly's backend: ``numba``, ``opencl`` or ``auto`` (the default:
+#: OpenCL when pyopencl finds a CPU device, else numba).
+BEM_DEVICE_ENV = "CUBEDIMER_BEM_DEVICE"
+
+
+_OPENCL_FAILED = False  # set when an OpenCL assembly failed in this process
+
+
+@functools.lru_cache(maxsize=1)
+def _opencl_cpu_available() -> bool:
+    try:
+        import pyopencl as cl
+
+        return any(p.get_devices(device_type=cl.device_type.CPU) for p in cl.get_platforms())
+    except Exception:  # not installed, no platform (ICD) or no driver: numba it is
+        return False
+
+
+def assembly_device() -> str:
+    """The bempp-cl backend of the dense assembly: ``"opencl"`` or ``"numba"``, from :data:`BEM_DEVICE_ENV`.
+
+    ``auto`` (the default) takes OpenCL when pyopencl finds a CPU device (``pip install pyopencl
+    pocl-binary-distribution``), numba otherwise.  Both backends assemble the same matrices to rounding (a test
+    compares them); OpenCL is about twice as fast on one core (``make bench``).  Set ``POCL_MAX_PTHREAD_COUNT=1``
+    when several solves run side by side, as numba's ``NUMBA_NUM_THREADS=1``.
+    """
+    choice = os.environ.get(BEM_DEVICE_ENV, "auto").strip().lower() or "auto"
+    if choice not in ("auto", "numba", "opencl"):
+        raise ValueError(f"{BEM_DEVICE_ENV}={choice!r}: choose numba, opencl or auto")
+    if choice == "numba":
+        return "numba"
+    available = _opencl_cpu_available()
+    if choice == "opencl" and not available:
+        raise RuntimeError(f"{BEM_DEVICE_ENV}=opencl, but pyopencl finds no OpenCL CPU device; install pyopencl and "
+                           f"pocl-binary-distribution, or set {BEM_DEVICE_ENV}=numba")
+    return "opencl" if available else "numba"
+
+
 def import_bempp():
     """``bempp_cl.api``, imported with its start-up notice (printed to stdout) sent to the log instead."""
     import contextlib
@@ -338,6 +383,28 @@ def mirror_maps(vertices: NDArray, faces: NDArray, rtol: float = 1e-9) -> dict[s
         if all(tuple(sorted(perm[f])) in face_set for f in faces.tolist()):
             out[name] = perm.astype(np.int64)
     return out
+
+
+def _burton_miller_matrix(bempp, space, test_space, k: float) -> NDArray[np.complex128]:
+    """The dense Galerkin matrix of ``I/2 - D - (i/k) W`` (trial ``space``, test ``test_space``) on the backend of
+    :func:`assembly_device`; an OpenCL failure (a driver that cannot build the kernels) falls back to numba
+    with a warning, for the rest of the process."""
+    global _OPENCL_FAILED
+    device = "numba" if _OPENCL_FAILED else assembly_device()
+    while True:
+        opts = dict(assembler="dense", device_interface=device)
+        try:
+            ident = bempp.operators.boundary.sparse.identity(space, space, test_space)
+            dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, test_space, k, **opts)
+            hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, test_space, k, **opts)
+            with warnings.catch_warnings():  # pocl's compiler notes on bempp's kernels, harmless
+                warnings.filterwarnings("ignore", message="Non-empty compiler output")
+                return (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
+        except Exception as exc:
+            if device != "opencl" or os.environ.get(BEM_DEVICE_ENV, "").strip().lower() == "opencl":
+                raise
+            log.warning("OpenCL assembly failed (%s: %s); assembling on numba instead", type(exc).__name__, exc)
+            _OPENCL_FAILED, device = True, "numba"
 
 
 def _symmetric_matrix(bempp, grid, space, vertices: NDArray, faces: NDArray, k: float, maps: dict) -> tuple | None:
@@ -379,11 +446,7 @@ def _symmetric_matrix(bempp, grid, space, vertices: NDArray, faces: NDArray, k: 
     dof_vertex[l2g[sup][used]] = faces[sup][used]
     if np.any(dof_vertex < 0) or not np.array_equal(np.sort(dof_vertex), reps):
         return None
-    opts = dict(assembler="dense", device_interface="numba")
-    ident = bempp.operators.boundary.sparse.identity(space, space, dual)
-    dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, dual, k, **opts)
-    hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, dual, k, **opts)
-    rows = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()  # (n_dofs_dual, n)
+    rows = _burton_miller_matrix(bempp, space, dual, k)  # (n_dofs_dual, n)
     order = np.argsort(rep_index[dof_vertex])
     return rows[order] @ fold, reps, fold
 
@@ -430,17 +493,13 @@ def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium(), use_symm
         sol = fold @ lu_solve(lu_factor(matrix, check_finite=False), rhs[reps], check_finite=False)
         sym = "".join(sorted(maps))
     else:
-        opts = dict(assembler="dense", device_interface="numba")
-        ident = bempp.operators.boundary.sparse.identity(space, space, space)
-        dlp = bempp.operators.boundary.helmholtz.double_layer(space, space, space, k, **opts)
-        hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, space, k, **opts)
-        matrix = (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
+        matrix = _burton_miller_matrix(bempp, space, space, k)
         t1 = time.perf_counter()
         sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
         sym = ""
     t2 = time.perf_counter()
-    log.info("full-wave solve: %d DOFs (mirror symmetry: %s), assembly %.1f s, LU + 2 solves %.2f s",
-             len(vertices), sym or "none", t1 - t0, t2 - t1)
+    log.info("full-wave solve: %d DOFs (mirror symmetry: %s), assembly %.1f s (%s), LU + 2 solves %.2f s",
+             len(vertices), sym or "none", t1 - t0, "numba" if _OPENCL_FAILED else assembly_device(), t2 - t1)
     return ScatteringSolution(
         vertices=vertices, faces=faces, body_of_face=body_of_face, p_cos=sol[:, 0], p_sin=sol[:, 1],
         medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1, "symmetry": sym},

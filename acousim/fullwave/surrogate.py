@@ -558,6 +558,8 @@ def build_settings_of(sur: FullwaveSurrogate) -> dict:
     s = sur.settings
     keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5, flux_disc_points=UNKEYED_FLUX_DISC_POINTS))
     out = {k: s.get(k) for k in keys}
+    if s.get("h_edge") is not None:  # keyed only when set (meshes graded towards every edge)
+        out["h_edge"] = s["h_edge"]
     if sur.flux_disc_points != UNKEYED_FLUX_DISC_POINTS:
         out["flux_disc_points"] = sur.flux_disc_points
     return out

@@ -90,3 +90,20 @@ def test_richardson_limit_without_an_asymptotic_coarse_triple_makes_no_predictio
     fit = richardson_limit([1.4, 1.0, 0.7, 0.5], [-5.5098e-10, -5.5104e-10, -5.5504e-10, -5.5650e-10])
     assert fit["predicted_finest"] is None and fit["prediction_error"] is None
     assert fit["order"] > 2 and fit["finest_error"] < 0.005
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--study", "gap", "--levels", "1"], "only a mesh study"),
+    (["--study", "mesh", "--mesh-rule", "family", "--levels", "1,0.7,0.5"], "only a mesh study"),
+    (["--study", "mesh", "--mesh-rule", "family-edges", "--levels", "1,0.7"], "at least three"),
+    (["--study", "mesh", "--mesh-rule", "family-edges", "--levels", "1,0.7,0.5", "--family-level", "0.6"],
+     "--family-level 0.6"),
+])
+def test_merge_into_refuses_what_it_cannot_merge_before_any_solve(tmp_path, capsys, args, message):
+    from acousim.cli import main
+
+    out, record = tmp_path / "study.jsonl", tmp_path / "mesh_convergence.json"
+    code = main(["convergence", *args, "--out", str(out), "--merge-into", str(record)])
+    err = capsys.readouterr().err
+    assert code != 0 and message in err and len(err.strip().splitlines()) == 1
+    assert not out.exists() and not record.exists()

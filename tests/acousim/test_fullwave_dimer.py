@@ -134,3 +134,42 @@ def test_height_structure_against_direct_solves(coarse_pair):
         f, t = direct.forces_at(0.0, P0)
         np.testing.assert_allclose(f, hs.force(z), rtol=0, atol=1e-7 * np.max(np.abs(f)))
         np.testing.assert_allclose(t, hs.torque(z), rtol=0, atol=1e-7 * np.max(np.abs(t)))
+
+
+def test_opencl_and_numba_backends_solve_the_same_field(monkeypatch):
+    """bempp-cl's two backends (auto picks OpenCL when a CPU device exists) give the same surface field: the same
+    Galerkin matrix to rounding (1e-10 relative: the LU of a well-conditioned Burton-Miller matrix amplifies the
+    ~1e-15 assembly differences by its condition number, far below that)."""
+    from acousim.fullwave import solver
+
+    if not solver._opencl_cpu_available():
+        pytest.skip("no OpenCL CPU device (pip install pyopencl pocl-binary-distribution)")
+    out = {}
+    for device in ("numba", "opencl"):
+        monkeypatch.setenv(solver.BEM_DEVICE_ENV, device)
+        out[device] = solve_scattering(dimer_bodies(THETA, SPEC))
+    for name in ("p_cos", "p_sin"):
+        a, b = getattr(out["numba"], name), getattr(out["opencl"], name)
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * np.abs(a).max())
+
+
+@pytest.mark.parametrize("value,expected", [("numba", "numba"), ("NUMBA", "numba")])
+def test_assembly_device_honours_the_environment(monkeypatch, value, expected):
+    from acousim.fullwave import solver
+
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, value)
+    assert solver.assembly_device() == expected
+
+
+def test_assembly_device_refuses_what_it_cannot_do(monkeypatch):
+    from acousim.fullwave import solver
+
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, "gpu")
+    with pytest.raises(ValueError, match="choose numba, opencl or auto"):
+        solver.assembly_device()
+    monkeypatch.setattr(solver, "_opencl_cpu_available", lambda: False)
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, "opencl")
+    with pytest.raises(RuntimeError, match="no OpenCL CPU device"):
+        solver.assembly_device()
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, "auto")
+    assert solver.assembly_device() == "numba"
