@@ -140,3 +140,17 @@ def test_merging_into_a_hinge_graded_row_keeps_its_family_level(tmp_path):
     assert row["stated_error"] == before[0.05]["stated_error"]
     with pytest.raises(ValueError, match="no gap row"):
         merge_edge_graded_study(target, 0.02, rows)
+
+
+def test_edge_graded_family_record_states_below_two_percent_at_every_gap_node():
+    """The edge-graded family's mesh record: one row per gap node, at the node's level, each stating less than
+    2 % (the target for the hinge stiffness), restated by the record's rule from its levels."""
+    from acousim.fullwave.family_grid import EDGE_GRADED_FAMILY_DIR
+    from acousim.fullwave.mesh_record import stated_row_error
+
+    rows = json.loads((EDGE_GRADED_FAMILY_DIR / MESH_CONVERGENCE_FILE).read_text())["gap_rows"]
+    assert [r["gap_over_side"] for r in rows] == pytest.approx(sorted(FAMILY_GAP_RATIOS), rel=1e-9)
+    for r in rows:
+        assert r["family_mesh_rule"] == "family-edges"
+        assert r["family_level_q"] == family_mesh_level(r["gap_over_side"])
+        assert r["stated_error"] == pytest.approx(stated_row_error(r), abs=1e-12) and r["stated_error"] < 0.02
