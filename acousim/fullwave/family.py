@@ -17,8 +17,9 @@ equilibrium height is solved anew.  :func:`dimensionless_coefficients` and :func
 map and its inverse; a test checks it against direct solves at two different (s, f) with the same ks.
 
 Family.  Node tables (:class:`~acousim.fullwave.surrogate.FullwaveSurrogate`, Chebyshev in theta) are built
-on a tensor grid in ``ks`` and in ``log(g/s)`` (:data:`FAMILY_KS`, :data:`FAMILY_GAP_RATIOS`), each on the
-gap-resolving mesh of :func:`family_mesh_spec`.  Between nodes the dimensionless Chebyshev coefficients are
+on a tensor grid in ``ks`` and in ``log(g/s)`` (:data:`FAMILY_KS`, :data:`FAMILY_GAP_RATIOS`), all on one mesh
+rule of :mod:`acousim.fullwave.family_grid` (the hinge-graded :func:`family_mesh_spec`, or the edge-graded mesh at
+each gap's level).  Between nodes the dimensionless Chebyshev coefficients are
 interpolated by the tensor-product Lagrange polynomial through the nodes, after dividing F_Z's by ks: the
 vertical force is a gradient of the field's energy (the Rayleigh limit F ~ ks in these units), while the hinge's
 Q_theta comes from the near field between the cubes, whose kinetic energy p0^2/(rho0 c0^2) at the node does not

@@ -108,7 +108,9 @@ def run_info(args: argparse.Namespace) -> int:
         raise UserInputError(str(exc)) from None
     for (k, g), sur in sorted(fam.tables.items()):
         ba = sur.build_accuracy
-        print(f"ks {k:.4f}  g/s {g:.5f}  {int(ba.get('dofs', 0)):5d} DOFs  {float(ba.get('wall_s', 0)):7.0f} s")
+        level = FamilyNode.from_table(sur).mesh_level
+        mesh = "hinge-graded mesh" if level is None else f"edge-graded mesh q {level:g}"
+        print(f"ks {k:.4f}  g/s {g:.5f}  {int(ba.get('dofs', 0)):5d} DOFs  {float(ba.get('wall_s', 0)):7.0f} s  {mesh}")
     print(f"covers {fam.describe_range()}")
     return 0
 
