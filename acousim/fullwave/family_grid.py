@@ -108,8 +108,11 @@ def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: 
 def family_mesh_level(gap_ratio: float) -> float:
     """The edge-graded level q at ``gap_ratio`` (g/s): :data:`FAMILY_MESH_LEVELS` interpolated linearly in
     log(g/s), held at the end values outside; a check point between two gap nodes gets a level between theirs."""
+    r = float(gap_ratio)
+    if not (np.isfinite(r) and r > 0):
+        raise ValueError(f"g/s must be positive, got {gap_ratio!r}")
     g, q = np.array(FAMILY_MESH_LEVELS).T
-    return float(np.interp(np.log(float(gap_ratio)), np.log(g), q))
+    return float(np.interp(np.log(r), np.log(g), q))
 
 
 def edge_graded_mesh_spec(side: float, gap: float, level: float | None = None, edge_radius: float = 0.0) -> DimerMeshSpec:

@@ -154,3 +154,9 @@ def test_edge_graded_family_record_states_below_two_percent_at_every_gap_node():
         assert r["family_mesh_rule"] == "family-edges"
         assert r["family_level_q"] == family_mesh_level(r["gap_over_side"])
         assert r["stated_error"] == pytest.approx(stated_row_error(r), abs=1e-12) and r["stated_error"] < 0.02
+
+
+@pytest.mark.parametrize("gap_ratio", [0.0, -0.01, float("nan"), float("inf")])
+def test_mesh_level_refuses_a_gap_that_is_not_positive(gap_ratio):
+    with pytest.raises(ValueError, match="g/s must be positive"):
+        family_mesh_level(gap_ratio)
