@@ -10,6 +10,9 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+# The boundary-element tests assemble on numba, whose kernels every process compiles once anyway (the flux and
+# grid helpers need them); test_fullwave_dimer.py compares the OpenCL backend with it on the same mesh.
+os.environ.setdefault("CUBEDIMER_BEM_DEVICE", "numba")
 
 #: Test modules that solve boundary-element problems.  bempp-cl compiles its assembly kernels at first use in
 #: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` (``--dist loadfile``)
