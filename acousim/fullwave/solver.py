@@ -387,8 +387,8 @@ def mirror_maps(vertices: NDArray, faces: NDArray, rtol: float = 1e-9) -> dict[s
 
 def _burton_miller_matrix(bempp, space, test_space, k: float) -> NDArray[np.complex128]:
     """The dense Galerkin matrix of ``I/2 - D - (i/k) W`` (trial ``space``, test ``test_space``) on the backend of
-    :func:`assembly_device`; an OpenCL failure (a driver that cannot build the kernels) falls back to numba
-    with a warning, for the rest of the process."""
+    :func:`assembly_device`; under ``auto``, an OpenCL failure (a driver that cannot build the kernels) falls back
+    to numba with a warning, for the rest of the process."""
     global _OPENCL_FAILED
     device = "numba" if _OPENCL_FAILED else assembly_device()
     while True:
@@ -498,9 +498,11 @@ def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium(), use_symm
         sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
         sym = ""
     t2 = time.perf_counter()
+    device = "numba" if _OPENCL_FAILED else assembly_device()
     log.info("full-wave solve: %d DOFs (mirror symmetry: %s), assembly %.1f s (%s), LU + 2 solves %.2f s",
-             len(vertices), sym or "none", t1 - t0, "numba" if _OPENCL_FAILED else assembly_device(), t2 - t1)
+             len(vertices), sym or "none", t1 - t0, device, t2 - t1)
     return ScatteringSolution(
         vertices=vertices, faces=faces, body_of_face=body_of_face, p_cos=sol[:, 0], p_sin=sol[:, 1],
-        medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1, "symmetry": sym},
+        medium=medium, bodies=tuple(bodies), space=space, timings={"assembly_s": t1 - t0, "solve_s": t2 - t1, "symmetry": sym,
+                                                          "device": device},
     )

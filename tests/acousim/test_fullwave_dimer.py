@@ -148,6 +148,7 @@ def test_opencl_and_numba_backends_solve_the_same_field(monkeypatch):
     for device in ("numba", "opencl"):
         monkeypatch.setenv(solver.BEM_DEVICE_ENV, device)
         out[device] = solve_scattering(dimer_bodies(THETA, SPEC))
+        assert out[device].timings["device"] == device
     for name in ("p_cos", "p_sin"):
         a, b = getattr(out["numba"], name), getattr(out["opencl"], name)
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * np.abs(a).max())
