@@ -27,8 +27,8 @@ from cubedimer.cli import UserInputError, float_list, prepare_output_file
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
-from .mesh_record import (CONVERGED_WITHIN, judge_convergence, merge_edge_graded_study,  # noqa: F401 (re-exported)
-                          richardson_limit, stated_mesh_error)
+from .mesh_record import (CONVERGED_WITHIN, judge_convergence, mean_refinement_ratio,  # noqa: F401 (re-exported)
+                          merge_edge_graded_study, richardson_limit, stated_mesh_error)
 from .family_grid import EDGE_GRADED_H_EDGE, edge_graded_mesh_spec, family_mesh_spec
 from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
@@ -256,7 +256,7 @@ def run_study(args: argparse.Namespace) -> int:
         _append(args.out, res)
         stiffness.append(res["stiffness_nm"])
     if args.study == "mesh" and len(levels) >= 3:
-        ratio = float(np.exp(np.mean(np.log(np.array(levels[:-1]) / np.array(levels[1:])))))
+        ratio = mean_refinement_ratio(levels)
         verdict = judge_convergence(stiffness, ratio)
         log.info("hinge stiffness over q = %s (mean refinement ratio %.2f): corrections %s, monotone %s, order %.2f, "
                  "finest two levels %.2f %% apart: %s", args.levels, ratio,

@@ -32,11 +32,18 @@ from scipy.optimize import brentq
 
 from cubedimer.atomic import write_json
 
-__all__ = ["CONVERGED_WITHIN", "judge_convergence", "richardson_limit", "stated_mesh_error", "edge_graded_block",
-           "family_value", "stated_row_error", "merge_edge_graded_study"]
+__all__ = ["CONVERGED_WITHIN", "mean_refinement_ratio", "judge_convergence", "richardson_limit", "stated_mesh_error",
+           "edge_graded_block", "family_value", "stated_row_error", "merge_edge_graded_study"]
 
 #: The hinge stiffness counts as converged when the two finest levels agree within this fraction.
 CONVERGED_WITHIN = 0.02
+
+def mean_refinement_ratio(levels_q) -> float:
+    """The geometric mean of the ratios of successive mesh levels (coarse to fine), as :func:`judge_convergence`
+    takes it."""
+    q = np.asarray(levels_q, float)
+    return float(np.exp(np.mean(np.log(q[:-1] / q[1:]))))
+
 
 def judge_convergence(values, refinement_ratio: float) -> dict:
     """Judge a quantity computed on three or more successively refined meshes (coarse to fine).
@@ -153,8 +160,7 @@ def edge_graded_block(rows: Sequence[dict]) -> dict:
             block["richardson"] = richardson_limit(levels, k)
         except ValueError:
             pass
-        ratio = float(np.exp(np.mean(np.log(np.array(levels[:-1]) / np.array(levels[1:])))))
-        block["judgement"] = judge_convergence(k, ratio)
+        block["judgement"] = judge_convergence(k, mean_refinement_ratio(levels))
     return block
 
 
