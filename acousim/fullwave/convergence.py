@@ -29,7 +29,7 @@ from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
 from .mesh_record import (CONVERGED_WITHIN, judge_convergence, mean_refinement_ratio,  # noqa: F401 (re-exported)
                           merge_edge_graded_study, richardson_limit, stated_mesh_error)
-from .family_grid import EDGE_GRADED_H_EDGE, edge_graded_mesh_spec, family_mesh_spec
+from .mesh_rules import EDGE_GRADED_H_EDGE, edge_graded_mesh_spec, family_mesh_spec
 from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
 from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients

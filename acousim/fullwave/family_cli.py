@@ -8,7 +8,7 @@ from cubedimer.cli import UserInputError, add_executor_arguments, executor_confi
 
 from .family import (BUILD_HINT, EDGE_GRADED_FAMILY_DIR, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
                      FamilyNode, FamilyTableError, FullwaveFamily, build_family, family_nodes)
-from .family_grid import FAMILY_MESH_LEVELS, family_mesh_level
+from .mesh_rules import FAMILY_MESH_LEVELS
 from .flux import FLUX_DISC_POINTS_RANGE
 
 __all__ = ["add_parser"]
@@ -81,17 +81,14 @@ def run_build(args: argparse.Namespace) -> int:
         raise UserInputError(f"--flux-disc-points {args.flux_disc_points}: must lie in {lo}..{hi} (the shipped "
                              f"family: {FAMILY_BUILD['flux_disc_points']}, which converge the folding barrier)")
     try:
+        points = None
         if args.points:
-            pairs = [p.split(":") for p in args.points.split(",") if p.strip()]
-            if any(len(p) != 2 for p in pairs):
+            points = [p.split(":") for p in args.points.split(",") if p.strip()]
+            if any(len(p) != 2 for p in points):
                 raise UserInputError(f"--points {args.points!r}: expected KS:G pairs separated by commas")
-            edges = args.mesh == "edges"
-            nodes = [FamilyNode(float(k), float(g), args.n_half, args.theta_max, args.flux_disc_points,
-                                family_mesh_level(float(g)) if edges else None)
-                     for k, g in pairs]
-        else:
-            nodes = family_nodes(float_list(args.ks, "--ks"), float_list(args.gap_ratio, "--gap-ratio"), args.n_half,
-                                 args.theta_max, args.flux_disc_points, edge_graded=args.mesh == "edges")
+            points = [(float(k), float(g)) for k, g in points]
+        nodes = family_nodes(float_list(args.ks, "--ks"), float_list(args.gap_ratio, "--gap-ratio"), args.n_half,
+                             args.theta_max, args.flux_disc_points, edge_graded=args.mesh == "edges", points=points)
     except ValueError as exc:
         raise UserInputError(f"{exc} (options --ks / --gap-ratio / --points)") from None
     summary = build_family(args.out, nodes, executor_config(args), progress=not args.no_progress)

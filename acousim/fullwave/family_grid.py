@@ -4,20 +4,13 @@ A node is one (ks, g/s) with its build settings (:class:`FamilyNode`); its table
 :class:`~acousim.fullwave.surrogate.FullwaveSurrogate` built at the reference side and air (:data:`REFERENCE`),
 from which every other dimer with the same ks and g/s follows by exact scaling (:mod:`acousim.fullwave.family`).
 
-Meshes.  The field of a sharp cube is singular at every edge (|v| ~ r^-1/3).  Two mesh rules exist:
-
-* the **hinge-graded** rule (:func:`family_mesh_spec`): graded towards the hinge edges only, elements of 0.125 s
-  elsewhere.  Its hinge stiffness is 3-4 % soft (``mesh_convergence.json``);
-* the **edge-graded** rule (:func:`edge_graded_mesh_spec`): every size of the hinge-graded rule times a level q,
-  and each cube graded towards all twelve edges from :data:`EDGE_GRADED_H_EDGE` q s.  On these meshes the
-  hinge stiffness converges monotonically, with Richardson limits that predict a held-out finest level within
-  0.2 %.  :data:`FAMILY_MESH_LEVELS` gives the level of each gap node, chosen from that study so that the
-  stated mesh error (the distance from the limit plus the size of the extrapolation) stays below 2 %.
+Meshes.  A node is built on one of the two mesh rules of :mod:`acousim.fullwave.mesh_rules` (re-exported here):
+the hinge-graded rule (``mesh_level`` None) or the edge-graded rule at the level of its gap.
 """
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
@@ -25,6 +18,8 @@ import numpy as np
 
 from ..medium import Medium
 from .geometry import DimerMeshSpec
+from .mesh_rules import (EDGE_GRADED_H_EDGE, FAMILY_MESH_LEVELS, edge_graded_mesh_spec, family_mesh_level,
+                         family_mesh_spec)
 from .surrogate import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE
 
 __all__ = [
@@ -65,65 +60,12 @@ REFERENCE = {"side_m": 500e-6, "sound_speed_m_s": 343.0, "air_density_kg_m3": 1.
 BUILD_HINT = "python -m acousim family build"
 
 
-#: Element size at every cube edge, as a fraction of the side, of level q = 1 of the edge-graded rule.
-EDGE_GRADED_H_EDGE = 0.02
-#: (g/s, q): the edge-graded level of each gap node.  Each is the coarsest measured level whose stated mesh
-#: error of the hinge stiffness (distance from the Richardson limit plus the extrapolation's size, at ks = 0.418)
-#: is below 2 % with a margin: 1.32 % (g/s 0.01, q 1, 5,380 DOFs), 0.92 % (0.01495, q 0.7, 6,196),
-#: 1.25 % (0.0334, q 0.5, 6,164) and 1.71 % (0.05, q 0.5, 5,812) (docs/fullwave.md).
-FAMILY_MESH_LEVELS: tuple[tuple[float, float], ...] = ((0.01, 1.0), (0.014953, 0.7), (0.033437, 0.5), (0.05, 0.5))
-
-
 class FamilyRangeError(ValueError):
     """A condition lies outside what the shipped (or given) family covers; one line."""
 
 
 class FamilyTableError(ValueError):
     """A node table is corrupt or was built with other settings than the family's; one line naming the file."""
-
-
-def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: float = 1.0,
-                     refine_faces: bool = False) -> DimerMeshSpec:
-    """The gap-resolving mesh of the family nodes.
-
-    The faces are those of ``mesh_family(0.5)`` (largest element 0.125 s, growth 1.6).  At the hinge edges the
-    elements are ``g/2`` across (kept within [0.0025 s, 0.02 s]) and ``3 g`` along the hinge line (at most
-    0.125 s), halved at the edges' ends: the aspect ratio of the elements that face each other across the gap
-    is the same at every gap.  At g = 0.01 s this is the shipped default table's mesh (``TABLE_SPEC``).  The hinge
-    stiffness on these meshes is not converged under refinement of the faces; each gap row's measured mesh error
-    is in ``mesh_convergence.json`` (docs/fullwave.md).
-
-    ``refine`` scales the three hinge sizes for the mesh-convergence study of each gap node; with
-    ``refine_faces`` it scales the faces' largest element as well (every size times ``refine``: a uniformly
-    refined sequence of the same mesh).
-    """
-    r = float(gap) / float(side)
-    along = min(0.125, 3.0 * r) * refine
-    return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius,
-                         h_hinge=min(max(0.5 * r, 0.0025), 0.02) * refine,
-                         h_max=0.125 * (refine if refine_faces else 1.0), h_along=along, h_corner=0.5 * along,
-                         growth=1.6)
-
-
-def family_mesh_level(gap_ratio: float) -> float:
-    """The edge-graded level q at ``gap_ratio`` (g/s): :data:`FAMILY_MESH_LEVELS` interpolated linearly in
-    log(g/s), held at the end values outside; a check point between two gap nodes gets a level between theirs."""
-    r = float(gap_ratio)
-    if not (np.isfinite(r) and r > 0):
-        raise ValueError(f"g/s must be positive, got {gap_ratio!r}")
-    g, q = np.array(FAMILY_MESH_LEVELS).T
-    return float(np.interp(np.log(r), np.log(g), q))
-
-
-def edge_graded_mesh_spec(side: float, gap: float, level: float | None = None, edge_radius: float = 0.0) -> DimerMeshSpec:
-    """The edge-graded mesh at level ``level`` (q; default :func:`family_mesh_level` of g/s): every size of
-    :func:`family_mesh_spec` times q, and each cube graded towards all twelve edges from
-    ``EDGE_GRADED_H_EDGE * q * s`` with the same growth."""
-    q = family_mesh_level(gap / side) if level is None else float(level)
-    if not (np.isfinite(q) and q > 0):
-        raise ValueError(f"the mesh level must be positive, got {level!r}")
-    spec = family_mesh_spec(side, gap, edge_radius, refine=q, refine_faces=True)
-    return replace(spec, h_edge=EDGE_GRADED_H_EDGE * q)
 
 
 @dataclass(frozen=True)
@@ -196,10 +138,13 @@ def node_path(directory: str | os.PathLike, node: FamilyNode) -> Path:
 
 def family_nodes(ks: Sequence[float] = FAMILY_KS, gap_ratios: Sequence[float] = FAMILY_GAP_RATIOS,
                  n_half: int = FAMILY_BUILD["n_half"], theta_max: float = FAMILY_BUILD["theta_max"],
-                 flux_disc_points: int = FAMILY_BUILD["flux_disc_points"], edge_graded: bool = True) -> list[FamilyNode]:
+                 flux_disc_points: int = FAMILY_BUILD["flux_disc_points"], edge_graded: bool = True,
+                 points: Sequence[tuple[float, float]] | None = None) -> list[FamilyNode]:
     """The grid's nodes in build order: the largest gap first, so that a partial build covers a rectangle of the
     family as early as possible.  ``edge_graded``: on the edge-graded mesh at :func:`family_mesh_level` (else the
-    hinge-graded mesh)."""
+    hinge-graded mesh).  ``points``: exactly these (ks, g/s) pairs instead of the grid ``ks`` x ``gap_ratios``
+    (check points between the nodes), in the given order."""
+    pairs = [(k, g) for g in sorted(gap_ratios, reverse=True) for k in ks] if points is None else list(points)
     return [FamilyNode(float(k), float(g), n_half, theta_max, flux_disc_points,
                        family_mesh_level(g) if edge_graded else None)
-            for g in sorted(gap_ratios, reverse=True) for k in ks]
+            for k, g in pairs]

@@ -385,10 +385,10 @@ def mirror_maps(vertices: NDArray, faces: NDArray, rtol: float = 1e-9) -> dict[s
     return out
 
 
-def _burton_miller_matrix(bempp, space, test_space, k: float) -> NDArray[np.complex128]:
+def _burton_miller_matrix(bempp, space, test_space, k: float) -> tuple[NDArray[np.complex128], str]:
     """The dense Galerkin matrix of ``I/2 - D - (i/k) W`` (trial ``space``, test ``test_space``) on the backend of
-    :func:`assembly_device`; under ``auto``, an OpenCL failure (a driver that cannot build the kernels) falls back
-    to numba with a warning, for the rest of the process."""
+    :func:`assembly_device`, and the backend it was assembled on; under ``auto``, an OpenCL failure (a driver that
+    cannot build the kernels) falls back to numba with a warning, for the rest of the process."""
     global _OPENCL_FAILED
     device = "numba" if _OPENCL_FAILED else assembly_device()
     while True:
@@ -399,7 +399,7 @@ def _burton_miller_matrix(bempp, space, test_space, k: float) -> NDArray[np.comp
             hyp = bempp.operators.boundary.helmholtz.hypersingular(space, space, test_space, k, **opts)
             with warnings.catch_warnings():  # pocl's compiler notes on bempp's kernels, harmless
                 warnings.filterwarnings("ignore", message="Non-empty compiler output")
-                return (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense()
+                return (0.5 * ident - dlp - (1j / k) * hyp).weak_form().to_dense(), device
         except Exception as exc:
             if device != "opencl" or os.environ.get(BEM_DEVICE_ENV, "").strip().lower() == "opencl":
                 raise
@@ -409,7 +409,7 @@ def _burton_miller_matrix(bempp, space, test_space, k: float) -> NDArray[np.comp
 
 def _symmetric_matrix(bempp, grid, space, vertices: NDArray, faces: NDArray, k: float, maps: dict) -> tuple | None:
     """Assemble only the rows of the representative vertices (X >= 0, Y >= 0 for the mirrors in ``maps``) and
-    fold the columns over each vertex orbit.  Returns (reduced matrix, representatives, orbit matrix) or None
+    fold the columns over each vertex orbit.  Returns (reduced matrix, representatives, orbit matrix, backend) or None
     when the mesh does not conform to the mirror planes."""
     n = len(vertices)
     tol = 1e-9 * float(np.max(np.ptp(vertices, axis=0)))
@@ -446,9 +446,9 @@ def _symmetric_matrix(bempp, grid, space, vertices: NDArray, faces: NDArray, k: 
     dof_vertex[l2g[sup][used]] = faces[sup][used]
     if np.any(dof_vertex < 0) or not np.array_equal(np.sort(dof_vertex), reps):
         return None
-    rows = _burton_miller_matrix(bempp, space, dual, k)  # (n_dofs_dual, n)
+    rows, device = _burton_miller_matrix(bempp, space, dual, k)  # (n_dofs_dual, n)
     order = np.argsort(rep_index[dof_vertex])
-    return rows[order] @ fold, reps, fold
+    return rows[order] @ fold, reps, fold, device
 
 
 def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium(), use_symmetry: bool = True) -> ScatteringSolution:
@@ -488,17 +488,16 @@ def solve_scattering(bodies: Sequence[Body], medium: Medium = Medium(), use_symm
     maps = mirror_maps(vertices, faces) if use_symmetry else {}
     reduced = _symmetric_matrix(bempp, grid, space, vertices, faces, k, maps) if maps else None
     if reduced is not None:
-        matrix, reps, fold = reduced
+        matrix, reps, fold, device = reduced
         t1 = time.perf_counter()
         sol = fold @ lu_solve(lu_factor(matrix, check_finite=False), rhs[reps], check_finite=False)
         sym = "".join(sorted(maps))
     else:
-        matrix = _burton_miller_matrix(bempp, space, space, k)
+        matrix, device = _burton_miller_matrix(bempp, space, space, k)
         t1 = time.perf_counter()
         sol = lu_solve(lu_factor(matrix, check_finite=False), rhs, check_finite=False)
         sym = ""
     t2 = time.perf_counter()
-    device = "numba" if _OPENCL_FAILED else assembly_device()
     log.info("full-wave solve: %d DOFs (mirror symmetry: %s), assembly %.1f s (%s), LU + 2 solves %.2f s",
              len(vertices), sym or "none", t1 - t0, device, t2 - t1)
     return ScatteringSolution(

@@ -57,7 +57,7 @@ def run_table(args: argparse.Namespace) -> int:
     for name in ("bempp", "numba"):  # their INFO lines would drown the build's own
         logging.getLogger(name).setLevel(logging.WARNING)
     if args.mesh == "edges":
-        from .family_grid import edge_graded_mesh_spec
+        from .mesh_rules import edge_graded_mesh_spec
 
         gap = 0.01 * args.side if args.gap is None else args.gap
         spec = edge_graded_mesh_spec(args.side, gap, args.level, edge_radius=args.edge_radius)

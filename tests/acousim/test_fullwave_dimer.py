@@ -174,3 +174,57 @@ def test_assembly_device_refuses_what_it_cannot_do(monkeypatch):
         solver.assembly_device()
     monkeypatch.setenv(solver.BEM_DEVICE_ENV, "auto")
     assert solver.assembly_device() == "numba"
+
+
+def _bempp_without_opencl(monkeypatch):
+    """bempp-cl as the solver sees it, except that the OpenCL kernels fail to build (as with a broken driver)."""
+    from types import SimpleNamespace
+
+    from acousim.fullwave import solver
+
+    real = solver.import_bempp()
+
+    def failing_on_opencl(operator):
+        def build(*args, device_interface="numba", **kwargs):
+            if device_interface == "opencl":
+                raise RuntimeError("clBuildProgram failed")
+            return operator(*args, device_interface=device_interface, **kwargs)
+        return build
+
+    h = real.operators.boundary.helmholtz
+    helmholtz = SimpleNamespace(double_layer=failing_on_opencl(h.double_layer),
+                                hypersingular=failing_on_opencl(h.hypersingular))
+    fake = SimpleNamespace(Grid=real.Grid, function_space=real.function_space,
+                           operators=SimpleNamespace(boundary=SimpleNamespace(sparse=real.operators.boundary.sparse,
+                                                                              helmholtz=helmholtz)))
+    monkeypatch.setattr(solver, "import_bempp", lambda: fake)
+    monkeypatch.setattr(solver, "_opencl_cpu_available", lambda: True)
+    monkeypatch.setattr(solver, "_OPENCL_FAILED", False)
+
+
+def test_failed_opencl_assembly_falls_back_to_numba_under_auto(monkeypatch, caplog, coarse_pair):
+    """Under ``auto`` an OpenCL assembly that fails is redone on numba, with a warning, and the solution records
+    the backend it was really assembled on; the field is numba's (the same operations: equal to rounding)."""
+    from acousim.fullwave import solver
+
+    _bempp_without_opencl(monkeypatch)
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, "auto")
+    with caplog.at_level("WARNING", logger=solver.__name__):
+        sol = solve_scattering(dimer_bodies(THETA, SPEC))
+    assert sol.timings["device"] == "numba"
+    assert "OpenCL assembly failed" in caplog.text and solver._OPENCL_FAILED
+    ref = coarse_pair[THETA]  # solved on numba (tests/conftest.py sets the backend)
+    for name in ("p_cos", "p_sin"):
+        a = getattr(ref, name)
+        np.testing.assert_allclose(getattr(sol, name), a, rtol=0, atol=1e-12 * np.abs(a).max())
+
+
+def test_failed_opencl_assembly_is_an_error_when_opencl_was_asked_for(monkeypatch):
+    """``CUBEDIMER_BEM_DEVICE=opencl`` means OpenCL or nothing: the failure is raised, not hidden by a fallback."""
+    from acousim.fullwave import solver
+
+    _bempp_without_opencl(monkeypatch)
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, "opencl")
+    with pytest.raises(RuntimeError, match="clBuildProgram failed"):
+        solve_scattering(dimer_bodies(THETA, SPEC))
+    assert not solver._OPENCL_FAILED

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from acousim.fullwave.convergence import stated_mesh_error
-from acousim.fullwave.family import FAMILY_DIR, FullwaveFamily, FamilyTableError, load_node
+from acousim.fullwave.family import FAMILY_DIR, FamilyTableError, FullwaveFamily, family_accuracy, load_node
 from acousim.fullwave.family_grid import (EDGE_GRADED_H_EDGE, FAMILY_GAP_RATIOS, FAMILY_KS, FAMILY_MESH_LEVELS,
                                           MESH_CONVERGENCE_FILE, FamilyNode, edge_graded_mesh_spec, family_mesh_level,
                                           family_mesh_spec, family_nodes)
@@ -69,6 +69,15 @@ def test_default_nodes_are_edge_graded_at_their_levels():
     assert "h_edge" not in FamilyNode(node.ks, node.gap_ratio).expected_settings()
 
 
+def test_check_points_take_the_level_of_their_gap_in_the_given_order():
+    points = [(0.6, 0.0122), (0.34, 0.03), (0.5625, 0.05)]
+    nodes = family_nodes(points=points)
+    assert [(n.ks, n.gap_ratio) for n in nodes] == points
+    assert [n.mesh_level for n in nodes] == [family_mesh_level(g) for _, g in points]
+    assert 0.7 < nodes[0].mesh_level < 1.0  # 0.0122 lies between the nodes 0.01 (q 1) and 0.01495 (q 0.7)
+    assert all(n.mesh_level is None for n in family_nodes(points=points, edge_graded=False))
+
+
 @pytest.mark.parametrize("level", [0.0, -1.0, float("nan"), 10.0])
 def test_bad_mesh_level_is_refused(level):
     with pytest.raises(ValueError, match="mesh level"):
@@ -84,6 +93,19 @@ def test_edge_graded_family_reads_back_its_nodes_and_interpolates(tmp_path):
         load_node(tmp_path / f"{node.name}.json", node)  # its own node accepts it
     # the synthetic dependence is quadratic in ks and log g/s: the interpolant is exact (1e-9: rounding)
     np.testing.assert_allclose(fam.dimensionless(0.5, 0.02)["qt"], synthetic_reduced(0.5, 0.02)["qt"], rtol=1e-9)
+
+
+def test_accuracy_skips_a_check_on_the_other_mesh_rule(tmp_path, synthetic_family_dir, caplog):
+    """A check built on the other mesh rule would measure the mesh difference, not the interpolation: skipped."""
+    write_synthetic_family(tmp_path, gap_nodes=FAMILY_GAP_RATIOS[:1], edge_graded=True)
+    other = [load_node(p) for p in sorted(tmp_path.glob("ks*.json"))]
+    hinge = FullwaveFamily(synthetic_family_dir)
+    assert hinge.edge_graded is False and FullwaveFamily(tmp_path).edge_graded is True
+    with caplog.at_level("WARNING"):
+        acc = family_accuracy(hinge, other)
+    assert acc["summary"]["n_checks"] == 0 and "edge-graded mesh rule" in caplog.text
+    same = [load_node(p) for p in sorted(synthetic_family_dir.glob("ks*.json"))]
+    assert family_accuracy(hinge, same)["summary"]["n_checks"] == len(same)
 
 
 def test_family_mixing_mesh_rules_is_refused(tmp_path, synthetic_family_dir):
