@@ -11,8 +11,9 @@
 
 bempp-cl is imported lazily, at the first solve.
 """
-from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, MeshError, check_closed_oriented,
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, MeshError, check_closed_oriented,
                        dimer_bodies, hinge_refined_spec, mesh_family, split_bodies, volume_centroid)
+from .mesh_rules import TABLE_SPEC, edge_graded_mesh_spec
 from .flux import (ExteriorField, FluxSurface, double_layer_potential, enclosing_sphere_surface, flux_height_structure,
                    mirror_half_surface)
 from .solver import Body, HeightStructure, ScatteringSolution, solve_scattering
@@ -23,7 +24,8 @@ __all__ = [
     "Body", "HeightStructure", "ScatteringSolution", "solve_scattering",
     "ExteriorField", "FluxSurface", "double_layer_potential", "enclosing_sphere_surface", "mirror_half_surface",
     "flux_height_structure",
-    "DimerMeshSpec", "DEFAULT_SPEC", "TABLE_SPEC", "COARSE_SPEC", "mesh_family", "hinge_refined_spec", "dimer_bodies",
+    "DimerMeshSpec", "DEFAULT_SPEC", "TABLE_SPEC", "COARSE_SPEC", "mesh_family", "hinge_refined_spec", "edge_graded_mesh_spec",
+    "dimer_bodies",
     "split_bodies",
     "check_closed_oriented", "volume_centroid", "MeshError",
     "FullwaveSurrogate", "build_fullwave_surrogate", "cached_fullwave_surrogate", "default_fullwave_surrogate",

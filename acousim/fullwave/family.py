@@ -47,14 +47,14 @@ from numpy.typing import NDArray
 from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..medium import GRAVITY, Medium
-from .family_grid import (BUILD_HINT, EDGE_GRADED_FAMILY_DIR, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
+from .family_grid import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
                           MESH_CONVERGENCE_FILE, REFERENCE, FamilyNode, FamilyRangeError, FamilyTableError,
                           family_mesh_spec, family_nodes, node_path)
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
 from .surrogate import _COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate, build_settings_of
 
 __all__ = [
-    "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "EDGE_GRADED_FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
+    "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
     "family_mesh_spec", "FamilyNode", "node_path", "family_nodes", "load_node", "force_scale", "build_family_node", "build_family",
     "dimensionless_coefficients", "scaled_surrogate", "FullwaveFamily", "FamilyRangeError", "FamilyTableError",
     "BUILD_HINT", "interpolation_errors", "family_accuracy", "fullwave_surrogate", "shipped_family", "FAMILY_ENV", "DEFAULT_GAP_RATIO",
@@ -127,7 +127,7 @@ def _build_task(item: tuple) -> dict:
     return build_family_node(node, directory)
 
 
-def build_family(directory: str | os.PathLike = EDGE_GRADED_FAMILY_DIR, nodes: Sequence[FamilyNode] | None = None,
+def build_family(directory: str | os.PathLike = FAMILY_DIR, nodes: Sequence[FamilyNode] | None = None,
                  config: ExecutorConfig | None = None, progress: bool = True) -> list[dict]:
     """Build every missing node table of ``nodes`` (default: the whole edge-graded family) into ``directory``.
 

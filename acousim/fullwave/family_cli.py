@@ -6,7 +6,7 @@ import logging
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, float_list
 
-from .family import (BUILD_HINT, EDGE_GRADED_FAMILY_DIR, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
+from .family import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
                      FamilyNode, FamilyTableError, FullwaveFamily, build_family, family_nodes)
 from .mesh_rules import FAMILY_MESH_LEVELS
 from .flux import FLUX_DISC_POINTS_RANGE
@@ -33,12 +33,12 @@ def add_parser(subparsers) -> None:
                        description="Build every missing node table of the grid --ks x --gap-ratio into --out. "
                                    "Rerun the same command to resume an interrupted build.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    b.add_argument("--out", default=str(EDGE_GRADED_FAMILY_DIR), help="directory of the node tables")
+    b.add_argument("--out", default=str(FAMILY_DIR), help="directory of the node tables")
     b.add_argument("--mesh", choices=("edges", "hinge"), default="edges",
                    help="edges: meshes graded towards all twelve edges of each cube, at the level q of each gap ("
                         + ", ".join(f"g/s {g:g}: q {q:g}" for g, q in FAMILY_MESH_LEVELS)
                         + "; interpolated in log g/s between them), whose hinge stiffness is within 2 %% of its "
-                          "mesh-converged limit; hinge: graded towards the hinge edges only (3-4 %% soft)")
+                          "mesh-converged limit (the shipped family's rule); hinge: graded towards the hinge edges only (3-5 %% soft)")
     b.add_argument("--ks", default=",".join(f"{v:g}" for v in FAMILY_KS),
                    help="ks nodes (wavenumber x side), comma-separated")
     b.add_argument("--gap-ratio", default=",".join(f"{v:g}" for v in FAMILY_GAP_RATIOS),

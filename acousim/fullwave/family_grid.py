@@ -24,7 +24,7 @@ from .surrogate import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE", "BUILD_HINT", "MESH_CONVERGENCE_FILE",
-    "EDGE_GRADED_H_EDGE", "FAMILY_MESH_LEVELS", "EDGE_GRADED_FAMILY_DIR", "FamilyRangeError", "FamilyTableError", "family_mesh_spec",
+    "EDGE_GRADED_H_EDGE", "FAMILY_MESH_LEVELS", "FamilyRangeError", "FamilyTableError", "family_mesh_spec",
     "family_mesh_level", "edge_graded_mesh_spec", "FamilyNode", "node_path", "family_nodes",
 ]
 
@@ -46,11 +46,9 @@ FAMILY_KS: tuple[float, ...] = (0.3, 0.3875, 0.65)
 #: g/s nodes: 4 Chebyshev-Lobatto points in log(g/s) on [0.01, 0.05].
 FAMILY_GAP_RATIOS: tuple[float, ...] = tuple(round(float(np.exp(v)), 6)
                                              for v in _lobatto(np.log(0.01), np.log(0.05), 4))
-#: Where the shipped node tables live (the hinge-graded family).
+#: Where the shipped node tables live (edge-graded meshes), with their check tables (``checks/``), the measured
+#: interpolation errors (``accuracy.json``) and the mesh-convergence record (``mesh_convergence.json``).
 FAMILY_DIR = Path(__file__).resolve().parent.parent / "data" / "fullwave_family"
-#: Where ``python -m acousim family build`` builds the edge-graded family by default (resumably, node by node);
-#: it replaces the hinge-graded family once every node and check table is built.
-EDGE_GRADED_FAMILY_DIR = Path(__file__).resolve().parent.parent / "data" / "fullwave_family_edge_graded"
 #: Theta series of every node: n_half solves on |theta| <= theta_max (2 n_half Chebyshev terms).
 FAMILY_BUILD = {"n_half": 6, "theta_max": 0.9, "flux_disc_points": FLUX_DISC_POINTS}
 #: The physical settings the nodes are built at (any others follow by the exact scaling).

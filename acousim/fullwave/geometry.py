@@ -39,7 +39,6 @@ __all__ = [
     "FAMILY_BASE",
     "COARSE_SPEC",
     "DEFAULT_SPEC",
-    "TABLE_SPEC",
     "hinge_refined_spec",
     "graded_nodes",
     "cube_body_mesh",
@@ -143,7 +142,7 @@ def mesh_family(q: float, side: float = 500e-6, gap: float | None = None, edge_r
     """The mesh of refinement level ``q``: every element size of :data:`FAMILY_BASE` times q, growth fixed.
 
     q = 2 is the coarsest (264 DOFs), q = 1 the coarse mesh (536 DOFs), the standard q = 0.5 (1,368 DOFs); the
-    shipped table uses :func:`hinge_refined_spec` instead; see docs/fullwave.md.
+    shipped tables use the edge-graded meshes of :mod:`acousim.fullwave.mesh_rules`; see docs/fullwave.md.
     """
     b = FAMILY_BASE
     return DimerMeshSpec(side=side, gap=gap, edge_radius=edge_radius, h_hinge=b["h_hinge"] * q, h_max=b["h_max"] * q,
@@ -155,22 +154,20 @@ DEFAULT_SPEC = mesh_family(0.5)
 
 
 def hinge_refined_spec(side: float = 500e-6, gap: float | None = None, edge_radius: float = 0.0) -> DimerMeshSpec:
-    """The mesh of the shipped default table: the faces of ``mesh_family(0.5)``, and at the hinge edges elements
-    g/2 across (kept within [0.0025 s, 0.02 s]), 0.03 s along and 0.015 s at the edges' ends (4,216 DOFs for the
-    default dimer).
+    """A hinge-graded mesh refined along the hinge line: the faces of ``mesh_family(0.5)``, and at the hinge edges
+    elements g/2 across (kept within [0.0025 s, 0.02 s]), 0.03 s along and 0.015 s at the edges' ends (4,216 DOFs
+    for the default dimer; ``python -m acousim table --mesh hinge``).
 
-    The 5 um default gap needs the refinement along the hinge line: with the faces fixed, the hinge stiffness
-    converges monotonically there, and this mesh is within about 1 % of that Richardson limit.  Refining the faces
-    as well raises the stiffness further (by 2 % for faces of 0.0625 s): docs/fullwave.md states the mesh error
-    as measured.
+    With the faces fixed, the hinge stiffness converges monotonically under refinement along the hinge line, and
+    this mesh is within about 1 % of that limit; refining the faces as well raises it further (by 2 % for faces of
+    0.0625 s), so that on this mesh the 5 um default gap's hinge is about 3 % soft.  The shipped tables use the
+    edge-graded meshes instead (:data:`acousim.fullwave.mesh_rules.TABLE_SPEC`; docs/fullwave.md).
     """
     g = 0.01 * side if gap is None else float(gap)
     return DimerMeshSpec(side=side, gap=g, edge_radius=edge_radius, h_hinge=min(max(0.5 * g / side, 0.0025), 0.02),
                          h_max=0.125, h_along=0.03, h_corner=0.015, growth=1.6)
 
 
-#: The mesh of the shipped default table (:func:`hinge_refined_spec` of the default dimer).
-TABLE_SPEC = hinge_refined_spec()
 #: Coarse mesh (q = 1) of the studies and of the coarse surrogate build.
 COARSE_SPEC = mesh_family(1.0)
 

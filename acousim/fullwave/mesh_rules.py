@@ -18,7 +18,8 @@ import numpy as np
 
 from .geometry import DimerMeshSpec
 
-__all__ = ["EDGE_GRADED_H_EDGE", "FAMILY_MESH_LEVELS", "family_mesh_spec", "family_mesh_level", "edge_graded_mesh_spec"]
+__all__ = ["EDGE_GRADED_H_EDGE", "FAMILY_MESH_LEVELS", "family_mesh_spec", "family_mesh_level", "edge_graded_mesh_spec",
+           "TABLE_SPEC"]
 
 #: Element size at every cube edge, as a fraction of the side, of level q = 1 of the edge-graded rule.
 EDGE_GRADED_H_EDGE = 0.02
@@ -36,7 +37,7 @@ def family_mesh_spec(side: float, gap: float, edge_radius: float = 0.0, refine: 
     The faces are those of ``mesh_family(0.5)`` (largest element 0.125 s, growth 1.6).  At the hinge edges the
     elements are ``g/2`` across (kept within [0.0025 s, 0.02 s]) and ``3 g`` along the hinge line (at most
     0.125 s), halved at the edges' ends: the aspect ratio of the elements that face each other across the gap
-    is the same at every gap.  At g = 0.01 s this is the shipped default table's mesh (``TABLE_SPEC``).  The hinge
+    is the same at every gap.  At g = 0.01 s this is :func:`~acousim.fullwave.geometry.hinge_refined_spec`.  The hinge
     stiffness on these meshes is not converged under refinement of the faces; each gap row's measured mesh error
     is in ``mesh_convergence.json`` (docs/fullwave.md).
 
@@ -71,3 +72,8 @@ def edge_graded_mesh_spec(side: float, gap: float, level: float | None = None, e
         raise ValueError(f"the mesh level must be positive, got {level!r}")
     spec = family_mesh_spec(side, gap, edge_radius, refine=q, refine_faces=True)
     return replace(spec, h_edge=EDGE_GRADED_H_EDGE * q)
+
+
+#: The mesh of the shipped default dimer's table (``acousim/data/fullwave_default.json``): the edge-graded mesh of
+#: the 500 um dimer with g = 0.01 s at the family's level there (q = 1, 5,380 DOFs).
+TABLE_SPEC = edge_graded_mesh_spec(500e-6, 5e-6)

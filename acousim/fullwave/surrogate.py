@@ -41,9 +41,10 @@ from cubedimer.atomic import write_json
 
 from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
 from ..medium import GRAVITY, Medium
-from .geometry import (COARSE_SPEC, DEFAULT_SPEC, TABLE_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
+from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
                        rounded_cube_volume)
 from .flux import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, UNKEYED_FLUX_DISC_POINTS, cube_b_flux_surface, dimer_flux_coefficients  # noqa: F401 (re-exported)
+from .mesh_rules import TABLE_SPEC
 from .solver import HeightStructure, solve_scattering
 
 __all__ = [

@@ -20,19 +20,19 @@ def add_parser(subparsers) -> None:
         help="build one full-wave surrogate table (JSON) of a cube dimer",
         description=("Solve the scattering by both cubes with boundary elements at n-half orientations (theta > 0) and "
                      "write the Chebyshev-in-theta table of the forces and torque that the full-wave model reads "
-                     "(acousim/data/fullwave_default.json is one). About 20 minutes on 2 cores at the default mesh; "
+                     "(acousim/data/fullwave_default.json is one). About half an hour on 2 cores at the default mesh; "
                      "docs/fullwave.md."),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--out", required=True, help="output JSON")
-    p.add_argument("--mesh", choices=("hinge", "edges"), default="hinge",
-                   help="hinge: graded towards the hinge edges (with --level: mesh_family(q)); edges: graded towards "
-                        "all twelve edges of each cube as the edge-graded family (edge_graded_mesh_spec; --level is "
-                        "its q, default the family's level at this g/s), whose hinge stiffness is within 2 %% of its "
-                        "mesh-converged limit")
+    p.add_argument("--mesh", choices=("edges", "hinge"), default="edges",
+                   help="edges: graded towards all twelve edges of each cube, the shipped tables' rule "
+                        "(edge_graded_mesh_spec; --level is its q, default the family's level at this g/s), whose "
+                        "hinge stiffness is within 2 %% of its mesh-converged limit; hinge: graded towards the hinge "
+                        "edges only (hinge_refined_spec, or mesh_family(q) with --level), 3-5 %% soft")
     p.add_argument("--level", type=positive_float, default=None,
-                   help="mesh level q of mesh_family (1: coarse, 0.5: standard) or of the edge-graded mesh; default: "
-                        "the shipped table's mesh, refined along the hinge line (hinge_refined_spec)")
+                   help="mesh level q of the edge-graded mesh, or of mesh_family with --mesh hinge (1: coarse, "
+                        "0.5: standard)")
     p.add_argument("--n-half", type=positive_int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
     p.add_argument("--theta-max", type=positive_float, default=DEFAULT_BUILD["theta_max"],
                    help="interpolation half-width")
@@ -61,7 +61,7 @@ def run_table(args: argparse.Namespace) -> int:
 
         gap = 0.01 * args.side if args.gap is None else args.gap
         spec = edge_graded_mesh_spec(args.side, gap, args.level, edge_radius=args.edge_radius)
-    elif args.level is None:  # with the default geometry this is TABLE_SPEC, the shipped table's mesh
+    elif args.level is None:
         spec = hinge_refined_spec(side=args.side, gap=args.gap, edge_radius=args.edge_radius)
     else:
         spec = mesh_family(args.level, side=args.side, gap=args.gap, edge_radius=args.edge_radius)

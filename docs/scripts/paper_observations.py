@@ -36,9 +36,15 @@ for seed in SEEDS:
     for c in cells:
         key = c["outcome"] + (f"/{c['amplitude_class']}" if "amplitude_class" in c else "")
         labels[key] = labels.get(key, 0) + 1
+    free = [c for c in cells if c["outcome"] == "independent"]
+    ratio = [c["f_theta_hz"] / c["f_y_hz"] for c in free]
+    free_text = (f"; independent: theta amplitude {min(c['amp_theta'] for c in free):.2f}-"
+                 f"{max(c['amp_theta'] for c in free):.2f} at f_theta / f_y {min(ratio):.3f}-{max(ratio):.3f}, "
+                 f"2 f_y share {min(c['share_2fy'] for c in free):.2f}-{max(c['share_2fy'] for c in free):.2f}"
+                 if free else "")
     print(f"seed {seed}: {labels}; locked at f_y {o['locked_at_fy']}/{RUNS}, 2 f_y >= 5 % {o['with_2fy']}, "
-          f"in phase {o['in_phase']}, anti-phase {o['anti_phase']}, long-lived attractors {o['attractors']}",
-          flush=True)
+          f"in phase {o['in_phase']}, anti-phase {o['anti_phase']}, long-lived attractors {o['attractors']}"
+          f"{free_text}", flush=True)
 
 for key in ("locked_at_fy_fraction", "with_2fy_fraction"):
     v = np.array([r[key] for r in rows])

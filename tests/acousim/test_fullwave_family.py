@@ -14,15 +14,19 @@ from acousim.fullwave import default_fullwave_surrogate
 from acousim.fullwave.family import (FAMILY_GAP_RATIOS, FAMILY_KS, FamilyNode, FamilyRangeError, FamilyTableError,
                                      FullwaveFamily, build_family, dimensionless_coefficients, family_mesh_spec,
                                      family_nodes, load_node, node_path, scaled_surrogate)
-from acousim.fullwave.geometry import TABLE_SPEC
+from acousim.fullwave.geometry import hinge_refined_spec
+from acousim.fullwave.mesh_rules import TABLE_SPEC, edge_graded_mesh_spec
 from acousim.medium import Medium
 from acousim.models import ConditionError, ExperimentConditions, dynamic_model, static_model
 
 from ..conftest import synthetic_reduced, write_synthetic_family
 
 
-def test_family_mesh_is_the_shipped_table_mesh_at_the_default_gap():
-    assert family_mesh_spec(500e-6, 5e-6) == TABLE_SPEC
+def test_shipped_table_meshes_are_the_family_rule_at_the_default_gap():
+    """The default dimer's table is on the family's edge-graded mesh at g/s = 0.01 (q = 1); the hinge-graded
+    rule there is the hinge-refined mesh."""
+    assert TABLE_SPEC == edge_graded_mesh_spec(500e-6, 5e-6, 1.0)
+    assert family_mesh_spec(500e-6, 5e-6) == hinge_refined_spec()
 
 
 def test_family_mesh_keeps_the_hinge_aspect_ratio():
