@@ -1,8 +1,9 @@
 """Mesh convergence: judging a refined sequence, its Richardson limit, and a family's record of both
 (``mesh_convergence.json``) with the mesh error each gap row states.
 
-One row per gap node (``gap_over_side``).  A row may hold a uniformly refined sequence of the family's own mesh
-(``levels_q``, ``stiffness_nm``, ``family_level_q``: the hinge-graded family) and an edge-graded sequence
+One row per gap node (``gap_over_side``).  A row may hold a uniformly refined sequence of the hinge-graded mesh
+(``levels_q``, ``stiffness_nm``; ``family_level_q`` is one of these levels for a family on that rule) and an
+edge-graded sequence
 (``edge_graded``: ``levels_q``, ``dofs``, ``stiffness_nm``, ``f_theta_hz``, ``f_y_hz``, ``y2_theta``, with its
 Richardson fit and :func:`~acousim.fullwave.convergence.judge_convergence` verdict).  A family built on the
 edge-graded meshes marks its rows ``family_mesh_rule = "family-edges"``, its level being one of the sequence's.

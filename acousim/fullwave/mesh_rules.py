@@ -8,7 +8,7 @@ between two of them, so the mesh decides how close a table's hinge stiffness is 
 * The **edge-graded** rule (:func:`edge_graded_mesh_spec`): every size of the hinge-graded rule times a level q,
   and each cube graded towards all twelve edges from :data:`EDGE_GRADED_H_EDGE` q s.  On these meshes the hinge
   stiffness converges monotonically; :data:`FAMILY_MESH_LEVELS` gives the level at each gap node of the family,
-  chosen so that its stated mesh error stays below 2 % (docs/fullwave.md, "Two mesh rules").
+  chosen so that its stated mesh error stays below 2 % (docs/fullwave.md, "The nodes' meshes").
 """
 from __future__ import annotations
 
