@@ -237,10 +237,10 @@ class FullwaveFamily:
                                        f"built with another mesh rule); rebuild it with {BUILD_HINT}")
             tables[(node.ks, node.gap_ratio)] = sur
             quadratures.add(node.flux_disc_points)
-            rules.add(node.mesh_level is None)
+            rules.add(node.mesh_level is not None)
         self.tables = tables
         #: True when the nodes are on the edge-graded mesh rule, False on the hinge-graded one (None: no nodes).
-        self.edge_graded: bool | None = (not next(iter(rules))) if len(rules) == 1 else None
+        self.edge_graded: bool | None = next(iter(rules)) if len(rules) == 1 else None
         ks = sorted({k for k, _ in tables})
         gaps = sorted({g for _, g in tables})
         complete = [g for g in gaps if all((k, g) in tables for k in ks)]
@@ -474,16 +474,15 @@ def family_accuracy(family: FullwaveFamily, checks: Sequence[FullwaveSurrogate])
 
     A check on the other mesh rule than the family's (hinge-graded against edge-graded) is skipped with a warning:
     it would measure the mesh difference (3-11 % in the hinge torque), not the interpolation."""
+    rule = {True: "edge-graded", False: "hinge-graded"}
     rows = []
     for c in checks:
-        if family.edge_graded is not None and (c.settings.get("h_edge") is not None) != family.edge_graded:
-            log.warning("check table at ks %.4f, g/s %.4f skipped: built on the %s mesh rule, the family on the %s one",
-                        c.wavenumber * float(c.settings["side_m"]),
-                        float(c.settings["gap_m"]) / float(c.settings["side_m"]),
-                        "edge-graded" if c.settings.get("h_edge") is not None else "hinge-graded",
-                        "edge-graded" if family.edge_graded else "hinge-graded")
-            continue
         ks, g = c.wavenumber * float(c.settings["side_m"]), float(c.settings["gap_m"]) / float(c.settings["side_m"])
+        edge_graded = c.settings.get("h_edge") is not None  # keyed only on the edge-graded rule
+        if family.edge_graded is not None and edge_graded != family.edge_graded:
+            log.warning("check table at ks %.4f, g/s %.4f skipped: built on the %s mesh rule, the family on the %s one",
+                        ks, g, rule[edge_graded], rule[family.edge_graded])
+            continue
         try:
             family.check_covers(ks, g)
         except FamilyRangeError:

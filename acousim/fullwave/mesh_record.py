@@ -39,6 +39,7 @@ __all__ = ["CONVERGED_WITHIN", "mean_refinement_ratio", "judge_convergence", "ri
 #: The hinge stiffness counts as converged when the two finest levels agree within this fraction.
 CONVERGED_WITHIN = 0.02
 
+
 def mean_refinement_ratio(levels_q) -> float:
     """The geometric mean of the ratios of successive mesh levels (coarse to fine), as :func:`judge_convergence`
     takes it."""

@@ -25,8 +25,8 @@ __all__ = ["EDGE_GRADED_H_EDGE", "FAMILY_MESH_LEVELS", "family_mesh_spec", "fami
 EDGE_GRADED_H_EDGE = 0.02
 #: (g/s, q): the edge-graded level of each gap node.  Each is the coarsest measured level whose stated mesh
 #: error of the hinge stiffness (distance from the Richardson limit plus the extrapolation's size, at ks = 0.418)
-#: is below 2 % with a margin: 1.32 % (g/s 0.01, q 1, 5,380 DOFs), 0.92 % (0.01495, q 0.7, 6,196),
-#: 1.25 % (0.0334, q 0.5, 6,164) and 1.71 % (0.05, q 0.5, 5,812) (docs/fullwave.md).
+#: is below 2 % with a margin: 1.33 % (g/s 0.01, q 1, 5,380 DOFs), 0.93 % (0.01495, q 0.7, 6,196),
+#: 1.26 % (0.0334, q 0.5, 6,164) and 1.72 % (0.05, q 0.5, 5,812), as ``mesh_convergence.json`` states them.
 FAMILY_MESH_LEVELS: tuple[tuple[float, float], ...] = ((0.01, 1.0), (0.014953, 0.7), (0.033437, 0.5), (0.05, 0.5))
 
 
