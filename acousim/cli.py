@@ -12,6 +12,7 @@ from cubedimer.cli import command_parser, run_cli
 from . import atlas_cli, simulate_cli, sweep_cli
 from .fullwave import cli as fullwave_cli
 from .fullwave import convergence, family_cli, table_cli
+from .fullwave.solver import AssemblyBackendError
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
@@ -29,4 +30,4 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_cli(build_parser(), argv)
+    return run_cli(build_parser(), argv, errors=(AssemblyBackendError,))

@@ -6,6 +6,8 @@ import os
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
+
 from cubedimer.atomic import write_json
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .ensemble import mean_pvalues
@@ -14,7 +16,7 @@ from .methods import METHODS
 from .model import TERMS
 from .results import FitResult
 
-__all__ = ["model_json", "write_fit"]
+__all__ = ["model_json", "write_fit", "data_range"]
 
 
 def _terms(mask) -> dict[str, list[str]]:
@@ -62,6 +64,7 @@ def model_json(res: FitResult) -> dict:
         "fallback": res.fallback,
         "oracle": res.oracle.to_json() if res.oracle is not None else None,
         "method": res.method,
+        "data_range": data_range(res),
     }
     if res.discovery is not None:
         out["discovery"] = disc = res.discovery.to_json()
@@ -69,6 +72,15 @@ def model_json(res: FitResult) -> dict:
         out["integral_form"] = {"method": disc["method"], **{
             eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
     return out
+
+
+def data_range(res: FitResult) -> dict:
+    """The box the fitted data span, ``{"theta_abs_max", "y_abs_max_m"}``: the largest |theta| and |y| [m] of
+    the runs the fit saw (filled frames included, origin as in the data).  ``validation compare`` fits the
+    simulated static coefficients over this box unless told otherwise."""
+    theta = max(float(np.max(np.abs(p.run.theta))) for p in res.runs)
+    y = max(float(np.max(np.abs(p.run.y))) for p in res.runs)
+    return {"theta_abs_max": theta, "y_abs_max_m": y}
 
 
 def _integral_form_json(res: FitResult) -> dict | None:
