@@ -58,6 +58,7 @@ __all__ = [
     "ScatteringSolution",
     "solve_scattering",
     "assembly_device",
+    "AssemblyBackendError",
     "BEM_DEVICE_ENV",
     "surface_force_density",
     "triangle_rule",
