@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-#: The test run's own caches and configuration folders, under the checkout (``make clean`` removes them), set before any package of the suite
-#: is imported: kernels compiled here (some bind effects that only the tests register) and tables built here never
-#: reach the caches that the installed commands read (``~/.cache/cubedimer``, or a ``NUMBA_CACHE_DIR`` of the user's).
+#: The test run's own caches and configuration folders, under the checkout (``make clean`` removes them), set before
+#: any package of the suite is imported: kernels compiled here (some bind effects that only the tests register) and
+#: tables built here never reach the caches that the installed commands read (``~/.cache/cubedimer``, or a
+#: ``NUMBA_CACHE_DIR`` of the user's).
 TEST_CACHE_ROOT = Path(__file__).resolve().parents[1] / ".pytest_cache" / "cubedimer-caches"
 os.environ["XDG_CACHE_HOME"] = str(TEST_CACHE_ROOT / "xdg")
 os.environ["XDG_CONFIG_HOME"] = str(TEST_CACHE_ROOT / "xdg-config")  # headless Chromium's profile and crash reports
