@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from cubedimer.atomic import atomic_write_text, json_text, write_json
-from cubedimer.attractors import ATTRACTOR_CLASSES, classify_trajectory
+from cubedimer.attractors import ATTRACTOR_CLASSES, LOCKED_AT_FY, classify_trajectory
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.spectra import line_amplitude
 
@@ -47,7 +47,7 @@ AMPLITUDE_CLASSES = (("small", 0.05), ("medium", 0.3), ("large", math.inf))
 #: Cycles of y a settled class must persist over to count as long-lived.
 LONG_LIVED_CYCLES = 100
 CSV_COLUMNS = ("dimer", "side_m", "gap_ratio", "t_off_s", "theta_drop", "outcome", "t_end_s", "f_y_hz", "f_theta_hz",
-               "amp_y_m", "amp_theta", "amplitude_class", "section_phase_deg", "coherence", "share_2fy",
+               "amp_y_m", "amp_theta", "amplitude_class", "section_phase_deg", "coherence", "lock_ratio", "share_2fy",
                "long_lived", "cycles")
 
 
@@ -168,7 +168,8 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
     -------
     dict
         ``outcome`` (the class of the second half), ``f_y_hz``, ``f_theta_hz``, ``amp_y_m``, ``amp_theta``,
-        ``amplitude_class``, ``section_phase_deg``, ``coherence``, ``share_2fy`` (theta's line at 2 f_y over its
+        ``amplitude_class``, ``section_phase_deg``, ``coherence``, ``lock_ratio`` (``"p:q"`` of a lock, ``""``
+        otherwise), ``share_2fy`` (theta's line at 2 f_y over its
         line at f_y, second half), ``long_lived`` (the third and the last quarter have the same class and span
         at least :data:`LONG_LIVED_CYCLES` cycles of y together) and ``cycles`` (cycles of y in the second half).
     """
@@ -184,7 +185,7 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
     return {"outcome": c.label, "f_y_hz": c.f_y, "f_theta_hz": c.f_theta, "amp_y_m": c.amp_y, "amp_theta": c.amp_theta,
             "amplitude_class": _amplitude_class(c.amp_theta),
             "section_phase_deg": float(np.degrees(c.section_phase)) if np.isfinite(c.section_phase) else float("nan"),
-            "coherence": c.coherence, "share_2fy": at_2fy / at_fy if at_fy > 0 else float("nan"),
+            "coherence": c.coherence, "lock_ratio": c.lock_ratio, "share_2fy": at_2fy / at_fy if at_fy > 0 else float("nan"),
             "long_lived": bool(third.label == last.label == c.label and cycles >= LONG_LIVED_CYCLES),
             "cycles": float(cycles)}
 
@@ -223,22 +224,32 @@ def observations(cells: list[dict]) -> dict:
     """The source paper's observations over a set of runs (:func:`drop_and_settle` results).
 
     Returns the counts and fractions, over all runs: ``trapped`` (neither escaped nor folded), ``locked_at_fy``
-    (theta's strongest line at f_y: a locked class), ``with_2fy`` (of those, a 2 f_y line >= 5 % of the f_y one),
-    ``in_phase`` and ``anti_phase`` (locked classes), ``both_phase_classes`` (each >= 15 % of all runs),
-    ``long_lived`` and ``attractors`` (the distinct (class, amplitude class) pairs among long-lived runs).
+    (theta's strongest line at f_y: a class of :data:`cubedimer.attractors.LOCKED_AT_FY`), ``locked_ratio`` (a
+    ``locked-p:q`` lock) with ``lock_ratios`` (runs per ratio), ``with_2fy`` (of every lock, at f_y or p:q, a 2 f_y
+    line >= 5 % of the f_y one) and ``with_2fy_at_fy`` (of the locks at f_y only), ``in_phase`` and ``anti_phase``
+    (locked classes), ``both_phase_classes`` (each >= 15 % of all runs), ``long_lived`` and ``attractors`` (the
+    distinct (class, amplitude class) pairs among long-lived runs; a p:q lock's class names its ratio).
     """
     n = len(cells)
     get = lambda key: [c for c in cells if c["outcome"] == key]
-    locked = [c for c in cells if c["outcome"].startswith("locked-")]
-    with_2fy = [c for c in locked if c.get("share_2fy") is not None and c["share_2fy"] >= 0.05]  # NaN >= 0.05 is False
+    locked = [c for c in cells if c["outcome"] in LOCKED_AT_FY]
+    ratio_locked = get("locked-p:q")
+    big_2fy = lambda c: c.get("share_2fy") is not None and c["share_2fy"] >= 0.05  # NaN >= 0.05 is False
+    with_2fy = [c for c in locked + ratio_locked if big_2fy(c)]
     long_lived = [c for c in cells if c.get("long_lived")]
-    attractors = sorted({(c["outcome"], c["amplitude_class"]) for c in long_lived})
+    name = lambda c: c["outcome"] + (f" {c['lock_ratio']}" if c["outcome"] == "locked-p:q" else "")
+    attractors = sorted({(name(c), c["amplitude_class"]) for c in long_lived})
+    ratios = {}
+    for c in ratio_locked:
+        ratios[c.get("lock_ratio", "")] = ratios.get(c.get("lock_ratio", ""), 0) + 1
     frac = lambda k: k / n if n else float("nan")
     inp, anti = len(get("locked-in-phase")), len(get("locked-anti-phase"))
     return {"runs": n, "escaped": len(get("escaped")), "folded": len(get("folded")),
             "trapped": n - len(get("escaped")) - len(get("folded")),
             "locked_at_fy": len(locked), "locked_at_fy_fraction": frac(len(locked)),
+            "locked_ratio": len(ratio_locked), "lock_ratios": dict(sorted(ratios.items())),
             "with_2fy": len(with_2fy), "with_2fy_fraction": frac(len(with_2fy)),
+            "with_2fy_at_fy": sum(map(big_2fy, locked)),
             "in_phase": inp, "anti_phase": anti,
             "both_phase_classes": bool(n and inp >= 0.15 * n and anti >= 0.15 * n),
             "long_lived": len(long_lived), "attractors": [list(a) for a in attractors],
