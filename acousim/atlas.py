@@ -92,6 +92,8 @@ class AtlasConfig:
         Recorded time after the field is back on [s] (>= 1).
     sample_rate : float
         Samples per second of the classified motion [1/s] (>= 8 f_y is needed for the 2 f_y line; >= 200).
+    transducer_q : float
+        The transducer's quality factor (the field's ring time Q / (pi f), :mod:`acousim.switching`; 0: instant).
     """
 
     dimers: tuple[AtlasDimer, ...]
@@ -101,8 +103,11 @@ class AtlasConfig:
     frequency_hz: float = 45_650.0
     duration: float = 8.0
     sample_rate: float = 1000.0
+    transducer_q: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.transducer_q) and 0 <= self.transducer_q <= 1e5):
+            raise AtlasError(f"--transducer-q: {self.transducer_q!r} must lie in [0, 1e5] (0: instant switching)")
         if not self.dimers:
             raise AtlasError("--dimers: give at least one SIDE:GAP_RATIO pair")
         if not self.t_off or not all(math.isfinite(v) and 0 <= v <= 0.03 for v in self.t_off):
@@ -128,6 +133,8 @@ class AtlasConfig:
         out["dimers"] = [asdict(d) for d in self.dimers]
         out["t_off"] = list(self.t_off)
         out["theta_drop"] = list(self.theta_drop)
+        if self.transducer_q == 0:  # an instant switch pins the folder as before the ring time existed
+            del out["transducer_q"]
         return out
 
 
@@ -191,23 +198,22 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
 
 
 def drop_and_settle(dynamics, t_off: float, theta_drop: float, duration: float, sample_rate: float,
-                    thetadot_drop: float = 0.0) -> dict:
+                    thetadot_drop: float = 0.0, ring_time_s: float = 0.0) -> dict:
     """One field drop from rest at the levitation height and what it settles on.
 
-    The field is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting), then on for
-    ``duration`` [s], sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
+    The drive is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting; with a ring time
+    ``ring_time_s`` [s] the field rings down and back up, :mod:`acousim.switching`), then on for ``duration`` [s],
+    sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
     ``{"outcome": "escaped" | "folded", "t_end_s": time after the field came back}`` for a run that left the trap
     or whose faces touched (``t_end_s`` is NaN for a completed run, ``-t_off`` for one lost during the drop).
     """
-    x0 = np.array([0.0, 0.0, float(theta_drop), float(thetadot_drop)])
-    if t_off > 0:
-        fall = dynamics.integrate(x0, t_off, t_off, field_on=False)
-        if not fall.ok:
-            return {"outcome": "folded" if fall.status == 2 else "escaped", "t_end_s": -float(t_off)}
-        x0 = fall.state[-1]
-    traj = dynamics.integrate(x0, duration, 1.0 / sample_rate, field_on=True)
-    if not traj.ok:
-        return {"outcome": "folded" if traj.status == 2 else "escaped", "t_end_s": float(traj.t[-1])}
+    from .switching import field_drop
+
+    motion = field_drop(dynamics, [0.0, 0.0, float(theta_drop), float(thetadot_drop)], t_off, duration,
+                        1.0 / sample_rate, tau=ring_time_s)
+    if not motion.ok:
+        return {"outcome": "folded" if motion.status == 2 else "escaped", "t_end_s": float(motion.t_stop)}
+    traj = motion.trajectory
     return {**settled_outcome(traj.t, traj.state), "t_end_s": float("nan")}
 
 
@@ -215,7 +221,8 @@ def _cell_task(item: tuple) -> dict:
     config, (d, i, j) = item
     dimer = config.dimers[d]
     dyn = atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_amplitude_pa, config.frequency_hz)
-    res = drop_and_settle(dyn, config.t_off[i], config.theta_drop[j], config.duration, config.sample_rate)
+    res = drop_and_settle(dyn, config.t_off[i], config.theta_drop[j], config.duration, config.sample_rate,
+                          ring_time_s=config.transducer_q / (math.pi * config.frequency_hz))
     return {"dimer": dimer.label, "side_m": dimer.side, "gap_ratio": dimer.gap_ratio, "t_off_s": config.t_off[i],
             "theta_drop": config.theta_drop[j], "index": [d, i, j], **res}
 
