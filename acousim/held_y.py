@@ -38,7 +38,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.rk4 import rk4, rk4_batch
 
 from .atlas import AMPLITUDE_CLASSES, AtlasDimer, AtlasError, atlas_dynamics, settled_outcome
-from .equations import field_on_acceleration, kernel_arguments
+from .equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
 __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "floquet_multipliers",
            "held_y_cell", "cell_summary", "run_held_y_map", "MAP_COLUMNS", "TWO_FY_SHARE", "POPULATED"]
@@ -131,9 +131,13 @@ class HeldYConfig:
 @nb.njit(cache=True)
 def held_y_acceleration(y, ydot, theta, thetadot, args):
     """(yddot, thetaddot) with y held: y obeys the trap at the frozen hinge angle theta* without effects, the
-    hinge its full equation.  ``args = (hinge args, y args, theta*)`` (:func:`held_y_arguments`)."""
-    args_hinge, args_y, theta_star = args
-    ay, _ = field_on_acceleration(y, ydot, theta_star, 0.0, args_y)
+    hinge its full equation.  ``args = (hinge args, (A_y, B_y, C_y) at theta*, theta*)`` (:func:`held_y_arguments`):
+    the y force at theta* is ``A_y + B_y cos 2kZ + C_y sin 2kZ - M g``, the kernel's own series evaluated once."""
+    args_hinge, y_series, theta_star = args
+    par = args_hinge[6]
+    z = par[_P_ZEQ] + y
+    c, s = np.cos(par[_P_TWO_K] * z), np.sin(par[_P_TWO_K] * z)
+    ay = (y_series[0] + y_series[1] * c + y_series[2] * s - par[_P_MG]) / par[_P_MASS]
     _, at = field_on_acceleration(y, ydot, theta, thetadot, args_hinge)
     return ay, at
 
@@ -151,11 +155,10 @@ def _integrate_held_batch(args, x0s, h, substeps, n_out, lower, upper, out, n_va
 def held_y_arguments(dynamics) -> tuple[tuple, NDArray[np.float64]]:
     """(kernel ``args`` of :func:`held_y_acceleration`, the static equilibrium [y, 0, theta*, 0]) of a
     :class:`~acousim.dynamics.DimerDynamics`."""
-    from .effects import EffectSet
-
     eq = dynamics.equilibrium()
-    args = (dynamics._args_on, kernel_arguments(dynamics.force_model, EffectSet(), True), float(eq[2]))
-    return args, eq
+    a_y, b_y, c_y = dynamics._args_on[:3]
+    y_series = np.array([_chebval(c, float(eq[2])) for c in (a_y, b_y, c_y)])
+    return (dynamics._args_on, y_series, float(eq[2])), eq
 
 
 _BOX = (np.array([-np.inf, -np.inf, -np.nextafter(1.0, 0.0), -np.inf]),
