@@ -40,7 +40,8 @@ from cubedimer.rk4 import rk4, rk4_batch
 from .atlas import AMPLITUDE_CLASSES, AtlasDimer, AtlasError, atlas_dynamics, settled_outcome
 from .equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
-__all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "floquet_multipliers",
+__all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "held_y_orbits",
+           "floquet_multipliers",
            "held_y_cell", "cell_summary", "run_held_y_map", "MAP_COLUMNS", "TWO_FY_SHARE", "POPULATED"]
 
 logger = logging.getLogger(__name__)
@@ -219,6 +220,44 @@ def floquet_multipliers(integrate, args, x_orbit: ArrayLike, period: float, step
     return np.linalg.eigvals(np.column_stack(cols))
 
 
+def held_y_orbits(dynamics, amplitude_m: float, starts, periods: int, samples_per_period: int = 40,
+                  max_step: float = 1e-4) -> tuple:
+    """Integrate the held system from every hinge start (one compiled call).
+
+    Parameters
+    ----------
+    dynamics : acousim.dynamics.DimerDynamics
+    amplitude_m : float
+        Depth of the held y orbit's lowest point below the equilibrium [m].
+    starts : sequence of (theta0, thetadot0)
+        Hinge starts at y's lowest point.
+    periods, samples_per_period : int
+        Periods of y integrated and samples per period.
+    max_step : float
+        Longest internal RK4 step [s].
+
+    Returns
+    -------
+    (t, states (B, n, 4), n_valid (B,), status (B,), period [s], kernel args, RK4 substeps per sample)
+        Rows of ``states`` from ``n_valid`` on are NaN; a non-zero status is a fold (theta = +-1).
+    """
+    f_y, _ = dynamics.force_model.linear_frequencies()
+    args, eq = held_y_arguments(dynamics)
+    y_start = float(eq[0]) - amplitude_m
+    period = y_orbit_period(args, y_start, f_y)
+    dt_out = period / samples_per_period
+    substeps = max(1, int(math.ceil(dt_out / max_step - 1e-9)))
+    n_out = periods * samples_per_period + 1
+    x0s = np.array([[y_start, 0.0, th, thd] for th, thd in starts])
+    b = len(x0s)
+    out = np.full((b, n_out, 4), np.nan)
+    n_valid, status = np.zeros(b, np.int64), np.zeros(b, np.int64)
+    lower, upper = (np.tile(v, (b, 1)) for v in _BOX)
+    _integrate_held_batch(args, x0s, np.full(b, dt_out / substeps), substeps, np.full(b, n_out), lower, upper, out,
+                          n_valid, status)
+    return np.arange(n_out) * dt_out, out, n_valid, status, period, args, substeps
+
+
 # ---------------------------------------------------------------------- one cell
 def _amplitude_class(amp: float) -> str:
     return next(name for name, upper in AMPLITUDE_CLASSES if amp < upper)
@@ -241,23 +280,13 @@ def held_y_cell(dimer: AtlasDimer, pressure_pa: float, amplitude_m: float, confi
     t0 = time.perf_counter()
     dyn = atlas_dynamics(dimer.side, dimer.gap_ratio, pressure_pa, config.frequency_hz)
     f_y, f_theta = dyn.force_model.linear_frequencies()
-    args, eq = held_y_arguments(dyn)
-    y_start = float(eq[0]) - amplitude_m
-    period = y_orbit_period(args, y_start, f_y)
-    n_per = int(config.samples_per_period)
-    dt_out = period / n_per
-    substeps = max(1, int(math.ceil(dt_out / config.max_step - 1e-9)))
-    h = dt_out / substeps
-    n_out = (int(config.settle_periods) + int(config.analysed_periods)) * n_per + 1
     starts = config.starts()
-    x0s = np.array([[y_start, 0.0, th, thd] for th, thd in starts])
-    b = len(starts)
-    out = np.full((b, n_out, 4), np.nan)
-    n_valid, status = np.zeros(b, np.int64), np.zeros(b, np.int64)
-    lower, upper = (np.tile(v, (b, 1)) for v in _BOX)
-    _integrate_held_batch(args, x0s, np.full(b, h), substeps, np.full(b, n_out), lower, upper, out, n_valid, status)
+    n_per = int(config.samples_per_period)
+    periods = int(config.settle_periods) + int(config.analysed_periods)
+    t, out, n_valid, status, period, args, substeps = held_y_orbits(dyn, amplitude_m, starts, periods, n_per,
+                                                                    config.max_step)
+    n_out = t.size
     keep = 2 * int(config.analysed_periods) * n_per  # settled_outcome classifies the second half of what it gets
-    t = np.arange(n_out) * dt_out
     runs = []
     for k, (th0, thd0) in enumerate(starts):
         run = {"theta0": th0, "thetadot0": thd0}
