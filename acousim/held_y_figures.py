@@ -11,7 +11,7 @@ __all__ = ["CELL_KINDS", "cell_kind", "write_held_y_figures"]
 
 #: What a cell shows, in the order of precedence, and its colour.
 CELL_KINDS = {"both phase classes": "tab:purple", "in phase": "tab:blue", "anti-phase": "tab:red",
-              "other lock": "tab:green", "folded": "black", "not locked": "tab:orange"}
+              "other lock": "tab:green", "folded": "black", "not locked or at rest": "tab:orange"}
 
 
 def cell_kind(row: dict) -> str:
@@ -21,7 +21,7 @@ def cell_kind(row: dict) -> str:
         return "both phase classes"
     counts = {"in phase": row["in_phase"], "anti-phase": row["anti_phase"],
               "other lock": row["quadrature"] + row["ratio_locked"], "folded": row["folded"],
-              "not locked": row["independent"] + row["at_rest"]}
+              "not locked or at rest": row["independent"] + row["at_rest"]}
     return max(counts, key=lambda k: counts[k])
 
 
