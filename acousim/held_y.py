@@ -37,7 +37,7 @@ from cubedimer.attractors import LOCKED_AT_FY
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.rk4 import rk4, rk4_batch
 
-from .atlas import AMPLITUDE_CLASSES, AtlasDimer, AtlasError, atlas_dynamics, settled_outcome
+from .atlas import AtlasDimer, AtlasError, atlas_dynamics, settled_outcome
 from .equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
 __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "held_y_orbits",
@@ -259,10 +259,6 @@ def held_y_orbits(dynamics, amplitude_m: float, starts, periods: int, samples_pe
 
 
 # ---------------------------------------------------------------------- one cell
-def _amplitude_class(amp: float) -> str:
-    return next(name for name, upper in AMPLITUDE_CLASSES if amp < upper)
-
-
 def held_y_cell(dimer: AtlasDimer, pressure_pa: float, amplitude_m: float, config: HeldYConfig) -> dict:
     """Every hinge start of one cell, classified, with the Floquet multipliers of the locked orbits.
 
