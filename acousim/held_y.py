@@ -42,7 +42,7 @@ from .equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acce
 
 __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "held_y_orbits",
            "floquet_multipliers",
-           "held_y_cell", "cell_summary", "run_held_y_map", "MAP_COLUMNS", "TWO_FY_SHARE", "POPULATED"]
+           "held_y_cell", "cell_summary", "run_held_y_map", "MAP_COLUMNS", "TWO_FY_SHARE", "POPULATED", "CLOSED"]
 
 logger = logging.getLogger(__name__)
 
@@ -53,7 +53,10 @@ POPULATED = 0.15
 MAP_COLUMNS = ("dimer", "side_m", "gap_ratio", "pressure_pa", "amplitude_m", "f_y_hz", "f_theta_hz", "r",
                "period_s", "starts", "folded", "in_phase", "anti_phase", "quadrature", "ratio_locked", "independent",
                "at_rest", "two_phase_classes", "third_class", "classes", "max_share_2fy_locked", "reaches_2fy",
-               "max_floquet", "seconds")
+               "max_floquet", "unclosed", "seconds")
+#: A locked run's orbit counts as closed (a periodic orbit, whose Floquet multipliers are meaningful) when its state
+#: repeats after one orbit period to this (relative, ``closure``); larger: a slow modulation (a torus) or a drift.
+CLOSED = 1e-3
 
 
 @dataclass(frozen=True)
@@ -310,8 +313,9 @@ def cell_summary(cell: dict) -> dict:
     ``two_phase_classes`` (in phase and anti-phase each >= :data:`POPULATED` of the starts), ``third_class``
     (a long-lived state beyond those two: a p:q lock, quadrature, or a second amplitude class of a phase class),
     ``classes`` (the distinct long-lived (class, amplitude class) pairs), ``max_share_2fy_locked`` and
-    ``reaches_2fy`` (>= :data:`TWO_FY_SHARE` in a run locked at f_y) and ``max_floquet`` (the largest |mu| over
-    the locked runs: < 1 for stable orbits)."""
+    ``reaches_2fy`` (>= :data:`TWO_FY_SHARE` in a run locked at f_y), ``max_floquet`` (the largest |mu| over
+    the locked runs whose orbit closes to :data:`CLOSED`: < 1 for stable orbits) and ``unclosed`` (locked runs
+    whose orbit does not close: a slowly modulated lock, for which multipliers are not defined)."""
     runs = cell["runs"]
     n = len(runs)
     count = lambda o: sum(r["outcome"] == o for r in runs)
@@ -325,7 +329,8 @@ def cell_summary(cell: dict) -> dict:
     two = bool(n and inp >= POPULATED * n and anti >= POPULATED * n)
     third = bool(others) or len(phase) > len({c[0] for c in phase})
     shares = [r["share_2fy"] for r in runs if r["outcome"] in LOCKED_AT_FY and np.isfinite(r.get("share_2fy", np.nan))]
-    flo = [r["floquet"][0] for r in runs if r.get("floquet")]
+    flo = [r["floquet"][0] for r in runs if r.get("floquet") and r["closure"] < CLOSED]
+    unclosed = sum(1 for r in runs if r.get("floquet") and not r["closure"] < CLOSED)
     return {**{k: cell[k] for k in ("dimer", "side_m", "gap_ratio", "pressure_pa", "amplitude_m", "f_y_hz",
                                      "f_theta_hz", "r", "period_s", "seconds")},
             "starts": n, "folded": count("folded"), "in_phase": inp, "anti_phase": anti,
@@ -334,7 +339,7 @@ def cell_summary(cell: dict) -> dict:
             "two_phase_classes": two, "third_class": third, "classes": "; ".join(f"{a}/{b}" for a, b in classes),
             "max_share_2fy_locked": max(shares) if shares else float("nan"),
             "reaches_2fy": bool(shares and max(shares) >= TWO_FY_SHARE),
-            "max_floquet": max(flo) if flo else float("nan")}
+            "max_floquet": max(flo) if flo else float("nan"), "unclosed": unclosed}
 
 
 # ---------------------------------------------------------------------- the map

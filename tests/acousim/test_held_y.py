@@ -13,7 +13,7 @@ from acousim.atlas import AtlasDimer, atlas_dynamics, settled_outcome
 from acousim.cli import main
 from acousim.effects import EffectSet
 from acousim.equations import accelerations
-from acousim.held_y import HeldYConfig, cell_summary, floquet_multipliers, held_y_arguments, held_y_cell
+from acousim.held_y import CLOSED, HeldYConfig, cell_summary, floquet_multipliers, held_y_arguments, held_y_cell
 from cubedimer.rk4 import rk4
 
 
@@ -111,8 +111,12 @@ def test_the_locked_orbits_are_stable_and_damped(cell):
     run = result["runs"][0]
     assert run["outcome"] == "locked-anti-phase" and run["closure"] < 1e-2
     assert all(0 < m < 1 for m in run["floquet"])
+    # an orbit that does not repeat to CLOSED is counted as unclosed and its multipliers are not summarised
     row = cell_summary(result)
-    assert row["starts"] == 1 and row["max_floquet"] == pytest.approx(max(run["floquet"]))
+    assert row["starts"] == 1 and run["closure"] > CLOSED
+    assert row["unclosed"] == 1 and np.isnan(row["max_floquet"])
+    closed = {**result, "runs": [{**run, "closure": 0.1 * CLOSED}]}
+    assert cell_summary(closed)["max_floquet"] == pytest.approx(max(run["floquet"])) and cell_summary(closed)["unclosed"] == 0
 
 
 def test_the_command_writes_resumes_and_refuses_bad_input(tmp_path, capsys):
