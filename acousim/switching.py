@@ -20,8 +20,8 @@ acoustic generalised forces and the effects that need the field, so exactly thos
 :func:`field_drop` runs the drop protocol (off for ``t_off``, then on): with ``tau = 0`` the switch is instant, as
 the twin's default; otherwise the off phase and the first :data:`RING_SPAN` tau of the on phase are integrated
 with the envelope (a compiled fixed-step RK4 in time, the classical scheme of :func:`cubedimer.rk4.rk4` with the
-envelope evaluated at t, t + h/2 and t + h), and the rest with the field fully on (the envelope is then within
-exp(-20) = 2e-9 of 1).
+envelope evaluated at t, t + h/2 and t + h), and the rest with the field fully on (the forces are then within
+2 exp(-20) = 4e-9 of 1).
 """
 from __future__ import annotations
 
