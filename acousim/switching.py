@@ -21,7 +21,7 @@ acoustic generalised forces and the effects that need the field, so exactly thos
 the twin's default; otherwise the off phase and the first :data:`RING_SPAN` tau of the on phase are integrated
 with the envelope (a compiled fixed-step RK4 in time, the classical scheme of :func:`cubedimer.rk4.rk4` with the
 envelope evaluated at t, t + h/2 and t + h), and the rest with the field fully on (the forces are then within
-2 exp(-20) = 4e-9 of 1).
+2 exp(-20) = 4e-9 of their full value, relative).
 """
 from __future__ import annotations
 
