@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
 * ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
-  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
+  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION] [--no-glitch-mask]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
@@ -65,6 +65,8 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
     if a.selection:
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
+    if a.no_glitch_mask:
+        cfg = replace(cfg, load=replace(cfg.load, glitches=None))
     t0 = time.perf_counter()
     res = fit_dataset(a.data_dir, cfg, executor_config(a), strict=a.strict, progress=not a.no_progress,
                       cache_dir=Path(a.out) / "runs")
@@ -192,6 +194,9 @@ def add_fit_parser(subparsers) -> None:
     f.add_argument("--relative-threshold", action="store_true",
                    help="apply the regression threshold to each equation relative to its signal size (for a hinge "
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
+    f.add_argument("--no-glitch-mask", action="store_true",
+                   help="keep every recorded frame: no isolated tracking glitch is masked and filled (by default the "
+                        "frames masked per run are counted in model.json's per_run entries)")
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
 

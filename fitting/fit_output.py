@@ -40,6 +40,7 @@ def model_json(res: FitResult) -> dict:
         d = f.model_json()
         d["attractor"] = p.attractor.to_dict()
         d["loss_minimal_model"] = lt.to_dict()
+        d["glitch_frames_masked"], d["frames_averaged"] = p.run.n_glitches, p.frames_averaged
         per_run.append(d)
     out = {
         "state": list(STATE_NAMES),

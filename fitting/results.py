@@ -24,12 +24,16 @@ __all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "FitResult"]
 
 @dataclass(frozen=True, eq=False)
 class PreparedRun:
-    """A loaded run with its derivatives and attractor class."""
+    """A loaded run with its derivatives and attractor class.
+
+    ``run`` is the run as fitted: block-averaged by ``frames_averaged`` recorded frames per fitted frame at high
+    frame rates (:mod:`fitting.decimation`; 1: every recorded frame)."""
 
     run: Run
     derivs: Derivatives
     f_y: float
     attractor: AttractorClass
+    frames_averaged: int = 1
 
 
 @dataclass(frozen=True, eq=False)
