@@ -101,3 +101,19 @@ def test_the_same_model_at_500_to_50000_frames_per_second(fits_by_frame_rate):
     # more frames carry more information: the y stiffness's standard error falls with the frame rate
     se = [fits_by_frame_rate[f].discovery.std_errors[0, TERMS.index("y")] for f in FRAME_RATES]
     assert se[0] > se[1] > se[2] > se[3]
+
+
+def test_recorded_noise_is_divided_by_sqrt_q_for_block_means():
+    from types import SimpleNamespace
+
+    from fitting.oracle import NoiseLevels
+    from fitting.pipeline import _fitted_noise
+
+    noise = NoiseLevels(1e-6, 4e-3, source="recorded")
+    one = [SimpleNamespace(frames_averaged=1)] * 2
+    four = [SimpleNamespace(frames_averaged=4)] * 2
+    assert _fitted_noise(noise, one) is noise and _fitted_noise(None, four) is None
+    n4 = _fitted_noise(noise, four)
+    np.testing.assert_allclose([n4.sigma_y, n4.sigma_theta], [0.5e-6, 2e-3], rtol=1e-12)  # sqrt(4) = 2 exactly
+    assert "sqrt(4)" in n4.source
+    assert _fitted_noise(noise, one + four) is None  # different factors: estimated from the runs
