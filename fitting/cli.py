@@ -67,13 +67,16 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
     if a.no_glitch_mask:
         cfg = replace(cfg, load=replace(cfg.load, glitches=None))
+    if a.min_periods is not None:
+        cfg = replace(cfg, load=replace(cfg.load, min_periods=a.min_periods))
     t0 = time.perf_counter()
     res = fit_dataset(a.data_dir, cfg, executor_config(a), strict=a.strict, progress=not a.no_progress,
                       cache_dir=Path(a.out) / "runs")
     path = write_fit(res, a.out, plots=not a.no_plots)
     _log(f"wrote {path} in {time.perf_counter() - t0:.1f} s")
     for eq, terms in res.model.equations().items():
-        print(f"{eq} = " + " + ".join(f"({v:.6g}) {t}" for t, v in terms.items()))
+        name = res.system.rename
+        print(f"{name(eq)} = " + " + ".join(f"({v:.6g}) {name(t)}" for t, v in terms.items()))
     return 0
 
 
@@ -197,6 +200,9 @@ def add_fit_parser(subparsers) -> None:
     f.add_argument("--no-glitch-mask", action="store_true",
                    help="keep every recorded frame: no isolated tracking glitch is masked and filled (by default the "
                         "frames masked per run are counted in model.json's per_run entries)")
+    f.add_argument("--min-periods", type=positive_float, default=None, metavar="N",
+                   help="oscillation periods (of the dominant frequency of y, or of the first declared coordinate) a "
+                        "run must hold to be fitted (default 5)")
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
 

@@ -51,4 +51,5 @@ def block_average(run: Run, q: int) -> Run:
         return run
     n = run.t.size // q * q
     mean = lambda x: np.asarray(x[:n], float).reshape(-1, q).mean(axis=1)  # noqa: E731
-    return replace(run, t=mean(run.t), y=mean(run.y), theta=mean(run.theta))
+    v = None if run.velocities is None else np.column_stack([mean(run.velocities[:, k]) for k in range(2)])
+    return replace(run, t=mean(run.t), y=mean(run.y), theta=mean(run.theta), velocities=v)

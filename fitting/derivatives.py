@@ -244,7 +244,7 @@ def _scaled_savgol(x: NDArray, dt: float, window: int, polyorder: int, max_deriv
 
 
 def run_derivatives(t: NDArray, y: NDArray, theta: NDArray, f_y: float,
-                    config: SmoothingConfig = SmoothingConfig()) -> Derivatives:
+                    config: SmoothingConfig = SmoothingConfig(), velocities: NDArray | None = None) -> Derivatives:
     """Smooth and differentiate one run.
 
     Parameters
@@ -253,6 +253,10 @@ def run_derivatives(t: NDArray, y: NDArray, theta: NDArray, f_y: float,
         Uniform times [s], gap-free y [m] and theta [-].
     f_y : float
         Dominant y frequency [Hz], sets the window.
+    velocities : ndarray (n, 2), optional
+        Measured rates of y and theta [per s] (NaN columns: none); each given one, smoothed by the same filter,
+        replaces the Savitzky-Golay derivative of its position in ``state`` (the accelerations stay the second
+        derivatives of the positions, which the matched filter assumes).
     """
     dt = float((t[-1] - t[0]) / (t.size - 1))
     w = savgol_window(dt, 1.0 / f_y, config)
@@ -261,6 +265,12 @@ def run_derivatives(t: NDArray, y: NDArray, theta: NDArray, f_y: float,
     ys, yd, ydd = differentiate(y, dt, w, config.polyorder)
     ts, td, tdd = differentiate(theta, dt, w, config.polyorder)
     _check_smoothing(y, ys, w, dt, f_y)
+    if velocities is not None:
+        rates = [yd, td]
+        for k in range(2):
+            if np.all(np.isfinite(velocities[:, k])):
+                rates[k] = differentiate(velocities[:, k], dt, w, config.polyorder)[0]
+        yd, td = rates
     return Derivatives(t=t, state=np.column_stack([ys, yd, ts, td]),
                        accel=np.column_stack([ydd, tdd]), window=w, trim=w // 2, polyorder=config.polyorder)
 

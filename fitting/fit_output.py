@@ -111,7 +111,10 @@ def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) ->
     returns the model.json path."""
     out = Path(out_dir)
     path = out / "model.json"
-    write_json(path, model_json(res))
+    doc = model_json(res)
+    if res.system.generic:  # the declared coordinates' names (cubedimer.system)
+        doc = {**res.system.rename(doc), "system": res.system.to_json()}
+    write_json(path, doc)
     if plots:
         from .plots import plot_fit  # matplotlib only when figures are asked for
         plot_fit(res, out)

@@ -49,7 +49,7 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
         r = block_average(r, q)
         fy = dominant_frequency(r.y, r.dt)
         try:
-            d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
+            d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing, velocities=r.velocities)
         except SmoothingFailure as exc:
             raise DatasetError(f"{r.name}: {exc}") from None
         att = classify_trajectory(d.t, d.state, config.classify)
@@ -105,7 +105,7 @@ def fit_dataset(data_dir: str | os.PathLike, config: FitConfig = FitConfig(), ex
     if noise is not None:
         logger.info("oracle noise from meta.json's tracking block: %.3g m / %.3g", noise.sigma_y, noise.sigma_theta)
     res = fit_runs(prepared, scales, config, executor, cache_dir=cache_dir, progress=progress, noise=noise)
-    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches)
+    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches, system=ds.system)
 
 
 def _fitted_noise(noise: NoiseLevels | None, prepared: Sequence[PreparedRun]) -> NoiseLevels | None:

@@ -8,6 +8,7 @@ import numpy as np
 
 from cubedimer.attractors import AttractorClass
 from cubedimer.dataset import Run
+from cubedimer.system import LEVITATED_DIMER, SystemSpec
 from .config import FitConfig
 from .derivatives import Derivatives
 from .discovery import DiscoveryResult
@@ -171,6 +172,7 @@ class FitResult:
     oracle: OracleResult | None = None
     skipped: tuple[dict, ...] = ()
     n_glitches: int = 0
+    system: SystemSpec = LEVITATED_DIMER
 
     @property
     def model(self) -> PolynomialModel:
