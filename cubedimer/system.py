@@ -109,6 +109,19 @@ class SystemSpec:
                 return s
         return s
 
+    def internal(self, pair: str) -> str:
+        """``equation:term`` in the declared names (``phi2ddot:phi1^2*phi2``) in the library's names (identity for
+        the levitated dimer); ValueError on an unknown equation or factor."""
+        if not self.generic:
+            return pair
+        eq, sep, term = pair.rpartition(":")
+        if not sep:
+            return term_name(parse_term(term, self.state_names))
+        if eq not in self.equation_names:
+            raise ValueError(f"unknown equation {eq!r} in {pair!r}; the declared system's are "
+                             f"{', '.join(self.equation_names)}")
+        return f"{EQUATION_NAMES[self.equation_names.index(eq)]}:{term_name(parse_term(term, self.state_names))}"
+
     def internal_equations(self, equations: dict) -> dict:
         """Equations written in the declared names (``{"phi1ddot": {"phi1^2*phi2": c}}``) in the library's names."""
         out = {}

@@ -93,13 +93,18 @@ def _cmd_compare(a: argparse.Namespace) -> int:
         ref = PolynomialModel.from_json(data)
     except (OSError, ValueError, KeyError) as exc:
         raise DatasetError(f"{a.model}: not a readable model.json ({exc})") from None
-    ds = load_dataset(a.data_dir, strict=a.strict)
+    from .config import FitConfig
+    ds = load_dataset(a.data_dir, strict=a.strict, config=FitConfig().load)  # generic systems too
     prepared, scales = prepare_runs(ds.runs)
+    system = ds.system
     if "scales" in data:
         s = data["scales"]
         scales = Scales(s["length_y_m"], s["length_theta"], s["time_s"])
     if a.drop:
-        variant = drop_terms(ref, a.drop)
+        try:
+            variant = drop_terms(ref, [system.internal(d) for d in a.drop])
+        except ValueError as exc:
+            raise UserInputError(f"--drop: {exc}") from None
         label = "without " + ", ".join(a.drop)
     else:
         variant = ref.with_mask(ref.support & ~cross_coupling_mask(ref))
@@ -108,7 +113,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     cmp = compare_models(ref, variant, [p.derivs for p in prepared], scales,
                          names=[p.run.name for p in prepared], reoptimise=not a.no_reoptimise)
     out = {"variant_label": label, **cmp.to_json()}
-    write_json(Path(a.out) / "compare.json", out)
+    write_json(Path(a.out) / "compare.json", system.rename(out))
     for name, t in (("shape", cmp.shape_test), ("Poincare", cmp.poincare_test)):
         print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
               f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")

@@ -127,3 +127,12 @@ def test_minimum_periods_is_an_option(raw, tmp_path, capsys):
     assert main(["fit", str(data), "--out", str(tmp_path / "out"), "--min-periods", "25", "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "every file fails the same check" in err[0] and "too short to hold 25" in err[0]
+
+
+def test_compare_reads_a_generic_model_and_data_set(raw, tmp_path):
+    data = _write(tmp_path / "data", raw[:3])
+    out = tmp_path / "out"
+    assert main(["fit", str(data), "--out", str(out), "--no-plots", "--quiet", "--max-evals", "10"]) == 0
+    assert main(["compare", str(data), "--model", str(out / "model.json"), "--out", str(out), "--no-plots",
+                 "--drop", "phi2ddot:phi1^2*phi2", "--no-reoptimise"]) == 0
+    assert json.loads((out / "compare.json").read_text())["variant_label"] == "without phi2ddot:phi1^2*phi2"
