@@ -131,7 +131,11 @@ def validate_meta(meta: Any, source: str = "meta.json") -> dict:
             out[key] = check_meta_value(key, meta[key], source)
     if "tracking" in meta:
         out["tracking"] = check_tracking_block(meta["tracking"], source)
-    unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS and k not in META_BLOCK_KEYS]
+    if "system" in meta:
+        from .system import read_system
+        read_system(meta, source)  # the declared system (cubedimer.system), refused here in one line when bad
+    unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS and k not in META_BLOCK_KEYS
+               and k != "system"]
     if unknown:
         logger.warning("%s: unknown key(s) %s ignored; the known keys are %s (docs/formats.md)", source,
                        ", ".join(repr(k) for k in unknown), ", ".join(META_RANGES))

@@ -40,6 +40,7 @@ def model_json(res: FitResult) -> dict:
         d = f.model_json()
         d["attractor"] = p.attractor.to_dict()
         d["loss_minimal_model"] = lt.to_dict()
+        d["glitch_frames_masked"], d["frames_averaged"] = p.run.n_glitches, p.frames_averaged
         per_run.append(d)
     out = {
         "state": list(STATE_NAMES),
@@ -110,7 +111,10 @@ def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) ->
     returns the model.json path."""
     out = Path(out_dir)
     path = out / "model.json"
-    write_json(path, model_json(res))
+    doc = model_json(res)
+    if res.system.generic:  # the declared coordinates' names (cubedimer.system)
+        doc = {**res.system.rename(doc), "system": res.system.to_json()}
+    write_json(path, doc)
     if plots:
         from .plots import plot_fit  # matplotlib only when figures are asked for
         plot_fit(res, out)
