@@ -31,7 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames
+from .calibration import Calibration, calibrate
+from .measure import COLUMNS, STATUS, STATUS_TEXT, measure_frames
 from .recording import Recording, TrackingError
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
@@ -123,27 +124,6 @@ class TrackConfig:
                 raise TrackingError(f"{name.replace('_', ' ')} must be positive, got {v!r}")
 
 
-@dataclass(frozen=True)
-class Calibration:
-    """What the calibration frames gave (grey levels in the recording's units, lengths in pixels)."""
-
-    polarity: str
-    polarity_from: str
-    background: float
-    contrast: float
-    slope_u: float
-    slope_v: float
-    edge_blur_px: float
-    edge_window_px: int
-    area_px2: float
-    frames_used: int
-
-    def settings(self, config: TrackConfig) -> MeasureSettings:
-        return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background, self.contrast,
-                               self.edge_window_px, self.edge_blur_px, max(9.0, 0.01 * self.area_px2), self.area_px2,
-                               config.area_tolerance, self.slope_u, self.slope_v)
-
-
 @dataclass(frozen=True, eq=False)
 class TrackResult:
     """The tracked run.
@@ -176,82 +156,6 @@ class TrackResult:
     @property
     def n_measured(self) -> int:
         return int(np.sum(self.status == 0))
-
-
-def _ring_mask(h: int, w: int, width: int = 2) -> NDArray[np.bool_]:
-    m = np.zeros((h, w), bool)
-    m[:width] = m[-width:] = True
-    m[:, :width] = m[:, -width:] = True
-    return m
-
-
-def calibrate(frames: NDArray, config: TrackConfig) -> Calibration:
-    """Polarity, grey levels, background gradient, edge blur and silhouette area (module docstring, step 1).
-
-    Raises
-    ------
-    TrackingError
-        When no calibration frame shows a dimer (``"no dimer found ..."``).
-    """
-    n = frames.shape[0]
-    idx = np.unique(np.linspace(0, n - 1, min(n, config.calibration_frames)).round().astype(int))
-    sample = frames[idx].astype(np.float32)
-    k, h, w = sample.shape
-    # grey-level statistics (medians, tails) on at most 16 of the calibration frames: they are costly per frame
-    # and the same in every frame of a recording; all calibration frames are measured below
-    stats = sample[np.unique(np.linspace(0, k - 1, min(k, 16)).round().astype(int))]
-    flat = stats.reshape(stats.shape[0], -1)
-    med = np.median(flat, axis=1)
-    lo, hi = np.percentile(flat, [0.5, 99.5], axis=1)
-    noise = 1.4826 * np.median(np.abs(np.diff(stats, axis=2)), axis=(1, 2)) / math.sqrt(2.0)
-    spread = np.maximum(med - lo, hi - med)
-    valid = np.isfinite(spread) & (spread > np.maximum(10.0 * noise, 1e-12))
-    if not valid.any():
-        raise TrackingError(f"no dimer found: none of {flat.shape[0]} frames sampled over the recording shows an "
-                            "object against its background")
-    dark_votes = (med - lo > hi - med)[valid]
-    if config.polarity == "auto":
-        polarity, polarity_from = ("dark" if dark_votes.mean() >= 0.5 else "bright"), "detected"
-    else:
-        polarity, polarity_from = config.polarity, "option"
-    pol = -1.0 if polarity == "dark" else 1.0
-    background = float(np.median(med[valid]))
-    levels = []
-    for i in np.flatnonzero(valid):
-        mid = 0.5 * (med[i] + (lo[i] if polarity == "dark" else hi[i]))
-        obj = flat[i][flat[i] < mid] if polarity == "dark" else flat[i][flat[i] > mid]
-        if obj.size:
-            levels.append(float(np.median(obj)))
-    contrast = abs(float(np.median(levels)) - background) if levels else 0.0
-    if not contrast > 0:
-        raise TrackingError("no dimer found: the frames show no contrast between object and background")
-    # background gradient from the border rings of the calibration frames
-    ring = _ring_mask(h, w)
-    vv, uu = np.nonzero(ring)
-    A = np.stack([np.ones(vv.size), uu - 0.5 * (w - 1), vv - 0.5 * (h - 1)], axis=1)
-    slopes = []
-    for f in sample:  # every calibration frame: the gradient's median over frames is what y is sensitive to
-        vals = f[ring]
-        keep = pol * (vals - background) / contrast < 0.3
-        if keep.sum() > 0.5 * vals.size:
-            coef = np.linalg.lstsq(A[keep], vals[keep], rcond=None)[0]
-            slopes.append(coef[1:])
-    su, sv = (np.median(np.array(slopes), axis=0) if slopes else (0.0, 0.0))
-    window = int(config.edge_window or 8)
-    first = Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), 1.5, window, 0.0, k)
-    rows = measure_frames(sample, first.settings(config))
-    ok = rows[:, 0] == 0
-    if not ok.any():
-        codes, counts = np.unique(rows[:, 0].astype(int), return_counts=True)
-        why = {v: s for s, v in STATUS.items()}[int(codes[np.argmax(counts)])]
-        raise TrackingError(f"no dimer found: none of {k} frames sampled over the recording could be measured "
-                            f"(mostly: {STATUS_TEXT[why]})")
-    area = float(np.median(rows[ok, _C["area"]]))
-    blur = float(np.median(rows[ok, _C["edge_width"]]))
-    if config.edge_window is None:
-        window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
-    return Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), blur, window, area,
-                       int(ok.sum()))
 
 
 def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
@@ -302,7 +206,7 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     settings = cal.settings(config)
     rows = np.empty((n, len(COLUMNS)))
     for f0 in range(0, n, config.batch):
-        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings)
+        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings, pinv=cal.pinv)
     status = rows[:, 0].astype(np.int64)
     refs = _flag(status, rows, config)
     ok = status == 0
@@ -361,7 +265,12 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         "calibration": {"background_level": cal.background, "contrast": cal.contrast,
                         "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
                         "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
-                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used},
+                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used,
+                        "illumination_change": cal.scene.gradient, "static_structure_px": int(cal.scene.static.sum()),
+                        "light_level_range": [float(np.min(rows[ok, _C["background"]]) / cal.background),
+                                              float(np.max(rows[ok, _C["background"]]) / cal.background)]
+                        if cal.background > 0 else None,
+                        "holes_filled": cal.fill_holes, "dark_offset": cal.dark_offset},
         "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square))
                                                     if np.isfinite(square).any() else None,
                                                     "p95_abs": float(np.nanpercentile(np.abs(square), 95))
