@@ -33,6 +33,8 @@ from numpy.typing import NDArray
 
 from .calibration import Calibration, calibrate
 from .measure import COLUMNS, STATUS, STATUS_TEXT, measure_frames
+from .noise_estimate import noise_estimate
+from .origin import find_origin
 from .recording import Recording, TrackingError
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
@@ -83,6 +85,9 @@ class TrackConfig:
         Frames (spread over the recording) used to calibrate.
     batch : int
         Frames measured per batch.
+    roi : (x0, x1, y0, y1), optional
+        Region of interest: columns ``x0 <= u < x1`` and rows ``y0 <= v < y1`` of the frames [px]; only it is
+        measured (a dimer that reaches its border is out of view).
     """
 
     fps: float | None = None
@@ -99,6 +104,7 @@ class TrackConfig:
     max_hinge_gap: float = 0.1
     calibration_frames: int = 100
     batch: int = 1024
+    roi: tuple[int, int, int, int] | None = None
 
     def __post_init__(self) -> None:
         for name in ("fps", "pixel_size"):
@@ -118,6 +124,11 @@ class TrackConfig:
             raise TrackingError(f"up must be one of {', '.join(UP)}, got {self.up!r}")
         if self.edge_window is not None and not 2 <= int(self.edge_window) <= 50:
             raise TrackingError(f"edge window must lie in [2, 50] px, got {self.edge_window!r}")
+        if self.roi is not None:
+            x0, x1, y0, y1 = self.roi
+            if any(int(v) != v for v in self.roi) or min(self.roi) < 0 or x1 <= x0 or y1 <= y0:
+                raise TrackingError(f"region of interest {x0}:{x1},{y0}:{y1} is empty or inverted: give "
+                                    "--roi x0:x1,y0:y1 with 0 <= x0 < x1 (columns) and 0 <= y0 < y1 (rows)")
         for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
@@ -197,8 +208,16 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
                             "(metres per pixel in the object plane)")
     frames = rec.frames
     n, h, w = frames.shape
+    if config.roi is not None:
+        x0, x1, y0, y1 = config.roi
+        if x1 > w or y1 > h:
+            raise TrackingError(f"{rec.path}: --roi {x0}:{x1},{y0}:{y1} reaches outside the frames of {w} x {h} px; "
+                                f"give columns within 0:{w} and rows within 0:{h}")
+        frames = frames[:, y0:y1, x0:x1]
+        n, h, w = frames.shape
     if h < 24 or w < 24:
-        raise TrackingError(f"{rec.path}: frames of {w} x {h} px are too small to hold a dimer")
+        raise TrackingError(f"{rec.path}: frames of {w} x {h} px" + (" (the --roi)" if config.roi else "")
+                            + " are too small to hold a dimer")
     try:
         cal = calibrate(frames, config)
     except TrackingError as exc:
@@ -212,24 +231,29 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     ok = status == 0
     if not ok.any():
         raise TrackingError(f"{rec.path}: no dimer in any frame could be measured")
-    # ---- origin
+    # ---- origin (rows of the full frame; the region of interest starts at row y0)
+    x0, y0 = (config.roi[0], config.roi[2]) if config.roi else (0, 0)
     if config.origin_row is not None:
-        origin, origin_from = float(config.origin_row), "option --origin-row"
+        origin = {"row_px": float(config.origin_row), "from": "option --origin-row", "at_rest": None,
+                  "method": "option"}
     elif rec.levitation_row is not None:
-        origin, origin_from = float(rec.levitation_row), "recorded in the file"
+        origin = {"row_px": float(rec.levitation_row), "from": "recorded in the file", "at_rest": None,
+                  "method": "file"}
     else:
-        first = np.flatnonzero(ok[: config.origin_frames])
-        if first.size == 0:
-            raise TrackingError(f"{rec.path}: none of the first {config.origin_frames} frames could be measured, so "
-                                "the levitation height is unknown; give --origin-row or more --origin-frames")
-        origin = float(np.median(rows[first, _C["v_com"]]))
-        origin_from = f"median centre-of-mass row of the {first.size} measured frames among the first {config.origin_frames}"
+        origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path)
+        if not origin["at_rest"]:
+            logger.warning("%s: the recording does not start at rest: y = 0 is the centre of the late oscillation "
+                           "(%s); give --origin-row if the levitation row is known", rec.name, origin["from"])
     sign = 1.0 if config.up == "top" else -1.0
-    y = np.where(ok, sign * (origin - rows[:, _C["v_com"]]) * pixel, np.nan)
+    y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
     theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
     t = np.arange(n) / float(fps)
-    sigma_y = float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel
-    sigma_theta = float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2)))
+    check_y = np.where(ok, (rows[:, _C["v_com"]] - 0.5 * (rows[:, _C["v_a"]] + rows[:, _C["v_b"]])) * pixel, np.nan)
+    check_theta = np.where(ok, rows[:, _C["theta"]] - (rows[:, _C["alpha_free"]] - rows[:, _C["beta_free"]]) / math.pi,
+                           np.nan)
+    noise_y = noise_estimate(y, check_y, float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel)
+    noise_theta = noise_estimate(theta, check_theta, float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2))))
+    sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
     names = {v: k for k, v in STATUS.items()}
     counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
     # the example frame: a measured frame with a clear bend (90th percentile of |theta|)
@@ -243,12 +267,13 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         "source": rec.path,
         "format": rec.format,
         "frames": int(n),
-        "frame_size_px": [int(w), int(h)],
+        "frame_size_px": [int(rec.frames.shape[2]), int(rec.frames.shape[1])],
+        "roi_px": list(config.roi) if config.roi else None,
         "frame_rate_hz": float(fps),
         "frame_rate_from": "option --fps" if config.fps else "recorded in the file",
         "pixel_size_m": float(pixel),
         "pixel_size_from": "option --pixel-size" if config.pixel_size else "recorded in the file",
-        "y_origin": {"row_px": origin, "from": origin_from,
+        "y_origin": {**origin,
                      "convention": "y = (origin row - centre-of-mass row) x pixel size: positive up, image rows "
                                    "counting down" if sign > 0 else
                                    "y = (centre-of-mass row - origin row) x pixel size: the image is upside down "
@@ -258,10 +283,14 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         "frames_not_measured": int(n - ok.sum()),
         "fraction_measured": float(ok.mean()),
         "not_measured": counts,
-        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta,
-                           "method": "RMS over the measured frames of each frame's standard error: the image noise "
-                                     "of the border ring through the centre of mass (y), the edge residuals through "
-                                     "the face fits (theta)"},
+        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta, "estimator_y": noise_y["estimator"],
+                           "estimator_theta": noise_theta["estimator"], "y_details": noise_y,
+                           "theta_details": noise_theta,
+                           "method": "white: RMS over the measured frames of each frame's standard error (the image "
+                                     "noise of the border ring through the centre of mass for y, the edge residuals "
+                                     "through the face fits for theta); correlated, when the frames' errors are "
+                                     "correlated (lag-1 correlation of the cross-check above 0.3): the fourth "
+                                     "differences corrected for that correlation, if larger (docs/tracking.md)"},
         "calibration": {"background_level": cal.background, "contrast": cal.contrast,
                         "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
                         "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
