@@ -447,7 +447,7 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
             row[0] = 4
             return
     if fill:
-        fill_holes(c, bu0, bu1, bv0, bv1, int(math.ceil(2.0 * blur)))
+        fill_holes(c, bu0, bu1, bv0, bv1, int(math.ceil(3.0 * blur)) + 1)
     u0 = bu0 - M
     u1 = bu1 + M
     v0 = bv0 - M

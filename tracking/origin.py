@@ -25,7 +25,8 @@ REST_SPREAD_FLOOR_PX = 0.1
 LATE_SPREAD_MAX_PX = 1.0
 
 
-def find_origin(v_com: NDArray, sigma_v: NDArray, ok: NDArray, origin_frames: int, path: str) -> dict:
+def find_origin(v_com: NDArray, sigma_v: NDArray, ok: NDArray, origin_frames: int, path: str,
+                why: str = "") -> dict:
     """The origin row from the frames (module docstring).
 
     Parameters
@@ -38,6 +39,8 @@ def find_origin(v_com: NDArray, sigma_v: NDArray, ok: NDArray, origin_frames: in
         The first frames that should show the dimer at rest.
     path : str
         The recording (for the messages).
+    why : str
+        What kept the origin frames from being measured (for the message), e.g. ``"poor_fit in 50"``.
 
     Returns
     -------
@@ -52,8 +55,8 @@ def find_origin(v_com: NDArray, sigma_v: NDArray, ok: NDArray, origin_frames: in
     """
     first = np.flatnonzero(ok[:origin_frames])
     if first.size == 0:
-        raise TrackingError(f"{path}: none of the first {origin_frames} frames could be measured, so the levitation "
-                            "height is unknown; give --origin-row or more --origin-frames")
+        raise TrackingError(f"{path}: none of the first {origin_frames} frames could be measured ({why}), so the "
+                            "levitation height is unknown; give --origin-row or more --origin-frames")
     rows = v_com[first]
     spread = float(np.std(rows)) if first.size > 1 else 0.0
     noise = float(np.sqrt(np.mean(sigma_v[first] ** 2)))

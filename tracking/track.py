@@ -190,6 +190,21 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
 
 
+def _hint(status: NDArray) -> str:
+    """What to try for the commonest reason frames were not measured (the option that bounds that check)."""
+    bad = status[status != 0]
+    if bad.size == 0:
+        return ""
+    names = {v: k for k, v in STATUS.items()}
+    top = names[int(np.bincount(bad).argmax())]
+    return {"poor_fit": "; see RUN.json checks, and --max-hinge-gap (hinge corners apart: a hinge line tilted out of "
+                        "the camera axis) or --max-squareness",
+            "third_particle": "; python -m tracking inspect shows the background: try --roi",
+            "occlusion": "; try --area-tolerance or --roi",
+            "motion_blur": "; try --max-motion-blur",
+            "out_of_view": "; the dimer reaches the border of the frame (or of --roi)"}.get(top, "")
+
+
 def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> TrackResult:
     """Track one recording (module docstring).
 
@@ -229,8 +244,10 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     status = rows[:, 0].astype(np.int64)
     refs = _flag(status, rows, config)
     ok = status == 0
+    names = {v: k for k, v in STATUS.items()}
     if not ok.any():
-        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured")
+        why = ", ".join(f"{names[c]} in {int(np.sum(status == c))}" for c in sorted(set(status.tolist())))
+        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)})")
     # ---- origin (rows of the full frame; the region of interest starts at row y0)
     x0, y0 = (config.roi[0], config.roi[2]) if config.roi else (0, 0)
     if config.origin_row is not None:
@@ -240,7 +257,10 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         origin = {"row_px": float(rec.levitation_row), "from": "recorded in the file", "at_rest": None,
                   "method": "file"}
     else:
-        origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path)
+        head = status[: config.origin_frames]
+        why = ", ".join(f"{names[c]} in {int(np.sum(head == c))}" for c in sorted(set(head.tolist())) if c != 0)
+        origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path,
+                             why + _hint(head))
         if not origin["at_rest"]:
             logger.warning("%s: the recording does not start at rest: y = 0 is the centre of the late oscillation "
                            "(%s); give --origin-row if the levitation row is known", rec.name, origin["from"])
@@ -254,7 +274,6 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     noise_y = noise_estimate(y, check_y, float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel)
     noise_theta = noise_estimate(theta, check_theta, float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2))))
     sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
-    names = {v: k for k, v in STATUS.items()}
     counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
     # the example frame: a measured frame with a clear bend (90th percentile of |theta|)
     meas = np.flatnonzero(ok)
