@@ -41,22 +41,26 @@ def _add_polarity_argument(p: argparse.ArgumentParser) -> None:
                    help="dark cubes on a bright background (shadowgraph), bright on dark, or detect (default)")
 
 
-def roi_argument(text: str) -> tuple[int, int, int, int]:
-    """``x0:x1,y0:y1`` (columns, then rows; the ends excluded) as a tuple of four whole numbers."""
+def parse_roi(text: str | None) -> tuple[int, int, int, int] | None:
+    """``--roi x0:x1,y0:y1`` (columns, then rows; the ends excluded) as four whole numbers (None without it);
+    a malformed, empty or inverted region raises :class:`UserInputError` (one line, exit 2)."""
+    if text is None:
+        return None
     try:
         cols, rows = text.split(",")
         x0, x1 = (int(v) for v in cols.split(":"))
         y0, y1 = (int(v) for v in rows.split(":"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected x0:x1,y0:y1 in pixels (columns, then rows), e.g. 0:180,20:130, "
-                                         f"got {text!r}") from None
+        raise UserInputError(f"--roi {text}: expected x0:x1,y0:y1 in pixels (columns, then rows), e.g. "
+                             "0:180,20:130") from None
     if min(x0, x1, y0, y1) < 0 or x1 <= x0 or y1 <= y0:
-        raise argparse.ArgumentTypeError(f"{text!r} is empty or inverted: give 0 <= x0 < x1 and 0 <= y0 < y1")
+        raise UserInputError(f"--roi {text}: the region is empty or inverted: give 0 <= x0 < x1 (columns) and "
+                             "0 <= y0 < y1 (rows)")
     return x0, x1, y0, y1
 
 
 def _add_roi_argument(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--roi", type=roi_argument, default=None, metavar="x0:x1,y0:y1",
+    p.add_argument("--roi", default=None, metavar="x0:x1,y0:y1",
                    help="measure only columns x0..x1-1 and rows y0..y1-1 (pixels from the top left; e.g. to leave out "
                    "a structure that is neither at the border nor moving); a dimer reaching its border is out of view")
 
@@ -150,7 +154,7 @@ def _config(a: argparse.Namespace):
     return TrackConfig(fps=a.fps, pixel_size=a.pixel_size, origin_frames=a.origin_frames, origin_row=a.origin_row,
                        polarity=a.polarity, up=a.up, edge_window=a.edge_window, area_tolerance=a.area_tolerance,
                        max_motion_blur=a.max_motion_blur, max_squareness=a.max_squareness,
-                       max_hinge_gap=a.max_hinge_gap, roi=a.roi)
+                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi))
 
 
 def _track_task(item):
@@ -184,8 +188,9 @@ def inspect(a: argparse.Namespace) -> int:
                                    "not recorded: give track --pixel-size"))
     if rec.levitation_row is not None:
         lines.append(f"levitation row: {rec.levitation_row:g} px (recorded in the file)")
-    if a.roi is not None:
-        x0, x1, y0, y1 = a.roi
+    roi = parse_roi(a.roi)
+    if roi is not None:
+        x0, x1, y0, y1 = roi
         if x1 > w or y1 > h:
             print("\n".join(lines))
             raise TrackingError(f"{src}: --roi {x0}:{x1},{y0}:{y1} reaches outside the frames of {w} x {h} px")
