@@ -95,19 +95,21 @@ _MAX_PARTICLES = 8
 
 #: Frame status codes; 0 is a measured frame.
 STATUS = {"measured": 0, "corrupt": 1, "no_dimer": 2, "out_of_view": 3, "third_particle": 4, "occlusion": 5,
-          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9}
+          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9,
+          "touching": 10}
 #: What each status means (RUN.json).
 STATUS_TEXT = {
     "measured": "measured",
     "corrupt": "blank or corrupt frame (background far from the recording's, or non-finite pixels)",
     "no_dimer": "no particle in view",
     "out_of_view": "the dimer touches the frame's border (partly out of view)",
-    "third_particle": "another particle in view, or the two cubes apart",
+    "third_particle": "another particle within the dimer's window, or the two cubes apart",
     "occlusion": "the silhouette's area differs from the dimer's (occlusion or a particle touching it)",
     "fit_failed": "too few edge samples on a cube's faces",
     "faces_cross": "fitted faces cross (alpha <= 0 or beta <= 0): no physical bend",
     "motion_blur": "edges wider than the recording's by more than the motion-blur bound",
     "poor_fit": "edges not straight, hinge corners not square or not touching (beyond the bounds)",
+    "touching": "the silhouette's centre of mass off the fitted squares' centre (a particle stuck to the dimer)",
 }
 
 

@@ -174,6 +174,17 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     ok = status == 0
     if not ok.any():
         return {}
+    # a particle stuck to the silhouette moves its centre of mass off the fitted squares' centre (their faces,
+    # fitted away from the corners, do not see it): beyond 8 robust standard deviations of the recording (+ 0.05 px)
+    dv = rows[:, _C["v_com"]] - 0.5 * (rows[:, _C["v_a"]] + rows[:, _C["v_b"]])
+    du = rows[:, _C["u_com"]] - 0.5 * (rows[:, _C["u_a"]] + rows[:, _C["u_b"]])
+    off = np.zeros_like(ok)
+    for d in (dv, du):
+        ref = float(np.median(d[ok]))
+        scale = 1.4826 * float(np.median(np.abs(d[ok] - ref)))
+        off |= ok & (np.abs(d - ref) > 8.0 * scale + 0.05)
+    status[off] = STATUS["touching"]
+    ok = status == 0
     width = rows[:, _C["edge_width"]]
     w_ref = float(np.median(width[ok]))
     blur = ok & (width ** 2 - w_ref ** 2 > config.max_motion_blur ** 2 / 12.0)
@@ -201,6 +212,7 @@ def _hint(status: NDArray) -> str:
                         "the camera axis) or --max-squareness",
             "third_particle": "; python -m tracking inspect shows the background: try --roi",
             "occlusion": "; try --area-tolerance or --roi",
+            "touching": "; python -m tracking inspect shows the background: try --roi",
             "motion_blur": "; try --max-motion-blur",
             "out_of_view": "; the dimer reaches the border of the frame (or of --roi)"}.get(top, "")
 

@@ -110,4 +110,4 @@ def test_a_particle_touching_the_dimer_is_an_occlusion():
     res = _track(render(y, theta, CAM, seed=36, extra=(centres, 0.0, half)))
     assert np.all(res.status[~on] == 0)
     assert np.all(res.status[on] != 0)
-    assert set(res.info["not_measured"]) <= {"occlusion", "poor_fit", "third_particle"}
+    assert set(res.info["not_measured"]) <= {"occlusion", "poor_fit", "third_particle", "touching"}
