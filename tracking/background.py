@@ -4,11 +4,11 @@ A levitator recording shows more than the dimer: the illumination is uneven (a g
 flicker, and the reflector and transducer edges, or dirt on the window, stay in view.  What does not move is
 estimated once per recording and removed before segmentation (:mod:`tracking.segmentation`):
 
-1. **Light levels.**  Each calibration frame's light level is the median of its background-like pixels (grey
-   levels on the background's side of half the contrast... within 0.3 of it) relative to the median over the
-   frames; every frame is divided by its level (the light multiplies the scene: a flicker scales background
-   and cube alike).
-2. **The median image** ``M`` of the normalised frames, per pixel: what is there in most frames.
+1. **Light levels.**  Each calibration frame's light level is the mean of its background-like pixels (coverage
+   below 0.3 against the recording's background level) relative to the median over the frames; every frame is
+   divided by its level (the light multiplies the scene: a flicker scales background and cube alike).
+2. **The median image** ``M`` of the normalised frames (at most ``MEDIAN_FRAMES`` of them), per pixel: what is
+   there in most frames.
 3. **The illumination** ``S``: a plane in (column, row) fitted to the background-like pixels of
    ``M``, with those more than 4 robust standard deviations off left out (twice).  Where the dimer is, ``M``
    shows the dimer; the smooth surface reaches under it.
@@ -27,6 +27,8 @@ from numpy.typing import NDArray
 
 __all__ = ["Background", "estimate_background", "STATIC_MARGIN_PX"]
 
+#: Calibration frames (at most, spread over them) whose per-pixel median is the median image.
+MEDIAN_FRAMES = 50
 #: Widening of a static structure for its blurred edge [px].
 STATIC_MARGIN_PX = 3
 
@@ -106,14 +108,14 @@ def estimate_background(sample: NDArray, polarity: float, background: float, con
     from scipy import ndimage
 
     k, h, w = sample.shape
-    cov0 = polarity * (sample - background) / contrast
-    levels = np.ones(k)
-    for i in range(k):
-        bg = sample[i][cov0[i] < 0.3]
-        if bg.size > 0.05 * h * w:
-            levels[i] = float(np.median(bg))
-    levels = levels / np.median(levels) if np.all(levels > 0) else np.ones(k)
-    med = np.median(sample / levels[:, None, None], axis=0)
+    like_bg = polarity * (sample - background) / contrast < 0.3
+    n_bg = like_bg.sum(axis=(1, 2))
+    levels = np.where(n_bg > 0.05 * h * w, np.sum(np.where(like_bg, sample, 0.0), axis=(1, 2)) / np.maximum(n_bg, 1),
+                      np.nan)
+    levels = levels / np.nanmedian(levels) if np.all(np.nan_to_num(levels, nan=1.0) > 0) else np.ones(k)
+    levels = np.nan_to_num(levels, nan=1.0)
+    sub = np.unique(np.linspace(0, k - 1, min(k, MEDIAN_FRAMES)).round().astype(int))
+    med = np.median(sample[sub] / levels[sub, None, None].astype(np.float32), axis=0)
     A = _design(h, w)
     z = med.reshape(-1)
     use = (polarity * (z - background) / contrast < 0.3) & np.isfinite(z)
