@@ -36,6 +36,7 @@ from .measure import COLUMNS, STATUS, STATUS_TEXT, measure_frames
 from .noise_estimate import noise_estimate
 from .origin import find_origin
 from .recording import Recording, TrackingError
+from .tilt import MAX_TILT_DEG, area_factor, tilt_from_gap
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
 
@@ -47,6 +48,8 @@ POLARITIES = ("auto", "dark", "bright")
 UP = ("top", "bottom")
 
 _C = {name: i for i, name in enumerate(COLUMNS)}
+#: Estimated tilt of the hinge line [degrees] above which the tracking warns (the estimate's noise is ~0.3).
+TILT_WARNING_DEG = 3.0
 
 
 @dataclass(frozen=True)
@@ -257,9 +260,23 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     refs = _flag(status, rows, config)
     ok = status == 0
     names = {v: k for k, v in STATUS.items()}
+    fitted = (ok | (status == STATUS["poor_fit"])) & np.isfinite(rows[:, _C["hinge_gap"]])
+    tilt_deg = tilt_from_gap(float(np.median(rows[fitted, _C["hinge_gap"]] / (2.0 * rows[fitted, _C["half_side"]])))) \
+        if fitted.any() else None
+    if tilt_deg is not None and tilt_deg > MAX_TILT_DEG:
+        raise TrackingError(f"{rec.path}: the hinge line is tilted about {tilt_deg:.0f} degrees out of the camera axis "
+                            f"(the fitted squares' hinge corners lie apart), beyond the {MAX_TILT_DEG:.0f} degrees that "
+                            "can be measured; align the camera along the hinge line")
+    if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG:
+        logger.warning("%s: the hinge line is tilted about %.1f degrees out of the camera axis: y and theta are measured "
+                       "on the skewed silhouettes, not corrected (docs/tracking.md); frames whose hinge corners lie "
+                       "more than --max-hinge-gap %g of the side apart are not measured", rec.name, tilt_deg,
+                       config.max_hinge_gap)
     if not ok.any():
         why = ", ".join(f"{names[c]} in {int(np.sum(status == c))}" for c in sorted(set(status.tolist())))
-        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)})")
+        tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
+                  "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
+        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
     # ---- origin (rows of the full frame; the region of interest starts at row y0)
     x0, y0 = (config.roi[0], config.roi[2]) if config.roi else (0, 0)
     if config.origin_row is not None:
@@ -337,6 +354,9 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
                                                     if np.isfinite(square).any() else None,
                                                     "bound": config.max_squareness},
                    "tilt_rad_median": float(np.median(rows[ok, _C["tilt"]])),
+                   "hinge_line_tilt_deg": tilt_deg,
+                   "side_length_m_tilt_corrected": math.sqrt(cal.area_px2 / 2.0 / area_factor(math.radians(tilt_deg)))
+                   * pixel if tilt_deg is not None else None,
                    "edge_rms_px_median": refs.get("edge_rms_px"), "edge_width_px_median": refs.get("edge_width_px")},
         "quality": {"measure": "edge_rms_px: RMS distance [px] of the sub-pixel edge crossings from the fitted faces "
                                "(about the image noise times the window's square root; larger for occlusions, "

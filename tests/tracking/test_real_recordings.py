@@ -121,3 +121,27 @@ def test_region_of_interest_measures_only_its_pixels_and_refuses_bad_regions():
     assert set(res.info["not_measured"]) == {"out_of_view"}
     assert 0 < res.info["frames_not_measured"] < 0.9 * res.info["frames"]
     assert np.all(np.isnan(res.y[res.status == STATUS["out_of_view"]]))
+
+
+def test_a_tilted_hinge_line_is_detected_with_its_angle():
+    from tracking.tilt import area_factor, tilt_from_gap
+
+    # the inversion: a tilt's hinge gap over the area's side gives the tilt back
+    for tau in (2.0, 10.0, 30.0):
+        r = np.radians(tau)
+        np.testing.assert_allclose(tilt_from_gap(np.sin(r) / np.sqrt(area_factor(r))), tau, atol=0.05)  # 0.1 deg grid
+    # 10 degrees: every frame's hinge corners lie ~9 px apart: refused by the default bound, naming the angle
+    with pytest.raises(TrackingError, match=r"tilted about (9|10|11) degrees.*--max-hinge-gap 0.5"):
+        track(Imperfections(tilt_deg=10.0), seed=410, n=200)
+    res, y, theta, cam = track(Imperfections(tilt_deg=10.0), seed=410, n=200, max_hinge_gap=0.5)
+    assert abs(res.info["checks"]["hinge_line_tilt_deg"] - 10.0) < 1.5  # the estimate's model ignores the blur
+    y_rms, origin, th_rms, lost = errors(res, y, theta, cam)
+    assert y_rms < 1.5e-6 and origin < 2e-6 and th_rms < 0.01 and lost < 0.02  # the targets at a 10 degree tilt
+    side = res.info["checks"]["side_length_m_tilt_corrected"]
+    assert abs(side / SIDE - 1) < 0.03 < res.info["calibration"]["side_length_m"] / SIDE - 1  # 11 % too large uncorrected
+    # 25 degrees: beyond what can be measured, whatever the bound
+    with pytest.raises(TrackingError, match="beyond the 20 degrees"):
+        track(Imperfections(tilt_deg=25.0), seed=410, n=200, max_hinge_gap=0.9)
+    # an aligned camera: no tilt seen
+    res, *_ = track(Imperfections(), seed=410, n=200)
+    assert res.info["checks"]["hinge_line_tilt_deg"] < 1.0
