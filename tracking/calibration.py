@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from .background import Background, estimate_background
 from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames, reciprocal_background
 from .recording import TrackingError
+from .tilt import tilt_from_gap
 
 __all__ = ["Calibration", "calibrate"]
 
@@ -45,6 +46,7 @@ class Calibration:
     fill_holes: bool = False
     scene: Background | None = None
     pinv: NDArray | None = field(default=None, repr=False)
+    hinge_tilt_deg: float | None = None
 
     def settings(self, config) -> MeasureSettings:
         return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background + self.dark_offset,
@@ -141,7 +143,9 @@ def calibrate(frames: NDArray, config) -> Calibration:
                             "python -m tracking inspect, and try --roi to exclude what is not the dimer")
     area = float(np.median(rows[ok, _C["area"]]))
     blur = float(np.median(rows[ok, _C["edge_width"]]))
+    gap = rows[ok, _C["hinge_gap"]] / (2.0 * rows[ok, _C["half_side"]])
+    tilt = tilt_from_gap(float(np.median(gap[np.isfinite(gap)]))) if np.isfinite(gap).any() else None
     if config.edge_window is None:
         window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
     return Calibration(polarity, polarity_from, background, contrast, su, sv, blur, window, area, int(ok.sum()),
-                       dark, fill, scene, pinv)
+                       dark, fill, scene, pinv, tilt)

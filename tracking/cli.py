@@ -216,6 +216,14 @@ def inspect(a: argparse.Namespace) -> int:
     lines.append(f"silhouette: {cal.area_px2:.0f} px^2 in {cal.frames_used} sampled frames, a cube side of "
                  f"{side_px:.1f} px" + (f" = {side_px * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else ""))
     lines.append(f"edge blur: {cal.edge_blur_px:.2f} px (track's edge window: {cal.edge_window_px} px)")
+    if cal.hinge_tilt_deg is not None and cal.hinge_tilt_deg > 3.0:
+        from .tilt import area_factor
+
+        true_side = side_px / np.sqrt(area_factor(np.radians(cal.hinge_tilt_deg)))
+        lines.append(f"hinge line: tilted about {cal.hinge_tilt_deg:.1f} degrees out of the camera axis (the squares' "
+                     f"hinge corners lie apart); the side corrected for it is {true_side:.1f} px"
+                     + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else "")
+                     + "; track needs --max-hinge-gap 0.5 beyond about 5 degrees")
     print("\n".join(lines))
     return 0
 

@@ -238,3 +238,17 @@ def test_inspect_prints_the_file_facts_before_refusing_a_file_without_dimer(tmp_
     cap = capsys.readouterr()
     assert "40 frames of 180 x 150 px" in cap.out and "frame rate: 2000 frames/s" in cap.out
     assert "no dimer found" in cap.err and len(cap.err.strip().splitlines()) == 1
+
+
+def test_inspect_names_a_tilted_hinge_line(tmp_path, write_tiff, capsys):
+    from acousim.twin.imperfections import Imperfections
+    from acousim.twin.video import VideoCamera, record_video
+
+    cam = VideoCamera(imperfections=Imperfections(tilt_deg=10.0))
+    _, y, theta = motion(40, seed=49)
+    src = write_tiff("tilted.tif", record_video(np.arange(40) / 2000.0, y, theta, 500e-6, cam, 49)[0], cam)
+    assert main(["inspect", str(src)]) == 0
+    out = capsys.readouterr().out
+    assert "hinge line: tilted about" in out
+    side = float(out.split("the side corrected for it is ")[1].split(" px")[0])
+    assert abs(side / 50.0 - 1) < 0.03  # 500 um at 10 um/px; uncorrected it reads 11 % larger
