@@ -49,10 +49,7 @@ class Calibration:
     hinge_tilt_deg: float | None = None
 
     def settings(self, config) -> MeasureSettings:
-        # the reference level is the illumination plane's at the frame's centre: the relative contrast is then the
-        # contrast over the background the frames are normalised by (for a flat field: c = (I - L B) / contrast)
-        ref = float(self.scene.coefficients[0]) if self.scene is not None else self.background + self.dark_offset
-        return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, ref,
+        return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background + self.dark_offset,
                                self.contrast, self.edge_window_px, self.edge_blur_px, max(9.0, 0.01 * self.area_px2),
                                self.area_px2, config.area_tolerance, self.slope_u, self.slope_v, self.fill_holes,
                                self.dark_offset)
