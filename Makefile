@@ -4,17 +4,22 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= demo_output
+# Exact versions known to pass the whole suite (`make lock` refreshes them); pyproject.toml keeps loose ranges.
+# PIP_CONSTRAINT also pins the build backend in pip's isolated build environment.
+CONSTRAINTS := $(CURDIR)/requirements/constraints.txt
+# `make test-latest` and `make lock`: a separate environment with the newest releases pyproject.toml allows
+LATEST_VENV ?= .venv-latest
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 export MPLBACKEND ?= Agg
 
-.PHONY: all demo demo-video test test-durations test-fast bench venv system-deps browser clean
+.PHONY: all demo demo-video test test-durations test-fast test-latest lock bench venv system-deps browser clean
 
 all: test
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml requirements/constraints.txt
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	PIP_CONSTRAINT=$(CONSTRAINTS) $(BIN)/python -m pip install --quiet --upgrade pip
+	PIP_CONSTRAINT=$(CONSTRAINTS) $(BIN)/python -m pip install --quiet -e '.[test]'
 	@touch $(STAMP)
 
 venv: $(STAMP) system-deps
@@ -60,10 +65,32 @@ demo-video: venv
 # once, and the boundary-element files together (tests/conftest.py); one numba and one BLAS thread per worker
 # (the boundary-element assembly is numba-parallel; the workers already keep every core busy, and more threads
 # per worker only compete for them).
-PYTEST := NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadfile
+PYTEST_WITH = NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
+	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) \
+	$(1)/python -m pytest -q -n auto --dist loadfile
+PYTEST := $(call PYTEST_WITH,$(BIN))
 
 test: venv browser
-	CUBEDIMER_REQUIRE_BROWSER=$$(command -v chromium >/dev/null 2>&1 && echo 1 || echo 0) $(PYTEST)
+	$(PYTEST)
+
+# The whole suite on the newest releases (no constraints) in $(LATEST_VENV), made afresh: an upgrade is a decision.
+test-latest: system-deps browser
+	rm -rf $(LATEST_VENV)
+	$(PYTHON) -m venv $(LATEST_VENV)
+	$(LATEST_VENV)/bin/python -m pip install --quiet --upgrade pip hatchling
+	$(LATEST_VENV)/bin/python -m pip install --quiet -e '.[test]'
+	$(call PYTEST_WITH,$(LATEST_VENV)/bin)
+
+# Refresh the constraints: the newest releases, the whole suite, and the freeze only if it passes (the build
+# backend hatchling is installed there too, so that its version is frozen with the rest).
+lock: test-latest
+	@mkdir -p requirements
+	@{ echo "# Exact versions of the test and demo environment, frozen by \`make lock\` after the whole suite passed"; \
+	   echo "# on them ($$($(LATEST_VENV)/bin/python --version), $$(date -u +%Y-%m-%d)). Used as pip constraints by make demo/test."; \
+	   $(LATEST_VENV)/bin/python -m pip freeze --all --exclude-editable | grep -v -i -E '^(setuptools|wheel)=='; \
+	} > requirements/constraints.txt.new
+	mv requirements/constraints.txt.new requirements/constraints.txt
+	@echo "requirements/constraints.txt refreshed from $(LATEST_VENV)"
 
 # the seconds of each test unit from this checkout's last full `make test`, committed so that a fresh clone's
 # `make test` also starts the longest units first (tests/conftest.py)
@@ -78,4 +105,4 @@ bench: venv
 	$(BIN)/python -m benchmarks --out benchmarks/results.md
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache "$${XDG_CACHE_HOME:-$$HOME/.cache}/cubedimer/numba"
+	rm -rf $(VENV) $(LATEST_VENV) $(OUT) .pytest_cache "$${XDG_CACHE_HOME:-$$HOME/.cache}/cubedimer/numba"

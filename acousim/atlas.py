@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from cubedimer.atomic import atomic_write_text, json_text, write_json
-from cubedimer.attractors import ATTRACTOR_CLASSES, classify_trajectory
+from cubedimer.attractors import ATTRACTOR_CLASSES, LOCKED_AT_FY, classify_trajectory
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.spectra import line_amplitude
 
@@ -47,7 +47,7 @@ AMPLITUDE_CLASSES = (("small", 0.05), ("medium", 0.3), ("large", math.inf))
 #: Cycles of y a settled class must persist over to count as long-lived.
 LONG_LIVED_CYCLES = 100
 CSV_COLUMNS = ("dimer", "side_m", "gap_ratio", "t_off_s", "theta_drop", "outcome", "t_end_s", "f_y_hz", "f_theta_hz",
-               "amp_y_m", "amp_theta", "amplitude_class", "section_phase_deg", "coherence", "share_2fy",
+               "amp_y_m", "amp_theta", "amplitude_class", "section_phase_deg", "coherence", "lock_ratio", "share_2fy",
                "long_lived", "cycles")
 
 
@@ -92,6 +92,8 @@ class AtlasConfig:
         Recorded time after the field is back on [s] (>= 1).
     sample_rate : float
         Samples per second of the classified motion [1/s] (>= 8 f_y is needed for the 2 f_y line; >= 200).
+    transducer_q : float
+        The transducer's quality factor (the field's ring time Q / (pi f), :mod:`acousim.switching`; 0: instant).
     """
 
     dimers: tuple[AtlasDimer, ...]
@@ -101,8 +103,11 @@ class AtlasConfig:
     frequency_hz: float = 45_650.0
     duration: float = 8.0
     sample_rate: float = 1000.0
+    transducer_q: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.transducer_q) and 0 <= self.transducer_q <= 1e5):
+            raise AtlasError(f"--transducer-q: {self.transducer_q!r} must lie in [0, 1e5] (0: instant switching)")
         if not self.dimers:
             raise AtlasError("--dimers: give at least one SIDE:GAP_RATIO pair")
         if not self.t_off or not all(math.isfinite(v) and 0 <= v <= 0.03 for v in self.t_off):
@@ -128,6 +133,8 @@ class AtlasConfig:
         out["dimers"] = [asdict(d) for d in self.dimers]
         out["t_off"] = list(self.t_off)
         out["theta_drop"] = list(self.theta_drop)
+        if self.transducer_q == 0:  # an instant switch pins the folder as before the ring time existed
+            del out["transducer_q"]
         return out
 
 
@@ -168,7 +175,8 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
     -------
     dict
         ``outcome`` (the class of the second half), ``f_y_hz``, ``f_theta_hz``, ``amp_y_m``, ``amp_theta``,
-        ``amplitude_class``, ``section_phase_deg``, ``coherence``, ``share_2fy`` (theta's line at 2 f_y over its
+        ``amplitude_class``, ``section_phase_deg``, ``coherence``, ``lock_ratio`` (``"p:q"`` of a lock, ``""``
+        otherwise), ``share_2fy`` (theta's line at 2 f_y over its
         line at f_y, second half), ``long_lived`` (the third and the last quarter have the same class and span
         at least :data:`LONG_LIVED_CYCLES` cycles of y together) and ``cycles`` (cycles of y in the second half).
     """
@@ -184,29 +192,28 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
     return {"outcome": c.label, "f_y_hz": c.f_y, "f_theta_hz": c.f_theta, "amp_y_m": c.amp_y, "amp_theta": c.amp_theta,
             "amplitude_class": _amplitude_class(c.amp_theta),
             "section_phase_deg": float(np.degrees(c.section_phase)) if np.isfinite(c.section_phase) else float("nan"),
-            "coherence": c.coherence, "share_2fy": at_2fy / at_fy if at_fy > 0 else float("nan"),
+            "coherence": c.coherence, "lock_ratio": c.lock_ratio, "share_2fy": at_2fy / at_fy if at_fy > 0 else float("nan"),
             "long_lived": bool(third.label == last.label == c.label and cycles >= LONG_LIVED_CYCLES),
             "cycles": float(cycles)}
 
 
 def drop_and_settle(dynamics, t_off: float, theta_drop: float, duration: float, sample_rate: float,
-                    thetadot_drop: float = 0.0) -> dict:
+                    thetadot_drop: float = 0.0, ring_time_s: float = 0.0) -> dict:
     """One field drop from rest at the levitation height and what it settles on.
 
-    The field is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting), then on for
-    ``duration`` [s], sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
+    The drive is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting; with a ring time
+    ``ring_time_s`` [s] the field rings down and back up, :mod:`acousim.switching`), then on for ``duration`` [s],
+    sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
     ``{"outcome": "escaped" | "folded", "t_end_s": time after the field came back}`` for a run that left the trap
     or whose faces touched (``t_end_s`` is NaN for a completed run, ``-t_off`` for one lost during the drop).
     """
-    x0 = np.array([0.0, 0.0, float(theta_drop), float(thetadot_drop)])
-    if t_off > 0:
-        fall = dynamics.integrate(x0, t_off, t_off, field_on=False)
-        if not fall.ok:
-            return {"outcome": "folded" if fall.status == 2 else "escaped", "t_end_s": -float(t_off)}
-        x0 = fall.state[-1]
-    traj = dynamics.integrate(x0, duration, 1.0 / sample_rate, field_on=True)
-    if not traj.ok:
-        return {"outcome": "folded" if traj.status == 2 else "escaped", "t_end_s": float(traj.t[-1])}
+    from .switching import field_drop
+
+    motion = field_drop(dynamics, [0.0, 0.0, float(theta_drop), float(thetadot_drop)], t_off, duration,
+                        1.0 / sample_rate, tau=ring_time_s)
+    if not motion.ok:
+        return {"outcome": "folded" if motion.status == 2 else "escaped", "t_end_s": float(motion.t_stop)}
+    traj = motion.trajectory
     return {**settled_outcome(traj.t, traj.state), "t_end_s": float("nan")}
 
 
@@ -214,7 +221,8 @@ def _cell_task(item: tuple) -> dict:
     config, (d, i, j) = item
     dimer = config.dimers[d]
     dyn = atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_amplitude_pa, config.frequency_hz)
-    res = drop_and_settle(dyn, config.t_off[i], config.theta_drop[j], config.duration, config.sample_rate)
+    res = drop_and_settle(dyn, config.t_off[i], config.theta_drop[j], config.duration, config.sample_rate,
+                          ring_time_s=config.transducer_q / (math.pi * config.frequency_hz))
     return {"dimer": dimer.label, "side_m": dimer.side, "gap_ratio": dimer.gap_ratio, "t_off_s": config.t_off[i],
             "theta_drop": config.theta_drop[j], "index": [d, i, j], **res}
 
@@ -223,22 +231,32 @@ def observations(cells: list[dict]) -> dict:
     """The source paper's observations over a set of runs (:func:`drop_and_settle` results).
 
     Returns the counts and fractions, over all runs: ``trapped`` (neither escaped nor folded), ``locked_at_fy``
-    (theta's strongest line at f_y: a locked class), ``with_2fy`` (of those, a 2 f_y line >= 5 % of the f_y one),
-    ``in_phase`` and ``anti_phase`` (locked classes), ``both_phase_classes`` (each >= 15 % of all runs),
-    ``long_lived`` and ``attractors`` (the distinct (class, amplitude class) pairs among long-lived runs).
+    (theta's strongest line at f_y: a class of :data:`cubedimer.attractors.LOCKED_AT_FY`), ``locked_ratio`` (a
+    ``locked-p:q`` lock) with ``lock_ratios`` (runs per ratio), ``with_2fy`` (of every lock, at f_y or p:q, a 2 f_y
+    line >= 5 % of the f_y one) and ``with_2fy_at_fy`` (of the locks at f_y only), ``in_phase`` and ``anti_phase``
+    (locked classes), ``both_phase_classes`` (each >= 15 % of all runs), ``long_lived`` and ``attractors`` (the
+    distinct (class, amplitude class) pairs among long-lived runs; a p:q lock's class names its ratio).
     """
     n = len(cells)
     get = lambda key: [c for c in cells if c["outcome"] == key]
-    locked = [c for c in cells if c["outcome"].startswith("locked-")]
-    with_2fy = [c for c in locked if c.get("share_2fy") is not None and c["share_2fy"] >= 0.05]  # NaN >= 0.05 is False
+    locked = [c for c in cells if c["outcome"] in LOCKED_AT_FY]
+    ratio_locked = get("locked-p:q")
+    big_2fy = lambda c: c.get("share_2fy") is not None and c["share_2fy"] >= 0.05  # NaN >= 0.05 is False
+    with_2fy = [c for c in locked + ratio_locked if big_2fy(c)]
     long_lived = [c for c in cells if c.get("long_lived")]
-    attractors = sorted({(c["outcome"], c["amplitude_class"]) for c in long_lived})
+    name = lambda c: c["outcome"] + (f" {c['lock_ratio']}" if c["outcome"] == "locked-p:q" else "")
+    attractors = sorted({(name(c), c["amplitude_class"]) for c in long_lived})
+    ratios = {}
+    for c in ratio_locked:
+        ratios[c.get("lock_ratio", "")] = ratios.get(c.get("lock_ratio", ""), 0) + 1
     frac = lambda k: k / n if n else float("nan")
     inp, anti = len(get("locked-in-phase")), len(get("locked-anti-phase"))
     return {"runs": n, "escaped": len(get("escaped")), "folded": len(get("folded")),
             "trapped": n - len(get("escaped")) - len(get("folded")),
             "locked_at_fy": len(locked), "locked_at_fy_fraction": frac(len(locked)),
+            "locked_ratio": len(ratio_locked), "lock_ratios": dict(sorted(ratios.items())),
             "with_2fy": len(with_2fy), "with_2fy_fraction": frac(len(with_2fy)),
+            "with_2fy_at_fy": sum(map(big_2fy, locked)),
             "in_phase": inp, "anti_phase": anti,
             "both_phase_classes": bool(n and inp >= 0.15 * n and anti >= 0.15 * n),
             "long_lived": len(long_lived), "attractors": [list(a) for a in attractors],

@@ -64,6 +64,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
     p.add_argument("--duration", type=float, default=8.0, help="recorded time after the field is back on [s]; the second half is classified")
     p.add_argument("--sample-rate", type=float, default=1000.0, help="samples per second of the classified motion")
+    p.add_argument("--transducer-q", type=float, default=0.0, metavar="Q",
+                   help="the transducer's quality factor: the field rings down and up with tau = Q / (pi f) and the "
+                   "forces follow p(t)^2 (docs/twin.md); 0 (default): instant switching")
     p.add_argument("--no-figures", action="store_true", help="write the table only")
     p.add_argument("--force", action="store_true", help="discard an atlas with other settings in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -79,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         config = AtlasConfig(dimers=parse_dimers(args.dimers), t_off=parse_grid(args.t_off, "--t-off"),
                              theta_drop=parse_grid(args.theta_drop, "--theta-drop"),
                              pressure_amplitude_pa=args.pressure, frequency_hz=args.frequency,
-                             duration=args.duration, sample_rate=args.sample_rate)
+                             duration=args.duration, sample_rate=args.sample_rate, transducer_q=args.transducer_q)
     except AtlasError as exc:
         raise UserInputError(str(exc)) from None
     out = prepare_output_dir(args.out, "--out", create=False)

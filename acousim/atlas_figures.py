@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from cubedimer.atomic import save_figure
-from cubedimer.attractors import CLASS_COLORS
+from cubedimer.attractors import CLASS_COLORS, LOCKED_AT_FY
 
 __all__ = ["OUTCOME_COLORS", "write_atlas_figures"]
 
@@ -53,7 +53,7 @@ def write_atlas_figures(config, rows: list[dict], out: str | Path, outcomes: tup
     fig, ax = plt.subplots(figsize=(6.0, 3.6))
     bins = np.linspace(-180, 180, 37)
     for dimer in config.dimers:
-        ph = [r["section_phase_deg"] for r in rows if r["dimer"] == dimer.label and r["outcome"].startswith("locked-")
+        ph = [r["section_phase_deg"] for r in rows if r["dimer"] == dimer.label and r["outcome"] in LOCKED_AT_FY
               and r.get("section_phase_deg") is not None and np.isfinite(r["section_phase_deg"])]
         ax.hist(ph, bins=bins, histtype="step", lw=1.5, label=f"{dimer.label} ({len(ph)} locked)")
     ax.set_xlabel("settled phase of theta relative to y at f_y [deg]")

@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas,held-y} ...``.
 
 Each subcommand lives in its own module and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -9,15 +9,16 @@ import argparse
 
 from cubedimer.cli import command_parser, run_cli
 
-from . import atlas_cli, simulate_cli, sweep_cli
+from . import atlas_cli, held_y_cli, simulate_cli, sweep_cli
 from .fullwave import cli as fullwave_cli
 from .fullwave import convergence, family_cli, table_cli
+from .fullwave.solver import AssemblyBackendError
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: The commands of ``python -m acousim``, in the order of the help.
 COMMANDS = (sweep_cli.add_parser, simulate_cli.add_parser, fullwave_cli.add_parser, family_cli.add_parser,
-            table_cli.add_parser, convergence.add_parser, atlas_cli.add_parser)
+            table_cli.add_parser, convergence.add_parser, atlas_cli.add_parser, held_y_cli.add_parser)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -29,4 +30,4 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return run_cli(build_parser(), argv)
+    return run_cli(build_parser(), argv, errors=(AssemblyBackendError,))

@@ -165,6 +165,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="leave out the air's drag computed from the dimer's geometry and the air (effect air_damping, "
                    "docs/damping.md), which every twin has by default: the inviscid dimer, damped only by --effect "
                    "(the paper-like preset has it off, its linear damping being the tuned total)")
+    p.add_argument("--transducer-q", type=float, default=None, metavar="Q",
+                   help="the transducer's quality factor: the field rings down when the drive stops and up when it "
+                   "is back, with tau = Q / (pi f), and the acoustic forces follow p(t)^2 / p0^2 (docs/twin.md); "
+                   "0: instant switching (default 0 or the preset's; 250 is the value docs/twin.md states)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
@@ -240,6 +244,7 @@ def build_config(args: argparse.Namespace):
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=model,
             gap=gap, edge_radius=args.edge_radius, frequency=frequency,
             air_damping=not args.no_air_damping and dimer.get("air_damping", True),
+            transducer_q=args.transducer_q if args.transducer_q is not None else dimer.get("transducer_q", 0.0),
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None
@@ -268,6 +273,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {config.runs} runs to {args.out} (true pressure amplitude {truth['pressure_amplitude_pa']:.1f} Pa, "
           f"effects: {EffectSet.from_dict(truth['effects']).describe()})" + (f"; camera frames in {args.out}/video/" if video else ""),
           file=sys.stderr)
+    if truth["folded_runs"]:
+        print(f"{truth['folded_runs']} of {config.runs} runs folded (theta reached +-1): recorded up to the fold, "
+              "the event in truth.json", file=sys.stderr)
     if args.figures:
         from .twin import write_twin_figures
 

@@ -24,9 +24,10 @@ def main() -> str:
     from acousim.fullwave.family_grid import FamilyNode, edge_graded_mesh_spec
     from acousim.fullwave.geometry import dimer_bodies
 
-    if not solver._opencl_cpu_available():
-        return ("## bem_backends: numba against OpenCL assembly\n\nNo OpenCL CPU device here "
-                "(`pip install pyopencl pocl-binary-distribution`); nothing measured.")
+    verdict = solver._opencl_verdict()
+    if not verdict.works:
+        return ("## bem_backends: numba against OpenCL assembly\n\nThe OpenCL backend does not work here "
+                f"({verdict.reason}; `pip install -e '.[opencl]'`); nothing measured.")
     numba.set_num_threads(1)
     medium = FamilyNode(0.418, GAP).medium
     before = os.environ.get(solver.BEM_DEVICE_ENV)

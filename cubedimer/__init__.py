@@ -5,7 +5,8 @@ here, so that ``acousim`` and ``fitting`` never import each other:
 
 * :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling;
   :mod:`cubedimer.errors` - its one-line :class:`DatasetError`
-* :mod:`cubedimer.meta` - the one validated reader of ``meta.json``
+* :mod:`cubedimer.meta` - the one validated reader of ``meta.json``; :mod:`cubedimer.system` - the system a data
+  set records (a levitated dimer, or a generic two-coordinate system declared in meta.json)
 * :mod:`cubedimer.noise` - the one white tracking-noise estimate (fourth differences)
 * :mod:`cubedimer.terms` - term names and the cubic monomial library over [y, ydot, theta, thetadot]
 * :mod:`cubedimer.spectra`, :mod:`cubedimer.poincare`, :mod:`cubedimer.attractors` - signal analysis

@@ -30,7 +30,7 @@ from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
 __all__ = ["UserInputError", "OneLineParser", "command_parser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
-           "positive_int", "positive_float", "float_list"]
+           "positive_int", "positive_float", "float_list", "invoked_as"]
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf)")
 
@@ -220,14 +220,22 @@ def check_limit(what: str, value: float, limit: float, hint: str = "") -> None:
         raise UserInputError(f"{what} = {value:,.0f} exceeds the limit of {limit:,.0f}" + (f"; {hint}" if hint else ""))
 
 
+def invoked_as(module_prog: str, argv0: str | None = None) -> str:
+    """The command as the user typed it, for usage lines: the console script's name (``cubedimer-acousim``) when
+    the package runs as one, else ``module_prog`` (``python -m acousim``)."""
+    name = Path(sys.argv[0] if argv0 is None else argv0).name
+    return name if name.startswith("cubedimer-") else module_prog
+
+
 def command_parser(prog: str, description: str,
                    commands: Sequence[Callable[[argparse._SubParsersAction], None]]) -> OneLineParser:
-    """The parser of a package's command line: one sub-parser per ``add_parser(subparsers)`` function in ``commands``.
+    """The parser of a package's command line: one sub-parser per ``add_parser(subparsers)`` function in ``commands``,
+    named as it was invoked (:func:`invoked_as`; ``prog`` is the ``python -m`` form).
 
     Every package's command module has this one shape: each command is a function that adds its sub-parser to
     ``subparsers`` and sets ``func`` (the function :func:`run_cli` calls with the parsed arguments).
     """
-    parser = OneLineParser(prog=prog, description=description)
+    parser = OneLineParser(prog=invoked_as(prog), description=description)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     for add_parser in commands:
         add_parser(sub)

@@ -10,8 +10,16 @@ for :data:`STALE_AFTER_DAYS` days are removed then, so that a working copy that 
 disk with kernels of versions that are gone.
 
 The folder is ``$NUMBA_CACHE_DIR/cubedimer-<fingerprint>`` when ``NUMBA_CACHE_DIR`` is set, else
-``$XDG_CACHE_HOME/cubedimer/numba/cubedimer-<fingerprint>`` (``~/.cache`` by default; the system's temporary
-folder when that cannot be written).  ``make clean`` removes the default folder.
+``numba/cubedimer-<fingerprint>`` under the suite's user cache (:func:`suite_cache_root`:
+``$XDG_CACHE_HOME/cubedimer``, ``~/.cache/cubedimer`` by default, the system's temporary folder when that cannot
+be written).  ``make clean`` removes the default folder; the test suite uses a folder of its own.
+
+A cache is never fatal.  An entry that cannot be loaded - an index or a kernel that does not unpickle (it names a
+module this process cannot import, such as a kernel compiled in a process that had registered an effect of its
+own), a truncated or corrupt file, an entry numba cannot rebuild - is passed over: the kernel is compiled again
+and the entry rewritten, with one warning per process.  An entry that cannot be saved (a cache folder that is not
+writable) only costs the compilation next time.  :func:`make_cache_failures_harmless` installs this on numba's
+cache classes.
 
 :func:`configure_compile_cache` runs when :mod:`cubedimer` is imported, which every package of the suite does
 before it defines a compiled function.
@@ -26,8 +34,8 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["SUITE_PACKAGES", "STALE_AFTER_DAYS", "source_fingerprint", "compile_cache_dir", "prune_stale_caches",
-           "configure_compile_cache", "kernel_array"]
+__all__ = ["SUITE_PACKAGES", "STALE_AFTER_DAYS", "suite_cache_root", "source_fingerprint", "compile_cache_dir",
+           "prune_stale_caches", "make_cache_failures_harmless", "configure_compile_cache", "kernel_array"]
 
 log = logging.getLogger(__name__)
 
@@ -38,6 +46,29 @@ SUITE_PACKAGES = ("cubedimer", "acousim", "fitting", "tracking", "validation")
 STALE_AFTER_DAYS = 7.0
 
 _SUITE_ROOT = Path(__file__).resolve().parents[1]
+
+
+def suite_cache_root() -> Path:
+    """The suite's user cache folder: ``$XDG_CACHE_HOME/cubedimer`` (``~/.cache/cubedimer`` by default), or
+    ``<system temporary folder>/cubedimer-<user>`` when that cannot be created or written.
+
+    Every cache of the suite lives below it (compiled kernels, full-wave tables built on demand, the OpenCL
+    verdict), so that ``XDG_CACHE_HOME`` moves them all; the test suite points it at a folder of its own."""
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cubedimer"
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        if not os.access(base, os.W_OK):
+            raise PermissionError(str(base))
+    except OSError:
+        base = Path(tempfile.gettempdir()) / f"cubedimer-{_user_name()}"
+    return base
+
+
+def _user_name() -> str:
+    try:
+        return str(os.getuid())
+    except AttributeError:  # not POSIX
+        return os.environ.get("USERNAME", "user")
 
 
 def source_fingerprint(root: Path = _SUITE_ROOT, packages: tuple[str, ...] = SUITE_PACKAGES) -> str:
@@ -56,14 +87,7 @@ def compile_cache_dir(fingerprint: str | None = None) -> Path:
     name = f"cubedimer-{fingerprint or source_fingerprint()}"
     if os.environ.get("NUMBA_CACHE_DIR"):
         return Path(os.environ["NUMBA_CACHE_DIR"]) / name
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cubedimer" / "numba"
-    try:
-        base.mkdir(parents=True, exist_ok=True)
-        if not os.access(base, os.W_OK):
-            raise PermissionError(str(base))
-    except OSError:
-        base = Path(tempfile.gettempdir()) / "cubedimer-numba"
-    return base / name
+    return suite_cache_root() / "numba" / name
 
 
 def prune_stale_caches(current: Path, max_age_days: float = STALE_AFTER_DAYS, now: float | None = None) -> list[Path]:
@@ -88,23 +112,102 @@ def prune_stale_caches(current: Path, max_age_days: float = STALE_AFTER_DAYS, no
     return removed
 
 
+_WARNED = False
+
+
+def _passed_over(what: str, where: str, exc: BaseException) -> None:
+    """The one warning per process about a cache entry that could not be used (module docstring)."""
+    global _WARNED
+    if not _WARNED:
+        _WARNED = True
+        log.warning("compiled-kernel cache: an entry could not be %s (%s: %s; %s); compiling again "
+                    "(further such entries are passed over silently)", what, type(exc).__name__, exc, where)
+    else:
+        log.debug("compiled-kernel cache: an entry could not be %s (%s: %s; %s)", what, type(exc).__name__, exc, where)
+
+
+def make_cache_failures_harmless() -> None:
+    """Make numba's on-disk cache skip every entry it cannot load or save instead of raising (module docstring).
+
+    numba reads a kernel's index with :func:`pickle.loads` and lets any error through: an index that names a
+    module this process cannot import ends the command with ``ModuleNotFoundError``.  Here a failed read counts
+    as an empty index (the kernel is compiled, and the next save rewrites the index without the entry), a
+    failed rebuild as a miss, and a failed save is logged.  Idempotent."""
+    from numba.core import caching
+
+    if getattr(caching.IndexDataCacheFile, "_cubedimer_harmless", False):
+        return
+    load_index, load, load_overload, save_overload = (caching.IndexDataCacheFile._load_index,
+                                                      caching.IndexDataCacheFile.load, caching.Cache.load_overload,
+                                                      caching.Cache.save_overload)
+
+    def _load_index(self):
+        try:
+            return load_index(self)
+        except Exception as exc:  # unpicklable, truncated, another format: an empty index, rewritten at the next save
+            _passed_over("read", self._index_path, exc)
+            return {}
+
+    def _load(self, key):
+        try:
+            return load(self, key)
+        except Exception as exc:  # a corrupt or unpicklable kernel file
+            _passed_over("read", self._cache_path, exc)
+            return None
+
+    def _load_overload(self, sig, target_context):
+        try:
+            return load_overload(self, sig, target_context)
+        except Exception as exc:  # an entry numba cannot rebuild in this process
+            _passed_over("loaded", self._name, exc)
+            return None
+
+    def _save_overload(self, sig, data):
+        try:
+            return save_overload(self, sig, data)
+        except Exception as exc:  # an unwritable folder, a full disk
+            _passed_over("saved", self._name, exc)
+            return None
+
+    caching.IndexDataCacheFile._load_index = _load_index
+    caching.IndexDataCacheFile.load = _load
+    caching.Cache.load_overload = _load_overload
+    caching.Cache.save_overload = _save_overload
+    caching.IndexDataCacheFile._cubedimer_harmless = True
+
+
 def configure_compile_cache() -> Path:
-    """Point numba's cache at :func:`compile_cache_dir`, mark that folder as used, and remove the folders of other
-    source versions unused for :data:`STALE_AFTER_DAYS` days; returns the folder."""
+    """Point numba's cache at :func:`compile_cache_dir`, make unusable entries harmless
+    (:func:`make_cache_failures_harmless`), mark the folder as used, and remove the folders of other source
+    versions unused for :data:`STALE_AFTER_DAYS` days; returns the folder."""
     from numba.core import config
 
+    make_cache_failures_harmless()
     folder = compile_cache_dir()
+    if not _writable_folder(folder):
+        fallback = Path(tempfile.gettempdir()) / f"cubedimer-{_user_name()}" / "numba" / folder.name
+        log.warning("compiled-kernel cache %s cannot be written; using %s (set NUMBA_CACHE_DIR to a writable "
+                    "folder to keep kernels between runs)", folder, fallback)
+        folder = fallback
+        if not _writable_folder(folder):  # numba then finds a folder of its own, or compiles every time
+            log.warning("compiled-kernel cache %s cannot be written either", folder)
+            return folder
     config.CACHE_DIR = str(folder)
+    for gone in prune_stale_caches(folder):
+        log.debug("removed the stale numba cache %s", gone)
+    log.debug("numba cache: %s", folder)
+    return folder
+
+
+def _writable_folder(folder: Path) -> bool:
+    """Create ``folder`` if needed, mark it as used now, and tell whether a file can be written in it."""
     try:
         folder.mkdir(parents=True, exist_ok=True)
         os.utime(folder)
-    except OSError:  # numba reports an unwritable cache itself, at the first compilation
-        pass
-    else:
-        for gone in prune_stale_caches(folder):
-            log.debug("removed the stale numba cache %s", gone)
-    log.debug("numba cache: %s", folder)
-    return folder
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError:
+        return False
+    return True
 
 
 def kernel_array(a, dtype=float):

@@ -254,7 +254,8 @@ def _physics_problem(f: RunFeatures, meta: Mapping[str, float], c: ConsistencyCo
 
 def check_consistency(features: Sequence[RunFeatures], meta: Mapping[str, float] | None = None,
                       config: ConsistencyConfig = ConsistencyConfig(),
-                      trap_frequency: Callable[[Mapping[str, float]], float] | None = None) -> list[Inconsistency]:
+                      trap_frequency: Callable[[Mapping[str, float]], float] | None = None,
+                      levitated: bool = True) -> list[Inconsistency]:
     """The runs of a data set that do not fit (module docstring), each with its likely cause.
 
     Parameters
@@ -270,6 +271,9 @@ def check_consistency(features: Sequence[RunFeatures], meta: Mapping[str, float]
         nominal pressure (NaN when it has none).  Used only with a ``meta``: the run's dominant y frequency must
         lie within ``config.meta_frequency_ratio`` of it.  This package carries no acoustic model; the caller
         that has one passes it in.
+    levitated : bool
+        False for a generic two-coordinate system (:mod:`cubedimer.system`): only a constant run and pure noise are
+        refused; the levitation bounds and the comparisons in metres and seconds do not apply.
 
     Returns
     -------
@@ -283,6 +287,8 @@ def check_consistency(features: Sequence[RunFeatures], meta: Mapping[str, float]
             found.append(Inconsistency(f.name, problem[1], problem[0]))
         else:
             signal_ok.append(f)
+    if not levitated:
+        return found
     physical = [f for f in signal_ok if _physics_problem(f, meta or {}, config, None, None) is None]
     reference = float(np.median([f.y_amplitude for f in physical])) if len(physical) >= 2 else None
     ok: list[RunFeatures] = []

@@ -23,6 +23,7 @@ from .meta import read_meta
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .spectra import dominant_frequency
+from .system import LEVITATED_DIMER, SystemSpec, check_velocity, coordinate_unit_factor, read_system
 
 __all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
 
@@ -54,6 +55,10 @@ class LoadConfig:
         ``trap_frequency(meta) -> Hz``, a physics estimate of the vertical trap frequency at meta.json's
         nominal pressure (e.g. :func:`acousim.analytic.nominal_trap_frequency`), checked when the data set
         has a meta.json; None keeps the physics-free bound of 5-200 Hz only.
+    systems : tuple of str
+        The kinds of system (:data:`cubedimer.system.SYSTEM_KINDS`) accepted from meta.json; a data set declaring
+        another kind is refused in one line.  The default, a levitated dimer only, is what every command but
+        ``fitting fit`` needs.
     """
 
     max_gap: int = 10
@@ -63,6 +68,7 @@ class LoadConfig:
     glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
     consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
     trap_frequency: Callable[[dict], float] | None = None
+    systems: tuple[str, ...] = ("levitated_dimer",)
 
     def __post_init__(self) -> None:
         check_whole(self, "max_gap", minimum=0)
@@ -91,6 +97,9 @@ class Run:
         Frames that were missing or masked as glitches, and filled.
     glitch_frames : tuple of int
         Indices of the frames masked as tracking glitches (in y or theta).
+    velocities : ndarray (n, 2) or None
+        Measured rates of the two coordinates [SI per s] (a generic system's declared velocity columns; NaN for a
+        coordinate without one), or None.  In a generic system y and theta hold its first and second coordinate.
     """
 
     name: str
@@ -99,6 +108,7 @@ class Run:
     theta: NDArray[np.float64]
     n_filled: int = 0
     glitch_frames: tuple[int, ...] = ()
+    velocities: NDArray[np.float64] | None = None
 
     @property
     def n_glitches(self) -> int:
@@ -123,6 +133,7 @@ class Dataset:
     runs: tuple[Run, ...]
     meta: dict = field(default_factory=dict)
     skipped: tuple["SkippedFile", ...] = ()
+    system: SystemSpec = LEVITATED_DIMER
 
     @property
     def n_glitches(self) -> int:
@@ -293,7 +304,8 @@ def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list
     return t_full, out, lines, size - t.size
 
 
-def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None) -> Run:
+def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None,
+             system: SystemSpec = LEVITATED_DIMER) -> Run:
     """Read one CSV run, check it against the data-set format (docs/formats.md), fill short gaps.
 
     What labs write is read: the file as UTF-8 with or without a byte-order mark, CRLF line endings, ``,``
@@ -303,6 +315,11 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     ``frame`` column of integer frame numbers in place of ``t`` when ``frame_rate_hz`` is given (meta.json),
     and omitted rows of lost frames (a time step that is an integer multiple of the frame interval: the
     frames in between are missing and filled as such).
+
+    A generic ``system`` (:mod:`cubedimer.system`) reads its declared coordinate columns (and velocity columns)
+    into ``y`` and ``theta`` (and ``velocities``), converting their unit labels to the declared SI units; the
+    levitation checks (|theta| < 1, the refused labels) are skipped and the dominant frequency of the first
+    coordinate must lie in the declared range.
 
     Line numbers in messages are those of the file (comments and blank lines counted), and file
     content quoted in a message is cut to :data:`ECHO_LIMIT` characters.
@@ -326,34 +343,31 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     decimal_comma = sep != ","
     header, units = _parse_header(path, header_line, header_text, sep)
     time_col = "t" if "t" in header else ("frame" if "frame" in header and frame_rate_hz else None)
-    missing = [c for c in REQUIRED_COLUMNS if c not in header and not (c == "t" and time_col == "frame")]
-    if missing:
+    velocity_cols = [c.velocity for c in system.coordinates if c.velocity]
+    missing = [c for c in ("t", *system.names, *velocity_cols)
+               if c not in header and not (c == "t" and time_col == "frame")]
+    if missing and not system.generic:
         raise DatasetError(_missing_columns_message(path, header_line, header_text, missing, header, frame_rate_hz))
-    used = [time_col, "y", "theta"]
+    if missing:
+        raise DatasetError(f"{path}: missing column{'s' if len(missing) > 1 else ''} "
+                           f"{', '.join(repr(c) for c in missing)} (header on line {header_line}: "
+                           f"{_echo(header_text)}); meta.json's system declares the columns "
+                           f"{', '.join(['t', *system.names, *velocity_cols])}: rename the columns or the declaration")
+    used = [time_col, *system.names, *velocity_cols]
     idx = [header.index(c) for c in used]
-    factors = [_unit_factor(path, c, units[i]) for c, i in zip(used, idx)]
-    rows, line_no = [], []
-    for k, ln in lines[1:]:
-        parts = ln.split(sep)
-        if len(parts) < len(header):
-            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}"
-                               + ("; with a decimal comma the separator must be ';' or a tab" if sep == "," and
-                                  len(parts) > len(header) else ""))
-        vals = []
-        for i in idx:
-            s = parts[i].strip().strip('"')
-            if decimal_comma:
-                s = s.replace(",", ".")
-            try:
-                vals.append(float(s) if s else np.nan)
-            except ValueError:
-                raise DatasetError(f"{path}: non-numeric value {_echo(s)} in column {header[i]!r} on line {k}") from None
-        rows.append(vals)
-        line_no.append(k)
+    factors = [_unit_factor(path, c, units[i]) for c, i in zip(used[:1], idx)]
+    if system.generic:
+        factors += [coordinate_unit_factor(path, c.name, c.unit, units[header.index(c.name)])
+                    for c in system.coordinates]
+        factors += [coordinate_unit_factor(path, c.velocity, c.unit, units[header.index(c.velocity)], velocity=True)
+                    for c in system.coordinates if c.velocity]
+    else:
+        factors += [_unit_factor(path, c, units[i]) for c, i in zip(used[1:], idx[1:])]
+    rows, line_no = _read_rows(path, lines[1:], header, idx, sep, decimal_comma)
     if len(rows) < 16:
         raise DatasetError(f"{path}: only {len(rows)} data rows; too short to hold {config.min_periods:g} oscillation periods")
     a = np.asarray(rows, dtype=float) * np.asarray(factors)
-    t, y, th = a[:, 0], a[:, 1], a[:, 2]
+    t, y, th, vel = a[:, 0], a[:, 1], a[:, 2], list(a[:, 3:].T)
     if not np.all(np.isfinite(t)):
         k = int(np.flatnonzero(~np.isfinite(t))[0])
         raise DatasetError(f"{path}: missing or non-finite {time_col} value on line {line_no[k]}")
@@ -366,7 +380,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     if np.any(dt <= 0):
         k = int(np.flatnonzero(dt <= 0)[0])
         raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (line {line_no[k + 1]})")
-    t, (y, th), line_no, n_lost = _fill_lost_frames(path, t, [y, th], line_no, config.uniform_tol)
+    t, (y, th, *vel), line_no, n_lost = _fill_lost_frames(path, t, [y, th, *vel], line_no, config.uniform_tol)
     if n_lost:
         logger.info("%s: %d omitted frame(s) taken as missing", name, n_lost)
     dt = np.diff(t)
@@ -379,7 +393,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
                            f"frame at its time, with empty y and theta where it was lost, or leave its row out "
                            f"(docs/formats.md)")
     fin = np.isfinite(th)
-    if fin.any() and np.any(np.abs(th[fin]) >= 1.0):
+    if not system.generic and fin.any() and np.any(np.abs(th[fin]) >= 1.0):
         k = int(np.flatnonzero(fin & (np.abs(np.where(fin, th, 0.0)) >= 1.0))[0])
         worst = float(np.max(np.abs(th[fin])))
         hint = ("; if it holds alpha - beta in degrees divide by 180 (docs/conventions.md)" if worst <= 180 else "")
@@ -396,7 +410,12 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
                            prefer_above=SLOW_PEAK_FRACTION, refine=False)
     if f <= 0 or duration * f < config.min_periods:
         raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
-                           f"({duration:.3g} s at a dominant y frequency of {f:.3g} Hz)")
+                           f"({duration:.3g} s at a dominant {system.names[0]} frequency of {f:.3g} Hz)")
+    lo, hi = system.frequency_range_hz
+    if system.generic and not lo <= f <= hi:
+        raise DatasetError(f"{path}: dominant {system.names[0]} frequency {f:.3g} Hz is outside meta.json's "
+                           f"system.frequency_range_hz [{lo:g}, {hi:g}]: check the units of t or widen the range")
+    velocities = _velocities(path, t, (y, th), vel, system, config.max_gap, duration * f) if vel else None
     glitch_frames: tuple[int, ...] = ()
     if config.glitches is not None:
         frames_per_period = t.size / (duration * f)
@@ -407,7 +426,46 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
             y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.max_gap, "y", str(path))
             th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.max_gap, "theta", str(path))
             logger.info("%s: %d tracking glitch frame(s) masked", name, len(glitch_frames))
-    return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt), glitch_frames=glitch_frames)
+    return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt), glitch_frames=glitch_frames,
+               velocities=velocities)
+
+
+def _read_rows(path: Path, lines: list[tuple[int, str]], header: list[str], idx: list[int], sep: str,
+               decimal_comma: bool) -> tuple[list[list[float]], list[int | None]]:
+    """The values of the columns ``idx`` of every data line (NaN where empty) and the lines' numbers."""
+    rows, line_no = [], []
+    for k, ln in lines:
+        parts = ln.split(sep)
+        if len(parts) < len(header):
+            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}"
+                               + ("; with a decimal comma the separator must be ';' or a tab" if sep == "," and
+                                  len(parts) > len(header) else ""))
+        vals = []
+        for i in idx:
+            s = parts[i].strip().strip('"')
+            if decimal_comma:
+                s = s.replace(",", ".")
+            try:
+                vals.append(float(s) if s else np.nan)
+            except ValueError:
+                raise DatasetError(f"{path}: non-numeric value {_echo(s)} in column {header[i]!r} on line {k}") from None
+        rows.append(vals)
+        line_no.append(k)
+    return rows, line_no
+
+
+def _velocities(path: Path, t: NDArray, x: tuple[NDArray, NDArray], vel: list[NDArray], system: SystemSpec,
+                max_gap: int, periods: float) -> NDArray:
+    """The declared velocity columns as (n, 2) (NaN for a coordinate without one), gaps filled, each checked
+    against its positions (:func:`cubedimer.system.check_velocity`)."""
+    out = np.full((t.size, 2), np.nan)
+    columns = iter(vel)
+    for k, c in enumerate(system.coordinates):
+        if c.velocity:
+            v, _ = fill_gaps(t, next(columns), max_gap, c.velocity, str(path))
+            check_velocity(path, c.velocity, t, x[k], v, periods)
+            out[:, k] = v
+    return out
 
 
 def _log_skip(message: str) -> None:
@@ -443,6 +501,11 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
     meta = read_meta(p)
+    system = read_system(meta, str(p / "meta.json"))
+    if system.kind not in config.systems:
+        raise DatasetError(f"{p / 'meta.json'}: declares a {system.kind.replace('_', ' ')} system "
+                           f"({', '.join(system.names)}); this command reads {' or '.join(config.systems)} data sets "
+                           f"only (python -m fitting fit fits any two coordinates)")
     report = report or _log_skip
     runs, skipped = [], []
     # the skipped files are reported once the set is known to hold good runs: a set refused as a whole is
@@ -458,7 +521,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     codes: dict[str, str] = {}
     for f in files:
         try:
-            runs.append(load_run(f, config, frame_rate_hz=meta.get("frame_rate_hz")))
+            runs.append(load_run(f, config, frame_rate_hz=meta.get("frame_rate_hz"), system=system))
         except DatasetError as exc:
             if strict:
                 raise
@@ -471,7 +534,8 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
         # the physics bounds hold with or without meta.json (defaults stand in); the estimate of the trap
         # frequency at the nominal pressure only when the data set states its constants
         found = check_consistency(features, meta, config.consistency,
-                                  trap_frequency=config.trap_frequency if meta else None)
+                                  trap_frequency=config.trap_frequency if meta else None,
+                                  levitated=not system.generic)
         bad = {x.file: x.reason for x in found}
         codes = {x.file: x.code for x in found}
         for r in runs:
@@ -489,7 +553,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     for message in pending:
         report(message)
     skipped.sort(key=lambda s: s.file)
-    return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped))
+    return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped), system=system)
 
 
 # ---------------------------------------------------------------------- writing

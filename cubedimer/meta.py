@@ -19,8 +19,8 @@ import logging
 
 from .errors import DatasetError
 
-__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "META_TEXT_KEYS", "read_meta", "validate_meta",
-           "check_meta_value"]
+__all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "META_TEXT_KEYS", "META_BLOCK_KEYS",
+           "TRACKING_RANGES", "read_meta", "validate_meta", "check_meta_value", "check_tracking_block"]
 
 logger = logging.getLogger(__name__)
 
@@ -43,6 +43,20 @@ META_RECORDING_KEYS: tuple[str, ...] = ("frame_rate_hz",)
 
 #: Free-text keys a data set may carry for people (any JSON value; not read).
 META_TEXT_KEYS: tuple[str, ...] = ("source", "comment", "notes", "description")
+
+#: Blocks a data set's meta.json may hold, written by the suite's own tools: ``tracking`` (the tracking's summary,
+#: written by ``python -m tracking``; docs/formats.md).  Each must be a JSON object; its numbers are checked by
+#: :func:`check_tracking_block`.
+META_BLOCK_KEYS: tuple[str, ...] = ("tracking",)
+
+#: The tracking block's numbers: each, when present, a finite number within its range.
+TRACKING_RANGES: dict[str, tuple[float, float]] = {
+    "noise_y_m": (0.0, 1e-2),
+    "noise_theta": (0.0, 1.0),
+    "fraction_measured": (0.0, 1.0),
+    "pixel_size_m": (0.0, 1e-2),
+    "side_length_m_measured": (0.0, 1e-2),
+}
 
 #: Open ranges a value must lie in (a generous envelope around acoustic levitation in air or water).
 META_RANGES: dict[str, tuple[float, float]] = {
@@ -78,6 +92,29 @@ def check_meta_value(key: str, value: Any, source: str = "meta.json") -> float:
     return v
 
 
+def check_tracking_block(block: Any, source: str = "meta.json") -> dict:
+    """meta.json's ``tracking`` block, checked: a JSON object whose numbers of :data:`TRACKING_RANGES` (the pooled
+    tracking noise, the fraction of frames measured, the pixel size and the measured side) are finite and in range
+    where present; other keys (per-run summaries, skipped recordings, the method) pass unread.
+
+    Raises
+    ------
+    DatasetError
+        ``"<source>: tracking.<key> ..."`` naming the key and what to do.
+    """
+    if not isinstance(block, dict):
+        raise DatasetError(f"{source}: 'tracking' must be a JSON object (the block python -m tracking writes), got "
+                           f"{type(block).__name__}; remove it or track the recordings again")
+    for key, (lo, hi) in TRACKING_RANGES.items():
+        if key not in block:
+            continue
+        v = block[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not lo <= v <= hi:
+            raise DatasetError(f"{source}: tracking.{key} = {v!r} must be a number in [{lo:g}, {hi:g}] (SI units); "
+                               f"correct it or track the recordings again")
+    return dict(block)
+
+
 def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     """Check the known keys of ``meta`` (a parsed meta.json); return a copy with them as floats.
 
@@ -92,7 +129,13 @@ def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     for key in META_RANGES:
         if key in meta:
             out[key] = check_meta_value(key, meta[key], source)
-    unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS]
+    if "tracking" in meta:
+        out["tracking"] = check_tracking_block(meta["tracking"], source)
+    if "system" in meta:
+        from .system import read_system
+        read_system(meta, source)  # the declared system (cubedimer.system), refused here in one line when bad
+    unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS and k not in META_BLOCK_KEYS
+               and k != "system"]
     if unknown:
         logger.warning("%s: unknown key(s) %s ignored; the known keys are %s (docs/formats.md)", source,
                        ", ".join(repr(k) for k in unknown), ", ".join(META_RANGES))

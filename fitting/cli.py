@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
 * ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
-  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
+  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION] [--no-glitch-mask]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
@@ -65,13 +65,18 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
     if a.selection:
         cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
+    if a.no_glitch_mask:
+        cfg = replace(cfg, load=replace(cfg.load, glitches=None))
+    if a.min_periods is not None:
+        cfg = replace(cfg, load=replace(cfg.load, min_periods=a.min_periods))
     t0 = time.perf_counter()
     res = fit_dataset(a.data_dir, cfg, executor_config(a), strict=a.strict, progress=not a.no_progress,
                       cache_dir=Path(a.out) / "runs")
     path = write_fit(res, a.out, plots=not a.no_plots)
     _log(f"wrote {path} in {time.perf_counter() - t0:.1f} s")
     for eq, terms in res.model.equations().items():
-        print(f"{eq} = " + " + ".join(f"({v:.6g}) {t}" for t, v in terms.items()))
+        name = res.system.rename
+        print(f"{name(eq)} = " + " + ".join(f"({v:.6g}) {name(t)}" for t, v in terms.items()))
     return 0
 
 
@@ -88,13 +93,18 @@ def _cmd_compare(a: argparse.Namespace) -> int:
         ref = PolynomialModel.from_json(data)
     except (OSError, ValueError, KeyError) as exc:
         raise DatasetError(f"{a.model}: not a readable model.json ({exc})") from None
-    ds = load_dataset(a.data_dir, strict=a.strict)
+    from .config import FitConfig
+    ds = load_dataset(a.data_dir, strict=a.strict, config=FitConfig().load)  # generic systems too
     prepared, scales = prepare_runs(ds.runs)
+    system = ds.system
     if "scales" in data:
         s = data["scales"]
         scales = Scales(s["length_y_m"], s["length_theta"], s["time_s"])
     if a.drop:
-        variant = drop_terms(ref, a.drop)
+        try:
+            variant = drop_terms(ref, [system.internal(d) for d in a.drop])
+        except ValueError as exc:
+            raise UserInputError(f"--drop: {exc}") from None
         label = "without " + ", ".join(a.drop)
     else:
         variant = ref.with_mask(ref.support & ~cross_coupling_mask(ref))
@@ -103,7 +113,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     cmp = compare_models(ref, variant, [p.derivs for p in prepared], scales,
                          names=[p.run.name for p in prepared], reoptimise=not a.no_reoptimise)
     out = {"variant_label": label, **cmp.to_json()}
-    write_json(Path(a.out) / "compare.json", out)
+    write_json(Path(a.out) / "compare.json", system.rename(out))
     for name, t in (("shape", cmp.shape_test), ("Poincare", cmp.poincare_test)):
         print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
               f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")
@@ -192,6 +202,12 @@ def add_fit_parser(subparsers) -> None:
     f.add_argument("--relative-threshold", action="store_true",
                    help="apply the regression threshold to each equation relative to its signal size (for a hinge "
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
+    f.add_argument("--no-glitch-mask", action="store_true",
+                   help="keep every recorded frame: no isolated tracking glitch is masked and filled (by default the "
+                        "frames masked per run are counted in model.json's per_run entries)")
+    f.add_argument("--min-periods", type=positive_float, default=None, metavar="N",
+                   help="oscillation periods (of the dominant frequency of y, or of the first declared coordinate) a "
+                        "run must hold to be fitted (default 5)")
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
 

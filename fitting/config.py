@@ -5,6 +5,7 @@ from dataclasses import dataclass, field, replace
 
 from cubedimer.attractors import ClassifyConfig
 from cubedimer.dataset import LoadConfig
+from cubedimer.system import SYSTEM_KINDS
 from .derivatives import SmoothingConfig
 from .discovery import DiscoveryConfig
 from .ensemble import EnsembleConfig
@@ -27,7 +28,8 @@ class FitConfig:
         non-positive ``polish_se``.
     """
 
-    load: LoadConfig = field(default_factory=LoadConfig)
+    #: loading rules; the fit reads levitated dimers and generic two-coordinate systems (cubedimer.system)
+    load: LoadConfig = field(default_factory=lambda: LoadConfig(systems=SYSTEM_KINDS))
     smoothing: SmoothingConfig = field(default_factory=SmoothingConfig)
     regression: RegressionConfig = field(default_factory=RegressionConfig)
     refine: RefineConfig = field(default_factory=RefineConfig)

@@ -55,7 +55,7 @@ from cubedimer.terms import EQUATION_NAMES, evaluate_library
 from .integral_form import column_states, integral_window
 from .model import TERMS, PolynomialModel, damping_mask
 from .model_states import SegmentConfig, model_states, segment_length
-from .support_search import fit_support, heldout_rms, prune_heldout, reduced_design, select_support
+from .support_search import fit_support, heldout_rms, prune_heldout, reduced_design, select_heldout, select_support
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run
@@ -137,6 +137,15 @@ class DiscoveryConfig:
         the theta residual came out 3.6 % above the tracking noise and up to 5 spurious thetaddot terms per data set
         were selected at z 3.8-5.8 (a constant, theta^3, y^2, y*thetadot, ...).  0.875 is the floor's own share of
         the 35-Hz hinge it was chosen on (docs/fitting.md, "Near parametric resonance").
+    model_error_factor : float or None
+        When an equation's residual standard deviation (at the significance rule's support) exceeds this many times
+        the white tracking noise of its coordinate (:func:`cubedimer.noise.white_noise_std`), the residual is model
+        error (a truth that is not sparse in the library), under which the standard errors and Holm's rule have no
+        meaning: that equation is selected by held-out prediction over runs instead
+        (:func:`fitting.support_search.select_heldout`: the smallest support on the elimination path from the full
+        library within ``model_error_se`` paired standard errors of the smallest held-out error).  None: never.
+    model_error_se : float
+        The standard errors of that rule (1: the one-standard-error rule).
     """
 
     alpha: float = 0.01
@@ -155,6 +164,8 @@ class DiscoveryConfig:
     stepwise: bool = True
     velocity_price: float | None = None
     natural_periods: float | None = 0.875
+    model_error_factor: float | None = 1.1
+    model_error_se: float = 1.0
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -170,6 +181,9 @@ class DiscoveryConfig:
             raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
         if self.natural_periods is not None and not self.natural_periods > 0:
             raise ValueError(f"natural_periods must be positive or None, got {self.natural_periods}")
+        if (self.model_error_factor is not None and not self.model_error_factor > 1) or not self.model_error_se >= 0:
+            raise ValueError(f"model_error_factor must exceed 1 (or be None) and model_error_se be >= 0, got "
+                             f"{self.model_error_factor}, {self.model_error_se}")
 
 
 @dataclass(frozen=True)
@@ -239,6 +253,11 @@ class DiscoveryResult:
         ``{equation: tuple of PathPoint}``, from the full library to the forced terms.
     iterations : tuple of IterationLog
     converged : bool
+    selection_modes : tuple of str
+        Per equation, how the last pass selected: ``"significance"`` (Holm's rule and the held-out pruning) or
+        ``"held-out (model error)"`` (``DiscoveryConfig.model_error_factor``).
+    residual_to_noise : tuple of float
+        Per equation, the residual standard deviation at the significance rule's support over the tracking noise.
     """
 
     mask: NDArray[np.bool_]
@@ -249,6 +268,8 @@ class DiscoveryResult:
     pareto: dict[str, tuple[PathPoint, ...]]
     iterations: tuple[IterationLog, ...]
     converged: bool
+    selection_modes: tuple[str, str] = ("significance", "significance")
+    residual_to_noise: tuple[float, float] = (float("nan"), float("nan"))
 
     @property
     def z(self) -> NDArray[np.float64]:
@@ -285,7 +306,9 @@ class DiscoveryResult:
                 **{eq: {"terms": {t: {"value": float(self.coef[q, j]), "std_error": float(self.std_errors[q, j]),
                                       "z": float(z[q, j])} for j, t in enumerate(TERMS) if self.mask[q, j]},
                         "residual_std": float(self.residual_std[q]), "window_s": float(self.window_s[q]),
-                        "pareto": [p.to_json() for p in self.pareto[eq]]}
+                        "pareto": [p.to_json() for p in self.pareto[eq]],
+                        "selection": {"rule": self.selection_modes[q],
+                                      "residual_to_noise": float(self.residual_to_noise[q])}}
                    for q, eq in enumerate(EQUATION_NAMES)},
                 "knee": {"tolerance": KNEE_TOLERANCE, **{eq: list(t) for eq, t in knee.items()}},
                 "iterations": [it.to_json() for it in self.iterations], "converged": self.converged}
@@ -349,8 +372,11 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
     positions = (ys, ths)
+    from cubedimer.noise import white_noise_std
+    noise = (white_noise_std(ys), white_noise_std(ths))
 
     caches: list[dict] = [{}, {}]
+    modes, ratio = ["significance", "significance"], [float("nan"), float("nan")]
 
     def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool, frozen: NDArray | None):
         lib = [evaluate_library(s) for s in states]
@@ -360,8 +386,14 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         for q in range(2):
             sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise,
                                         config.velocity_price)
+            ratio[q] = fit_support(designs[q], sel)[2] / noise[q] if noise[q] > 0 else float("inf")
+            modes[q] = "significance"
             held_a = [float("nan")] * len(path)
-            if config.heldout_prune:
+            if config.model_error_factor is not None and ratio[q] > config.model_error_factor:
+                modes[q] = "held-out (model error)"
+                sel, path, held = select_heldout(designs[q], forced[q], config.alpha, config.velocity_first,
+                                                 config.n_folds, config.model_error_se)
+            elif config.heldout_prune:
                 sel, path_b, held_b = prune_heldout(designs[q], sel, forced[q], config.alpha, config.velocity_first,
                                                     config.n_folds, config.heldout_tolerance)
                 path, held = path + path_b, held_a + held_b
@@ -442,5 +474,10 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         pareto[eq] = tuple(sorted(points, key=lambda p: -p.n_terms))
     log.info("discovery: %d terms in %.2f s (%s)", int(mask.sum()), time.perf_counter() - t_start,
              "converged" if converged else "not converged")
+    for q, eq in enumerate(EQUATION_NAMES):
+        if modes[q] != "significance":
+            log.info("%s: residual %.3g times the tracking noise (above %g): model error; terms selected by held-out "
+                     "prediction over runs", eq, ratio[q], config.model_error_factor)
     return DiscoveryResult(mask=mask, coef=coef, std_errors=se, residual_std=res_std, window_s=window_s,
-                           pareto=pareto, iterations=tuple(history), converged=converged)
+                           pareto=pareto, iterations=tuple(history), converged=converged,
+                           selection_modes=(modes[0], modes[1]), residual_to_noise=(ratio[0], ratio[1]))

@@ -6,6 +6,8 @@ import os
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
+
 from cubedimer.atomic import write_json
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .ensemble import mean_pvalues
@@ -14,7 +16,7 @@ from .methods import METHODS
 from .model import TERMS
 from .results import FitResult
 
-__all__ = ["model_json", "write_fit"]
+__all__ = ["model_json", "write_fit", "data_range"]
 
 
 def _terms(mask) -> dict[str, list[str]]:
@@ -38,6 +40,7 @@ def model_json(res: FitResult) -> dict:
         d = f.model_json()
         d["attractor"] = p.attractor.to_dict()
         d["loss_minimal_model"] = lt.to_dict()
+        d["glitch_frames_masked"], d["frames_averaged"] = p.run.n_glitches, p.frames_averaged
         per_run.append(d)
     out = {
         "state": list(STATE_NAMES),
@@ -62,6 +65,7 @@ def model_json(res: FitResult) -> dict:
         "fallback": res.fallback,
         "oracle": res.oracle.to_json() if res.oracle is not None else None,
         "method": res.method,
+        "data_range": data_range(res),
     }
     if res.discovery is not None:
         out["discovery"] = disc = res.discovery.to_json()
@@ -69,6 +73,15 @@ def model_json(res: FitResult) -> dict:
         out["integral_form"] = {"method": disc["method"], **{
             eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
     return out
+
+
+def data_range(res: FitResult) -> dict:
+    """The box the fitted data span, ``{"theta_abs_max", "y_abs_max_m"}``: the largest |theta| and |y| [m] of
+    the runs the fit saw (filled frames included, origin as in the data).  ``validation compare`` fits the
+    simulated static coefficients over this box unless told otherwise."""
+    theta = max(float(np.max(np.abs(p.run.theta))) for p in res.runs)
+    y = max(float(np.max(np.abs(p.run.y))) for p in res.runs)
+    return {"theta_abs_max": theta, "y_abs_max_m": y}
 
 
 def _integral_form_json(res: FitResult) -> dict | None:
@@ -98,7 +111,10 @@ def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) ->
     returns the model.json path."""
     out = Path(out_dir)
     path = out / "model.json"
-    write_json(path, model_json(res))
+    doc = model_json(res)
+    if res.system.generic:  # the declared coordinates' names (cubedimer.system)
+        doc = {**res.system.rename(doc), "system": res.system.to_json()}
+    write_json(path, doc)
     if plots:
         from .plots import plot_fit  # matplotlib only when figures are asked for
         plot_fit(res, out)

@@ -143,6 +143,13 @@ class PolynomialModel:
                     data = json.load(fh)
         if "units" in data and data["units"] != "SI":
             raise ValueError(f"only SI models are supported, got units={data['units']!r}")
+        if "system" in data:  # a generic two-coordinate system (cubedimer.system): its declared names
+            from cubedimer.system import read_system
+            spec = read_system({"system": data["system"]}, "model.json")
+            if spec.generic:
+                if "state" in data and list(data["state"]) != list(spec.state_names):
+                    raise ValueError(f"state must be {list(spec.state_names)}, got {data['state']}")
+                return cls.from_equations(spec.internal_equations(data["equations"]))
         if "state" in data and list(data["state"]) != list(STATE_NAMES):
             raise ValueError(f"state must be {list(STATE_NAMES)}, got {data['state']}")
         return cls.from_equations(data["equations"])

@@ -19,13 +19,16 @@ import os
 from dataclasses import replace
 from typing import Sequence
 
+import numpy as np
+
 from cubedimer.attractors import classify_trajectory
 from cubedimer.dataset import Dataset, DatasetError, Run, load_dataset
 from cubedimer.executor import ExecutorConfig
 from cubedimer.spectra import dominant_frequency
 from . import discovery_fit, paper_fit  # noqa: F401 - registers the built-in methods
 from .config import FitConfig
-from .derivatives import run_derivatives
+from .decimation import block_average, decimation_factor
+from .derivatives import SmoothingFailure, run_derivatives
 from .methods import FitContext, get_method
 from .model import Scales
 from .oracle import NoiseLevels, recorded_tracking_noise
@@ -41,10 +44,19 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
     """Smooth/differentiate and classify every run; common scales of the data set."""
     out = []
     for r in runs:
+        q = decimation_factor(r.dt, max(dominant_frequency(r.y, r.dt), dominant_frequency(r.theta, r.dt)),
+                              config.smoothing.max_frames_per_period)
+        r = block_average(r, q)
         fy = dominant_frequency(r.y, r.dt)
-        d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing)
+        try:
+            d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing, velocities=r.velocities)
+        except SmoothingFailure as exc:
+            raise DatasetError(f"{r.name}: {exc}") from None
         att = classify_trajectory(d.t, d.state, config.classify)
-        out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att))
+        out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att, frames_averaged=q))
+    if any(p.frames_averaged > 1 for p in out):
+        logger.info("high frame rate: %s recorded frames averaged per fitted frame (fitting.decimation)",
+                    "/".join(str(q) for q in sorted({p.frames_averaged for p in out})))
     scales = dataset_scales([p.derivs for p in out], [p.f_y for p in out])
     return out, scales
 
@@ -89,8 +101,22 @@ def fit_dataset(data_dir: str | os.PathLike, config: FitConfig = FitConfig(), ex
     prepared, scales = prepare_runs(ds.runs, config)
     logger.info("%d runs loaded (%d skipped, %d glitch frames masked); scales: y %.3g m, theta %.3g, time %.3g s",
                 len(prepared), len(ds.skipped), ds.n_glitches, scales.length_y, scales.length_theta, scales.time)
-    noise = recorded_tracking_noise(ds.meta)
+    noise = _fitted_noise(recorded_tracking_noise(ds.meta), prepared)
     if noise is not None:
         logger.info("oracle noise from meta.json's tracking block: %.3g m / %.3g", noise.sigma_y, noise.sigma_theta)
     res = fit_runs(prepared, scales, config, executor, cache_dir=cache_dir, progress=progress, noise=noise)
-    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches)
+    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches, system=ds.system)
+
+
+def _fitted_noise(noise: NoiseLevels | None, prepared: Sequence[PreparedRun]) -> NoiseLevels | None:
+    """The recorded tracking noise at the fitted frame rate: block means of q frames carry 1/sqrt(q) of it; None
+    (estimate it from the runs) when the runs were averaged by different factors."""
+    factors = {p.frames_averaged for p in prepared}
+    if noise is None or factors == {1}:
+        return noise
+    if len(factors) > 1:
+        logger.info("runs averaged by different factors: the oracle's noise is estimated from the runs")
+        return None
+    q = factors.pop()
+    return replace(noise, sigma_y=noise.sigma_y / np.sqrt(q), sigma_theta=noise.sigma_theta / np.sqrt(q),
+                   source=f"{noise.source}, divided by sqrt({q}) for the means of {q} frames")

@@ -8,6 +8,7 @@ import numpy as np
 
 from cubedimer.attractors import AttractorClass
 from cubedimer.dataset import Run
+from cubedimer.system import LEVITATED_DIMER, SystemSpec
 from .config import FitConfig
 from .derivatives import Derivatives
 from .discovery import DiscoveryResult
@@ -24,12 +25,16 @@ __all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "FitResult"]
 
 @dataclass(frozen=True, eq=False)
 class PreparedRun:
-    """A loaded run with its derivatives and attractor class."""
+    """A loaded run with its derivatives and attractor class.
+
+    ``run`` is the run as fitted: block-averaged by ``frames_averaged`` recorded frames per fitted frame at high
+    frame rates (:mod:`fitting.decimation`; 1: every recorded frame)."""
 
     run: Run
     derivs: Derivatives
     f_y: float
     attractor: AttractorClass
+    frames_averaged: int = 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,6 +172,7 @@ class FitResult:
     oracle: OracleResult | None = None
     skipped: tuple[dict, ...] = ()
     n_glitches: int = 0
+    system: SystemSpec = LEVITATED_DIMER
 
     @property
     def model(self) -> PolynomialModel:

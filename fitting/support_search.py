@@ -134,6 +134,48 @@ def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) 
     return out
 
 
+def heldout_per_run(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) -> NDArray[np.float64]:
+    """Held-out sum of squared misfits of every run (n_paths, R) for every support in ``paths`` (K-fold over runs,
+    the folds of :func:`heldout_rms`)."""
+    R = len(d.per_run)
+    k = min(n_folds, R)
+    folds = [list(range(f, R, k)) for f in range(k)]
+    train = [_r_factor([d.per_run[r] for r in range(R) if r not in fold]) for fold in folds]
+    out = np.zeros((len(paths), R))
+    for i, cols in enumerate(paths):
+        for fold, Rt in zip(folds, train):
+            c = _lstsq(Rt, cols, covariance=False)[0] if len(cols) else np.zeros(0)
+            for r in fold:
+                res = d.per_run[r][:, list(cols)] @ c - d.per_run[r][:, -1]
+                out[i, r] = float(res @ res)
+    return out
+
+
+def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,
+                   n_folds: int = 5, se_rule: float = 1.0) -> tuple[list[int], list[list[int]], list[float]]:
+    """Selection by held-out prediction over runs, for data whose residual is model error rather than noise.
+
+    Backward elimination from the full library (least |z| first, velocity terms first while one is below the
+    Bonferroni level) down to the forced terms; on that path the smallest support whose held-out error (K-fold over
+    runs) exceeds the path's smallest by at most ``se_rule`` standard errors of the difference, the standard error
+    from the paired per-run differences (the one-standard-error rule of cross-validation, paired over runs).
+    Returns the support, the path and the path's held-out RMS errors (as :func:`heldout_rms`)."""
+    n_lib = d.total.shape[1] - 1
+    path = [keep for keep, _ in _eliminate(d, range(n_lib), forced, alpha, velocity_first)]
+    err = heldout_per_run(d, path, n_folds)
+    dof = float(d.rows.sum() - 2 * d.windows.sum())
+    held = [float(np.sqrt(e / max(dof, 1.0))) for e in err.sum(axis=1)]
+    R = err.shape[1]
+    if R < 2 or not np.all(np.isfinite(err)):
+        return path[0], path, held
+    total = err.sum(axis=1)
+    best = int(np.argmin(total))
+    rel = err / err[best] - 1.0  # each run's relative increase over the best support
+    mean, se = rel.mean(axis=1), rel.std(axis=1, ddof=1) / np.sqrt(R)
+    chosen = max(i for i in range(len(path)) if mean[i] <= se_rule * se[i])
+    return path[chosen], path, held
+
+
 def _abs_z(d: ReducedDesign, cols: Sequence[int]) -> NDArray[np.float64]:
     c, se, _ = fit_support(d, cols)
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -8,6 +8,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: The test run's own caches and configuration folders, under the checkout (``make clean`` removes them), set before
+#: any package of the suite is imported: kernels compiled here (some bind effects that only the tests register) and
+#: tables built here never reach the caches that the installed commands read (``~/.cache/cubedimer``, or a
+#: ``NUMBA_CACHE_DIR`` of the user's).
+TEST_CACHE_ROOT = Path(__file__).resolve().parents[1] / ".pytest_cache" / "cubedimer-caches"
+os.environ["XDG_CACHE_HOME"] = str(TEST_CACHE_ROOT / "xdg")
+os.environ["XDG_CONFIG_HOME"] = str(TEST_CACHE_ROOT / "xdg-config")  # headless Chromium's profile and crash reports
+os.environ["NUMBA_CACHE_DIR"] = str(TEST_CACHE_ROOT / "numba")
+os.environ["MPLCONFIGDIR"] = str(TEST_CACHE_ROOT / "matplotlib")
+os.environ.pop("ACOUSIM_FULLWAVE_CACHE", None)
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 # The boundary-element tests assemble on numba, whose kernels every process compiles once anyway (the flux and

@@ -43,9 +43,11 @@ def add_compare_parser(sub) -> None:
     src.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
     src.add_argument("--data", help="data set directory: the sweep is computed from its meta.json (nominal pressure)")
     p.add_argument("--fit-theta-max", type=float, default=None,
-                   help="static fitting box |theta| <= (default: the data range stored in model.json, else 0.3)")
+                   help="static fitting box |theta| <= (default: the data range model.json records, at most 0.9; "
+                        "0.3 for a model.json without one)")
     p.add_argument("--fit-y-max", type=float, default=None,
-                   help="static fitting box |y| <= [m] (default: the data range stored in model.json, else 150e-6)")
+                   help="static fitting box |y| <= [m] (default: the data range model.json records; 150e-6 for a "
+                        "model.json without one)")
     p.add_argument("--origin-offset", default="fitted-equilibrium",
                    help="delta [m] with y_sim = y_data + delta, or 'fitted-equilibrium' (root of the fitted yddot)")
     p.add_argument("--n-sigma", type=float, default=2.0, help="agreement criterion in combined standard deviations")
@@ -90,7 +92,7 @@ def run_compare(args: argparse.Namespace) -> int:
     prepare_output_dir(args.out, "--out", create=False)
     model = _read_model(Path(args.model))
     rng = model.get("data_range", {})
-    theta_max = args.fit_theta_max or rng.get("theta_abs_max") or 0.3
+    theta_max = args.fit_theta_max or min(rng.get("theta_abs_max") or 0.3, 0.9)
     y_max = args.fit_y_max or rng.get("y_abs_max_m") or 150e-6
     if not (0 < theta_max < 1) or not (y_max > 0):
         raise UserInputError("the static fitting box needs 0 < theta_max < 1 and y_max > 0")

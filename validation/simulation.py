@@ -54,5 +54,7 @@ def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh
         Unknown model, an option the model does not take, or an experiment outside what the model covers
         (one line, naming the setting).
     """
+    from cubedimer.system import require_levitated_dimer
+    require_levitated_dimer(meta, "validation")  # a generic two-coordinate set is refused in one line
     conditions = conditions_from_meta(meta, pressure_amplitude_pa, mesh_size, gap, edge_radius)
     return static_model(model, conditions)

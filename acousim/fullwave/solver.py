@@ -58,6 +58,7 @@ __all__ = [
     "ScatteringSolution",
     "solve_scattering",
     "assembly_device",
+    "AssemblyBackendError",
     "BEM_DEVICE_ENV",
     "surface_force_density",
     "triangle_rule",
@@ -309,41 +310,50 @@ def _rhs(space_vertices: NDArray, faces: NDArray, k: float) -> NDArray[np.comple
 
 
 #: Environment variable choosing the dense assembly's backend: ``numba``, ``opencl`` or ``auto`` (the default:
-#: OpenCL when pyopencl finds a CPU device, else numba).
+#: OpenCL when its trial assembly works here, :mod:`acousim.fullwave.opencl_probe`, else numba).
 BEM_DEVICE_ENV = "CUBEDIMER_BEM_DEVICE"
+
+
+class AssemblyBackendError(RuntimeError):
+    """The backend named in :data:`BEM_DEVICE_ENV` cannot be used here (one line: why, and what to set instead)."""
 
 
 _OPENCL_FAILED = False  # set when an OpenCL assembly failed in this process
 
 
 @functools.lru_cache(maxsize=1)
-def _opencl_cpu_available() -> bool:
-    try:
-        import pyopencl as cl
+def _opencl_verdict():
+    from .opencl_probe import opencl_verdict
 
-        return any(p.get_devices(device_type=cl.device_type.CPU) for p in cl.get_platforms())
-    except Exception:  # not installed, no platform (ICD) or no driver: numba it is
-        return False
+    return opencl_verdict()
 
 
 def assembly_device() -> str:
     """The bempp-cl backend of the dense assembly: ``"opencl"`` or ``"numba"``, from :data:`BEM_DEVICE_ENV`.
 
-    ``auto`` (the default) takes OpenCL when pyopencl finds a CPU device (``pip install pyopencl
-    pocl-binary-distribution``), numba otherwise.  Both backends assemble the same matrices to rounding (a test
-    compares them); OpenCL is about twice as fast on one core (``make bench``).  Set ``POCL_MAX_PTHREAD_COUNT=1``
-    when several solves run side by side, as numba's ``NUMBA_NUM_THREADS=1``.
+    ``auto`` (the default) takes OpenCL only when a trial assembly on the OpenCL device has run in a child process
+    (:func:`acousim.fullwave.opencl_probe.opencl_verdict`, cached per environment: a driver that aborts or fails
+    is treated as absent), numba otherwise.  ``opencl`` asks for OpenCL or nothing.  Both backends assemble the
+    same matrices to rounding (a test compares them where the probe succeeds); OpenCL is about twice as fast on
+    one core (``make bench``).  Set ``POCL_MAX_PTHREAD_COUNT=1`` when several solves run side by side, as
+    numba's ``NUMBA_NUM_THREADS=1``.
+
+    Raises
+    ------
+    AssemblyBackendError
+        An unknown value, or ``opencl`` where the trial assembly does not work (one line, with the reason).
     """
     choice = os.environ.get(BEM_DEVICE_ENV, "auto").strip().lower() or "auto"
     if choice not in ("auto", "numba", "opencl"):
-        raise ValueError(f"{BEM_DEVICE_ENV}={choice!r}: choose numba, opencl or auto")
+        raise AssemblyBackendError(f"{BEM_DEVICE_ENV}={choice!r}: choose numba, opencl or auto")
     if choice == "numba":
         return "numba"
-    available = _opencl_cpu_available()
-    if choice == "opencl" and not available:
-        raise RuntimeError(f"{BEM_DEVICE_ENV}=opencl, but pyopencl finds no OpenCL CPU device; install pyopencl and "
-                           f"pocl-binary-distribution, or set {BEM_DEVICE_ENV}=numba")
-    return "opencl" if available else "numba"
+    verdict = _opencl_verdict()
+    if choice == "opencl" and not verdict.works:
+        raise AssemblyBackendError(f"{BEM_DEVICE_ENV}=opencl, but the OpenCL backend does not work here "
+                                   f"({verdict.reason}); install a working driver (pip install pyopencl "
+                                   f"pocl-binary-distribution), or set {BEM_DEVICE_ENV}=numba or auto")
+    return "opencl" if verdict.works else "numba"
 
 
 def import_bempp():

@@ -38,6 +38,7 @@ from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
 from cubedimer.atomic import write_json
+from cubedimer.compile_cache import suite_cache_root
 
 from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
 from ..medium import GRAVITY, Medium
@@ -509,8 +510,7 @@ def _cache_dir() -> Path:
     env = os.environ.get("ACOUSIM_FULLWAVE_CACHE")
     if env:
         return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "cubedimer" / "fullwave"
+    return suite_cache_root() / "fullwave"
 
 
 def _key(settings: dict) -> str:
@@ -541,7 +541,14 @@ def cached_fullwave_surrogate(
     candidates = [DEFAULT_TABLE, Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"]
     for path in candidates:
         if path.exists():
-            sur = FullwaveSurrogate.load(path)
+            try:
+                sur = FullwaveSurrogate.load(path)
+            except Exception as exc:  # a cached table that cannot be read is rebuilt, never fatal
+                if path == DEFAULT_TABLE:
+                    raise
+                log.warning("the cached full-wave table %s cannot be read (%s: %s); building it again", path,
+                            type(exc).__name__, exc)
+                continue
             if build_settings_of(sur) == key_settings and sur.gravity == gravity:
                 log.debug("full-wave surrogate from %s", path)
                 return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)

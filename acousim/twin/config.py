@@ -146,11 +146,13 @@ class TwinPreset:
     gap: float | None = None
     frequency: float | None = None
     air_damping: bool = True
+    transducer_q: float | None = None
 
     def dimer_settings(self) -> dict:
         """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets, and
         ``air_damping`` always)."""
-        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency") if getattr(self, k) is not None}
+        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency", "transducer_q")
+               if getattr(self, k) is not None}
         out["air_damping"] = bool(self.air_damping)
         return out
 
@@ -196,6 +198,12 @@ class TwinConfig:
         in air has it, and ``effects`` then add what the air's drag misses.  False gives the inviscid dimer with
         no damping beyond ``effects`` (what a study that draws its damping itself, or a tuned total damping such
         as :data:`PAPER_LIKE`'s, needs).
+    transducer_q : float
+        The transducer's quality factor Q: the field rings down when the drive stops and rings up when it is back,
+        with the amplitude's ring time tau = Q / (pi ``frequency``), and the acoustic forces follow p(t)^2 / p0^2
+        (:mod:`acousim.switching`).  0 (the default) switches the field instantly;
+        :data:`acousim.switching.DEFAULT_TRANSDUCER_Q` (250, tau = 1.74 ms at 45.65 kHz) is the value stated for
+        a Langevin transducer of a levitator (Q 150-400).
     """
 
     runs: int = 10
@@ -215,8 +223,13 @@ class TwinConfig:
     edge_radius: float | None = None
     frequency: float = 45_650.0
     air_damping: bool = True
+    transducer_q: float = 0.0
 
     def __post_init__(self) -> None:
+        if not isinstance(self.transducer_q, (int, float)) or not np.isfinite(self.transducer_q) \
+                or not 0 <= self.transducer_q <= 1e5:
+            raise TwinError(f"transducer quality factor must lie in [0, 1e5] (0: instant switching), "
+                            f"got {self.transducer_q!r}")
         if int(self.runs) != self.runs or self.runs < 1:
             raise TwinError(f"runs must be a positive integer, got {self.runs!r}")
         if not np.isfinite(self.duration) or self.duration <= 0:
@@ -292,6 +305,11 @@ class TwinConfig:
         if self.frequency != ExperimentConditions.frequency_hz:
             out["frequency_hz"] = float(self.frequency)
         out["air_damping"] = bool(self.air_damping)
+        out["field_switching"] = {"transducer_q": float(self.transducer_q),
+                                  "ring_time_s": float(self.transducer_q) / (np.pi * float(self.frequency)),
+                                  "model": "instant" if self.transducer_q == 0 else
+                                  "p(t)/p0 = exp(-t/tau) with the drive off, 1 - (1 - p_on/p0) exp(-t/tau) once it "
+                                  "is back; forces scale as (p/p0)^2"}
         return out
 
 

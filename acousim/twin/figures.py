@@ -23,7 +23,7 @@ from ..effects import EffectSet
 __all__ = ["write_twin_figures"]
 
 #: classes in the order their representative runs are shown
-_SHOWN = ("locked-in-phase", "locked-anti-phase", "independent", "locked-quadrature", "theta-at-rest")
+_SHOWN = ("locked-in-phase", "locked-anti-phase", "locked-p:q", "independent", "locked-quadrature", "theta-at-rest")
 
 
 def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, prefix: str = "twin_") -> list[Path]:

@@ -11,22 +11,28 @@ A synthetic experiment follows the protocol of the source paper:
    the free oscillation for ``duration`` seconds at ``fps`` frames per second, starting at t = 0
    when the field is back on, with Gaussian tracking noise on y and theta and a few missing frames.
 
+With a transducer quality factor (``TwinConfig.transducer_q``) the field does not switch instantly: it rings down
+while the drive is off and rings up when it is back, with tau = Q / (pi f), and the acoustic forces follow
+p(t)^2 / p0^2 (:mod:`acousim.switching`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
+outcome, not an error: it is recorded up to the fold and its ``event`` says so.
+
 Randomness: one :class:`numpy.random.SeedSequence` from the seed is split into a stream for the
 pressure error and one child per run (``spawn``), so every run's draws depend on the seed and the
 run's index only, not on the number of workers.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
 
-from ..dynamics import DEFAULT_MAX_STEP, DimerDynamics
+from ..dynamics import DEFAULT_MAX_STEP, STATUS_MESSAGES, DimerDynamics
 from ..effects import EffectSet, air_damping_for
 from ..models import dynamic_model
+from ..switching import field_drop, ring_time
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
 __all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
@@ -49,6 +55,12 @@ class SimulatedRun:
         The drawn protocol values (``t_off_s``, ``theta_drop``, ``thetadot_drop``).
     missing : ndarray of int
         Indices of the missing frames.
+    event : dict, optional
+        ``{"event": "folded", "t_s": time of the fold from the moment the field is back on (negative: during
+        the drop)}`` for a run whose hinge folded; the frames stop before it (none for a fold during the drop).
+        None for a run recorded over the whole duration.
+    field_on_state : ndarray (4,), optional
+        The state when the drive comes back (``state[0]``, or the state at the fold during the drop).
     """
 
     t: NDArray[np.float64]
@@ -57,10 +69,16 @@ class SimulatedRun:
     state: NDArray[np.float64]
     drop: dict
     missing: NDArray[np.int64]
+    event: dict | None = None
+    field_on_state: NDArray[np.float64] | None = None
 
     @property
     def state_at_field_on(self) -> NDArray[np.float64]:
-        return self.state[0]
+        return self.state[0] if self.field_on_state is None else self.field_on_state
+
+    @property
+    def folded(self) -> bool:
+        return self.event is not None and self.event.get("event") == "folded"
 
 
 def run_seeds(seed: int, runs: int) -> tuple[np.random.SeedSequence, list[np.random.SeedSequence]]:
@@ -78,7 +96,8 @@ def true_pressure(nominal: float, error: float, seed: int) -> float:
 
 
 def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera, duration: float,
-                 seed: np.random.SeedSequence | int, max_step: float = DEFAULT_MAX_STEP) -> SimulatedRun:
+                 seed: np.random.SeedSequence | int, max_step: float = DEFAULT_MAX_STEP,
+                 ring_time_s: float = 0.0) -> SimulatedRun:
     """Simulate one field-drop run and record it with the camera.
 
     Parameters
@@ -93,37 +112,45 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
         The run's random stream (drop values first, then camera noise and missing frames).
     max_step : float
         Longest internal RK4 step [s].
+    ring_time_s : float
+        The transducer's ring time tau [s] (:mod:`acousim.switching`; 0: the field switches instantly).
+
+    Returns
+    -------
+    SimulatedRun
+        A run whose hinge folds is recorded up to the fold (``event``).
 
     Raises
     ------
     TwinError
-        If the dimer leaves the trap or the hinge closes (theta = +-1) during the run.
+        If the dimer leaves the trap or the state stops being finite.
     """
     rng = np.random.default_rng(seed)
     drop = protocol.draw(rng)
     x_drop = np.array([0.0, 0.0, drop["theta_drop"], drop["thetadot_drop"]])
-    if drop["t_off_s"] > 0:
-        fall = dynamics.integrate(x_drop, drop["t_off_s"], drop["t_off_s"], max_step=max_step, field_on=False)
-        if not fall.ok:
-            raise TwinError(f"during the drop (t_off = {drop['t_off_s'] * 1e3:.2f} ms): {fall.message}")
-        x_on = fall.state[-1]
-    else:
-        x_on = x_drop
     n = int(round(duration * camera.fps))
-    traj = dynamics.integrate(x_on, (n - 1) / camera.fps, 1.0 / camera.fps, max_step=max_step, field_on=True)
-    if not traj.ok:
-        raise TwinError(
-            f"{traj.message} at t = {traj.t[-1]:.3f} s (t_off = {drop['t_off_s'] * 1e3:.2f} ms, "
-            f"theta_drop = {drop['theta_drop']:.3f}, thetadot_drop = {drop['thetadot_drop']:.3g} 1/s); "
-            "use shorter drops or a smaller hinge range"
-        )
+    motion = field_drop(dynamics, x_drop, drop["t_off_s"], (n - 1) / camera.fps, 1.0 / camera.fps,
+                        tau=ring_time_s, max_step=max_step)
+    if motion.status not in (0, 2):
+        where = (f"during the drop (t_off = {drop['t_off_s'] * 1e3:.2f} ms)" if motion.trajectory is None else
+                 f"at t = {motion.t_stop:.3f} s (t_off = {drop['t_off_s'] * 1e3:.2f} ms, theta_drop = "
+                 f"{drop['theta_drop']:.3f}, thetadot_drop = {drop['thetadot_drop']:.3g} 1/s)")
+        raise TwinError(f"{STATUS_MESSAGES[motion.status]} {where}; use shorter drops or a smaller hinge range")
+    event = None if motion.ok else {"event": "folded", "t_s": float(motion.t_stop)}
+    if motion.trajectory is None:
+        empty = np.zeros(0)
+        return SimulatedRun(t=empty, y=empty, theta=empty, state=np.zeros((0, 4)), drop=drop,
+                            missing=np.zeros(0, np.int64), event=event, field_on_state=motion.state_at_field_on)
+    traj = motion.trajectory
+    if event is not None:  # a short run keeps its missing frames apart: at most one in two interior frames
+        camera = replace(camera, missing_frames=min(int(camera.missing_frames), max(0, (len(traj.t) - 2) // 2)))
     y, th, idx = camera.record(traj.state, rng)
-    return SimulatedRun(t=traj.t, y=y, theta=th, state=traj.state, drop=drop, missing=idx)
+    return SimulatedRun(t=traj.t, y=y, theta=th, state=traj.state, drop=drop, missing=idx, event=event)
 
 
 def _run_task(item: tuple) -> SimulatedRun:
-    dynamics, protocol, camera, duration, seed, max_step = item
-    return simulate_run(dynamics, protocol, camera, duration, seed, max_step)
+    dynamics, protocol, camera, duration, seed, max_step, tau = item
+    return simulate_run(dynamics, protocol, camera, duration, seed, max_step, tau)
 
 
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
@@ -155,7 +182,8 @@ def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool =
     """
     dynamics, p_true = twin_dynamics(config)
     _, seeds = run_seeds(config.seed, config.runs)
-    items = [(dynamics, config.protocol, config.camera, config.duration, s, config.max_step) for s in seeds]
+    tau = ring_time(config.transducer_q, config.frequency)
+    items = [(dynamics, config.protocol, config.camera, config.duration, s, config.max_step, tau) for s in seeds]
     executor = executor or ExecutorConfig()
     try:
         runs = map_ordered(_run_task, items, executor, desc="simulate", progress=progress)

@@ -48,7 +48,7 @@ def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, 
     """Write one run's video (``stem.tif``, or ``stem.mp4`` with the H.264 codec) and its true ``t, y, theta``
     (``stem_truth.csv``) into ``directory``; returns the indices of the lost frames.  With rest frames
     (:class:`~acousim.twin.imperfections.Imperfections`) the video and the truth begin with the dimer at rest at
-    y = 0 and the drop's theta, and the run's times are shifted by them."""
+    y = 0 and the run's first theta, and the run's times are shifted by them."""
     directory = Path(directory)
     imp = camera.imperfections
     dt = float(run.t[1] - run.t[0])
@@ -114,13 +114,21 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
     out.update({
         "state": ["y", "ydot", "theta", "thetadot"],
         "runs_detail": [
-            {"file": f, **r.drop, "state_at_field_on": [float(v) for v in r.state[0]],
-             "missing_frames": [int(i) for i in r.missing]}
+            {"file": f, **r.drop, "state_at_field_on": [float(v) for v in r.state_at_field_on],
+             "pressure_at_field_on": _pressure_at_field_on(config, r.drop["t_off_s"]),
+             "missing_frames": [int(i) for i in r.missing], "frames": int(r.t.size), "event": r.event}
             for f, r in zip(files, runs)
         ],
+        "folded_runs": sum(r.folded for r in runs),
         "units": "SI",
     })
     return out
+
+
+def _pressure_at_field_on(config: TwinConfig, t_off: float) -> float:
+    """p / p0 when the drive comes back: exp(-t_off / tau), 0 for an instant switch."""
+    tau = config.transducer_q / (np.pi * config.frequency)
+    return float(np.exp(-t_off / tau)) if tau > 0 else 0.0
 
 
 def check_output_dir(out_dir: str | os.PathLike, force: bool = False) -> Path:
@@ -149,22 +157,30 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
     out = check_output_dir(out_dir, force)
     runs, dynamics, p_true = simulate_field_drop_runs(config, executor, progress)
     width = max(2, len(str(config.runs)))
-    files = [f"run{i:0{width}d}.csv" for i in range(1, config.runs + 1)]
+    # a run that folded during the drop has no frame: no CSV, its truth entry says why
+    files = [f"run{i:0{width}d}.csv" if r.t.size else None for i, r in enumerate(runs, 1)]
     truth = truth_dict(config, dynamics, p_true, runs, files)
     with atomic_directory(out) as tmp:
         for i, (f, r) in enumerate(zip(files, runs), 1):
-            write_run(tmp / f, r, i, config.runs)
+            if f is not None:
+                write_run(tmp / f, r, i, config.runs)
         if video is not None:
             lost = {}
             for i, (f, r) in enumerate(zip(files, runs)):
+                if f is None or r.t.size < 2:  # a video needs two frames
+                    continue
                 lost[Path(f).stem] = write_run_video(tmp / "video", Path(f).stem, r, config.side, video,
                                                      video_seed(config.seed, i))
             truth["video"] = {**video.to_dict(), "fps": float(config.camera.fps), "lost_frames_per_run": lost,
-                              "files": [f"video/{Path(f).stem}.{'mp4' if video.imperfections.codec == 'h264' else 'tif'}"
-                                        for f in files]}
+                              "files": [f"video/{stem}.{'mp4' if video.imperfections.codec == 'h264' else 'tif'}"
+                                        for stem in lost]}
             os.chmod(tmp / "video", default_dir_mode())
         write_json(tmp / "meta.json", meta_dict(config, dynamics))
         write_json(tmp / "truth.json", truth)
-        states = {Path(f).stem: r.state for f, r in zip(files, runs)}
-        atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=runs[0].t, **states))
+        n = config.n_frames
+        # folded runs: NaN after the fold, so that every run shares the frame times
+        states = {f"run{i:0{width}d}": np.concatenate([r.state, np.full((n - r.t.size, 4), np.nan)])
+                  for i, r in enumerate(runs, 1)}
+        atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=np.arange(n) * (1.0 / config.camera.fps),
+                                                                     **states))
     return truth

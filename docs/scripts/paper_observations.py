@@ -42,7 +42,8 @@ for seed in SEEDS:
                  f"{max(c['amp_theta'] for c in free):.2f} at f_theta / f_y {min(ratio):.3f}-{max(ratio):.3f}, "
                  f"2 f_y share {min(c['share_2fy'] for c in free):.2f}-{max(c['share_2fy'] for c in free):.2f}"
                  if free else "")
-    print(f"seed {seed}: {labels}; locked at f_y {o['locked_at_fy']}/{RUNS}, 2 f_y >= 5 % {o['with_2fy']}, "
+    print(f"seed {seed}: {labels}; locked at f_y {o['locked_at_fy']}/{RUNS}, p:q locks {o['lock_ratios']}, "
+          f"2 f_y >= 5 % {o['with_2fy']} (of the locks at f_y {o['with_2fy_at_fy']}), "
           f"in phase {o['in_phase']}, anti-phase {o['anti_phase']}, long-lived attractors {o['attractors']}"
           f"{free_text}", flush=True)
 

@@ -38,6 +38,32 @@ def test_observations_count_the_papers_criteria():
     assert o["both_phase_classes"] and o["n_attractors"] == 2
 
 
+def test_the_2fy_line_is_counted_for_every_lock():
+    """A 3:2 lock's third harmonic sits at 2 f_y: it counts in with_2fy, not in with_2fy_at_fy nor as locked at f_y."""
+    cells = ([{"outcome": "locked-p:q", "lock_ratio": "3:2", "share_2fy": 0.3, "long_lived": True,
+               "amplitude_class": "large"}] * 2
+             + [{"outcome": "locked-in-phase", "lock_ratio": "1:1", "share_2fy": 0.01, "long_lived": True,
+                 "amplitude_class": "medium"}])
+    o = observations(cells)
+    assert (o["locked_at_fy"], o["locked_ratio"], o["with_2fy"], o["with_2fy_at_fy"]) == (1, 2, 2, 0)
+    assert o["lock_ratios"] == {"3:2": 2}
+    assert o["attractors"] == [["locked-in-phase", "medium"], ["locked-p:q 3:2", "large"]]
+
+
+def test_settled_outcome_reads_a_3_2_lock():
+    """theta = B cos(2/3 w t) + C cos(2 w t) with y at w: a 3:2 lock whose 2 f_y line is C over theta's f_y line."""
+    f, fs, dur = 21.0, 1000.0, 12.0     # 2/3 f, f and 2 f on the 1/6 Hz grid of the 6 s analysed
+    t = np.arange(int(dur * fs)) / fs
+    w = 2 * np.pi * f
+    y, yd = 1e-4 * np.cos(w * t), -1e-4 * w * np.sin(w * t)
+    th = 0.4 * np.cos(2 / 3 * w * t) + 0.05 * np.cos(w * t) + 0.02 * np.cos(2 * w * t)
+    thd = -0.4 * 2 / 3 * w * np.sin(2 / 3 * w * t) - 0.05 * w * np.sin(w * t) - 0.04 * w * np.sin(2 * w * t)
+    r = settled_outcome(t, np.column_stack([y, yd, th, thd]))
+    assert r["outcome"] == "locked-p:q" and r["lock_ratio"] == "3:2" and r["long_lived"]
+    # exact-bin lines: the Hann amplitudes are exact to round-off
+    assert r["share_2fy"] == pytest.approx(0.4, rel=1e-6)
+
+
 def test_a_long_drop_throws_the_dimer_out():
     """A 25 ms free fall (3.1 mm) goes past the potential barrier (less than a quarter wavelength, 1.9 mm)."""
     dyn = atlas_dynamics(700e-6, 0.05, 6000.0, 45_650.0)

@@ -88,3 +88,21 @@ def test_python_dash_m_entry_point(tmp_path):
     r = subprocess.run([sys.executable, "-m", "acousim", "force", "--mesh", str(tmp_path / "missing.stl"), "--z", "0"],
                        cwd=REPO, capture_output=True, text=True, timeout=600)
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [f"error: --mesh {tmp_path / 'missing.stl'}: no such file"]
+
+
+@pytest.mark.parametrize("device,reason", [
+    ("opencl", "the OpenCL backend does not work here (the trial assembly failed (killed by signal 6)"),
+    ("gpu", "choose numba, opencl or auto"),
+])
+def test_a_backend_that_cannot_be_used_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch, device, reason):
+    from acousim.fullwave import solver
+    from acousim.fullwave.opencl_probe import OpenCLVerdict
+
+    monkeypatch.setattr(solver, "_opencl_verdict",
+                        lambda: OpenCLVerdict(False, "the trial assembly failed (killed by signal 6): no message", "k"))
+    monkeypatch.setenv(solver.BEM_DEVICE_ENV, device)
+    mesh, out = tmp_path / "pair.stl", tmp_path / "force.json"
+    two_spheres(mesh)
+    code, _, err = run_here(capsys, "--mesh", str(mesh), "--z", "0", "--out", str(out))
+    assert code == 2 and err.count("\n") == 1 and reason in err and "Traceback" not in err
+    assert not out.exists()

@@ -171,3 +171,42 @@ def test_identical_data_sets_serially_on_local_processes_and_on_a_cluster(tmp_pa
     assert sorted(files["serial"]) == ["meta.json", "run01.csv", "run02.csv", "run03.csv", "truth.json",
                                        "truth_states.npz"]
     assert files["local"] == files["serial"] and files["cluster"] == files["serial"]
+
+
+def test_a_folded_run_is_an_outcome_recorded_up_to_the_fold(tmp_path, capsys):
+    """The 500 um, g = 10 um dimer at 3 kPa: a 7 ms drop folds its hinge 72 ms after the field is back (run 3 of
+    seed 2); the data set is written, that run up to the fold, the event in truth.json."""
+    out = tmp_path / "d"
+    argv = ["simulate", "--model", "fullwave", "--side", "500e-6", "--gap", "10e-6", "--pressure", "3000",
+            "--runs", "4", "--t-off", "0.002:0.008", "--seed", "2", "--out", str(out), "--workers", "1",
+            "--no-progress", "--duration", "0.5", "--fps", "1000"]
+    assert main(argv) == 0
+    assert "1 of 4 runs folded" in capsys.readouterr().err
+    truth = json.loads((out / "truth.json").read_text())
+    assert truth["folded_runs"] == 1 and truth["field_switching"]["transducer_q"] == 0.0
+    folded = [r for r in truth["runs_detail"] if r["event"]]
+    assert len(folded) == 1 and folded[0]["t_off_s"] > 6e-3 and folded[0]["event"]["event"] == "folded"
+    frames = folded[0]["frames"]
+    assert 0 < frames < 500 and folded[0]["event"]["t_s"] == pytest.approx((frames - 1) / 1000)
+    rows = [ln for ln in (out / folded[0]["file"]).read_text().splitlines() if ln and not ln.startswith("#")]
+    assert len(rows) == frames + 1                           # header + the frames up to the fold
+    states = np.load(out / "truth_states.npz")
+    x = states[Path(folded[0]["file"]).stem]
+    assert x.shape == (500, 4) and np.all(np.isfinite(x[:frames])) and np.all(np.isnan(x[frames:]))
+    # the last recorded hinge angle is close to contact: it reaches +-1 within the next frame
+    assert 0.9 < abs(x[frames - 1, 2]) < 1
+    # the loader keeps the other runs
+    assert len(load_dataset(out, strict=False).runs) >= 3
+
+
+def test_the_ring_time_is_recorded_and_checked(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["simulate", "--runs", "2", "--seed", "1", "--out", str(out), *FAST, "--transducer-q", "250"]) == 0
+    truth = json.loads((out / "truth.json").read_text())
+    assert truth["field_switching"]["transducer_q"] == 250.0
+    # tau = Q / (pi f) at 45.65 kHz
+    assert truth["field_switching"]["ring_time_s"] == pytest.approx(250 / (np.pi * 45_650.0), rel=1e-12)
+    assert all(r["pressure_at_field_on"] == pytest.approx(np.exp(-r["t_off_s"] / truth["field_switching"]["ring_time_s"]))
+               for r in truth["runs_detail"])
+    assert main(["simulate", "--out", str(tmp_path / "bad"), *FAST, "--transducer-q", "-1"]) == 2
+    assert "transducer quality factor" in capsys.readouterr().err and not (tmp_path / "bad").exists()

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from cubedimer.attractors import (ATTRACTOR_CLASSES, CLASS_COLORS, ClassifyConfig, classify_signal,
-                                  classify_trajectory, section_phase)
+                                  classify_trajectory, lock_coherence, lock_ratios, section_phase)
 
 
 def _signals(phase_deg, f_theta=21.5, amp=0.2, offset=0.0):
@@ -72,3 +72,45 @@ def test_every_class_has_a_colour():
 def test_bad_thresholds():
     with pytest.raises(ValueError):
         ClassifyConfig(coherence_min=1.5)
+
+
+def _ratio_signals(ratio, amp=0.4, harmonic=0.0, f_y=52.0, phase=0.3, seconds=4.0, fs=2000.0):
+    """y = 100 um cos(w t); theta = amp cos(ratio w t + phase) + harmonic cos(3 ratio w t): a hinge at ratio f_y
+    with its third harmonic (an anharmonic hinge), exact velocities."""
+    t = np.arange(0, seconds, 1 / fs)
+    w, wt = 2 * np.pi * f_y, 2 * np.pi * f_y * ratio
+    th = amp * np.cos(wt * t + phase) + harmonic * np.cos(3 * wt * t + 3 * phase)
+    thd = -amp * wt * np.sin(wt * t + phase) - 3 * harmonic * wt * np.sin(3 * wt * t + 3 * phase)
+    return t, np.column_stack([1e-4 * np.cos(w * t), -1e-4 * w * np.sin(w * t), th, thd])
+
+
+@pytest.mark.parametrize("p, q", [(3, 2), (2, 1), (1, 2), (2, 3), (3, 1)])
+def test_a_p_q_lock_is_its_own_class(p, q):
+    """A hinge at exactly q/p f_y (with a third harmonic: 2 f_y for the 3:2 lock) repeats every p periods of y."""
+    att = classify_trajectory(*_ratio_signals(q / p, harmonic=0.05))
+    assert att.label == "locked-p:q" and att.lock_ratio == f"{p}:{q}"
+    # the states at crossings k and k + p coincide up to the section's linear interpolation between frames
+    assert att.lock_coherence > 0.999
+
+
+def test_a_drift_near_a_ratio_is_not_a_lock():
+    """0.69 f_y is within 5 % of 2/3 f_y, but the hinge's phase slips by (0.69 - 2/3) x 52 Hz x 2 s ~ 2.4 turns over
+    the 2 s analysed: the residues' phases spread and the coherence is small."""
+    att = classify_trajectory(*_ratio_signals(0.69))
+    assert att.lock_coherence < 0.5 and att.label == "independent" and att.lock_ratio == ""
+
+
+def test_max_lock_order_one_reads_only_f_y_locks():
+    att = classify_trajectory(*_ratio_signals(2 / 3), ClassifyConfig(max_lock_order=1))
+    assert att.label == "independent"
+    # a 1:1 lock keeps its phase class and reports its ratio
+    att = classify_trajectory(*_signals(180.0))
+    assert att.label == "locked-anti-phase" and att.lock_ratio == "1:1"
+    assert att.lock_coherence == pytest.approx(att.coherence)
+
+
+def test_lock_coherence_of_one_period_is_the_section_coherence():
+    t, state = _signals(150.0)
+    _, coh = section_phase(t, state)
+    assert lock_coherence(t, state, 1, 21.5) == pytest.approx(coh, abs=1e-12)
+    assert lock_ratios(3) == [(1, 2), (1, 3), (2, 1), (2, 3), (3, 1), (3, 2)]

@@ -72,3 +72,15 @@ def test_check_limit():
         check_limit("--runs", 11, 10, "fewer")
     with pytest.raises(UserInputError):
         check_limit("frames", float("nan"), 10)
+
+
+@pytest.mark.parametrize("argv0,expected", [
+    ("/home/lab/.venv/bin/cubedimer-acousim", "cubedimer-acousim"),
+    ("cubedimer-tracking", "cubedimer-tracking"),
+    ("/work/acousim/__main__.py", "python -m acousim"),
+    ("-c", "python -m acousim"),
+])
+def test_the_usage_line_names_the_command_as_typed(argv0, expected):
+    from cubedimer.cli import invoked_as
+
+    assert invoked_as("python -m acousim", argv0) == expected

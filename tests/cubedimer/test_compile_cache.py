@@ -1,11 +1,16 @@
 """numba's cache folder follows the suite's sources (cubedimer.compile_cache)."""
 import os
+import pickle
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from cubedimer.compile_cache import STALE_AFTER_DAYS, compile_cache_dir, prune_stale_caches, source_fingerprint
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture
@@ -61,3 +66,58 @@ def test_folders_of_other_versions_unused_for_a_week_are_removed(tmp_path):
     # the current version's folder however old, another version's recent one and a folder not ours are kept
     assert all(folders[n].exists() for n in ("cubedimer-current", "cubedimer-recent", "someone-else"))
     assert not folders["cubedimer-old"].exists()
+
+
+# ------------------------------------------------------------------------------- a cache is never fatal
+def _simulate_outside_the_repository(workdir: Path, cache: Path, out: str) -> subprocess.CompletedProcess:
+    """``python -m acousim simulate`` (one short run, which compiles the twin's kernels) run as a user would, from
+    ``workdir``, with the compiled-kernel cache in ``cache``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")])  # also without an install
+    return subprocess.run([sys.executable, "-m", "acousim", "simulate", "--runs", "1", "--duration", "0.3", "--seed",
+                           "1", "--out", out, "--no-progress"], cwd=workdir, env=env, capture_output=True, text=True,
+                          timeout=600)
+
+
+def _poison(cache: Path) -> int:
+    """Make every index of ``cache`` name a module that cannot be imported (as an index written by a process that
+    had registered an effect of its own does), and every kernel file garbage; returns the number of indexes."""
+    import numba
+
+    indexes = list(cache.rglob("*.nbi"))
+    for index in indexes:
+        index.write_bytes(pickle.dumps(numba.__version__) + b"cno_such_module_of_a_test_run\nEffect\n.")
+    for kernel in cache.rglob("*.nbc"):
+        kernel.write_bytes(b"\x80\x05not a kernel")
+    return len(indexes)
+
+
+@pytest.mark.slow
+def test_a_poisoned_kernel_cache_is_recompiled_not_fatal(tmp_path):
+    """Every cache entry unloadable (indexes naming a missing module, corrupt kernels): the command still works,
+    from a folder outside the repository, gives the same numbers, warns once, and rewrites the indexes."""
+    cache, work = tmp_path / "cache", tmp_path / "work"
+    work.mkdir()
+    first = _simulate_outside_the_repository(work, cache, "clean")
+    assert first.returncode == 0, first.stderr[-2000:]
+    assert _poison(cache) >= 5  # the twin's kernels were cached, and are now all unloadable
+    again = _simulate_outside_the_repository(work, cache, "poisoned")
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert "Traceback" not in again.stderr and again.stderr.count("compiled-kernel cache: an entry could not") == 1
+    assert (work / "poisoned" / "run01.csv").read_bytes() == (work / "clean" / "run01.csv").read_bytes()
+    assert not any(b"no_such_module" in index.read_bytes() for index in cache.rglob("*.nbi"))  # rewritten
+
+
+def test_an_unwritable_cache_folder_falls_back_with_one_warning(monkeypatch, tmp_path, caplog):
+    from cubedimer import compile_cache
+
+    monkeypatch.setattr(compile_cache, "_writable_folder", lambda folder: "fallback-numba" in str(folder))
+    monkeypatch.setattr(compile_cache.tempfile, "gettempdir", lambda: str(tmp_path / "fallback-numba"))
+    with caplog.at_level("WARNING", logger=compile_cache.__name__):
+        folder = compile_cache.configure_compile_cache()
+    try:
+        assert str(folder).startswith(str(tmp_path / "fallback-numba")) and len(caplog.records) == 1
+        assert "cannot be written; using" in caplog.text
+    finally:
+        monkeypatch.undo()
+        compile_cache.configure_compile_cache()  # back to the test run's own folder

@@ -206,6 +206,31 @@ def test_unknown_meta_keys_are_named_with_the_known_ones(tmp_path, caplog):
     assert "source" not in msg.split("ignored")[0]  # a free-text key is not unknown
 
 
+TRACKING_BLOCK = {"noise_y_m": 1.2e-7, "noise_theta": 5e-4, "fraction_measured": 0.998, "frames": 4000,
+                  "pixel_size_m": 1e-5, "side_length_m_measured": 5.02e-4, "runs": [], "skipped": [], "method": "m"}
+
+
+def test_the_tracking_block_is_a_known_key_read_without_a_warning(tmp_path, caplog):
+    d = _dataset(tmp_path, n=1, meta={"tracking": TRACKING_BLOCK})
+    with caplog.at_level("WARNING", logger="cubedimer.meta"):
+        ds = load_dataset(d)
+    assert not [r for r in caplog.records if r.name == "cubedimer.meta"]
+    assert ds.meta["tracking"] == TRACKING_BLOCK
+
+
+@pytest.mark.parametrize("block,named", [
+    ([1, 2], "'tracking' must be a JSON object"),
+    (dict(TRACKING_BLOCK, noise_y_m=-1e-7), "tracking.noise_y_m = -1e-07 must be a number in [0, 0.01]"),
+    (dict(TRACKING_BLOCK, fraction_measured=1.5), "tracking.fraction_measured = 1.5"),
+    (dict(TRACKING_BLOCK, noise_theta="small"), "tracking.noise_theta = 'small'"),
+])
+def test_a_bad_tracking_block_is_one_line_naming_the_key(tmp_path, block, named):
+    d = _dataset(tmp_path, n=1, meta={"tracking": block})
+    with pytest.raises(DatasetError) as err:
+        load_dataset(d)
+    assert named in str(err.value) and "meta.json" in str(err.value) and "\n" not in str(err.value)
+
+
 # ------------------------------------------------------------------------------------- the commands
 def _one_line_refusal(capsys, main, argv, out):
     rc = main(argv)

@@ -29,6 +29,18 @@ def test_fit_writes_model_json_and_plots(fitted):
         assert (fitted / p).stat().st_size > 1000
 
 
+def test_model_json_records_the_box_the_data_span(small_dataset, fitted):
+    """``data_range`` is the largest |theta| and |y| of the runs the fit saw (what ``validation compare`` fits the
+    static coefficients over): the loader's runs, exactly."""
+    from cubedimer import load_dataset
+
+    runs = load_dataset(small_dataset).runs
+    rng = json.loads((fitted / "model.json").read_text())["data_range"]
+    assert rng == {"theta_abs_max": max(float(abs(r.theta).max()) for r in runs),
+                   "y_abs_max_m": max(float(abs(r.y).max()) for r in runs)}
+    assert 0.05 < rng["theta_abs_max"] < 0.9 and 1e-5 < rng["y_abs_max_m"] < 1e-3  # a dimer's range, in SI units
+
+
 def test_fit_resumes_from_cached_runs(small_dataset, fitted, capsys):
     before = {p.name: p.stat().st_mtime_ns for p in (fitted / "runs").glob("*.json")}
     assert len(before) == 3

@@ -41,7 +41,7 @@ def test_fit_dataset_passes_the_recorded_noise_on(monkeypatch, tmp_path):
     class Stop(Exception):
         pass
 
-    runs = (SimpleNamespace(n_glitches=0), SimpleNamespace(n_glitches=0))
+    runs = (SimpleNamespace(n_glitches=0, frames_averaged=1), SimpleNamespace(n_glitches=0, frames_averaged=1))
     monkeypatch.setattr(pipeline, "load_dataset", lambda *a, **k: Dataset(str(tmp_path), runs, dict(TRACKED)))
     monkeypatch.setattr(pipeline, "prepare_runs", lambda r, c: (list(r), SimpleNamespace(length_y=1, length_theta=1, time=1)))
 

@@ -33,8 +33,8 @@ def atlas_section(atlas_dir: str | Path) -> Section:
     except (OSError, ValueError, KeyError, TypeError):
         raise AtlasSectionError(f"--atlas {atlas_dir}: no readable atlas.json (write one with python -m acousim "
                                 f"atlas --out {atlas_dir})") from None
-    outcomes = ("escaped", "folded", "locked-in-phase", "locked-anti-phase", "locked-quadrature", "independent",
-                "theta-at-rest")
+    outcomes = ("escaped", "folded", "locked-in-phase", "locked-anti-phase", "locked-quadrature", "locked-p:q",
+                "independent", "theta-at-rest")
     rows = []
     for label, d in dimers.items():
         c, o = d.get("counts", {}), d.get("observations", {})
