@@ -72,13 +72,46 @@ def build_video_camera(args: argparse.Namespace):
     if not getattr(args, "video", False):
         return None
     from .twin import TwinError, VideoCamera
+    from .twin.imperfections import Imperfections
 
     try:
+        imp = Imperfections(gradient=args.illumination_gradient, flicker=args.flicker, flicker_hz=args.flicker_hz,
+                            bands_px=args.static_bands, dust=args.dust, transparent=args.transparent,
+                            tilt_deg=args.tilt, codec=args.codec, crf=args.crf, rest_frames=args.rest_frames,
+                            record_origin=not args.no_levitation_row)
         return VideoCamera(pixel_size=args.pixel_size, width=args.frame_size[0], height=args.frame_size[1],
                            psf_sigma=args.psf, noise=args.image_noise, bit_depth=args.bit_depth,
-                           polarity=args.polarity, lost_frames=args.lost_frames)
+                           polarity=args.polarity, lost_frames=args.lost_frames, imperfections=imp)
     except TwinError as exc:
         raise UserInputError(str(exc)) from None
+
+
+def _add_imperfection_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of a real recording's imperfections (:mod:`acousim.twin.imperfections`; all off by default)."""
+    v = p.add_argument_group("imperfections of a real recording (--video)", "All off by default; see docs/tracking.md.")
+    v.add_argument("--illumination-gradient", type=float, default=0.0, metavar="FRACTION",
+                   help="relative change of the illumination from the left edge to the right one (e.g. 0.3)")
+    v.add_argument("--flicker", type=float, default=0.0, metavar="FRACTION",
+                   help="relative amplitude of the illumination's flicker (e.g. 0.05)")
+    v.add_argument("--flicker-hz", type=float, default=100.0, metavar="HZ", help="flicker frequency (default 100)")
+    v.add_argument("--static-bands", type=int, default=0, metavar="PX",
+                   help="reflector and transducer edges: static bands of PX rows at the top and bottom, as dark "
+                   "(or bright) as the cubes")
+    v.add_argument("--dust", type=int, default=0, metavar="N", help="dust specks drifting through each run")
+    v.add_argument("--transparent", action="store_true",
+                   help="transparent crystals: a dark outline around an interior brighter than the background "
+                   "(darker with --polarity bright)")
+    v.add_argument("--tilt", type=float, default=0.0, metavar="DEG",
+                   help="the hinge line turned out of the camera axis about the vertical [degrees]")
+    v.add_argument("--codec", choices=("tiff", "h264"), default="tiff",
+                   help="uncompressed multi-page TIFF (default) or H.264 in an mp4, which records neither the "
+                   "frame rate nor the pixel size (track then needs --fps and --pixel-size)")
+    v.add_argument("--crf", type=int, default=23, metavar="Q", help="H.264 constant rate factor (default 23)")
+    v.add_argument("--rest-frames", type=int, default=0, metavar="N",
+                   help="frames at rest (y = 0) before the drop (default 0: the video starts at the drop, "
+                   "mid-oscillation)")
+    v.add_argument("--no-levitation-row", action="store_true",
+                   help="do not record the levitation row in the TIFF, as a real camera's file")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -163,6 +196,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="dark cubes on a bright background (shadowgraph, default) or bright on dark")
     v.add_argument("--lost-frames", type=int, default=0, metavar="K",
                    help="frames per run the camera loses, recorded all black (default 0)")
+    _add_imperfection_arguments(p)
     add_executor_arguments(p)
     p.set_defaults(func=run)
     return p

@@ -41,6 +41,30 @@ def _add_polarity_argument(p: argparse.ArgumentParser) -> None:
                    help="dark cubes on a bright background (shadowgraph), bright on dark, or detect (default)")
 
 
+def parse_roi(text: str | None) -> tuple[int, int, int, int] | None:
+    """``--roi x0:x1,y0:y1`` (columns, then rows; the ends excluded) as four whole numbers (None without it);
+    a malformed, empty or inverted region raises :class:`UserInputError` (one line, exit 2)."""
+    if text is None:
+        return None
+    try:
+        cols, rows = text.split(",")
+        x0, x1 = (int(v) for v in cols.split(":"))
+        y0, y1 = (int(v) for v in rows.split(":"))
+    except ValueError:
+        raise UserInputError(f"--roi {text}: expected x0:x1,y0:y1 in pixels (columns, then rows), e.g. "
+                             "0:180,20:130") from None
+    if min(x0, x1, y0, y1) < 0 or x1 <= x0 or y1 <= y0:
+        raise UserInputError(f"--roi {text}: the region is empty or inverted: give 0 <= x0 < x1 (columns) and "
+                             "0 <= y0 < y1 (rows)")
+    return x0, x1, y0, y1
+
+
+def _add_roi_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--roi", default=None, metavar="x0:x1,y0:y1",
+                   help="measure only columns x0..x1-1 and rows y0..y1-1 (pixels from the top left; e.g. to leave out "
+                   "a structure that is neither at the border nor moving); a dimer reaching its border is out of view")
+
+
 def add_track_parser(sub) -> None:
     """``track``: see its --help."""
     from .track import UP
@@ -81,6 +105,10 @@ def add_track_parser(sub) -> None:
                    help="largest |alpha + beta - pi| of the faces fitted at the hinge (default 0.05 rad)")
     p.add_argument("--area-tolerance", type=positive_float, default=0.06, metavar="FRACTION",
                    help="largest relative deviation of a frame's silhouette area from the recording's (default 0.06)")
+    p.add_argument("--max-hinge-gap", type=positive_float, default=0.1, metavar="FRACTION",
+                   help="largest distance between the two cubes' fitted hinge corners, as a fraction of the side "
+                   "(default 0.1); a hinge line tilted out of the camera axis separates them")
+    _add_roi_argument(p)
     p.add_argument("--strict", action="store_true",
                    help="a folder of recordings: refuse the set on the first bad recording instead of skipping it")
     p.add_argument("--force", action="store_true", help="replace an existing output")
@@ -103,6 +131,7 @@ def add_inspect_parser(sub) -> None:
     p.add_argument("video", metavar="VIDEO", help="one recording: video file, multi-page TIFF, Phantom .cine or a "
                    "folder of images")
     _add_polarity_argument(p)
+    _add_roi_argument(p)
     p.add_argument("--quiet", action="store_true", help="warnings and errors only")
     p.set_defaults(func=inspect)
 
@@ -124,7 +153,8 @@ def _config(a: argparse.Namespace):
 
     return TrackConfig(fps=a.fps, pixel_size=a.pixel_size, origin_frames=a.origin_frames, origin_row=a.origin_row,
                        polarity=a.polarity, up=a.up, edge_window=a.edge_window, area_tolerance=a.area_tolerance,
-                       max_motion_blur=a.max_motion_blur, max_squareness=a.max_squareness)
+                       max_motion_blur=a.max_motion_blur, max_squareness=a.max_squareness,
+                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi))
 
 
 def _track_task(item):
@@ -143,7 +173,7 @@ def inspect(a: argparse.Namespace) -> int:
     """``python -m tracking inspect``: prints the recording's summary to standard output; returns the exit code."""
     import numpy as np
 
-    from .recording import read_recording
+    from .recording import TrackingError, read_recording
     from .track import TrackConfig, calibrate
 
     src = Path(a.video)
@@ -158,13 +188,42 @@ def inspect(a: argparse.Namespace) -> int:
                                    "not recorded: give track --pixel-size"))
     if rec.levitation_row is not None:
         lines.append(f"levitation row: {rec.levitation_row:g} px (recorded in the file)")
-    cal = calibrate(frames, TrackConfig(polarity=a.polarity))
+    roi = parse_roi(a.roi)
+    if roi is not None:
+        x0, x1, y0, y1 = roi
+        if x1 > w or y1 > h:
+            print("\n".join(lines))
+            raise TrackingError(f"{src}: --roi {x0}:{x1},{y0}:{y1} reaches outside the frames of {w} x {h} px")
+        frames = frames[:, y0:y1, x0:x1]
+        lines.append(f"region of interest: columns {x0}-{x1 - 1}, rows {y0}-{y1 - 1} ({x1 - x0} x {y1 - y0} px)")
+    try:
+        cal = calibrate(frames, TrackConfig(polarity=a.polarity))
+    except TrackingError as exc:
+        print("\n".join(lines))  # the file's facts, then the refusal
+        raise TrackingError(f"{src}: {exc}") from None
     side_px = float(np.sqrt(cal.area_px2 / 2.0))  # two cubes of side s seen along the hinge: area 2 s^2
     lines.append(f"polarity: {cal.polarity} cubes ({cal.polarity_from}); contrast {cal.contrast:.4g} grey levels "
                  f"over a background of {cal.background:.4g}")
+    scene = cal.scene
+    rows = scene.static_rows
+    lines.append(f"background: illumination changing by {100 * scene.gradient:.0f} % across the frame, light level "
+                 f"{scene.levels.min():.3f}-{scene.levels.max():.3f} of its median over the sampled frames; "
+                 + (f"static structures on {int(scene.static.sum())} px left out"
+                    + (f" (rows {rows[0]}-{rows[-1]} and others)" if rows else "") if scene.static.any()
+                    else "no static structure"))
+    if cal.fill_holes:
+        lines.append("silhouettes with holes (transparent crystals): filled")
     lines.append(f"silhouette: {cal.area_px2:.0f} px^2 in {cal.frames_used} sampled frames, a cube side of "
                  f"{side_px:.1f} px" + (f" = {side_px * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else ""))
     lines.append(f"edge blur: {cal.edge_blur_px:.2f} px (track's edge window: {cal.edge_window_px} px)")
+    if cal.hinge_tilt_deg is not None and cal.hinge_tilt_deg > 3.0:
+        from .tilt import area_factor
+
+        true_side = side_px / np.sqrt(area_factor(np.radians(cal.hinge_tilt_deg)))
+        lines.append(f"hinge line: tilted about {cal.hinge_tilt_deg:.1f} degrees out of the camera axis (the squares' "
+                     f"hinge corners lie apart); the side corrected for it is {true_side:.1f} px"
+                     + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else "")
+                     + "; track needs --max-hinge-gap 0.5 beyond about 5 degrees")
     print("\n".join(lines))
     return 0
 

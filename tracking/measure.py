@@ -4,15 +4,19 @@ Image coordinates: pixel centres at integer ``(u, v)``, ``u`` the column (right)
 (counting down); the lab frame of the measurement has ``X = u`` and ``Z = -v`` (up).  Every frame goes
 through these steps (:func:`measure_frames`):
 
-1. **Background.**  The recording's background plane (its slopes, from calibration frames) with the
-   frame's own level, the mean over a ring of pixels along the frame's border (pixels that look like a
-   cube are left out), and the white pixel noise from the ring's spread.
-   The coverage of every pixel is ``c = polarity (I - background) / contrast`` (0 background, 1 cube).
+1. **Background and light.**  The recording's background image ``B`` (:mod:`tracking.background`: its smooth
+   illumination and static structures, which are masked) times the frame's own light level ``L``, the mean of
+   ``I / B`` over a ring of pixels along the frame's border (pixels that look like a cube and static ones are
+   left out); the white pixel noise from the ring's spread.  The coverage of every pixel is
+   ``c = polarity (I / (L B) - 1) / kappa`` (0 background, 1 cube; ``kappa`` the relative contrast): the light
+   multiplies the scene, so a flicker or a gradient scales background and cube alike.
 2. **Particles.**  The pixels with ``c > 1/2`` (found as runs along the rows in the same pass), joined in
    8-connected components.  Components larger
-   than ``min_area`` are particles: one (or two of similar size side by side, less than ``3 + 3 blur`` px
-   apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer; anything more
-   is a third particle.  A dimer whose window reaches the border is out of view.
+   than ``min_area`` are particles: the largest (with the second when of similar size and less than
+   ``3 + 3 blur`` px apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer;
+   another particle counts (third particle) only where it reaches the dimer's window.  A dimer whose window
+   reaches the border is out of view.  With ``fill_holes`` the holes of the dimer's silhouette (a transparent
+   crystal's bright interior) become cube.
 3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
    the edge window), unclipped: a symmetric point-spread function and white noise leave it unbiased.
 4. **First orientation.**  The dimer is split at the middle column of its bounding box (the hinge of the
@@ -48,9 +52,10 @@ from numba import njit
 from numpy.typing import NDArray
 
 from .face_fit import fit_square, wrap_angle
-from .segmentation import BORDER_RING, background, coverage_runs, particles
+from .segmentation import BORDER_RING, background, coverage_runs, fill_holes, particles
 
-__all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads"]
+__all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads",
+           "reciprocal_background"]
 
 #: Columns of a frame's measurement row (pixel units unless stated).
 COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
@@ -85,22 +90,26 @@ _I_V_A = COLUMNS.index('v_a')
 _I_V_B = COLUMNS.index('v_b')
 _I_V_COM = COLUMNS.index('v_com')
 NCOL = len(COLUMNS)
+#: Particles a frame's segmentation keeps track of (the largest); a frame with more is not measured.
+_MAX_PARTICLES = 8
 
 #: Frame status codes; 0 is a measured frame.
 STATUS = {"measured": 0, "corrupt": 1, "no_dimer": 2, "out_of_view": 3, "third_particle": 4, "occlusion": 5,
-          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9}
+          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9,
+          "touching": 10}
 #: What each status means (RUN.json).
 STATUS_TEXT = {
     "measured": "measured",
     "corrupt": "blank or corrupt frame (background far from the recording's, or non-finite pixels)",
     "no_dimer": "no particle in view",
     "out_of_view": "the dimer touches the frame's border (partly out of view)",
-    "third_particle": "another particle in view, or the two cubes apart",
+    "third_particle": "another particle within the dimer's window, or the two cubes apart",
     "occlusion": "the silhouette's area differs from the dimer's (occlusion or a particle touching it)",
     "fit_failed": "too few edge samples on a cube's faces",
     "faces_cross": "fitted faces cross (alpha <= 0 or beta <= 0): no physical bend",
     "motion_blur": "edges wider than the recording's by more than the motion-blur bound",
     "poor_fit": "edges not straight, hinge corners not square or not touching (beyond the bounds)",
+    "touching": "the silhouette's centre of mass off the fitted squares' centre (a particle stuck to the dimer)",
 }
 
 
@@ -128,7 +137,13 @@ class MeasureSettings:
         Allowed relative deviation of a frame's area from ``area_ref``.
     slope_u, slope_v : float
         The recording's background gradient along columns and rows [grey levels / px], about the frame's
-        centre; each frame fits only its own background level (a per-frame gradient would add noise to y).
+        centre, used when no background image is given to :func:`measure_frames`; each frame fits only its own
+        light level (a per-frame gradient would add noise to y).
+    fill_holes : bool
+        Fill the silhouette's holes (transparent crystals: a bright interior inside a dark outline).
+    dark_offset : float
+        Grey levels added to every pixel before the light is normalised (``background_ref`` includes it): a
+        background near black (bright cubes on a black background) is then normalised nearly additively.
     """
 
     polarity: float
@@ -141,6 +156,8 @@ class MeasureSettings:
     area_tolerance: float = 0.06
     slope_u: float = 0.0
     slope_v: float = 0.0
+    fill_holes: bool = False
+    dark_offset: float = 0.0
 
     def __post_init__(self) -> None:
         if self.polarity not in (-1.0, 1.0):
@@ -153,10 +170,31 @@ class MeasureSettings:
     def pack(self) -> NDArray[np.float64]:
         """The settings in the order the kernel reads them."""
         return np.array([self.polarity, self.background_ref, self.contrast, self.edge_window, self.edge_blur,
-                         self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v], float)
+                         self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v,
+                         float(self.fill_holes), self.dark_offset], float)
+
+    def plane(self, shape: tuple[int, int]) -> NDArray[np.float32]:
+        """The reciprocal background image of the plane ``background_ref + slope_u (u - uc) + slope_v (v - vc)``
+        (about the frame's centre) for frames of ``shape``: what :func:`measure_frames` uses without one."""
+        h, w = shape
+        plane = (self.background_ref + self.slope_u * (np.arange(w) - 0.5 * (w - 1))[None, :]
+                 + self.slope_v * (np.arange(h) - 0.5 * (h - 1))[:, None])
+        return reciprocal_background(plane, self.background_ref)
 
 
-def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | None = None) -> NDArray[np.float64]:
+def reciprocal_background(image: NDArray, background_ref: float, static: NDArray | None = None) -> NDArray[np.float32]:
+    """``1 / image`` as the kernel reads it (a frame's grey levels relative to its background are ``img x this``),
+    0 on the ``static`` pixels (left out of every frame); the image is held at no less than a fifth of
+    ``background_ref``."""
+    img = np.maximum(np.asarray(image, float), 0.2 * background_ref)
+    out = (1.0 / img).astype(np.float32)
+    if static is not None:
+        out[np.asarray(static, bool)] = 0.0
+    return np.ascontiguousarray(out)
+
+
+def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | None = None,
+                   pinv: NDArray | None = None) -> NDArray[np.float64]:
     """Measure every frame of a batch (module docstring).
 
     Parameters
@@ -166,6 +204,9 @@ def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | No
     settings : MeasureSettings
     threads : int, optional
         Threads sharing the batch (default :func:`numba_threads`).
+    pinv : ndarray (height, width), optional
+        The recording's reciprocal background image (:func:`reciprocal_background`; 0 on static structures);
+        default: the plane of ``settings`` (:meth:`MeasureSettings.plane`).
 
     Returns
     -------
@@ -177,16 +218,20 @@ def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | No
         raise ValueError(f"frames must be (n, height, width), got shape {f.shape}")
     out = np.full((f.shape[0], NCOL), np.nan)
     prm = settings.pack()
+    pinv = settings.plane(f.shape[1:]) if pinv is None else np.ascontiguousarray(pinv, dtype=np.float32)
+    if pinv.shape != f.shape[1:]:
+        raise ValueError(f"background image of shape {pinv.shape} for frames of {f.shape[1:]}")
     n = f.shape[0]
     threads = max(1, min(int(threads or numba_threads()), n // 32 or 1))
     if threads == 1:
-        _measure_batch(f, prm, out)
+        _measure_batch(f, pinv, prm, out)
         return out
     from concurrent.futures import ThreadPoolExecutor
 
     edges = np.linspace(0, n, threads + 1).astype(int)
     with ThreadPoolExecutor(threads) as pool:  # the compiled kernel releases the GIL
-        list(pool.map(lambda k: _measure_batch(f[edges[k]:edges[k + 1]], prm, out[edges[k]:edges[k + 1]]),
+        list(pool.map(lambda k: _measure_batch(f[edges[k]:edges[k + 1]], pinv, prm,
+                                                     out[edges[k]:edges[k + 1]]),
                       range(threads)))
     return out
 
@@ -334,7 +379,7 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
 
 
 @njit(cache=True)
-def _measure_one(img, prm, row):  # pragma: no cover - compiled
+def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
     h, w = img.shape
     pol = prm[0]
     bg_ref = prm[1]
@@ -344,20 +389,25 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     min_area = prm[5]
     area_ref = prm[6]
     area_tol = prm[7]
-    slope_u = prm[8]
-    slope_v = prm[9]
-    # ---- 1. background level from the border ring (the slopes are the recording's)
+    fill = prm[10] > 0
+    dark = prm[11]
+    # ---- 1. the frame's light level from the border ring (the background image is the recording's)
     bgp = np.zeros(5)
-    background(img, pol, bg_ref, contrast, slope_u, slope_v, bgp)
+    kappa = contrast / bg_ref
+    background(img, dark, pol, kappa, pinv, bgp)
     if bgp[4] > 0:
         row[0] = 1
         return
-    sigma_pix = bgp[3] / contrast
-    row[_I_PIXEL_NOISE] = sigma_pix
-    row[_I_BACKGROUND] = bgp[0]
-    if abs(bgp[0] - bg_ref) > 0.25 * contrast:
+    level = bgp[0]
+    row[_I_BACKGROUND] = level * bg_ref - dark
+    if abs(level - 1.0) > 0.25 * kappa:
         row[0] = 1
         return
+    if level < 0.05:  # an unlit (black) frame on a dark background
+        row[0] = 2
+        return
+    sigma_pix = bgp[3] / (kappa * level)
+    row[_I_PIXEL_NOISE] = sigma_pix
     # ---- 2. coverage and particles
     c = np.empty((h, w), np.float32)
     cap = 16384
@@ -365,31 +415,41 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
     r0 = np.empty(cap, np.int32)
     r1 = np.empty(cap, np.int32)
     row_start = np.empty(h + 1, np.int32)
-    nruns = coverage_runs(img, bgp[0], slope_u, slope_v, pol / contrast, c, rv, r0, r1, row_start)
+    nruns = coverage_runs(img, dark, pinv, pol / (kappa * level), pol / kappa, c, rv, r0, r1, row_start)
     if nruns < 0:
         row[0] = 1
         return
-    box = np.zeros(10)
+    box = np.zeros(5 * _MAX_PARTICLES)
     nbig = particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
     if nbig == 0:
         row[0] = 2
         return
-    if nbig > 2:
-        row[0] = 4
-        return
     bu0, bu1, bv0, bv1 = int(box[0]), int(box[1]), int(box[2]), int(box[3])
-    if nbig == 2:
+    first_other = 1
+    if nbig >= 2:
         ratio = box[4] / box[9]
         gap_u = max(box[5] - box[1], box[0] - box[6])
         gap_v = max(box[7] - box[3], box[2] - box[8])
-        if ratio > 2.0 or gap_u > 3.0 + 3.0 * blur or gap_v > 3:
+        if ratio <= 2.0:
+            if gap_u > 3.0 + 3.0 * blur or gap_v > 3:  # two cube-sized particles apart
+                row[0] = 4
+                return
+            bu0 = min(bu0, int(box[5]))
+            bu1 = max(bu1, int(box[6]))
+            bv0 = min(bv0, int(box[7]))
+            bv1 = max(bv1, int(box[8]))
+            first_other = 2
+    M = W + 2
+    if nbig > _MAX_PARTICLES:
+        row[0] = 4
+        return
+    for k in range(first_other, nbig):  # another particle counts only where it touches the dimer's window
+        if (box[5 * k] <= bu1 + M and box[5 * k + 1] >= bu0 - M and box[5 * k + 2] <= bv1 + M
+                and box[5 * k + 3] >= bv0 - M):
             row[0] = 4
             return
-        bu0 = min(bu0, int(box[5]))
-        bu1 = max(bu1, int(box[6]))
-        bv0 = min(bv0, int(box[7]))
-        bv1 = max(bv1, int(box[8]))
-    M = W + 2
+    if fill:
+        fill_holes(c, bu0, bu1, bv0, bv1, int(math.ceil(3.0 * blur)) + 1)
     u0 = bu0 - M
     u1 = bu1 + M
     v0 = bv0 - M
@@ -494,6 +554,6 @@ def _measure_one(img, prm, row):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _measure_batch(frames, prm, out):  # pragma: no cover - compiled
+def _measure_batch(frames, pinv, prm, out):  # pragma: no cover - compiled
     for i in range(frames.shape[0]):
-        _measure_one(frames[i], prm, out[i])
+        _measure_one(frames[i], pinv, prm, out[i])

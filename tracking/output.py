@@ -70,11 +70,15 @@ def dataset_tracking_block(results: list[TrackResult], skipped: list[dict]) -> d
         "side_length_m_measured": float(np.median([r.info["calibration"]["side_length_m"] for r in results])),
         "runs": [{"file": f"{r.name}.csv", "source": Path(r.info["source"]).name, "frames": r.info["frames"],
                   "fraction_measured": r.info["fraction_measured"], "noise_y_m": r.info["noise_estimate"]["y_m"],
-                  "noise_theta": r.info["noise_estimate"]["theta"], "not_measured": r.info["not_measured"]}
+                  "noise_theta": r.info["noise_estimate"]["theta"], "not_measured": r.info["not_measured"],
+                  "noise_estimator": {"y": r.info["noise_estimate"]["estimator_y"],
+                                      "theta": r.info["noise_estimate"]["estimator_theta"]},
+                  "origin": r.info["y_origin"]["method"], "origin_at_rest": r.info["y_origin"]["at_rest"]}
                  for r in results],
         "skipped": skipped,
         "method": "python -m tracking: y from the silhouette's centre of mass, theta from sub-pixel face fits "
-                  "(docs/tracking.md); noise: RMS of the per-frame standard errors",
+                  "(docs/tracking.md); noise: RMS of the per-frame standard errors, or the correlated estimate "
+                  "where the frames' errors are correlated (each run's noise_estimator)",
     }
 
 

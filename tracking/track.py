@@ -31,8 +31,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames
+from .calibration import Calibration, calibrate
+from .measure import COLUMNS, STATUS, STATUS_TEXT, measure_frames
+from .noise_estimate import noise_estimate
+from .origin import find_origin
 from .recording import Recording, TrackingError
+from .tilt import MAX_TILT_DEG, area_factor, tilt_from_gap
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
 
@@ -44,6 +48,8 @@ POLARITIES = ("auto", "dark", "bright")
 UP = ("top", "bottom")
 
 _C = {name: i for i, name in enumerate(COLUMNS)}
+#: Estimated tilt of the hinge line [degrees] above which the tracking warns (the estimate's noise is ~0.3).
+TILT_WARNING_DEG = 3.0
 
 
 @dataclass(frozen=True)
@@ -82,6 +88,9 @@ class TrackConfig:
         Frames (spread over the recording) used to calibrate.
     batch : int
         Frames measured per batch.
+    roi : (x0, x1, y0, y1), optional
+        Region of interest: columns ``x0 <= u < x1`` and rows ``y0 <= v < y1`` of the frames [px]; only it is
+        measured (a dimer that reaches its border is out of view).
     """
 
     fps: float | None = None
@@ -98,6 +107,7 @@ class TrackConfig:
     max_hinge_gap: float = 0.1
     calibration_frames: int = 100
     batch: int = 1024
+    roi: tuple[int, int, int, int] | None = None
 
     def __post_init__(self) -> None:
         for name in ("fps", "pixel_size"):
@@ -117,31 +127,15 @@ class TrackConfig:
             raise TrackingError(f"up must be one of {', '.join(UP)}, got {self.up!r}")
         if self.edge_window is not None and not 2 <= int(self.edge_window) <= 50:
             raise TrackingError(f"edge window must lie in [2, 50] px, got {self.edge_window!r}")
+        if self.roi is not None:
+            x0, x1, y0, y1 = self.roi
+            if any(int(v) != v for v in self.roi) or min(self.roi) < 0 or x1 <= x0 or y1 <= y0:
+                raise TrackingError(f"region of interest {x0}:{x1},{y0}:{y1} is empty or inverted: give "
+                                    "--roi x0:x1,y0:y1 with 0 <= x0 < x1 (columns) and 0 <= y0 < y1 (rows)")
         for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise TrackingError(f"{name.replace('_', ' ')} must be positive, got {v!r}")
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """What the calibration frames gave (grey levels in the recording's units, lengths in pixels)."""
-
-    polarity: str
-    polarity_from: str
-    background: float
-    contrast: float
-    slope_u: float
-    slope_v: float
-    edge_blur_px: float
-    edge_window_px: int
-    area_px2: float
-    frames_used: int
-
-    def settings(self, config: TrackConfig) -> MeasureSettings:
-        return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background, self.contrast,
-                               self.edge_window_px, self.edge_blur_px, max(9.0, 0.01 * self.area_px2), self.area_px2,
-                               config.area_tolerance, self.slope_u, self.slope_v)
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,87 +172,22 @@ class TrackResult:
         return int(np.sum(self.status == 0))
 
 
-def _ring_mask(h: int, w: int, width: int = 2) -> NDArray[np.bool_]:
-    m = np.zeros((h, w), bool)
-    m[:width] = m[-width:] = True
-    m[:, :width] = m[:, -width:] = True
-    return m
-
-
-def calibrate(frames: NDArray, config: TrackConfig) -> Calibration:
-    """Polarity, grey levels, background gradient, edge blur and silhouette area (module docstring, step 1).
-
-    Raises
-    ------
-    TrackingError
-        When no calibration frame shows a dimer (``"no dimer found ..."``).
-    """
-    n = frames.shape[0]
-    idx = np.unique(np.linspace(0, n - 1, min(n, config.calibration_frames)).round().astype(int))
-    sample = frames[idx].astype(np.float32)
-    k, h, w = sample.shape
-    # grey-level statistics (medians, tails) on at most 16 of the calibration frames: they are costly per frame
-    # and the same in every frame of a recording; all calibration frames are measured below
-    stats = sample[np.unique(np.linspace(0, k - 1, min(k, 16)).round().astype(int))]
-    flat = stats.reshape(stats.shape[0], -1)
-    med = np.median(flat, axis=1)
-    lo, hi = np.percentile(flat, [0.5, 99.5], axis=1)
-    noise = 1.4826 * np.median(np.abs(np.diff(stats, axis=2)), axis=(1, 2)) / math.sqrt(2.0)
-    spread = np.maximum(med - lo, hi - med)
-    valid = np.isfinite(spread) & (spread > np.maximum(10.0 * noise, 1e-12))
-    if not valid.any():
-        raise TrackingError(f"no dimer found: none of {flat.shape[0]} frames sampled over the recording shows an "
-                            "object against its background")
-    dark_votes = (med - lo > hi - med)[valid]
-    if config.polarity == "auto":
-        polarity, polarity_from = ("dark" if dark_votes.mean() >= 0.5 else "bright"), "detected"
-    else:
-        polarity, polarity_from = config.polarity, "option"
-    pol = -1.0 if polarity == "dark" else 1.0
-    background = float(np.median(med[valid]))
-    levels = []
-    for i in np.flatnonzero(valid):
-        mid = 0.5 * (med[i] + (lo[i] if polarity == "dark" else hi[i]))
-        obj = flat[i][flat[i] < mid] if polarity == "dark" else flat[i][flat[i] > mid]
-        if obj.size:
-            levels.append(float(np.median(obj)))
-    contrast = abs(float(np.median(levels)) - background) if levels else 0.0
-    if not contrast > 0:
-        raise TrackingError("no dimer found: the frames show no contrast between object and background")
-    # background gradient from the border rings of the calibration frames
-    ring = _ring_mask(h, w)
-    vv, uu = np.nonzero(ring)
-    A = np.stack([np.ones(vv.size), uu - 0.5 * (w - 1), vv - 0.5 * (h - 1)], axis=1)
-    slopes = []
-    for f in sample:  # every calibration frame: the gradient's median over frames is what y is sensitive to
-        vals = f[ring]
-        keep = pol * (vals - background) / contrast < 0.3
-        if keep.sum() > 0.5 * vals.size:
-            coef = np.linalg.lstsq(A[keep], vals[keep], rcond=None)[0]
-            slopes.append(coef[1:])
-    su, sv = (np.median(np.array(slopes), axis=0) if slopes else (0.0, 0.0))
-    window = int(config.edge_window or 8)
-    first = Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), 1.5, window, 0.0, k)
-    rows = measure_frames(sample, first.settings(config))
-    ok = rows[:, 0] == 0
-    if not ok.any():
-        codes, counts = np.unique(rows[:, 0].astype(int), return_counts=True)
-        why = {v: s for s, v in STATUS.items()}[int(codes[np.argmax(counts)])]
-        raise TrackingError(f"no dimer found: none of {k} frames sampled over the recording could be measured "
-                            f"(mostly: {STATUS_TEXT[why]})")
-    area = float(np.median(rows[ok, _C["area"]]))
-    blur = float(np.median(rows[ok, _C["edge_width"]]))
-    if config.edge_window is None:
-        window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
-    return Calibration(polarity, polarity_from, background, contrast, float(su), float(sv), blur, window, area,
-                       int(ok.sum()))
-
-
 def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     """Step 3 of the module docstring: the recording's bounds; returns the reference values used."""
     ok = status == 0
     if not ok.any():
         return {}
+    # a particle stuck to the silhouette moves its centre of mass off the fitted squares' centre (their faces,
+    # fitted away from the corners, do not see it): beyond 8 robust standard deviations of the recording (+ 0.05 px)
+    dv = rows[:, _C["v_com"]] - 0.5 * (rows[:, _C["v_a"]] + rows[:, _C["v_b"]])
+    du = rows[:, _C["u_com"]] - 0.5 * (rows[:, _C["u_a"]] + rows[:, _C["u_b"]])
+    off = np.zeros_like(ok)
+    for d in (dv, du):
+        ref = float(np.median(d[ok]))
+        scale = 1.4826 * float(np.median(np.abs(d[ok] - ref)))
+        off |= ok & (np.abs(d - ref) > 8.0 * scale + 0.05)
+    status[off] = STATUS["touching"]
+    ok = status == 0
     width = rows[:, _C["edge_width"]]
     w_ref = float(np.median(width[ok]))
     blur = ok & (width ** 2 - w_ref ** 2 > config.max_motion_blur ** 2 / 12.0)
@@ -273,6 +202,22 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
                  | (rows[:, _C["hinge_gap"]] > config.max_hinge_gap * side))
     status[poor] = STATUS["poor_fit"]
     return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
+
+
+def _hint(status: NDArray) -> str:
+    """What to try for the commonest reason frames were not measured (the option that bounds that check)."""
+    bad = status[status != 0]
+    if bad.size == 0:
+        return ""
+    names = {v: k for k, v in STATUS.items()}
+    top = names[int(np.bincount(bad).argmax())]
+    return {"poor_fit": "; see RUN.json checks, and --max-hinge-gap (hinge corners apart: a hinge line tilted out of "
+                        "the camera axis) or --max-squareness",
+            "third_particle": "; python -m tracking inspect shows the background: try --roi",
+            "occlusion": "; try --area-tolerance or --roi",
+            "touching": "; python -m tracking inspect shows the background: try --roi",
+            "motion_blur": "; try --max-motion-blur",
+            "out_of_view": "; the dimer reaches the border of the frame (or of --roi)"}.get(top, "")
 
 
 def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> TrackResult:
@@ -293,8 +238,16 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
                             "(metres per pixel in the object plane)")
     frames = rec.frames
     n, h, w = frames.shape
+    if config.roi is not None:
+        x0, x1, y0, y1 = config.roi
+        if x1 > w or y1 > h:
+            raise TrackingError(f"{rec.path}: --roi {x0}:{x1},{y0}:{y1} reaches outside the frames of {w} x {h} px; "
+                                f"give columns within 0:{w} and rows within 0:{h}")
+        frames = frames[:, y0:y1, x0:x1]
+        n, h, w = frames.shape
     if h < 24 or w < 24:
-        raise TrackingError(f"{rec.path}: frames of {w} x {h} px are too small to hold a dimer")
+        raise TrackingError(f"{rec.path}: frames of {w} x {h} px" + (" (the --roi)" if config.roi else "")
+                            + " are too small to hold a dimer")
     try:
         cal = calibrate(frames, config)
     except TrackingError as exc:
@@ -302,31 +255,54 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     settings = cal.settings(config)
     rows = np.empty((n, len(COLUMNS)))
     for f0 in range(0, n, config.batch):
-        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings)
+        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings, pinv=cal.pinv)
     status = rows[:, 0].astype(np.int64)
     refs = _flag(status, rows, config)
     ok = status == 0
+    names = {v: k for k, v in STATUS.items()}
+    fitted = (ok | (status == STATUS["poor_fit"])) & np.isfinite(rows[:, _C["hinge_gap"]])
+    tilt_deg = tilt_from_gap(float(np.median(rows[fitted, _C["hinge_gap"]] / (2.0 * rows[fitted, _C["half_side"]])))) \
+        if fitted.any() else None
+    if tilt_deg is not None and tilt_deg > MAX_TILT_DEG:
+        raise TrackingError(f"{rec.path}: the hinge line is tilted about {tilt_deg:.0f} degrees out of the camera axis "
+                            f"(the fitted squares' hinge corners lie apart), beyond the {MAX_TILT_DEG:.0f} degrees that "
+                            "can be measured; align the camera along the hinge line")
+    if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG:
+        logger.warning("%s: the hinge line is tilted about %.1f degrees out of the camera axis: y and theta are measured "
+                       "on the skewed silhouettes, not corrected (docs/tracking.md); frames whose hinge corners lie "
+                       "more than --max-hinge-gap %g of the side apart are not measured", rec.name, tilt_deg,
+                       config.max_hinge_gap)
     if not ok.any():
-        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured")
-    # ---- origin
+        why = ", ".join(f"{names[c]} in {int(np.sum(status == c))}" for c in sorted(set(status.tolist())))
+        tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
+                  "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
+        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
+    # ---- origin (rows of the full frame; the region of interest starts at row y0)
+    x0, y0 = (config.roi[0], config.roi[2]) if config.roi else (0, 0)
     if config.origin_row is not None:
-        origin, origin_from = float(config.origin_row), "option --origin-row"
+        origin = {"row_px": float(config.origin_row), "from": "option --origin-row", "at_rest": None,
+                  "method": "option"}
     elif rec.levitation_row is not None:
-        origin, origin_from = float(rec.levitation_row), "recorded in the file"
+        origin = {"row_px": float(rec.levitation_row), "from": "recorded in the file", "at_rest": None,
+                  "method": "file"}
     else:
-        first = np.flatnonzero(ok[: config.origin_frames])
-        if first.size == 0:
-            raise TrackingError(f"{rec.path}: none of the first {config.origin_frames} frames could be measured, so "
-                                "the levitation height is unknown; give --origin-row or more --origin-frames")
-        origin = float(np.median(rows[first, _C["v_com"]]))
-        origin_from = f"median centre-of-mass row of the {first.size} measured frames among the first {config.origin_frames}"
+        head = status[: config.origin_frames]
+        why = ", ".join(f"{names[c]} in {int(np.sum(head == c))}" for c in sorted(set(head.tolist())) if c != 0)
+        origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path,
+                             why + _hint(head))
+        if not origin["at_rest"]:
+            logger.warning("%s: the recording does not start at rest: y = 0 is the centre of the late oscillation "
+                           "(%s); give --origin-row if the levitation row is known", rec.name, origin["from"])
     sign = 1.0 if config.up == "top" else -1.0
-    y = np.where(ok, sign * (origin - rows[:, _C["v_com"]]) * pixel, np.nan)
+    y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
     theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
     t = np.arange(n) / float(fps)
-    sigma_y = float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel
-    sigma_theta = float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2)))
-    names = {v: k for k, v in STATUS.items()}
+    check_y = np.where(ok, (rows[:, _C["v_com"]] - 0.5 * (rows[:, _C["v_a"]] + rows[:, _C["v_b"]])) * pixel, np.nan)
+    check_theta = np.where(ok, rows[:, _C["theta"]] - (rows[:, _C["alpha_free"]] - rows[:, _C["beta_free"]]) / math.pi,
+                           np.nan)
+    noise_y = noise_estimate(y, check_y, float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel)
+    noise_theta = noise_estimate(theta, check_theta, float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2))))
+    sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
     counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
     # the example frame: a measured frame with a clear bend (90th percentile of |theta|)
     meas = np.flatnonzero(ok)
@@ -339,12 +315,13 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         "source": rec.path,
         "format": rec.format,
         "frames": int(n),
-        "frame_size_px": [int(w), int(h)],
+        "frame_size_px": [int(rec.frames.shape[2]), int(rec.frames.shape[1])],
+        "roi_px": list(config.roi) if config.roi else None,
         "frame_rate_hz": float(fps),
         "frame_rate_from": "option --fps" if config.fps else "recorded in the file",
         "pixel_size_m": float(pixel),
         "pixel_size_from": "option --pixel-size" if config.pixel_size else "recorded in the file",
-        "y_origin": {"row_px": origin, "from": origin_from,
+        "y_origin": {**origin,
                      "convention": "y = (origin row - centre-of-mass row) x pixel size: positive up, image rows "
                                    "counting down" if sign > 0 else
                                    "y = (centre-of-mass row - origin row) x pixel size: the image is upside down "
@@ -354,20 +331,32 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         "frames_not_measured": int(n - ok.sum()),
         "fraction_measured": float(ok.mean()),
         "not_measured": counts,
-        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta,
-                           "method": "RMS over the measured frames of each frame's standard error: the image noise "
-                                     "of the border ring through the centre of mass (y), the edge residuals through "
-                                     "the face fits (theta)"},
+        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta, "estimator_y": noise_y["estimator"],
+                           "estimator_theta": noise_theta["estimator"], "y_details": noise_y,
+                           "theta_details": noise_theta,
+                           "method": "white: RMS over the measured frames of each frame's standard error (the image "
+                                     "noise of the border ring through the centre of mass for y, the edge residuals "
+                                     "through the face fits for theta); correlated, when the frames' errors are "
+                                     "correlated (lag-1 correlation of the cross-check above 0.3): the fourth "
+                                     "differences corrected for that correlation, if larger (docs/tracking.md)"},
         "calibration": {"background_level": cal.background, "contrast": cal.contrast,
                         "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
                         "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
-                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used},
+                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used,
+                        "illumination_change": cal.scene.gradient, "static_structure_px": int(cal.scene.static.sum()),
+                        "light_level_range": [float(np.min(rows[ok, _C["background"]]) / cal.background),
+                                              float(np.max(rows[ok, _C["background"]]) / cal.background)]
+                        if cal.background > 0 else None,
+                        "holes_filled": cal.fill_holes, "dark_offset": cal.dark_offset},
         "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square))
                                                     if np.isfinite(square).any() else None,
                                                     "p95_abs": float(np.nanpercentile(np.abs(square), 95))
                                                     if np.isfinite(square).any() else None,
                                                     "bound": config.max_squareness},
                    "tilt_rad_median": float(np.median(rows[ok, _C["tilt"]])),
+                   "hinge_line_tilt_deg": tilt_deg,
+                   "side_length_m_tilt_corrected": math.sqrt(cal.area_px2 / 2.0 / area_factor(math.radians(tilt_deg)))
+                   * pixel if tilt_deg is not None else None,
                    "edge_rms_px_median": refs.get("edge_rms_px"), "edge_width_px_median": refs.get("edge_width_px")},
         "quality": {"measure": "edge_rms_px: RMS distance [px] of the sub-pixel edge crossings from the fitted faces "
                                "(about the image noise times the window's square root; larger for occlusions, "

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from cubedimer.compile_cache import kernel_array
 
 from .config import TwinError
+from .imperfections import Imperfections, band_coverage, dust_tracks, illumination, tilted_coverage
 
 __all__ = ["VideoCamera", "dimer_squares", "render_coverage", "render_frames", "record_video", "write_video_tiff",
            "POLARITIES"]
@@ -75,6 +76,8 @@ class VideoCamera:
         Frames per run the camera loses (recorded all black), at random interior positions.
     subsamples : int
         Sub-samples per pixel and axis of the area integration.
+    imperfections : Imperfections
+        What a real recording has beyond the clean camera (:mod:`acousim.twin.imperfections`; none by default).
     """
 
     pixel_size: float = 10e-6
@@ -90,6 +93,7 @@ class VideoCamera:
     hinge_column: float | None = None
     lost_frames: int = 0
     subsamples: int = 2
+    imperfections: Imperfections = Imperfections()
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.pixel_size) and 1e-8 < self.pixel_size < 1e-3):
@@ -136,7 +140,8 @@ class VideoCamera:
                 "psf_sigma_px": float(self.psf_sigma), "noise_fraction_of_contrast": float(self.noise),
                 "bit_depth": int(self.bit_depth), "polarity": self.polarity, "background_level": bg,
                 "cube_level": fg, "levitation_row_px": v0, "hinge_column_px": u0,
-                "lost_frames": int(self.lost_frames), "subsamples": int(self.subsamples)}
+                "lost_frames": int(self.lost_frames), "subsamples": int(self.subsamples),
+                **({"imperfections": self.imperfections.to_dict()} if self.imperfections.any else {})}
 
 
 def dimer_squares(y: NDArray, theta: NDArray, side: float, camera: VideoCamera) -> tuple[NDArray, NDArray, float]:
@@ -316,13 +321,54 @@ def record_video(t: NDArray, y: NDArray, theta: NDArray, side: float, camera: Vi
     lost = np.sort(1 + rng.choice(n - 2, size=k, replace=False)) if k else np.zeros(0, int)
     centres, angles, half = dimer_squares(y, theta, side, camera)
     frames = np.empty((n, camera.height, camera.width), np.uint8 if camera.bit_depth == 8 else np.uint16)
-    for f0 in range(0, n, 512):
-        sl = slice(f0, min(n, f0 + 512))
-        cov = render_coverage(centres[sl], angles[sl], half, (camera.height, camera.width), camera.psf_sigma,
-                              camera.subsamples)
-        frames[sl] = render_frames(cov, camera, rng)
+    imp = camera.imperfections
+    if imp.changes_frames:
+        _record_imperfect(np.asarray(t, float), centres, angles, half, camera, rng, frames)
+    else:
+        for f0 in range(0, n, 512):
+            sl = slice(f0, min(n, f0 + 512))
+            cov = render_coverage(centres[sl], angles[sl], half, (camera.height, camera.width), camera.psf_sigma,
+                                  camera.subsamples)
+            frames[sl] = render_frames(cov, camera, rng)
     frames[lost] = 0
     return frames, lost
+
+
+def _record_imperfect(t, centres, angles, half, camera: VideoCamera, rng, frames) -> None:
+    """:func:`record_video` with the camera's imperfections (:mod:`acousim.twin.imperfections`), into ``frames``:
+    the opaque coverage (cubes or their outlines, dust, static structures; clipped at 1), a transparent interior,
+    the illumination multiplying the scene, then the sensor's noise and quantisation."""
+    imp = camera.imperfections
+    n = len(t)
+    shape = (camera.height, camera.width)
+    bg, fg = camera.levels
+    interior = min(1.0, max(0.0, bg + 0.1 * (bg - fg)))  # beyond the background, away from the cube's level
+    bands = band_coverage(camera.height, camera.width, imp.bands_px, camera.psf_sigma)
+    dust = dust_tracks(n, camera.width, camera.height, imp, rng) if imp.dust else None
+    full = (1 << camera.bit_depth) - 1
+    for f0 in range(0, n, 512):
+        sl = slice(f0, min(n, f0 + 512))
+        if imp.tilt_deg:
+            cov = tilted_coverage(centres[sl], angles[sl], half, camera.origin[0], math.radians(imp.tilt_deg), shape,
+                                  camera.psf_sigma)
+        else:
+            cov = render_coverage(centres[sl], angles[sl], half, shape, camera.psf_sigma, camera.subsamples)
+        inner = None
+        if imp.transparent:
+            inner = render_coverage(centres[sl], angles[sl], half * (1.0 - 2.0 * imp.rim), shape, camera.psf_sigma,
+                                    camera.subsamples)
+        if dust is not None:
+            d = dust[sl]
+            cov += render_coverage(d, np.full(d.shape[:2], 0.3), 0.5 * imp.dust_px, shape, camera.psf_sigma,
+                                   camera.subsamples)
+        cov = np.minimum(cov + bands[None], 1.0)
+        img = bg + (fg - bg) * cov
+        if inner is not None:
+            img += (interior - fg) * inner
+        img *= illumination(t[sl], camera.width, imp)
+        if camera.noise > 0:
+            img += np.float32(camera.noise * abs(fg - bg)) * rng.standard_normal(img.shape, dtype=np.float32)
+        frames[sl] = np.clip(np.rint(img * full), 0, full)
 
 
 def write_video_tiff(path, frames: NDArray, fps: float, camera: VideoCamera, extra: dict | None = None) -> None:

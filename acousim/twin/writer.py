@@ -45,14 +45,34 @@ def video_seed(seed: int, index: int) -> np.random.SeedSequence:
 
 def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, side: float, camera: VideoCamera,
                     seed: np.random.SeedSequence | int) -> list[int]:
-    """Write one run's video (``stem.tif``) and its true ``t, y, theta`` (``stem_truth.csv``) into
-    ``directory``; returns the indices of the lost frames."""
+    """Write one run's video (``stem.tif``, or ``stem.mp4`` with the H.264 codec) and its true ``t, y, theta``
+    (``stem_truth.csv``) into ``directory``; returns the indices of the lost frames.  With rest frames
+    (:class:`~acousim.twin.imperfections.Imperfections`) the video and the truth begin with the dimer at rest at
+    y = 0 and the run's first theta, and the run's times are shifted by them."""
     directory = Path(directory)
-    frames, lost = record_video(run.t, run.state[:, 0], run.state[:, 2], side, camera, seed)
-    fps = 1.0 / float(run.t[1] - run.t[0])
-    write_video_tiff(directory / f"{stem}.tif", frames, fps, camera, {"side_length_m": float(side)})
-    write_run_csv(directory / f"{stem}_truth.csv", run.t, run.state[:, 0], run.state[:, 2],
-                  ["acousim digital twin: the true motion recorded in " + f"{stem}.tif (lost frames included)",
+    imp = camera.imperfections
+    dt = float(run.t[1] - run.t[0])
+    fps = 1.0 / dt
+    y, theta = run.state[:, 0], run.state[:, 2]
+    k = int(imp.rest_frames)
+    if k:
+        y = np.concatenate([np.zeros(k), y])
+        theta = np.concatenate([np.full(k, theta[0]), theta])
+    t = np.arange(y.size) * dt
+    frames, lost = record_video(t, y, theta, side, camera, seed)
+    if imp.codec == "h264":
+        from .imperfections import encode_h264
+
+        name = f"{stem}.mp4"
+        atomic_save(directory / name, lambda tmp: encode_h264(tmp, frames, fps, imp.crf))
+    else:
+        name = f"{stem}.tif"
+        extra = {"side_length_m": float(side)}
+        if not imp.record_origin:
+            extra["levitation_row_px"] = None
+        write_video_tiff(directory / name, frames, fps, camera, extra)
+    write_run_csv(directory / f"{stem}_truth.csv", t, y, theta,
+                  ["acousim digital twin: the true motion recorded in " + f"{name} (lost frames included)",
                    "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"],
                   t_decimals=9, y_digits=10, theta_decimals=10)
     return [int(i) for i in lost]
@@ -152,7 +172,8 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
                 lost[Path(f).stem] = write_run_video(tmp / "video", Path(f).stem, r, config.side, video,
                                                      video_seed(config.seed, i))
             truth["video"] = {**video.to_dict(), "fps": float(config.camera.fps), "lost_frames_per_run": lost,
-                              "files": [f"video/{stem}.tif" for stem in lost]}
+                              "files": [f"video/{stem}.{'mp4' if video.imperfections.codec == 'h264' else 'tif'}"
+                                        for stem in lost]}
             os.chmod(tmp / "video", default_dir_mode())
         write_json(tmp / "meta.json", meta_dict(config, dynamics))
         write_json(tmp / "truth.json", truth)

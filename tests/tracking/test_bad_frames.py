@@ -33,20 +33,44 @@ def test_lost_frames_are_left_empty_and_counted():
     _good(res, y, theta, res.status == 0)
 
 
-def test_a_third_particle_entering_the_view_empties_exactly_its_frames():
+def test_a_particle_costs_only_the_frames_where_it_reaches_the_dimer():
+    from acousim.twin.video import dimer_squares, render_coverage
+
     n = 200
     _, y, theta = motion(n, seed=32)
-    # a 300 um particle drifts in from the left edge at frame 120 (its centre 30 px outside at frame 0)
-    u = -60.0 + 0.5 * np.arange(n)
-    centres = np.stack([u, np.full(n, 30.0)], axis=1)
+    # a 300 um particle comes down from above the view towards cube A
+    v = -25.0 + 0.25 * np.arange(n)
+    centres = np.stack([np.full(n, CAM.origin[0] - 50.0), v], axis=1)
     half = 0.5 * 300e-6 / CAM.pixel_size
     res = _track(render(y, theta, CAM, seed=32, extra=(centres, 0.3, half)))
-    inview = u + half * np.sqrt(2) > 2.5  # any part of it reaches the third pixel column
-    flagged = res.status != 0
-    assert np.all(res.status[inview & (u > 0)] == STATUS["third_particle"])
-    assert not flagged[u < -half * 1.5].any()  # wholly outside: every frame measured
-    assert flagged.sum() <= inview.sum() + 2
-    _good(res, y, theta, ~flagged)
+    # the silhouettes (coverage > 1/2) of each alone: how far the particle's is from the dimer's bounding box
+    shape = (CAM.height, CAM.width)
+    c2, a2, h2 = dimer_squares(y, theta, 500e-6, CAM)
+    dim = render_coverage(c2, a2, h2, shape, CAM.psf_sigma) > 0.5
+    par = render_coverage(centres[:, None, :], np.full((n, 1), 0.3), half, shape, CAM.psf_sigma) > 0.5
+    rows = np.arange(CAM.height)[None, :]
+    top = np.min(np.where(dim.any(axis=2), rows, 10 ** 6), axis=1)
+    bottom = np.max(np.where(par.any(axis=2), rows, -10 ** 6), axis=1)
+    sep = top - bottom  # rows between them (the particle lies over the dimer's columns)
+    window = res.info["calibration"]["edge_window_px"] + 2
+    in_view = par.sum(axis=(1, 2)) > 0.02 * dim.sum(axis=(1, 2))
+    near = in_view & (sep >= 2) & (sep < window - 1)  # close, not touching
+    far = in_view & (sep > window + 1)
+    assert near.sum() > 20 and np.all(res.status[near] == STATUS["third_particle"])
+    assert far.sum() > 80 and np.all(res.status[far] == 0)  # in view, farther than the dimer's window: measured
+    assert np.all(res.status[~in_view] == 0)
+    _good(res, y, theta, res.status == 0)
+
+
+def test_dust_far_from_the_dimer_costs_no_frame():
+    n = 120
+    _, y, theta = motion(n, seed=37)
+    # a 100 um speck crosses the whole view 60 px above the levitation height (the dimer reaches 44 px up)
+    u = -10.0 + 1.6 * np.arange(n)
+    centres = np.stack([u, np.full(n, CAM.origin[1] - 60.0)], axis=1)
+    res = _track(render(y, theta, CAM, seed=37, extra=(centres, 0.2, 0.5 * 100e-6 / CAM.pixel_size)))
+    assert np.all(res.status == 0)
+    _good(res, y, theta, res.status == 0)
 
 
 def test_a_cube_leaving_the_frame_for_a_while_keeps_the_good_frames():
@@ -86,4 +110,4 @@ def test_a_particle_touching_the_dimer_is_an_occlusion():
     res = _track(render(y, theta, CAM, seed=36, extra=(centres, 0.0, half)))
     assert np.all(res.status[~on] == 0)
     assert np.all(res.status[on] != 0)
-    assert set(res.info["not_measured"]) <= {"occlusion", "poor_fit", "third_particle"}
+    assert set(res.info["not_measured"]) <= {"occlusion", "poor_fit", "third_particle", "touching"}

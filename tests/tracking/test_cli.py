@@ -213,3 +213,42 @@ def test_a_recording_given_without_a_command_names_the_command(tmp_path, write_t
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and f"python -m tracking track {src}" in err
     assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize("roi, message", [("0:200,0:150", "reaches outside the frames of 180 x 150 px"),
+                                          ("50:40,0:150", "empty or inverted"), ("0-180,0-150", "expected x0:x1,y0:y1"),
+                                          ("0:180,100:100", "empty or inverted")])
+def test_a_bad_region_of_interest_gets_one_line_exit_2_and_no_output(tmp_path, write_tiff, capsys, roi, message):
+    _, y, theta = motion(30, seed=48)
+    src = write_tiff("r.tif", render(y, theta, CAM, seed=48), CAM)
+    out = tmp_path / "out" / "run.csv"
+    err = _fail([src, "--out", out, "--roi", roi], capsys)
+    assert message in err
+    assert not out.parent.exists() or not any(out.parent.iterdir())
+
+
+def test_inspect_prints_the_file_facts_before_refusing_a_file_without_dimer(tmp_path, write_tiff, capsys):
+    rng = np.random.default_rng(1)
+    # one dark bead (a disc of 12 px radius) on the background: no dimer
+    vv, uu = np.mgrid[:150, :180]
+    bead = np.where((uu - 90) ** 2 + (vv - 75) ** 2 < 144, 40.0, 200.0)
+    frames = np.clip(bead + 3 * rng.standard_normal((40, 150, 180)), 0, 255).astype(np.uint8)
+    src = write_tiff("bead.tif", frames, CAM)
+    assert main(["inspect", str(src)]) == 2
+    cap = capsys.readouterr()
+    assert "40 frames of 180 x 150 px" in cap.out and "frame rate: 2000 frames/s" in cap.out
+    assert "no dimer found" in cap.err and len(cap.err.strip().splitlines()) == 1
+
+
+def test_inspect_names_a_tilted_hinge_line(tmp_path, write_tiff, capsys):
+    from acousim.twin.imperfections import Imperfections
+    from acousim.twin.video import VideoCamera, record_video
+
+    cam = VideoCamera(imperfections=Imperfections(tilt_deg=10.0))
+    _, y, theta = motion(40, seed=49)
+    src = write_tiff("tilted.tif", record_video(np.arange(40) / 2000.0, y, theta, 500e-6, cam, 49)[0], cam)
+    assert main(["inspect", str(src)]) == 0
+    out = capsys.readouterr().out
+    assert "hinge line: tilted about" in out
+    side = float(out.split("the side corrected for it is ")[1].split(" px")[0])
+    assert abs(side / 50.0 - 1) < 0.03  # 500 um at 10 um/px; uncorrected it reads 11 % larger
