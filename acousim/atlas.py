@@ -267,7 +267,9 @@ def _cell_path(out: Path, config: AtlasConfig, d: int, i: int, j: int) -> Path:
     return out / "cells" / f"{config.dimers[d].label}_t{i:03d}_th{j:03d}.json"
 
 
-def _csv_text(rows: list[dict]) -> str:
+def cells_csv_text(columns: tuple[str, ...], rows: list[dict]) -> str:
+    """The CSV of a cell study: a header of ``columns`` and one line per row (booleans lower case, non-finite
+    floats and missing values empty, floats to 6 significant digits)."""
     def fmt(v):
         if isinstance(v, bool):
             return str(v).lower()
@@ -275,8 +277,32 @@ def _csv_text(rows: list[dict]) -> str:
             return "" if not math.isfinite(v) else f"{v:.6g}"
         return "" if v is None else str(v)
 
-    lines = [",".join(CSV_COLUMNS)] + [",".join(fmt(r.get(k)) for k in CSV_COLUMNS) for r in rows]
+    lines = [",".join(columns)] + [",".join(fmt(r.get(k)) for k in columns) for r in rows]
     return "\n".join(lines) + "\n"
+
+
+def check_pinned_settings(pinned: Path, settings: dict, what: str) -> None:
+    """Refuse a study folder whose ``pinned`` settings file holds other settings (:class:`AtlasError`, naming
+    ``what``: "an atlas", "a held-y map")."""
+    if pinned.exists() and json.loads(pinned.read_text()) != json.loads(json_text(settings)):
+        raise AtlasError(f"--out {pinned.parent} holds {what} with other settings; choose another --out (or --force)")
+
+
+def run_resumable_cells(out: Path, cells: list, cell_path, task, item, executor: ExecutorConfig | None,
+                        progress: bool, desc: str) -> list[dict]:
+    """Run the cells of a study whose result file ``cell_path(cell)`` does not exist yet, each ``task(item(cell))``
+    through the executor, writing each result atomically as it finishes (so that a rerun resumes); returns
+    every cell's result, in the order of ``cells``."""
+    (out / "cells").mkdir(parents=True, exist_ok=True)
+    todo = [c for c in cells if not cell_path(c).exists()]
+    logger.info("%s: %d of %d cells to run", desc, len(todo), len(cells))
+
+    def save(k: int, result: dict) -> None:
+        write_json(cell_path(todo[k]), result)
+
+    map_ordered(task, [item(c) for c in todo], executor or ExecutorConfig(), desc=desc, progress=progress,
+                on_result=save)
+    return [json.loads(cell_path(c).read_text()) for c in cells]
 
 
 def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorConfig | None = None,
@@ -292,26 +318,17 @@ def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorCon
     out = Path(out)
     settings = config.to_dict()
     pinned = out / "atlas_settings.json"
-    if pinned.exists():
-        if json.loads(pinned.read_text()) != json.loads(json_text(settings)):
-            raise AtlasError(f"--out {out} holds an atlas with other settings; choose another --out (or --force)")
+    check_pinned_settings(pinned, settings, "an atlas")
     for dimer in config.dimers:  # every dimer must be buildable before anything is written
         try:
             atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_amplitude_pa, config.frequency_hz)
         except ValueError as exc:
             raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g}: {exc}") from None
-    (out / "cells").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     write_json(pinned, settings)
-    todo = [c for c in config.cells() if not _cell_path(out, config, *c).exists()]
-    logger.info("atlas: %d of %d cells to run", len(todo), len(config.cells()))
-
-    def save(k: int, result: dict) -> None:
-        write_json(_cell_path(out, config, *todo[k]), result)
-
-    map_ordered(_cell_task, [(config, c) for c in todo], executor or ExecutorConfig(), desc="atlas",
-                progress=progress, on_result=save)
-    rows = [json.loads(_cell_path(out, config, *c).read_text()) for c in config.cells()]
-    atomic_write_text(out / "atlas.csv", _csv_text(rows))
+    rows = run_resumable_cells(out, config.cells(), lambda c: _cell_path(out, config, *c), _cell_task,
+                               lambda c: (config, c), executor, progress, "atlas")
+    atomic_write_text(out / "atlas.csv", cells_csv_text(CSV_COLUMNS, rows))
     summary = {}
     for dimer in config.dimers:
         mine = [r for r in rows if r["dimer"] == dimer.label]

@@ -21,7 +21,6 @@ the figures (:mod:`acousim.held_y_figures`).  No random choice: the grid is dete
 """
 from __future__ import annotations
 
-import json
 import logging
 import math
 import os
@@ -32,12 +31,13 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from cubedimer.atomic import atomic_write_text, json_text, write_json
+from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.attractors import LOCKED_AT_FY
-from cubedimer.executor import ExecutorConfig, map_ordered
+from cubedimer.executor import ExecutorConfig
 from cubedimer.rk4 import rk4, rk4_batch
 
-from .atlas import AtlasDimer, AtlasError, atlas_dynamics, settled_outcome
+from .atlas import (AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells,
+                    settled_outcome)
 from .equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
 __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "held_y_orbits",
@@ -352,17 +352,6 @@ def _cell_path(out: Path, config: HeldYConfig, d: int, p: int, a: int) -> Path:
     return out / "cells" / f"{config.dimers[d].label}_p{p:02d}_a{a:02d}.json"
 
 
-def _csv_text(rows: list[dict]) -> str:
-    def fmt(v):
-        if isinstance(v, bool):
-            return str(v).lower()
-        if isinstance(v, float):
-            return "" if not math.isfinite(v) else f"{v:.6g}"
-        return "" if v is None else str(v)
-
-    return "\n".join([",".join(MAP_COLUMNS)] + [",".join(fmt(r.get(k)) for k in MAP_COLUMNS) for r in rows]) + "\n"
-
-
 def run_held_y_map(config: HeldYConfig, out: str | os.PathLike, executor: ExecutorConfig | None = None,
                    progress: bool = True, figures: bool = True) -> dict:
     """Run (or resume) the held-y map into ``out``; returns the ``held_y.json`` content.
@@ -375,27 +364,19 @@ def run_held_y_map(config: HeldYConfig, out: str | os.PathLike, executor: Execut
     out = Path(out)
     settings = config.to_dict()
     pinned = out / "held_y_settings.json"
-    if pinned.exists() and json.loads(pinned.read_text()) != json.loads(json_text(settings)):
-        raise AtlasError(f"--out {out} holds a held-y map with other settings; choose another --out (or --force)")
+    check_pinned_settings(pinned, settings, "a held-y map")
     for dimer in config.dimers:  # every dimer and pressure must be buildable before anything is written
         for p in config.pressures_pa:
             try:
                 atlas_dynamics(dimer.side, dimer.gap_ratio, p, config.frequency_hz)
             except ValueError as exc:
                 raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g} at {p:g} Pa: {exc}") from None
-    (out / "cells").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     write_json(pinned, settings)
-    todo = [c for c in config.cells() if not _cell_path(out, config, *c).exists()]
-    logger.info("held-y map: %d of %d cells to run", len(todo), len(config.cells()))
-
-    def save(k: int, result: dict) -> None:
-        write_json(_cell_path(out, config, *todo[k]), result)
-
-    map_ordered(_cell_task, [(config, c) for c in todo], executor or ExecutorConfig(), desc="held-y map",
-                progress=progress, on_result=save)
-    cells = [json.loads(_cell_path(out, config, *c).read_text()) for c in config.cells()]
+    cells = run_resumable_cells(out, config.cells(), lambda c: _cell_path(out, config, *c), _cell_task,
+                                lambda c: (config, c), executor, progress, "held-y map")
     rows = [cell_summary(c) for c in cells]
-    atomic_write_text(out / "held_y.csv", _csv_text(rows))
+    atomic_write_text(out / "held_y.csv", cells_csv_text(MAP_COLUMNS, rows))
     result = {"settings": settings, "summary": rows, "cells": cells, "units": "SI"}
     write_json(out / "held_y.json", result)
     if figures:
