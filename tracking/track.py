@@ -221,13 +221,48 @@ def _hint(status: NDArray) -> str:
 
 
 def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> TrackResult:
-    """Track one recording (module docstring).
+    """Track one recording (module docstring): the frame rate and pixel size, the frames (in the region of
+    interest), the calibration, every frame measured, the hinge line's tilt, the origin, y and theta, their
+    noise, and the run's record (RUN.json).
 
     Raises
     ------
     TrackingError
         Unknown frame rate or pixel size, no dimer in any frame, no origin.
     """
+    fps, pixel = _frame_rate_and_pixel_size(rec, config)
+    frames = _frames_in_region(rec, config)
+    n = frames.shape[0]
+    try:
+        cal = calibrate(frames, config)
+    except TrackingError as exc:
+        raise TrackingError(f"{rec.path}: {exc}") from None
+    settings = cal.settings(config)
+    rows = np.empty((n, len(COLUMNS)))
+    for f0 in range(0, n, config.batch):
+        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings, pinv=cal.pinv)
+    status = rows[:, 0].astype(np.int64)
+    refs = _flag(status, rows, config)
+    ok = status == 0
+    tilt_deg = _hinge_line_tilt(rec, rows, status, config)
+    origin = _origin(rec, rows, status, config)
+    sign = 1.0 if config.up == "top" else -1.0
+    y0 = config.roi[2] if config.roi else 0
+    y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
+    theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
+    t = np.arange(n) / float(fps)
+    noise_y, noise_theta = _noise(rows, ok, y, theta, pixel)
+    ex = _example_frame(ok, theta)
+    info = _run_info(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
+                     theta)
+    logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
+                ", ".join(f"{k} {v}" for k, v in info["not_measured"].items()) or "all", noise_y["value"],
+                noise_theta["value"])
+    return TrackResult(rec.name, t, y, theta, status, rows, info, np.array(frames[ex]))
+
+
+def _frame_rate_and_pixel_size(rec: Recording, config: TrackConfig) -> tuple[float, float]:
+    """The frame rate [1/s] and pixel size [m]: the options, else the file's; a one-line refusal without either."""
     fps = config.fps or rec.fps
     if fps is None:
         raise TrackingError(f"{rec.path}: unknown frame rate: the file does not record the camera's; give --fps "
@@ -236,6 +271,11 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     if pixel is None:
         raise TrackingError(f"{rec.path}: unknown pixel size: the file does not record one; give --pixel-size "
                             "(metres per pixel in the object plane)")
+    return fps, pixel
+
+
+def _frames_in_region(rec: Recording, config: TrackConfig) -> np.ndarray:
+    """The frames, cut to ``--roi`` when given; refused when the region leaves the frame or is too small."""
     frames = rec.frames
     n, h, w = frames.shape
     if config.roi is not None:
@@ -248,16 +288,13 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     if h < 24 or w < 24:
         raise TrackingError(f"{rec.path}: frames of {w} x {h} px" + (" (the --roi)" if config.roi else "")
                             + " are too small to hold a dimer")
-    try:
-        cal = calibrate(frames, config)
-    except TrackingError as exc:
-        raise TrackingError(f"{rec.path}: {exc}") from None
-    settings = cal.settings(config)
-    rows = np.empty((n, len(COLUMNS)))
-    for f0 in range(0, n, config.batch):
-        rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings, pinv=cal.pinv)
-    status = rows[:, 0].astype(np.int64)
-    refs = _flag(status, rows, config)
+    return frames
+
+
+def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackConfig) -> float | None:
+    """The hinge line's tilt out of the camera axis [degrees] from the fitted squares' hinge gap (None when no frame
+    was fitted); a warning above :data:`TILT_WARNING_DEG`, a refusal above :data:`MAX_TILT_DEG` or when no frame
+    could be measured (naming the counts per reason, and the tilt with the option that measures it)."""
     ok = status == 0
     names = {v: k for k, v in STATUS.items()}
     fitted = (ok | (status == STATUS["poor_fit"])) & np.isfinite(rows[:, _C["hinge_gap"]])
@@ -277,8 +314,15 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
                   "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
         raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
-    # ---- origin (rows of the full frame; the region of interest starts at row y0)
-    x0, y0 = (config.roi[0], config.roi[2]) if config.roi else (0, 0)
+    return tilt_deg
+
+
+def _origin(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackConfig) -> dict:
+    """The origin row (of the full frame; the region of interest starts at row y0) and how it was found: the
+    option, the file, or the first frames (at rest) or the late oscillation's centre (:func:`find_origin`)."""
+    ok = status == 0
+    names = {v: k for k, v in STATUS.items()}
+    y0 = config.roi[2] if config.roi else 0
     if config.origin_row is not None:
         origin = {"row_px": float(config.origin_row), "from": "option --origin-row", "at_rest": None,
                   "method": "option"}
@@ -293,21 +337,37 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
         if not origin["at_rest"]:
             logger.warning("%s: the recording does not start at rest: y = 0 is the centre of the late oscillation "
                            "(%s); give --origin-row if the levitation row is known", rec.name, origin["from"])
-    sign = 1.0 if config.up == "top" else -1.0
-    y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
-    theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
-    t = np.arange(n) / float(fps)
+    return origin
+
+
+def _noise(rows: np.ndarray, ok: np.ndarray, y: np.ndarray, theta: np.ndarray, pixel: float) -> tuple[dict, dict]:
+    """The noise estimates of y [m] and theta (:func:`noise_estimate`, with each frame's standard errors and the
+    cross-checks of the centre of mass and of the face angles)."""
     check_y = np.where(ok, (rows[:, _C["v_com"]] - 0.5 * (rows[:, _C["v_a"]] + rows[:, _C["v_b"]])) * pixel, np.nan)
     check_theta = np.where(ok, rows[:, _C["theta"]] - (rows[:, _C["alpha_free"]] - rows[:, _C["beta_free"]]) / math.pi,
                            np.nan)
     noise_y = noise_estimate(y, check_y, float(np.sqrt(np.mean(rows[ok, _C["sigma_v"]] ** 2))) * pixel)
     noise_theta = noise_estimate(theta, check_theta, float(np.sqrt(np.mean(rows[ok, _C["sigma_theta"]] ** 2))))
-    sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
-    counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
-    # the example frame: a measured frame with a clear bend (90th percentile of |theta|)
+    return noise_y, noise_theta
+
+
+def _example_frame(ok: np.ndarray, theta: np.ndarray) -> int:
+    """The example frame: a measured frame with a clear bend (90th percentile of |theta|)."""
     meas = np.flatnonzero(ok)
     target = np.quantile(np.abs(theta[meas]), 0.9)
-    ex = int(meas[np.argmin(np.abs(np.abs(theta[meas]) - target))])
+    return int(meas[np.argmin(np.abs(np.abs(theta[meas]) - target))])
+
+
+def _run_info(rec: Recording, config: TrackConfig, fps: float, pixel: float, cal, rows: np.ndarray,
+              status: np.ndarray, refs: dict, origin: dict, tilt_deg: float | None, noise_y: dict, noise_theta: dict,
+              ex: int, theta: np.ndarray) -> dict:
+    """The run's record, RUN.json (docs/formats.md)."""
+    ok = status == 0
+    n = len(status)
+    names = {v: k for k, v in STATUS.items()}
+    sign = 1.0 if config.up == "top" else -1.0
+    sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
+    counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
     r = rows[ex]
     alpha, beta = (r[_C["alpha"]], r[_C["beta"]]) if sign > 0 else (r[_C["beta"]], r[_C["alpha"]])
     square = rows[ok, _C["alpha_free"]] + rows[ok, _C["beta_free"]] - math.pi
@@ -376,6 +436,4 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
                                         "counter-clockwise from the +column axis with up = -row"},
         "units": "SI (lengths in pixels where named _px, angles in radians)",
     }
-    logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
-                ", ".join(f"{k} {v}" for k, v in counts.items()) or "all", sigma_y, sigma_theta)
-    return TrackResult(rec.name, t, y, theta, status, rows, info, np.array(frames[ex]))
+    return info
