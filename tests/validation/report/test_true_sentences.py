@@ -156,3 +156,90 @@ def test_the_minimal_model_agrees_with_the_stated_selection_rule(report):
     damping = [t for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in eqs[eq]]
     if damping:  # kept whatever their z: the text must say so
         assert "kept as physical damping whatever their significance" in readings["fit"]
+
+
+# ------------------------------------------------------------------------------- claims with their thresholds
+def test_reproduces_only_below_the_stated_threshold():
+    from validation.report.claims import REPRODUCES_BELOW, long_time_reading
+
+    good = long_time_reading({"shape": 0.03, "poincare": 0.05, "frequency": 0.01})
+    assert "reproduces the long-time behaviour" in good and f"below the {REPRODUCES_BELOW:g}" in good
+    # the lab's case: a Poincare error of 0.43, where 1 means predicting no motion
+    bad = long_time_reading({"shape": 0.05, "poincare": 0.43, "frequency": 0.02})
+    assert "reproduces the long-time behaviour" not in bad and "does not reproduce" in bad
+    assert "Poincare error 0.43" in bad and "the Poincare error exceeds the 0.1" in bad
+    assert "about 1 for one that predicts no motion" in bad
+
+
+def test_a_phase_only_where_theta_has_the_line():
+    """theta locked to y (a line at f_y of 0.2) has a phase at f_y; theta at its own 1.7-Hz hinge frequency with a
+    line at f_y of 2 % of its peak has none."""
+    from validation.report.claims import PHASE_LINE_FRACTION, run_phase
+
+    dt, f_y = 1 / 2000, 21.8
+    t = np.arange(4000) * dt
+    locked = 0.2 * np.cos(2 * np.pi * f_y * t + 0.5)
+    assert run_phase(locked, dt, f_y, 0.5) == pytest.approx(np.degrees(0.5))
+    own = 0.2 * np.cos(2 * np.pi * 1.7 * t) + 0.02 * PHASE_LINE_FRACTION * 2 * np.cos(2 * np.pi * f_y * t)
+    assert run_phase(own, dt, f_y, 0.5) is None
+    assert run_phase(own, dt, f_y, float("nan")) is None
+
+
+def test_anti_damping_is_flagged_with_its_possible_causes():
+    from validation.report.claims import anti_damping_text
+
+    assert anti_damping_text({"gamma_y": 0.1, "gamma_theta": 1.5}) == ""
+    text = anti_damping_text({"gamma_y": 0.1, "gamma_theta": -8.0})
+    assert "Anti-damping" in text and "gamma_theta -8 1/s" in text and "gamma_y" not in text
+    assert "origin" in text and "drive" in text and "wrong model" in text and "not physical damping" in text
+
+
+def test_a_non_significant_test_states_the_smallest_attainable_p():
+    from validation.report.claims import not_significant_text, smallest_wilcoxon_p
+
+    assert smallest_wilcoxon_p(4) == 0.0625
+    text = not_significant_text(0.0625, 4, 0.05)
+    assert "smallest attainable p is 0.0625" in text and "4 runs cannot show a significant difference" in text
+    assert not_significant_text(0.2, 8, 0.05).endswith("smallest attainable p is 0.00391)")
+    assert "smallest" not in not_significant_text(0.01, 8, 0.05)
+
+
+def test_the_origin_is_stated_against_a_named_reference():
+    """The lab's report measured the origin from the nominal-pressure Z_eq while naming the calibrated offset
+    elsewhere: both references are named in the sentence, with the numbers of diagnosis.json."""
+    diag = _diagnosis()
+    diag["calibration"].update(y_origin_above_nominal_Z_eq_m=56.5e-6, y_origin_above_calibrated_Z_eq_m=-1.01e-6)
+    reading = diagnosis_section(diag, []).reading
+    assert ("the data's y origin lies -1.01 um above the simulation's Z_eq at the calibrated pressure (the effects' "
+            "y origin) and +56.50 um above its Z_eq at the nominal pressure") in reading
+    assert "from the simulated Z_eq" not in reading
+
+
+def test_an_indistinguishable_pair_is_one_verdict_and_negative_damping_is_flagged():
+    diag = _diagnosis(identified=["pair_scattering"])
+    diag["effects"].append({"name": "linear_damping", "params": {"gamma_y": -0.5, "gamma_theta": 1.2}, "gap_after": 0.01,
+                            "shrink": 0.9, "significant": True, "named": False, "p_value": 0.004,
+                            "indistinguishable_from": ["quadratic_drag"]})
+    diag["indistinguishable"] = [{"effects": ["linear_damping", "quadratic_drag"], "kept_in_model": "linear_damping",
+                                  "p_given_other": {"linear_damping": 0.3, "quadratic_drag": 0.6},
+                                  "p_together": 0.002, "median_difference": 1e-6, "p_difference": 0.7}]
+    section = diagnosis_section(diag, [])
+    reading = section.reading
+    assert "caused by pair_scattering (kappa = 1.5e+04), and by linear_damping or quadratic_drag, which the data " \
+           "cannot tell apart" in reading
+    assert "linear_damping p = 0.3, quadratic_drag p = 0.6" in reading and "together they do (p = 0.002)" in reading
+    assert "then linear_damping" not in reading  # never named alone
+    assert "Anti-damping" in reading and "gamma_y of linear_damping -0.5 1/s" in reading
+    table = section.tables[0]
+    assert [r[1] for r in table.rows] == ["yes", "indistinguishable"]
+    assert set(table.header) - {"effect"} <= set(table.columns)  # every column defined
+
+
+def test_wide_tables_scroll_and_columns_are_defined(tmp_path):
+    from validation.report.html import Section, Table, write_report
+
+    table = Table("wide", [f"column {i}" for i in range(40)], [list(range(40))],
+                  {f"column {i}": f"the {i}-th" for i in range(40)})
+    text = write_report([Section("s", "S", "reading", [], [table])], tmp_path, "t").read_text()
+    assert '<div class="table-scroll"><table>' in text and ".table-scroll{overflow-x:auto" in text
+    assert "<b>column 39</b>: the 39-th" in text
