@@ -36,7 +36,7 @@ from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
 
 logger = logging.getLogger(__name__)
 
@@ -237,6 +237,30 @@ def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: lis
     return out
 
 
+#: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the
+#: calibration's and the effects' held-out comparison needs at least two runs to fit on and one to score.
+MIN_RUNS = 3
+
+
+def check_enough_runs(data_dir, n_runs: int, n_skipped: int, alpha: float) -> None:
+    """Refuse a data set with fewer than :data:`MIN_RUNS` usable runs: one line that says how many are needed and why.
+
+    Raises
+    ------
+    DatasetError
+        With fewer than :data:`MIN_RUNS` runs.
+    """
+    from cubedimer.errors import DatasetError
+
+    if n_runs >= MIN_RUNS:
+        return
+    skipped = f" ({n_skipped} file(s) skipped)" if n_skipped else ""
+    raise DatasetError(
+        f"{data_dir}: {n_runs} usable run{'' if n_runs == 1 else 's'}{skipped}; the diagnosis needs at least {MIN_RUNS}, "
+        f"because it scores every fit on runs held out of it, and at least {runs_needed(alpha)} to name an effect at "
+        f"alpha {alpha:g} (the held-out sign-flip test's smallest p with n runs is 2^-n); record more runs")
+
+
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
                       mesh_size: float | None, model_name: str, gap: float | None,
                       edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
@@ -261,6 +285,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     # of the trap frequency at its nominal pressure
     dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
                            report=lambda m: skip("skipping %s", m))
+    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
     problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
                                              config.max_frames_per_run)
     data_warnings = []

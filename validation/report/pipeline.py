@@ -169,6 +169,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
     # before the long fit, not after it
     model_from_meta(read_meta(data_dir), model=model, gap=gap, edge_radius=edge_radius)
+    # and a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
+    _check_runs(data_dir)
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -436,6 +438,18 @@ RUN_COLUMNS = {
                    f"where theta's line at f_y reaches {PHASE_LINE_FRACTION:g} of its largest spectral line (blank: theta "
                    "has no line at f_y, so there is no phase)",
 }
+
+
+def _check_runs(data_dir) -> None:
+    """:func:`validation.diagnosis.pipeline.check_enough_runs` on the data set as the diagnosis loads it."""
+    from acousim.analytic import nominal_trap_frequency
+    from cubedimer.dataset import LoadConfig, load_dataset
+
+    from ..diagnosis import DiagnoseConfig
+    from ..diagnosis.pipeline import check_enough_runs
+
+    dataset = load_dataset(data_dir, config=LoadConfig(trap_frequency=nominal_trap_frequency), report=lambda m: None)
+    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
 
 
 def _late_phase(p) -> float | None:
