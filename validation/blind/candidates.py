@@ -182,6 +182,9 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         # effects named alone that the truth does not hold, and pairs named as indistinguishable
         "false_effects": sorted(set(found) - set(true_set)),
+        # the greedy rounds' set before the backward check and the judgement against discovered terms
+        "false_effects_greedy": None if diag is None or "greedy_identified" not in diag else sorted(
+            set(diag["greedy_identified"]) - set(true_set)),
         "indistinguishable": [] if diag is None else [p["effects"] for p in diag.get("indistinguishable") or []],
         "discovered_terms": None if diag is None else {
             eq: [t["term"] for t in terms]
@@ -203,6 +206,8 @@ def summarize(results: list[dict]) -> dict:
         out[f"n_{k}_effects"] = len(sub)
     out["false_effect_rate"] = float(np.mean([bool(set(r["identified"]) - set(r["true_set"])) for r in results])) \
         if results else None
+    greedy = [bool(r["false_effects_greedy"]) for r in results if r.get("false_effects_greedy") is not None]
+    out["false_effect_rate_greedy_rounds_alone"] = float(np.mean(greedy)) if greedy else None
     out["cases_with_indistinguishable_pairs"] = int(sum(bool(r.get("indistinguishable")) for r in results))
     within = [e <= 0.05 for r in results if len(r["true_set"]) == 1 and r["exact"]
               for errs in r["parameter_relative_error"].values() for e in errs.values()]

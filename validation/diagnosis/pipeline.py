@@ -477,6 +477,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "indistinguishable": [pr.to_dict() for pr in pairs],
         "model_effects": identified,
         "dropped_by_backward_check": list(elim.dropped),
+        "greedy_identified": list(ident.identified),
         "calibration": calibration,
         "gap_before": gap_before,
         "gap_after": gap_after,
