@@ -243,3 +243,78 @@ def test_wide_tables_scroll_and_columns_are_defined(tmp_path):
     text = write_report([Section("s", "S", "reading", [], [table])], tmp_path, "t").read_text()
     assert '<div class="table-scroll"><table>' in text and ".table-scroll{overflow-x:auto" in text
     assert "<b>column 39</b>: the 39-th" in text
+
+
+# ------------------------------------------------------------------ the diagnosis's sentences on real diagnoses
+def _per_run_origin_error(data, offsets_m):
+    """Shift each run's y by its own offset: a tracking whose y origin differs from run to run."""
+    for f, dy in zip(sorted(data.glob("*.csv")), offsets_m):
+        out = []
+        for ln in f.read_text().splitlines():
+            if ln.startswith("#") or ln.startswith("t,"):  # comments and the header
+                out.append(ln)
+                continue
+            t, y, th = ln.split(",")
+            out.append(f"{t},{float(y) + dy:.9e},{th}" if y else ln)
+        f.write_text("\n".join(out) + "\n")
+
+
+DIAGNOSIS_CASES = {
+    # the paper-like dynamics (locked attractors, weak linear damping) on 8 short runs
+    "paper-like": dict(runs=8, duration=2.0, preset=True),
+    # 4 runs (a lab's first set) with a different y origin in every run (a tracking's per-run origin error)
+    "per-run origin error": dict(runs=4, duration=2.0, preset=False, offsets=(0.0, 3e-6, -2e-6, 5e-6)),
+}
+
+
+@pytest.fixture(scope="module", params=list(DIAGNOSIS_CASES))
+def diagnosed(request, tmp_path_factory):
+    from acousim.twin import PAPER_LIKE, TwinConfig, simulate_dataset
+    from validation.diagnosis import DiagnoseConfig, diagnose_dataset
+
+    case = DIAGNOSIS_CASES[request.param]
+    data = tmp_path_factory.mktemp("diagnosed") / "data"
+    cfg = (TwinConfig.from_preset(PAPER_LIKE, runs=case["runs"], duration=case["duration"], seed=31)
+           if case["preset"] else TwinConfig(runs=case["runs"], duration=case["duration"], seed=32))
+    simulate_dataset(cfg, data, progress=False)
+    (data / "truth.json").unlink()
+    if "offsets" in case:
+        _per_run_origin_error(data, case["offsets"])
+    diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=False), progress=False)
+    return diag
+
+
+@pytest.mark.slow
+def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
+    """Each claim of the diagnosis's reading against diagnosis.json: the origin against both named references, the
+    named effects and pairs exactly (never a pair's member alone), anti-damping flagged exactly when a fitted damping
+    rate is negative, and the smallest attainable p of the held-out test beside its column."""
+    diag = diagnosed
+    section = diagnosis_section(diag, [])
+    g = section.reading
+    cal = diag["calibration"]
+    assert _number(r"y origin lies ([-+\d.]+) um above the simulation's Z_eq at the calibrated", g) == pytest.approx(
+        cal["y_origin_above_calibrated_Z_eq_m"] * 1e6, abs=0.006)
+    assert _number(r"and ([-+\d.]+) um above its Z_eq at the nominal pressure", g) == pytest.approx(
+        cal["y_origin_above_nominal_Z_eq_m"] * 1e6, abs=0.006)
+    assert cal["y_origin_above_nominal_Z_eq_m"] - cal["y_origin_above_calibrated_Z_eq_m"] == pytest.approx(
+        cal["calibrated_Z_eq_m"] - cal["nominal_Z_eq_m"], abs=1e-12)
+    named = diag["identified"]
+    pairs = [p["effects"] for p in diag.get("indistinguishable") or []]
+    if named or pairs:
+        cause = g.split("The gap is caused by", 1)[1].split(". ", 1)[0]
+        for name in named:
+            assert name in cause
+        for a, b in pairs:
+            assert f"by {a} or {b}, which the data cannot tell apart" in cause
+        others = set(diag["settings"]["candidates"]) - set(named) - {e for p in pairs for e in p}
+        assert not any(re.search(rf"\b{o}\b", cause) for o in others), (cause, others)
+    else:
+        assert "No candidate effect improves held-out runs significantly." in g
+    rates = [v for e in diag["effects"] if e["significant"] and e["name"] == "linear_damping" for v in e["params"].values()]
+    assert ("Anti-damping" in g) == any(v < 0 for v in rates)
+    n = len(diag["gap_per_run"]["runs"])
+    assert f"the smallest p {n} runs allow is {0.5 ** n:.3g}" in section.tables[0].columns["held-out p (sign-flip)"]
+    assert set(section.tables[0].header) - {"effect"} <= set(section.tables[0].columns)
+    if n < diag["settings"]["runs_needed"]:
+        assert f"at least {diag['settings']['runs_needed']} runs are needed" in g
