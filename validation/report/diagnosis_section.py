@@ -217,7 +217,12 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         tables.append(Table("Discovered library terms (what no candidate explains; found in the equation's integral "
                             "form, or in the energy balance for a dissipation)",
                             ["equation", "term", "found in", "coefficient (SI)", "std error", "shrink",
-                             "held-out p (sign-flip)"], term_rows))
+                             "held-out p (sign-flip)"], term_rows,
+                            {"found in": "integral: the equation's integral form; energy: the energy balance",
+                             "std error": "white-noise standard error of the coefficient",
+                             "shrink": "fraction of the equation's remaining gap beyond noise the term removes, added in "
+                                       "order", "held-out p (sign-flip)": "one-sided sign-flip test of the term's "
+                                                                         "per-run held-out improvement"}))
     if drift.get("detected"):
         tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
                             [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))

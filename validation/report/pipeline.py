@@ -110,7 +110,16 @@ def _scattering_section(models) -> Section:
                    "long-time error", "fitted parameters"],
                   [[MODEL_LABELS[r.model], r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
                     r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
-                   for r in models.rows])
+                   for r in models.rows],
+                  {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
+                   "origin offset [um]": "the data's y origin above this simulation's equilibrium height Z_eq at its "
+                                         "calibrated pressure",
+                   "y equation": "unexplained fraction of the vertical accelerations beyond the noise floor, mean over runs",
+                   "theta equation": "the same for the measured hinge angle (integral form)",
+                   "energy": "the same for the energy balance over 0.4-s windows",
+                   "gap": "the mean of the three", "long-time error": "mean of the attractor-shape, Poincare and frequency "
+                   "errors of the simulation started from each run's first state",
+                   "fitted parameters": "the parameters fitted with the simulation (SI)"})
     return Section("scattering", "7. Scattering added: fitted or from physics", text, [], [table], models.to_dict())
 
 
