@@ -200,7 +200,7 @@ def summarize(results: list[dict]) -> dict:
     out: dict = {"n_cases": len(results), "failed": sum(r["error"] is not None for r in results),
                  "not_generated": sum(not r.get("scored", True) for r in results)}
     results = [r for r in results if r.get("scored", True)]
-    for k in (0, 1, 2):
+    for k in (0, 1, 2, 3):  # three: two drawn effects beside the air's damping (linear_damping)
         sub = [r for r in results if r["n_true"] == k]
         out[f"exact_rate_{k}_effects"] = float(np.mean([r["exact"] for r in sub])) if sub else None
         out[f"n_{k}_effects"] = len(sub)
@@ -242,6 +242,8 @@ def candidates_table(summary: dict) -> list[str]:
              f"| exact identification, no effect ({summary['n_0_effects']} sets) | {pct(summary['exact_rate_0_effects'])} | no effect named |",
              f"| exact identification, one effect ({summary['n_1_effects']} sets) | {pct(summary['exact_rate_1_effects'])} | >= 90 % |",
              f"| exact identification, two effects ({summary['n_2_effects']} sets) | {pct(summary['exact_rate_2_effects'])} | >= 80 % |",
+             *([f"| exact identification, three effects ({summary['n_3_effects']} sets: two drawn beside the air's damping) "
+                f"| {pct(summary['exact_rate_3_effects'])} | |"] if summary.get("n_3_effects") else []),
              f"| no-effect sets with an effect named | {summary['false_positive_sets_on_no_effect']} | 0 |",
              f"| sets with a false effect named (alone) | {pct(summary.get('false_effect_rate'))} | <= 5 % |",
              f"| sets with an indistinguishable pair named | {summary.get('cases_with_indistinguishable_pairs', '-')} | |",
