@@ -83,6 +83,8 @@ class Elimination:
     indistinguishable: list[IndistinguishablePair] = field(default_factory=list)
     #: each effect's last test against the set without it (``p_value`` etc. given all the others)
     tests: dict[str, CandidateTest] = field(default_factory=dict)
+    #: each dropped effect's test at the time it was dropped
+    dropped_tests: dict[str, CandidateTest] = field(default_factory=dict)
 
 
 def backward_check(problem: DiagnosisProblem, chosen: Sequence[str], alpha: float = 0.01,
@@ -115,6 +117,7 @@ def backward_check(problem: DiagnosisProblem, chosen: Sequence[str], alpha: floa
     pairs: list[IndistinguishablePair] = []
     dropped: list[str] = []
     tests: dict[str, CandidateTest] = {}
+    dropped_tests: dict[str, CandidateTest] = {}
     while kept:
         full = gaps(kept)
         round_tests = {e: candidate_test(gaps([x for x in kept if x != e]), full, acting_components(e), alpha,
@@ -141,6 +144,7 @@ def backward_check(problem: DiagnosisProblem, chosen: Sequence[str], alpha: floa
                 round_tests[weakest].median_improvement)
             kept.remove(weakest)
             dropped.append(weakest)
+            dropped_tests[weakest] = round_tests[weakest]
             if weakest in paired:  # the pair as a whole is not needed
                 pairs = [p for p in pairs if p.kept_in_model != weakest]
                 dropped.append(paired.pop(weakest))
@@ -155,7 +159,7 @@ def backward_check(problem: DiagnosisProblem, chosen: Sequence[str], alpha: floa
         paired[pair.kept_in_model] = other
         pairs.append(pair)
     named = [e for e in kept if e not in paired]
-    return Elimination(named, kept, dropped, pairs, {e: tests[e] for e in kept})
+    return Elimination(named, kept, dropped, pairs, {e: tests[e] for e in kept}, dropped_tests)
 
 
 def _pair(problem: DiagnosisProblem, kept: Sequence[str], members: tuple[str, str], order: Sequence[str],

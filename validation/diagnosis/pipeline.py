@@ -394,10 +394,12 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         g = scalar_gap(fit_gaps(runs, fit))
         test = last_tests.get(name)
         note = "fitted on top of the identified effects; not a significant held-out improvement"
+        given = elim.dropped_tests.get(name)
         if name in elim.dropped:
             t = ident.rounds[ident.identified.index(name)].candidates[name]
             note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
-                    "(backward check): the others explain its share of the gap")
+                    f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
+                    "of the gap")
         if name in in_pair:
             other = [e for e in in_pair[name].effects if e != name][0]
             note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
@@ -409,7 +411,8 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                        "significant": False, "p_value": test.p_value if test else None,
                        "wilcoxon_p": test.wilcoxon_p if test else None,
                        "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
-                       "note": note})
+                       "note": note, **({"p_value_given_others": given.p_value,
+                                         "median_improvement_given_others": given.median_improvement} if given else {})})
     effects += sorted(others, key=lambda e: e["gap_after"])
     loc_before = localize_residuals(runs, base.residuals)
     loc_after = localize_residuals(runs, final.residuals)

@@ -15,6 +15,7 @@ def test_an_effect_not_needed_given_the_others_is_dropped(fast_model, synthetic_
     result = backward_check(problem, ["mirror_asymmetry", "pair_scattering"], cache=cache)
     assert result.named == ["pair_scattering"] and result.model_effects == ["pair_scattering"]
     assert result.dropped == ["mirror_asymmetry"] and result.indistinguishable == []
+    assert not result.dropped_tests["mirror_asymmetry"].significant
     test = result.tests["pair_scattering"]
     assert test.significant and test.p_value < 0.01
     # the held-out gaps are shared with the caller (the greedy rounds): the full set and each set without one
