@@ -237,6 +237,63 @@ def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: lis
     return out
 
 
+def _ranked_effects(problem: DiagnosisProblem, config: DiagnoseConfig, ident, elim, identified: list[str],
+                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
+                    gap_before: float) -> list[dict]:
+    """diagnosis.json's ``effects``: every candidate, the model's effects first (in the order added, with the gap
+    after the cumulative fit and their held-out tests), then the others fitted on top of them, by gap."""
+    runs = problem.runs
+    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
+    # the others fitted on top of the identified set
+    effects = []
+    last_tests = ident.last_tests()
+    for i, name in enumerate(identified):
+        fit = fit_gap_model(problem, identified[: i + 1])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = ident.rounds[ident.identified.index(name)].candidates[name]
+        given = elim.tests.get(name)
+        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                 "held_out_improvement_fraction": test.median_improvement_fraction,
+                 "added_in_round": ident.identified.index(name) + 1, "named": name in named,
+                 "p_value_given_others": given.p_value if given else None,
+                 "median_improvement_given_others": given.median_improvement if given else None}
+        if name in in_pair:
+            entry["indistinguishable_from"] = [e for e in in_pair[name].effects if e != name]
+        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
+            entry["params_without_discovered_terms"] = final.effects[name]
+        effects.append(entry)
+    others = []
+    for name in config.candidates:
+        if name in identified:
+            continue
+        fit = fit_gap_model(problem, identified + [name])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = last_tests.get(name)
+        note = "fitted on top of the identified effects; not a significant held-out improvement"
+        given = elim.dropped_tests.get(name)
+        if name in elim.dropped:
+            t = ident.rounds[ident.identified.index(name)].candidates[name]
+            note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
+                    f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
+                    "of the gap")
+        if name in in_pair:
+            other = [e for e in in_pair[name].effects if e != name][0]
+            note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
+                    f"{other} stands for both in the fitted model")
+        if name in replaced:
+            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
+                    "the discovered terms explain its share of the gap better")
+        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                       "significant": False, "p_value": test.p_value if test else None,
+                       "wilcoxon_p": test.wilcoxon_p if test else None,
+                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
+                       "note": note, **({"p_value_given_others": given.p_value,
+                                         "median_improvement_given_others": given.median_improvement} if given else {})})
+    effects += sorted(others, key=lambda e: e["gap_after"])
+    return effects
+
+
 #: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the
 #: calibration's and the effects' held-out comparison needs at least two runs to fit on and one to score.
 MIN_RUNS = 3
@@ -366,54 +423,8 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
-    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
-    # the others fitted on top of the identified set
-    effects = []
-    last_tests = ident.last_tests()
-    for i, name in enumerate(identified):
-        fit = fit_gap_model(problem, identified[: i + 1])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = ident.rounds[ident.identified.index(name)].candidates[name]
-        given = elim.tests.get(name)
-        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                 "held_out_improvement_fraction": test.median_improvement_fraction,
-                 "added_in_round": ident.identified.index(name) + 1, "named": name in named,
-                 "p_value_given_others": given.p_value if given else None,
-                 "median_improvement_given_others": given.median_improvement if given else None}
-        if name in in_pair:
-            entry["indistinguishable_from"] = [e for e in in_pair[name].effects if e != name]
-        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
-            entry["params_without_discovered_terms"] = final.effects[name]
-        effects.append(entry)
-    others = []
-    for name in config.candidates:
-        if name in identified:
-            continue
-        fit = fit_gap_model(problem, identified + [name])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = last_tests.get(name)
-        note = "fitted on top of the identified effects; not a significant held-out improvement"
-        given = elim.dropped_tests.get(name)
-        if name in elim.dropped:
-            t = ident.rounds[ident.identified.index(name)].candidates[name]
-            note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
-                    f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
-                    "of the gap")
-        if name in in_pair:
-            other = [e for e in in_pair[name].effects if e != name][0]
-            note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
-                    f"{other} stands for both in the fitted model")
-        if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
-                    "the discovered terms explain its share of the gap better")
-        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                       "significant": False, "p_value": test.p_value if test else None,
-                       "wilcoxon_p": test.wilcoxon_p if test else None,
-                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
-                       "note": note, **({"p_value_given_others": given.p_value,
-                                         "median_improvement_given_others": given.median_improvement} if given else {})})
-    effects += sorted(others, key=lambda e: e["gap_after"])
+    effects = _ranked_effects(problem, config, ident, elim, identified, named, in_pair, replaced, joint_params, final,
+                              gap_before)
     loc_before = localize_residuals(runs, base.residuals)
     loc_after = localize_residuals(runs, final.residuals)
     long_time = {}
