@@ -183,10 +183,12 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         warnings_text + data_text + drift_text + gap_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         + _origin_text(cal) +
-        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
-        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
-        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: " if ident or pairs else "")
-        + f"{rem['statement'][0].upper()}{rem['statement'][1:]}.{found}"
+        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the data unexplained beyond the noise "
+        "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
+        f"energy balance; noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
+        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: {rem['statement']}" if ident or pairs else
+           f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
+        + f".{found}"
         + anti_damping_text({f"{k} of {e['name']}": v for e in diagnosis["effects"] if e["significant"]
                              and e["name"] in DAMPING_RATES for k, v in e["params"].items() if k in DAMPING_RATES[e["name"]]})
     )

@@ -116,7 +116,7 @@ def test_each_numeric_claim_is_the_number_in_numbers_json(report):
                                                                                           abs=0.005)
     assert _number(r"resolve ([\d.]+) Hz", d) == pytest.approx(data["frequency_resolution_hz"], rel=0.01)
     diag, g = numbers["diagnosis"], readings["diagnosis"]
-    assert _number(r"leaves ([\d.]+) % of the acceleration variance", g) == pytest.approx(100 * diag["gap_before"],
+    assert _number(r"leaves ([\d.]+) % of the data unexplained beyond the noise floor", g) == pytest.approx(100 * diag["gap_before"],
                                                                                            abs=0.05)
     assert _number(r"noise floor ([\d.]+) %", g) == pytest.approx(100 * diag["noise_floor"], abs=0.05)
     assert _number(r"Calibrated pressure ([\d.]+) Pa", g) == pytest.approx(diag["pressure_amplitude_pa"], abs=0.5)
