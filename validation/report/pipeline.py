@@ -505,10 +505,9 @@ def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
     damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in model_json["equations"][eq]]
     rates = _damping_rates(model_json["equations"])
     if damping and (model_json.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
-        positive = [d for d, r in zip(damping, rates.values()) if r >= 0] if len(rates) == len(damping) else damping
-        if positive:
-            text += (f" The damping terms ({', '.join(positive)}) are kept as physical damping whatever their significance, "
-                     "as in the source paper; Holm's rule selects the other terms.")
+        text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
+                 "the source paper; Holm's rule selects the other terms.")
+    # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
     text += anti_damping_text(rates)
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."

@@ -318,3 +318,15 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
     assert set(section.tables[0].header) - {"effect"} <= set(section.tables[0].columns)
     if n < diag["settings"]["runs_needed"]:
         assert f"at least {diag['settings']['runs_needed']} runs are needed" in g
+
+
+def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
+    """The lab's hinge damping of +8 and +16 1/s in thetaddot (anti-damping), kept by the rule, is flagged."""
+    from validation.report.pipeline import _discovery_fit_text
+
+    model = {"equations": {"yddot": {"y": -1.9e4, "ydot": -0.2}, "thetaddot": {"theta": -110.0, "thetadot": 8.0}},
+             "settings": {"discovery": {"keep_damping": True}}}
+    text, _ = _discovery_fit_text(model, ["..."])
+    assert "kept as physical damping whatever their significance" in text
+    assert "Anti-damping" in text and "gamma_theta (thetadot in thetaddot) -8 1/s" in text
+    assert "gamma_y (ydot in yddot)" not in text  # 0.2 1/s of damping: not flagged
