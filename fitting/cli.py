@@ -138,15 +138,17 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 def _cmd_plan(a: argparse.Namespace) -> int:
     from .model import PolynomialModel
-    from .oracle import NoiseLevels
     from .run_planning import plan_runs
 
     try:
         model = PolynomialModel.from_json(str(a.model))
     except (OSError, ValueError, KeyError) as exc:
         raise UserInputError(f"{a.model}: not a readable model.json ({exc})") from None
+    noise = _plan_noise(a)
+    if a.data is not None:  # say which levels the data set gave
+        _log(f"tracking noise: sigma_y = {noise.sigma_y:.3g} m, sigma_theta = {noise.sigma_theta:.3g} ({noise.source})")
     try:
-        plan = plan_runs(model, NoiseLevels(a.noise_y, a.noise_theta), a.duration, a.fps, a.term, target_z=a.target_z,
+        plan = plan_runs(model, noise, a.duration, a.fps, a.term, target_z=a.target_z,
                          size=a.size, n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
                          y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude)
     except (ValueError, RuntimeError) as exc:
@@ -155,14 +157,47 @@ def _cmd_plan(a: argparse.Namespace) -> int:
     return 0
 
 
+def _plan_noise(a: argparse.Namespace):
+    """The planner's tracking noise: --noise-y/--noise-theta where given, else the noise the data set of --data
+    records in meta.json (:func:`fitting.oracle.recorded_tracking_noise`), else the noise estimated from its runs."""
+    from .oracle import NoiseLevels, estimate_tracking_noise, recorded_tracking_noise
+
+    if a.noise_y is not None and a.noise_theta is not None:
+        return NoiseLevels(a.noise_y, a.noise_theta, source="given on the command line")
+    if a.data is None:
+        raise UserInputError("plan: give --noise-y and --noise-theta, or --data DATA_DIR to read the data set's tracking "
+                             "noise")
+    from cubedimer.dataset import DatasetError, load_dataset
+    from cubedimer.meta import read_meta
+
+    try:
+        noise = recorded_tracking_noise(read_meta(a.data))
+        if noise is None:
+            noise = replace(estimate_tracking_noise(load_dataset(a.data, report=lambda m: None).runs),
+                            source=f"estimated from the runs of {a.data} (fourth differences; its meta.json records no "
+                                   "tracking noise)")
+        else:
+            noise = replace(noise, source=f"recorded by the tracking in {Path(a.data) / 'meta.json'}")
+    except DatasetError as exc:
+        raise UserInputError(str(exc)) from None
+    # a level given on the command line overrides the data set's for its coordinate
+    return replace(noise, sigma_y=a.noise_y if a.noise_y is not None else noise.sigma_y,
+                   sigma_theta=a.noise_theta if a.noise_theta is not None else noise.sigma_theta)
+
+
 def add_plan_parser(subparsers) -> None:
     """``plan``: how many runs make a term resolvable (the oracle's experiment planner)."""
     p = subparsers.add_parser("plan", help="how many runs make a term resolvable (oracle z of integral-form least squares)")
     p.add_argument("--model", required=True, help="model.json (fit's output or a truth.json)")
     p.add_argument("--term", required=True, help="EQUATION:TERM, e.g. thetaddot:y^2*theta")
     p.add_argument("--size", type=float, default=None, help="the term's coefficient [SI] (default: the model's)")
-    p.add_argument("--noise-y", type=positive_float, required=True, help="tracking noise of y [m]")
-    p.add_argument("--noise-theta", type=positive_float, required=True, help="tracking noise of theta [-]")
+    p.add_argument("--data", default=None, metavar="DATA_DIR",
+                   help="a data set whose tracking noise the plan uses: the noise its meta.json records (written by "
+                        "python -m tracking), else the noise estimated from its runs")
+    p.add_argument("--noise-y", type=positive_float, default=None,
+                   help="tracking noise of y [m] (required without --data; overrides the data set's)")
+    p.add_argument("--noise-theta", type=positive_float, default=None,
+                   help="tracking noise of theta [-] (required without --data; overrides the data set's)")
     p.add_argument("--duration", type=positive_float, default=3.0, help="run length [s]")
     p.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
     p.add_argument("--target-z", type=positive_float, default=5.0, help="oracle z that counts as resolvable")

@@ -209,8 +209,8 @@ def add_blind_parser(sub) -> None:
         description=(
             "Generate N data sets per case kind, diagnose each without access to its truth and score it. Candidate "
             "cases: a hidden random choice of no effect, one or two effects (random strengths from weak to strong) "
-            "and a random pressure error, on the twin without the air's computed damping (the drawn effects are the "
-            "whole truth); scored by identification (exact-set rate by number of effects, per-effect "
+            "and a random pressure error, on the twin with the air's computed damping (scored as linear_damping at "
+            "the air's rates; --inviscid: without it, the drawn effects are the whole truth); scored by identification (exact-set rate by number of effects, per-effect "
             "precision and recall), parameter errors, shrink and false positives. Further kinds: an effect outside "
             "the candidates (not forced onto a candidate, leading discovered term), a drifting pressure (detected), "
             "tracking glitches (against the same case without them) and a file in the wrong units (skipped by name). "
@@ -229,6 +229,10 @@ def add_blind_parser(sub) -> None:
                    "(a drifting pressure), glitches (outlier frames, scored against the clean twin), unit_slip (one "
                    "run in micrometres or milliseconds, to be skipped by name); 'all' for every kind. The default keeps the "
                    "study of the identification targets; every further kind costs one diagnosis per case (glitches two)")
+    p.add_argument("--inviscid", action="store_true",
+                   help="candidate cases without the air's computed damping (the drawn effects are the whole truth; the "
+                        "study of docs/diagnosis.md's blind-check table); default: the twin's default physics, whose "
+                        "air damping the truth holds as linear_damping at the air's rates")
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
     add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "
@@ -251,7 +255,8 @@ def run_blind_cli(args: argparse.Namespace) -> int:
     check_limit("frames per case (--runs x --duration x 2000 fps)", args.runs * args.duration * 2000.0,
                 MAX_BLIND_FRAMES_PER_CASE)
     prepare_output_dir(args.out, "--out", create=False)
-    config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration, kinds=kinds)
+    config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration, kinds=kinds,
+                         air_damping=not args.inviscid)
     summary = run_blind(config, args.out, executor_config(args))
     print(blind_table(summary, config))
     return 0

@@ -224,3 +224,35 @@ def test_plan_cli(tmp_path, model, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and all(e.startswith("error:") for e in err)
     assert main(args + ["--term", "thetaddot:theta^3", "--size", "-300"]) == 0
+
+
+def test_plan_reads_the_data_sets_recorded_tracking_noise(tmp_path, model, capsys, sine_run, write_csv):
+    """--data: the noise the data set's meta.json records (the tracking's block); the oracle SE is linear in the
+    noise, so twice the recorded levels give twice the SE of the same plan at the given ones (same reference runs)."""
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(model.to_json()))
+    common = ["plan", "--model", str(path), "--term", "thetaddot:y^2*theta", "--duration", "1", "--fps", "1500",
+              "--runs", "4", "--reference-runs", "6"]
+
+    def first_se() -> float:
+        out = capsys.readouterr()
+        row = [ln.split() for ln in out.out.splitlines() if ln.split() and ln.split()[0] == "4"][0]
+        return float(row[1]), out.err
+
+    assert main(common + ["--noise-y", "1.5e-6", "--noise-theta", "0.003"]) == 0
+    given, _ = first_se()
+    data = tmp_path / "data"
+    data.mkdir()
+    write_csv(data / "run01.csv", *sine_run)
+    (data / "meta.json").write_text(json.dumps({"tracking": {"noise_y_m": 3e-6, "noise_theta": 0.006}}))
+    assert main(common + ["--data", str(data)]) == 0
+    recorded, err = first_se()
+    assert recorded == pytest.approx(2 * given, rel=1e-3)  # 4 significant digits printed
+    assert "sigma_y = 3e-06 m, sigma_theta = 0.006 (recorded by the tracking in" in err
+    # without a record: estimated from the runs (a clean sine run: the estimate is tiny but positive), and named so
+    (data / "meta.json").write_text("{}")
+    assert main(common + ["--data", str(data)]) == 0
+    assert "estimated from the runs of" in first_se()[1]
+    # neither levels nor a data set: one line, exit 2
+    assert main(common) == 2
+    assert "give --noise-y and --noise-theta, or --data DATA_DIR" in capsys.readouterr().err

@@ -24,7 +24,7 @@ def test_blind_draws_are_seeded_and_scored():
 
 
 def test_blind_twin_cases_are_inviscid_apart_from_the_drawn_effects(tmp_path, monkeypatch):
-    """The blind study's twin runs without the air's computed damping: the drawn effects are the whole truth it
+    """The inviscid study's twin runs without the air's computed damping: the drawn effects are the whole truth it
     scores (a case of no effect must be the dimer with no effect, not with the air's drag the diagnosis would name)."""
     import acousim.twin
     from validation.blind import BlindConfig
@@ -33,5 +33,34 @@ def test_blind_twin_cases_are_inviscid_apart_from_the_drawn_effects(tmp_path, mo
     seen = []
     monkeypatch.setattr(acousim.twin, "simulate_dataset", lambda twin, *a, **k: seen.append(twin))
     case = {"index": 0, "effects": {}, "pressure_error": 0.0, "twin_seed": 1}
-    assert generate_twin_case(case, BlindConfig(cases=1, runs=3, duration=1.0), tmp_path / "d") == (None, 0)
+    config = BlindConfig(cases=1, runs=3, duration=1.0, air_damping=False)
+    assert generate_twin_case(case, config, tmp_path / "d", air_damping=config.air_damping) == (None, 0)
     assert len(seen) == 1 and seen[0].air_damping is False and len(seen[0].effects) == 0
+
+
+def test_the_default_blind_study_has_the_air_damping_scored_as_linear_damping():
+    """Realistic by default: the twin's default physics, whose air damping the truth holds as linear_damping at the
+    air's rates (added to a drawn linear damping's); a diagnosis naming only it is exact, and quadratic drag named
+    beside it is a false effect."""
+    from validation.blind import BlindConfig
+    from validation.blind.candidates import candidate_truth
+
+    assert BlindConfig().air_damping is True
+    air = {"air_damping": {"gamma_y": 0.585, "gamma_theta": 1.21}}
+    assert candidate_truth(air) == {"linear_damping": {"gamma_y": 0.585, "gamma_theta": 1.21}}
+    both = candidate_truth({**air, "linear_damping": {"gamma_y": 1.0, "gamma_theta": 2.0},
+                            "pair_scattering": {"kappa": 1e4}})
+    assert both["linear_damping"] == pytest.approx({"gamma_y": 1.585, "gamma_theta": 3.21})
+    assert both["pair_scattering"] == {"kappa": 1e4}
+    case = {"index": 0, "effects": candidate_truth(air), "pressure_error": 0.0, "twin_seed": 1}
+    diag = {"identified": ["linear_damping", "quadratic_drag"], "gap_before": 0.02, "gap_after": 1e-4,
+            "effects": [{"name": "linear_damping", "params": {"gamma_y": 0.59, "gamma_theta": 1.22}},
+                        {"name": "quadratic_drag", "params": {"c_y": 1.0, "c_theta": 0.01}}],
+            "calibration": {"pressure_amplitude_pa": 3000.0}, "indistinguishable": []}
+    r = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
+    assert r["false_effects"] == ["quadratic_drag"] and not r["exact"]
+    diag["identified"] = ["linear_damping"]
+    exact = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
+    assert exact["exact"] and exact["false_effects"] == []
+    s = summarize([r, exact])
+    assert s["false_effect_rate"] == 0.5 and s["single_effect_parameters_within_5pct"] == 1.0

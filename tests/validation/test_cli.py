@@ -124,3 +124,16 @@ def test_report_heldout_tolerance_is_checked_before_anything_runs(tmp_path, tiny
     line = _one_line_error(capsys)
     assert line.startswith("error: --heldout-tolerance") and "[0, 1)" in line
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["diagnose", "report"])
+def test_a_single_run_is_refused_with_the_runs_needed(tmp_path, tiny_data, capsys, command):
+    """One usable run: one line saying how many runs the diagnosis needs and why, exit 2, nothing written (the
+    report refuses before its fit)."""
+    out = tmp_path / "out"
+    assert main([command, str(tiny_data), "--out", str(out), "--quiet"]) == 2
+    line = _one_line_error(capsys)
+    assert str(tiny_data) in line and "1 usable run;" in line
+    assert "needs at least 3, because it scores every fit on runs held out of it" in line
+    assert "at least 7 to name an effect at alpha 0.01" in line and "record more runs" in line
+    assert not out.exists()

@@ -6,9 +6,12 @@ ends of ``STRENGTHS``, random signs where the physics allows both) and a pressur
 within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 
-The twin runs without the air's computed damping (``TwinConfig(air_damping=False)``): the drawn effects are
-the whole truth, a case of no effect is the inviscid dimer, and a drawn ``linear_damping`` is the only damping,
-so that every score compares the diagnosis with exactly what was drawn (docs/blind/*).
+By default the twin runs with its default physics, the air's computed damping (``BlindConfig(air_damping=True)``),
+as every real recording has it: the true candidate set is then the drawn effects plus ``linear_damping``, the
+candidate that stands for the air's drag, at the air's rates (plus a drawn linear damping's; :func:`candidate_truth`).
+The inviscid study (``BlindConfig(air_damping=False)``, ``python -m validation blind --inviscid``) runs without it:
+the drawn effects are the whole truth, a case of no effect is the inviscid dimer, and a drawn ``linear_damping`` is
+the only damping (the study documented in docs/diagnosis.md's blind check, docs/blind/*).
 """
 from __future__ import annotations
 
@@ -24,7 +27,8 @@ from cubedimer.atomic import write_json
 
 from .config import BlindConfig
 
-__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "draw_parameters", "draw_from", "draw_case", "generate_twin_case", "hide_truth", "diagnose_blind",
+__all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "draw_parameters", "draw_from", "draw_case", "generate_twin_case",
+           "candidate_truth", "hide_truth", "diagnose_blind",
            "run_case", "score_case", "summarize", "candidates_table", "confusion_figure"]
 
 logger = logging.getLogger(__name__)
@@ -65,11 +69,12 @@ def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
     return draw_from(np.random.default_rng(np.random.SeedSequence([seed, index])), index, pressure_error)
 
 
-def generate_twin_case(case: dict, config: BlindConfig, data: Path) -> tuple[str | None, int]:
+def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping: bool = False) -> tuple[str | None, int]:
     """Write the twin data set of a drawn case into ``data`` with its truth.json; (error or None, redraws).
 
     A drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs): the twin's
-    seed is redrawn (same effects and pressure) up to 5 times."""
+    seed is redrawn (same effects and pressure) up to 5 times.  ``air_damping``: the twin adds the air's computed
+    drag (its default physics); off, the drawn effects are the whole truth."""
     from acousim.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
@@ -77,16 +82,29 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path) -> tuple[str
         shutil.rmtree(data)
     generation_error, retries = None, 0
     for retries in range(5):
-        # inviscid on purpose: the drawn effects are the truth the study scores (module docstring)
+        # with the air's damping, truth.json lists it among the effects (module docstring)
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
                           pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]),
-                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]), air_damping=False)
+                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]), air_damping=air_damping)
         try:
             simulate_dataset(twin, data, progress=False, force=True)
             return None, retries
         except TwinError as exc:
             generation_error = str(exc)
     return generation_error, retries
+
+
+def candidate_truth(effects: dict) -> dict:
+    """The true effects as the candidates describe them: the twin's ``air_damping`` (its computed drag,
+    ``-gamma_y ydot`` and ``-gamma_theta S(theta) thetadot`` with S(0) = 1) is ``linear_damping`` at its rates, added
+    to a drawn linear damping's."""
+    out = {k: dict(v) for k, v in effects.items() if k != "air_damping"}
+    air = effects.get("air_damping")
+    if air:
+        lin = out.setdefault("linear_damping", {"gamma_y": 0.0, "gamma_theta": 0.0})
+        for p in ("gamma_y", "gamma_theta"):
+            lin[p] = lin.get(p, 0.0) + float(air[p])
+    return out
 
 
 def hide_truth(data: Path, truth_path: Path) -> dict:
@@ -122,14 +140,16 @@ def not_generated(case: dict, error: str, retries: int) -> dict:
 def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     """Generate, diagnose blind, score one case; writes ``result.json`` in ``out_dir``."""
     data = out_dir / "data"
-    generation_error, retries = generate_twin_case(case, config, data)
+    generation_error, retries = generate_twin_case(case, config, data, air_damping=config.air_damping)
     if generation_error is not None:
         result = not_generated(case, generation_error, retries)
         write_json(out_dir / "result.json", result)
         return result
     truth = hide_truth(data, out_dir / "truth.json")  # hidden from the diagnosis
     diag, error = diagnose_blind(data, config)
-    result = score_case(case, truth, diag, error)
+    # scored against what the twin simulated (with the air's damping as the linear damping it is)
+    result = score_case({**case, "effects": candidate_truth(truth.get("effects", case["effects"]))}, truth, diag, error)
+    result["air_damping"] = bool(config.air_damping)
     result["twin_redraws"] = retries
     write_json(out_dir / "result.json", result)
     shutil.rmtree(data, ignore_errors=True)  # keep the study small on disk; truth and result stay
@@ -160,6 +180,12 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
         "pressure_true_pa": truth["pressure_amplitude_pa"],
         "pressure_calibrated_pa": None if diag is None else diag["calibration"]["pressure_amplitude_pa"],
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
+        # effects named alone that the truth does not hold, and pairs named as indistinguishable
+        "false_effects": sorted(set(found) - set(true_set)),
+        # the greedy rounds' set before the backward check and the judgement against discovered terms
+        "false_effects_greedy": None if diag is None or "greedy_identified" not in diag else sorted(
+            set(diag["greedy_identified"]) - set(true_set)),
+        "indistinguishable": [] if diag is None else [p["effects"] for p in diag.get("indistinguishable") or []],
         "discovered_terms": None if diag is None else {
             eq: [t["term"] for t in terms]
             for eq, terms in diag.get("remaining_gap", {}).get("discovered_terms", {}).items()},
@@ -174,10 +200,18 @@ def summarize(results: list[dict]) -> dict:
     out: dict = {"n_cases": len(results), "failed": sum(r["error"] is not None for r in results),
                  "not_generated": sum(not r.get("scored", True) for r in results)}
     results = [r for r in results if r.get("scored", True)]
-    for k in (0, 1, 2):
+    for k in (0, 1, 2, 3):  # three: two drawn effects beside the air's damping (linear_damping)
         sub = [r for r in results if r["n_true"] == k]
         out[f"exact_rate_{k}_effects"] = float(np.mean([r["exact"] for r in sub])) if sub else None
         out[f"n_{k}_effects"] = len(sub)
+    out["false_effect_rate"] = float(np.mean([bool(set(r["identified"]) - set(r["true_set"])) for r in results])) \
+        if results else None
+    greedy = [bool(r["false_effects_greedy"]) for r in results if r.get("false_effects_greedy") is not None]
+    out["false_effect_rate_greedy_rounds_alone"] = float(np.mean(greedy)) if greedy else None
+    out["cases_with_indistinguishable_pairs"] = int(sum(bool(r.get("indistinguishable")) for r in results))
+    within = [e <= 0.05 for r in results if len(r["true_set"]) == 1 and r["exact"]
+              for errs in r["parameter_relative_error"].values() for e in errs.values()]
+    out["single_effect_parameters_within_5pct"] = float(np.mean(within)) if within else None
     none_sets = [r for r in results if r["n_true"] == 0]
     out["false_positive_sets_on_no_effect"] = int(sum(bool(r["identified"]) for r in none_sets))
     out["sets_with_discovered_terms"] = int(sum(any((r.get("discovered_terms") or {}).values()) for r in results))
@@ -208,7 +242,13 @@ def candidates_table(summary: dict) -> list[str]:
              f"| exact identification, no effect ({summary['n_0_effects']} sets) | {pct(summary['exact_rate_0_effects'])} | no effect named |",
              f"| exact identification, one effect ({summary['n_1_effects']} sets) | {pct(summary['exact_rate_1_effects'])} | >= 90 % |",
              f"| exact identification, two effects ({summary['n_2_effects']} sets) | {pct(summary['exact_rate_2_effects'])} | >= 80 % |",
+             *([f"| exact identification, three effects ({summary['n_3_effects']} sets: two drawn beside the air's damping) "
+                f"| {pct(summary['exact_rate_3_effects'])} | |"] if summary.get("n_3_effects") else []),
              f"| no-effect sets with an effect named | {summary['false_positive_sets_on_no_effect']} | 0 |",
+             f"| sets with a false effect named (alone) | {pct(summary.get('false_effect_rate'))} | <= 5 % |",
+             f"| sets with an indistinguishable pair named | {summary.get('cases_with_indistinguishable_pairs', '-')} | |",
+             f"| parameters within 5 %, single effect named exactly | "
+             f"{pct(summary.get('single_effect_parameters_within_5pct'))} | 100 % |",
              f"| sets with a library term discovered (every effect is a candidate) | {summary.get('sets_with_discovered_terms', '-')} | 0 |",
              f"| median shrink where an effect is present | {pct(summary['median_shrink_with_effect'])} | >= 70 % |",
              f"| median calibrated-pressure error | {pct(summary['median_pressure_error'])} | |",

@@ -30,6 +30,9 @@ class BlindConfig:
         Hidden pressure error: the truth is nominal x (1 + e), e uniform in +-``pressure_error``.
     long_time : bool
         Compute the diagnosis's long-time errors too (not scored).
+    air_damping : bool
+        The candidate cases' twin runs with the air's computed damping, its default physics (the truth then holds
+        ``linear_damping`` at the air's rates); False: the inviscid study, whose drawn effects are the whole truth.
     kinds : tuple of str
         The case kinds to run (a subset of :data:`KINDS`; default the candidate cases alone, whose study is
         the reference of the identification targets; each further kind costs one or two diagnoses per case).
@@ -42,6 +45,7 @@ class BlindConfig:
     pressure_error: float = 0.10
     long_time: bool = False
     kinds: tuple[str, ...] = ("candidates",)
+    air_damping: bool = True
 
     def __post_init__(self):
         if self.cases < 1 or self.runs < 3 or not self.duration > 0:

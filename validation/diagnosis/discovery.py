@@ -106,6 +106,13 @@ class Discovery:
         return Discovery({e: [t for t in self.terms[e] if t.term not in terms.get(e, ())] for e in EQUATIONS},
                          self.selected, self.remaining)
 
+    def union(self, other: "Discovery") -> "Discovery":
+        """The terms of both discoveries (per equation; a term in both keeps this discovery's entry)."""
+        terms = {e: list(self.terms[e]) + [t for t in other.terms[e] if t.term not in self.names()[e]]
+                 for e in EQUATIONS}
+        selected = {e: list(dict.fromkeys(self.selected.get(e, []) + other.selected.get(e, []))) for e in EQUATIONS}
+        return Discovery(terms, selected, {**other.remaining, **self.remaining})
+
     def to_dict(self) -> dict:
         """``{"yddot": [...], "thetaddot": [...]}`` (docs/formats.md ``remaining_gap.discovered_terms``)."""
         return {e: [t.to_dict() for t in self.terms[e]] for e in EQUATIONS}

@@ -36,7 +36,7 @@ from .problem import DiagnosisProblem
 from .statistics import sign_flip_pvalue, wilcoxon_greater_pvalue
 
 __all__ = ["PracticalThresholds", "CandidateTest", "IdentificationRound", "Identification", "held_out_gaps",
-           "identify_effects"]
+           "candidate_test", "identify_effects"]
 
 logger = logging.getLogger(__name__)
 
@@ -143,9 +143,27 @@ def held_out_gaps(problem: DiagnosisProblem, effects: Sequence[str], folds: int 
     return out
 
 
+def candidate_test(base: NDArray[np.float64], trial: NDArray[np.float64], components: Sequence[int], alpha: float,
+                   thresholds: PracticalThresholds) -> CandidateTest:
+    """The held-out test of one candidate: per-run held-out gap components (n_runs, 3) without it (``base``) and
+    with it (``trial``), judged by the sign-flip test and the practical thresholds (module docstring)."""
+    min_abs = thresholds.min_absolute_improvement
+    comps = list(components)
+    current, tried = base.mean(axis=1), trial.mean(axis=1)
+    diff = current - tried  # > 0: the candidate helps the held-out run (the floor cancels)
+    p = sign_flip_pvalue(diff)
+    gain = float(np.median(diff))
+    base_c = max(float(np.mean(base[:, comps])), 0.0)
+    gain_c = float(np.median(base[:, comps].mean(axis=1) - trial[:, comps].mean(axis=1)))
+    rel = gain / max(float(np.mean(current)), min_abs)
+    significant = bool(p < alpha and gain > min_abs and gain_c > thresholds.min_relative_improvement * base_c)
+    return CandidateTest(float(np.mean(tried)), gain, rel, min_abs, comps, gain_c, base_c, p,
+                         wilcoxon_greater_pvalue(diff), significant, tried.tolist())
+
+
 def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] | None = None,
                      alpha: float = 0.01, thresholds: PracticalThresholds = PracticalThresholds(),
-                     progress: bool = True) -> Identification:
+                     progress: bool = True, cache: dict | None = None) -> Identification:
     """Greedy, held-out identification of the effects present (module docstring).
 
     A trustworthy calibration is required for naming any cause: the pressure and origin come from the
@@ -166,14 +184,24 @@ def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] | None
     thresholds : PracticalThresholds
     progress : bool
         Log each test at INFO level (else DEBUG).
+    cache : dict, optional
+        Held-out gaps (:func:`held_out_gaps`) by sorted effect names, filled here and reused by the caller's
+        backward check (:func:`validation.diagnosis.elimination.backward_check`).
     """
     if len(problem) < 3:
         raise ValueError("identification needs at least 3 runs (held-out runs are the significance test)")
     log = logger.info if progress else logger.debug
-    min_abs = thresholds.min_absolute_improvement
+    cache = {} if cache is None else cache
+
+    def gaps(effects: list[str]) -> NDArray[np.float64]:
+        key = tuple(sorted(effects))
+        if key not in cache:
+            cache[key] = held_out_gaps(problem, effects)
+        return cache[key]
+
     chosen: list[str] = []
     rounds: list[IdentificationRound] = []
-    current_c = held_out_gaps(problem, chosen)
+    current_c = gaps(chosen)
     current = current_c.mean(axis=1)
     remaining = list(CANDIDATE_EFFECTS if candidates is None else candidates)
     while remaining:
@@ -182,21 +210,11 @@ def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] | None
         best, best_gain = None, 0.0
         for c in remaining:
             log("testing %s on top of %s", c, chosen or "calibration")
-            trial_c = held_out_gaps(problem, chosen + [c])
-            trial = trial_c.mean(axis=1)
-            diff = current - trial  # > 0: the candidate helps the held-out run (the floor cancels)
-            p_w = wilcoxon_greater_pvalue(diff)
-            p = sign_flip_pvalue(diff)
-            gain = float(np.median(diff))
-            comps = acting_components(c)
-            base_c = max(float(np.mean(current_c[:, comps])), 0.0)
-            gain_c = float(np.median(current_c[:, comps].mean(axis=1) - trial_c[:, comps].mean(axis=1)))
-            rel = gain / max(float(np.mean(current)), min_abs)
-            significant = bool(p < alpha and gain > min_abs and gain_c > thresholds.min_relative_improvement * base_c)
-            tests[c] = CandidateTest(float(np.mean(trial)), gain, rel, min_abs, comps, gain_c, base_c, p, p_w,
-                                     significant, trial.tolist())
-            if significant and rel > best_gain:
-                best, best_gain, best_trial = c, rel, trial_c
+            trial_c = gaps(chosen + [c])
+            test = candidate_test(current_c, trial_c, acting_components(c), alpha, thresholds)
+            tests[c] = test
+            if test.significant and test.median_improvement_fraction > best_gain:
+                best, best_gain, best_trial = c, test.median_improvement_fraction, trial_c
         rounds.append(IdentificationRound(base, base_gap, tests))
         if best is None:
             break

@@ -25,6 +25,7 @@ from .discovery import Discovery, discover_terms, discovered_equations
 from .joint_model import joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
 from .gap_model import GapFit, fit_gap_model
+from .elimination import backward_check
 from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
@@ -35,7 +36,7 @@ from .preparation import RunAccelerations, prepare_diagnosis_runs
 from .problem import DiagnosisProblem
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
 
 logger = logging.getLogger(__name__)
 
@@ -218,6 +219,105 @@ def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
     return out
 
 
+def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: list[str], discover) -> Discovery:
+    """The dissipative terms found without the identified candidate dampings: on the calibration alone, and, with
+    two or more dampings identified, also beside each of them alone (the other effects kept), united.
+
+    Two candidate dampings together can mimic a dissipation neither describes (linear damping and quadratic drag
+    reproduce a loss growing as the amplitude^4); on the calibration alone the search can then find its leading term
+    only (measured on the centred y-dependent damping: ``y^2*ydot`` at 23 % under the truth, without the ``y*ydot``
+    that its centre off the data's origin adds), and the two dampings still improve every held-out run on top of it.
+    Beside one damping, the rest of the dissipation's shape is found (there: ``y*ydot`` and ``y^2*ydot``)."""
+    out = discover(base, forms=("energy",))
+    dampings = [e for e in identified if e in AIR_DAMPINGS]
+    if len(dampings) > 1:
+        for d in dampings:
+            keep = [e for e in identified if e not in dampings or e == d]
+            out = out.union(discover(fit_gap_model(problem, keep), forms=("energy",)))
+    return out
+
+
+def _ranked_effects(problem: DiagnosisProblem, config: DiagnoseConfig, ident, elim, identified: list[str],
+                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
+                    gap_before: float) -> list[dict]:
+    """diagnosis.json's ``effects``: every candidate, the model's effects first (in the order added, with the gap
+    after the cumulative fit and their held-out tests), then the others fitted on top of them, by gap."""
+    runs = problem.runs
+    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
+    # the others fitted on top of the identified set
+    effects = []
+    last_tests = ident.last_tests()
+    for i, name in enumerate(identified):
+        fit = fit_gap_model(problem, identified[: i + 1])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = ident.rounds[ident.identified.index(name)].candidates[name]
+        given = elim.tests.get(name)
+        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
+                 "held_out_improvement_fraction": test.median_improvement_fraction,
+                 "added_in_round": ident.identified.index(name) + 1, "named": name in named,
+                 "p_value_given_others": given.p_value if given else None,
+                 "median_improvement_given_others": given.median_improvement if given else None}
+        if name in in_pair:
+            entry["indistinguishable_from"] = [e for e in in_pair[name].effects if e != name]
+        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
+            entry["params_without_discovered_terms"] = final.effects[name]
+        effects.append(entry)
+    others = []
+    for name in config.candidates:
+        if name in identified:
+            continue
+        fit = fit_gap_model(problem, identified + [name])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = last_tests.get(name)
+        note = "fitted on top of the identified effects; not a significant held-out improvement"
+        given = elim.dropped_tests.get(name)
+        if name in elim.dropped:
+            t = ident.rounds[ident.identified.index(name)].candidates[name]
+            note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
+                    f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
+                    "of the gap")
+        if name in in_pair:
+            other = [e for e in in_pair[name].effects if e != name][0]
+            note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
+                    f"{other} stands for both in the fitted model")
+        if name in replaced:
+            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
+                    "the discovered terms explain its share of the gap better")
+        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
+                       "significant": False, "p_value": test.p_value if test else None,
+                       "wilcoxon_p": test.wilcoxon_p if test else None,
+                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
+                       "note": note, **({"p_value_given_others": given.p_value,
+                                         "median_improvement_given_others": given.median_improvement} if given else {})})
+    effects += sorted(others, key=lambda e: e["gap_after"])
+    return effects
+
+
+#: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the
+#: calibration's and the effects' held-out comparison needs at least two runs to fit on and one to score.
+MIN_RUNS = 3
+
+
+def check_enough_runs(data_dir, n_runs: int, n_skipped: int, alpha: float) -> None:
+    """Refuse a data set with fewer than :data:`MIN_RUNS` usable runs: one line that says how many are needed and why.
+
+    Raises
+    ------
+    DatasetError
+        With fewer than :data:`MIN_RUNS` runs.
+    """
+    from cubedimer.errors import DatasetError
+
+    if n_runs >= MIN_RUNS:
+        return
+    skipped = f" ({n_skipped} file(s) skipped)" if n_skipped else ""
+    raise DatasetError(
+        f"{data_dir}: {n_runs} usable run{'' if n_runs == 1 else 's'}{skipped}; the diagnosis needs at least {MIN_RUNS}, "
+        f"because it scores every fit on runs held out of it, and at least {runs_needed(alpha)} to name an effect at "
+        f"alpha {alpha:g} (the held-out sign-flip test's smallest p with n runs is 2^-n); record more runs")
+
+
 def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
                       mesh_size: float | None, model_name: str, gap: float | None,
                       edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
@@ -242,6 +342,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     # of the trap frequency at its nominal pressure
     dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
                            report=lambda m: skip("skipping %s", m))
+    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
     problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
                                              config.max_frames_per_run)
     data_warnings = []
@@ -284,9 +385,15 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     gap_before = scalar_gap(per_before)
     floor = float(np.mean(noise_floors(runs, base)))
     log("gap before = %.3g (noise floor %.3g); identifying effects", gap_before, floor)
+    held_out_cache: dict = {}
     ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
-                             progress=progress)
-    identified = list(ident.identified)
+                             progress=progress, cache=held_out_cache)
+    # every effect the greedy rounds chose must still be needed given all the others; pairs that only work as
+    # either one are one verdict naming both
+    elim = backward_check(problem, ident.identified, alpha=config.alpha, thresholds=config.thresholds, log=log,
+                          cache=held_out_cache)
+    pairs = list(elim.indistinguishable)
+    identified = list(elim.model_effects)  # what the model fits; the named ones are `named` below
     final = fit_gap_model(problem, identified)
     discovery, replaced = Discovery(), {}
     if config.discover:
@@ -298,7 +405,7 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         # the candidates are judged against the terms found on top of them, and against the dissipative terms
         # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
         # describe, leaving nothing to discover on top of it
-        for rivals in (discovery, discover(base, forms=("energy",)) if identified else Discovery()):
+        for rivals in (discovery, _dissipation_rivals(problem, base, identified, discover) if identified else Discovery()):
             if rivals.empty or not identified:
                 continue
             kept, pvals = judge_candidates(problem, identified, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
@@ -307,42 +414,17 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
                 identified = kept
                 final = fit_gap_model(problem, identified)
                 discovery = discover(final)
+    # a pair whose kept member the discovered terms replaced is not a verdict any more
+    pairs = [pr for pr in pairs if pr.kept_in_model in identified]
+    in_pair = {e: pr for pr in pairs for e in pr.effects}
+    named = [e for e in identified if e not in in_pair]
     per_after = fit_gaps(runs, final)
     gap_after = scalar_gap(per_after)
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
-    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
-    # the others fitted on top of the identified set
-    effects = []
-    last_tests = ident.last_tests()
-    for i, name in enumerate(identified):
-        fit = fit_gap_model(problem, identified[: i + 1])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = ident.rounds[ident.identified.index(name)].candidates[name]
-        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                 "held_out_improvement_fraction": test.median_improvement_fraction, "added_in_round": i + 1}
-        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
-            entry["params_without_discovered_terms"] = final.effects[name]
-        effects.append(entry)
-    others = []
-    for name in config.candidates:
-        if name in identified:
-            continue
-        fit = fit_gap_model(problem, identified + [name])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = last_tests.get(name)
-        note = "fitted on top of the identified effects; not a significant held-out improvement"
-        if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
-                    "the discovered terms explain its share of the gap better")
-        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                       "significant": False, "p_value": test.p_value if test else None,
-                       "wilcoxon_p": test.wilcoxon_p if test else None,
-                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
-                       "note": note})
-    effects += sorted(others, key=lambda e: e["gap_after"])
+    effects = _ranked_effects(problem, config, ident, elim, identified, named, in_pair, replaced, joint_params, final,
+                              gap_before)
     loc_before = localize_residuals(runs, base.residuals)
     loc_after = localize_residuals(runs, final.residuals)
     long_time = {}
@@ -393,6 +475,9 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
         "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
         "y_origin_height_m": cal.z_origin_m,
         "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
+        "y_origin_above_calibrated_Z_eq_m": cal.origin_offset_m,
+        "calibrated_Z_eq_m": cal.equilibrium_height_m,
+        "nominal_Z_eq_m": model.equilibrium_height,
         "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
         "calibrated_on": CALIBRATED_ON,
         **_parameter_record(conditions, parameters, model_name),
@@ -402,7 +487,11 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     diagnosis = {
         "model": model_name,
         "simulation": {k: v for k, v in model.record().items() if not isinstance(v, (list, dict))},
-        "identified": identified,
+        "identified": named,
+        "indistinguishable": [pr.to_dict() for pr in pairs],
+        "model_effects": identified,
+        "dropped_by_backward_check": list(elim.dropped),
+        "greedy_identified": list(ident.identified),
         "calibration": calibration,
         "gap_before": gap_before,
         "gap_after": gap_after,

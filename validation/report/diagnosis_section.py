@@ -10,6 +10,7 @@ import numpy as np
 from cubedimer.atomic import save_figure as _save
 
 from ..diagnosis.statistics import format_p
+from .claims import anti_damping_text
 from .html import Figure, Section, Table
 
 __all__ = ["diagnosis_figures", "diagnosis_section", "write_diagnosis"]
@@ -83,15 +84,57 @@ def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[F
     return figs
 
 
+#: the candidate effects whose parameters are damping rates [1/s] (positive: energy taken out of the motion)
+DAMPING_RATES = {"linear_damping": ("gamma_y", "gamma_theta")}
+
+
+def _origin_text(cal: dict) -> str:
+    """Where the data's y origin lies, with the reference named: the simulation's Z_eq at the calibrated pressure (the
+    one the effects' y is measured from) and at the nominal one."""
+    nominal = cal["y_origin_above_nominal_Z_eq_m"] * 1e6
+    calibrated = cal.get("y_origin_above_calibrated_Z_eq_m")
+    if calibrated is None:
+        return f"the data's y origin lies {nominal:+.2f} um above the simulation's Z_eq at the nominal pressure. "
+    return (f"the data's y origin lies {calibrated * 1e6:+.2f} um above the simulation's Z_eq at the calibrated pressure "
+            f"(the effects' y origin) and {nominal:+.2f} um above its Z_eq at the nominal pressure. ")
+
+
+def _verdict(effect: dict, pairs: list[dict]) -> str:
+    if any(effect["name"] in pr["effects"] for pr in pairs):
+        return "indistinguishable"
+    return "yes" if effect["significant"] and effect.get("named", True) else "no"
+
+
+def _params_text(params: dict) -> str:
+    return ", ".join(f"{k} = {v:.3g}" for k, v in params.items())
+
+
+def _cause_text(diagnosis: dict, pairs: list[dict]) -> str:
+    """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
+    verdict naming both, with the held-out evidence."""
+    named = [e for e in diagnosis["effects"] if e["significant"] and e.get("named", True)]
+    parts = [f"{e['name']} ({_params_text(e['params'])})" for e in named]
+    text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
+    for pr in pairs:
+        a, b = pr["effects"]
+        kept = next((e for e in diagnosis["effects"] if e["name"] == pr["kept_in_model"]), None)
+        text += (f"{', and' if parts else ''} by {a} or {b}, which the data cannot tell apart: neither improves held-out "
+                 f"runs given the other ({a} {format_p(pr['p_given_other'][a])}, {b} {format_p(pr['p_given_other'][b])}), "
+                 f"together they do ({format_p(pr['p_together'])}), and the held-out gap with one instead of the other "
+                 f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
+                 f"fitted model uses {pr['kept_in_model']}"
+                 + (f" ({_params_text(kept['params'])})" if kept else ""))
+    return text + "."
+
+
 def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     """The report section of a diagnosis: the reading (calibration, gap, cause) and the ranked candidates."""
     cal = diagnosis["calibration"]
     ident = diagnosis["identified"]
     rem = diagnosis["remaining_gap"]
-    if ident:
-        cause = ", then ".join(f"{e['name']} ({', '.join(f'{k} = {v:.3g}' for k, v in e['params'].items())})"
-                               for e in diagnosis["effects"] if e["significant"])
-        what = f"The gap is caused by {cause}."
+    pairs = diagnosis.get("indistinguishable") or []
+    if ident or pairs:
+        what = _cause_text(diagnosis, pairs)
     else:
         what = "No candidate effect improves held-out runs significantly."
         settings = diagnosis.get("settings") or {}
@@ -139,16 +182,36 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     reading = (
         warnings_text + data_text + drift_text + gap_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
-        f"the data's y origin lies {cal['y_origin_above_nominal_Z_eq_m'] * 1e6:+.1f} um from the simulated Z_eq. "
-        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the acceleration variance unexplained "
-        f"(noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
-        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: " if ident else "")
-        + f"{rem['statement'][0].upper()}{rem['statement'][1:]}.{found}"
+        + _origin_text(cal) +
+        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the data unexplained beyond the noise "
+        "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
+        f"energy balance; noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
+        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: {rem['statement']}" if ident or pairs else
+           f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
+        + f".{found}"
+        + anti_damping_text({f"{k} of {e['name']}": v for e in diagnosis["effects"] if e["significant"]
+                             and e["name"] in DAMPING_RATES for k, v in e["params"].items() if k in DAMPING_RATES[e["name"]]})
     )
-    rows = [[e["name"], "yes" if e["significant"] else "no",
-             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value")]
+    rows = [[e["name"], _verdict(e, pairs),
+             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value"),
+             e.get("p_value_given_others")]
             for e in diagnosis["effects"]]
-    tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink", "held-out p (sign-flip)"], rows)]
+    n_runs = len(diagnosis["gap_per_run"]["runs"])
+    smallest = (diagnosis.get("settings") or {}).get("smallest_attainable_p", 0.5 ** n_runs)
+    columns = {
+        "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
+                      "cannot tell apart (named together); no: not a significant held-out improvement",
+        "parameters (SI)": "fitted with the named effects (for the others: on top of them)",
+        "gap after": "the gap (mean unexplained fraction of the three components beyond the noise floor) with the named "
+                     "effects up to this one, or with the named effects plus this one",
+        "shrink": "1 - gap after / gap before",
+        "held-out p (sign-flip)": f"one-sided sign-flip test over the {n_runs} runs of the held-out improvement when "
+                                  f"the effect was added or last tested; the smallest p {n_runs} runs allow is "
+                                  f"{smallest:.3g}",
+        "p given the others": "the same test of the effect against the named set without it (the backward check)",
+    }
+    tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink",
+                                                   "held-out p (sign-flip)", "p given the others"], rows, columns)]
     terms = rem.get("discovered_terms") or {}
     term_rows = [[eq, t["term"], t.get("form", "integral"), t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
                  for eq, ts in terms.items() for t in ts]
@@ -156,7 +219,12 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         tables.append(Table("Discovered library terms (what no candidate explains; found in the equation's integral "
                             "form, or in the energy balance for a dissipation)",
                             ["equation", "term", "found in", "coefficient (SI)", "std error", "shrink",
-                             "held-out p (sign-flip)"], term_rows))
+                             "held-out p (sign-flip)"], term_rows,
+                            {"found in": "integral: the equation's integral form; energy: the energy balance",
+                             "std error": "white-noise standard error of the coefficient",
+                             "shrink": "fraction of the equation's remaining gap beyond noise the term removes, added in "
+                                       "order", "held-out p (sign-flip)": "one-sided sign-flip test of the term's "
+                                                                         "per-run held-out improvement"}))
     if drift.get("detected"):
         tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
                             [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))

@@ -29,11 +29,13 @@ class Figure:
 
 @dataclass(frozen=True)
 class Table:
-    """A table: title, column headers and rows of cells (numbers are formatted with 4 significant digits)."""
+    """A table: title, column headers and rows of cells (numbers are formatted with 4 significant digits), and what
+    each column holds (``columns``: header -> definition, printed under the table)."""
 
     title: str
     header: list[str]
     rows: list[list]
+    columns: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -73,6 +75,7 @@ figcaption{font-size:.85em;color:#444;max-width:520px}
 table{border-collapse:collapse;margin:.8em 0;font-size:.85em} th,td{border:1px solid #ccc;padding:3px 7px;text-align:right}
 th{background:#f2f2f2} td:first-child,td:nth-child(2),th:first-child{text-align:left}
 .reading{background:#f7f9fc;border-left:3px solid #4a78c2;padding:.5em .8em}
+.table-scroll{overflow-x:auto;max-width:100%} .columns{font-size:.8em;color:#444}
 """
 
 
@@ -105,11 +108,16 @@ def write_report(sections: list[Section], out_dir: str | Path, title: str, subti
                 shutil.copyfile(f.path, target)
             parts.append(f"<figure>{_img(target)}<figcaption>{html.escape(f.caption)}</figcaption></figure>")
         for t in s.tables:
-            parts.append(f"<h3>{html.escape(t.title)}</h3><table><thead><tr>"
+            # a table wider than the page scrolls sideways inside its box instead of being cut off
+            parts.append(f'<h3>{html.escape(t.title)}</h3><div class="table-scroll"><table><thead><tr>'
                          + "".join(f"<th>{html.escape(str(h))}</th>" for h in t.header) + "</tr></thead><tbody>")
             for row in t.rows:
                 parts.append("<tr>" + "".join(f"<td>{html.escape(format_number(c))}</td>" for c in row) + "</tr>")
-            parts.append("</tbody></table>")
+            parts.append("</tbody></table></div>")
+            if t.columns:
+                parts.append('<p class="columns">' + "; ".join(
+                    f"<b>{html.escape(h)}</b>: {html.escape(t.columns[h])}" for h in t.header if h in t.columns)
+                             + ".</p>")
         parts.append("</section>")
         numbers[s.id] = s.numbers
     parts.append("</body></html>")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..diagnosis.statistics import format_p
+from .claims import PHASE_LINE_FRACTION, anti_damping_text, long_time_reading, not_significant_text, run_phase
 from .html import Figure, Section, Table, write_report
 
 __all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
@@ -110,7 +110,16 @@ def _scattering_section(models) -> Section:
                    "long-time error", "fitted parameters"],
                   [[MODEL_LABELS[r.model], r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
                     r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
-                   for r in models.rows])
+                   for r in models.rows],
+                  {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
+                   "origin offset [um]": "the data's y origin above this simulation's equilibrium height Z_eq at its "
+                                         "calibrated pressure",
+                   "y equation": "unexplained fraction of the vertical accelerations beyond the noise floor, mean over runs",
+                   "theta equation": "the same for the measured hinge angle (integral form)",
+                   "energy": "the same for the energy balance over 0.4-s windows",
+                   "gap": "the mean of the three", "long-time error": "mean of the attractor-shape, Poincare and frequency "
+                   "errors of the simulation started from each run's first state",
+                   "fitted parameters": "the parameters fitted with the simulation (SI)"})
     return Section("scattering", "7. Scattering added: fitted or from physics", text, [], [table], models.to_dict())
 
 
@@ -169,6 +178,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
     # before the long fit, not after it
     model_from_meta(read_meta(data_dir), model=model, gap=gap, edge_radius=edge_radius)
+    # and a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
+    _check_runs(data_dir)
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -254,7 +265,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                ["file", "class", "f_y [Hz]", "f_theta [Hz]", "resolution [Hz]", "amplitude y [um]", "amplitude theta",
                 "phase [deg]"],
                [[p.run.name, p.attractor.label, py[0], pt[0], py[1], p.attractor.amp_y * 1e6,
-                 p.attractor.amp_theta, float(np.degrees(p.attractor.phase))] for p, (py, pt) in zip(prepared, peaks)])],
+                 p.attractor.amp_theta, _late_phase(p)] for p, (py, pt) in zip(prepared, peaks)],
+               RUN_COLUMNS)],
         {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": fy, "median_f_theta_hz": ft,
          "frequency_resolution_hz": resolution}))
     # the tracking, when the data set came from video (its own section module)
@@ -268,9 +280,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     loss = model_json["loss"]["final"]
     sections.append(Section(
         "phase-space", "2. Phase space",
-        f"The minimal model, integrated from each run's first measured state, reproduces the long-time behaviour with a "
-        f"mean attractor-shape error {loss['shape']:.3g}, Poincare error {loss['poincare']:.3g} and frequency error "
-        f"{loss['frequency']:.3g} (each 0 for a perfect model and about 1 for one that predicts no motion).",
+        long_time_reading(loss),
         [Figure(p, c) for p, c in pfig] + [Figure(fit_dir / "phase_portraits.png", "Phase portraits (y, ydot) and (theta, thetadot): data and minimal model, first runs."),
                                            Figure(fit_dir / "poincare.png", "Poincare maps (theta, thetadot at y = 0, ydot < 0): data and minimal model.")],
         [], {"loss_final": loss}))
@@ -289,8 +299,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         fit_figs.append(Figure(fit_dir / "compare.png", "Per-run errors of the minimal model and of its variant without cross-coupling terms."))
     cmp_text = "" if cmp is None else (
         " Without its cross-coupling terms (re-optimised) the model's per-run errors are "
-        + " and ".join(f"{'' if t.p_greater < 0.05 else 'not significantly '}larger for the {what} (one-sided "
-                       f"Wilcoxon {format_p(t.p_greater, 3)})"
+        + " and ".join(f"{'' if t.p_greater < 0.05 else 'not significantly '}larger for the {what} "
+                       + not_significant_text(t.p_greater, t.n, 0.05)
                        for t, what in ((cmp.shape_test, "attractor shape"), (cmp.poincare_test, "Poincare map"))) + ".")
     if model_json.get("method") == "discovery":
         fit_text, fit_table = _discovery_fit_text(model_json, eqs)
@@ -304,7 +314,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                      "zscore": "the paper's rule (terms with z > 3 across runs)",
                      "backward": "backward elimination on the joint long-time loss"}.get(rule, rule)
         fit_text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
-                    "rule, " + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + ".")
+                    "rule, " + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + "."
+                    + anti_damping_text(_damping_rates(model_json["equations"])))
         fit_table = Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score", "p (ensemble mean = 0)"],
                           [[eq, t, c, model_json["zscores"][eq].get(t),
                             model_json.get("selection", {}).get("mean_pvalues", {}).get(eq, {}).get(t)]
@@ -327,9 +338,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     fw_text = ""
     if fw_sweep is not None:
         fc = cals["fullwave"]
-        fw_text = (f" Beside it (red) the full-wave model, calibrated the same way ({fc.pressure_amplitude_pa:.0f} Pa, origin "
-                   f"{fc.origin_offset_m * 1e6:+.1f} um from the Gor'kov one's): the scattering between the cubes holds the hinge "
-                   "with no fitted stiffness.")
+        fw_text = (f" Beside it (red) the full-wave model, calibrated the same way ({fc.pressure_amplitude_pa:.0f} Pa; the data's "
+                   f"y origin lies {fc.origin_offset_m * 1e6:+.2f} um above the full-wave model's calibrated Z_eq, against "
+                   f"{delta * 1e6:+.2f} um above the Gor'kov model's calibrated Z_eq): the scattering between the cubes "
+                   "holds the hinge with no fitted stiffness.")
     elif models.unavailable:
         fw_text = f" The full-wave model is not shown: {models.unavailable}."
     sections.append(Section(
@@ -422,6 +434,51 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     return path
 
 
+#: what each column of the runs table holds
+RUN_COLUMNS = {
+    "class": "the attractor class of the run's second half (docs/fitting.md), from theta's frequency and its phase "
+             "relative to y",
+    "f_y [Hz]": "the peak of the zero-padded spectrum of y", "f_theta [Hz]": "the same for theta",
+    "resolution [Hz]": "1/duration of the run, the spacing of independent spectral values",
+    "amplitude y [um]": "half the range between the 1 % and 99 % quantiles of the smoothed y over the run's second half "
+                        "(the late motion, after the decay from the drop)",
+    "amplitude theta": "the same for theta [-]",
+    "phase [deg]": f"phase of theta relative to y at f_y from their cross spectrum over the run's second half; given only "
+                   f"where theta's line at f_y reaches {PHASE_LINE_FRACTION:g} of its largest spectral line (blank: theta "
+                   "has no line at f_y, so there is no phase)",
+}
+
+
+def _check_runs(data_dir) -> None:
+    """:func:`validation.diagnosis.pipeline.check_enough_runs` on the data set as the diagnosis loads it."""
+    from acousim.analytic import nominal_trap_frequency
+    from cubedimer.dataset import LoadConfig, load_dataset
+
+    from ..diagnosis import DiagnoseConfig
+    from ..diagnosis.pipeline import check_enough_runs
+
+    dataset = load_dataset(data_dir, config=LoadConfig(trap_frequency=nominal_trap_frequency), report=lambda m: None)
+    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
+
+
+def _late_phase(p) -> float | None:
+    """The runs table's phase: over the stretch the attractor was classified on (the run's second half)."""
+    d = p.derivs
+    half = len(d.t) // 2
+    return run_phase(d.state[half:, 2], float(d.t[1] - d.t[0]), p.attractor.f_y, p.attractor.phase)
+
+
+def _damping_rates(equations: dict) -> dict[str, float]:
+    """The model's linear damping as rates [1/s] (positive: damping): minus the coefficients of ydot in yddot and of
+    thetadot in thetaddot, where the model has them."""
+    out = {}
+    for eq, term, label in (("yddot", "ydot", "gamma_y (ydot in yddot)"),
+                            ("thetaddot", "thetadot", "gamma_theta (thetadot in thetaddot)")):
+        if term in equations.get(eq, {}):
+            out[label] = -float(equations[eq][term])
+    return out
+
+
 def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
     """Section 3's reading and table for a model found by the integral-form discovery (``method == "discovery"``)."""
     disc = model_json.get("discovery") or {}
@@ -446,9 +503,12 @@ def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
             "closest library rival: below about 3 no estimator tells the two apart reliably (the rival wins in "
             "Phi(-alias z / 2) of data sets).")
     damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in model_json["equations"][eq]]
+    rates = _damping_rates(model_json["equations"])
     if damping and (model_json.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
         text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
                  "the source paper; Holm's rule selects the other terms.")
+    # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
+    text += anti_damping_text(rates)
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "

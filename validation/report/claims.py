@@ -1,0 +1,110 @@
+"""The report's claims that depend on a threshold, each stated with it, so that a sentence says only what its number
+supports.
+
+* :func:`long_time_reading`: "reproduces the long-time behaviour" only when every long-time error lies below
+  :data:`REPRODUCES_BELOW`; otherwise the errors with what they mean.
+* :func:`run_phase`: the phase of theta relative to y at f_y only where theta has a line at f_y of at least
+  :data:`PHASE_LINE_FRACTION` of its largest line (else there is no phase to give).
+* :func:`anti_damping_text`: a fitted velocity coefficient that feeds energy in (anti-damping) is flagged, with what
+  may cause it.
+* :func:`not_significant_text`: beside a test that is not significant, the smallest p its number of runs allows.
+"""
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..diagnosis.statistics import format_p
+
+__all__ = ["REPRODUCES_BELOW", "PHASE_LINE_FRACTION", "long_time_reading", "run_phase", "anti_damping_text",
+           "smallest_wilcoxon_p", "not_significant_text"]
+
+#: A long-time error (attractor shape, Poincare map, frequency: 0 for a perfect model, about 1 for one that predicts no
+#: motion) below this is called reproduced: a tenth of the error of predicting no motion.
+REPRODUCES_BELOW = 0.1
+
+#: theta's line at f_y must reach this fraction of theta's largest spectral line for a phase at f_y to be given
+#: (below it the cross spectrum's phase is that of leakage and noise).
+PHASE_LINE_FRACTION = 0.1
+
+_LONG_TIME_NAMES = {"shape": "attractor-shape", "poincare": "Poincare", "frequency": "frequency"}
+
+
+def long_time_reading(loss: Mapping[str, float], subject: str = "The minimal model") -> str:
+    """The sentence on a model's long-time errors: "reproduces" only when all three lie below
+    :data:`REPRODUCES_BELOW`, otherwise the errors and which of them exceed it.
+
+    Parameters
+    ----------
+    loss : mapping with ``shape``, ``poincare`` and ``frequency`` (0 perfect, about 1 for a model predicting no motion)
+    subject : the sentence's subject
+    """
+    errors = ", ".join(f"{_LONG_TIME_NAMES[k]} error {float(loss[k]):.3g}" for k in _LONG_TIME_NAMES)
+    meaning = "each 0 for a perfect model and about 1 for one that predicts no motion"
+    above = [_LONG_TIME_NAMES[k] for k in _LONG_TIME_NAMES if not float(loss[k]) < REPRODUCES_BELOW]
+    if not above:
+        return (f"{subject}, integrated from each run's first measured state, reproduces the long-time behaviour: mean "
+                f"{errors} ({meaning}; all below the {REPRODUCES_BELOW:g} counted as reproducing).")
+    return (f"{subject}, integrated from each run's first measured state, has a mean {errors} ({meaning}); the "
+            f"{' and '.join(above)} error{'s' if len(above) > 1 else ''} exceed{'' if len(above) > 1 else 's'} the "
+            f"{REPRODUCES_BELOW:g} counted as reproducing the long-time behaviour, so it does not reproduce it there.")
+
+
+def run_phase(theta: NDArray, dt: float, f_y: float, phase: float) -> float | None:
+    """The phase [deg] of theta relative to y at f_y, or None where theta has no line at f_y: its line amplitude there
+    (:func:`cubedimer.spectra.line_amplitude`) below :data:`PHASE_LINE_FRACTION` of its largest line.
+
+    Parameters
+    ----------
+    theta : the hinge angle over the stretch the phase was measured on [-]
+    dt : sample interval [s]
+    f_y : the vertical frequency [Hz]
+    phase : the measured phase [rad]
+    """
+    from cubedimer.spectra import amplitude_spectrum, line_amplitude
+
+    theta = np.asarray(theta, float)
+    theta = theta[np.isfinite(theta)]
+    if theta.size < 8 or not np.isfinite(phase) or not f_y > 0:
+        return None
+    _, amp = amplitude_spectrum(theta - theta.mean(), dt)
+    largest = float(amp[1:].max()) if amp.size > 1 else 0.0
+    if not largest > 0 or line_amplitude(theta - theta.mean(), dt, f_y) < PHASE_LINE_FRACTION * largest:
+        return None
+    return float(np.degrees(phase))
+
+
+def anti_damping_text(coefficients: Mapping[str, float]) -> str:
+    """A sentence flagging fitted velocity coefficients that feed energy in: ``{label: rate}`` with the rate as a
+    damping rate [1/s] (positive: damping; negative: anti-damping).  Empty when none is negative."""
+    anti = {k: v for k, v in coefficients.items() if np.isfinite(v) and v < 0}
+    if not anti:
+        return ""
+    listed = ", ".join(f"{k} {v:+.3g} 1/s" for k, v in anti.items())
+    return (f" Anti-damping: the fitted damping rate{'s' if len(anti) > 1 else ''} {listed} "
+            f"{'are' if len(anti) > 1 else 'is'} negative, i.e. the term feeds energy into the motion, which a passive "
+            "dimer in air cannot do. It may come from the y origin (a misplaced origin makes the trap's asymmetry read "
+            "as a velocity term), from a drive (a pressure or a field that does work on the dimer) or from a wrong "
+            "model (the term standing in for a missing one); it is not physical damping.")
+
+
+def smallest_wilcoxon_p(n: int) -> float:
+    """The smallest one-sided p-value the exact Wilcoxon signed-rank test reaches with ``n`` non-zero differences:
+    2^-n (every difference of one sign). 1 for none."""
+    return 0.5 ** int(n) if n > 0 else 1.0
+
+
+def not_significant_text(p: float, n: int, alpha: float, test: str = "one-sided Wilcoxon",
+                         smallest: float | None = None) -> str:
+    """``"(test p = ...)"`` for a significant result; beside a non-significant one also the smallest p that ``n``
+    runs allow (2^-n unless ``smallest`` is given), and, when that is not below ``alpha``, that no number of
+    differences this size could have been significant."""
+    floor = smallest_wilcoxon_p(n) if smallest is None else smallest
+    if p < alpha:
+        return f"({test} {format_p(p, 3)})"
+    text = f"({test} {format_p(p, 3)}; with {n} runs the smallest attainable p is {floor:.3g}"
+    if not floor < alpha:
+        text += f", not below {alpha:g}: {n} runs cannot show a significant difference"
+    return text + ")"
