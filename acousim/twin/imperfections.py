@@ -209,9 +209,9 @@ def _union_rows(corners, sweep, m, out):  # pragma: no cover - compiled
     widened along the rows by +-``sweep``: exact along the rows, ``m`` sub-rows per pixel row."""
     n, h, w = out.shape
     kq = corners.shape[1]
-    lo = np.empty(kq)
-    hi = np.empty(kq)
     for f in prange(n):
+        lo = np.empty(kq)  # each thread's own interval ends (shared ones would be overwritten by the other frames)
+        hi = np.empty(kq)
         for v in range(h):
             for p in range(m):
                 z = v - 0.5 + (p + 0.5) / m
