@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 from .face_fit import fit_square, wrap_angle
 from .segmentation import BORDER_RING, background, coverage_runs, fill_holes, particles
 
-__all__ = ["COLUMNS", "STATUS", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads",
+__all__ = ["COLUMNS", "STATUS", "STATUS_NAMES", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads",
            "reciprocal_background"]
 
 #: Columns of a frame's measurement row (pixel units unless stated).
@@ -97,6 +97,8 @@ _MAX_PARTICLES = 8
 STATUS = {"measured": 0, "corrupt": 1, "no_dimer": 2, "out_of_view": 3, "third_particle": 4, "occlusion": 5,
           "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9,
           "touching": 10}
+#: The name of each status code.
+STATUS_NAMES = {code: name for name, code in STATUS.items()}
 #: What each status means (RUN.json).
 STATUS_TEXT = {
     "measured": "measured",

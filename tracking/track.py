@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .calibration import Calibration, calibrate
-from .measure import COLUMNS, STATUS, STATUS_TEXT, measure_frames
+from .measure import COLUMNS, STATUS, STATUS_NAMES, STATUS_TEXT, measure_frames
 from .noise_estimate import noise_estimate
 from .origin import find_origin
 from .recording import Recording, TrackingError
@@ -204,13 +204,17 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
 
 
+def _status_counts(status: NDArray) -> dict[str, int]:
+    """Frames per reason they were not measured, by status name, in the order of the codes."""
+    return {STATUS_NAMES[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
+
+
 def _hint(status: NDArray) -> str:
     """What to try for the commonest reason frames were not measured (the option that bounds that check)."""
     bad = status[status != 0]
     if bad.size == 0:
         return ""
-    names = {v: k for k, v in STATUS.items()}
-    top = names[int(np.bincount(bad).argmax())]
+    top = STATUS_NAMES[int(np.bincount(bad).argmax())]
     return {"poor_fit": "; see RUN.json checks, and --max-hinge-gap (hinge corners apart: a hinge line tilted out of "
                         "the camera axis) or --max-squareness",
             "third_particle": "; python -m tracking inspect shows the background: try --roi",
@@ -296,7 +300,6 @@ def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, confi
     was fitted); a warning above :data:`TILT_WARNING_DEG`, a refusal above :data:`MAX_TILT_DEG` or when no frame
     could be measured (naming the counts per reason, and the tilt with the option that measures it)."""
     ok = status == 0
-    names = {v: k for k, v in STATUS.items()}
     fitted = (ok | (status == STATUS["poor_fit"])) & np.isfinite(rows[:, _C["hinge_gap"]])
     tilt_deg = tilt_from_gap(float(np.median(rows[fitted, _C["hinge_gap"]] / (2.0 * rows[fitted, _C["half_side"]])))) \
         if fitted.any() else None
@@ -310,7 +313,7 @@ def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, confi
                        "more than --max-hinge-gap %g of the side apart are not measured", rec.name, tilt_deg,
                        config.max_hinge_gap)
     if not ok.any():
-        why = ", ".join(f"{names[c]} in {int(np.sum(status == c))}" for c in sorted(set(status.tolist())))
+        why = ", ".join(f"{k} in {v}" for k, v in _status_counts(status).items())
         tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
                   "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
         raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
@@ -321,7 +324,6 @@ def _origin(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackC
     """The origin row (of the full frame; the region of interest starts at row y0) and how it was found: the
     option, the file, or the first frames (at rest) or the late oscillation's centre (:func:`find_origin`)."""
     ok = status == 0
-    names = {v: k for k, v in STATUS.items()}
     y0 = config.roi[2] if config.roi else 0
     if config.origin_row is not None:
         origin = {"row_px": float(config.origin_row), "from": "option --origin-row", "at_rest": None,
@@ -331,7 +333,7 @@ def _origin(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackC
                   "method": "file"}
     else:
         head = status[: config.origin_frames]
-        why = ", ".join(f"{names[c]} in {int(np.sum(head == c))}" for c in sorted(set(head.tolist())) if c != 0)
+        why = ", ".join(f"{k} in {v}" for k, v in _status_counts(head).items())
         origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path,
                              why + _hint(head))
         if not origin["at_rest"]:
@@ -364,10 +366,9 @@ def _run_info(rec: Recording, config: TrackConfig, fps: float, pixel: float, cal
     """The run's record, RUN.json (docs/formats.md)."""
     ok = status == 0
     n = len(status)
-    names = {v: k for k, v in STATUS.items()}
     sign = 1.0 if config.up == "top" else -1.0
     sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
-    counts = {names[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
+    counts = _status_counts(status)
     r = rows[ex]
     alpha, beta = (r[_C["alpha"]], r[_C["beta"]]) if sign > 0 else (r[_C["beta"]], r[_C["alpha"]])
     square = rows[ok, _C["alpha_free"]] + rows[ok, _C["beta_free"]] - math.pi
@@ -423,7 +424,7 @@ def _run_info(rec: Recording, config: TrackConfig, fps: float, pixel: float, cal
                                "bent or blurred edges); null where the frame was not measured",
                     "edge_rms_px": [round(float(v), 4) if s == 0 else None
                                     for v, s in zip(rows[:, _C["edge_rms"]], status)],
-                    "status": status.tolist(), "status_codes": {v: k for k, v in STATUS.items()},
+                    "status": status.tolist(), "status_codes": dict(STATUS_NAMES),
                     "status_text": STATUS_TEXT},
         "example_frame": {"index": ex, "theta": float(theta[ex]), "alpha_rad": float(alpha), "beta_rad": float(beta),
                           "centre_of_mass_px": [float(r[_C["u_com"]]), float(r[_C["v_com"]])],
