@@ -20,8 +20,6 @@ corrected fourth-difference one; otherwise the white estimate.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
