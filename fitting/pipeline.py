@@ -83,10 +83,14 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     return method.fit(prepared, scales, config, FitContext(executor, cache_dir, progress, noise))
 
 
-def fit_dataset(data_dir: str | os.PathLike, config: FitConfig = FitConfig(), executor: ExecutorConfig | None = None,
-                strict: bool = False, progress: bool = True,
+def fit_dataset(data: Dataset | str | os.PathLike, config: FitConfig = FitConfig(),
+                executor: ExecutorConfig | None = None, strict: bool = False, progress: bool = True,
                 cache_dir: str | os.PathLike | None = None) -> FitResult:
-    """Load ``data_dir`` and fit it (module docstring); writes nothing but the method's resume cache in ``cache_dir``.
+    """Fit a data set (module docstring); writes nothing but the method's resume cache in ``cache_dir``.
+
+    ``data`` is a loaded :class:`~cubedimer.dataset.Dataset` (fitted as it is: pass the one object to every step
+    that reads the data set, so that all see the same runs), or the path of one, loaded with ``config.load``
+    (``strict``: stop at the first bad file).
 
     Raises
     ------
@@ -95,9 +99,9 @@ def fit_dataset(data_dir: str | os.PathLike, config: FitConfig = FitConfig(), ex
     fitting.final_checks.NoSaneModelError
         The final model blows up and no fallback integrates over every run.
     """
-    ds: Dataset = load_dataset(data_dir, strict=strict, config=config.load)
+    ds = data if isinstance(data, Dataset) else load_dataset(data, strict=strict, config=config.load)
     if len(ds.runs) < 2:
-        raise DatasetError(f"{data_dir}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
+        raise DatasetError(f"{ds.path}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
     prepared, scales = prepare_runs(ds.runs, config)
     logger.info("%d runs loaded (%d skipped, %d glitch frames masked); scales: y %.3g m, theta %.3g, time %.3g s",
                 len(prepared), len(ds.skipped), ds.n_glitches, scales.length_y, scales.length_theta, scales.time)

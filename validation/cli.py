@@ -190,14 +190,14 @@ def run_diagnose(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
-        diagnosis, internals = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
-                                                model=args.model, gap=args.gap, edge_radius=args.edge_radius)
+        diagnosis = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
+                                     model=args.model, gap=args.gap, edge_radius=args.edge_radius)
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
-    paths = write_diagnosis(diagnosis, internals, args.out)
+    paths = write_diagnosis(diagnosis, args.out)
     if not args.quiet:
-        print(f"identified: {diagnosis['identified'] or 'none'}; gap {diagnosis['gap_before']:.3g} -> "
-              f"{diagnosis['gap_after']:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
+        print(f"identified: {diagnosis.identified or 'none'}; gap {diagnosis.gap_before:.3g} -> "
+              f"{diagnosis.gap_after:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
     return 0
 
 

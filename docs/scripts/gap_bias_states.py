@@ -80,8 +80,8 @@ def main() -> None:
             if smoother == "exact" and kw["noise"][1] > 1e-6:
                 continue
             with hinge_state_smoother(smoother):
-                d, _ = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
-            cal = d["calibration"]
+                d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+            cal = d.calibration
             print(f"| {label} | {smoother} | {100 * (cal['gap_m'] / g_true - 1):+.3f} % | "
                   f"{100 * cal['gap_std_m'] / g_true:.3f} % | "
                   f"{100 * (cal['pressure_amplitude_pa'] / truth['pressure_amplitude_pa'] - 1):+.3f} % |", flush=True)

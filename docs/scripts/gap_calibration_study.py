@@ -31,8 +31,8 @@ def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECT
                       duration: float = 3.0) -> list:
     """What the diagnosis names on the Gor'kov twin of the same case (same seed, effects and drift)."""
     write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift, effects=effects)
-    d, _ = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="gorkov")
-    return d["identified"]
+    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="gorkov")
+    return d.identified
 
 
 def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, effects: dict = EFFECTS,
@@ -41,16 +41,16 @@ def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, 
     truth = write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift,
                                     effects=effects, force_model=fm)
     t0 = time.perf_counter()
-    d, _ = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
-    cal = d["calibration"]
-    discovered = [t["term"] for eq in d["remaining_gap"]["discovered_terms"].values() for t in eq]
+    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+    cal = d.calibration
+    discovered = [t["term"] for eq in d.remaining_gap["discovered_terms"].values() for t in eq]
     return {"side_um": side * 1e6, "ks": fm.wavenumber * side, "gap_true_um": gap_ratio * side * 1e6,
             "gap_um": cal["gap_m"] * 1e6, "gap_std_um": (cal["gap_std_m"] or float("nan")) * 1e6,
             "gap_model_error_um": (cal.get("gap_model_error_m") or float("nan")) * 1e6,
             "calibrated": cal["gap_calibrated"], "seed": seed, "drift": drift,
-            "drift_detected": bool(cal.get("drift", {}).get("detected", False)), "identified": d["identified"],
+            "drift_detected": bool(cal.get("drift", {}).get("detected", False)), "identified": d.identified,
             "discovered": discovered,
-            "damping": next((e["params"] for e in d["effects"] if e["name"] == "linear_damping"), None),
+            "damping": next((e.params for e in d.effects if e.name == "linear_damping"), None),
             "pressure_error": cal["pressure_amplitude_pa"] / truth["pressure_amplitude_pa"] - 1,
             "wall_s": time.perf_counter() - t0,
             "gorkov_identified": gorkov_identified(seed, drift, out.with_name(out.name + "_gorkov"), effects,

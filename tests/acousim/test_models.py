@@ -77,12 +77,12 @@ def test_a_new_model_runs_through_sweep_twin_and_diagnosis(dummy_model, tmp_path
     truth = simulate_dataset(TwinConfig(runs=3, duration=1.5, seed=2, force_model="stiff_gorkov",
                                         pressure_amplitude_pa=3000.0), data, progress=False)
     assert truth["force_model"] == "stiff_gorkov"
-    d, _ = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",)),
+    d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",)),
                             progress=False, model="stiff_gorkov")
     # the data come from the model itself: the calibration finds the model's own amplitude, 1.2 x 3000 Pa (a
     # mix-up with the Gor'kov model would give 3000 Pa)
-    assert d["calibration"]["pressure_amplitude_pa"] == pytest.approx(3600.0, rel=2e-3)
-    assert d["model"] == "stiff_gorkov"
+    assert d.calibration["pressure_amplitude_pa"] == pytest.approx(3600.0, rel=2e-3)
+    assert d.model == "stiff_gorkov"
 
 
 _EXEMPT = {

@@ -1,10 +1,12 @@
 """The blind check's hidden draws and scoring."""
+from dataclasses import replace
+
 import pytest
 
 from validation.blind import STRENGTHS, draw_case, score_case, summarize
 
 
-def test_blind_draws_are_seeded_and_scored():
+def test_blind_draws_are_seeded_and_scored(make_diagnosis):
     a, b = draw_case(7, 3), draw_case(7, 3)
     assert a == b and draw_case(8, 3) != a  # same seed, same hidden truth
     for name, params in a["effects"].items():
@@ -12,10 +14,9 @@ def test_blind_draws_are_seeded_and_scored():
             lo, hi, signed = STRENGTHS[name][p]
             assert lo <= abs(v) <= hi
     case = {"index": 0, "effects": {"pair_scattering": {"kappa": 1e4}}, "pressure_error": 0.05, "twin_seed": 1}
-    diag = {"identified": ["pair_scattering", "linear_damping"], "gap_before": 0.4, "gap_after": 0.02,
-            "effects": [{"name": "pair_scattering", "params": {"kappa": 1.1e4}},
-                        {"name": "linear_damping", "params": {"gamma_y": 0.1, "gamma_theta": 0.1}}],
-            "calibration": {"pressure_amplitude_pa": 3100.0}}
+    diag = make_diagnosis(["pair_scattering", "linear_damping"],
+                          params={"pair_scattering": {"kappa": 1.1e4}, "linear_damping": {"gamma_y": 0.1, "gamma_theta": 0.1}},
+                          gap_before=0.4, gap_after=0.02, calibration={"pressure_amplitude_pa": 3100.0})
     r = score_case(case, {"pressure_amplitude_pa": 3150.0}, diag, None)
     assert not r["exact"] and r["parameter_relative_error"]["pair_scattering"]["kappa"] == pytest.approx(0.1)
     s = summarize([r])
@@ -38,7 +39,7 @@ def test_blind_twin_cases_are_inviscid_apart_from_the_drawn_effects(tmp_path, mo
     assert len(seen) == 1 and seen[0].air_damping is False and len(seen[0].effects) == 0
 
 
-def test_the_default_blind_study_has_the_air_damping_scored_as_linear_damping():
+def test_the_default_blind_study_has_the_air_damping_scored_as_linear_damping(make_diagnosis):
     """Realistic by default: the twin's default physics, whose air damping the truth holds as linear_damping at the
     air's rates (added to a drawn linear damping's); a diagnosis naming only it is exact, and quadratic drag named
     beside it is a false effect."""
@@ -53,13 +54,11 @@ def test_the_default_blind_study_has_the_air_damping_scored_as_linear_damping():
     assert both["linear_damping"] == pytest.approx({"gamma_y": 1.585, "gamma_theta": 3.21})
     assert both["pair_scattering"] == {"kappa": 1e4}
     case = {"index": 0, "effects": candidate_truth(air), "pressure_error": 0.0, "twin_seed": 1}
-    diag = {"identified": ["linear_damping", "quadratic_drag"], "gap_before": 0.02, "gap_after": 1e-4,
-            "effects": [{"name": "linear_damping", "params": {"gamma_y": 0.59, "gamma_theta": 1.22}},
-                        {"name": "quadratic_drag", "params": {"c_y": 1.0, "c_theta": 0.01}}],
-            "calibration": {"pressure_amplitude_pa": 3000.0}, "indistinguishable": []}
+    params = {"linear_damping": {"gamma_y": 0.59, "gamma_theta": 1.22}, "quadratic_drag": {"c_y": 1.0, "c_theta": 0.01}}
+    diag = make_diagnosis(["linear_damping", "quadratic_drag"], params=params, gap_before=0.02, gap_after=1e-4)
     r = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
     assert r["false_effects"] == ["quadratic_drag"] and not r["exact"]
-    diag["identified"] = ["linear_damping"]
+    diag = replace(diag, identified=("linear_damping",))
     exact = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
     assert exact["exact"] and exact["false_effects"] == []
     s = summarize([r, exact])

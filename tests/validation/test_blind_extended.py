@@ -8,14 +8,16 @@ from validation.blind import (KINDS, OUT_OF_CANDIDATE, BlindConfig, blind_table,
                               slip_units, summarize_kind, write_twin_like_dataset)
 
 
-def _diag(identified=(), discovered=None, drift=False, amplitude=0.0, skipped=(), params=None, masked=0):
-    """The keys of a diagnosis.json that the blind scores read."""
-    return {"identified": list(identified), "gap_before": 0.3, "gap_after": 0.01,
-            "effects": [{"name": n, "params": (params or {}).get(n, {"_": 1.0})} for n in identified],
-            "calibration": {"pressure_amplitude_pa": 3000.0,
-                            "drift": {"detected": drift, "relative_amplitude": amplitude}},
-            "remaining_gap": {"discovered_terms": discovered or {"yddot": [], "thetaddot": []}},
-            "skipped_files": list(skipped), "glitch_frames_masked": masked}
+def _diag_factory(make_diagnosis):
+    """Diagnoses with what the blind scores read: the identified effects, discovered terms, a drift, skipped files
+    and masked glitches."""
+    def diag(identified=(), discovered=None, drift=False, amplitude=0.0, skipped=(), params=None, masked=0):
+        return make_diagnosis(identified, params=params,
+                              calibration={"pressure_amplitude_pa": 3000.0,
+                                           "drift": {"detected": drift, "relative_amplitude": amplitude}},
+                              remaining_gap={"discovered_terms": discovered or {"yddot": [], "thetaddot": []}},
+                              skipped_files=tuple(skipped), glitch_frames_masked=masked)
+    return diag
 
 
 def test_extended_draws_are_seeded():
@@ -28,7 +30,8 @@ def test_extended_draws_are_seeded():
         BlindConfig(kinds=("candidates", "typo"))
 
 
-def test_out_of_candidate_forced_onto_a_candidate_scores_as_forced():
+def test_out_of_candidate_forced_onto_a_candidate_scores_as_forced(make_diagnosis):
+    _diag = _diag_factory(make_diagnosis)
     case = draw_extended_case("out_of_candidate", 0, 0)  # cubic hinge
     truth = {"pressure_amplitude_pa": 3000.0}
     right = {"yddot": [], "thetaddot": [{"term": "theta^3", "coefficient": -1.05 * case["strength"]}]}
@@ -43,7 +46,8 @@ def test_out_of_candidate_forced_onto_a_candidate_scores_as_forced():
     assert "cubic_hinge" in blind_table({"out_of_candidate": s}, BlindConfig(cases=2))
 
 
-def test_drift_missed_or_forced_scores_as_such():
+def test_drift_missed_or_forced_scores_as_such(make_diagnosis):
+    _diag = _diag_factory(make_diagnosis)
     case = draw_extended_case("drift", 0, 1)
     truth = {"pressure_amplitude_pa": 3000.0, "relative_half_range": [0.03, 0.03]}
     hit = score_drift(case, truth, _diag(case["effects"], drift=True, amplitude=0.033), None)
@@ -54,7 +58,8 @@ def test_drift_missed_or_forced_scores_as_such():
     assert summarize_kind("drift", [hit, miss])["detected_rate"] == 0.5
 
 
-def test_glitch_case_that_loses_accuracy_scores_as_lost(tmp_path):
+def test_glitch_case_that_loses_accuracy_scores_as_lost(tmp_path, make_diagnosis):
+    _diag = _diag_factory(make_diagnosis)
     """Glitches are inserted where the loader can find them (all masked on short twin-like runs), and a glitched
     diagnosis that names an extra effect counts against its clean twin."""
     from cubedimer.dataset import load_dataset
@@ -77,7 +82,8 @@ def test_glitch_case_that_loses_accuracy_scores_as_lost(tmp_path):
 
 # a t in milliseconds is caught first by the physics bound on the vertical frequency (5-200 Hz), which names it
 @pytest.mark.parametrize("slip, word", [("y_micrometres", "micrometres"), ("t_milliseconds", "milliseconds")])
-def test_unit_slip_file_is_skipped_by_name(tmp_path, slip, word):
+def test_unit_slip_file_is_skipped_by_name(tmp_path, slip, word, make_diagnosis):
+    _diag = _diag_factory(make_diagnosis)
     """The loader names the slipped file; a diagnosis that skipped another file (or none) scores as not named."""
     from cubedimer.dataset import load_dataset
 

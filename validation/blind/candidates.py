@@ -15,6 +15,8 @@ the only damping (the study documented in docs/diagnosis.md's blind check, docs/
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import json
 import logging
 import os
@@ -26,6 +28,9 @@ import numpy as np
 from cubedimer.atomic import write_json
 
 from .config import BlindConfig
+
+if TYPE_CHECKING:
+    from ..diagnosis import Diagnosis
 
 __all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "draw_parameters", "draw_from", "draw_case", "generate_twin_case",
            "candidate_truth", "hide_truth", "diagnose_blind",
@@ -117,12 +122,12 @@ def hide_truth(data: Path, truth_path: Path) -> dict:
     return json.loads(truth_path.read_text())
 
 
-def diagnose_blind(data: Path, config: BlindConfig) -> tuple[dict | None, str | None]:
+def diagnose_blind(data: Path, config: BlindConfig) -> tuple["Diagnosis | None", str | None]:
     """The diagnosis of ``data`` (long-time errors as configured), or (None, error) if it failed."""
     from ..diagnosis import DiagnoseConfig, diagnose_dataset
 
     try:
-        diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
+        diag = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
         return diag, None
     except Exception as exc:  # a failed diagnosis is a result of the study, not a crash of it
         return None, f"{type(exc).__name__}: {exc}"
@@ -156,13 +161,13 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     return result
 
 
-def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | None) -> dict:
     """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
-    found = [] if diag is None else list(diag["identified"])
+    found = [] if diag is None else list(diag.identified)
     params_err = {}
     if diag is not None:
-        fitted = {e["name"]: e["params"] for e in diag["effects"]}
+        fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
             errs = {p: abs(fitted[name][p] - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
@@ -174,21 +179,21 @@ def score_case(case: dict, truth: dict, diag: dict | None, error: str | None) ->
         "exact": sorted(found) == true_set,
         "n_true": len(true_set),
         "parameter_relative_error": params_err,
-        "gap_before": None if diag is None else diag["gap_before"],
-        "gap_after": None if diag is None else diag["gap_after"],
-        "shrink": None if diag is None else 1 - diag["gap_after"] / diag["gap_before"],
+        "gap_before": None if diag is None else diag.gap_before,
+        "gap_after": None if diag is None else diag.gap_after,
+        "shrink": None if diag is None else 1 - diag.gap_after / diag.gap_before,
         "pressure_true_pa": truth["pressure_amplitude_pa"],
-        "pressure_calibrated_pa": None if diag is None else diag["calibration"]["pressure_amplitude_pa"],
+        "pressure_calibrated_pa": None if diag is None else diag.calibration["pressure_amplitude_pa"],
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         # effects named alone that the truth does not hold, and pairs named as indistinguishable
         "false_effects": sorted(set(found) - set(true_set)),
         # the greedy rounds' set before the backward check and the judgement against discovered terms
-        "false_effects_greedy": None if diag is None or "greedy_identified" not in diag else sorted(
-            set(diag["greedy_identified"]) - set(true_set)),
-        "indistinguishable": [] if diag is None else [p["effects"] for p in diag.get("indistinguishable") or []],
+        "false_effects_greedy": None if diag is None else sorted(
+            set(diag.greedy_identified) - set(true_set)),
+        "indistinguishable": [] if diag is None else [p["effects"] for p in diag.indistinguishable or []],
         "discovered_terms": None if diag is None else {
             eq: [t["term"] for t in terms]
-            for eq, terms in diag.get("remaining_gap", {}).get("discovered_terms", {}).items()},
+            for eq, terms in diag.remaining_gap.get("discovered_terms", {}).items()},
         "error": error,
         "scored": True,
     }

@@ -22,6 +22,8 @@ Each kind has a draw (every random choice from ``SeedSequence([seed, KIND_CODES[
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import json
 import shutil
 from pathlib import Path
@@ -34,6 +36,9 @@ from cubedimer.dataset import write_run_csv
 from .candidates import (diagnose_blind, draw_from, draw_parameters, generate_twin_case, hide_truth, not_generated,
                          score_case)
 from .config import BlindConfig
+
+if TYPE_CHECKING:
+    from ..diagnosis import Diagnosis
 
 __all__ = ["KIND_CODES", "OUT_OF_CANDIDATE", "DRIFT_AMPLITUDE", "DRIFT_EFFECTS", "GLITCHES_PER_RUN", "GLITCH_SIZE",
            "UNIT_SLIPS", "draw_extended_case", "run_extended_case", "insert_glitches", "slip_units", "score_out_of_candidate", "score_drift",
@@ -145,22 +150,22 @@ def _run_twin_like(case: dict, config: BlindConfig, data: Path) -> dict:
     return result
 
 
-def _common(case: dict, diag: dict | None, error: str | None) -> dict:
+def _common(case: dict, diag: "Diagnosis | None", error: str | None) -> dict:
     return {"index": case["index"], "case": case, "error": error, "scored": True,
-            "identified": [] if diag is None else list(diag["identified"]),
-            "gap_before": None if diag is None else diag["gap_before"],
-            "gap_after": None if diag is None else diag["gap_after"],
-            "drift_detected": None if diag is None else bool(diag["calibration"]["drift"]["detected"]),
+            "identified": [] if diag is None else list(diag.identified),
+            "gap_before": None if diag is None else diag.gap_before,
+            "gap_after": None if diag is None else diag.gap_after,
+            "drift_detected": None if diag is None else bool(diag.calibration["drift"]["detected"]),
             "discovered_terms": None if diag is None else {
                 eq: [(t["term"], t["coefficient"]) for t in terms]
-                for eq, terms in diag["remaining_gap"]["discovered_terms"].items()}}
+                for eq, terms in diag.remaining_gap["discovered_terms"].items()}}
 
 
-def score_out_of_candidate(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+def score_out_of_candidate(case: dict, truth: dict, diag: "Diagnosis | None", error: str | None) -> dict:
     """Forced onto a candidate (any candidate named), leading discovered term right, its coefficient's error."""
     eq, term, sign, _ = OUT_OF_CANDIDATE[case["effect"]]
     r = _common(case, diag, error)
-    found = [] if diag is None else diag["remaining_gap"]["discovered_terms"][eq]
+    found = [] if diag is None else diag.remaining_gap["discovered_terms"][eq]
     lead = found[0] if found else None
     true_coef = sign * case["strength"]
     r.update(forced=bool(r["identified"]) if diag is not None else None,
@@ -170,22 +175,22 @@ def score_out_of_candidate(case: dict, truth: dict, diag: dict | None, error: st
              coefficient_relative_error=(abs(lead["coefficient"] / true_coef - 1)
                                          if lead is not None and lead["term"] == term else None),
              pressure_true_pa=truth["pressure_amplitude_pa"],
-             pressure_calibrated_pa=None if diag is None else diag["calibration"]["pressure_amplitude_pa"])
+             pressure_calibrated_pa=None if diag is None else diag.calibration["pressure_amplitude_pa"])
     return r
 
 
-def score_drift(case: dict, truth: dict, diag: dict | None, error: str | None) -> dict:
+def score_drift(case: dict, truth: dict, diag: "Diagnosis | None", error: str | None) -> dict:
     """Drift detected, its amplitude against the truth (median over runs), the effects named on top."""
     r = _common(case, diag, error)
     true_set = sorted(case["effects"])
     true_amp = float(np.median(truth["relative_half_range"]))
-    amp = None if diag is None else diag["calibration"]["drift"].get("relative_amplitude")
+    amp = None if diag is None else diag.calibration["drift"].get("relative_amplitude")
     r.update(true_set=true_set, exact=diag is not None and sorted(r["identified"]) == true_set,
              forced=diag is not None and bool(set(r["identified"]) - set(true_set)),
              true_relative_amplitude=true_amp, relative_amplitude=amp,
              amplitude_relative_error=None if amp is None else abs(amp / true_amp - 1),
              pressure_true_pa=truth["pressure_amplitude_pa"],
-             pressure_calibrated_pa=None if diag is None else diag["calibration"]["pressure_amplitude_pa"])
+             pressure_calibrated_pa=None if diag is None else diag.calibration["pressure_amplitude_pa"])
     return r
 
 
@@ -235,7 +240,7 @@ def _run_glitches(case: dict, config: BlindConfig, data: Path, truth: dict) -> d
     return score_glitches(case, truth, clean_diag, clean_err, diag, err, inserted)
 
 
-def score_glitches(case: dict, truth: dict, clean_diag: dict | None, clean_error: str | None, diag: dict | None,
+def score_glitches(case: dict, truth: dict, clean_diag: "Diagnosis | None", clean_error: str | None, diag: "Diagnosis | None",
                    error: str | None, inserted: int) -> dict:
     """The glitched diagnosis against its clean twin: each scored as a candidate case, then compared."""
     clean = score_case(case, truth, clean_diag, clean_error)
@@ -253,8 +258,8 @@ def score_glitches(case: dict, truth: dict, clean_diag: dict | None, clean_error
             "accuracy_lost": clean["exact"] and not glitched["exact"],
             "max_parameter_error_clean": wc, "max_parameter_error": wg,
             "glitches_inserted": inserted,
-            "glitches_masked": None if diag is None else diag.get("glitch_frames_masked"),
-            "glitches_masked_clean": None if clean_diag is None else clean_diag.get("glitch_frames_masked"),
+            "glitches_masked": None if diag is None else diag.glitch_frames_masked,
+            "glitches_masked_clean": None if clean_diag is None else clean_diag.glitch_frames_masked,
             "pressure_error_clean": _pressure_error(clean), "pressure_error": _pressure_error(glitched)}
 
 
@@ -292,10 +297,10 @@ def _run_unit_slip(case: dict, config: BlindConfig, data: Path, truth: dict) -> 
 _SLIP_WORDS = {"y_micrometres": ("micrometre",), "t_milliseconds": ("millisecond", "units of t")}
 
 
-def score_unit_slip(case: dict, truth: dict, diag: dict | None, error: str | None, slipped: str) -> dict:
+def score_unit_slip(case: dict, truth: dict, diag: "Diagnosis | None", error: str | None, slipped: str) -> dict:
     """The slipped file skipped, and only it; its reason naming the unit; the rest scored as a candidate case."""
     r = score_case(case, truth, diag, error)
-    skipped = [] if diag is None else diag["skipped_files"]
+    skipped = [] if diag is None else diag.skipped_files
     names = [s["file"] for s in skipped]
     reason = next((s["reason"] for s in skipped if s["file"] == slipped), None)
     r.update(case=case, slipped_file=slipped, skipped_files=skipped, skipped_by_name=names == [slipped],

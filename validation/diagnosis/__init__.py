@@ -24,7 +24,10 @@ every fit here is a linear least-squares problem at the measured states.  One mo
   final joint model of the identified effects with them (:func:`~validation.diagnosis.joint_model.joint_estimates`);
 * :mod:`~validation.diagnosis.localization`: where the residual lies (terms, regions, time scales);
 * :mod:`~validation.diagnosis.long_time`: attractor, Poincare and frequency errors;
-* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose_dataset` (its files: :func:`validation.report.write_diagnosis`);
+* :mod:`~validation.diagnosis.verdicts`: every candidate's verdict, ranked;
+* :mod:`~validation.diagnosis.result`: the typed result, :class:`Diagnosis` (``to_json``/``from_json``: diagnosis.json);
+* :mod:`~validation.diagnosis.pipeline`: :func:`diagnose` of a loaded data set as named steps (calibrate, identify,
+  discover, summarise), :func:`diagnose_dataset` of a path (its files: :func:`validation.report.write_diagnosis`);
 * :mod:`~validation.diagnosis.model_comparison`: the gaps of Gor'kov, Gor'kov + fitted pair scattering and
   the full-wave model side by side (:func:`compare_simulation_models`).
 
@@ -40,11 +43,13 @@ from .gap_model import GapFit
 from .identification import Identification
 from .long_time import LongTimeGap
 from .model_comparison import ModelComparison, ModelGap, compare_simulation_models
-from .pipeline import DiagnoseConfig, DiagnosisInternals, EXPLAINED_GAP, diagnose_dataset
+from .pipeline import DiagnoseConfig, EXPLAINED_GAP, diagnose, diagnose_dataset, load_for_diagnosis
 from .problem import DiagnosisProblem
+from .result import Diagnosis, DiagnosisInternals, EffectVerdict
 
 __all__ = [
-    "diagnose_dataset", "DiagnoseConfig", "DiagnosisInternals", "EXPLAINED_GAP", "CANDIDATE_EFFECTS", "effect_regressors",
+    "diagnose", "diagnose_dataset", "load_for_diagnosis", "Diagnosis", "EffectVerdict", "DiagnoseConfig",
+    "DiagnosisInternals", "EXPLAINED_GAP", "CANDIDATE_EFFECTS", "effect_regressors",
     "compare_simulation_models", "ModelComparison", "ModelGap", "DiagnosisProblem", "GapFit", "Calibration",
     "Identification", "Discovery", "PressureDrift", "LongTimeGap",
 ]

@@ -25,13 +25,15 @@ no false precision is reported.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ParameterCalibration", "calibrate_model_parameter", "jackknife_log_error", "MAX_RELATIVE_ERROR",
-           "NUISANCE_EFFECTS", "JACKKNIFE_MIN_RUNS"]
+from .problem import DiagnosisProblem
+
+__all__ = ["ParameterCalibration", "calibrate_model_parameter", "calibrate_model_parameters", "parameter_record",
+           "jackknife_log_error", "MAX_RELATIVE_ERROR", "NUISANCE_EFFECTS", "JACKKNIFE_MIN_RUNS"]
 
 log = logging.getLogger(__name__)
 
@@ -193,3 +195,72 @@ def calibrate_model_parameter(name: str, lo: float, hi: float, default: float, b
     profile = sorted((float(np.exp(u)), float(c.sum()) / m) for u, (c, m) in cache.items())
     return ParameterCalibration(name, estimate if calibrated else float(default), estimate, std_error, calibrated,
                                 note, (float(lo), float(hi)), profile)
+
+
+def _label(name: str) -> str:
+    """A model parameter's name in prose: the field without its unit (``gap_m`` -> ``gap``)."""
+    return name.rsplit("_", 1)[0].replace("_", " ")
+
+
+def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
+                               log=None, drift=None) -> tuple[object, dict]:
+    """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
+    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name.
+
+    ``drift`` (a :class:`~validation.diagnosis.drift.PressureDrift`) is followed by every trial model, so that a
+    pressure drifting within runs does not bias the hinge profile."""
+    from acousim.models import force_model_type, static_model
+
+    log = log or logging.getLogger(__name__).info
+    mtype = force_model_type(model_name)
+    out = {}
+    for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
+        if getattr(conditions, name) is not None:
+            continue
+        if not hi > lo * (1 + 1e-9):  # the model covers one value only: nothing to profile
+            out[name] = ParameterCalibration(name, float(default), float(lo), float("inf"), False,
+                                             f"the model's tables cover one {_label(name)} ({lo:.3g}) only: nothing "
+                                             f"to profile; the default {default:.3g} is kept", (lo, hi))
+            conditions = replace(conditions, **{name: float(default)})
+            continue
+        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
+
+        def build(value: float, name=name):
+            sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
+            trial = DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
+            return trial if drift is None else trial.with_drift(drift)
+
+        pc = calibrate_model_parameter(name, lo, hi, default, build, label=_label(name))
+        log("%s", pc.note)
+        out[name] = pc
+        conditions = replace(conditions, **{name: pc.value})
+    return conditions, out
+
+
+def parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
+    """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
+    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable, and
+    ``gap_model_error_m`` for a calibrated one whose model states its error (the systematic error the model's own
+    stated accuracy implies; None otherwise)."""
+    from acousim.models import force_model_type
+
+    mtype = force_model_type(model_name)
+    out = {}
+    model_errors = None
+    for name in mtype.calibration_ranges(conditions):
+        base, unit = name.rsplit("_", 1)
+        pc = calibrated.get(name)
+        out[name] = float(getattr(conditions, name))
+        out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
+        out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
+        model_error = None
+        if pc is not None and pc.calibrated and mtype.parameter_model_error is not None:
+            if model_errors is None:
+                model_errors = mtype.parameter_model_error(conditions)
+            rel = model_errors.get(name)
+            model_error = None if rel is None or not np.isfinite(rel) else float(rel) * out[name]
+        out[f"{base}_model_error_{unit}"] = model_error
+        out[f"{base}_note"] = pc.note if pc is not None else f"the {_label(name)} given by the user"
+        if pc is not None:
+            out[f"{base}_profile"] = pc.to_dict()
+    return out

@@ -14,10 +14,14 @@ import logging
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from acousim.effects import EFFECT_TYPES
+
+if TYPE_CHECKING:
+    from cubedimer.dataset import Dataset, LoadConfig
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
@@ -30,13 +34,16 @@ from .identification import PracticalThresholds, identify_effects
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_components, fit_gaps, gap_definition, noise_floors, scalar_gap
-from .model_parameters import ParameterCalibration, calibrate_model_parameter
+from .model_parameters import calibrate_model_parameters, parameter_record
 from .orientation import check_y_orientation
-from .preparation import RunAccelerations, prepare_diagnosis_runs
+from .preparation import prepare_diagnosis_runs
 from .problem import DiagnosisProblem
+from .result import Diagnosis, DiagnosisInternals
+from .verdicts import ranked_effects
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "diagnose_dataset", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
+           "diagnosis_load_config", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
 
 logger = logging.getLogger(__name__)
 
@@ -101,34 +108,45 @@ class DiagnoseConfig:
         return PracticalThresholds(self.min_relative_improvement, self.min_absolute_improvement, self.max_vertical_gap)
 
 
-@dataclass(frozen=True, eq=False)
-class DiagnosisInternals:
-    """What the figures and the report need beyond diagnosis.json: the problem and the fits before and after."""
+def diagnosis_load_config() -> "LoadConfig":
+    """How a diagnosis loads a data set: the physics bounds of any levitated dimer, and with a meta.json also the
+    Gor'kov estimate of the trap frequency at its nominal pressure (:func:`acousim.analytic.nominal_trap_frequency`).
+    Load the data set once with it and pass the :class:`~cubedimer.dataset.Dataset` to the fit and the diagnosis,
+    so that both see the same runs."""
+    from acousim.analytic import nominal_trap_frequency
+    from cubedimer.dataset import LoadConfig
 
-    problem: DiagnosisProblem
-    base: GapFit  #: the calibrated simulation alone
-    final: GapFit  #: with the identified effects
+    return LoadConfig(trap_frequency=nominal_trap_frequency)
 
-    @property
-    def runs(self) -> tuple[RunAccelerations, ...]:
-        return self.problem.runs
 
-    @property
-    def model(self):
-        return self.problem.model
+def load_for_diagnosis(data_dir: str | Path, strict: bool = False, progress: bool = True) -> "Dataset":
+    """Load ``data_dir`` as :func:`diagnose` reads it (:func:`diagnosis_load_config`); skipped files are warned
+    about (``progress``) or logged at DEBUG level."""
+    from cubedimer.dataset import load_dataset
+
+    skip = logger.warning if progress else logger.debug
+    return load_dataset(data_dir, strict=strict, config=diagnosis_load_config(), report=lambda m: skip("skipping %s", m))
 
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
                      progress: bool = True, mesh_size: float | None = None,
                      model: str = "gorkov", gap: float | None = None,
-                     edge_radius: float | None = None) -> tuple[dict, DiagnosisInternals]:
-    """Diagnose a data set.
+                     edge_radius: float | None = None) -> Diagnosis:
+    """Load the data set ``data_dir`` (:func:`load_for_diagnosis`) and diagnose it (:func:`diagnose`)."""
+    dataset = load_for_diagnosis(data_dir, strict=strict, progress=progress)
+    return diagnose(dataset, config, progress=progress, mesh_size=mesh_size, model=model, gap=gap,
+                    edge_radius=edge_radius)
+
+
+def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), progress: bool = True,
+             mesh_size: float | None = None, model: str = "gorkov", gap: float | None = None,
+             edge_radius: float | None = None) -> Diagnosis:
+    """Diagnose a loaded data set.
 
     Parameters
     ----------
-    data_dir : path of the data set (CSV runs and meta.json)
+    dataset : the data set (:func:`load_for_diagnosis` loads it with the checks a diagnosis needs)
     config : DiagnoseConfig
-    strict : stop at the first bad file instead of skipping it
     progress : log the steps at INFO level (else DEBUG)
     mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
     model : the simulation model, a name of the registry :mod:`acousim.models` (``"gorkov"``, ``"fullwave"``);
@@ -139,8 +157,9 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
 
     Returns
     -------
-    (diagnosis, internals)
-        The diagnosis.json document (docs/formats.md) and :class:`DiagnosisInternals` for figures.
+    Diagnosis
+        The diagnosis (``to_json()``: diagnosis.json, docs/formats.md), with :class:`DiagnosisInternals` for the
+        figures in ``internals``.
 
     Runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`): the same numbers wherever it
     runs (here, in an executor task, on a dask worker), and faster for its many small factorisations.
@@ -148,75 +167,7 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     from cubedimer.executor import single_blas_thread
 
     with single_blas_thread():
-        return _diagnose_dataset(data_dir, config, strict, progress, mesh_size, model, gap, edge_radius)
-
-
-def _label(name: str) -> str:
-    """A model parameter's name in prose: the field without its unit (``gap_m`` -> ``gap``)."""
-    return name.rsplit("_", 1)[0].replace("_", " ")
-
-
-def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
-                               log=logger.info, drift=None) -> tuple[object, dict]:
-    """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
-    and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name.
-
-    ``drift`` (a :class:`~validation.diagnosis.drift.PressureDrift`) is followed by every trial model, so that a
-    pressure drifting within runs does not bias the hinge profile."""
-    from acousim.models import force_model_type, static_model
-
-    mtype = force_model_type(model_name)
-    out = {}
-    for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
-        if getattr(conditions, name) is not None:
-            continue
-        if not hi > lo * (1 + 1e-9):  # the model covers one value only: nothing to profile
-            out[name] = ParameterCalibration(name, float(default), float(lo), float("inf"), False,
-                                             f"the model's tables cover one {_label(name)} ({lo:.3g}) only: nothing "
-                                             f"to profile; the default {default:.3g} is kept", (lo, hi))
-            conditions = replace(conditions, **{name: float(default)})
-            continue
-        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
-
-        def build(value: float, name=name):
-            sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
-            trial = DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
-            return trial if drift is None else trial.with_drift(drift)
-
-        pc = calibrate_model_parameter(name, lo, hi, default, build, label=_label(name))
-        log("%s", pc.note)
-        out[name] = pc
-        conditions = replace(conditions, **{name: pc.value})
-    return conditions, out
-
-
-def _parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
-    """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
-    ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable, and
-    ``gap_model_error_m`` for a calibrated one whose model states its error (the systematic error the model's own
-    stated accuracy implies; None otherwise)."""
-    from acousim.models import force_model_type
-
-    mtype = force_model_type(model_name)
-    out = {}
-    model_errors = None
-    for name in mtype.calibration_ranges(conditions):
-        base, unit = name.rsplit("_", 1)
-        pc = calibrated.get(name)
-        out[name] = float(getattr(conditions, name))
-        out[f"{base}_std_{unit}"] = None if pc is None or not np.isfinite(pc.std_error) else pc.std_error
-        out[f"{base}_calibrated"] = bool(pc is not None and pc.calibrated)
-        model_error = None
-        if pc is not None and pc.calibrated and mtype.parameter_model_error is not None:
-            if model_errors is None:
-                model_errors = mtype.parameter_model_error(conditions)
-            rel = model_errors.get(name)
-            model_error = None if rel is None or not np.isfinite(rel) else float(rel) * out[name]
-        out[f"{base}_model_error_{unit}"] = model_error
-        out[f"{base}_note"] = pc.note if pc is not None else f"the {_label(name)} given by the user"
-        if pc is not None:
-            out[f"{base}_profile"] = pc.to_dict()
-    return out
+        return _diagnose(dataset, config, progress, mesh_size, model, gap, edge_radius)
 
 
 def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: list[str], discover) -> Discovery:
@@ -235,63 +186,6 @@ def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: lis
             keep = [e for e in identified if e not in dampings or e == d]
             out = out.union(discover(fit_gap_model(problem, keep), forms=("energy",)))
     return out
-
-
-def _ranked_effects(problem: DiagnosisProblem, config: DiagnoseConfig, ident, elim, identified: list[str],
-                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
-                    gap_before: float) -> list[dict]:
-    """diagnosis.json's ``effects``: every candidate, the model's effects first (in the order added, with the gap
-    after the cumulative fit and their held-out tests), then the others fitted on top of them, by gap."""
-    runs = problem.runs
-    # every candidate, ranked: identified ones in order with the gap after the cumulative fit;
-    # the others fitted on top of the identified set
-    effects = []
-    last_tests = ident.last_tests()
-    for i, name in enumerate(identified):
-        fit = fit_gap_model(problem, identified[: i + 1])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = ident.rounds[ident.identified.index(name)].candidates[name]
-        given = elim.tests.get(name)
-        entry = {"name": name, "params": joint_params[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                 "significant": True, "p_value": test.p_value, "wilcoxon_p": test.wilcoxon_p,
-                 "held_out_improvement_fraction": test.median_improvement_fraction,
-                 "added_in_round": ident.identified.index(name) + 1, "named": name in named,
-                 "p_value_given_others": given.p_value if given else None,
-                 "median_improvement_given_others": given.median_improvement if given else None}
-        if name in in_pair:
-            entry["indistinguishable_from"] = [e for e in in_pair[name].effects if e != name]
-        if joint_params[name] != final.effects[name]:  # fitted beside discovered terms: the effects-only values too
-            entry["params_without_discovered_terms"] = final.effects[name]
-        effects.append(entry)
-    others = []
-    for name in config.candidates:
-        if name in identified:
-            continue
-        fit = fit_gap_model(problem, identified + [name])
-        g = scalar_gap(fit_gaps(runs, fit))
-        test = last_tests.get(name)
-        note = "fitted on top of the identified effects; not a significant held-out improvement"
-        given = elim.dropped_tests.get(name)
-        if name in elim.dropped:
-            t = ident.rounds[ident.identified.index(name)].candidates[name]
-            note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
-                    f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
-                    "of the gap")
-        if name in in_pair:
-            other = [e for e in in_pair[name].effects if e != name][0]
-            note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
-                    f"{other} stands for both in the fitted model")
-        if name in replaced:
-            note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
-                    "the discovered terms explain its share of the gap better")
-        others.append({"name": name, "params": fit.effects[name], "gap_after": g, "shrink": 1 - g / gap_before,
-                       "significant": False, "p_value": test.p_value if test else None,
-                       "wilcoxon_p": test.wilcoxon_p if test else None,
-                       "held_out_improvement_fraction": test.median_improvement_fraction if test else None,
-                       "note": note, **({"p_value_given_others": given.p_value,
-                                         "median_improvement_given_others": given.median_improvement} if given else {})})
-    effects += sorted(others, key=lambda e: e["gap_after"])
-    return effects
 
 
 #: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the
@@ -318,31 +212,54 @@ def check_enough_runs(data_dir, n_runs: int, n_skipped: int, alpha: float) -> No
         f"alpha {alpha:g} (the held-out sign-flip test's smallest p with n runs is 2^-n); record more runs")
 
 
-def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: bool,
-                      mesh_size: float | None, model_name: str, gap: float | None,
-                      edge_radius: float | None) -> tuple[dict, DiagnosisInternals]:
-    from acousim.analytic import nominal_trap_frequency
-    from acousim.models import force_model_type, static_model
-    from cubedimer.dataset import LoadConfig, load_dataset
-    from cubedimer.meta import read_meta
+@dataclass(frozen=True, eq=False)
+class _Calibrated:
+    """The calibration step's outcome: the problem at the calibrated model, with what it decided."""
 
+    problem: DiagnosisProblem
+    conditions: object  #: the experiment conditions with the model's calibrated parameters
+    parameters: dict  #: ParameterCalibration by field name
+    data_warnings: list
+    drift: object  #: DriftTest or None
+
+
+@dataclass(frozen=True, eq=False)
+class _Identified:
+    """The identification step's outcome: the greedy rounds, the backward check and the fitted model."""
+
+    ident: object  #: Identification
+    elim: object  #: the backward check
+    pairs: list
+    identified: list[str]
+    base: GapFit
+    final: GapFit
+
+
+def _diagnose(dataset, config: DiagnoseConfig, progress: bool, mesh_size: float | None, model_name: str,
+              gap: float | None, edge_radius: float | None) -> Diagnosis:
+    """The diagnosis as its named steps: calibrate, identify, discover, the joint model, summarise."""
     from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
-    skip = logger.warning if progress else logger.debug
-    meta = read_meta(data_dir)
-    conditions = conditions_from_meta(meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
+    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
+    conditions = conditions_from_meta(dataset.meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
+    cal = _calibrate(dataset, conditions, model_name, config, log)
+    found = _identify(cal.problem, config, progress, log)
+    discovery, replaced, identified, final = _discover(cal.problem, found, config, log)
+    return _summarise(dataset, cal, found, discovery, replaced, identified, final, model_name, config, log)
+
+
+def _calibrate(dataset, conditions, model_name: str, config: DiagnoseConfig, log) -> _Calibrated:
+    """The calibrated problem: the model (refused if it does not fit the experiment), y's orientation, the model's
+    own parameters the data may determine, and a pressure drift within runs (followed by the simulation)."""
+    from acousim.models import force_model_type, static_model
+
     # refuses a misfit first (a gap with Gor'kov, a dimer outside the full-wave family); a parameter to be calibrated
     # starts at the value the model takes by default
     mtype = force_model_type(model_name)
     mtype.check(conditions)
     start = {n: d for n, (_, _, d) in mtype.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
     model = static_model(model_name, replace(conditions, **start))
-    # the loader checks the physics bounds of any levitated dimer; with a meta.json also the Gor'kov estimate
-    # of the trap frequency at its nominal pressure
-    dataset = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
-                           report=lambda m: skip("skipping %s", m))
-    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
     problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
                                              config.max_frames_per_run)
     data_warnings = []
@@ -358,82 +275,137 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
     calibrated_later = {n for n in mtype.calibration_ranges(conditions) if getattr(conditions, n) is None}
     first_drift = None
     if calibrated_later and config.drift is not None:
-        found = detect_pressure_drift(problem, config.drift)
-        first_drift = found.drift if found.detected else None
+        first = detect_pressure_drift(problem, config.drift)
+        first_drift = first.drift if first.detected else None
     conditions, parameters = calibrate_model_parameters(model_name, conditions, problem.recorded_runs,
                                                         config.max_frames_per_run, log, drift=first_drift)
     if parameters:
         model = static_model(model_name, conditions)
         problem = DiagnosisProblem.from_recorded(model.interpolated(), problem.recorded_runs,
                                                  config.max_frames_per_run)
-    model = problem.model
-    runs = problem.runs
-    log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)", len(runs))
-    p_floor = smallest_sign_flip_pvalue(len(runs))
-    identification_possible = p_floor <= config.alpha
-    if not identification_possible:  # logged in quiet mode too: it changes what "identified: none" means
-        logger.warning("with %d runs no effect can be identified at --alpha %g (smallest attainable p %.3g of the "
-                       "held-out sign-flip test, 2^-%d); record at least %d runs", len(runs), config.alpha, p_floor,
-                       len(runs), runs_needed(config.alpha))
+    log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)",
+        len(problem.runs))
     drift = detect_pressure_drift(problem, config.drift) if config.drift is not None else None
     if drift is not None and drift.detected:
         log("pressure drift detected (relative amplitude %.3g, time scale %.2g s, p = %.2g): the simulation "
             "follows it", drift.relative_amplitude, drift.time_scale_s, drift.p_value)
         problem = problem.with_drift(drift.drift)
+    return _Calibrated(problem, conditions, parameters, data_warnings, drift)
+
+
+def _identify(problem: DiagnosisProblem, config: DiagnoseConfig, progress: bool, log) -> _Identified:
+    """The candidate effects that improve held-out runs (greedy rounds), each still needed given all the others
+    (the backward check; pairs that only work as either one are one verdict naming both), and the fitted model."""
+    n = len(problem.runs)
+    p_floor = smallest_sign_flip_pvalue(n)
+    if p_floor > config.alpha:  # logged in quiet mode too: it changes what "identified: none" means
+        logger.warning("with %d runs no effect can be identified at --alpha %g (smallest attainable p %.3g of the "
+                       "held-out sign-flip test, 2^-%d); record at least %d runs", n, config.alpha, p_floor,
+                       n, runs_needed(config.alpha))
     base = fit_gap_model(problem, [])
-    per_before = fit_gaps(runs, base)
-    gap_before = scalar_gap(per_before)
-    floor = float(np.mean(noise_floors(runs, base)))
-    log("gap before = %.3g (noise floor %.3g); identifying effects", gap_before, floor)
+    log("gap before = %.3g (noise floor %.3g); identifying effects", scalar_gap(fit_gaps(problem.runs, base)),
+        float(np.mean(noise_floors(problem.runs, base))))
     held_out_cache: dict = {}
     ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
                              progress=progress, cache=held_out_cache)
-    # every effect the greedy rounds chose must still be needed given all the others; pairs that only work as
-    # either one are one verdict naming both
     elim = backward_check(problem, ident.identified, alpha=config.alpha, thresholds=config.thresholds, log=log,
                           cache=held_out_cache)
-    pairs = list(elim.indistinguishable)
-    identified = list(elim.model_effects)  # what the model fits; the named ones are `named` below
-    final = fit_gap_model(problem, identified)
+    identified = list(elim.model_effects)  # what the model fits; the named ones are decided in the summary
+    return _Identified(ident, elim, list(elim.indistinguishable), identified, base, fit_gap_model(problem, identified))
+
+
+def _discover(problem: DiagnosisProblem, found: _Identified, config: DiagnoseConfig, log):
+    """The library terms that carry what the identified effects leave, and the identified candidates judged against
+    them: ``(discovery, replaced, identified, final)``, where ``replaced`` holds the p-value of every candidate the
+    discovered terms replaced."""
+    identified, final = found.identified, found.final
     discovery, replaced = Discovery(), {}
-    if config.discover:
-        log("regressing the remaining residual on the library (held-out runs)")
-        discover = partial(discover_terms, problem, alpha=config.alpha,
-                           min_absolute_improvement=config.discovery_min_improvement,
-                           min_relative_improvement=config.min_relative_improvement)
-        discovery = discover(final)
-        # the candidates are judged against the terms found on top of them, and against the dissipative terms
-        # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
-        # describe, leaving nothing to discover on top of it
-        for rivals in (discovery, _dissipation_rivals(problem, base, identified, discover) if identified else Discovery()):
-            if rivals.empty or not identified:
-                continue
-            kept, pvals = judge_candidates(problem, identified, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
-            if kept != identified:
-                replaced.update({c: pvals[c] for c in identified if c not in kept})
-                identified = kept
-                final = fit_gap_model(problem, identified)
-                discovery = discover(final)
+    if not config.discover:
+        return discovery, replaced, identified, final
+    log("regressing the remaining residual on the library (held-out runs)")
+    discover = partial(discover_terms, problem, alpha=config.alpha,
+                       min_absolute_improvement=config.discovery_min_improvement,
+                       min_relative_improvement=config.min_relative_improvement)
+    discovery = discover(final)
+    # the candidates are judged against the terms found on top of them, and against the dissipative terms
+    # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
+    # describe, leaving nothing to discover on top of it
+    for rivals in (discovery, _dissipation_rivals(problem, found.base, identified, discover) if identified
+                   else Discovery()):
+        if rivals.empty or not identified:
+            continue
+        kept, pvals = judge_candidates(problem, identified, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
+        if kept != identified:
+            replaced.update({c: pvals[c] for c in identified if c not in kept})
+            identified = kept
+            final = fit_gap_model(problem, identified)
+            discovery = discover(final)
+    return discovery, replaced, identified, final
+
+
+def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discovery, replaced: dict,
+               identified: list[str], final: GapFit, model_name: str, config: DiagnoseConfig, log) -> Diagnosis:
+    """The joint model's parameters, every candidate's verdict, the gaps before and after, where the rest lies and
+    the long-time errors, as one :class:`Diagnosis`."""
+    problem, base, runs = cal.problem, found.base, cal.problem.runs
     # a pair whose kept member the discovered terms replaced is not a verdict any more
-    pairs = [pr for pr in pairs if pr.kept_in_model in identified]
+    pairs = [pr for pr in found.pairs if pr.kept_in_model in identified]
     in_pair = {e: pr for pr in pairs for e in pr.effects}
     named = [e for e in identified if e not in in_pair]
-    per_after = fit_gaps(runs, final)
-    gap_after = scalar_gap(per_after)
+    per_before, per_after = fit_gaps(runs, base), fit_gaps(runs, final)
+    gap_before, gap_after = scalar_gap(per_before), scalar_gap(per_after)
+    floor = float(np.mean(noise_floors(runs, base)))
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
-    effects = _ranked_effects(problem, config, ident, elim, identified, named, in_pair, replaced, joint_params, final,
-                              gap_before)
-    loc_before = localize_residuals(runs, base.residuals)
+    effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
+                             replaced, joint_params, final, gap_before)
     loc_after = localize_residuals(runs, final.residuals)
-    long_time = {}
-    if config.long_time:
-        log("long-time gaps (simulating every run from its first state)")
-        lt_before = long_time_gaps(problem, base, config.long_time_duration)
-        lt_after = long_time_gaps(problem, final, config.long_time_duration) if identified else lt_before
-        long_time = {"before": {"mean": mean_long_time_gap(lt_before), "per_run": [g.to_dict() for g in lt_before]},
-                     "after": {"mean": mean_long_time_gap(lt_after), "per_run": [g.to_dict() for g in lt_after]}}
+    components = fit_components(final)
+    p_floor = smallest_sign_flip_pvalue(len(runs))
+    return Diagnosis(
+        model=model_name,
+        simulation={k: v for k, v in problem.model.record().items() if not isinstance(v, (list, dict))},
+        identified=tuple(named), indistinguishable=tuple(pr.to_dict() for pr in pairs),
+        model_effects=tuple(identified), dropped_by_backward_check=tuple(found.elim.dropped),
+        greedy_identified=tuple(found.ident.identified),
+        calibration=_calibration_record(problem, final, cal, model_name),
+        gap_before=gap_before, gap_after=gap_after, gap_definition=gap_definition(components),
+        gap_components=tuple(c.name for c in components),
+        gap_component_forms={c.name: c.form for c in components},
+        gap_per_run={"before": per_before.tolist(), "after": per_after.tolist(), "runs": [r.name for r in runs]},
+        noise_floor=floor, noise_floor_note="mean floor already subtracted from every gap",
+        effects=effects,
+        localization={"before": localize_residuals(runs, base.residuals), "after": loc_after},
+        long_time=_long_time_record(problem, base, final, bool(identified), config, log),
+        remaining_gap=_remaining_gap(found.ident, cal.drift, discovery, replaced, folded, identified, gap_after,
+                                     floor, loc_after),
+        identification_rounds=tuple(r.to_dict() for r in found.ident.rounds),
+        data_warnings=tuple(cal.data_warnings), skipped_files=tuple(dataset.skipped_files()),
+        glitch_frames_masked=dataset.n_glitches,
+        settings={"alpha": config.alpha, "smallest_attainable_p": p_floor,
+                  "identification_possible": bool(p_floor <= config.alpha), "runs_needed": runs_needed(config.alpha),
+                  "min_relative_improvement": config.min_relative_improvement,
+                  "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
+        internals=DiagnosisInternals(problem, base, final))
+
+
+def _long_time_record(problem: DiagnosisProblem, base: GapFit, final: GapFit, any_effect: bool,
+                      config: DiagnoseConfig, log) -> dict:
+    """diagnosis.json's ``long_time``: the attractor-shape, Poincare and frequency errors of every run simulated
+    from its first state, before and after the effects (empty when the config skips them)."""
+    if not config.long_time:
+        return {}
+    log("long-time gaps (simulating every run from its first state)")
+    lt_before = long_time_gaps(problem, base, config.long_time_duration)
+    lt_after = long_time_gaps(problem, final, config.long_time_duration) if any_effect else lt_before
+    return {"before": {"mean": mean_long_time_gap(lt_before), "per_run": [g.to_dict() for g in lt_before]},
+            "after": {"mean": mean_long_time_gap(lt_after), "per_run": [g.to_dict() for g in lt_after]}}
+
+
+def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: dict, identified: list[str],
+                   gap_after: float, floor: float, loc_after: dict) -> dict:
+    """diagnosis.json's ``remaining_gap``: what is left, whether it is within the noise, and what carries it."""
     # the gap is already in excess of the noise floor: "explained" when under 1 % of the variance
     explained = bool(gap_after <= EXPLAINED_GAP)
     remaining = {
@@ -467,51 +439,26 @@ def _diagnose_dataset(data_dir, config: DiagnoseConfig, strict: bool, progress: 
             f"; the vertical (calibration) equation itself stays {100 * ident.vertical_gap:.0f} % unexplained, so the "
             f"calibration is distorted by a cause outside the candidates, and {', '.join(ident.withheld)} (which improved "
             "held-out runs on top of that calibration) is not named as a cause")
-    cal = final.calibration
-    components = fit_components(final)
+    return remaining
+
+
+def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, model_name: str) -> dict:
+    """diagnosis.json's ``calibration``: pressure, height origin (from the nominal and the calibrated Z_eq), the first
+    states, the model's calibrated parameters and the pressure drift."""
+    c, model = final.calibration, problem.model
     calibration = {
-        "pressure_amplitude_pa": cal.pressure_amplitude_pa,
-        "nominal_pressure_amplitude_pa": cal.nominal_pressure_pa,
-        "pressure_ratio": cal.pressure_amplitude_pa / cal.nominal_pressure_pa,
-        "y_origin_height_m": cal.z_origin_m,
-        "y_origin_above_nominal_Z_eq_m": cal.z_origin_m - model.equilibrium_height,
-        "y_origin_above_calibrated_Z_eq_m": cal.origin_offset_m,
-        "calibrated_Z_eq_m": cal.equilibrium_height_m,
+        "pressure_amplitude_pa": c.pressure_amplitude_pa,
+        "nominal_pressure_amplitude_pa": c.nominal_pressure_pa,
+        "pressure_ratio": c.pressure_amplitude_pa / c.nominal_pressure_pa,
+        "y_origin_height_m": c.z_origin_m,
+        "y_origin_above_nominal_Z_eq_m": c.z_origin_m - model.equilibrium_height,
+        "y_origin_above_calibrated_Z_eq_m": c.origin_offset_m,
+        "calibrated_Z_eq_m": c.equilibrium_height_m,
         "nominal_Z_eq_m": model.equilibrium_height,
         "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
         "calibrated_on": CALIBRATED_ON,
-        **_parameter_record(conditions, parameters, model_name),
+        **parameter_record(cal.conditions, cal.parameters, model_name),
     }
-    if drift is not None:
-        calibration["drift"] = drift.to_dict()
-    diagnosis = {
-        "model": model_name,
-        "simulation": {k: v for k, v in model.record().items() if not isinstance(v, (list, dict))},
-        "identified": named,
-        "indistinguishable": [pr.to_dict() for pr in pairs],
-        "model_effects": identified,
-        "dropped_by_backward_check": list(elim.dropped),
-        "greedy_identified": list(ident.identified),
-        "calibration": calibration,
-        "gap_before": gap_before,
-        "gap_after": gap_after,
-        "gap_definition": gap_definition(components),
-        "gap_components": [c.name for c in components],
-        "gap_component_forms": {c.name: c.form for c in components},
-        "gap_per_run": {"before": per_before.tolist(), "after": per_after.tolist(), "runs": [r.name for r in runs]},
-        "noise_floor": floor,
-        "noise_floor_note": "mean floor already subtracted from every gap",
-        "effects": effects,
-        "localization": {"before": loc_before, "after": loc_after},
-        "long_time": long_time,
-        "remaining_gap": remaining,
-        "identification_rounds": [r.to_dict() for r in ident.rounds],
-        "data_warnings": data_warnings,
-        "skipped_files": dataset.skipped_files(),
-        "glitch_frames_masked": dataset.n_glitches,
-        "settings": {"alpha": config.alpha, "smallest_attainable_p": p_floor,
-                     "identification_possible": bool(identification_possible), "runs_needed": runs_needed(config.alpha),
-                     "min_relative_improvement": config.min_relative_improvement,
-                     "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
-    }
-    return diagnosis, DiagnosisInternals(problem, base, final)
+    if cal.drift is not None:
+        calibration["drift"] = cal.drift.to_dict()
+    return calibration

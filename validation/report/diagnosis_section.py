@@ -4,6 +4,7 @@ files (:func:`write_diagnosis`)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,39 +14,41 @@ from ..diagnosis.statistics import format_p
 from .claims import anti_damping_text
 from .html import Figure, Section, Table
 
+if TYPE_CHECKING:
+    from ..diagnosis import Diagnosis, EffectVerdict
+
 __all__ = ["diagnosis_figures", "diagnosis_section", "write_diagnosis"]
 
 
-def write_diagnosis(diagnosis: dict, internals, out_dir: str | Path) -> list[Path]:
+def write_diagnosis(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Path]:
     """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``.
 
-    ``diagnosis`` and ``internals`` are what :func:`validation.diagnosis.diagnose_dataset` returns; returns the
-    paths of diagnosis.json and report.html."""
+    ``diagnosis`` is what :func:`validation.diagnosis.diagnose` returns; returns the paths of diagnosis.json and
+    report.html."""
     from cubedimer.atomic import write_json
 
     from .html import write_report
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "diagnosis.json", diagnosis)
-    figs = diagnosis_figures(diagnosis, internals, out / "figures")
+    write_json(out / "diagnosis.json", diagnosis.to_json())
+    figs = diagnosis_figures(diagnosis, out / "figures")
     write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
     return [out / "diagnosis.json", out / "report.html"]
 
 
-def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[Figure]:
-    """The diagnosis's figures as PNG files in ``out_dir``, from the diagnosis.json document ``diagnosis``
-    (``internals``, the :class:`validation.diagnosis.DiagnosisInternals`, is accepted for figures that need
-    the runs themselves)."""
+def diagnosis_figures(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Figure]:
+    """The diagnosis's figures as PNG files in ``out_dir``: the gap by candidate, the residual maps before and after,
+    and the residual by library term."""
     import matplotlib.pyplot as plt
 
     out = Path(out_dir)
     figs = []
     # 1. gap by candidate
     fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
-    names = ["calibrated\nsimulation"] + [e["name"].replace("_", "\n") for e in diagnosis["effects"]]
-    vals = [diagnosis["gap_before"]] + [e["gap_after"] for e in diagnosis["effects"]]
-    colors = ["0.5"] + ["tab:green" if e["significant"] else "tab:gray" for e in diagnosis["effects"]]
+    names = ["calibrated\nsimulation"] + [e.name.replace("_", "\n") for e in diagnosis.effects]
+    vals = [diagnosis.gap_before] + [e.gap_after for e in diagnosis.effects]
+    colors = ["0.5"] + ["tab:green" if e.significant else "tab:gray" for e in diagnosis.effects]
     ax.bar(range(len(vals)), np.maximum(vals, 1e-5), color=colors)
     ax.axhline(0.01, color="k", ls="--", lw=0.8, label="'explained within noise' threshold")
     ax.set_xticks(range(len(vals)), names, fontsize=7)
@@ -60,7 +63,7 @@ def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[F
     # 2. residual maps over (theta, y), before and after, thetaddot and yddot
     fig, axes = plt.subplots(2, 2, figsize=(8, 6), constrained_layout=True)
     for col, key in enumerate(("before", "after")):
-        reg = diagnosis["localization"][key]["regions"]["theta_y"]
+        reg = diagnosis.localization[key]["regions"]["theta_y"]
         xe, ye = np.array(reg["x_edges"]), np.array(reg["y_edges"]) * 1e6
         for row, (eq, unit) in enumerate((("rms_yddot", "m/s$^2$"), ("rms_thetaddot", "1/s$^2$"))):
             ax = axes[row, col]
@@ -75,7 +78,7 @@ def diagnosis_figures(diagnosis: dict, internals, out_dir: str | Path) -> list[F
     # 3. residual explained by single library terms
     fig, axes = plt.subplots(1, 2, figsize=(8, 3.4), constrained_layout=True)
     for ax, eq in zip(axes, ("yddot", "thetaddot")):
-        rows = sorted(diagnosis["localization"]["before"]["terms"][eq], key=lambda d: -d["explained_fraction_alone"])[:8]
+        rows = sorted(diagnosis.localization["before"]["terms"][eq], key=lambda d: -d["explained_fraction_alone"])[:8]
         ax.barh([r["term"] for r in rows][::-1], [r["explained_fraction_alone"] for r in rows][::-1], color="tab:blue")
         ax.set_xlabel("fraction of residual variance explained alone")
         ax.set_title(f"{eq} residual of the calibrated simulation", fontsize=9)
@@ -99,47 +102,47 @@ def _origin_text(cal: dict) -> str:
             f"(the effects' y origin) and {nominal:+.2f} um above its Z_eq at the nominal pressure. ")
 
 
-def _verdict(effect: dict, pairs: list[dict]) -> str:
-    if any(effect["name"] in pr["effects"] for pr in pairs):
+def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
+    if any(effect.name in pr["effects"] for pr in pairs):
         return "indistinguishable"
-    return "yes" if effect["significant"] and effect.get("named", True) else "no"
+    return "yes" if effect.significant and effect.named else "no"
 
 
 def _params_text(params: dict) -> str:
     return ", ".join(f"{k} = {v:.3g}" for k, v in params.items())
 
 
-def _cause_text(diagnosis: dict, pairs: list[dict]) -> str:
+def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
-    named = [e for e in diagnosis["effects"] if e["significant"] and e.get("named", True)]
-    parts = [f"{e['name']} ({_params_text(e['params'])})" for e in named]
+    named = [e for e in diagnosis.effects if e.significant and e.named]
+    parts = [f"{e.name} ({_params_text(e.params)})" for e in named]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
-        kept = next((e for e in diagnosis["effects"] if e["name"] == pr["kept_in_model"]), None)
+        kept = next((e for e in diagnosis.effects if e.name == pr["kept_in_model"]), None)
         text += (f"{', and' if parts else ''} by {a} or {b}, which the data cannot tell apart: neither improves held-out "
                  f"runs given the other ({a} {format_p(pr['p_given_other'][a])}, {b} {format_p(pr['p_given_other'][b])}), "
                  f"together they do ({format_p(pr['p_together'])}), and the held-out gap with one instead of the other "
                  f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
                  f"fitted model uses {pr['kept_in_model']}"
-                 + (f" ({_params_text(kept['params'])})" if kept else ""))
+                 + (f" ({_params_text(kept.params)})" if kept else ""))
     return text + "."
 
 
-def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
+def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
     """The report section of a diagnosis: the reading (calibration, gap, cause) and the ranked candidates."""
-    cal = diagnosis["calibration"]
-    ident = diagnosis["identified"]
-    rem = diagnosis["remaining_gap"]
-    pairs = diagnosis.get("indistinguishable") or []
+    cal = diagnosis.calibration
+    ident = diagnosis.identified
+    rem = diagnosis.remaining_gap
+    pairs = diagnosis.indistinguishable or []
     if ident or pairs:
         what = _cause_text(diagnosis, pairs)
     else:
         what = "No candidate effect improves held-out runs significantly."
-        settings = diagnosis.get("settings") or {}
+        settings = diagnosis.settings or {}
         if settings.get("identification_possible") is False:
-            n_runs = len(diagnosis["gap_per_run"]["runs"])
+            n_runs = len(diagnosis.gap_per_run["runs"])
             what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
                      f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
                      f"at least {settings['runs_needed']} runs are needed.")
@@ -158,13 +161,13 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
     if replaced:
         found += (" Not named, because the discovered terms explain its share better on held-out runs: "
                   + ", ".join(r["name"] for r in replaced) + ".")
-    skipped = diagnosis.get("skipped_files") or []
+    skipped = diagnosis.skipped_files or []
     data_text = ""
-    if skipped or diagnosis.get("glitch_frames_masked"):
-        data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.get('glitch_frames_masked', 0)} tracking-glitch "
+    if skipped or diagnosis.glitch_frames_masked:
+        data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.glitch_frames_masked} tracking-glitch "
                      "frames masked. ")
     # what the data suggest about how they were recorded comes first: it changes how everything after it reads
-    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.get("data_warnings") or [])
+    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or [])
     gap_text = ""
     if "gap_m" in cal:  # the full-wave model's hinge gap: calibrated with its standard error, or why not
         if cal.get("gap_calibrated"):
@@ -183,21 +186,21 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         warnings_text + data_text + drift_text + gap_text +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         + _origin_text(cal) +
-        f"The calibrated simulation leaves {100 * diagnosis['gap_before']:.1f} % of the data unexplained beyond the noise "
+        f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
-        f"energy balance; noise floor {100 * diagnosis['noise_floor']:.1f} %). {what} "
-        + (f"With them the gap is {100 * diagnosis['gap_after']:.1f} %: {rem['statement']}" if ident or pairs else
+        f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {what} "
+        + (f"With them the gap is {100 * diagnosis.gap_after:.1f} %: {rem['statement']}" if ident or pairs else
            f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
         + f".{found}"
-        + anti_damping_text({f"{k} of {e['name']}": v for e in diagnosis["effects"] if e["significant"]
-                             and e["name"] in DAMPING_RATES for k, v in e["params"].items() if k in DAMPING_RATES[e["name"]]})
+        + anti_damping_text({f"{k} of {e.name}": v for e in diagnosis.effects if e.significant
+                             and e.name in DAMPING_RATES for k, v in e.params.items() if k in DAMPING_RATES[e.name]})
     )
-    rows = [[e["name"], _verdict(e, pairs),
-             ", ".join(f"{k}={v:.3g}" for k, v in e["params"].items()), e["gap_after"], e["shrink"], e.get("p_value"),
-             e.get("p_value_given_others")]
-            for e in diagnosis["effects"]]
-    n_runs = len(diagnosis["gap_per_run"]["runs"])
-    smallest = (diagnosis.get("settings") or {}).get("smallest_attainable_p", 0.5 ** n_runs)
+    rows = [[e.name, _verdict(e, pairs),
+             ", ".join(f"{k}={v:.3g}" for k, v in e.params.items()), e.gap_after, e.shrink, e.p_value,
+             e.p_value_given_others]
+            for e in diagnosis.effects]
+    n_runs = len(diagnosis.gap_per_run["runs"])
+    smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
     columns = {
         "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
@@ -232,11 +235,11 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
         tables.append(Table("Skipped files", ["file", "reason"],
                             [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
     return Section("diagnosis", "Sim-to-real gap", reading, figures, tables,
-                   {"gap_before": diagnosis["gap_before"], "gap_after": diagnosis["gap_after"], "identified": ident,
-                    "noise_floor": diagnosis["noise_floor"], "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
+                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after, "identified": ident,
+                    "noise_floor": diagnosis.noise_floor, "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
                     "pressure_ratio": cal["pressure_ratio"],
                     "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
-                    "effects": {e["name"]: e["params"] for e in diagnosis["effects"] if e["significant"]},
-                    "data_warnings": [w["code"] for w in diagnosis.get("data_warnings") or []],
+                    "effects": {e.name: e.params for e in diagnosis.effects if e.significant},
+                    "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})

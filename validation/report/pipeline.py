@@ -38,7 +38,7 @@ def model_equation_text(equations: dict) -> list[str]:
     return lines
 
 
-def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta_max: float, y_max: float) -> dict[str, float]:
+def effect_static_coefficients(diag: "Diagnosis", wavenumber: float, z_eq: float, theta_max: float, y_max: float) -> dict[str, float]:
     """Velocity-free thetaddot coefficients [SI] that the *identified* effects add to the static model: least
     squares of their accelerations at zero velocity on the velocity-free cubic monomials over the same
     box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
@@ -51,8 +51,8 @@ def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta
     th, y = np.meshgrid(np.linspace(-theta_max, theta_max, 21), np.linspace(-y_max, y_max, 41))
     state = np.column_stack([y.ravel(), np.zeros(y.size), th.ravel(), np.zeros(y.size)])
     total = np.zeros(y.size)
-    for name in diag.get("identified", []):
-        params = next(e["params"] for e in diag["effects"] if e["name"] == name)
+    for name in diag.identified:
+        params = next(e.params for e in diag.effects if e.name == name)
         pv = np.array([params[p] for p in CANDIDATE_EFFECTS[name]])
         total += effect_regressors(name, state, z_eq + state[:, 0], wavenumber, z_eq)[:, 1, :] @ pv
     if not np.any(total):
@@ -155,16 +155,16 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from cubedimer.spectra import peak_frequency
     from acousim.sweep import fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
-    from cubedimer.meta import read_meta
     from fitting.compare import compare_models, cross_coupling_mask
     from fitting.config import FitConfig
-    from fitting.fit_output import write_fit
+    from fitting.fit_output import model_json as fit_model_json, write_fit
     from fitting.pipeline import fit_dataset
     from fitting.refine import JOINT_REFINE
     from fitting.plots import plot_comparison
 
     from ..coefficients import compare_coefficients
-    from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose_dataset
+    from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose, load_for_diagnosis
+    from ..diagnosis.pipeline import check_enough_runs
     from ..diagnosis.model_comparison import MODEL_LABELS
     from ..simulation import model_from_meta
     from .diagnosis_section import diagnosis_figures, diagnosis_section
@@ -175,11 +175,14 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     def say(message: str) -> None:
         logger.log(level, "%s", message)
 
+    # the data set, loaded once with the diagnosis's checks: the fit and the diagnosis see the same runs
+    dataset = load_for_diagnosis(data_dir, progress=progress)
+    meta = dataset.meta
     # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
     # before the long fit, not after it
-    model_from_meta(read_meta(data_dir), model=model, gap=gap, edge_radius=edge_radius)
+    model_from_meta(meta, model=model, gap=gap, edge_radius=edge_radius)
     # and a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
-    _check_runs(data_dir)
+    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
     out = Path(out_dir)
     figs_dir = out / "figures"
     fit_dir = out / "fit"
@@ -190,12 +193,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                          joint=replace(config.joint, max_evals=max_evals))
     say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
                                     else "integral-form discovery with held-out selection, long-time polish") + ")")
-    res = fit_dataset(data_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
+    res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
-    import json
-
-    model_json = json.loads((fit_dir / "model.json").read_text())
+    model_json = fit_model_json(res)
     prepared = res.runs
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
     mask = cross_coupling_mask(res.model)
@@ -207,11 +208,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                              [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag, internals = diagnose_dataset(data_dir, DiagnoseConfig(), progress=progress, model=model, gap=gap,
-                                       edge_radius=edge_radius)
-    meta = read_meta(data_dir)
+    diag = diagnose(dataset, DiagnoseConfig(), progress=progress, model=model, gap=gap, edge_radius=edge_radius)
+    internals = diag.internals
     # the full-wave model beside the diagnosis's one: at its calibrated (or given) gap
-    fw_gap = diag["calibration"].get("gap_m", gap)
+    fw_gap = diag.calibration.get("gap_m", gap)
     say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
     models = compare_simulation_models(internals.problem, meta, base=internals.base, gap=fw_gap)
     # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
@@ -370,7 +370,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     if added.get("y^2*theta") and np.isfinite(fitted_lead):
         with_effects = main_lead.simulated + added["y^2*theta"]
         n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
-        effects_reading = (f" The effects identified in section 6 ({', '.join(diag['identified'])}) add {added['y^2*theta']:.3g} to the "
+        effects_reading = (f" The effects identified in section 6 ({', '.join(diag.identified)}) add {added['y^2*theta']:.3g} to the "
                            f"static theta*y^2 (least squares over the same box); with them the "
                            f"{MODEL_LABELS.get(model, model).split(' (')[0]} simulation predicts "
                            f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
@@ -415,7 +415,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # 7 (placed after the diagnosis) how far the gap shrinks once scattering is added
     sections_after = [_scattering_section(models)]
     # 6 the gap
-    dfigs = diagnosis_figures(diag, internals, figs_dir)
+    dfigs = diagnosis_figures(diag, figs_dir)
     sec = diagnosis_section(diag, dfigs)
     sections.append(Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(model, model).split(' (')[0]} model)",
                             sec.reading, sec.figures, sec.tables, sec.numbers))
@@ -426,7 +426,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         sections.append(atlas_section(atlas))
     from cubedimer.atomic import write_json
 
-    write_json(out / "diagnosis.json", diag)
+    write_json(out / "diagnosis.json", diag.to_json())
     write_json(out / "comparison.json", numbers5)
     path = write_report(sections, out, "Cube dimer: model vs simulation",
                         f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
@@ -447,18 +447,6 @@ RUN_COLUMNS = {
                    f"where theta's line at f_y reaches {PHASE_LINE_FRACTION:g} of its largest spectral line (blank: theta "
                    "has no line at f_y, so there is no phase)",
 }
-
-
-def _check_runs(data_dir) -> None:
-    """:func:`validation.diagnosis.pipeline.check_enough_runs` on the data set as the diagnosis loads it."""
-    from acousim.analytic import nominal_trap_frequency
-    from cubedimer.dataset import LoadConfig, load_dataset
-
-    from ..diagnosis import DiagnoseConfig
-    from ..diagnosis.pipeline import check_enough_runs
-
-    dataset = load_dataset(data_dir, config=LoadConfig(trap_frequency=nominal_trap_frequency), report=lambda m: None)
-    check_enough_runs(data_dir, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
 
 
 def _late_phase(p) -> float | None:

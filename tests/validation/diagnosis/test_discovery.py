@@ -63,9 +63,9 @@ def test_cubic_hinge_discovered_not_forced_onto_a_candidate(cubic_dataset):
     """-2.4e4 theta^3 in thetaddot: measured -24213 +- 10 (+0.9 %), shrink 1.0, nothing named (pair scattering,
     the closest candidate, p = 0.2)."""
     data, truth = cubic_dataset
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == []
-    found = diag["remaining_gap"]["discovered_terms"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ()
+    found = diag.remaining_gap["discovered_terms"]
     assert found["yddot"] == []
     lead = found["thetaddot"][0]
     assert lead["term"] == "theta^3"
@@ -73,8 +73,8 @@ def test_cubic_hinge_discovered_not_forced_onto_a_candidate(cubic_dataset):
     # whose bias on the cubic is of order 1 % (measured +0.9 %)
     assert lead["coefficient"] == pytest.approx(-truth["cubic_hinge"], rel=0.05)
     assert lead["shrink"] > 0.8
-    assert "[discovered: -2.42e+04 theta^3" in diag["remaining_gap"]["discovered_equations"]["thetaddot"]
-    assert not diag["calibration"]["drift"]["detected"]
+    assert "[discovered: -2.42e+04 theta^3" in diag.remaining_gap["discovered_equations"]["thetaddot"]
+    assert not diag.calibration["drift"]["detected"]
 
 
 @pytest.mark.slow
@@ -139,9 +139,9 @@ def test_y_dependent_damping_discovered_in_the_energy_balance(y_damping_dataset)
     from acousim import cached_surrogate
 
     data, truth = y_damping_dataset
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == []
-    found = diag["remaining_gap"]["discovered_terms"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ()
+    found = diag.remaining_gap["discovered_terms"]
     assert found["thetaddot"] == []
     lead = found["yddot"][0]
     assert (lead["term"], lead["form"]) == ("y^2*ydot", "energy")
@@ -153,7 +153,7 @@ def test_y_dependent_damping_discovered_in_the_energy_balance(y_damping_dataset)
     rate_at_equilibrium = sum(coef.get(term, 0.0) * delta**k for k, term in enumerate(("ydot", "y*ydot", "y^2*ydot")))
     # measured 0.3 % of the truth's rate c Delta^2 at the nominal origin
     assert abs(rate_at_equilibrium) < 0.1 * truth["y_damping"] * delta**2
-    assert "y^2*ydot (energy balance)" in diag["remaining_gap"]["discovered_equations"]["yddot"]
+    assert "y^2*ydot (energy balance)" in diag.remaining_gap["discovered_equations"]["yddot"]
 
 
 @pytest.mark.slow
@@ -167,11 +167,11 @@ def test_candidate_dampings_standing_in_for_a_dissipation_are_not_named(centred_
     dissipative term carries the loss is at the information limit here: y^2*ydot and ydot^3 remove the same energy
     from a harmonic oscillation, so the test asks for a cubic dissipation in yddot found in the energy balance."""
     data, truth = centred_y_damping_dataset
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == []
-    assert sorted(r["name"] for r in diag["remaining_gap"]["replaced_by_discovered_terms"]) == [
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ()
+    assert sorted(r["name"] for r in diag.remaining_gap["replaced_by_discovered_terms"]) == [
         "linear_damping", "quadratic_drag"]
-    lead = diag["remaining_gap"]["discovered_terms"]["yddot"][0]
+    lead = diag.remaining_gap["discovered_terms"]["yddot"][0]
     assert lead["form"] == "energy" and lead["term"] in ("y^2*ydot", "ydot^3")
     assert lead["coefficient"] < 0  # a damping
 

@@ -74,20 +74,20 @@ def test_drift_detected_then_effects_on_top(drift_dataset):
     against a true median half range of 4.0 %), the simulation follows it, and the data are explained within
     the noise with nothing named."""
     data, truth = drift_dataset
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    drift = diag["calibration"]["drift"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    drift = diag.calibration["drift"]
     assert drift["detected"] and drift["p_value"] < 1e-6
     # the node pressures are each window's least-squares value; their half range within a run is the drift's
     # (noise per node ~0.2 Pa, 0.01 %); 15 %: the nodes sample a sinusoid 0.3 s apart and miss its peaks by a few %
     assert drift["relative_amplitude"] == pytest.approx(np.median(truth["relative_half_range"]), rel=0.15)
     assert 0.1 < drift["time_scale_s"] < 1.0  # T / 2 pi for periods of 1.5-4 s: 0.24-0.64 s
     assert len(drift["times_s"]) == len(drift["pressure_amplitude_pa"]) == len(drift["run"]) > 0
-    assert diag["calibration"]["pressure_amplitude_pa"] == pytest.approx(truth["pressure_amplitude_pa"], rel=0.01)
-    assert diag["identified"] == [] and diag["remaining_gap"]["withheld"] == []
-    assert diag["gap_after"] < EXPLAINED_GAP and diag["remaining_gap"]["explained_within_noise"]
-    assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
-    assert "drifts" in diag["remaining_gap"]["statement"]
-    assert diag["skipped_files"] == []
+    assert diag.calibration["pressure_amplitude_pa"] == pytest.approx(truth["pressure_amplitude_pa"], rel=0.01)
+    assert diag.identified == () and diag.remaining_gap["withheld"] == []
+    assert diag.gap_after < EXPLAINED_GAP and diag.remaining_gap["explained_within_noise"]
+    assert diag.remaining_gap["discovered_terms"] == {"yddot": [], "thetaddot": []}
+    assert "drifts" in diag.remaining_gap["statement"]
+    assert diag.skipped_files == ()
 
 
 def test_a_run_too_long_for_its_windows_is_refused_before_any_fit():

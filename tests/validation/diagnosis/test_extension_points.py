@@ -49,10 +49,10 @@ def test_a_registered_effect_runs_through_the_twin_and_the_diagnosis(registered_
     simulate_dataset(cfg, data, progress=False)
     assert json.loads((data / "truth.json").read_text())["effects"] == {"constant_push": {"push": push}}
     (data / "truth.json").unlink()  # the diagnosis is blind
-    diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False,
+    diag = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False,
                                                     candidates=("constant_push", "linear_damping")), progress=False)
-    assert diag["identified"] == ["constant_push"]
-    fitted = next(e for e in diag["effects"] if e["name"] == "constant_push")["params"]["push"]
+    assert diag.identified == ("constant_push",)
+    fitted = next(e for e in diag.effects if e.name == "constant_push").params["push"]
     # the hinge noise of the twin (tracking 0.004 over 8 x 1.5 s) leaves a standard error of a few 1/s^2; 5 %
     # also covers the Savitzky-Golay bias of the accelerations (about 1 %, docs/diagnosis.md)
     assert fitted == pytest.approx(push, rel=0.05)

@@ -109,15 +109,15 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
 def test_diagnosis_calibrates_the_gap_and_names_only_the_true_effect(fullwave_twin, use_synthetic_family):
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
-    d, _ = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
-    cal = d["calibration"]
+    d = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+    cal = d.calibration
     assert cal["gap_calibrated"] is True
     # the target is 20 %; on noise-free physics (the twin is the family itself) it is far better
     assert cal["gap_m"] == pytest.approx(10e-6, rel=0.2)
     assert abs(cal["gap_m"] - 10e-6) < 4 * cal["gap_std_m"] + 0.001 * 10e-6  # the refinement's own resolution
     assert cal["gap_model_error_m"] is None  # the synthetic family states no mesh error
-    assert d["identified"] == ["linear_damping"]
-    assert d["model"] == "fullwave"
+    assert d.identified == ("linear_damping",)
+    assert d.model == "fullwave"
     # the report states the calibrated gap with its uncertainty
     from validation.report.diagnosis_section import diagnosis_section
 
@@ -132,10 +132,10 @@ def test_a_given_gap_is_used_not_calibrated(fullwave_twin, use_synthetic_family)
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
     # the calibration only: one candidate, no discovery
-    d, _ = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False, discover=False,
+    d = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False, discover=False,
                                                           candidates=("linear_damping",)), progress=False,
                             model="fullwave", gap=13e-6)
-    cal = d["calibration"]
+    cal = d.calibration
     assert cal["gap_m"] == 13e-6 and cal["gap_calibrated"] is False and cal["gap_std_m"] is None
     assert "gap_profile" not in cal
     from validation.report.diagnosis_section import diagnosis_section

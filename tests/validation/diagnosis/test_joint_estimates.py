@@ -15,13 +15,13 @@ def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_p
 
     truth = write_twin_like_dataset(tmp_path / "data", runs=8, duration=2.0, seed=5, cubic_hinge=5.0e4,
                                     effects={"pair_scattering": {"kappa": 15000.0}})
-    diag, _ = diagnose_dataset(tmp_path / "data", DiagnoseConfig(long_time=False), progress=False)
-    assert diag["identified"] == ["pair_scattering"]
-    effect = diag["effects"][0]
+    diag = diagnose_dataset(tmp_path / "data", DiagnoseConfig(long_time=False), progress=False)
+    assert diag.identified == ("pair_scattering",)
+    effect = diag.effects[0]
     # within 3 % (the noise of 8 short runs: the theta^3 standard error is 0.5 % of the coefficient, kappa's similar)
-    np.testing.assert_allclose(effect["params"]["kappa"], truth["effects"]["pair_scattering"]["kappa"], rtol=0.03)
+    np.testing.assert_allclose(effect.params["kappa"], truth["effects"]["pair_scattering"]["kappa"], rtol=0.03)
     # the effects-only fit, kept for reference, is the biased one
-    assert effect["params_without_discovered_terms"]["kappa"] > 1.1 * truth["effects"]["pair_scattering"]["kappa"]
-    found = {t["term"]: t for t in diag["remaining_gap"]["discovered_terms"]["thetaddot"]}
-    assert "theta" not in found and diag["remaining_gap"]["folded_into_effects"] == {"thetaddot": ["theta"]}
+    assert effect.params_without_discovered_terms["kappa"] > 1.1 * truth["effects"]["pair_scattering"]["kappa"]
+    found = {t["term"]: t for t in diag.remaining_gap["discovered_terms"]["thetaddot"]}
+    assert "theta" not in found and diag.remaining_gap["folded_into_effects"] == {"thetaddot": ["theta"]}
     np.testing.assert_allclose(found["theta^3"]["coefficient"], -truth["cubic_hinge"], rtol=0.03)

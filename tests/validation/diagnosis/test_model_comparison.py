@@ -34,9 +34,9 @@ def test_fullwave_model_calibrates_its_own_twin(fullwave_twin, fullwave_diagnosi
     Tracking noise 1 um and 8 runs of 2 s: the vertical equation pins the pressure to ~0.1 % and the origin to a
     fraction of a micrometre (measured 0.03 % and 0.3 um); the tolerances are 3 times that."""
     _, truth = fullwave_twin
-    diag, internals = fullwave_diagnosis
-    assert diag["model"] == "fullwave"
-    cal = diag["calibration"]
+    diag = fullwave_diagnosis
+    assert diag.model == "fullwave"
+    cal = diag.calibration
     np.testing.assert_allclose(cal["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=1e-3)
     z_eq_true = truth["equilibrium_height_m"]
     # the data's y is measured from the true equilibrium, so the calibrated origin is the true Z_eq
@@ -47,7 +47,7 @@ def test_side_by_side_gaps_on_fullwave_data(fullwave_twin, fullwave_diagnosis):
     """Side by side, the full-wave model explains its own twin's vertical motion within the noise, and the Gor'kov
     model, whose trap is softer (f_y 21.8 vs 24.1 Hz at the same pressure), needs another pressure for it."""
     data, truth = fullwave_twin
-    _, internals = fullwave_diagnosis
+    internals = fullwave_diagnosis.internals
     cmp = compare_simulation_models(internals.problem, read_meta(data), base=internals.base, long_time_duration=None)
     rows = {r.model: r for r in cmp.rows}
     assert list(rows) == ["gorkov", "gorkov+pair_scattering", "fullwave"] and cmp.unavailable is None

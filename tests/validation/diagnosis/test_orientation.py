@@ -36,18 +36,18 @@ def test_y_positive_down_is_named_and_not_reported_as_new_physics(tmp_path):
     truth = write_twin_like_dataset(up, runs=5, duration=1.5, seed=3, pressure_error=0.05,
                                     effects={"pair_scattering": {"kappa": 15000.0}})
     _write_upside_down(up, down)
-    diag, _ = diagnose_dataset(down, DiagnoseConfig(long_time=False, alpha=0.05), progress=False)
-    (w,) = diag["data_warnings"]
+    diag = diagnose_dataset(down, DiagnoseConfig(long_time=False, alpha=0.05), progress=False)
+    (w,) = diag.data_warnings
     assert w["code"] == "y_inverted" and "y -> -y" in w["message"] and "\n" not in w["message"]
     # the trap's asymmetry: the vertical equation of the recorded (inverted) data keeps a gap far above the flipped
     assert w["vertical_gap_flipped"] <= FAR_BETTER * w["vertical_gap"]
     # diagnosed with -y: the effect built in is named, with its parameter, and nothing is left to discover
-    assert diag["identified"] == ["pair_scattering"]
-    kappa = diag["effects"][0]["params"]["kappa"]
+    assert diag.identified == ("pair_scattering",)
+    kappa = diag.effects[0].params["kappa"]
     # 5 runs of 1.5 s with 1-um / 0.005 tracking noise: kappa within 10 % (the blind study's errors at this size
     # are a few per cent)
     np.testing.assert_allclose(kappa, truth["effects"]["pair_scattering"]["kappa"], rtol=0.10)
-    assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
+    assert diag.remaining_gap["discovered_terms"] == {"yddot": [], "thetaddot": []}
     # the report says so first
     assert diagnosis_section(diag, []).reading.startswith("Data warning: y evidently points down")
 

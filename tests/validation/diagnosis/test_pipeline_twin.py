@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, diagnose_dataset
+from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, Diagnosis, diagnose_dataset
 
 #: single effects at moderate strength (velocity coupling in the middle of the blind range of
 #: validation.blind.STRENGTHS; the theta equation is fitted in its integral form, whose noise is the
@@ -43,34 +43,34 @@ FAST = DiagnoseConfig(long_time=False)
 @pytest.mark.parametrize("name", list(SINGLE))
 def test_single_effect_identified_with_parameters(tmp_path, name):
     data, truth = _twin(tmp_path, {name: SINGLE[name]})
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == [name]
-    assert not diag["calibration"]["drift"]["detected"]  # no false alarm at a constant pressure with an effect
-    fitted = next(e for e in diag["effects"] if e["name"] == name)["params"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == (name,)
+    assert not diag.calibration["drift"]["detected"]  # no false alarm at a constant pressure with an effect
+    fitted = next(e for e in diag.effects if e.name == name).params
     for p, v in SINGLE[name].items():
         # acceptance: parameters within 25 %
         assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
     # the calibrated pressure recovers the hidden pressure error (Savitzky-Golay bias ~1 %, see docs)
-    np.testing.assert_allclose(diag["calibration"]["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=0.02)
-    if diag["gap_before"] > EXPLAINED_GAP:
-        assert diag["gap_after"] < 0.3 * diag["gap_before"]
+    np.testing.assert_allclose(diag.calibration["pressure_amplitude_pa"], truth["pressure_amplitude_pa"], rtol=0.02)
+    if diag.gap_before > EXPLAINED_GAP:
+        assert diag.gap_after < 0.3 * diag.gap_before
     else:
         # a gap already below the "explained" level lies within the estimate of the noise floor, where a
         # shrink ratio means nothing (velocity coupling at 5e3 / 1e6: 1.2e-4 -> 5.4e-5): it must not grow
-        assert diag["gap_after"] <= diag["gap_before"] and diag["remaining_gap"]["explained_within_noise"]
+        assert diag.gap_after <= diag.gap_before and diag.remaining_gap["explained_within_noise"]
 
 
 @pytest.mark.slow
 def test_no_effect_names_nothing(tmp_path):
     data, truth = _twin(tmp_path, {}, seed=5)
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == []
-    assert diag["remaining_gap"]["explained_within_noise"]
-    assert not diag["calibration"]["drift"]["detected"]
-    assert diag["remaining_gap"]["discovered_terms"] == {"yddot": [], "thetaddot": []}
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ()
+    assert diag.remaining_gap["explained_within_noise"]
+    assert not diag.calibration["drift"]["detected"]
+    assert diag.remaining_gap["discovered_terms"] == {"yddot": [], "thetaddot": []}
     # twin runs carry integral data: the theta component is computed, and described, in its integral form
-    assert diag["gap_component_forms"] == {"yddot": "acceleration", "thetaddot": "integral", "energy": "energy balance"}
-    assert "thetaddot (integral form)" in diag["gap_definition"]
+    assert diag.gap_component_forms == {"yddot": "acceleration", "thetaddot": "integral", "energy": "energy balance"}
+    assert "thetaddot (integral form)" in diag.gap_definition
 
 
 @pytest.mark.slow
@@ -80,12 +80,17 @@ def test_partly_corrupt_dataset(tmp_path):
     text = files[0].read_text().splitlines()
     files[0].write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
     files[1].write_text("t,y\n0,0\n")  # no theta column
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == ["pair_scattering"]
-    assert len(diag["skipped_files"]) == 2
-    assert {files[0].name, files[1].name} == {s["file"] for s in diag["skipped_files"]}  # docs/formats.md: {file, reason}
-    assert all(s["reason"] for s in diag["skipped_files"])
-    assert len(diag["gap_per_run"]["runs"]) == 8
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ("pair_scattering",)
+    assert len(diag.skipped_files) == 2
+    assert {files[0].name, files[1].name} == {s["file"] for s in diag.skipped_files}  # docs/formats.md: {file, reason}
+    assert all(s["reason"] for s in diag.skipped_files)
+    assert len(diag.gap_per_run["runs"]) == 8
+    # diagnosis.json round trip: the typed result reads back its own document, key for key and value for value
+    doc = json.loads(json.dumps(diag.to_json()))
+    assert list(doc)[:3] == ["model", "simulation", "identified"]
+    assert Diagnosis.from_json(doc).to_json() == doc
+    assert Diagnosis.from_json(doc) == diag  # equal fields (internals are not compared)
 
 
 def test_diagnose_cli_bad_directory(tmp_path):
@@ -106,9 +111,9 @@ def test_strong_velocity_coupling_identified(tmp_path):
     leaves out the fast response the coupling itself drives (see the xfail below)."""
     effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
     data, _ = _twin(tmp_path, effects)
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == ["velocity_coupling"]
-    fitted = diag["effects"][0]["params"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ("velocity_coupling",)
+    fitted = diag.effects[0].params
     for p, v in effects["velocity_coupling"].items():
         assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
 
@@ -121,8 +126,8 @@ def test_strong_velocity_coupling_identified(tmp_path):
     "names velocity_coupling alone"))
 def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
     data, _ = _twin(tmp_path, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
-    diag, _ = diagnose_dataset(data, FAST, progress=False)
-    assert diag["identified"] == ["velocity_coupling"]
+    diag = diagnose_dataset(data, FAST, progress=False)
+    assert diag.identified == ("velocity_coupling",)
 
 
 @pytest.mark.slow
@@ -140,16 +145,16 @@ def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
     diag = json.loads((out / "diagnosis.json").read_text())
     assert {"identified", "calibration", "gap_before", "gap_after", "effects", "localization", "skipped_files",
             "remaining_gap", "gap_definition", "gap_components"} <= set(diag)
-    assert [e["name"] for e in diag["effects"]] == ["pair_scattering"]
+    assert [e.name for e in diag.effects] == ["pair_scattering"]
     assert (out / "report.html").exists()
     assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
     assert "[validation.diagnosis.pipeline] 3 runs; calibrating" in r.stderr
     assert "[validation.diagnosis.identification] testing pair_scattering on top of calibration" in r.stderr
     # three runs cannot make any held-out test significant (smallest one-sided p 2^-3 = 0.125 > alpha 0.01):
     # the command says so, and the file records it, instead of a bare "identified: none"
-    assert diag["identified"] == []
-    assert diag["settings"]["smallest_attainable_p"] == 0.125
-    assert diag["settings"]["identification_possible"] is False and diag["settings"]["runs_needed"] == 7
+    assert diag.identified == ()
+    assert diag.settings["smallest_attainable_p"] == 0.125
+    assert diag.settings["identification_possible"] is False and diag.settings["runs_needed"] == 7
     assert "with 3 runs no effect can be identified at --alpha 0.01" in r.stderr
     assert "record at least 7 runs" in r.stderr
     assert "at least 7 runs are needed" in (out / "report.html").read_text()

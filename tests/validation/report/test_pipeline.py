@@ -28,9 +28,39 @@ def damping_report(tmp_path_factory):
     """Twin data whose only effect is viscous damping (nothing acts on theta beyond the Gor'kov model)."""
     from validation.report import build_report
 
+    import cubedimer.dataset
+    import fitting.pipeline
+    import validation.diagnosis
+
     base = tmp_path_factory.mktemp("report")
     data = _twin(base / "data", {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
-    return build_report(data, base / "report", workers=1, progress=False, max_evals=150)
+    # what the report's steps receive, recorded on the way (the real functions do the work)
+    with pytest.MonkeyPatch.context() as mp:
+        for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.pipeline, "fit_dataset"),
+                             (validation.diagnosis, "diagnose")):
+            mp.setattr(module, name, _recorded(name, getattr(module, name)))
+        return build_report(data, base / "report", workers=1, progress=False, max_evals=150)
+
+
+#: The first argument of every call of the recorded functions during the report's build, by function name.
+_SEEN: dict[str, list] = {}
+
+
+def _recorded(name, function):
+    def record(*args, **kwargs):
+        _SEEN.setdefault(name, []).append(args[0])
+        return function(*args, **kwargs)
+    return record
+
+
+@pytest.mark.slow
+def test_the_fit_and_the_diagnosis_of_a_report_see_one_loaded_data_set(damping_report):
+    """The data set is loaded once, with the diagnosis's checks, and that one object is fitted and diagnosed: the
+    two can never work on different sets of runs."""
+    assert len(_SEEN["load_dataset"]) == 1
+    (fitted,), (diagnosed,) = _SEEN["fit_dataset"], _SEEN["diagnose"]
+    assert fitted is diagnosed
+    assert [r.name for r in fitted.runs] == [f"run{i:02d}.csv" for i in range(1, 9)]
 
 
 @pytest.mark.slow
@@ -118,15 +148,15 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
         assert term in by_term and by_term[term].kind.startswith("dynamic only")
 
 
-def test_identified_effects_add_their_static_coefficients():
+def test_identified_effects_add_their_static_coefficients(make_diagnosis):
     """Pair scattering's -kappa cos^2(k (Z_eq + y)) theta adds kappa k^2 cos(2 k Z_eq) to theta*y^2 and
     -kappa cos^2(k Z_eq) to theta (Taylor); on a small box the least squares approaches them."""
     k, z_eq, kappa = 836.2, -4.289e-4, 1.95e4
-    diag = {"identified": ["pair_scattering"], "effects": [{"name": "pair_scattering", "params": {"kappa": kappa}}]}
+    diag = make_diagnosis(["pair_scattering"], params={"pair_scattering": {"kappa": kappa}})
     c = effect_static_coefficients(diag, k, z_eq, theta_max=0.05, y_max=20e-6)
     # box of +-20 um: the next Taylor term (y^4) shifts the y^2 coefficient by ~(k y_max)^2 / 3 ~ 1e-4
     np.testing.assert_allclose(c["y^2*theta"], kappa * k**2 * np.cos(2 * k * z_eq), rtol=1e-3)
     np.testing.assert_allclose(c["theta"], -kappa * np.cos(k * z_eq) ** 2, rtol=1e-6)
     np.testing.assert_allclose(c["y*theta"], kappa * k * np.sin(2 * k * z_eq), rtol=1e-3)
     assert abs(c["y^2"]) < 1e-6 * abs(c["y^2*theta"])  # odd in theta: no theta-free terms
-    assert effect_static_coefficients({"identified": [], "effects": []}, k, z_eq, 0.3, 1e-4) == {}
+    assert effect_static_coefficients(make_diagnosis(), k, z_eq, 0.3, 1e-4) == {}

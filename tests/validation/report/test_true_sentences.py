@@ -32,17 +32,22 @@ def test_a_short_record_gives_a_zero_padded_peak_and_its_resolution():
 
 
 def _diagnosis(identified=(), p_drift=0.3, drift_amplitude=0.0, statement="the calibrated simulation explains the "
-               "data within its derivative noise"):
-    effects = [{"name": n, "params": {"kappa": 15000.0}, "gap_after": 0.01, "shrink": 0.9, "significant": True,
-                "p_value": 0.004} for n in identified]
-    return {"identified": list(identified), "effects": effects, "gap_before": 0.3, "gap_after": 0.01 if identified else 0.3,
-            "noise_floor": 0.003, "gap_per_run": {"runs": ["a", "b", "c", "d"]},
-            "calibration": {"pressure_amplitude_pa": 3010.0, "pressure_ratio": 1.0033,
-                            "y_origin_above_nominal_Z_eq_m": 2e-7,
-                            "drift": {"tested": True, "detected": False, "p_value": p_drift, "alpha": 1e-6,
-                                      "relative_amplitude": drift_amplitude, "min_relative_amplitude": 0.005}},
-            "remaining_gap": {"statement": statement, "discovered_terms": {}}, "settings": {}, "skipped_files": [],
-            "data_warnings": []}
+               "data within its derivative noise", calibration=None, extra_effects=(), indistinguishable=()):
+    """A hand-made diagnosis: ``identified`` named with kappa 15,000, then ``extra_effects`` (EffectVerdicts)."""
+    from validation.diagnosis import Diagnosis, EffectVerdict
+
+    effects = tuple(EffectVerdict(n, {"kappa": 15000.0}, 0.01, 0.9, True, 0.004, None, None, named=True)
+                    for n in identified) + tuple(extra_effects)
+    cal = {"pressure_amplitude_pa": 3010.0, "pressure_ratio": 1.0033, "y_origin_above_nominal_Z_eq_m": 2e-7,
+           "drift": {"tested": True, "detected": False, "p_value": p_drift, "alpha": 1e-6,
+                     "relative_amplitude": drift_amplitude, "min_relative_amplitude": 0.005}, **(calibration or {})}
+    return Diagnosis(model="gorkov", simulation={}, identified=tuple(identified),
+                     indistinguishable=tuple(indistinguishable), model_effects=tuple(e.name for e in effects),
+                     dropped_by_backward_check=(), greedy_identified=tuple(identified), calibration=cal,
+                     gap_before=0.3, gap_after=0.01 if identified else 0.3, gap_definition="", gap_components=(),
+                     gap_component_forms={}, gap_per_run={"runs": ["a", "b", "c", "d"]}, noise_floor=0.003,
+                     noise_floor_note="", effects=effects, localization={}, long_time={},
+                     remaining_gap={"statement": statement, "discovered_terms": {}}, identification_rounds=())
 
 
 def test_no_sentence_about_identified_effects_when_there_are_none():
@@ -207,8 +212,7 @@ def test_a_non_significant_test_states_the_smallest_attainable_p():
 def test_the_origin_is_stated_against_a_named_reference():
     """The lab's report measured the origin from the nominal-pressure Z_eq while naming the calibrated offset
     elsewhere: both references are named in the sentence, with the numbers of diagnosis.json."""
-    diag = _diagnosis()
-    diag["calibration"].update(y_origin_above_nominal_Z_eq_m=56.5e-6, y_origin_above_calibrated_Z_eq_m=-1.01e-6)
+    diag = _diagnosis(calibration={"y_origin_above_nominal_Z_eq_m": 56.5e-6, "y_origin_above_calibrated_Z_eq_m": -1.01e-6})
     reading = diagnosis_section(diag, []).reading
     assert ("the data's y origin lies -1.01 um above the simulation's Z_eq at the calibrated pressure (the effects' "
             "y origin) and +56.50 um above its Z_eq at the nominal pressure") in reading
@@ -216,13 +220,14 @@ def test_the_origin_is_stated_against_a_named_reference():
 
 
 def test_an_indistinguishable_pair_is_one_verdict_and_negative_damping_is_flagged():
-    diag = _diagnosis(identified=["pair_scattering"])
-    diag["effects"].append({"name": "linear_damping", "params": {"gamma_y": -0.5, "gamma_theta": 1.2}, "gap_after": 0.01,
-                            "shrink": 0.9, "significant": True, "named": False, "p_value": 0.004,
-                            "indistinguishable_from": ["quadratic_drag"]})
-    diag["indistinguishable"] = [{"effects": ["linear_damping", "quadratic_drag"], "kept_in_model": "linear_damping",
-                                  "p_given_other": {"linear_damping": 0.3, "quadratic_drag": 0.6},
-                                  "p_together": 0.002, "median_difference": 1e-6, "p_difference": 0.7}]
+    from validation.diagnosis import EffectVerdict
+
+    damping = EffectVerdict("linear_damping", {"gamma_y": -0.5, "gamma_theta": 1.2}, 0.01, 0.9, True, 0.004, None, None,
+                            named=False, indistinguishable_from=("quadratic_drag",))
+    diag = _diagnosis(identified=["pair_scattering"], extra_effects=[damping], indistinguishable=[
+        {"effects": ["linear_damping", "quadratic_drag"], "kept_in_model": "linear_damping",
+         "p_given_other": {"linear_damping": 0.3, "quadratic_drag": 0.6},
+         "p_together": 0.002, "median_difference": 1e-6, "p_difference": 0.7}])
     section = diagnosis_section(diag, [])
     reading = section.reading
     assert "caused by pair_scattering (kappa = 1.5e+04), and by linear_damping or quadratic_drag, which the data " \
@@ -280,7 +285,7 @@ def diagnosed(request, tmp_path_factory):
     (data / "truth.json").unlink()
     if "offsets" in case:
         _per_run_origin_error(data, case["offsets"])
-    diag, _ = diagnose_dataset(data, DiagnoseConfig(long_time=False), progress=False)
+    diag = diagnose_dataset(data, DiagnoseConfig(long_time=False), progress=False)
     return diag
 
 
@@ -292,32 +297,32 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
     diag = diagnosed
     section = diagnosis_section(diag, [])
     g = section.reading
-    cal = diag["calibration"]
+    cal = diag.calibration
     assert _number(r"y origin lies ([-+\d.]+) um above the simulation's Z_eq at the calibrated", g) == pytest.approx(
         cal["y_origin_above_calibrated_Z_eq_m"] * 1e6, abs=0.006)
     assert _number(r"and ([-+\d.]+) um above its Z_eq at the nominal pressure", g) == pytest.approx(
         cal["y_origin_above_nominal_Z_eq_m"] * 1e6, abs=0.006)
     assert cal["y_origin_above_nominal_Z_eq_m"] - cal["y_origin_above_calibrated_Z_eq_m"] == pytest.approx(
         cal["calibrated_Z_eq_m"] - cal["nominal_Z_eq_m"], abs=1e-12)
-    named = diag["identified"]
-    pairs = [p["effects"] for p in diag.get("indistinguishable") or []]
+    named = diag.identified
+    pairs = [p["effects"] for p in diag.indistinguishable or []]
     if named or pairs:
         cause = g.split("The gap is caused by", 1)[1].split(". ", 1)[0]
         for name in named:
             assert name in cause
         for a, b in pairs:
             assert f"by {a} or {b}, which the data cannot tell apart" in cause
-        others = set(diag["settings"]["candidates"]) - set(named) - {e for p in pairs for e in p}
+        others = set(diag.settings["candidates"]) - set(named) - {e for p in pairs for e in p}
         assert not any(re.search(rf"\b{o}\b", cause) for o in others), (cause, others)
     else:
         assert "No candidate effect improves held-out runs significantly." in g
-    rates = [v for e in diag["effects"] if e["significant"] and e["name"] == "linear_damping" for v in e["params"].values()]
+    rates = [v for e in diag.effects if e.significant and e.name == "linear_damping" for v in e.params.values()]
     assert ("Anti-damping" in g) == any(v < 0 for v in rates)
-    n = len(diag["gap_per_run"]["runs"])
+    n = len(diag.gap_per_run["runs"])
     assert f"the smallest p {n} runs allow is {0.5 ** n:.3g}" in section.tables[0].columns["held-out p (sign-flip)"]
     assert set(section.tables[0].header) - {"effect"} <= set(section.tables[0].columns)
-    if n < diag["settings"]["runs_needed"]:
-        assert f"at least {diag['settings']['runs_needed']} runs are needed" in g
+    if n < diag.settings["runs_needed"]:
+        assert f"at least {diag.settings['runs_needed']} runs are needed" in g
 
 
 def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
