@@ -149,11 +149,12 @@ def atlas_dynamics(side: float, gap_ratio: float, pressure_amplitude_pa: float, 
     """
     from .dynamics import DimerDynamics
     from .effects import EffectSet, air_damping_for
+    from .fullwave.statics import MODEL_NAME
     from .models import ExperimentConditions, dynamic_model
 
     conditions = ExperimentConditions(side_length_m=side, gap_m=gap_ratio * side, frequency_hz=frequency_hz,
                                       pressure_amplitude_pa=pressure_amplitude_pa)
-    model = dynamic_model("fullwave", conditions)
+    model = dynamic_model(MODEL_NAME, conditions)
     return DimerDynamics(model, EffectSet((air_damping_for(model, conditions),)))
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
-from typing import Callable, ClassVar, Protocol, runtime_checkable
+from typing import Callable, ClassVar, Mapping, Protocol, runtime_checkable
 
 from numpy.typing import ArrayLike
 
@@ -27,7 +27,7 @@ from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial
 
 __all__ = ["ExperimentConditions", "StaticModel", "ForceModelType", "FORCE_MODEL_TYPES", "register_force_model",
-           "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError"]
+           "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError", "ModelSpec"]
 
 
 class ConditionError(ValueError):
@@ -166,6 +166,8 @@ class ForceModelType:
         The ``--model`` value.
     summary : str
         One line for ``--help``.
+    label : str
+        The model's name in tables and prose (e.g. ``"Gor'kov"``).
     static : callable
         ``static(conditions) -> StaticModel``.
     dynamic : callable
@@ -187,6 +189,7 @@ class ForceModelType:
 
     name: str
     summary: str
+    label: str
     static: Callable[[ExperimentConditions], StaticModel]
     dynamic: Callable[[ExperimentConditions], ForceModel]
     options: frozenset = field(default_factory=frozenset)
@@ -244,6 +247,68 @@ def dynamic_model(name: str, conditions: ExperimentConditions) -> ForceModel:
     return t.dynamic(conditions)
 
 
+@dataclass(frozen=True)
+class ModelSpec:
+    """A chosen force model: its registry entry and its own options, checked on construction.
+
+    The one object that carries a model choice through a command (instead of a name and loose keyword arguments):
+    the experiment itself (side, material, frequency, pressure) comes from the data set's meta.json or the options
+    where the model is built, :meth:`conditions`; the model's own options (the :data:`MODEL_OPTIONS` fields it takes,
+    e.g. the full-wave hinge gap) travel here.  A new model with a new option needs no change where a spec travels.
+
+    Parameters
+    ----------
+    name : str, optional
+        A registered model name (default: the first registered, the Gor'kov model).
+    options : mapping, optional
+        ``{field: value}`` of :data:`MODEL_OPTIONS` fields (None values are left out); a field the model does not
+        take is refused with one line naming the option.
+    """
+
+    name: str | None = None
+    options: Mapping[str, float] | tuple = ()
+
+    def __post_init__(self) -> None:
+        name = self.name if self.name is not None else force_model_names()[0]
+        items = self.options.items() if isinstance(self.options, Mapping) else self.options
+        options = tuple(sorted((str(k), v) for k, v in items if v is not None))
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "options", options)
+        t = force_model_type(name)
+        for k, _ in options:
+            if k not in MODEL_OPTIONS:
+                raise ConditionError(f"{k!r} is not a model option (one of {', '.join(MODEL_OPTIONS)})")
+        t.check(ExperimentConditions(**dict(options)))
+
+    @property
+    def type(self) -> ForceModelType:
+        """The registry entry."""
+        return force_model_type(self.name)
+
+    @property
+    def label(self) -> str:
+        """The model's name in tables and prose."""
+        return self.type.label
+
+    @property
+    def option_values(self) -> dict[str, float]:
+        """``{field: value}`` of the options that are set."""
+        return dict(self.options)
+
+    def conditions(self, meta: Mapping | None = None, **overrides) -> ExperimentConditions:
+        """The experiment of ``meta`` (missing keys: the defaults) with this model's options and ``overrides``
+        (None values ignored)."""
+        return ExperimentConditions.from_meta(meta, **{**self.option_values, **overrides})
+
+    def static(self, conditions: ExperimentConditions) -> StaticModel:
+        """The static model at ``conditions`` (checked first; :class:`ConditionError` on a misfit)."""
+        return static_model(self.name, conditions)
+
+    def dynamic(self, conditions: ExperimentConditions) -> ForceModel:
+        """The force model of the equations of motion at ``conditions`` (checked first)."""
+        return dynamic_model(self.name, conditions)
+
+
 # ---------------------------------------------------------------------------------------------- Gor'kov
 def _gorkov_static(c: ExperimentConditions):
     from .dimer import CubeDimer
@@ -274,7 +339,7 @@ def _gorkov_dynamic(c: ExperimentConditions):
 
 register_force_model(ForceModelType(
     "gorkov", "the Gor'kov volume integral over tetrahedral meshes of the two cubes (small-particle limit)",
-    _gorkov_static, _gorkov_dynamic, frozenset({"mesh_size_m", "side_b_m", "quadrature_degree"}),
+    "Gor'kov", _gorkov_static, _gorkov_dynamic, frozenset({"mesh_size_m", "side_b_m", "quadrature_degree"}),
     frozenset({"render", "potential"})))
 
 
@@ -330,5 +395,5 @@ def _fullwave_gap_range(c: ExperimentConditions) -> dict:
 
 register_force_model(ForceModelType(
     "fullwave", "the full-wave (boundary-element) scattering by both cubes, from the table family over (ks, g/s)",
-    _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range,
+    "full wave", _fullwave_static, _fullwave_dynamic, frozenset({"gap_m", "edge_radius_m"}), calibratable=_fullwave_gap_range,
     parameter_model_error=_fullwave_gap_model_error))

@@ -5,10 +5,11 @@ import argparse
 
 from cubedimer.cli import UserInputError
 
-from .models import ExperimentConditions, force_model_names, force_model_type, static_model, dynamic_model
+from .models import (MODEL_OPTIONS, OPTION_NAMES, ExperimentConditions, ModelSpec, force_model_names, force_model_type,
+                     static_model, dynamic_model)
 
 __all__ = ["add_model_arguments", "conditions_from_args", "static_model_from_args", "dynamic_model_from_args",
-           "model_help"]
+           "model_help", "model_spec_from_args"]
 
 
 def model_help() -> str:
@@ -16,9 +17,10 @@ def model_help() -> str:
     return "; ".join(f"{t.name}: {t.summary}" for t in map(force_model_type, force_model_names()))
 
 
-def add_model_arguments(parser: argparse.ArgumentParser, default: str = "gorkov") -> None:
-    """``--model`` (the registry's choices) and the hinge options ``--gap`` / ``--edge-radius``."""
-    parser.add_argument("--model", choices=force_model_names(), default=default,
+def add_model_arguments(parser: argparse.ArgumentParser, unset_default: bool = False) -> None:
+    """``--model`` (the registry's choices; default the registry's first model, or None with ``unset_default``, for a
+    command whose preset may choose it) and the hinge options ``--gap`` / ``--edge-radius``."""
+    parser.add_argument("--model", choices=force_model_names(), default=None if unset_default else force_model_names()[0],
                         help=f"force model ({model_help()})")
     parser.add_argument("--gap", type=float, default=None, metavar="METRES",
                         help="hinge gap g [m] of the full-wave model (default 0.01 x side; the shipped family covers "
@@ -56,3 +58,14 @@ def static_model_from_args(args: argparse.Namespace, conditions: ExperimentCondi
 def dynamic_model_from_args(args: argparse.Namespace, conditions: ExperimentConditions):
     """The force model of ``--model`` for the equations of motion (one-line errors)."""
     return _checked(dynamic_model, args, conditions)
+
+
+def model_spec_from_args(args: argparse.Namespace, **extra) -> ModelSpec:
+    """The :class:`~acousim.models.ModelSpec` of ``--model`` with every model option the command offers that is set
+    (``--gap``, ``--edge-radius``, ``--mesh-size``...: the :data:`~acousim.models.MODEL_OPTIONS` by their
+    command-line names) and ``extra``; one-line :class:`UserInputError` when the model does not take one."""
+    options = {name: getattr(args, OPTION_NAMES[name].lstrip("-").replace("-", "_"), None) for name in MODEL_OPTIONS}
+    try:
+        return ModelSpec(args.model, {**options, **extra})
+    except ValueError as exc:
+        raise UserInputError(str(exc)) from None

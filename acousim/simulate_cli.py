@@ -160,7 +160,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
-    add_model_arguments(p, default=None)
+    add_model_arguments(p, unset_default=True)
     p.add_argument("--no-air-damping", action="store_true",
                    help="leave out the air's drag computed from the dimer's geometry and the air (effect air_damping, "
                    "docs/damping.md), which every twin has by default: the inviscid dimer, damped only by --effect "
@@ -205,6 +205,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def build_config(args: argparse.Namespace):
     """The :class:`~acousim.twin.TwinConfig` of parsed arguments (raises UserInputError)."""
     from .effects import EffectError, EffectSet
+    from .models import force_model_names
     from .twin import PRESETS, Camera, DropProtocol, TwinConfig, TwinError
 
     check_limit("--runs", args.runs, MAX_RUNS)
@@ -218,7 +219,7 @@ def build_config(args: argparse.Namespace):
     dimer = preset.dimer_settings() if preset is not None else {}
     side = args.side if args.side is not None else dimer.get("side", 500e-6)
     frequency = args.frequency if args.frequency is not None else dimer.get("frequency", 45_650.0)
-    model = args.model if args.model is not None else dimer.get("force_model", "gorkov")
+    model = args.model if args.model is not None else dimer.get("force_model", force_model_names()[0])
     gap = args.gap if args.gap is not None else dimer.get("gap")
     check_meta_value("side_length_m", side, "--side")
     check_meta_value("frequency_hz", frequency, "--frequency")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.models_cli import add_model_arguments
+from acousim.models_cli import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 from fitting.final_checks import NoSaneModelError
@@ -191,7 +191,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
         diagnosis = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
-                                     model=args.model, gap=args.gap, edge_radius=args.edge_radius)
+                                     spec=model_spec_from_args(args))
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, args.out)
@@ -323,9 +323,8 @@ def run_report(args: argparse.Namespace) -> int:
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
-                     max_evals=args.max_evals, method=args.method, model=args.model,
-                     heldout_tolerance=args.heldout_tolerance, gap=args.gap, edge_radius=args.edge_radius,
-                     atlas=args.atlas)
+                     max_evals=args.max_evals, method=args.method, spec=model_spec_from_args(args),
+                     heldout_tolerance=args.heldout_tolerance, atlas=args.atlas)
     except (DatasetError, TableMismatch, ConditionError, FamilyRangeError, FamilyTableError) as exc:
         raise UserInputError(str(exc)) from None
     return 0

@@ -1,4 +1,5 @@
-"""The simulation model of a data set, built from the data set's ``meta.json`` through the force-model registry.
+"""The simulation model of a data set: a :class:`acousim.models.ModelSpec` (the chosen model and its own options)
+at the experiment of the data set's ``meta.json``, through the force-model registry.
 
 Every model of :mod:`acousim.models` can be the simulation (``--model``): ``"gorkov"``, the Gor'kov volume
 integral (docs/conventions.md, the acoustic model), and ``"fullwave"``, the boundary-element model of the dimer
@@ -9,10 +10,10 @@ frequency_hz, sound_speed_m_s, air_density_kg_m3, pressure_amplitude_pa (nominal
 """
 from __future__ import annotations
 
-from acousim.models import ExperimentConditions, force_model_names, static_model
+from acousim.models import ExperimentConditions, ModelSpec, force_model_names
 from cubedimer.meta import META_DEFAULTS
 
-__all__ = ["model_from_meta", "simulation_models", "conditions_from_meta"]
+__all__ = ["model_from_meta", "simulation_models", "conditions_from_meta", "calibrated_model"]
 
 
 def simulation_models() -> tuple[str, ...]:
@@ -20,29 +21,24 @@ def simulation_models() -> tuple[str, ...]:
     return force_model_names()
 
 
-def conditions_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh_size: float | None = None,
-                         gap: float | None = None, edge_radius: float | None = None) -> ExperimentConditions:
-    """The experiment of ``meta`` (defaults for missing keys) with the given overrides (None: not set)."""
-    return ExperimentConditions.from_meta({**META_DEFAULTS, **meta}, pressure_amplitude_pa=pressure_amplitude_pa,
-                                          mesh_size_m=mesh_size, gap_m=gap, edge_radius_m=edge_radius)
+def conditions_from_meta(meta: dict, spec: ModelSpec = ModelSpec(), pressure_amplitude_pa: float | None = None
+                         ) -> ExperimentConditions:
+    """The experiment of ``meta`` (the docs/conventions.md defaults for missing keys) with the model's own options
+    and, if given, another pressure amplitude [Pa] (e.g. a calibrated one)."""
+    return spec.conditions({**META_DEFAULTS, **meta}, pressure_amplitude_pa=pressure_amplitude_pa)
 
 
-def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh_size: float | None = None,
-                    model: str = "gorkov", gap: float | None = None, edge_radius: float | None = None):
+def model_from_meta(meta: dict, spec: ModelSpec = ModelSpec(), pressure_amplitude_pa: float | None = None):
     """The static simulation model of the experiment described by ``meta``.
 
     Parameters
     ----------
     meta : dict
         The data set's meta.json.
+    spec : ModelSpec
+        The model and its own options (default: the Gor'kov model with its defaults).
     pressure_amplitude_pa : float, optional
         Overrides the nominal pressure [Pa] (e.g. a calibrated value).
-    mesh_size : float, optional
-        Tetrahedron size of the Gor'kov model [m] (refused by the full-wave model).
-    model : str
-        A registered model name (:func:`simulation_models`).
-    gap, edge_radius : float, optional
-        Hinge gap and edge radius [m] of the full-wave model (refused by the Gor'kov model).
 
     Returns
     -------
@@ -51,10 +47,20 @@ def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh
     Raises
     ------
     ValueError
-        Unknown model, an option the model does not take, or an experiment outside what the model covers
-        (one line, naming the setting).
+        An experiment outside what the model covers (one line, naming the setting), or a generic two-coordinate
+        data set (not a levitated dimer).
     """
     from cubedimer.system import require_levitated_dimer
     require_levitated_dimer(meta, "validation")  # a generic two-coordinate set is refused in one line
-    conditions = conditions_from_meta(meta, pressure_amplitude_pa, mesh_size, gap, edge_radius)
-    return static_model(model, conditions)
+    return spec.static(conditions_from_meta(meta, spec, pressure_amplitude_pa))
+
+
+def calibrated_model(meta: dict, spec: ModelSpec, pressure_amplitude_pa: float, calibration: dict | None = None):
+    """The static model of ``spec`` at a calibrated pressure [Pa], with the model's own parameters that a diagnosis
+    calibrated (``calibration``: diagnosis.json's ``calibration``, which records every calibratable parameter by
+    field name; None or a missing field: the spec's value or the model's default)."""
+    from dataclasses import replace
+
+    conditions = conditions_from_meta(meta, spec, pressure_amplitude_pa)
+    fixed = {n: (calibration or {}).get(n) for n in spec.type.calibration_ranges(conditions)}
+    return spec.static(replace(conditions, **{n: v for n, v in fixed.items() if v is not None}))

@@ -63,6 +63,10 @@ class FullwaveInertia(SinusoidalInertia):
         return self.mass
 
 
+#: The full-wave model's name in the force-model registry (:mod:`acousim.models`).
+MODEL_NAME = "fullwave"
+
+
 class FullwaveDimer:
     """The full-wave surrogate evaluated at absolute heights above the node (see the module docstring).
 
@@ -73,7 +77,7 @@ class FullwaveDimer:
     """
 
     #: registry name (:mod:`acousim.models`)
-    name = "fullwave"
+    name = MODEL_NAME
     #: the forces need not derive from a potential: energy balances use the work along the path
     conservative = False
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
+from ..fullwave.statics import MODEL_NAME as FULLWAVE
 from ..models import ExperimentConditions, force_model_names, force_model_type
 
 __all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PAPER", "PRESETS"]
@@ -218,7 +219,7 @@ class TwinConfig:
     mesh_size: float | None = None
     max_step: float = DEFAULT_MAX_STEP
     preset: str | None = None
-    force_model: str = "gorkov"
+    force_model: str = field(default_factory=lambda: force_model_names()[0])
     gap: float | None = None
     edge_radius: float | None = None
     frequency: float = 45_650.0
@@ -350,7 +351,7 @@ PAPER = TwinPreset(
     protocol=DropProtocol(t_off=(13.0e-3, 13.0e-3), theta_drop=(-0.003, 0.037), thetadot_drop=(0.0, 0.0)),
     description="the paper's 13 ms field drop on the full-wave model of a 700 um dimer (g = 0.05 s) with the air's "
     "computed damping and no tuned parameter, see docs/twin.md",
-    force_model="fullwave",
+    force_model=FULLWAVE,
     side=700e-6,
     gap=35e-6,
     frequency=45_650.0,

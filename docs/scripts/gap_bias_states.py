@@ -29,6 +29,7 @@ import fitting.derivatives as derivatives
 from acousim.models import ExperimentConditions, dynamic_model
 from validation.blind import write_twin_like_dataset
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
+from acousim.models import ModelSpec
 
 EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}
 _SG = derivatives.smooth_long_window
@@ -80,7 +81,7 @@ def main() -> None:
             if smoother == "exact" and kw["noise"][1] > 1e-6:
                 continue
             with hinge_state_smoother(smoother):
-                d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+                d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("fullwave"))
             cal = d.calibration
             print(f"| {label} | {smoother} | {100 * (cal['gap_m'] / g_true - 1):+.3f} % | "
                   f"{100 * cal['gap_std_m'] / g_true:.3f} % | "

@@ -22,6 +22,7 @@ from acousim.models import ExperimentConditions, dynamic_model
 from acousim.fullwave.family import shipped_family
 from validation.blind import write_twin_like_dataset
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
+from acousim.models import ModelSpec
 
 
 EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}  # the only damping (no air_damping) by default
@@ -31,7 +32,7 @@ def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECT
                       duration: float = 3.0) -> list:
     """What the diagnosis names on the Gor'kov twin of the same case (same seed, effects and drift)."""
     write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift, effects=effects)
-    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="gorkov")
+    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("gorkov"))
     return d.identified
 
 
@@ -41,7 +42,7 @@ def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, 
     truth = write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift,
                                     effects=effects, force_model=fm)
     t0 = time.perf_counter()
-    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+    d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("fullwave"))
     cal = d.calibration
     discovered = [t["term"] for eq in d.remaining_gap["discovered_terms"].values() for t in eq]
     return {"side_um": side * 1e6, "ks": fm.wavenumber * side, "gap_true_um": gap_ratio * side * 1e6,

@@ -1,10 +1,12 @@
 """How far the gap shrinks once scattering is added: by a fitted stiffness, or by physics.
 
-:func:`compare_simulation_models` puts three calibrated simulations side by side on the same runs:
+:func:`compare_simulation_models` puts the calibrated simulations of every registered force model
+(:mod:`acousim.models`) side by side on the same runs:
 
-* the Gor'kov model alone (docs/conventions.md section 3);
-* the Gor'kov model plus the phenomenological ``pair_scattering`` of section 5, its kappa fitted;
-* the full-wave model (section 7, :class:`acousim.fullwave.FullwaveDimer`), with no fitted stiffness.
+* the reference model, the registry's first (the Gor'kov model, docs/conventions.md section 3), alone;
+* the reference model plus the phenomenological ``pair_scattering`` of section 5, its kappa fitted;
+* every other registered model (the full-wave model, section 7, :class:`acousim.fullwave.FullwaveDimer`) with no
+  fitted stiffness, at its default options.
 
 Each is calibrated in the same way (pressure amplitude and height origin, :func:`fit_gap_model`) and
 judged by the same gap components (y equation, theta equation, energy balance; :mod:`.metrics`) and the
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,13 +26,27 @@ from .long_time import long_time_gaps, mean_long_time_gap
 from .metrics import fit_gaps, scalar_gap
 from .problem import DiagnosisProblem
 
-__all__ = ["ModelGap", "ModelComparison", "compare_simulation_models", "MODEL_LABELS"]
+if TYPE_CHECKING:
+    from acousim.models import ModelSpec
+
+__all__ = ["ModelGap", "ModelComparison", "compare_simulation_models", "row_label", "SCATTERING_FITTED"]
 
 log = logging.getLogger(__name__)
 
-#: Row labels of the comparison, in order.
-MODEL_LABELS = {"gorkov": "Gor'kov", "gorkov+pair_scattering": "Gor'kov + fitted pair scattering",
-                "fullwave": "full wave (no fitted stiffness)"}
+#: The effect fitted on the reference model in the comparison's second row (its key: ``"<model>+<effect>"``).
+SCATTERING_FITTED = "pair_scattering"
+
+
+def row_label(key: str) -> str:
+    """A comparison row's label: the model's registry label, with the effect fitted on it, or marked as having no
+    fitted stiffness (every model but the reference one)."""
+    from acousim.models import force_model_names, force_model_type
+
+    name, _, effect = key.partition("+")
+    label = force_model_type(name).label
+    if effect:
+        return f"{label} + fitted {effect.replace('_', ' ')}"
+    return label if name == force_model_names()[0] else f"{label} (no fitted stiffness)"
 
 
 @dataclass(frozen=True)
@@ -39,7 +56,7 @@ class ModelGap:
     Attributes
     ----------
     model : str
-        Key of :data:`MODEL_LABELS`.
+        The row's key: a registered model name, or ``"<reference model>+pair_scattering"``.
     pressure_amplitude_pa, origin_offset_m : float
         Calibrated pressure [Pa] and the offset delta [m] of the simulation's y from the data's.
     components : tuple of float
@@ -61,7 +78,7 @@ class ModelGap:
     params: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {"model": self.model, "label": MODEL_LABELS[self.model], "pressure_amplitude_pa": self.pressure_amplitude_pa,
+        return {"model": self.model, "label": row_label(self.model), "pressure_amplitude_pa": self.pressure_amplitude_pa,
                 "origin_offset_m": self.origin_offset_m, "gap_y": self.components[0], "gap_theta": self.components[1],
                 "gap_energy": self.components[2], "gap": self.gap, "long_time_total": self.long_time_total,
                 "params": self.params}
@@ -75,20 +92,25 @@ class ModelComparison:
     Attributes
     ----------
     rows : list of ModelGap
-        In the order of :data:`MODEL_LABELS`.
+        The reference model, with pair scattering fitted, then the other registered models in registry order.
     fits, problems : dict
         :class:`GapFit` and :class:`DiagnosisProblem` per row key.
-    unavailable : str or None
-        Why the full-wave row is missing.
+    unavailable : dict
+        Why a model's row is missing, by model name (None for a model that has its row).
     """
 
     rows: list[ModelGap]
     fits: dict
     problems: dict
-    unavailable: str | None = None
+    unavailable: dict = field(default_factory=dict)
+
+    def row(self, key: str) -> ModelGap | None:
+        """The row of ``key`` (None when it is missing)."""
+        return next((r for r in self.rows if r.model == key), None)
 
     def to_dict(self) -> dict:
-        return {"rows": [r.to_dict() for r in self.rows], "fullwave_unavailable": self.unavailable}
+        return {"rows": [r.to_dict() for r in self.rows],
+                **{f"{name}_unavailable": reason for name, reason in self.unavailable.items()}}
 
 
 def _row(name: str, problem: DiagnosisProblem, fit: GapFit, long_time_duration: float | None) -> ModelGap:
@@ -101,48 +123,51 @@ def _row(name: str, problem: DiagnosisProblem, fit: GapFit, long_time_duration: 
                     scalar_gap(per), lt, fit.effects)
 
 
-def compare_simulation_models(problem: DiagnosisProblem, meta: dict, base: GapFit | None = None,
-                              long_time_duration: float | None = 2.0, gap: float | None = None) -> ModelComparison:
-    """The gaps of the calibrated Gor'kov model, of Gor'kov + fitted pair scattering and of the full-wave model.
+def compare_simulation_models(problem: DiagnosisProblem, spec: "ModelSpec", meta: dict, base: GapFit | None = None,
+                              long_time_duration: float | None = 2.0) -> ModelComparison:
+    """The gaps of every registered model, calibrated, and of the reference model with fitted pair scattering.
 
     Parameters
     ----------
     problem : DiagnosisProblem
-        A diagnosis's problem, on either simulation model (its runs and pressure drift are reused for both).
+        A diagnosis's problem, on the model of ``spec`` (its runs and pressure drift are reused for every model).
+    spec : ModelSpec
+        The diagnosis's model: its row is ``problem`` itself (with the diagnosis's calibrated parameters); every
+        other model is built at its default options.
     meta : dict
-        The data set's meta.json (the full-wave table must have been built for this experiment).
+        The data set's meta.json.
     base : GapFit, optional
         The calibrated ``problem.model`` alone, when already fitted (the diagnosis's ``base``).
     long_time_duration : float or None
         Seconds of every run simulated for the long-time error [s]; None: skip it.
-    gap : float, optional
-        Hinge gap [m] of the full-wave model (default: its default, 0.01 side).
     """
-    from acousim.fullwave.statics import FullwaveDimer
+    from acousim.models import ModelSpec, force_model_names
 
     from ..simulation import model_from_meta
-
-    on_fullwave = isinstance(problem.model, FullwaveDimer)
 
     def sibling(model) -> DiagnosisProblem:
         return DiagnosisProblem(model, problem.runs, problem.recorded_runs, drift=problem.drift)
 
-    problems = {"gorkov": sibling(model_from_meta(meta).interpolated()) if on_fullwave else problem}
-    problems["gorkov+pair_scattering"] = problems["gorkov"]
-    fits = {"gorkov": base if base is not None and not on_fullwave else fit_gap_model(problems["gorkov"], []),
-            "gorkov+pair_scattering": fit_gap_model(problems["gorkov"], ["pair_scattering"])}
-    unavailable = None
-    if on_fullwave:
-        problems["fullwave"] = problem
-    else:
+    problems, unavailable = {}, {}
+    for name in force_model_names():
+        if name == spec.name:
+            problems[name] = problem
+            continue
         try:
-            fw = model_from_meta(meta, model="fullwave", gap=gap)
-            fw.orientation_sums(np.concatenate([r.state[:, 2] for r in problem.recorded_runs]))  # the bend range
-            problems["fullwave"] = sibling(fw)
+            other = model_from_meta(meta, ModelSpec(name)).interpolated()
+            # a tabulated model refuses data bending beyond its table (ValueError) here, not in the middle of a fit
+            other.orientation_sums(np.concatenate([r.state[:, 2] for r in problem.recorded_runs]))
+            problems[name] = sibling(other)
         except ValueError as exc:
-            log.info("no full-wave comparison: %s", exc)
-            unavailable = str(exc)
-    if "fullwave" in problems:
-        fits["fullwave"] = base if base is not None and on_fullwave else fit_gap_model(problems["fullwave"], [])
-    rows = [_row(k, problems[k], fits[k], long_time_duration) for k in MODEL_LABELS if k in fits]
-    return ModelComparison(rows, fits, problems, unavailable)
+            log.info("no %s comparison: %s", name, exc)
+            unavailable[name] = str(exc)
+    reference = force_model_names()[0]
+    fits = {name: base if base is not None and name == spec.name else fit_gap_model(p, [])
+            for name, p in problems.items()}
+    with_scattering = f"{reference}+{SCATTERING_FITTED}"
+    fits[with_scattering] = fit_gap_model(problems[reference], [SCATTERING_FITTED])
+    problems[with_scattering] = problems[reference]
+    order = [reference, with_scattering] + [n for n in force_model_names()[1:]]
+    rows = [_row(k, problems[k], fits[k], long_time_duration) for k in order if k in fits]
+    unavailable.update({n: None for n in force_model_names()[1:] if n not in unavailable})
+    return ModelComparison(rows, fits, problems, {n: unavailable[n] for n in force_model_names()[1:]})

@@ -202,17 +202,15 @@ def _label(name: str) -> str:
     return name.rsplit("_", 1)[0].replace("_", " ")
 
 
-def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_frames_per_run: int,
+def calibrate_model_parameters(spec, conditions, recorded_runs, max_frames_per_run: int,
                                log=None, drift=None) -> tuple[object, dict]:
     """The conditions with every model parameter the data may determine (and the user left unset) calibrated,
     and their :class:`~validation.diagnosis.model_parameters.ParameterCalibration` by field name.
 
     ``drift`` (a :class:`~validation.diagnosis.drift.PressureDrift`) is followed by every trial model, so that a
     pressure drifting within runs does not bias the hinge profile."""
-    from acousim.models import force_model_type, static_model
-
     log = log or logging.getLogger(__name__).info
-    mtype = force_model_type(model_name)
+    mtype = spec.type
     out = {}
     for name, (lo, hi, default) in mtype.calibration_ranges(conditions).items():
         if getattr(conditions, name) is not None:
@@ -223,10 +221,10 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
                                              f"to profile; the default {default:.3g} is kept", (lo, hi))
             conditions = replace(conditions, **{name: float(default)})
             continue
-        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", model_name, name, lo, hi)
+        log("profiling the %s model's %s over [%.3g, %.3g] on the hinge equation", spec.name, name, lo, hi)
 
         def build(value: float, name=name):
-            sim = static_model(model_name, replace(conditions, **{name: value})).interpolated()
+            sim = spec.static(replace(conditions, **{name: value})).interpolated()
             trial = DiagnosisProblem.from_recorded(sim, recorded_runs, max_frames_per_run)
             return trial if drift is None else trial.with_drift(drift)
 
@@ -237,14 +235,12 @@ def calibrate_model_parameters(model_name: str, conditions, recorded_runs, max_f
     return conditions, out
 
 
-def parameter_record(conditions, calibrated: dict, model_name: str) -> dict:
+def parameter_record(conditions, calibrated: dict, spec) -> dict:
     """diagnosis.json calibration keys of the model's own parameters: ``gap_m``, ``gap_std_m``,
     ``gap_calibrated`` (and the profile) for every parameter the model type declares calibratable, and
     ``gap_model_error_m`` for a calibrated one whose model states its error (the systematic error the model's own
     stated accuracy implies; None otherwise)."""
-    from acousim.models import force_model_type
-
-    mtype = force_model_type(model_name)
+    mtype = spec.type
     out = {}
     model_errors = None
     for name in mtype.calibration_ranges(conditions):

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from acousim.effects import EFFECT_TYPES
+from acousim.models import ModelSpec
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Dataset, LoadConfig
@@ -129,18 +130,14 @@ def load_for_diagnosis(data_dir: str | Path, strict: bool = False, progress: boo
 
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
-                     progress: bool = True, mesh_size: float | None = None,
-                     model: str = "gorkov", gap: float | None = None,
-                     edge_radius: float | None = None) -> Diagnosis:
+                     progress: bool = True, spec: ModelSpec = ModelSpec()) -> Diagnosis:
     """Load the data set ``data_dir`` (:func:`load_for_diagnosis`) and diagnose it (:func:`diagnose`)."""
     dataset = load_for_diagnosis(data_dir, strict=strict, progress=progress)
-    return diagnose(dataset, config, progress=progress, mesh_size=mesh_size, model=model, gap=gap,
-                    edge_radius=edge_radius)
+    return diagnose(dataset, config, progress=progress, spec=spec)
 
 
 def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), progress: bool = True,
-             mesh_size: float | None = None, model: str = "gorkov", gap: float | None = None,
-             edge_radius: float | None = None) -> Diagnosis:
+             spec: ModelSpec = ModelSpec()) -> Diagnosis:
     """Diagnose a loaded data set.
 
     Parameters
@@ -148,12 +145,10 @@ def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), prog
     dataset : the data set (:func:`load_for_diagnosis` loads it with the checks a diagnosis needs)
     config : DiagnoseConfig
     progress : log the steps at INFO level (else DEBUG)
-    mesh_size : mesh size of the Gor'kov model [m] (default: the model's)
-    model : the simulation model, a name of the registry :mod:`acousim.models` (``"gorkov"``, ``"fullwave"``);
-        every model is calibrated the same way (pressure amplitude and height origin), and a model's own
-        parameters that the data may determine (the full-wave hinge gap) are profiled unless given
+    spec : the simulation model and its own options (:class:`acousim.models.ModelSpec`; default: the Gor'kov
+        model); every model is calibrated the same way (pressure amplitude and height origin), and a model's own
+        parameters that the data may determine (the full-wave hinge gap) are profiled unless the spec sets them
         (:mod:`validation.diagnosis.model_parameters`)
-    gap, edge_radius : hinge gap and edge radius of the full-wave model [m]; a given gap is not calibrated
 
     Returns
     -------
@@ -167,7 +162,7 @@ def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), prog
     from cubedimer.executor import single_blas_thread
 
     with single_blas_thread():
-        return _diagnose(dataset, config, progress, mesh_size, model, gap, edge_radius)
+        return _diagnose(dataset, config, progress, spec)
 
 
 def _dissipation_rivals(problem: DiagnosisProblem, base: GapFit, identified: list[str], discover) -> Discovery:
@@ -235,31 +230,27 @@ class _Identified:
     final: GapFit
 
 
-def _diagnose(dataset, config: DiagnoseConfig, progress: bool, mesh_size: float | None, model_name: str,
-              gap: float | None, edge_radius: float | None) -> Diagnosis:
+def _diagnose(dataset, config: DiagnoseConfig, progress: bool, spec: ModelSpec) -> Diagnosis:
     """The diagnosis as its named steps: calibrate, identify, discover, the joint model, summarise."""
     from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
     check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
-    conditions = conditions_from_meta(dataset.meta, mesh_size=mesh_size, gap=gap, edge_radius=edge_radius)
-    cal = _calibrate(dataset, conditions, model_name, config, log)
+    conditions = conditions_from_meta(dataset.meta, spec)
+    cal = _calibrate(dataset, conditions, spec, config, log)
     found = _identify(cal.problem, config, progress, log)
     discovery, replaced, identified, final = _discover(cal.problem, found, config, log)
-    return _summarise(dataset, cal, found, discovery, replaced, identified, final, model_name, config, log)
+    return _summarise(dataset, cal, found, discovery, replaced, identified, final, spec, config, log)
 
 
-def _calibrate(dataset, conditions, model_name: str, config: DiagnoseConfig, log) -> _Calibrated:
+def _calibrate(dataset, conditions, spec: ModelSpec, config: DiagnoseConfig, log) -> _Calibrated:
     """The calibrated problem: the model (refused if it does not fit the experiment), y's orientation, the model's
     own parameters the data may determine, and a pressure drift within runs (followed by the simulation)."""
-    from acousim.models import force_model_type, static_model
-
-    # refuses a misfit first (a gap with Gor'kov, a dimer outside the full-wave family); a parameter to be calibrated
-    # starts at the value the model takes by default
-    mtype = force_model_type(model_name)
-    mtype.check(conditions)
+    # refuses a misfit first (a dimer outside the full-wave family); a parameter to be calibrated starts at the
+    # value the model takes by default
+    mtype = spec.type
     start = {n: d for n, (_, _, d) in mtype.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
-    model = static_model(model_name, replace(conditions, **start))
+    model = spec.static(replace(conditions, **start))
     problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
                                              config.max_frames_per_run)
     data_warnings = []
@@ -277,10 +268,10 @@ def _calibrate(dataset, conditions, model_name: str, config: DiagnoseConfig, log
     if calibrated_later and config.drift is not None:
         first = detect_pressure_drift(problem, config.drift)
         first_drift = first.drift if first.detected else None
-    conditions, parameters = calibrate_model_parameters(model_name, conditions, problem.recorded_runs,
+    conditions, parameters = calibrate_model_parameters(spec, conditions, problem.recorded_runs,
                                                         config.max_frames_per_run, log, drift=first_drift)
     if parameters:
-        model = static_model(model_name, conditions)
+        model = spec.static(conditions)
         problem = DiagnosisProblem.from_recorded(model.interpolated(), problem.recorded_runs,
                                                  config.max_frames_per_run)
     log("%d runs; calibrating pressure and height origin (first: a drift of the pressure within runs?)",
@@ -344,7 +335,7 @@ def _discover(problem: DiagnosisProblem, found: _Identified, config: DiagnoseCon
 
 
 def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discovery, replaced: dict,
-               identified: list[str], final: GapFit, model_name: str, config: DiagnoseConfig, log) -> Diagnosis:
+               identified: list[str], final: GapFit, spec: ModelSpec, config: DiagnoseConfig, log) -> Diagnosis:
     """The joint model's parameters, every candidate's verdict, the gaps before and after, where the rest lies and
     the long-time errors, as one :class:`Diagnosis`."""
     problem, base, runs = cal.problem, found.base, cal.problem.runs
@@ -364,12 +355,12 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
     components = fit_components(final)
     p_floor = smallest_sign_flip_pvalue(len(runs))
     return Diagnosis(
-        model=model_name,
+        model=spec.name,
         simulation={k: v for k, v in problem.model.record().items() if not isinstance(v, (list, dict))},
         identified=tuple(named), indistinguishable=tuple(pr.to_dict() for pr in pairs),
         model_effects=tuple(identified), dropped_by_backward_check=tuple(found.elim.dropped),
         greedy_identified=tuple(found.ident.identified),
-        calibration=_calibration_record(problem, final, cal, model_name),
+        calibration=_calibration_record(problem, final, cal, spec),
         gap_before=gap_before, gap_after=gap_after, gap_definition=gap_definition(components),
         gap_components=tuple(c.name for c in components),
         gap_component_forms={c.name: c.form for c in components},
@@ -442,7 +433,7 @@ def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: d
     return remaining
 
 
-def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, model_name: str) -> dict:
+def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, spec: ModelSpec) -> dict:
     """diagnosis.json's ``calibration``: pressure, height origin (from the nominal and the calibrated Z_eq), the first
     states, the model's calibrated parameters and the pressure drift."""
     c, model = final.calibration, problem.model
@@ -457,7 +448,7 @@ def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrat
         "nominal_Z_eq_m": model.equilibrium_height,
         "initial_states": {r.name: r.state[0].tolist() for r in problem.recorded_runs},
         "calibrated_on": CALIBRATED_ON,
-        **parameter_record(cal.conditions, cal.parameters, model_name),
+        **parameter_record(cal.conditions, cal.parameters, spec),
     }
     if cal.drift is not None:
         calibration["drift"] = cal.drift.to_dict()

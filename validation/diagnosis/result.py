@@ -19,6 +19,13 @@ from .problem import DiagnosisProblem
 __all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict"]
 
 
+def _reference_model() -> str:
+    """The registry's first model (a diagnosis.json written before the key ``model`` was diagnosed on it)."""
+    from acousim.models import force_model_names
+
+    return force_model_names()[0]
+
+
 @dataclass(frozen=True)
 class EffectVerdict:
     """One candidate effect's verdict (diagnosis.json ``effects[i]``).
@@ -192,7 +199,7 @@ class Diagnosis:
     def from_json(cls, doc: Mapping[str, Any]) -> "Diagnosis":
         """The diagnosis of a diagnosis.json document (the keys added since the first layout are optional)."""
         return cls(
-            model=doc.get("model", "gorkov"), simulation=dict(doc.get("simulation", {})),
+            model=doc.get("model") or _reference_model(), simulation=dict(doc.get("simulation", {})),
             identified=tuple(doc["identified"]), indistinguishable=tuple(doc.get("indistinguishable", ())),
             model_effects=tuple(doc.get("model_effects", doc["identified"])),
             dropped_by_backward_check=tuple(doc.get("dropped_by_backward_check", ())),

@@ -12,11 +12,17 @@ from __future__ import annotations
 import logging
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .claims import PHASE_LINE_FRACTION, anti_damping_text, long_time_reading, not_significant_text, run_phase
 from .html import Figure, Section, Table, write_report
+
+if TYPE_CHECKING:
+    from acousim.models import ModelSpec
+
+    from ..diagnosis import Diagnosis
 
 __all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
 
@@ -89,7 +95,7 @@ def lead_term_reading(lead, n_sigma: float) -> str:
 
 def _scattering_section(models) -> Section:
     """Section 7: the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model side by side."""
-    from ..diagnosis.model_comparison import MODEL_LABELS
+    from ..diagnosis.model_comparison import row_label
 
     rows = {r.model: r for r in models.rows}
     g0, gp = rows["gorkov"], rows["gorkov+pair_scattering"]
@@ -103,12 +109,12 @@ def _scattering_section(models) -> Section:
                  f"leaves {fw.gap:.3g} (y equation {fw.components[0]:.3g}, theta equation {fw.components[1]:.3g}, energy "
                  f"{fw.components[2]:.3g}). docs/fullwave.md states how far its hinge numbers are converged and verified.")
     else:
-        text += f" The full-wave model is not compared: {models.unavailable}."
+        text += f" The full-wave model is not compared: {models.unavailable.get('fullwave')}."
     table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
                   "0 perfect, about 1 for no motion)",
                   ["simulation", "pressure [Pa]", "origin offset [um]", "y equation", "theta equation", "energy", "gap",
                    "long-time error", "fitted parameters"],
-                  [[MODEL_LABELS[r.model], r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
+                  [[row_label(r.model), r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
                     r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
                    for r in models.rows],
                   {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
@@ -125,8 +131,8 @@ def _scattering_section(models) -> Section:
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, max_evals: int | None = None, method: str = "discovery",
-                 model: str = "gorkov", heldout_tolerance: float | None = None, gap: float | None = None,
-                 edge_radius: float | None = None, atlas: str | Path | None = None) -> Path:
+                 spec: "ModelSpec | None" = None, heldout_tolerance: float | None = None,
+                 atlas: str | Path | None = None) -> Path:
     """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
 
     Parameters
@@ -140,11 +146,11 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         without cross-coupling terms (section 3);
         default: the fitting and comparison defaults
     method : the fit's model-discovery method (:data:`fitting.methods.METHODS`)
-    model : the simulation model the diagnosis (section 6) calibrates, ``"gorkov"`` or ``"fullwave"``; the other one
-        stands beside it in sections 4, 5 and 7 whenever the full-wave table applies to the experiment
+    spec : the simulation model the diagnosis (section 6) calibrates and its own options
+        (:class:`acousim.models.ModelSpec`; default: the Gor'kov model); the other registered models stand beside it
+        in sections 4, 5 and 7 whenever they apply to the experiment; a model parameter the spec leaves unset that
+        the data may determine (the full-wave hinge gap) is calibrated by the diagnosis
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
-    gap, edge_radius : hinge gap and edge radius [m] of the full-wave model; without ``gap`` a full-wave diagnosis
-        calibrates it from the data
     atlas : folder of an attractor atlas (``python -m acousim atlas``), shown as the last section
 
     Returns
@@ -165,11 +171,14 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from ..coefficients import compare_coefficients
     from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose, load_for_diagnosis
     from ..diagnosis.pipeline import check_enough_runs
-    from ..diagnosis.model_comparison import MODEL_LABELS
-    from ..simulation import model_from_meta
+    from ..simulation import calibrated_model, model_from_meta
     from .diagnosis_section import diagnosis_figures, diagnosis_section
     from .figures import data_figures, phase_space_figures, restoring_overlay_figure
 
+    from acousim.models import ModelSpec
+
+    spec = spec if spec is not None else ModelSpec()
+    model = spec.name
     level = logging.INFO if progress else logging.DEBUG
 
     def say(message: str) -> None:
@@ -180,7 +189,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     meta = dataset.meta
     # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
     # before the long fit, not after it
-    model_from_meta(meta, model=model, gap=gap, edge_radius=edge_radius)
+    model_from_meta(meta, spec)
     # and a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
     check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
     out = Path(out_dir)
@@ -208,14 +217,12 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                              [p.run.name for p in prepared], config=cmp_config)
         plot_comparison(cmp, fit_dir)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag = diagnose(dataset, DiagnoseConfig(), progress=progress, model=model, gap=gap, edge_radius=edge_radius)
+    diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
     internals = diag.internals
-    # the full-wave model beside the diagnosis's one: at its calibrated (or given) gap
-    fw_gap = diag.calibration.get("gap_m", gap)
     say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
-    models = compare_simulation_models(internals.problem, meta, base=internals.base, gap=fw_gap)
+    models = compare_simulation_models(internals.problem, spec, meta, base=internals.base)
     # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
-    cals = {k: f.calibration for k, f in models.fits.items() if k in MODEL_LABELS and "+" not in k}  # simulations
+    cals = {k: f.calibration for k, f in models.fits.items() if "+" not in k}  # simulations
     cals[model] = internals.final.calibration
     cal = cals["gorkov"]
     say("4/5 sweeping the calibrated simulations and comparing coefficients")
@@ -235,8 +242,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
     fw_sweep, fw_cmp = None, None
     if cals.get("fullwave") is not None:
-        fw_sim = model_from_meta(meta, pressure_amplitude_pa=cals["fullwave"].pressure_amplitude_pa, model="fullwave",
-                                 gap=fw_gap)
+        fw_spec = spec if spec.name == "fullwave" else ModelSpec("fullwave")
+        fw_sim = calibrated_model(meta, fw_spec, cals["fullwave"].pressure_amplitude_pa, diag.calibration)
         fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
     say("5/5 figures and the report")
     sections = []
@@ -342,8 +349,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
                    f"y origin lies {fc.origin_offset_m * 1e6:+.2f} um above the full-wave model's calibrated Z_eq, against "
                    f"{delta * 1e6:+.2f} um above the Gor'kov model's calibrated Z_eq): the scattering between the cubes "
                    "holds the hinge with no fitted stiffness.")
-    elif models.unavailable:
-        fw_text = f" The full-wave model is not shown: {models.unavailable}."
+    elif models.unavailable.get("fullwave"):
+        fw_text = f" The full-wave model is not shown: {models.unavailable['fullwave']}."
     sections.append(Section(
         "simulation", "4. The simulation",
         f"The Gor'kov model at the calibrated pressure {cal.pressure_amplitude_pa:.0f} Pa (nominal "
@@ -357,8 +364,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     lead = coef_cmp.rows[0]
     comparisons = {"gorkov": coef_cmp, "fullwave": fw_cmp}
     if comparisons.get(model) is None:  # any other registered model: its own calibrated sweep
-        own = model_from_meta(meta, pressure_amplitude_pa=cals[model].pressure_amplitude_pa, model=model,
-                              gap=gap, edge_radius=edge_radius)
+        own = calibrated_model(meta, spec, cals[model].pressure_amplitude_pa, diag.calibration)
         comparisons[model] = sweep_and_compare(own, cals[model].origin_offset_m)[1]
     main_cmp = comparisons[model]  # the diagnosis's model's comparison
     main_lead, main_cal = main_cmp.rows[0], cals[model]
@@ -372,7 +378,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
         effects_reading = (f" The effects identified in section 6 ({', '.join(diag.identified)}) add {added['y^2*theta']:.3g} to the "
                            f"static theta*y^2 (least squares over the same box); with them the "
-                           f"{MODEL_LABELS.get(model, model).split(' (')[0]} simulation predicts "
+                           f"{spec.label} simulation predicts "
                            f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
     fw_reading = ""
     fw_rows = {}
@@ -417,7 +423,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # 6 the gap
     dfigs = diagnosis_figures(diag, figs_dir)
     sec = diagnosis_section(diag, dfigs)
-    sections.append(Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(model, model).split(' (')[0]} model)",
+    sections.append(Section("diagnosis", f"6. The sim-to-real gap ({spec.label} model)",
                             sec.reading, sec.figures, sec.tables, sec.numbers))
     sections += sections_after
     if atlas is not None:

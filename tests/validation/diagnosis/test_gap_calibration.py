@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import model_parameters as mp
+from acousim.models import ModelSpec
 
 
 def _fake_profile(monkeypatch, u0: float, sigma_u: float, n: int = 10_000, misfit: float = 1.0):
@@ -109,7 +110,7 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
 def test_diagnosis_calibrates_the_gap_and_names_only_the_true_effect(fullwave_twin, use_synthetic_family):
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
-    d = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False), progress=False, model="fullwave")
+    d = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("fullwave"))
     cal = d.calibration
     assert cal["gap_calibrated"] is True
     # the target is 20 %; on noise-free physics (the twin is the family itself) it is far better
@@ -134,7 +135,7 @@ def test_a_given_gap_is_used_not_calibrated(fullwave_twin, use_synthetic_family)
     # the calibration only: one candidate, no discovery
     d = diagnose_dataset(fullwave_twin, DiagnoseConfig(long_time=False, discover=False,
                                                           candidates=("linear_damping",)), progress=False,
-                            model="fullwave", gap=13e-6)
+                            spec=ModelSpec("fullwave", {"gap_m": 13e-6}))
     cal = d.calibration
     assert cal["gap_m"] == 13e-6 and cal["gap_calibrated"] is False and cal["gap_std_m"] is None
     assert "gap_profile" not in cal

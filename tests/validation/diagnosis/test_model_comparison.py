@@ -7,6 +7,7 @@ import pytest
 from acousim.cli import main as acousim_main
 from cubedimer.meta import read_meta
 from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, compare_simulation_models, diagnose_dataset
+from acousim.models import ModelSpec
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +26,8 @@ def fullwave_twin(tmp_path_factory):
 @pytest.fixture(scope="module")
 def fullwave_diagnosis(fullwave_twin):
     data, _ = fullwave_twin
-    return diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False), progress=False, model="fullwave")
+    return diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False), progress=False,
+                            spec=ModelSpec("fullwave"))
 
 
 def test_fullwave_model_calibrates_its_own_twin(fullwave_twin, fullwave_diagnosis):
@@ -48,9 +50,13 @@ def test_side_by_side_gaps_on_fullwave_data(fullwave_twin, fullwave_diagnosis):
     model, whose trap is softer (f_y 21.8 vs 24.1 Hz at the same pressure), needs another pressure for it."""
     data, truth = fullwave_twin
     internals = fullwave_diagnosis.internals
-    cmp = compare_simulation_models(internals.problem, read_meta(data), base=internals.base, long_time_duration=None)
+    cmp = compare_simulation_models(internals.problem, ModelSpec("fullwave"), read_meta(data), base=internals.base,
+                                    long_time_duration=None)
     rows = {r.model: r for r in cmp.rows}
-    assert list(rows) == ["gorkov", "gorkov+pair_scattering", "fullwave"] and cmp.unavailable is None
+    assert list(rows) == ["gorkov", "gorkov+pair_scattering", "fullwave"] and cmp.unavailable == {"fullwave": None}
+    assert cmp.to_dict()["fullwave_unavailable"] is None
+    assert [r["label"] for r in cmp.to_dict()["rows"]] == ["Gor'kov", "Gor'kov + fitted pair scattering",
+                                                           "full wave (no fitted stiffness)"]
     # y equation explained within the diagnosis's own threshold (measured 3e-4)
     assert rows["fullwave"].components[0] < EXPLAINED_GAP
     np.testing.assert_allclose(rows["fullwave"].pressure_amplitude_pa, truth["pressure_amplitude_pa"], rtol=1e-3)
