@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from ..dynamics import DEFAULT_MAX_STEP
 from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..fullwave.statics import MODEL_NAME as FULLWAVE
-from ..models import ExperimentConditions, force_model_names, force_model_type
+from ..models import ExperimentConditions, ModelSpec, force_model_names
 
 __all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PAPER", "PRESETS"]
 
@@ -248,7 +248,7 @@ class TwinConfig:
         if not np.isfinite(self.max_step) or self.max_step <= 0:
             raise TwinError(f"max_step must be positive, got {self.max_step!r} s")
         try:
-            force_model_type(self.force_model).check(self.conditions)
+            self.model_spec  # noqa: B018 (checks the model and its options)
         except ValueError as exc:
             raise TwinError(str(exc)) from None
         n = int(round(self.duration * self.camera.fps))
@@ -272,6 +272,12 @@ class TwinConfig:
                                         frequency_hz=self.frequency)
         except ValueError as exc:
             raise TwinError(str(exc)) from None
+
+    @property
+    def model_spec(self) -> ModelSpec:
+        """The force model and its own options (:class:`acousim.models.ModelSpec`)."""
+        return ModelSpec(self.force_model, {"gap_m": self.gap, "edge_radius_m": self.edge_radius,
+                                            "mesh_size_m": self.mesh_size})
 
     @property
     def n_frames(self) -> int:

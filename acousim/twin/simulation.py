@@ -31,7 +31,6 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..dynamics import DEFAULT_MAX_STEP, STATUS_MESSAGES, DimerDynamics
 from ..effects import EffectSet, air_damping_for
-from ..models import dynamic_model
 from ..switching import field_drop, ring_time
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
@@ -163,7 +162,7 @@ def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     p_true = true_pressure(config.pressure_amplitude_pa, config.pressure_error, config.seed)
     effects = config.effects
     try:
-        sur = dynamic_model(config.force_model, config.conditions)
+        sur = config.model_spec.dynamic(config.conditions)
         if p_true != config.pressure_amplitude_pa:
             sur = sur.with_pressure(p_true)
         if config.air_damping and "air_damping" not in effects:
