@@ -142,9 +142,10 @@ def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
     r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(data), "--out", str(out),
                         "--candidates", "pair_scattering", "--no-long-time"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    diag = json.loads((out / "diagnosis.json").read_text())
+    doc = json.loads((out / "diagnosis.json").read_text())
     assert {"identified", "calibration", "gap_before", "gap_after", "effects", "localization", "skipped_files",
-            "remaining_gap", "gap_definition", "gap_components"} <= set(diag)
+            "remaining_gap", "gap_definition", "gap_components"} <= set(doc)
+    diag = Diagnosis.from_json(doc)
     assert [e.name for e in diag.effects] == ["pair_scattering"]
     assert (out / "report.html").exists()
     assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
