@@ -10,7 +10,7 @@ at ``Z = Z_eq + y`` is a combination of sin(kZ) and cos(kZ), forces are quadrati
 
 and a model hands the compiled equations of motion the six coefficient functions as Chebyshev
 series in theta on [-1, 1] (:class:`ForceCoefficients`; gravity is kept apart).  The Gor'kov
-surrogate (:class:`acousim.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
+surrogate (:class:`acousim.gorkov.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
 model gives Q_y and Q_theta directly (they need not derive from a potential).
 
 :class:`ForceModel` is the protocol (structural: any object with these members is one).
@@ -80,7 +80,7 @@ class ForceCoefficients:
 
 @runtime_checkable
 class ForceModel(Protocol):
-    """What the equations of motion (:mod:`acousim.equations`) need from a force model.
+    """What the equations of motion (:mod:`acousim.dynamics.equations`) need from a force model.
 
     Attributes
     ----------

@@ -248,7 +248,7 @@ def dynamic_model(name: str, conditions: ExperimentConditions) -> ForceModel:
 def _gorkov_static(c: ExperimentConditions):
     from .dimer import CubeDimer
     from .field import StandingWave
-    from .forces import DEFAULT_QUADRATURE_DEGREE, GorkovDimer
+    from .gorkov.forces import DEFAULT_QUADRATURE_DEGREE, GorkovDimer
 
     smallest = min(c.side_length_m, c.side_b_m or c.side_length_m)
     if c.mesh_size_m is not None and not 0.01 <= c.mesh_size_m / smallest <= 1.0:
@@ -261,7 +261,7 @@ def _gorkov_static(c: ExperimentConditions):
 
 
 def _gorkov_dynamic(c: ExperimentConditions):
-    from .surrogate import build_surrogate, cached_surrogate
+    from .gorkov.surrogate import build_surrogate, cached_surrogate
 
     if c.side_b_m is not None and c.side_b_m != c.side_length_m:
         raise ConditionError("--side-b: the equations of motion take equal cubes only")

@@ -18,7 +18,7 @@ from cubedimer.attractors import CLASS_COLORS, classify_trajectory, section_phas
 from cubedimer.poincare import poincare_section
 from cubedimer.spectra import amplitude_spectrum
 
-from ..effects import EffectSet
+from ..dynamics.effects import EffectSet
 
 __all__ = ["write_twin_figures"]
 

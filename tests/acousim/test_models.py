@@ -61,7 +61,7 @@ def test_a_new_model_runs_through_sweep_twin_and_diagnosis(dummy_model, tmp_path
     """One registry entry is all a new model needs: the sweep command offers it, the twin integrates it and the
     diagnosis calibrates it."""
     from acousim.cli import main as acousim_main
-    from acousim.sweep import read_sweep_csv
+    from acousim.statics.sweep import read_sweep_csv
     from acousim.twin import TwinConfig, simulate_dataset
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.effects import EFFECT_TYPES
+from acousim.dynamics.effects import EFFECT_TYPES
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
