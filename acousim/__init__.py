@@ -31,8 +31,9 @@ from .dynamics.effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_ef
 from .dynamics.integrator import DimerDynamics
 from .dynamics.air_damping import air_damping_rates
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
-from .models import (ExperimentConditions, ForceModelType, StaticModel, dynamic_model, force_model_names,
-                     register_force_model, static_model)
+from .static_model import StaticModel
+from .models import (ExperimentConditions, ForceModelType, dynamic_model, force_model_names, register_force_model,
+                     static_model)
 
 __all__ = [
     "CubeDimer", "StandingWave", "Medium", "ParticleMaterial", "GorkovDimer",

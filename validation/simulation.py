@@ -46,7 +46,7 @@ def model_from_meta(meta: dict, pressure_amplitude_pa: float | None = None, mesh
 
     Returns
     -------
-    acousim.models.StaticModel
+    acousim.static_model.StaticModel
 
     Raises
     ------

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..field import StandingWave
 from ..force_model import SinusoidalInertia
-from ..gorkov.forces import StaticForces
+from ..static_model import StaticForces
 from ..medium import ParticleMaterial
 from .surrogate import FullwaveSurrogate, default_fullwave_surrogate
 

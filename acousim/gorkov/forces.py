@@ -21,7 +21,6 @@ import threading
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,12 +29,12 @@ from scipy.optimize import brentq
 from ..dimer import CubeDimer, bend_angle
 from ..field import StandingWave, gorkov_potential_density, gorkov_potential_gradient
 from ..medium import GRAVITY
+from ..static_model import StaticForces
 from .mesh import grid_arrays, tetrahedralize_cube
 from .quadrature import tetrahedral_quadrature
 
 __all__ = [
     "GorkovDimer",
-    "StaticForces",
     "DEFAULT_MESH_FRACTION",
     "DEFAULT_QUADRATURE_DEGREE",
     "acoustic_potential_energy",
@@ -52,27 +51,6 @@ DEFAULT_QUADRATURE_DEGREE = 2
 _INTERPOLANTS: dict = {}
 _INTERPOLANTS_KEPT = 8
 _INTERPOLANTS_LOCK = threading.Lock()  # threaded executors (dask workers) share the cache
-
-
-class StaticForces(NamedTuple):
-    """Gor'kov-model values at zero velocity (arrays broadcast over the inputs).
-
-    Attributes
-    ----------
-    potential : acoustic potential energy U_ac [J]
-    force_z : vertical acoustic force F_Z [N]
-    q_y : generalised force F_Z - M g [N]
-    q_theta : generalised force -dU_ac/dtheta at fixed y [N m]
-    yddot : Q_y / M [m/s^2]
-    thetaddot : Q_theta / I(theta) [1/s^2]
-    """
-
-    potential: NDArray[np.float64]
-    force_z: NDArray[np.float64]
-    q_y: NDArray[np.float64]
-    q_theta: NDArray[np.float64]
-    yddot: NDArray[np.float64]
-    thetaddot: NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,6 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,10 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.terms import library_exponents, term_name
 
-from ..gorkov.forces import GorkovDimer
-
-if TYPE_CHECKING:
-    from ..models import StaticModel
+from ..static_model import StaticModel
 
 __all__ = [
     "SweepResult",
@@ -87,13 +83,13 @@ class SweepResult:
 
 
 def static_sweep(
-    model: "StaticModel",
+    model: StaticModel,
     theta: ArrayLike,
     y: ArrayLike,
     progress: bool = False,
     chunk: int = 64,
 ) -> SweepResult:
-    """Evaluate a static model (:class:`acousim.models.StaticModel`: Gor'kov or full wave) on the grid
+    """Evaluate a static model (:class:`acousim.static_model.StaticModel`: Gor'kov or full wave) on the grid
     ``theta x y`` (1-D arrays; theta dimensionless, y [m] above the model's own Z_eq).
 
     A model without a potential (``conservative = False``) leaves the ``potential`` column empty (NaN).  The
@@ -274,7 +270,7 @@ def fit_static_coefficients(
     return StaticCoefficients(terms, coefs, ses, rms, rel, origin, box, dict(sweep.settings), taylor)
 
 
-def taylor_coefficients(model: GorkovDimer, degree: int = 3, theta_half_width: float = 0.05,
+def taylor_coefficients(model: StaticModel, degree: int = 3, theta_half_width: float = 0.05,
                         y_half_width: float = 20e-6) -> dict[str, dict[str, float]]:
     """Local Taylor coefficients of yddot and thetaddot at (theta, y) = (0, 0) [SI].
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from acousim import models
-from acousim.models import (ConditionError, ExperimentConditions, ForceModelType, StaticModel, force_model_names,
+from acousim.static_model import StaticModel
+from acousim.models import (ConditionError, ExperimentConditions, ForceModelType, force_model_names,
                             register_force_model, static_model)
 
 ROOT = Path(__file__).resolve().parents[2]
