@@ -40,7 +40,7 @@ def default_mesh_dir() -> Path:
     env = os.environ.get("ACOUSIM_MESH_DIR")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parent.parent / "meshes"
+    return Path(__file__).resolve().parents[2] / "meshes"
 
 
 def cube_surface(side: float = 1.0):

@@ -12,7 +12,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 pytest.importorskip("bempp_cl")
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 def run_here(capsys, *args: str) -> tuple[int, str, str]:

@@ -11,7 +11,7 @@ import pytest
 from acousim.cli import main
 from cubedimer.dataset import load_dataset
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 FAST = ["--workers", "1", "--no-progress", "--duration", "1", "--fps", "500"]
 
 

@@ -118,7 +118,7 @@ def test_a_recording_is_the_same_on_any_number_of_threads(imperfection):
         cam = VideoCamera(imperfections=Imperfections(**{imperfection!r}))
         print(hashlib.sha1(record_video(t, y, theta, 500e-6, cam, 7)[0].tobytes()).hexdigest())
     """)
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     digests = set()
     for threads in ("1", "2", "2"):
         env = dict(os.environ, NUMBA_NUM_THREADS=threads,
