@@ -19,7 +19,7 @@ from acousim.fullwave.mesh_rules import TABLE_SPEC, edge_graded_mesh_spec
 from acousim.medium import Medium
 from acousim.models import ConditionError, ExperimentConditions, dynamic_model, static_model
 
-from ..conftest import synthetic_reduced, write_synthetic_family
+from ...conftest import synthetic_reduced, write_synthetic_family
 
 
 def test_shipped_table_meshes_are_the_family_rule_at_the_default_gap():
@@ -272,7 +272,7 @@ def test_gap_model_error_is_the_stiffness_error_over_its_gap_sensitivity(tmp_pat
     from acousim.fullwave.family import FAMILY_ENV
     from acousim.models import force_model_type
 
-    from ..conftest import SYNTHETIC_FAMILY
+    from ...conftest import SYNTHETIC_FAMILY
 
     for p in synthetic_family_dir.glob("*.json"):
         shutil.copy(p, tmp_path / p.name)

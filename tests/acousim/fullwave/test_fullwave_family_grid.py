@@ -15,7 +15,7 @@ from acousim.fullwave.family_grid import (EDGE_GRADED_H_EDGE, FAMILY_GAP_RATIOS,
                                           family_mesh_spec, family_nodes)
 from acousim.fullwave.geometry import dimer_bodies
 
-from ..conftest import synthetic_reduced, write_synthetic_family
+from ...conftest import synthetic_reduced, write_synthetic_family
 
 SIDE = 500e-6
 
