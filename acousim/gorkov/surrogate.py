@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..dimer import CubeDimer
 from ..field import StandingWave
-from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
+from ..force_model import ChebyshevSurrogate, ForceCoefficients
 from .forces import GorkovDimer
 from ..medium import GRAVITY
 
@@ -100,7 +100,7 @@ def _as_tuple(a: ArrayLike) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class ForceSurrogate(SinusoidalInertia):
+class ForceSurrogate(ChebyshevSurrogate):
     """Chebyshev-in-theta x harmonic-in-Z representation of the Gor'kov potential and forces.
 
     Build with :func:`build_surrogate`; all arrays are small and the object is picklable (it is
@@ -193,26 +193,17 @@ class ForceSurrogate(SinusoidalInertia):
         q_theta = -(cheb.chebval(theta, da) + cheb.chebval(theta, db) * c + cheb.chebval(theta, dg) * s)
         return q_y, q_theta
 
-    def with_pressure(self, pressure_amplitude_pa: float) -> "ForceSurrogate":
-        """The surrogate at another pressure amplitude.
+    def _theta0_vertical_force(self, scale: float = 1.0):
+        """The theta = 0 acoustic force two_k (b0 sin 2kZ - g0 cos 2kZ) [N] as a function of the height Z [m], with
+        b0, g0 the values of beta and gamma at theta = 0 times ``scale``."""
+        b0 = scale * float(cheb.chebval(0.0, np.asarray(self.beta)))
+        g0 = scale * float(cheb.chebval(0.0, np.asarray(self.gamma)))
+        two_k = self.two_k
+        return lambda z: two_k * (b0 * np.sin(two_k * z) - g0 * np.cos(two_k * z))
 
-        U_ac scales exactly as p0^2 (E_ac = p0^2 / (4 rho0 c0^2)), so the coefficients are rescaled and
-        the new equilibrium height is solved for (y is then measured from the new Z_eq).  Exact, no re-sweep.
-        """
-        p = float(pressure_amplitude_pa)
-        if not np.isfinite(p) or p <= 0:
-            raise ValueError(f"pressure amplitude must be positive and finite, got {pressure_amplitude_pa!r} Pa")
-        r = (p / self.pressure_amplitude_pa) ** 2
-        b0 = r * float(cheb.chebval(0.0, np.asarray(self.beta)))
-        g0 = r * float(cheb.chebval(0.0, np.asarray(self.gamma)))
-        z_eq = levitation_height(_vertical_force(b0, g0, self.two_k), self.mass * self.gravity, self.two_k)
-        settings = dict(self.settings, pressure_amplitude_pa=p, equilibrium_height_m=z_eq)
-        return ForceSurrogate(
-            alpha=tuple(r * np.asarray(self.alpha)), beta=tuple(r * np.asarray(self.beta)),
-            gamma=tuple(r * np.asarray(self.gamma)), two_k=self.two_k, wavenumber=self.wavenumber, z_eq=z_eq,
-            mass=self.mass, gravity=self.gravity, inertia_const=self.inertia_const, inertia_sin2=self.inertia_sin2,
-            pressure_amplitude_pa=p, settings=settings, build_accuracy=dict(self.build_accuracy), box=self.box,
-        )
+    def _scaled_fields(self, scale: float) -> dict:
+        return dict(alpha=tuple(scale * np.asarray(self.alpha)), beta=tuple(scale * np.asarray(self.beta)),
+                    gamma=tuple(scale * np.asarray(self.gamma)), build_accuracy=dict(self.build_accuracy))
 
     # ------------------------------------------------------------------ linearisation
     def linear_frequencies(self) -> tuple[float, float]:
@@ -230,13 +221,6 @@ class ForceSurrogate(SinusoidalInertia):
     def provenance(self) -> dict:
         """The build record (accuracy against the mesh model) and the interpolation box."""
         return {"build_accuracy": self.build_accuracy, "box": asdict(self.box)}
-
-    def escape_height(self) -> float:
-        """y [m] of the potential barrier below the equilibrium (theta = 0): below it the dimer falls out
-        (:func:`acousim.force_model.escape_height_below`)."""
-        b0 = float(cheb.chebval(0.0, np.asarray(self.beta)))
-        g0 = float(cheb.chebval(0.0, np.asarray(self.gamma)))
-        return escape_height_below(_vertical_force(b0, g0, self.two_k), self.mass * self.gravity, self.two_k, self.z_eq)
 
     # ------------------------------------------------------------------ checks
     def accuracy(self, model: GorkovDimer, n_theta: int = 23, n_y: int = 19, seed: int = 0) -> dict:
@@ -261,11 +245,6 @@ class ForceSurrogate(SinusoidalInertia):
             "q_theta": float(np.max(np.abs(q_t - direct.q_theta)) / np.max(np.abs(direct.q_theta))),
             "potential": float(np.max(np.abs(u - direct.potential)) / np.max(np.abs(du))),
         }
-
-
-def _vertical_force(b0: float, g0: float, two_k: float):
-    """The theta = 0 acoustic force two_k (b0 sin 2kZ - g0 cos 2kZ) [N] as a function of the height Z [m]."""
-    return lambda z: two_k * (b0 * np.sin(two_k * z) - g0 * np.cos(two_k * z))
 
 
 def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetric: bool | None = None) -> ForceSurrogate:
