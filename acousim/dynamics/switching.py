@@ -39,7 +39,7 @@ from .equations import field_off_acceleration, field_on_acceleration
 __all__ = ["DEFAULT_TRANSDUCER_Q", "RING_SPAN", "ring_time", "pressure_ratio", "switching_acceleration",
            "FieldDrop", "field_drop"]
 
-#: The transducer quality factor the twin states when a ring time is asked for (the issue's range 150-400 for
+#: The transducer quality factor the twin states when a ring time is asked for (within the range 150-400 of
 #: Langevin transducers of acoustic levitators at 40-50 kHz; tau = 1.74 ms at 45.65 kHz).
 DEFAULT_TRANSDUCER_Q = 250.0
 #: Ring times after the drive is back over which the envelope is integrated (then the field counts as fully on).

@@ -137,7 +137,7 @@ def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linsp
     -------
     dict
         ``q_y`` and ``q_theta``: the largest error relative to max |Q| over the box
-        |theta| <= theta_max, y in the range given (the issue's target is 0.005); ``per_theta``: the
+        |theta| <= theta_max, y in the range given (the table's target is 0.005); ``per_theta``: the
         same per bend.
     """
     if surrogate is None:

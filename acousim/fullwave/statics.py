@@ -161,13 +161,6 @@ class FullwaveDimer:
         return StaticForces(potential=potential, force_z=force_z, q_y=q_y, q_theta=q_theta, yddot=q_y / m,
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
 
-    def check_experiment(self, meta: dict) -> None:
-        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (docs/formats.md keys) the table was
-        not built for (:meth:`FullwaveSurrogate.mismatch`)."""
-        message = self.surrogate.mismatch(meta)
-        if message is not None:
-            raise TableMismatch(message)
-
 
 def default_fullwave_dimer(pressure_amplitude_pa: float = 3000.0) -> FullwaveDimer:
     """The shipped default dimer's table (:func:`default_fullwave_surrogate`) as a static model at p0 [Pa]."""

@@ -78,12 +78,6 @@ COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
 
-#: Experimental settings (docs/formats.md metadata key -> table settings key) a table is valid for only.
-TABLE_CONDITIONS = {"side_length_m": "side_m", "particle_density_kg_m3": "particle_density_kg_m3",
-                    "frequency_hz": "frequency_hz", "sound_speed_m_s": "sound_speed_m_s",
-                    "air_density_kg_m3": "air_density_kg_m3"}
-#: Relative tolerance of :meth:`FullwaveSurrogate.mismatch` (settings are decimal numbers written by people).
-TABLE_RTOL = 1e-6
 
 
 def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm: float = 0.0) -> dict[str, NDArray[np.float64]]:
@@ -233,29 +227,6 @@ class FullwaveSurrogate(ChebyshevSurrogate):
         return Medium(frequency_hz=float(st.get("frequency_hz", d.frequency_hz)),
                       sound_speed_m_s=float(st.get("sound_speed_m_s", d.sound_speed_m_s)),
                       density_kg_m3=float(st.get("air_density_kg_m3", d.density_kg_m3)))
-
-    def mismatch(self, conditions: dict, names: dict | None = None) -> str | None:
-        """The first of ``conditions`` the table was not built for, as a one-line message, or None.
-
-        Parameters
-        ----------
-        conditions : dict
-            Experimental settings under their docs/formats.md metadata keys (:data:`TABLE_CONDITIONS`: side,
-            particle density, frequency, sound speed, air density); other keys are ignored.
-        names : dict, optional
-            How to name a key in the message (e.g. ``{"side_length_m": "--side"}`` for a command-line option).
-
-        A setting matches when it agrees with the table's within a relative :data:`TABLE_RTOL`.
-        """
-        names = names or {}
-        for key, table_key in TABLE_CONDITIONS.items():
-            if key not in conditions or table_key not in self.settings:
-                continue
-            given, tabulated = float(conditions[key]), float(self.settings[table_key])
-            if not np.isclose(given, tabulated, rtol=TABLE_RTOL, atol=0.0):
-                return (f"{names.get(key, key)} = {given:g}: the full-wave model is tabulated for {key} = "
-                        f"{tabulated:g} only (build another table with python -m acousim table)")
-        return None
 
     def _theta0_vertical_force(self, scale: float = 1.0) -> Callable[[float], float]:
         """F_Z(0, Z) [N] at the absolute height Z [m], of the table with its coefficients times ``scale``."""

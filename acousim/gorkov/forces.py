@@ -356,14 +356,6 @@ class GorkovDimer:
         s = self.static_forces(theta, y)
         return s.q_y, s.q_theta
 
-    def potential_energy(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Acoustic potential energy U_ac [J] (gravity excluded)."""
-        return self.static_forces(theta, y).potential
-
-    def cube_torques(self, theta: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Y-component of the acoustic torque on each cube about its own centre, (..., 2) [N m]."""
-        return self._cube_integrals(np.asarray(theta, float), np.asarray(y, float) + self.equilibrium_height)[2]
-
     def torque(self, theta: float, y: float, about: ArrayLike) -> NDArray[np.float64]:
         """Total acoustic torque vector [N m] on the dimer about the lab point ``about`` (3,) [m].
 
@@ -433,13 +425,3 @@ class GorkovDimer:
                 f"maximum acoustic force {net(z_max) + weight:.3g} N < weight {weight:.3g} N"
             )
         return float(brentq(net, z_max, 0.0, xtol=1e-15, rtol=1e-13))
-
-    def vertical_stiffness(self) -> float:
-        """k_y = -dF_Z/dZ at (theta = 0, Z_eq) [N/m], from the analytic gradient of the factorised sum."""
-        theta = np.zeros(1)
-        c, _, _ = self._orientation_sums(theta)
-        k2 = 2.0 * self.wave.wavenumber
-        _, a2 = self.wave.harmonic_coefficients
-        ph = np.exp(1j * k2 * self.equilibrium_height)
-        # F_Z = -k2 a2 Im(e^{i k2 Z} C)  =>  -dF_Z/dZ = k2^2 a2 Re(e^{i k2 Z} C)
-        return float(np.sum(k2**2 * a2 * np.real(ph * c[0])))

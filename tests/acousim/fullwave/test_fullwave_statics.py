@@ -54,21 +54,3 @@ def test_pressure_scaling_and_equilibrium(fw):
 def test_refusals_name_the_problem(fw):
     with pytest.raises(TableMismatch, match="theta"):
         fw.orientation_sums(np.array([0.1, 0.95]))
-    with pytest.raises(TableMismatch, match="side_length_m"):
-        fw.check_experiment({"side_length_m": 400e-6})
-    fw.check_experiment({"side_length_m": 500e-6, "frequency_hz": 45650.0})  # the table's own experiment passes
-
-
-@pytest.mark.parametrize("key", ["side_length_m", "particle_density_kg_m3", "frequency_hz", "sound_speed_m_s",
-                                 "air_density_kg_m3"])
-def test_table_conditions_one_check(fw, key):
-    """Every table condition is checked by the one rule: a relative change of 1e-4 is refused (naming the key
-    or the caller's name for it), a change of 1e-8 (decimal round-off) is not."""
-    from acousim.fullwave.surrogate import TABLE_CONDITIONS
-
-    tabulated = float(fw.surrogate.settings[TABLE_CONDITIONS[key]])
-    assert fw.surrogate.mismatch({key: tabulated * (1 + 1e-8)}) is None
-    message = fw.surrogate.mismatch({key: tabulated * (1 + 1e-4), "unrelated": 1.0}, names={key: "--opt"})
-    assert message is not None and message.startswith("--opt = ") and key in message
-    with pytest.raises(TableMismatch, match=key):
-        fw.check_experiment({key: tabulated * (1 - 1e-4)})
