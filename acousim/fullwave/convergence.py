@@ -10,8 +10,8 @@ exact height structure and the bend parity (A, B odd and C even in theta, see
 * the Taylor coefficients of thetaddot = Q_theta / I: ``1``, ``y``, ``theta``, ``y*theta``, ``y^2*theta``.
 
 The mesh study ends with :func:`judge_convergence` of the hinge stiffness (monotone corrections, observed
-order >= 1, finest two levels within 2 %).  The command ``python -m acousim convergence``
-(:mod:`acousim.cli.convergence`) runs the studies; the tables of docs/fullwave.md were made with it.
+order >= 1, finest two levels within 2 %).  Run ``python -m acousim convergence --help``; the
+tables of docs/fullwave.md were made with it.
 """
 from __future__ import annotations
 
