@@ -1,6 +1,6 @@
 """What every static model gives: the :class:`StaticModel` protocol and its values, :class:`StaticForces`.
 
-A static model (the Gor'kov :class:`acousim.GorkovDimer`, the full-wave :class:`acousim.fullwave.FullwaveDimer`)
+A static model (the Gor'kov :class:`acousim.GorkovDimer`, the full-wave :class:`acousim.fullwave.statics.FullwaveDimer`)
 evaluates the forces at zero velocity at absolute heights above the pressure node; the static sweep
 (:mod:`acousim.statics.sweep`) and the diagnosis take any of them, and the registry (:mod:`acousim.models`) builds
 them by name.
