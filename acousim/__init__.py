@@ -22,17 +22,18 @@ Gor'kov potential density, the tetrahedral quadrature or one class per effect, a
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
 from .dimer import CubeDimer
 from .field import StandingWave
-from .forces import GorkovDimer
+from .gorkov.forces import GorkovDimer
 from .medium import Medium, ParticleMaterial
-from .sweep import fit_static_coefficients, read_sweep_csv, static_sweep
+from .statics.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 from .force_model import ForceModel
-from .surrogate import ForceSurrogate, build_surrogate, cached_surrogate
-from .effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
-from .dynamics import DimerDynamics
-from .air_damping import air_damping_rates
+from .gorkov.surrogate import ForceSurrogate, build_surrogate, cached_surrogate
+from .dynamics.effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
+from .dynamics.integrator import DimerDynamics
+from .dynamics.air_damping import air_damping_rates
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
-from .models import (ExperimentConditions, ForceModelType, StaticModel, dynamic_model, force_model_names,
-                     register_force_model, static_model)
+from .static_model import StaticModel
+from .models import (ExperimentConditions, ForceModelType, dynamic_model, force_model_names, register_force_model,
+                     static_model)
 
 __all__ = [
     "CubeDimer", "StandingWave", "Medium", "ParticleMaterial", "GorkovDimer",

@@ -10,14 +10,14 @@ at ``Z = Z_eq + y`` is a combination of sin(kZ) and cos(kZ), forces are quadrati
 
 and a model hands the compiled equations of motion the six coefficient functions as Chebyshev
 series in theta on [-1, 1] (:class:`ForceCoefficients`; gravity is kept apart).  The Gor'kov
-surrogate (:class:`acousim.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
+surrogate (:class:`acousim.gorkov.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
 model gives Q_y and Q_theta directly (they need not derive from a potential).
 
 :class:`ForceModel` is the protocol (structural: any object with these members is one).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
@@ -25,7 +25,8 @@ from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-__all__ = ["ForceCoefficients", "ForceModel", "SinusoidalInertia", "levitation_height", "escape_height_below"]
+__all__ = ["ForceCoefficients", "ForceModel", "SinusoidalInertia", "ChebyshevSurrogate", "levitation_height",
+           "escape_height_below"]
 
 _FIELDS = ("q_y_a", "q_y_b", "q_y_c", "q_theta_a", "q_theta_b", "q_theta_c")
 
@@ -80,7 +81,7 @@ class ForceCoefficients:
 
 @runtime_checkable
 class ForceModel(Protocol):
-    """What the equations of motion (:mod:`acousim.equations`) need from a force model.
+    """What the equations of motion (:mod:`acousim.dynamics.equations`) need from a force model.
 
     Attributes
     ----------
@@ -166,6 +167,48 @@ class SinusoidalInertia:
         """Static accelerations (Q_y / M [m/s^2], Q_theta / I [1/s^2]) at zero velocity."""
         q_y, q_t = self.generalized_forces(theta, y)
         return q_y / self.mass, q_t / self.hinge_inertia(theta)
+
+
+class ChebyshevSurrogate(SinusoidalInertia):
+    """Base of the frozen-dataclass surrogates whose coefficient functions are Chebyshev series in theta and whose
+    forces scale exactly as p0^2: the Gor'kov :class:`acousim.gorkov.surrogate.ForceSurrogate` and the full-wave
+    :class:`acousim.fullwave.surrogate.FullwaveSurrogate`.  The change of pressure (:meth:`with_pressure`) and the
+    escape height (:meth:`escape_height`) are written here once; a surrogate gives its vertical force at theta = 0
+    (:meth:`_theta0_vertical_force`) and the fields its coefficients scale (:meth:`_scaled_fields`)."""
+
+    two_k: float
+    z_eq: float
+    gravity: float
+    pressure_amplitude_pa: float
+    settings: dict
+
+    def _theta0_vertical_force(self, scale: float = 1.0) -> Callable[[float], float]:
+        """F_Z(theta = 0, Z) [N] as a function of the absolute height Z [m], for the coefficients times ``scale``."""
+        raise NotImplementedError
+
+    def _scaled_fields(self, scale: float) -> dict:
+        """The dataclass fields that hold the forces' coefficients, times ``scale`` (for :func:`dataclasses.replace`)."""
+        raise NotImplementedError
+
+    def with_pressure(self, pressure_amplitude_pa: float):
+        """The surrogate at another pressure amplitude p [Pa].
+
+        Every force scales exactly as p0^2 (E_ac = p0^2 / (4 rho0 c0^2)), so the coefficients are multiplied by
+        (p / p0)^2 and the new equilibrium height is solved for (:func:`levitation_height`; y is then measured from
+        the new Z_eq).  Exact, no new solve or sweep.
+        """
+        p = float(pressure_amplitude_pa)
+        if not np.isfinite(p) or p <= 0:
+            raise ValueError(f"pressure amplitude must be positive and finite, got {pressure_amplitude_pa!r} Pa")
+        r = (p / self.pressure_amplitude_pa) ** 2
+        z_eq = levitation_height(self._theta0_vertical_force(r), self.mass * self.gravity, self.two_k)
+        settings = dict(self.settings, pressure_amplitude_pa=p, equilibrium_height_m=z_eq)
+        return replace(self, **self._scaled_fields(r), pressure_amplitude_pa=p, z_eq=z_eq, settings=settings)
+
+    def escape_height(self) -> float:
+        """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out
+        (:func:`escape_height_below`)."""
+        return escape_height_below(self._theta0_vertical_force(), self.mass * self.gravity, self.two_k, self.z_eq)
 
 
 def levitation_height(force_z: Callable[[float], float], weight: float, two_k: float) -> float:

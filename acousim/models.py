@@ -5,7 +5,7 @@ Every command that simulates the dimer (``acousim sweep``, ``acousim simulate``,
 (:class:`ExperimentConditions`: the options or meta.json).  A model type (:class:`ForceModelType`) gives two
 views of the same physics:
 
-* the **static model** (:class:`StaticModel`): forces at absolute heights above the node, what the static
+* the **static model** (:class:`acousim.static_model.StaticModel`): forces at absolute heights above the node, what the static
   sweep and the sim-to-real diagnosis evaluate at every frame (:class:`acousim.GorkovDimer`,
   :class:`acousim.fullwave.FullwaveDimer`);
 * the **force model** (:class:`acousim.ForceModel`): the height structure ``A + B cos 2kZ + C sin 2kZ`` with
@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
-from typing import Callable, ClassVar, Mapping, Protocol, runtime_checkable
-
-from numpy.typing import ArrayLike
+from typing import Callable, ClassVar, Mapping
 
 from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial
+from .static_model import StaticModel
 
-__all__ = ["ExperimentConditions", "StaticModel", "ForceModelType", "FORCE_MODEL_TYPES", "register_force_model",
+__all__ = ["ExperimentConditions", "ForceModelType", "FORCE_MODEL_TYPES", "register_force_model",
            "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError", "ModelSpec"]
 
 
@@ -112,48 +111,6 @@ class ExperimentConditions:
 
     def with_pressure(self, pressure_amplitude_pa: float) -> "ExperimentConditions":
         return replace(self, pressure_amplitude_pa=float(pressure_amplitude_pa))
-
-
-@runtime_checkable
-class StaticModel(Protocol):
-    """What the static sweep and the diagnosis need from a force model at absolute heights.
-
-    Attributes
-    ----------
-    name : str
-        The registry name (``"gorkov"``, ``"fullwave"``).
-    conservative : bool
-        Whether the forces derive from a potential (energy balances then use it; otherwise ``potential`` is a
-        path potential whose theta-derivative is exactly -Q_theta, and energy balances add the work along the path
-        of the vertical force's remainder F_Z + dU/dZ; a sweep leaves its potential column empty).
-    equilibrium_height : float
-        Z_eq [m] (< 0) of the theta = 0 dimer.
-    dimer
-        Mass and hinge inertia: ``total_mass`` [kg] and ``hinge_inertia(theta)`` [kg m^2].
-    wave
-        The standing wave (pressure amplitude, medium, material).
-    gravity : float
-        g [m/s^2].
-    """
-
-    name: str
-    conservative: bool
-    gravity: float
-
-    @property
-    def equilibrium_height(self) -> float: ...
-
-    def orientation_sums(self, theta: ArrayLike) -> tuple: ...
-
-    def integrals_at_height(self, theta: ArrayLike, z_com: ArrayLike, orientation_sums: tuple | None = None): ...
-
-    def with_pressure(self, pressure_amplitude_pa: float) -> "StaticModel": ...
-
-    def interpolated(self) -> "StaticModel": ...
-
-    def record(self) -> dict:
-        """The model's settings (geometry, medium, mesh or table, pressure) for files and reports."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -313,7 +270,7 @@ class ModelSpec:
 def _gorkov_static(c: ExperimentConditions):
     from .dimer import CubeDimer
     from .field import StandingWave
-    from .forces import DEFAULT_QUADRATURE_DEGREE, GorkovDimer
+    from .gorkov.forces import DEFAULT_QUADRATURE_DEGREE, GorkovDimer
 
     smallest = min(c.side_length_m, c.side_b_m or c.side_length_m)
     if c.mesh_size_m is not None and not 0.01 <= c.mesh_size_m / smallest <= 1.0:
@@ -326,7 +283,7 @@ def _gorkov_static(c: ExperimentConditions):
 
 
 def _gorkov_dynamic(c: ExperimentConditions):
-    from .surrogate import build_surrogate, cached_surrogate
+    from .gorkov.surrogate import build_surrogate, cached_surrogate
 
     if c.side_b_m is not None and c.side_b_m != c.side_length_m:
         raise ConditionError("--side-b: the equations of motion take equal cubes only")

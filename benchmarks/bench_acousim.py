@@ -15,8 +15,8 @@ from benchmarks import best_time
 
 def main() -> str:
     from acousim import analytic
-    from acousim.forces import GorkovDimer
-    from acousim.sweep import static_sweep
+    from acousim.gorkov.forces import GorkovDimer
+    from acousim.statics.sweep import static_sweep
 
     theta = np.linspace(-0.9, 0.9, 41)
     y = np.linspace(-200e-6, 200e-6, 41)

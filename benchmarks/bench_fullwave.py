@@ -93,7 +93,7 @@ def main() -> str:
     from acousim.fullwave.geometry import dimer_bodies
     from acousim.fullwave.solver import solve_scattering
     from acousim.fullwave.surrogate import COARSE_BUILD, build_fullwave_surrogate
-    from acousim.surrogate import cached_surrogate
+    from acousim.gorkov.surrogate import cached_surrogate
 
     t0 = time.perf_counter()
     solve_scattering(dimer_bodies(0.1, mesh_family(1.0)))

@@ -17,9 +17,9 @@ from benchmarks import best_time
 
 
 def main() -> str:
-    from acousim.dynamics import DimerDynamics
-    from acousim.forces import GorkovDimer
-    from acousim.surrogate import build_surrogate
+    from acousim.dynamics.integrator import DimerDynamics
+    from acousim.gorkov.forces import GorkovDimer
+    from acousim.gorkov.surrogate import build_surrogate
     from acousim.twin import PAPER_LIKE, Camera, TwinConfig, simulate_dataset, simulate_run
     from cubedimer.executor import ExecutorConfig
 

@@ -28,9 +28,9 @@ os.environ.setdefault("CUBEDIMER_BEM_DEVICE", "numba")
 #: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` (``--dist loadfile``)
 #: sends these modules to one pytest-xdist worker as one unit and the compilation happens once per session.
 BOUNDARY_ELEMENT_MODULES = frozenset({
-    "tests/acousim/test_fullwave_sphere.py", "tests/acousim/test_fullwave_dimer.py",
-    "tests/acousim/test_fullwave_flux.py", "tests/acousim/test_fullwave_cli.py",
-    "tests/acousim/test_fullwave_surrogate.py", "tests/acousim/test_fullwave_interaction.py",
+    "tests/acousim/fullwave/test_fullwave_sphere.py", "tests/acousim/fullwave/test_fullwave_dimer.py",
+    "tests/acousim/fullwave/test_fullwave_flux.py", "tests/acousim/cli/test_fullwave_cli.py",
+    "tests/acousim/fullwave/test_fullwave_surrogate.py", "tests/acousim/fullwave/test_fullwave_interaction.py",
 })
 
 
@@ -124,7 +124,7 @@ def default_wave():
 @pytest.fixture(scope="session")
 def default_model():
     """The Gor'kov dimer at the docs/conventions.md defaults (500 um NaCl, 3 kPa, default mesh)."""
-    from acousim.forces import GorkovDimer
+    from acousim.gorkov.forces import GorkovDimer
 
     return GorkovDimer()
 
@@ -132,7 +132,7 @@ def default_model():
 @pytest.fixture(scope="session")
 def raw_model():
     """The default model without the symmetrised quadrature: the bare mesh."""
-    from acousim.forces import GorkovDimer
+    from acousim.gorkov.forces import GorkovDimer
 
     return GorkovDimer(symmetrize=False)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.models_cli import add_model_arguments, model_spec_from_args
+from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 from fitting.final_checks import NoSaneModelError
@@ -79,7 +79,7 @@ def _read_model(path: Path) -> dict:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    from acousim.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
+    from acousim.statics.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 
     from cubedimer.atomic import atomic_write_text
 

@@ -1,7 +1,7 @@
 """Fitted model coefficients against the static coefficients of the simulated sweep.
 
 Every velocity-free library term (monomials of y and theta) has a static prediction: the least-
-squares coefficient of the swept accelerations (:func:`acousim.sweep.fit_static_coefficients`).
+squares coefficient of the swept accelerations (:func:`acousim.statics.sweep.fit_static_coefficients`).
 Velocity terms have none ("dynamic only").
 
 The y origin.  The simulation measures y from Z_eq, where gravity and the acoustic force on the

@@ -42,7 +42,7 @@ def model_from_meta(meta: dict, spec: ModelSpec = ModelSpec(), pressure_amplitud
 
     Returns
     -------
-    acousim.models.StaticModel
+    acousim.static_model.StaticModel
 
     Raises
     ------

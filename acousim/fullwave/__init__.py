@@ -5,8 +5,8 @@
 * :func:`dimer_bodies` and :class:`DimerMeshSpec`: the posed, gapped, hinge-graded cube meshes;
 * :class:`FullwaveSurrogate`, :func:`build_fullwave_surrogate`, :func:`cached_fullwave_surrogate`,
   :func:`default_fullwave_surrogate`: the Chebyshev-in-theta force surrogate (same interface as
-  :class:`acousim.surrogate.ForceSurrogate`, without a potential);
-* ``python -m acousim force`` (:mod:`acousim.fullwave.cli`) and the convergence study
+  :class:`acousim.gorkov.surrogate.ForceSurrogate`, without a potential);
+* ``python -m acousim force`` (:mod:`acousim.cli.force`) and the convergence study
   (``python -m acousim convergence``).
 
 bempp-cl is imported lazily, at the first solve.

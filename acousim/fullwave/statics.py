@@ -3,7 +3,7 @@
 The sim-to-real diagnosis evaluates its simulation model at the measured states of every frame, at lab
 heights ``Z = z0 + y`` of a calibrated origin ``z0`` and at a calibrated pressure.  :class:`FullwaveDimer`
 gives the full-wave surrogate (:class:`~acousim.fullwave.surrogate.FullwaveSurrogate`) the members the
-diagnosis reads from :class:`~acousim.forces.GorkovDimer`: :meth:`~FullwaveDimer.integrals_at_height`,
+diagnosis reads from :class:`~acousim.gorkov.forces.GorkovDimer`: :meth:`~FullwaveDimer.integrals_at_height`,
 :meth:`~FullwaveDimer.orientation_sums`, :attr:`~FullwaveDimer.equilibrium_height`,
 :meth:`~FullwaveDimer.with_pressure`, ``dimer`` (mass and hinge inertia), ``wave`` and ``gravity``.
 
@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..field import StandingWave
 from ..force_model import SinusoidalInertia
-from ..forces import StaticForces
+from ..static_model import StaticForces
 from ..medium import ParticleMaterial
 from .surrogate import FullwaveSurrogate, default_fullwave_surrogate
 
@@ -164,13 +164,6 @@ class FullwaveDimer:
         theta_b = np.broadcast_to(theta, np.shape(force_z))
         return StaticForces(potential=potential, force_z=force_z, q_y=q_y, q_theta=q_theta, yddot=q_y / m,
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
-
-    def check_experiment(self, meta: dict) -> None:
-        """Raise :class:`TableMismatch` naming the first setting of ``meta`` (docs/formats.md keys) the table was
-        not built for (:meth:`FullwaveSurrogate.mismatch`)."""
-        message = self.surrogate.mismatch(meta)
-        if message is not None:
-            raise TableMismatch(message)
 
 
 def default_fullwave_dimer(pressure_amplitude_pa: float = 3000.0) -> FullwaveDimer:

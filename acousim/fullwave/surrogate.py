@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from cubedimer.atomic import write_json
 from cubedimer.compile_cache import suite_cache_root
 
-from ..force_model import ForceCoefficients, SinusoidalInertia, escape_height_below, levitation_height
+from ..force_model import ChebyshevSurrogate, ForceCoefficients, levitation_height
 from ..medium import GRAVITY, Medium
 from .geometry import (COARSE_SPEC, DEFAULT_SPEC, DimerMeshSpec, dimer_bodies, hinge_arm,
                        rounded_cube_volume)
@@ -78,12 +78,6 @@ COARSE_BUILD = {"spec": COARSE_SPEC, "n_half": 4, "theta_max": 0.9}
 
 _COMPONENTS = ("fz", "qt")
 
-#: Experimental settings (docs/formats.md metadata key -> table settings key) a table is valid for only.
-TABLE_CONDITIONS = {"side_length_m": "side_m", "particle_density_kg_m3": "particle_density_kg_m3",
-                    "frequency_hz": "frequency_hz", "sound_speed_m_s": "sound_speed_m_s",
-                    "air_density_kg_m3": "air_density_kg_m3"}
-#: Relative tolerance of :meth:`FullwaveSurrogate.mismatch` (settings are decimal numbers written by people).
-TABLE_RTOL = 1e-6
 
 
 def dimer_generalized_coefficients(hs: HeightStructure, theta: float = 0.0, arm: float = 0.0) -> dict[str, NDArray[np.float64]]:
@@ -132,7 +126,7 @@ def _tup(a: ArrayLike) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
-class FullwaveSurrogate(SinusoidalInertia):
+class FullwaveSurrogate(ChebyshevSurrogate):
     """Chebyshev-in-theta representation of the full-wave F_Z and Q_theta (see the module docstring).
 
     Attributes
@@ -234,40 +228,15 @@ class FullwaveSurrogate(SinusoidalInertia):
                       sound_speed_m_s=float(st.get("sound_speed_m_s", d.sound_speed_m_s)),
                       density_kg_m3=float(st.get("air_density_kg_m3", d.density_kg_m3)))
 
-    def mismatch(self, conditions: dict, names: dict | None = None) -> str | None:
-        """The first of ``conditions`` the table was not built for, as a one-line message, or None.
+    def _theta0_vertical_force(self, scale: float = 1.0) -> Callable[[float], float]:
+        """F_Z(0, Z) [N] at the absolute height Z [m], of the table with its coefficients times ``scale``."""
+        sur = self if scale == 1.0 else replace(self, coefficients=self._scaled_fields(scale)["coefficients"])
+        return lambda z: float(sur._harmonic(0.0, z - sur.z_eq, "fz"))
 
-        Parameters
-        ----------
-        conditions : dict
-            Experimental settings under their docs/formats.md metadata keys (:data:`TABLE_CONDITIONS`: side,
-            particle density, frequency, sound speed, air density); other keys are ignored.
-        names : dict, optional
-            How to name a key in the message (e.g. ``{"side_length_m": "--side"}`` for a command-line option).
-
-        A setting matches when it agrees with the table's within a relative :data:`TABLE_RTOL`.
-        """
-        names = names or {}
-        for key, table_key in TABLE_CONDITIONS.items():
-            if key not in conditions or table_key not in self.settings:
-                continue
-            given, tabulated = float(conditions[key]), float(self.settings[table_key])
-            if not np.isclose(given, tabulated, rtol=TABLE_RTOL, atol=0.0):
-                return (f"{names.get(key, key)} = {given:g}: the full-wave model is tabulated for {key} = "
-                        f"{tabulated:g} only (build another table with python -m acousim table)")
-        return None
-
-    def with_pressure(self, pressure_amplitude_pa: float) -> "FullwaveSurrogate":
-        """The surrogate at another pressure amplitude [Pa]: coefficients times (p/p0)^2, Z_eq solved anew."""
-        p = float(pressure_amplitude_pa)
-        if not np.isfinite(p) or p <= 0:
-            raise ValueError(f"pressure amplitude must be positive and finite, got {pressure_amplitude_pa!r} Pa")
-        r = (p / self.pressure_amplitude_pa) ** 2
-        coefs = {k: tuple(_tup(r * np.asarray(c)) for c in v) for k, v in self.coefficients.items()}
-        nodes = {k: (r * np.asarray(v)).tolist() if k in _COMPONENTS else v for k, v in self.nodes.items()}
-        new = replace(self, coefficients=coefs, pressure_amplitude_pa=p, nodes=nodes)
-        z_eq = _equilibrium_height(new)
-        return replace(new, z_eq=z_eq, settings=dict(self.settings, pressure_amplitude_pa=p, equilibrium_height_m=z_eq))
+    def _scaled_fields(self, scale: float) -> dict:
+        coefs = {k: tuple(_tup(scale * np.asarray(c)) for c in v) for k, v in self.coefficients.items()}
+        nodes = {k: (scale * np.asarray(v)).tolist() if k in _COMPONENTS else v for k, v in self.nodes.items()}
+        return dict(coefficients=coefs, nodes=nodes)
 
     # ------------------------------------------------------------------ linearisation
     def taylor_coefficients(self) -> dict[str, dict[str, float]]:
@@ -340,12 +309,6 @@ class FullwaveSurrogate(SinusoidalInertia):
         """The build record (solves, DOFs, family interpolation source and accuracy) and the theta range."""
         return {"build_accuracy": self.build_accuracy, "theta_max": self.theta_max}
 
-    def escape_height(self) -> float:
-        """y [m] of the barrier below the equilibrium at theta = 0: below it the dimer falls out
-        (:func:`acousim.force_model.escape_height_below`)."""
-        return escape_height_below(lambda z: float(self._harmonic(0.0, z - self.z_eq, "fz")), self.mass * self.gravity,
-                                   self.two_k, self.z_eq)
-
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict:
         """JSON-ready dict of everything."""
@@ -381,8 +344,7 @@ class FullwaveSurrogate(SinusoidalInertia):
 
 def _equilibrium_height(sur: FullwaveSurrogate) -> float:
     """Z in (-lambda/8, 0) where F_Z(0, Z) = M g (:func:`acousim.force_model.levitation_height`)."""
-    return levitation_height(lambda z: float(sur._harmonic(0.0, z - sur.z_eq, "fz")), sur.mass * sur.gravity,
-                             sur.two_k)
+    return levitation_height(sur._theta0_vertical_force(), sur.mass * sur.gravity, sur.two_k)
 
 
 def chebyshev_half_nodes(n_half: int) -> NDArray[np.float64]:

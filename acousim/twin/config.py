@@ -14,8 +14,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dynamics import DEFAULT_MAX_STEP
-from ..effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
+from ..dynamics.integrator import DEFAULT_MAX_STEP
+from ..dynamics.effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..fullwave.statics import MODEL_NAME as FULLWAVE
 from ..models import ExperimentConditions, ModelSpec, force_model_names
 
@@ -132,7 +132,7 @@ class TwinPreset:
     """A named set of effects, pressure, protocol and dimer (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
 
     ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default).
-    ``air_damping`` adds the air's computed drag (:func:`acousim.effects.air_damping_for`), as every twin does by
+    ``air_damping`` adds the air's computed drag (:func:`acousim.dynamics.effects.air_damping_for`), as every twin does by
     default; a preset whose ``effects`` hold a tuned *total* damping (a ``linear_damping`` standing for all of the
     air's drag) sets it False, so that the air is not counted twice.
     """
@@ -202,8 +202,8 @@ class TwinConfig:
     transducer_q : float
         The transducer's quality factor Q: the field rings down when the drive stops and rings up when it is back,
         with the amplitude's ring time tau = Q / (pi ``frequency``), and the acoustic forces follow p(t)^2 / p0^2
-        (:mod:`acousim.switching`).  0 (the default) switches the field instantly;
-        :data:`acousim.switching.DEFAULT_TRANSDUCER_Q` (250, tau = 1.74 ms at 45.65 kHz) is the value stated for
+        (:mod:`acousim.dynamics.switching`).  0 (the default) switches the field instantly;
+        :data:`acousim.dynamics.switching.DEFAULT_TRANSDUCER_Q` (250, tau = 1.74 ms at 45.65 kHz) is the value stated for
         a Langevin transducer of a levitator (Q 150-400).
     """
 

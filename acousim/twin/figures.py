@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from cubedimer.attractors import CLASS_COLORS, classify_trajectory, section_phas
 from cubedimer.poincare import poincare_section
 from cubedimer.spectra import amplitude_spectrum
 
-from ..effects import EffectSet
+from ..dynamics.effects import EffectSet
 
 __all__ = ["write_twin_figures"]
 
@@ -26,35 +27,42 @@ __all__ = ["write_twin_figures"]
 _SHOWN = ("locked-in-phase", "locked-anti-phase", "locked-p:q", "independent", "locked-quadrature", "theta-at-rest")
 
 
-def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, prefix: str = "twin_") -> list[Path]:
-    """Figures of a twin data set's exact states (``truth_states.npz``) into ``fig_dir``.
+@dataclass(frozen=True)
+class _TwinStates:
+    """A twin data set's exact states and what every figure shows of them."""
 
-    ``{prefix}timeseries.png`` (time series and amplitude spectra of representative runs),
-    ``{prefix}phase_portraits.png`` ((theta, thetadot, y) portraits), ``{prefix}poincare.png`` (the
-    section y = 0, ydot < 0 and its map theta_k -> theta_k+1) and ``{prefix}phase_hist.png`` (the
-    y-theta phase difference per run and per 0.5 s window).  Returns the paths written.
-    """
-    import matplotlib.pyplot as plt
+    t: np.ndarray
+    names: list[str]
+    states: list[np.ndarray]
+    dt: float
+    locks: list
+    reps: list[int]
+    title: str
 
-    data_dir, fig_dir = Path(data_dir), Path(fig_dir)
+
+def _load_states(data_dir: Path) -> _TwinStates:
+    """``truth_states.npz`` and ``truth.json`` of ``data_dir``, each run classified, up to three representative
+    runs (the first of each class in the order of :data:`_SHOWN`)."""
     npz = np.load(data_dir / "truth_states.npz")
     truth = json.loads((data_dir / "truth.json").read_text())
     t = npz["t"]
     names = sorted(k for k in npz.files if k != "t")
     states = [npz[k] for k in names]
-    dt = float(t[1] - t[0])
     locks = [classify_trajectory(t, x) for x in states]
-    fig_dir.mkdir(parents=True, exist_ok=True)
-    title = f"acousim twin: {EffectSet.from_dict(truth['effects']).describe()}"
     reps = []
     for lab in _SHOWN:
         idx = [i for i, l in enumerate(locks) if l.label == lab]
         if idx:
             reps.append(idx[0])
-    reps = reps[:3]
-    out = []
+    return _TwinStates(t=t, names=names, states=states, dt=float(t[1] - t[0]), locks=locks, reps=reps[:3],
+                       title=f"acousim twin: {EffectSet.from_dict(truth['effects']).describe()}")
 
-    # 1. time series and spectra
+
+def _timeseries_figure(s: _TwinStates):
+    """Time series (y and theta, with the last 0.15 s normalised) and amplitude spectra of the representative runs."""
+    import matplotlib.pyplot as plt
+
+    t, states, locks, names, dt, reps = s.t, s.states, s.locks, s.names, s.dt, s.reps
     fig, axes = plt.subplots(len(reps), 2, figsize=(12, 3.0 * len(reps)), squeeze=False)
     for row, i in enumerate(reps):
         x, lab = states[i], locks[i]
@@ -86,12 +94,14 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
         ax.set_xlabel("f [Hz] (second half of the run; dashed: 1, 2, 3 x f_y)")
         ax.set_ylabel("amplitude / max")
         ax.legend(fontsize=8, loc="upper right")
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out.append(fig_dir / f"{prefix}timeseries.png")
-    save_figure(fig, out[-1], dpi=110)
+    return fig
 
-    # 2. phase portraits
+
+def _phase_portraits_figure(s: _TwinStates):
+    """(theta, thetadot, y) of the representative runs and (theta, thetadot) of all runs over the last second."""
+    import matplotlib.pyplot as plt
+
+    t, states, locks, reps = s.t, s.states, s.locks, s.reps
     fig = plt.figure(figsize=(12, 5))
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     ax = fig.add_subplot(1, 2, 2)
@@ -108,12 +118,14 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     for lab, c in CLASS_COLORS.items():
         ax.plot([], [], color=c, label=f"{lab} ({sum(l.label == lab for l in locks)})")
     ax.legend(fontsize=8)
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out.append(fig_dir / f"{prefix}phase_portraits.png")
-    save_figure(fig, out[-1], dpi=110)
+    return fig
 
-    # 3. Poincare section and map
+
+def _poincare_figure(s: _TwinStates):
+    """The Poincare section y = 0, ydot < 0 of every run and its map theta_k -> theta_k+1."""
+    import matplotlib.pyplot as plt
+
+    t, states, locks = s.t, s.states, s.locks
     fig, axes = plt.subplots(1, 2, figsize=(12, 5))
     for x, lab in zip(states, locks):
         sec = poincare_section(t, x)
@@ -131,12 +143,14 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
     for lab, c in CLASS_COLORS.items():
         axes[0].plot([], [], ".", color=c, label=lab)
     axes[0].legend(fontsize=8)
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out.append(fig_dir / f"{prefix}poincare.png")
-    save_figure(fig, out[-1], dpi=110)
+    return fig
 
-    # 4. phase-difference distribution
+
+def _phase_hist_figure(s: _TwinStates):
+    """The y-theta phase per run (second half) and per 0.5 s window."""
+    import matplotlib.pyplot as plt
+
+    t, states, locks, dt = s.t, s.states, s.locks, s.dt
     fig, axes = plt.subplots(1, 2, figsize=(12, 4))
     bins = np.linspace(-180, 180, 37)
     per_run = [np.degrees(l.section_phase) for l in locks if np.isfinite(l.section_phase)]
@@ -156,8 +170,30 @@ def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, 
         fig.colorbar(sc, ax=axes[1], label="window start [s]")
     axes[1].set_xlabel("phase per 0.5 s window [deg]"), axes[1].set_ylabel("window start [s]")
     axes[1].set_xlim(-180, 180)
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out.append(fig_dir / f"{prefix}phase_hist.png")
-    save_figure(fig, out[-1], dpi=110)
+    return fig
+
+
+#: The figures in the order they are written: file name (after the prefix) and the function drawing it.
+_FIGURES = (("timeseries.png", _timeseries_figure), ("phase_portraits.png", _phase_portraits_figure),
+            ("poincare.png", _poincare_figure), ("phase_hist.png", _phase_hist_figure))
+
+
+def write_twin_figures(data_dir: str | os.PathLike, fig_dir: str | os.PathLike, prefix: str = "twin_") -> list[Path]:
+    """Figures of a twin data set's exact states (``truth_states.npz``) into ``fig_dir``.
+
+    ``{prefix}timeseries.png`` (time series and amplitude spectra of representative runs),
+    ``{prefix}phase_portraits.png`` ((theta, thetadot, y) portraits), ``{prefix}poincare.png`` (the
+    section y = 0, ydot < 0 and its map theta_k -> theta_k+1) and ``{prefix}phase_hist.png`` (the
+    y-theta phase difference per run and per 0.5 s window).  Returns the paths written.
+    """
+    data_dir, fig_dir = Path(data_dir), Path(fig_dir)
+    states = _load_states(data_dir)
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, draw in _FIGURES:
+        fig = draw(states)
+        fig.suptitle(states.title, fontsize=9)
+        fig.tight_layout()
+        out.append(fig_dir / f"{prefix}{name}")
+        save_figure(fig, out[-1], dpi=110)
     return out

@@ -5,7 +5,7 @@ A synthetic experiment follows the protocol of the source paper:
 1. the dimer levitates at its equilibrium height (y = 0, ydot = 0) with its hinge at a random
    angle ``theta_drop`` and rate ``thetadot_drop`` (:class:`~acousim.twin.config.DropProtocol`);
 2. the field is switched off for a random ``t_off``: free fall (``yddot = -g``) with a free hinge
-   (:class:`~acousim.dynamics.DimerDynamics` with ``field_on=False``), so the dimer starts its
+   (:class:`~acousim.dynamics.integrator.DimerDynamics` with ``field_on=False``), so the dimer starts its
    oscillation ~ g t_off^2 / 2 below the equilibrium, moving down at g t_off;
 3. the field is switched on again and the camera (:class:`~acousim.twin.config.Camera`) records
    the free oscillation for ``duration`` seconds at ``fps`` frames per second, starting at t = 0
@@ -13,7 +13,7 @@ A synthetic experiment follows the protocol of the source paper:
 
 With a transducer quality factor (``TwinConfig.transducer_q``) the field does not switch instantly: it rings down
 while the drive is off and rings up when it is back, with tau = Q / (pi f), and the acoustic forces follow
-p(t)^2 / p0^2 (:mod:`acousim.switching`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
+p(t)^2 / p0^2 (:mod:`acousim.dynamics.switching`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
 outcome, not an error: it is recorded up to the fold and its ``event`` says so.
 
 Randomness: one :class:`numpy.random.SeedSequence` from the seed is split into a stream for the
@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
 
-from ..dynamics import DEFAULT_MAX_STEP, STATUS_MESSAGES, DimerDynamics
-from ..effects import EffectSet, air_damping_for
-from ..switching import field_drop, ring_time
+from ..dynamics.integrator import DEFAULT_MAX_STEP, STATUS_MESSAGES, DimerDynamics
+from ..dynamics.effects import EffectSet, air_damping_for
+from ..dynamics.switching import field_drop, ring_time
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
 __all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
@@ -112,7 +112,7 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
     max_step : float
         Longest internal RK4 step [s].
     ring_time_s : float
-        The transducer's ring time tau [s] (:mod:`acousim.switching`; 0: the field switches instantly).
+        The transducer's ring time tau [s] (:mod:`acousim.dynamics.switching`; 0: the field switches instantly).
 
     Returns
     -------
@@ -155,7 +155,7 @@ def _run_task(item: tuple) -> SimulatedRun:
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
     """The true dynamics of a configuration and its true pressure amplitude [Pa].
 
-    With ``config.air_damping`` (the default) the air's computed drag (:func:`acousim.effects.air_damping_for`, at the true
+    With ``config.air_damping`` (the default) the air's computed drag (:func:`acousim.dynamics.effects.air_damping_for`, at the true
     pressure's frequencies) is added to the effects, unless they already hold an ``air_damping``; the
     dynamics' ``effects`` are then what truth.json records.
     """

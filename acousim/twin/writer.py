@@ -19,7 +19,7 @@ import numpy as np
 from cubedimer.atomic import atomic_directory, atomic_save, default_dir_mode, write_json
 from cubedimer.dataset import write_run_csv
 
-from ..dynamics import DimerDynamics
+from ..dynamics.integrator import DimerDynamics
 from ..medium import ParticleMaterial
 from .config import TwinConfig, TwinError
 from .simulation import SimulatedRun, simulate_field_drop_runs

@@ -1,5 +1,5 @@
 """The air's damping rates of docs/damping.md: python docs/scripts/air_damping_table.py (a few seconds)."""
-from acousim.air_damping import air_damping_rates
+from acousim.dynamics.air_damping import air_damping_rates
 from acousim.models import ExperimentConditions, dynamic_model
 
 print("| side [um] | g / s | p0 [kPa] | f_y [Hz] | f_theta [Hz] | delta_y [um] | gamma_y [1/s] | gamma_theta(0) [1/s] "

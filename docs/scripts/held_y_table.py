@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acousim.held_y import cell_summary
+from acousim.atlas.held_y import cell_summary
 from cubedimer.attractors import LOCKED_AT_FY
 
 cells = [json.loads(p.read_text()) for p in sorted(Path(sys.argv[1], "cells").glob("*.json"))]

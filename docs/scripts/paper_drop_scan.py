@@ -7,7 +7,7 @@ theta* and theta* + 0.02 (theta* its static equilibrium), falls for 13 ms with a
 """
 import numpy as np
 
-from acousim.atlas import atlas_dynamics, drop_and_settle
+from acousim.atlas.field_drops import atlas_dynamics, drop_and_settle
 
 DIMERS = [(400e-6, 0.03), (500e-6, 0.015), (500e-6, 0.03), (500e-6, 0.05), (600e-6, 0.03), (700e-6, 0.05)]
 for p0 in (3000.0, 4000.0, 5000.0, 6000.0, 8000.0):

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from acousim.atlas import atlas_dynamics
+from acousim.atlas.field_drops import atlas_dynamics
 
 data = sys.argv[1]
 truth = json.load(open(f"{data}/truth.json"))

@@ -3,7 +3,7 @@
 Fresh seeds of the `paper` preset: each seed set draws its runs' drops exactly as `python -m acousim simulate
 --preset paper --seed S` does; every run is followed for DURATION s after the field is back on (longer than the
 twin's default, so that "long-lived" can mean more than 100 cycles of y after the transient) and judged by
-acousim.atlas.settled_outcome: the classifier of cubedimer.attractors plus the 2 f_y share.  A run that folds
+acousim.atlas.field_drops.settled_outcome: the classifier of cubedimer.attractors plus the 2 f_y share.  A run that folds
 (faces touch) or escapes is counted as such instead of stopping the set.  Also prints what the physics gives for
 the quantities the paper's reduced model needs (f_theta / f_y, the hinge damping, the theta*y^2 coefficient).
 Takes about a minute on one core.
@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from acousim.atlas import drop_and_settle, observations
+from acousim.atlas.field_drops import drop_and_settle, observations
 from acousim.twin import PAPER, TwinConfig, twin_dynamics
 from acousim.twin.simulation import run_seeds
 

@@ -11,8 +11,8 @@ import sys
 
 import numpy as np
 
-from acousim.atlas import atlas_dynamics, settled_outcome
-from acousim.held_y import held_y_arguments, held_y_orbits
+from acousim.atlas.field_drops import atlas_dynamics, settled_outcome
+from acousim.atlas.held_y import held_y_arguments, held_y_orbits
 
 side, gap_ratio, p0, amp = (float(v) for v in sys.argv[1:5])
 dyn = atlas_dynamics(side, gap_ratio, p0, 45_650.0)

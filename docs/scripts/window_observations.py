@@ -5,7 +5,7 @@ e.g. 500e-6 0.02 3000 1e-3 3e-3 250 921,922,923,924,925 12
 Each seed set draws 20 drops as `python -m acousim simulate` does (t_off uniform in [T_OFF_MIN, T_OFF_MAX], the hinge
 at rest, theta_drop uniform in +-0.4 and thetadot_drop in +-30 1/s), with the field's ring (transducer Q) and
 the air's computed damping; every run is followed for DURATION s after the drive is back and judged on its second
-half by acousim.atlas.settled_outcome (folded and escaped runs are counted as such).  Besides the classifier's
+half by acousim.atlas.field_drops.settled_outcome (folded and escaped runs are counted as such).  Besides the classifier's
 classes it prints the runs whose hinge moves at f_y (within 5 %) whatever their phase coherence, split by the
 settled phase (|phase| < 60 or > 120 degrees).
 """
@@ -13,8 +13,8 @@ import sys
 
 import numpy as np
 
-from acousim.atlas import drop_and_settle, observations
-from acousim.switching import ring_time
+from acousim.atlas.field_drops import drop_and_settle, observations
+from acousim.dynamics.switching import ring_time
 from acousim.twin import DropProtocol, TwinConfig, twin_dynamics
 from acousim.twin.simulation import run_seeds
 

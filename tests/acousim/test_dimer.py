@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from acousim.dimer import CubeDimer
-from acousim.mesh import grid_arrays, tetrahedralize_cube
-from acousim.quadrature import tetrahedral_quadrature
+from acousim.gorkov.mesh import grid_arrays, tetrahedralize_cube
+from acousim.gorkov.quadrature import tetrahedral_quadrature
 
 THETAS = [-0.9, -0.4, 0.0, 0.25, 0.7]
 

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from acousim import models
-from acousim.models import (ConditionError, ExperimentConditions, ForceModelType, ModelSpec, StaticModel,
-                            force_model_names, register_force_model, static_model)
+from acousim.static_model import StaticModel
+from acousim.models import (ConditionError, ExperimentConditions, ForceModelType, ModelSpec, force_model_names,
+                            register_force_model, static_model)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -61,7 +62,7 @@ def test_a_new_model_runs_through_sweep_twin_and_diagnosis(dummy_model, tmp_path
     """One registry entry is all a new model needs: the sweep command offers it, the twin integrates it and the
     diagnosis calibrates it."""
     from acousim.cli import main as acousim_main
-    from acousim.sweep import read_sweep_csv
+    from acousim.statics.sweep import read_sweep_csv
     from acousim.twin import TwinConfig, simulate_dataset
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
@@ -133,7 +134,7 @@ def test_a_new_model_option_reaches_the_spec_from_the_command_line(dummy_model):
     """Every model option a command offers reaches the spec by its command-line name, with no per-model code."""
     import argparse
 
-    from acousim.models_cli import model_spec_from_args
+    from acousim.cli.models import model_spec_from_args
     from cubedimer.cli import UserInputError
 
     args = argparse.Namespace(model="stiff_gorkov", mesh_size=80e-6, gap=None, edge_radius=None)

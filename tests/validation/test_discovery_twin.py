@@ -6,7 +6,7 @@ import pytest
 
 @pytest.mark.slow
 def test_discovery_on_pair_scattering_twin_is_small_and_reproduces_the_attractor(tmp_path):
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, simulate_dataset
     from cubedimer.dataset import load_dataset
     from fitting.discovery import discover_model

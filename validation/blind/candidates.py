@@ -80,7 +80,7 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
     A drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs): the twin's
     seed is redrawn (same effects and pressure) up to 5 times.  ``air_damping``: the twin adds the air's computed
     drag (its default physics); off, the drawn effects are the whole truth."""
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
     if data.exists():

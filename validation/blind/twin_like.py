@@ -2,14 +2,14 @@
 drifting in time, optionally with candidate effects on top.
 
 The runs integrate the surrogate's equations of motion (docs/conventions.md section 4; the Gor'kov force and torque from the
-default dimer's Chebyshev surrogate and :func:`acousim.equations.hinge_acceleration`) with classical RK4 at the
+default dimer's Chebyshev surrogate and :func:`acousim.dynamics.equations.hinge_acceleration`) with classical RK4 at the
 frame interval (omega_y dt = 0.07 at 2000 fps), batched over runs, with
 
 * a pressure ``p(t) = p_true (1 + drift sin(2 pi t / T + phase))`` (T and phase drawn per run; the Gor'kov
   forces scale with p^2 at fixed lab height),
 * ``-cubic_hinge theta^3`` [1/s^2] added to thetaddot,
 * ``-y_damping y^2 ydot`` [1/(m^2 s)] added to yddot, with y measured from the true equilibrium height,
-* the accelerations of candidate effects (:class:`acousim.effects.EffectSet`, y from the true equilibrium).
+* the accelerations of candidate effects (:class:`acousim.dynamics.effects.EffectSet`, y from the true equilibrium).
 
 The CSVs (docs/formats.md) carry Gaussian tracking noise on y [m] and theta; y is measured from the nominal
 equilibrium height and meta.json holds the nominal pressure.  There is no damping beyond the effects given:
@@ -54,7 +54,7 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
     y_damping : float
         Coefficient c of ``-c y^2 ydot`` in yddot [1/(m^2 s)].
     effects : dict, optional
-        Candidate effects ``{name: {param: value}}`` (:meth:`acousim.effects.EffectSet.from_dict`).
+        Candidate effects ``{name: {param: value}}`` (:meth:`acousim.dynamics.effects.EffectSet.from_dict`).
     noise : (float, float)
         Tracking noise standard deviations of y [m] and theta [-].
     force_model : acousim.ForceModel, optional
@@ -76,7 +76,7 @@ def write_twin_like_dataset(path: str | Path, runs: int = 8, duration: float = 3
     from numpy.polynomial import chebyshev as cheb
 
     from acousim import EffectSet, cached_surrogate
-    from acousim.equations import hinge_acceleration
+    from acousim.dynamics.equations import hinge_acceleration
 
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)

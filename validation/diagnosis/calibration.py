@@ -88,7 +88,7 @@ def vertical_system(terms: SimulationTerms, z0: float, effects: Sequence[str]) -
 
 
 def _depends_on_node_height(name: str) -> bool:
-    from acousim.effects import EFFECT_TYPES
+    from acousim.dynamics.effects import EFFECT_TYPES
 
     return name not in EFFECT_TYPES or EFFECT_TYPES[name].depends_on_node_height
 

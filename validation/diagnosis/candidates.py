@@ -2,7 +2,7 @@
 
 Every candidate effect is linear in its parameters, so its added accelerations at given states are
 ``effect_regressors(...) @ params`` and every fit of the diagnosis is a linear least-squares problem at
-the measured states.  The columns are those of :meth:`acousim.effects.Effect.regressors` (the one definition of each
+the measured states.  The columns are those of :meth:`acousim.dynamics.effects.Effect.regressors` (the one definition of each
 effect); this module only chooses the effects' y (measured from the calibrated equilibrium).
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Iterator, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from acousim.effects import EFFECT_TYPES
+from acousim.dynamics.effects import EFFECT_TYPES
 
 __all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
@@ -24,7 +24,7 @@ def _is_candidate(cls: type) -> bool:
 
 
 class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
-    """Effect name -> its parameter names, read from :data:`acousim.effects.EFFECT_TYPES` on every access: the one
+    """Effect name -> its parameter names, read from :data:`acousim.dynamics.effects.EFFECT_TYPES` on every access: the one
     registry of effects, so that an effect registered there is a candidate of the diagnosis without a copy here."""
 
     def __getitem__(self, name: str) -> tuple[str, ...]:
@@ -44,7 +44,7 @@ class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
 
 
 #: Candidate effects and their parameters (docs/conventions.md section 5): every effect registered in
-#: :data:`acousim.effects.EFFECT_TYPES` that the diagnosis can fit (``candidate``, True unless the effect says not).
+#: :data:`acousim.dynamics.effects.EFFECT_TYPES` that the diagnosis can fit (``candidate``, True unless the effect says not).
 CANDIDATE_EFFECTS: Mapping[str, tuple[str, ...]] = _RegisteredEffects()
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
@@ -81,7 +81,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
                       z_eq: float | None = None) -> NDArray[np.float64]:
     """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
 
-    :meth:`acousim.effects.Effect.regressors` of the effect at the effects' y = Z_com - Z_eq.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
+    :meth:`acousim.dynamics.effects.Effect.regressors` of the effect at the effects' y = Z_com - Z_eq.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
     parameter] and thetaddot [1/s^2 per unit parameter] equations.
 
     Parameters

@@ -39,12 +39,12 @@ def long_time_gaps(problem: DiagnosisProblem, fit: GapFit, max_duration: float |
     """Per recorded run of ``problem``: the long-time loss terms of the simulation started from the run's
     first smoothed state, sampled on the run's own frames (at most ``max_duration`` seconds).
 
-    Integrated with the compiled RK4 of :class:`acousim.dynamics.DimerDynamics` on the problem's surrogate
+    Integrated with the compiled RK4 of :class:`acousim.dynamics.integrator.DimerDynamics` on the problem's surrogate
     rescaled to the calibrated pressure (its y is measured from the calibrated Z_eq, i.e. the data's y +
     ``calibration.origin_offset_m``), with the fitted effects.
     """
-    from acousim.dynamics import DimerDynamics
-    from acousim.effects import EffectSet
+    from acousim.dynamics.integrator import DimerDynamics
+    from acousim.dynamics.effects import EffectSet
     from fitting.losses import loss_terms, make_reference
 
     cal = fit.calibration

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from acousim.effects import EFFECT_TYPES
+from acousim.dynamics.effects import EFFECT_TYPES
 from acousim.models import ModelSpec
 
 if TYPE_CHECKING:

@@ -32,7 +32,7 @@ class EffectVerdict:
 
     Attributes
     ----------
-    name : the effect (a key of :data:`acousim.effects.EFFECT_TYPES`)
+    name : the effect (a key of :data:`acousim.dynamics.effects.EFFECT_TYPES`)
     params : its fitted parameters (SI), by parameter name
     gap_after : the scalar gap with it fitted (with the effects before it, for one in the model; on top of the
         model's effects otherwise)

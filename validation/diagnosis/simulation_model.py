@@ -1,8 +1,8 @@
 """The simulation's accelerations, energies and integral-form columns at the measured states.
 
 :class:`SimulationTerms` wraps the simulation's equations of motion (the Gor'kov model of docs/conventions.md
-section 4 at nominal pressure; the hinge's velocity term is :func:`acousim.equations.hinge_acceleration`, the
-effects' columns :meth:`acousim.effects.Effect.regressors`) for the diagnosis: per run, the
+section 4 at nominal pressure; the hinge's velocity term is :func:`acousim.dynamics.equations.hinge_acceleration`, the
+effects' columns :meth:`acousim.dynamics.effects.Effect.regressors`) for the diagnosis: per run, the
 acoustic force and torque, the potential for the energy balance, and the double integrals of the
 accelerations for the integral form.  The calibration scales the acoustic parts by
 s = (p0 / p_nom)^2; the candidate effects' columns come from :func:`validation.diagnosis.candidates.effect_regressors`.
@@ -14,7 +14,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from acousim.equations import hinge_acceleration
+from acousim.dynamics.equations import hinge_acceleration
 
 from .candidates import effect_regressors
 from .preparation import RunAccelerations
@@ -222,9 +222,9 @@ class SimulationTerms:
         """Per run: integral-form columns (rows, n_params) of the effects' accelerations of coordinate q.
 
         With ``z_eq`` None the effects' y is the data's y, so an effect that does not depend on the height
-        above the node (:attr:`acousim.effects.Effect.depends_on_node_height`) has the same columns at every
+        above the node (:attr:`acousim.dynamics.effects.Effect.depends_on_node_height`) has the same columns at every
         z0: they are computed once per run and shared by the problem's subsets."""
-        from acousim.effects import EFFECT_TYPES
+        from acousim.dynamics.effects import EFFECT_TYPES
 
         store = self.problem._shared.setdefault("effect_columns", {})
         out = []

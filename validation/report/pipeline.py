@@ -157,9 +157,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     -------
     Path of report.html
     """
-    from acousim.render import render_dimer
+    from acousim.gorkov.render import render_dimer
     from cubedimer.spectra import peak_frequency
-    from acousim.sweep import fit_static_coefficients, static_sweep
+    from acousim.statics.sweep import fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
     from fitting.compare import compare_models, cross_coupling_mask
     from fitting.config import FitConfig

@@ -6,7 +6,7 @@ from typing import Callable, ClassVar
 import numpy as np
 import pytest
 
-from acousim.effects import EFFECT_TYPES, Effect
+from acousim.dynamics.effects import EFFECT_TYPES, Effect
 
 from validation.diagnosis import Calibration, DiagnosisProblem
 from validation.diagnosis.gap_model import predicted_accelerations

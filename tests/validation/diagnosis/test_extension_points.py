@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from acousim.effects import EFFECT_TYPES
+from acousim.dynamics.effects import EFFECT_TYPES
 
 
 def _candidates() -> list[str]:
@@ -37,7 +37,7 @@ def test_a_registered_effect_runs_through_the_twin_and_the_diagnosis(registered_
     sum's registered kernels), the data set's truth names it, and the diagnosis's candidate fit finds it again."""
     import json
 
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 

@@ -92,7 +92,7 @@ def test_minimum_at_the_range_edge_is_not_called_calibrated(monkeypatch):
 def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     """8 runs of 2 s on the full wave (synthetic family) of the default dimer with a 10 um gap (between the nodes
     7.5 and 16.7 um) and linear damping as the only damping, the true pressure 5 % off the nominal one."""
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.fullwave.family import FAMILY_ENV
     from acousim.twin import TwinConfig, simulate_dataset
 

@@ -44,7 +44,7 @@ def test_energy_balance_finds_weak_damping(fast_model, synthetic_runs):
 
 
 def test_a_registered_effect_is_fitted_by_the_diagnosis(registered_push, fast_model, synthetic_runs):
-    """A dummy effect registered in acousim.effects.EFFECT_TYPES (a constant hinge push) is a candidate of the
+    """A dummy effect registered in acousim.dynamics.effects.EFFECT_TYPES (a constant hinge push) is a candidate of the
     diagnosis's effect fit with no further code: runs whose hinge feels it give back its parameter."""
     from validation.diagnosis.preparation import RunAccelerations
 

@@ -20,7 +20,7 @@ SINGLE = {
 
 
 def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, simulate_dataset
 
     data = tmp_path / "data"

@@ -1,7 +1,7 @@
 """The attractor atlas in the report (validation report --atlas)."""
 import pytest
 
-from acousim.atlas import AtlasConfig, AtlasDimer, run_atlas
+from acousim.atlas.field_drops import AtlasConfig, AtlasDimer, run_atlas
 from cubedimer.executor import ExecutorConfig
 from validation.cli import main
 from validation.report.atlas_section import AtlasSectionError, atlas_section

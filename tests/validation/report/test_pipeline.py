@@ -12,7 +12,7 @@ SECTIONS = ["data", "phase-space", "fit", "simulation", "model-vs-simulation", "
 
 
 def _twin(path, effects, runs=8, duration=3.0, seed=4):
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
 
     # no air damping: the effects given are the only ones (the numbers of docs/fitting.md come from these data)

@@ -68,7 +68,7 @@ def test_a_significant_but_negligible_drift_is_not_called_no_drift():
 
 # ------------------------------------------------------------------------------- the report on small data sets
 def _twin(path, runs, duration, effects):
-    from acousim.effects import EffectSet
+    from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
 
     # no air damping: the cases' effects are the only ones ("damping-free" is the inviscid dimer)

@@ -1,0 +1,31 @@
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas,held-y} ...``.
+
+Each subcommand lives in its own module of this package and registers itself through an ``add_parser(subparsers)``
+function; the runner is :func:`cubedimer.cli.run_cli`.
+"""
+from __future__ import annotations
+
+import argparse
+
+from cubedimer.cli import command_parser, run_cli
+
+from ..fullwave.solver import AssemblyBackendError
+from . import atlas, convergence, family, force, held_y, simulate, sweep, table
+
+__all__ = ["main", "build_parser", "COMMANDS"]
+
+#: The commands of ``python -m acousim``, in the order of the help.
+COMMANDS = (sweep.add_parser, simulate.add_parser, force.add_parser, family.add_parser, table.add_parser,
+            convergence.add_parser, atlas.add_parser, held_y.add_parser)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m acousim`` (one ``add_parser`` function per command)."""
+    return command_parser("python -m acousim",
+                          "The physics of a levitated cube dimer (the Gor'kov and the full-wave force models): static "
+                          "force/torque sweeps, synthetic experiments (digital twin), full-wave forces and tables. "
+                          "Conventions: docs/conventions.md; files: docs/formats.md.", COMMANDS)
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_cli(build_parser(), argv, errors=(AssemblyBackendError,))

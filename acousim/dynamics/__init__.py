@@ -1,0 +1,1 @@
+"""The equations of motion of the dimer (docs/conventions.md sections 4-5): the compiled right-hand side, the effects and their compiled sum, the air's computed damping, the integrator (DimerDynamics) and the field switching (field drops)."""

@@ -1,0 +1,1 @@
+"""The Gor'kov model of the dimer: the tetrahedral mesh of a cube, the quadrature over it, the forces and torques of the Gor'kov potential (GorkovDimer), its Chebyshev surrogate (ForceSurrogate) and the rendering of the posed mesh."""

@@ -1,0 +1,42 @@
+"""Property-based checks (hypothesis) of invariants that hold for any dimer and pose."""
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from acousim.dimer import CubeDimer
+from acousim.gorkov.forces import GorkovDimer
+
+sides = st.floats(min_value=300e-6, max_value=800e-6)
+thetas = st.floats(min_value=-0.99, max_value=0.99)
+
+
+@given(sa=sides, sb=sides, theta=thetas)
+@settings(max_examples=60, deadline=None)
+def test_inertia_bounds(sa, sb, theta):
+    """I(theta) lies between the spin-only value and the value with the centres swinging at full radius."""
+    d = CubeDimer(sa, sb)
+    (ma, mb) = d.cube_masses
+    spin = (np.pi / 4) ** 2 * (ma * sa**2 + mb * sb**2) / 6
+    inertia = d.hinge_inertia(theta)
+    assert spin * (1 - 1e-12) <= inertia <= spin + (np.pi / 4) ** 2 * (ma * sa**2 + mb * sb**2) / 2 * (1 + 1e-12)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return GorkovDimer()
+
+
+@given(theta=thetas, y=st.floats(min_value=-250e-6, max_value=250e-6))
+@settings(max_examples=40, deadline=None)
+def test_generalized_forces_invariants(model, theta, y):
+    s = model.static_forces(theta, y)
+    # restoring hinge torque at the default pressure: Q_theta has the opposite sign of theta
+    # (theta within [-0.99, 0.99]: Q_theta ~ -sin(4 phi) only changes sign at |theta| = 1)
+    assert s.q_theta * theta <= 1e-25
+    # vertical restoring force about Z_eq for |y| below lambda/8 - |Z_eq|
+    assert s.q_y * y <= 1e-15 * model.dimer.total_mass
+    # energy and forces consistent under a small step in y: dU/dy = -F_Z
+    h = 1e-8
+    fd = -(model.static_forces(theta, y + h).potential - model.static_forces(theta, y - h).potential) / (2 * h)
+    np.testing.assert_allclose(s.force_z, fd, rtol=1e-5)  # FD truncation ~ (2kh)^2 ~ 3e-10, round-off ~1e-7
