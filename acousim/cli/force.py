@@ -57,6 +57,7 @@ def force_on_mesh(vertices, faces, z: float, pressure_amplitude_pa: float, mediu
     """Force/torque JSON dict of docs/formats.md for a mesh [m] shifted up by ``z`` [m] (raises MeshError)."""
     from ..fullwave.geometry import split_bodies
     from ..fullwave.solver import solve_scattering
+    from ..fullwave.statics import MODEL_NAME
 
     bodies = split_bodies(vertices, faces, name)
     sol = solve_scattering(bodies, medium)
@@ -73,7 +74,7 @@ def force_on_mesh(vertices, faces, z: float, pressure_amplitude_pa: float, mediu
             "n_triangles": int(len(b.faces)),
         })
     return {
-        "model": "fullwave",
+        "model": MODEL_NAME,
         "bodies": out,
         "settings": {
             "z_m": float(z), "pressure_amplitude_pa": float(pressure_amplitude_pa),
