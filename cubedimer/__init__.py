@@ -13,6 +13,7 @@ here, so that ``acousim`` and ``fitting`` never import each other:
   shared by the twin, the fit and the report
 * :mod:`cubedimer.consistency`, :mod:`cubedimer.glitches` - cross-run checks of a data set and
   tracking-glitch masking, used by the loader
+* :mod:`cubedimer.folds` - the one K-fold split over runs of every held-out score
 * :mod:`cubedimer.rk4` - the one compiled fixed-step RK4 kernel (twin and fitted models)
 * :mod:`cubedimer.atomic` - atomic file output and the one JSON writer
 * :mod:`cubedimer.executor` - the seam for parallel work (local processes or a dask cluster)
