@@ -193,9 +193,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     res = fit_dataset(data_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
-    import json
+    from fitting.fit_output import read_model_json
 
-    model_json = json.loads((fit_dir / "model.json").read_text())
+    model_json = read_model_json(fit_dir / "model.json").document
     prepared = res.runs
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
     mask = cross_coupling_mask(res.model)
