@@ -4,6 +4,7 @@ What more than one of the user-facing packages (``acousim``, ``fitting``, ``vali
 here, so that ``acousim`` and ``fitting`` never import each other:
 
 * :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling;
+  :mod:`cubedimer.lab_csv` - the CSV dialect labs write (separators, unit labels, rows);
   :mod:`cubedimer.errors` - its one-line :class:`DatasetError`
 * :mod:`cubedimer.meta` - the one validated reader of ``meta.json``; :mod:`cubedimer.system` - the system a data
   set records (a levitated dimer, or a generic two-coordinate system declared in meta.json)
