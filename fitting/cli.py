@@ -135,16 +135,16 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 def _cmd_plan(a: argparse.Namespace) -> int:
     from .fit_output import read_model_json
-    from .run_planning import plan_runs
+    from .run_planning import PlanConfig, plan_runs
 
     model = read_model_json(a.model).model
     noise = _plan_noise(a)
     if a.data is not None:  # say which levels the data set gave
         _log(f"tracking noise: sigma_y = {noise.sigma_y:.3g} m, sigma_theta = {noise.sigma_theta:.3g} ({noise.source})")
     try:
-        plan = plan_runs(model, noise, a.duration, a.fps, a.term, target_z=a.target_z,
-                         size=a.size, n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
-                         y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude)
+        plan = plan_runs(model, noise, PlanConfig(a.duration, a.fps, a.term, target_z=a.target_z, size=a.size,
+                                                  n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
+                                                  y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude))
     except (ValueError, RuntimeError) as exc:
         raise UserInputError(str(exc)) from None
     print(plan.format_table())
