@@ -213,13 +213,13 @@ def make_data(name: str, level: float, seed: int) -> Data:
 
 def stlsq_cv(data: Data, ensemble: bool, seed: int) -> tuple[NDArray, float]:
     """pysindy STLSQ (or its bagged ensemble) at the threshold of least 5-fold held-out acceleration error."""
+    from cubedimer.folds import run_folds
     from cubedimer.spectra import dominant_frequency
     from fitting.regression import RegressionConfig, dataset_scales, fit_ensemble_regression, fit_regression
 
     derivs = data.sindy_derivs
     scales = dataset_scales(derivs, [dominant_frequency(r.y, r.dt) for r in data.runs])
-    R = len(derivs)
-    folds = [list(range(f, R, 5)) for f in range(min(5, R))]
+    folds = [test for _, test in run_folds(len(derivs), 5)]
     best, best_err = THRESHOLDS[0], np.inf
     for thr in THRESHOLDS:
         cfg = RegressionConfig(threshold=float(thr), alpha=STLSQ_ALPHA, matched_filter=False)

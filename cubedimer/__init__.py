@@ -4,6 +4,7 @@ What more than one of the user-facing packages (``acousim``, ``fitting``, ``vali
 here, so that ``acousim`` and ``fitting`` never import each other:
 
 * :mod:`cubedimer.dataset` - the trajectory data-set format (docs/formats.md): loader, checks, gap filling;
+  :mod:`cubedimer.lab_csv` - the CSV dialect labs write (separators, unit labels, rows);
   :mod:`cubedimer.errors` - its one-line :class:`DatasetError`
 * :mod:`cubedimer.meta` - the one validated reader of ``meta.json``; :mod:`cubedimer.system` - the system a data
   set records (a levitated dimer, or a generic two-coordinate system declared in meta.json)
@@ -13,6 +14,7 @@ here, so that ``acousim`` and ``fitting`` never import each other:
   shared by the twin, the fit and the report
 * :mod:`cubedimer.consistency`, :mod:`cubedimer.glitches` - cross-run checks of a data set and
   tracking-glitch masking, used by the loader
+* :mod:`cubedimer.folds` - the one K-fold split over runs of every held-out score
 * :mod:`cubedimer.rk4` - the one compiled fixed-step RK4 kernel (twin and fitted models)
 * :mod:`cubedimer.atomic` - atomic file output and the one JSON writer
 * :mod:`cubedimer.executor` - the seam for parallel work (local processes or a dask cluster)

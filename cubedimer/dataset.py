@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import logging
 import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -22,6 +21,7 @@ from .errors import DatasetError
 from .meta import read_meta
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
+from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
 from .spectra import dominant_frequency
 from .system import LEVITATED_DIMER, SystemSpec, check_velocity, coordinate_unit_factor, read_system
 
@@ -179,104 +179,6 @@ def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tup
     return out, int(bad.sum())
 
 
-#: Longest piece of a file's content echoed into an error message [characters].
-ECHO_LIMIT = 80
-
-def _cut(text: str, limit: int = ECHO_LIMIT) -> str:
-    """``text`` cut to at most ``limit`` characters, an ellipsis marking the cut."""
-    return text if len(text) <= limit else text[: limit - 1] + "\u2026"
-
-
-def _echo(text: str) -> str:
-    """File content quoted in an error message: cut (see :func:`_cut`) and repr-quoted."""
-    return repr(_cut(text))
-
-
-#: Column names a run must have (any order; ``frame`` may stand in for ``t``, see :func:`load_run`).
-REQUIRED_COLUMNS = ("t", "y", "theta")
-
-#: Unit labels read after a column name (``t [ms]``, ``y (um)``) and their factors to SI units.
-UNIT_FACTORS: dict[str, dict[str, float]] = {
-    "t": {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6},
-    "y": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6, "micron": 1e-6,
-          "microns": 1e-6, "nm": 1e-9},
-    "theta": {"-": 1.0, "1": 1.0, "": 1.0, "dimensionless": 1.0},
-    "frame": {"-": 1.0, "1": 1.0, "": 1.0, "frame": 1.0, "frames": 1.0, "#": 1.0},
-}
-
-#: Labels refused for a column, with the conversion to use (the label alone does not say what was measured).
-REFUSED_UNITS: dict[str, tuple[tuple[str, ...], str]] = {
-    "theta": (("deg", "degree", "degrees", "\u00b0", "rad", "radian", "radians"),
-              "theta is the dimensionless (alpha - beta)/pi: if the column holds alpha - beta in degrees divide "
-              "it by 180 (in radians: by pi), if it holds each cube's turn phi in degrees divide it by 45, and "
-              "label it 'theta [-]'"),
-    "y": (("px", "pixel", "pixels"),
-          "multiply y by the pixel size in metres (object plane) and label it 'y [m]'"),
-    "t": (("frame", "frames", "fps"),
-          "name the column 'frame' and give frame_rate_hz in meta.json, or divide by the frame rate"),
-}
-
-#: Column names labs use for the required quantities, with the name to use (a hint in the message only).
-COLUMN_HINTS = {"time": "t", "times": "t", "time_s": "t", "angle": "theta", "bend": "theta", "bending": "theta",
-                "alpha": "theta", "phi": "theta", "z": "y", "height": "y", "position": "y", "frames": "frame",
-                "frame_number": "frame"}
-
-_HEADER_CELL = re.compile(r"^\s*([^\[\(]*?)\s*(?:[\[\(]\s*(.*?)\s*[\]\)])?\s*$")
-
-
-def _separator(header: str) -> str:
-    """The field separator of a file, from its header: tab, ``;`` or ``,`` (docs/formats.md)."""
-    if "\t" in header:
-        return "\t"
-    if ";" in header:
-        return ";"
-    return ","
-
-
-def _parse_header(path: Path, header_line: int, header_text: str, sep: str) -> tuple[list[str], list[str | None]]:
-    """Column names (lower case, quotes stripped) and unit labels (None without a label) of a header row."""
-    names, units = [], []
-    for cell in header_text.split(sep):
-        cell = cell.strip().strip('"').strip("'").strip()
-        m = _HEADER_CELL.match(cell)
-        name, unit = (m.group(1), m.group(2)) if m else (cell, None)
-        names.append(name.strip().lower())
-        units.append(None if unit is None else unit.strip().lower())
-    return names, units
-
-
-def _unit_factor(path: Path, column: str, unit: str | None) -> float:
-    """The factor that takes a column with the unit label ``unit`` to SI (1 without a label).
-
-    Raises DatasetError for a label refused with its conversion or one this loader does not know."""
-    if unit is None:
-        return 1.0
-    refused, what_to_do = REFUSED_UNITS.get(column, ((), ""))
-    if unit in refused:
-        raise DatasetError(f"{path}: column '{column} [{unit}]': {what_to_do} (docs/conventions.md)")
-    table = UNIT_FACTORS[column]
-    if unit not in table:
-        known = ", ".join(k for k in table if k and not k.isdigit() and k not in ("-", "#"))
-        raise DatasetError(f"{path}: unknown unit label '{column} [{unit}]'; labels read for {column}: "
-                           f"{known or '-'} (docs/formats.md)")
-    return table[unit]
-
-
-def _missing_columns_message(path: Path, header_line: int, header_text: str, missing: list[str],
-                             names: list[str], frame_rate_hz: float | None) -> str:
-    hints = [f"'{n}' -> '{COLUMN_HINTS[n]}'" for n in names if n in COLUMN_HINTS and COLUMN_HINTS[n] in missing]
-    frame_note = ("; 'frame' (integer frame numbers) replaces t when meta.json gives frame_rate_hz"
-                  if "t" in missing else "")
-    if "t" in missing and "frame" in names and frame_rate_hz is None:
-        return (f"{path}: column 'frame' needs frame_rate_hz in meta.json (frames per second) to give the times; "
-                f"or write a column t in seconds (docs/formats.md)")
-    return (f"{path}: missing column{'s' if len(missing) > 1 else ''} {', '.join(repr(c) for c in missing)} "
-            f"(header on line {header_line}: {_echo(header_text)}); accepted names: t [s], y [m], theta [-], with "
-            f"an optional unit label such as 't [ms]'{frame_note}"
-            + (f"; rename {', '.join(hints)} if they hold those quantities" if hints else "")
-            + " (docs/formats.md)")
-
-
 def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
                       ) -> tuple[NDArray, list[NDArray], list[int | None], int]:
     """Insert missing rows where a time step is an integer multiple (2 or more) of the median frame interval
@@ -304,6 +206,121 @@ def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list
     return t_full, out, lines, size - t.size
 
 
+def _data_lines(path: Path) -> list[tuple[int, str]]:
+    """The file's header and data lines with their line numbers (comments and blank lines left out, counted)."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{path}: unreadable file ({exc.__class__.__name__}: {cut_text(str(exc))})") from None
+    lines = [(k, ln) for k, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise DatasetError(f"{path}: empty file (no header row)")
+    return lines
+
+
+def _columns(path: Path, header_line: int, header_text: str, header: list[str], units: list[str | None],
+             frame_rate_hz: float | None, system: SystemSpec) -> tuple[str | None, list[int], list[float]]:
+    """The time column's name (``t`` or ``frame``), the indices of the columns read (time, the system's
+    coordinates, its velocities) and their factors to SI units."""
+    time_col = "t" if "t" in header else ("frame" if "frame" in header and frame_rate_hz else None)
+    velocity_cols = [c.velocity for c in system.coordinates if c.velocity]
+    missing = [c for c in ("t", *system.names, *velocity_cols)
+               if c not in header and not (c == "t" and time_col == "frame")]
+    if missing and not system.generic:
+        raise DatasetError(missing_columns_message(path, header_line, header_text, missing, header, frame_rate_hz))
+    if missing:
+        raise DatasetError(f"{path}: missing column{'s' if len(missing) > 1 else ''} "
+                           f"{', '.join(repr(c) for c in missing)} (header on line {header_line}: "
+                           f"{echo(header_text)}); meta.json's system declares the columns "
+                           f"{', '.join(['t', *system.names, *velocity_cols])}: rename the columns or the declaration")
+    used = [time_col, *system.names, *velocity_cols]
+    idx = [header.index(c) for c in used]
+    factors = [unit_factor(path, c, units[i]) for c, i in zip(used[:1], idx)]
+    if system.generic:
+        factors += [coordinate_unit_factor(path, c.name, c.unit, units[header.index(c.name)])
+                    for c in system.coordinates]
+        factors += [coordinate_unit_factor(path, c.velocity, c.unit, units[header.index(c.velocity)], velocity=True)
+                    for c in system.coordinates if c.velocity]
+    else:
+        factors += [unit_factor(path, c, units[i]) for c, i in zip(used[1:], idx[1:])]
+    return time_col, idx, factors
+
+
+def _frame_times(path: Path, t: NDArray, time_col: str | None, frame_rate_hz: float | None,
+                 line_no: list[int | None]) -> NDArray:
+    """The frames' times [s]: finite, whole frame numbers divided by the frame rate for a ``frame`` column,
+    strictly increasing."""
+    if not np.all(np.isfinite(t)):
+        k = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DatasetError(f"{path}: missing or non-finite {time_col} value on line {line_no[k]}")
+    if time_col == "frame":
+        if np.any(np.abs(t - np.rint(t)) > 1e-6):
+            k = int(np.flatnonzero(np.abs(t - np.rint(t)) > 1e-6)[0])
+            raise DatasetError(f"{path}: frame numbers must be whole numbers ({echo(str(t[k]))} on line {line_no[k]})")
+        t = np.rint(t) / float(frame_rate_hz)
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        k = int(np.flatnonzero(dt <= 0)[0])
+        raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (line {line_no[k + 1]})")
+    return t
+
+
+def _check_uniform(path: Path, t: NDArray, line_no: list[int | None], tol: float) -> None:
+    """A uniform frame interval within the relative tolerance ``tol`` of the median (after lost frames are filled)."""
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    dev = float(np.max(np.abs(dt - med)) / med)
+    if dev > tol:
+        k = int(np.argmax(np.abs(dt - med)))
+        raise DatasetError(f"{path}: time is not uniformly sampled (step deviates {dev:.1%} from the median "
+                           f"{med:.4g} s on line {line_no[k + 1]}; allowed {tol:.0%}); write every "
+                           f"frame at its time, with empty y and theta where it was lost, or leave its row out "
+                           f"(docs/formats.md)")
+
+
+def _check_theta_range(path: Path, th: NDArray, line_no: list[int | None]) -> None:
+    """The dimer's bend theta = (alpha - beta)/pi inside (-1, 1), with the conversion from degrees as the hint."""
+    fin = np.isfinite(th)
+    if fin.any() and np.any(np.abs(th[fin]) >= 1.0):
+        k = int(np.flatnonzero(fin & (np.abs(np.where(fin, th, 0.0)) >= 1.0))[0])
+        worst = float(np.max(np.abs(th[fin])))
+        hint = ("; if it holds alpha - beta in degrees divide by 180 (docs/conventions.md)" if worst <= 180 else "")
+        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {worst:.4g}; first on line {line_no[k]}); "
+                           f"theta is the dimensionless (alpha - beta)/pi{hint}")
+
+
+def _oscillation_frequency(path: Path, t: NDArray, y: NDArray, config: LoadConfig, system: SystemSpec) -> float:
+    """The dominant frequency [Hz] of the first coordinate (gaps filled): enough periods in the run, and inside
+    a generic system's declared range."""
+    duration = t[-1] - t[0]
+    f = dominant_frequency(y, duration / (t.size - 1), config.min_periods / duration if duration > 0 else 0.0,
+                           prefer_above=SLOW_PEAK_FRACTION, refine=False)
+    if f <= 0 or duration * f < config.min_periods:
+        raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
+                           f"({duration:.3g} s at a dominant {system.names[0]} frequency of {f:.3g} Hz)")
+    lo, hi = system.frequency_range_hz
+    if system.generic and not lo <= f <= hi:
+        raise DatasetError(f"{path}: dominant {system.names[0]} frequency {f:.3g} Hz is outside meta.json's "
+                           f"system.frequency_range_hz [{lo:g}, {hi:g}]: check the units of t or widen the range")
+    return f
+
+
+def _mask_glitches(path: Path, t: NDArray, y_raw: NDArray, th_raw: NDArray, periods: float, config: LoadConfig
+                   ) -> tuple[tuple[int, ...], NDArray, NDArray, int] | None:
+    """Isolated tracking glitches (:mod:`cubedimer.glitches`) masked and filled like missing frames: the glitch
+    frames, y, theta and the most frames filled in one coordinate; None without a glitch."""
+    frames_per_period = t.size / periods
+    gy = find_glitches(y_raw, frames_per_period, config.glitches)
+    gt = find_glitches(th_raw, frames_per_period, config.glitches)
+    if not (gy.any() or gt.any()):
+        return None
+    glitch_frames = tuple(int(i) for i in np.flatnonzero(gy | gt))
+    y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.max_gap, "y", str(path))
+    th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.max_gap, "theta", str(path))
+    logger.info("%s: %d tracking glitch frame(s) masked", path.name, len(glitch_frames))
+    return glitch_frames, y, th, max(ny, nt)
+
+
 def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None,
              system: SystemSpec = LEVITATED_DIMER) -> Run:
     """Read one CSV run, check it against the data-set format (docs/formats.md), fill short gaps.
@@ -322,7 +339,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     coordinate must lie in the declared range.
 
     Line numbers in messages are those of the file (comments and blank lines counted), and file
-    content quoted in a message is cut to :data:`ECHO_LIMIT` characters.
+    content quoted in a message is cut to :data:`cubedimer.lab_csv.ECHO_LIMIT` characters.
 
     Raises
     ------
@@ -331,127 +348,38 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     """
     path = Path(path)
     name = path.name
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DatasetError(f"{path}: unreadable file ({exc.__class__.__name__}: {_cut(str(exc))})") from None
-    lines = [(k, ln) for k, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise DatasetError(f"{path}: empty file (no header row)")
+    lines = _data_lines(path)
     header_line, header_text = lines[0]
-    sep = _separator(header_text)
-    decimal_comma = sep != ","
-    header, units = _parse_header(path, header_line, header_text, sep)
-    time_col = "t" if "t" in header else ("frame" if "frame" in header and frame_rate_hz else None)
-    velocity_cols = [c.velocity for c in system.coordinates if c.velocity]
-    missing = [c for c in ("t", *system.names, *velocity_cols)
-               if c not in header and not (c == "t" and time_col == "frame")]
-    if missing and not system.generic:
-        raise DatasetError(_missing_columns_message(path, header_line, header_text, missing, header, frame_rate_hz))
-    if missing:
-        raise DatasetError(f"{path}: missing column{'s' if len(missing) > 1 else ''} "
-                           f"{', '.join(repr(c) for c in missing)} (header on line {header_line}: "
-                           f"{_echo(header_text)}); meta.json's system declares the columns "
-                           f"{', '.join(['t', *system.names, *velocity_cols])}: rename the columns or the declaration")
-    used = [time_col, *system.names, *velocity_cols]
-    idx = [header.index(c) for c in used]
-    factors = [_unit_factor(path, c, units[i]) for c, i in zip(used[:1], idx)]
-    if system.generic:
-        factors += [coordinate_unit_factor(path, c.name, c.unit, units[header.index(c.name)])
-                    for c in system.coordinates]
-        factors += [coordinate_unit_factor(path, c.velocity, c.unit, units[header.index(c.velocity)], velocity=True)
-                    for c in system.coordinates if c.velocity]
-    else:
-        factors += [_unit_factor(path, c, units[i]) for c, i in zip(used[1:], idx[1:])]
-    rows, line_no = _read_rows(path, lines[1:], header, idx, sep, decimal_comma)
+    sep = separator(header_text)
+    header, units = parse_header(path, header_line, header_text, sep)
+    time_col, idx, factors = _columns(path, header_line, header_text, header, units, frame_rate_hz, system)
+    rows, line_no = read_rows(path, lines[1:], header, idx, sep, sep != ",")
     if len(rows) < 16:
         raise DatasetError(f"{path}: only {len(rows)} data rows; too short to hold {config.min_periods:g} oscillation periods")
     a = np.asarray(rows, dtype=float) * np.asarray(factors)
     t, y, th, vel = a[:, 0], a[:, 1], a[:, 2], list(a[:, 3:].T)
-    if not np.all(np.isfinite(t)):
-        k = int(np.flatnonzero(~np.isfinite(t))[0])
-        raise DatasetError(f"{path}: missing or non-finite {time_col} value on line {line_no[k]}")
-    if time_col == "frame":
-        if np.any(np.abs(t - np.rint(t)) > 1e-6):
-            k = int(np.flatnonzero(np.abs(t - np.rint(t)) > 1e-6)[0])
-            raise DatasetError(f"{path}: frame numbers must be whole numbers ({_echo(str(t[k]))} on line {line_no[k]})")
-        t = np.rint(t) / float(frame_rate_hz)
-    dt = np.diff(t)
-    if np.any(dt <= 0):
-        k = int(np.flatnonzero(dt <= 0)[0])
-        raise DatasetError(f"{path}: time is not strictly increasing at t={t[k]:.6g} s (line {line_no[k + 1]})")
+    t = _frame_times(path, t, time_col, frame_rate_hz, line_no)
     t, (y, th, *vel), line_no, n_lost = _fill_lost_frames(path, t, [y, th, *vel], line_no, config.uniform_tol)
     if n_lost:
         logger.info("%s: %d omitted frame(s) taken as missing", name, n_lost)
-    dt = np.diff(t)
-    med = float(np.median(dt))
-    dev = float(np.max(np.abs(dt - med)) / med)
-    if dev > config.uniform_tol:
-        k = int(np.argmax(np.abs(dt - med)))
-        raise DatasetError(f"{path}: time is not uniformly sampled (step deviates {dev:.1%} from the median "
-                           f"{med:.4g} s on line {line_no[k + 1]}; allowed {config.uniform_tol:.0%}); write every "
-                           f"frame at its time, with empty y and theta where it was lost, or leave its row out "
-                           f"(docs/formats.md)")
-    fin = np.isfinite(th)
-    if not system.generic and fin.any() and np.any(np.abs(th[fin]) >= 1.0):
-        k = int(np.flatnonzero(fin & (np.abs(np.where(fin, th, 0.0)) >= 1.0))[0])
-        worst = float(np.max(np.abs(th[fin])))
-        hint = ("; if it holds alpha - beta in degrees divide by 180 (docs/conventions.md)" if worst <= 180 else "")
-        raise DatasetError(f"{path}: theta outside (-1, 1) (max |theta| = {worst:.4g}; first on line {line_no[k]}); "
-                           f"theta is the dimensionless (alpha - beta)/pi{hint}")
+    _check_uniform(path, t, line_no, config.uniform_tol)
+    if not system.generic:
+        _check_theta_range(path, th, line_no)
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
     y_raw, th_raw = y, th
     y, ny = fill_gaps(t, y, config.max_gap, "y", str(path))
     th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
-    duration = t[-1] - t[0]
-    f = dominant_frequency(y, duration / (t.size - 1), config.min_periods / duration if duration > 0 else 0.0,
-                           prefer_above=SLOW_PEAK_FRACTION, refine=False)
-    if f <= 0 or duration * f < config.min_periods:
-        raise DatasetError(f"{path}: too short to hold {config.min_periods:g} oscillation periods "
-                           f"({duration:.3g} s at a dominant {system.names[0]} frequency of {f:.3g} Hz)")
-    lo, hi = system.frequency_range_hz
-    if system.generic and not lo <= f <= hi:
-        raise DatasetError(f"{path}: dominant {system.names[0]} frequency {f:.3g} Hz is outside meta.json's "
-                           f"system.frequency_range_hz [{lo:g}, {hi:g}]: check the units of t or widen the range")
-    velocities = _velocities(path, t, (y, th), vel, system, config.max_gap, duration * f) if vel else None
+    periods = (t[-1] - t[0]) * _oscillation_frequency(path, t, y, config, system)
+    velocities = _velocities(path, t, (y, th), vel, system, config.max_gap, periods) if vel else None
+    glitches = _mask_glitches(path, t, y_raw, th_raw, periods, config) if config.glitches is not None else None
     glitch_frames: tuple[int, ...] = ()
-    if config.glitches is not None:
-        frames_per_period = t.size / (duration * f)
-        gy = find_glitches(y_raw, frames_per_period, config.glitches)
-        gt = find_glitches(th_raw, frames_per_period, config.glitches)
-        if gy.any() or gt.any():
-            glitch_frames = tuple(int(i) for i in np.flatnonzero(gy | gt))
-            y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.max_gap, "y", str(path))
-            th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.max_gap, "theta", str(path))
-            logger.info("%s: %d tracking glitch frame(s) masked", name, len(glitch_frames))
-    return Run(name=name, t=t, y=y, theta=th, n_filled=max(ny, nt), glitch_frames=glitch_frames,
+    n_filled = max(ny, nt)
+    if glitches is not None:
+        glitch_frames, y, th, n_filled = glitches
+    return Run(name=name, t=t, y=y, theta=th, n_filled=n_filled, glitch_frames=glitch_frames,
                velocities=velocities)
-
-
-def _read_rows(path: Path, lines: list[tuple[int, str]], header: list[str], idx: list[int], sep: str,
-               decimal_comma: bool) -> tuple[list[list[float]], list[int | None]]:
-    """The values of the columns ``idx`` of every data line (NaN where empty) and the lines' numbers."""
-    rows, line_no = [], []
-    for k, ln in lines:
-        parts = ln.split(sep)
-        if len(parts) < len(header):
-            raise DatasetError(f"{path}: line {k} has {len(parts)} fields, header has {len(header)}"
-                               + ("; with a decimal comma the separator must be ';' or a tab" if sep == "," and
-                                  len(parts) > len(header) else ""))
-        vals = []
-        for i in idx:
-            s = parts[i].strip().strip('"')
-            if decimal_comma:
-                s = s.replace(",", ".")
-            try:
-                vals.append(float(s) if s else np.nan)
-            except ValueError:
-                raise DatasetError(f"{path}: non-numeric value {_echo(s)} in column {header[i]!r} on line {k}") from None
-        rows.append(vals)
-        line_no.append(k)
-    return rows, line_no
 
 
 def _velocities(path: Path, t: NDArray, x: tuple[NDArray, NDArray], vel: list[NDArray], system: SystemSpec,

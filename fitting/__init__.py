@@ -14,7 +14,7 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
   :data:`SELECTION_RULES`, :class:`SelectionRule`, :func:`register_selection_rule`;
 * the model: :class:`PolynomialModel`, :class:`Scales`; the discovery: :func:`discover_model`;
 * oracle standard errors and the run planner: :class:`NoiseLevels`, :func:`oracle_standard_errors`,
-  :func:`plan_runs`;
+  :func:`plan_runs` with its :class:`PlanConfig`;
 * paired comparison of a variant: :func:`compare_models`; synthetic data: :func:`paper_reduced_model`,
   :func:`write_dataset`, :class:`SyntheticConfig`.
 
@@ -36,7 +36,7 @@ from .pipeline import fit_dataset, fit_runs, prepare_runs
 from .refine import RefineConfig
 from .regression import RegressionConfig
 from .results import FitResult
-from .run_planning import plan_runs
+from .run_planning import PlanConfig, plan_runs
 from .selection import SelectionConfig
 from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
 from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
@@ -48,6 +48,6 @@ __all__ = [
     "METHODS", "FittingMethod", "FitContext", "register_method",
     "SELECTION_RULES", "SelectionRule", "register_selection_rule",
     "PolynomialModel", "Scales", "discover_model", "DiscoveryResult",
-    "NoiseLevels", "oracle_standard_errors", "plan_runs",
+    "NoiseLevels", "oracle_standard_errors", "plan_runs", "PlanConfig",
     "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset",
 ]

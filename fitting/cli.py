@@ -15,7 +15,6 @@ Bad input: one line ``error: <file>: <problem>`` on stderr, exit status 2, nothi
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from dataclasses import replace
@@ -83,16 +82,14 @@ def _cmd_fit(a: argparse.Namespace) -> int:
 def _cmd_compare(a: argparse.Namespace) -> int:
     from cubedimer.atomic import write_json
     from .compare import compare_models, cross_coupling_mask, drop_terms
-    from cubedimer.dataset import DatasetError, load_dataset
-    from .model import PolynomialModel, Scales
+    from cubedimer.dataset import load_dataset
+    from .fit_output import read_model_json
+    from .model import Scales
     from .pipeline import prepare_runs
 
     prepare_output_dir(a.out, "--out", create=False)
-    try:
-        data = json.loads(Path(a.model).read_text())
-        ref = PolynomialModel.from_json(data)
-    except (OSError, ValueError, KeyError) as exc:
-        raise DatasetError(f"{a.model}: not a readable model.json ({exc})") from None
+    model_file = read_model_json(a.model)
+    data, ref = model_file.document, model_file.model
     from .config import FitConfig
     ds = load_dataset(a.data_dir, strict=a.strict, config=FitConfig().load)  # generic systems too
     prepared, scales = prepare_runs(ds.runs)
@@ -137,20 +134,17 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 
 def _cmd_plan(a: argparse.Namespace) -> int:
-    from .model import PolynomialModel
-    from .run_planning import plan_runs
+    from .fit_output import read_model_json
+    from .run_planning import PlanConfig, plan_runs
 
-    try:
-        model = PolynomialModel.from_json(str(a.model))
-    except (OSError, ValueError, KeyError) as exc:
-        raise UserInputError(f"{a.model}: not a readable model.json ({exc})") from None
+    model = read_model_json(a.model).model
     noise = _plan_noise(a)
     if a.data is not None:  # say which levels the data set gave
         _log(f"tracking noise: sigma_y = {noise.sigma_y:.3g} m, sigma_theta = {noise.sigma_theta:.3g} ({noise.source})")
     try:
-        plan = plan_runs(model, noise, a.duration, a.fps, a.term, target_z=a.target_z,
-                         size=a.size, n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
-                         y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude)
+        plan = plan_runs(model, noise, PlanConfig(a.duration, a.fps, a.term, target_z=a.target_z, size=a.size,
+                                                  n_reference=a.reference_runs, run_counts=a.runs, seed=a.seed,
+                                                  y_amplitude=a.y_amplitude, theta_amplitude=a.theta_amplitude))
     except (ValueError, RuntimeError) as exc:
         raise UserInputError(str(exc)) from None
     print(plan.format_table())

@@ -1,22 +1,25 @@
-"""The files of a fit: ``model.json`` (docs/formats.md) and the figures, written by the command, not by the fit."""
+"""The files of a fit: ``model.json`` (docs/formats.md) and the figures, written by the command, not by the fit;
+and the one reader of ``model.json`` (:func:`read_model_json`)."""
 from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
 from cubedimer.atomic import write_json
-from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
+from cubedimer.errors import DatasetError
+from cubedimer.system import SystemSpec, read_system
+from cubedimer.terms import EQUATION_NAMES, STATE_NAMES, parse_term
 from .ensemble import mean_pvalues
 from .integral_form import METHOD as INTEGRAL_METHOD
 from .methods import METHODS
-from .model import TERMS
+from .model import TERMS, PolynomialModel
 from .results import FitResult
 
-__all__ = ["model_json", "write_fit", "data_range"]
+__all__ = ["model_json", "write_fit", "data_range", "ModelFile", "read_model_json"]
 
 
 def _terms(mask) -> dict[str, list[str]]:
@@ -119,3 +122,51 @@ def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) ->
         from .plots import plot_fit  # matplotlib only when figures are asked for
         plot_fit(res, out)
     return path
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """A read ``model.json``: the document as written, the system it records and its model in the library's names."""
+
+    path: Path
+    document: dict
+    system: SystemSpec
+    model: PolynomialModel
+
+
+def read_model_json(path: str | os.PathLike) -> ModelFile:
+    """Read and check a ``model.json`` (docs/formats.md; a ``truth.json`` has the same model part).
+
+    Raises
+    ------
+    DatasetError
+        One line naming the file and the problem: unreadable, not JSON, no ``equations`` object, an unknown
+        equation, a bad term or coefficient, another unit system or state.
+    """
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise DatasetError(f"{path}: cannot read ({exc.strerror or exc}); give the model.json `fitting fit` writes") \
+            from None
+    except json.JSONDecodeError as exc:
+        raise DatasetError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    except UnicodeDecodeError:
+        raise DatasetError(f"{path}: not valid JSON (not UTF-8 text)") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("equations"), dict):
+        raise DatasetError(f"{path}: not a model.json (no 'equations' object)")
+    system = read_system({"system": doc.get("system")}, str(path))
+    for eq, coefs in doc["equations"].items():
+        if eq not in system.equation_names or not isinstance(coefs, dict):
+            raise DatasetError(f"{path}: unknown equation {eq!r}; expected {' and '.join(system.equation_names)}")
+        for term, v in coefs.items():
+            try:
+                parse_term(term, system.state_names)
+                float(v)
+            except (ValueError, TypeError):
+                raise DatasetError(f"{path}: bad term or value {term!r}: {v!r} in {eq}") from None
+    try:
+        model = PolynomialModel.from_json(doc)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise DatasetError(f"{path}: not a readable model.json ({exc})") from None
+    return ModelFile(path, doc, system, model)

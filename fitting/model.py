@@ -134,13 +134,9 @@ class PolynomialModel:
 
     @classmethod
     def from_json(cls, data: Mapping | str) -> "PolynomialModel":
-        """From a dict, a JSON string, or the path of a model.json file."""
+        """From a dict or a JSON string of the docs/formats.md model (files: :func:`fitting.fit_output.read_model_json`)."""
         if isinstance(data, str):
-            if data.lstrip().startswith("{"):
-                data = json.loads(data)
-            else:
-                with open(data, encoding="utf-8") as fh:
-                    data = json.load(fh)
+            data = json.loads(data)
         if "units" in data and data["units"] != "SI":
             raise ValueError(f"only SI models are supported, got units={data['units']!r}")
         if "system" in data:  # a generic two-coordinate system (cubedimer.system): its declared names

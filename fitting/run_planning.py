@@ -19,7 +19,55 @@ from .model import TERMS, PolynomialModel
 from .oracle import (NoiseLevels, OracleRun, alias_probability, canonical_term, covariance_diagonal, oracle_aliases,
                      oracle_information)
 
-__all__ = ["RunPlan", "plan_runs"]
+__all__ = ["PlanConfig", "RunPlan", "plan_runs"]
+
+
+@dataclass(frozen=True)
+class PlanConfig:
+    """What :func:`plan_runs` plans: a term, the runs' length and rate, the target and the reference runs.
+
+    Parameters
+    ----------
+    duration : float
+        Run length [s].
+    fps : float
+        Frame rate [1/s].
+    term : str
+        ``"EQUATION:TERM"``, e.g. ``"thetaddot:y^2*theta"``.
+    target_z : float
+        Oracle z the term must reach.
+    size : float, optional
+        The term's coefficient (SI); default: the model's.
+    n_reference : int
+        Reference runs (>= 4).
+    run_counts : sequence of int
+        Rows of the table.
+    seed : int
+        Seed of the reference runs' initial states and of the draws.
+    n_draws : int
+        Random draws of runs per row.
+    y_amplitude, theta_amplitude : (float, float), optional
+        Ranges of the initial amplitudes [m], [-]; default those of :class:`fitting.synthetic.SyntheticConfig`.
+    periods : float
+        Window length in periods (:func:`oracle_information`).
+    target_alias_z : float
+        Alias z that counts as told apart from the closest alias (4: the alias wins in 2.3 % of data sets).
+        The alias z of all reference runs is scaled with sqrt(n / n_reference).
+    """
+
+    duration: float
+    fps: float
+    term: str
+    target_z: float = 5.0
+    size: float | None = None
+    n_reference: int = 48
+    run_counts: Sequence[int] = (4, 6, 8, 10, 12, 16, 20, 30, 50)
+    seed: int = 0
+    n_draws: int = 200
+    y_amplitude: tuple[float, float] | None = None
+    theta_amplitude: tuple[float, float] | None = None
+    periods: float = 0.75
+    target_alias_z: float = 4.0
 
 
 @dataclass(frozen=True)
@@ -99,12 +147,9 @@ def _drawn_std_errors(information: NDArray, k: int, sigma: float, n: int, n_draw
     return np.array([sigma * np.sqrt(covariance_diagonal(m)[k]) for m in total])
 
 
-def plan_runs(model: PolynomialModel, noise: NoiseLevels, duration: float, fps: float, term: str,
-              target_z: float = 5.0, size: float | None = None, n_reference: int = 48,
-              run_counts: Sequence[int] = (4, 6, 8, 10, 12, 16, 20, 30, 50), seed: int = 0, n_draws: int = 200,
-              y_amplitude: tuple[float, float] | None = None, theta_amplitude: tuple[float, float] | None = None,
-              periods: float = 0.75, target_alias_z: float = 4.0) -> RunPlan:
-    """How many runs of ``duration`` s at ``fps`` make ``term`` resolvable at oracle z >= ``target_z``.
+def plan_runs(model: PolynomialModel, noise: NoiseLevels, config: PlanConfig) -> RunPlan:
+    """How many runs of ``config.duration`` s at ``config.fps`` make ``config.term`` resolvable at oracle z >=
+    ``config.target_z``.
 
     ``n_reference`` reference runs start from random initial states as in
     :func:`fitting.synthetic.generate_runs` (amplitudes uniform in the given ranges, random phases);
@@ -122,69 +167,72 @@ def plan_runs(model: PolynomialModel, noise: NoiseLevels, duration: float, fps: 
     Parameters
     ----------
     model : PolynomialModel
-        The model whose support is fitted; ``term`` is added to it if absent (then ``size`` is required).
+        The model whose support is fitted; the term is added to it if absent (then ``config.size`` is required).
     noise : NoiseLevels
-    duration : float
-        Run length [s].
-    fps : float
-        Frame rate [1/s].
-    term : str
-        ``"EQUATION:TERM"``, e.g. ``"thetaddot:y^2*theta"``.
-    target_z : float
-    size : float, optional
-        The term's coefficient (SI); default: the model's.
-    n_reference : int
-        Reference runs (>= 4).
-    run_counts : sequence of int
-        Rows of the table.
-    seed : int
-        Seed of the reference runs' initial states and of the draws.
-    n_draws : int
-        Random draws of runs per row.
-    y_amplitude, theta_amplitude : (float, float), optional
-        Ranges of the initial amplitudes [m], [-]; default those of :class:`fitting.synthetic.SyntheticConfig`.
-    periods : float
-        Window length in periods (:func:`oracle_information`).
-    target_alias_z : float
-        Alias z that counts as told apart from the closest alias (4: the alias wins in 2.3 % of data sets).
-        The alias z of all reference runs is scaled with sqrt(n / n_reference).
+    config : PlanConfig
 
     Returns
     -------
     RunPlan
     """
-    from .synthetic import SyntheticConfig, generate_runs
-
-    eq, name = canonical_term(term)
+    cfg = config
+    eq, name = canonical_term(cfg.term)
     q, j = EQUATION_NAMES.index(eq), TERMS.index(name)
     coef = model.coef.copy()
-    if size is not None:
-        coef[q, j] = float(size)
+    if cfg.size is not None:
+        coef[q, j] = float(cfg.size)
     if coef[q, j] == 0.0:
         raise ValueError(f"{eq}:{name} is not in the model; give its size")
-    if n_reference < 4:
+    if cfg.n_reference < 4:
         raise ValueError("n_reference must be at least 4")
-    counts = sorted(set(int(n) for n in run_counts))
+    counts = sorted(set(int(n) for n in cfg.run_counts))
     if not counts or counts[0] < 1:
         raise ValueError("run_counts must be positive integers")
     model = PolynomialModel(coef)
-    base = SyntheticConfig()
-    cfg = SyntheticConfig(n_runs=int(n_reference), duration=float(duration), fps=float(fps), noise_y=0.0,
-                          noise_theta=0.0, missing_frames=0, seed=int(seed),
-                          y_amplitude=tuple(y_amplitude) if y_amplitude else base.y_amplitude,
-                          theta_amplitude=tuple(theta_amplitude) if theta_amplitude else base.theta_amplitude)
-    gen = generate_runs(model, cfg)
-    runs = [OracleRun(g["x0"], g["t"].size, 1.0 / cfg.fps) for g in gen]
-    d = oracle_information(model, runs, periods, [g["state"] for g in gen])[eq]
+    runs, states = _reference_runs(model, cfg)
+    d = oracle_information(model, runs, cfg.periods, states)[eq]
     info = d["information"][d["used"]]
-    k = d["terms"].index(name)
     c = float(coef[q, j])
-    rng = np.random.default_rng(seed)
+    table = _draw_table(info, d["terms"].index(name), noise.of(eq), c, counts, cfg.n_draws,
+                        np.random.default_rng(cfg.seed))
+    slope, se1, needed, needed90 = _runs_needed(table, c, cfg.target_z)
+    al = oracle_aliases(model, runs, noise, cfg.periods, states)[eq].get(name, (None, float("nan")))
+    needed_alias = (int(np.ceil(len(runs) * (cfg.target_alias_z / al[1]) ** 2)) if al[0] is not None and al[1] > 0
+                    else 0)
+    return RunPlan(eq, name, c, se1, slope, needed, needed90, float(cfg.target_z),
+                   table, len(info), al[0], float(al[1]), needed_alias, float(cfg.target_alias_z))
+
+
+def _reference_runs(model: PolynomialModel, cfg: PlanConfig) -> tuple[list[OracleRun], list[NDArray]]:
+    """The noise-free reference runs of ``model`` (:func:`fitting.synthetic.generate_runs`): their oracle runs and
+    their state trajectories."""
+    from .synthetic import SyntheticConfig, generate_runs
+
+    base = SyntheticConfig()
+    syn = SyntheticConfig(n_runs=int(cfg.n_reference), duration=float(cfg.duration), fps=float(cfg.fps), noise_y=0.0,
+                          noise_theta=0.0, missing_frames=0, seed=int(cfg.seed),
+                          y_amplitude=tuple(cfg.y_amplitude) if cfg.y_amplitude else base.y_amplitude,
+                          theta_amplitude=tuple(cfg.theta_amplitude) if cfg.theta_amplitude else base.theta_amplitude)
+    gen = generate_runs(model, syn)
+    return [OracleRun(g["x0"], g["t"].size, 1.0 / syn.fps) for g in gen], [g["state"] for g in gen]
+
+
+def _draw_table(info: NDArray, k: int, sigma: float, c: float, counts: list[int], n_draws: int,
+                rng: np.random.Generator) -> list[tuple[int, float, float, float]]:
+    """Per number of runs: the median oracle standard error of term ``k`` (coefficient ``c``) over random draws of
+    the reference runs, and the median and 10th percentile of its oracle z."""
     table = []
     for n in counts:
-        se = _drawn_std_errors(info, k, noise.of(eq), n, n_draws, rng)
+        se = _drawn_std_errors(info, k, sigma, n, n_draws, rng)
         z = np.abs(c) / se
         table.append((n, float(np.median(se)), float(np.median(z)), float(np.percentile(z, 10))))
+    return table
+
+
+def _runs_needed(table: list[tuple[int, float, float, float]], c: float, target_z: float
+                 ) -> tuple[float, float, int, int]:
+    """From the table: the measured scaling exponent, the standard error of one run, the runs for a median z of
+    ``target_z`` (beyond the table: extrapolated with 1/sqrt(n)) and for a 10th-percentile z of it (0 beyond)."""
     ns = np.array([r[0] for r in table], float)
     med = np.array([r[1] for r in table])
     slope = float(np.polyfit(np.log(ns), np.log(med), 1)[0]) if len(ns) > 1 else -0.5
@@ -195,8 +243,4 @@ def plan_runs(model: PolynomialModel, noise: NoiseLevels, duration: float, fps: 
     else:  # beyond the table: extrapolate from its largest row with the asymptotic 1/sqrt(n)
         needed = int(np.ceil(ns[-1] * (target_z * med[-1] / abs(c)) ** 2))
     reached90 = [n for n, _, _, z10 in table if z10 >= target_z]
-    al = oracle_aliases(model, runs, noise, periods, [g["state"] for g in gen])[eq].get(name, (None, float("nan")))
-    needed_alias = (int(np.ceil(len(runs) * (target_alias_z / al[1]) ** 2)) if al[0] is not None and al[1] > 0
-                    else 0)
-    return RunPlan(eq, name, c, se1, slope, int(needed), int(reached90[0]) if reached90 else 0, float(target_z),
-                   table, len(info), al[0], float(al[1]), needed_alias, float(target_alias_z))
+    return slope, se1, int(needed), int(reached90[0]) if reached90 else 0

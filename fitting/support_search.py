@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.folds import run_folds
 from cubedimer.terms import is_velocity_free
 from .integral_form import detrend_windows, integral_columns, window_starts
 from .model import TERMS
@@ -118,9 +119,9 @@ def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) 
     R = len(d.per_run)
     if R < 2:
         return [float("nan")] * len(paths)
-    k = min(n_folds, R)
-    folds = [list(range(f, R, k)) for f in range(k)]
-    train = [_r_factor([d.per_run[r] for r in range(R) if r not in fold]) for fold in folds]
+    split = run_folds(R, n_folds)
+    folds = [test for _, test in split]
+    train = [_r_factor([d.per_run[r] for r in tr]) for tr, _ in split]
     dof = float(d.rows.sum() - 2 * d.windows.sum())
     out = []
     for cols in paths:
@@ -138,9 +139,9 @@ def heldout_per_run(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: i
     """Held-out sum of squared misfits of every run (n_paths, R) for every support in ``paths`` (K-fold over runs,
     the folds of :func:`heldout_rms`)."""
     R = len(d.per_run)
-    k = min(n_folds, R)
-    folds = [list(range(f, R, k)) for f in range(k)]
-    train = [_r_factor([d.per_run[r] for r in range(R) if r not in fold]) for fold in folds]
+    split = run_folds(R, n_folds)
+    folds = [test for _, test in split]
+    train = [_r_factor([d.per_run[r] for r in tr]) for tr, _ in split]
     out = np.zeros((len(paths), R))
     for i, cols in enumerate(paths):
         for fold, Rt in zip(folds, train):

@@ -7,7 +7,8 @@ silhouette, sub-pixel, positive up from the levitation height) and the bend ``th
 settings, counts and per-frame quality (``python -m tracking``; ``docs/tracking.md``).
 
 * :mod:`tracking.recording` - reading video files, multi-page TIFF, Phantom .cine and folders of images;
-* :mod:`tracking.measure` - the compiled per-frame measurement;
+* :mod:`tracking.measure` - the compiled per-frame measurement (its steps in :mod:`tracking.segmentation`,
+  :mod:`tracking.moments` and :mod:`tracking.face_fit`);
 * :mod:`tracking.track` - calibration, batches, the recording's bounds, y and theta, noise estimates;
 * :mod:`tracking.output` - the run's CSV, RUN.json and example frame, or a data set with meta.json;
 * :mod:`tracking.cli` - the command.

@@ -24,6 +24,154 @@ def wrap_angle(x, period):  # pragma: no cover - compiled
     return y
 
 
+#: Most edge samples a face keeps.
+_MAX_SAMPLES = 512
+
+
+@njit(cache=True)
+def _column_samples(c, px, rho, nx, nz, a, W, blur, u_split, side, h, w, clear, xs, ys):  # pragma: no cover
+    """Edge crossings of a face flatter than 45 degrees along the pixel columns across it, away from its corners
+    and from the other cube: (u, Z of the crossing) into ``xs``, ``ys``.  Returns (count, sum of the coverage
+    variance along the samples times |n_z|, the edge width's information)."""
+    cnt = 0
+    wsum = 0.0
+    tx = -nz
+    margin = W * abs(nx) + 2.0 * blur + 1.0
+    lo = px - (a - margin) * abs(tx)
+    hi = px + (a - margin) * abs(tx)
+    if hi <= lo:
+        return cnt, wsum
+    for uu in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
+        if side > 0 and uu < u_split + clear:
+            continue
+        if side < 0 and uu > u_split - clear:
+            continue
+        if uu < 0 or uu >= w:
+            continue
+        ze = (rho - nx * uu) / nz
+        ve = int(math.floor(-ze + 0.5))
+        v0 = ve - W
+        v1 = ve + W
+        if v0 < 0 or v1 >= h:
+            continue
+        L = 0.0
+        q = 0.0
+        for vv in range(v0, v1 + 1):
+            cv = c[vv, uu]
+            L += cv
+            q += cv * (1.0 - cv)
+        if nz > 0:
+            vedge = (v1 + 0.5) - L
+        else:
+            vedge = (v0 - 0.5) + L
+        if cnt < _MAX_SAMPLES:
+            xs[cnt] = uu
+            ys[cnt] = -vedge
+            cnt += 1
+            wsum += q * abs(nz)
+    return cnt, wsum
+
+
+@njit(cache=True)
+def _row_samples(c, pz, rho, nx, nz, a, W, blur, u_split, side, h, w, clear, xs, ys):  # pragma: no cover
+    """Edge crossings of a face steeper than 45 degrees along the pixel rows across it, away from its corners and
+    from the other cube: (Z, u of the crossing) into ``xs``, ``ys``.  Returns (count, sum of the coverage variance
+    along the samples times |n_x|)."""
+    cnt = 0
+    wsum = 0.0
+    tz = nx
+    margin = W * abs(nz) + 2.0 * blur + 1.0
+    lo = pz - (a - margin) * abs(tz)
+    hi = pz + (a - margin) * abs(tz)
+    if hi <= lo:
+        return cnt, wsum
+    for mz in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
+        vv = -mz
+        if vv < 0 or vv >= h:
+            continue
+        xe = (rho - nz * mz) / nx
+        ue = int(math.floor(xe + 0.5))
+        u0 = ue - W
+        u1 = ue + W
+        if u0 < 0 or u1 >= w:
+            continue
+        if side > 0 and u0 < u_split + clear:
+            continue
+        if side < 0 and u1 > u_split - clear:
+            continue
+        L = 0.0
+        q = 0.0
+        for uu in range(u0, u1 + 1):
+            cv = c[vv, uu]
+            L += cv
+            q += cv * (1.0 - cv)
+        if nx > 0:
+            uedge = (u0 - 0.5) + L
+        else:
+            uedge = (u1 + 0.5) - L
+        if cnt < _MAX_SAMPLES:
+            xs[cnt] = mz
+            ys[cnt] = uedge
+            cnt += 1
+            wsum += q * abs(nx)
+    return cnt, wsum
+
+
+@njit(cache=True)
+def _line_fit(xs, ys, cnt):  # pragma: no cover - compiled
+    """Least squares r = alpha + beta s through the first ``cnt`` samples.  Returns (mean s, mean r, S_ss, beta,
+    residual sum of squares); S_ss <= 0 (all s equal): no line, beta and the residual 0."""
+    sm = 0.0
+    rm = 0.0
+    for i in range(cnt):
+        sm += xs[i]
+        rm += ys[i]
+    sm /= cnt
+    rm /= cnt
+    sss = 0.0
+    ssr = 0.0
+    for i in range(cnt):
+        sss += (xs[i] - sm) ** 2
+        ssr += (xs[i] - sm) * (ys[i] - rm)
+    if sss <= 0:
+        return sm, rm, sss, 0.0, 0.0
+    beta = ssr / sss
+    alpha0 = rm - beta * sm
+    rr = 0.0
+    for i in range(cnt):
+        e = ys[i] - alpha0 - beta * xs[i]
+        rr += e * e
+    return sm, rm, sss, beta, rr
+
+
+@njit(cache=True)
+def _centre_and_side(res, g, X0, Z0):  # pragma: no cover - compiled
+    """The square's centre (``res[1]``, ``res[2]``) and half side (``res[7]``) from the offsets of opposite faces
+    (``res[12..15]``) along the fitted direction ``g``; a pair of faces not both fitted keeps the centre's
+    component of the starting point (X0, Z0)."""
+    a_sum = 0.0
+    a_n = 0
+    n0x = math.cos(g - 0.5 * math.pi)
+    n0z = math.sin(g - 0.5 * math.pi)
+    n1x = -n0z
+    n1z = n0x
+    comp0 = n0x * X0 + n0z * Z0
+    comp1 = n1x * X0 + n1z * Z0
+    if not math.isnan(res[12]) and not math.isnan(res[14]):
+        comp0 = 0.5 * (res[12] - res[14])
+        a_sum += 0.5 * (res[12] + res[14])
+        a_n += 1
+    if not math.isnan(res[13]) and not math.isnan(res[15]):
+        comp1 = 0.5 * (res[13] - res[15])
+        a_sum += 0.5 * (res[13] + res[15])
+        a_n += 1
+    Xc = comp0 * n0x + comp1 * n1x
+    Zc = comp0 * n0z + comp1 * n1z
+    res[1] = Xc
+    res[2] = -Zc
+    res[7] = a_sum / a_n if a_n > 0 else np.nan
+
+
 @njit(cache=True)
 def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
     """Edge fits of the four faces of one square (module docstring, step 5).
@@ -48,112 +196,23 @@ def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragm
         res[12 + k] = np.nan
         res[16 + k] = np.nan
         res[20 + k] = np.nan
-    xs = np.empty(512)
-    ys = np.empty(512)
+    xs = np.empty(_MAX_SAMPLES)
+    ys = np.empty(_MAX_SAMPLES)
     for k in range(4):
         nu = gamma - 0.5 * math.pi + 0.5 * math.pi * k
         nx = math.cos(nu)
         nz = math.sin(nu)
         rho = nx * X0 + nz * Z0 + a
-        px = X0 + a * nx
-        pz = Z0 + a * nz
         cols = abs(nz) >= abs(nx)
-        cnt = 0
-        wsum = 0.0
         if cols:
-            tx = -nz
-            margin = W * abs(nx) + 2.0 * blur + 1.0
-            lo = px - (a - margin) * abs(tx)
-            hi = px + (a - margin) * abs(tx)
-            if hi <= lo:
-                continue
-            for uu in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
-                if side > 0 and uu < u_split + clear:
-                    continue
-                if side < 0 and uu > u_split - clear:
-                    continue
-                if uu < 0 or uu >= w:
-                    continue
-                ze = (rho - nx * uu) / nz
-                ve = int(math.floor(-ze + 0.5))
-                v0 = ve - W
-                v1 = ve + W
-                if v0 < 0 or v1 >= h:
-                    continue
-                L = 0.0
-                q = 0.0
-                for vv in range(v0, v1 + 1):
-                    cv = c[vv, uu]
-                    L += cv
-                    q += cv * (1.0 - cv)
-                if nz > 0:
-                    vedge = (v1 + 0.5) - L
-                else:
-                    vedge = (v0 - 0.5) + L
-                if cnt < 512:
-                    xs[cnt] = uu
-                    ys[cnt] = -vedge
-                    cnt += 1
-                    wsum += q * abs(nz)
+            cnt, wsum = _column_samples(c, X0 + a * nx, rho, nx, nz, a, W, blur, u_split, side, h, w, clear, xs, ys)
         else:
-            tz = nx
-            margin = W * abs(nz) + 2.0 * blur + 1.0
-            lo = pz - (a - margin) * abs(tz)
-            hi = pz + (a - margin) * abs(tz)
-            if hi <= lo:
-                continue
-            for mz in range(int(math.ceil(lo)), int(math.floor(hi)) + 1):
-                vv = -mz
-                if vv < 0 or vv >= h:
-                    continue
-                xe = (rho - nz * mz) / nx
-                ue = int(math.floor(xe + 0.5))
-                u0 = ue - W
-                u1 = ue + W
-                if u0 < 0 or u1 >= w:
-                    continue
-                if side > 0 and u0 < u_split + clear:
-                    continue
-                if side < 0 and u1 > u_split - clear:
-                    continue
-                L = 0.0
-                q = 0.0
-                for uu in range(u0, u1 + 1):
-                    cv = c[vv, uu]
-                    L += cv
-                    q += cv * (1.0 - cv)
-                if nx > 0:
-                    uedge = (u0 - 0.5) + L
-                else:
-                    uedge = (u1 + 0.5) - L
-                if cnt < 512:
-                    xs[cnt] = mz
-                    ys[cnt] = uedge
-                    cnt += 1
-                    wsum += q * abs(nx)
+            cnt, wsum = _row_samples(c, Z0 + a * nz, rho, nx, nz, a, W, blur, u_split, side, h, w, clear, xs, ys)
         if cnt < 5:
             continue
-        # least squares r = alpha + beta s
-        sm = 0.0
-        rm = 0.0
-        for i in range(cnt):
-            sm += xs[i]
-            rm += ys[i]
-        sm /= cnt
-        rm /= cnt
-        sss = 0.0
-        ssr = 0.0
-        for i in range(cnt):
-            sss += (xs[i] - sm) ** 2
-            ssr += (xs[i] - sm) * (ys[i] - rm)
+        sm, rm, sss, beta, rr = _line_fit(xs, ys, cnt)
         if sss <= 0:
             continue
-        beta = ssr / sss
-        alpha0 = rm - beta * sm
-        rr = 0.0
-        for i in range(cnt):
-            e = ys[i] - alpha0 - beta * xs[i]
-            rr += e * e
         norm = 1.0 / (1.0 + beta * beta)
         ss_res += rr * norm
         n_res += cnt - 2
@@ -185,27 +244,4 @@ def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragm
     res[0] = g
     res[3] = math.sqrt(ss_res / n_res) if n_res > 0 else np.nan
     res[4] = sw
-    # centre and half side from opposite faces
-    cu = uc
-    cv = vc
-    a_sum = 0.0
-    a_n = 0
-    n0x = math.cos(g - 0.5 * math.pi)
-    n0z = math.sin(g - 0.5 * math.pi)
-    n1x = -n0z
-    n1z = n0x
-    comp0 = n0x * X0 + n0z * Z0
-    comp1 = n1x * X0 + n1z * Z0
-    if not math.isnan(res[12]) and not math.isnan(res[14]):
-        comp0 = 0.5 * (res[12] - res[14])
-        a_sum += 0.5 * (res[12] + res[14])
-        a_n += 1
-    if not math.isnan(res[13]) and not math.isnan(res[15]):
-        comp1 = 0.5 * (res[13] - res[15])
-        a_sum += 0.5 * (res[13] + res[15])
-        a_n += 1
-    Xc = comp0 * n0x + comp1 * n1x
-    Zc = comp0 * n0z + comp1 * n1z
-    res[1] = Xc
-    res[2] = -Zc
-    res[7] = a_sum / a_n if a_n > 0 else np.nan
+    _centre_and_side(res, g, X0, Z0)

@@ -52,6 +52,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from .face_fit import fit_square, wrap_angle
+from .moments import half_direction, window_moments
 from .segmentation import BORDER_RING, background, coverage_runs, fill_holes, particles
 
 __all__ = ["COLUMNS", "STATUS", "STATUS_NAMES", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads",
@@ -252,74 +253,6 @@ def numba_threads() -> int:
 
 # ---------------------------------------------------------------------------------------------- compiled kernel
 @njit(cache=True)
-def _half_moments(c, ua, ub, v0, v1, uo, vo, mom, j):  # pragma: no cover - compiled
-    """M0 and the complex moments M_k = sum c z^k (k = 1..4, z = (u - uo) + i (vo - v)) of the columns
-    ``ua..ub`` and rows ``v0..v1``, into ``mom[j:j + 9]`` (M0, Re M1, Im M1, ..., Re M4, Im M4)."""
-    s0 = 0.0
-    s1r = 0.0
-    s1i = 0.0
-    s2r = 0.0
-    s2i = 0.0
-    s3r = 0.0
-    s3i = 0.0
-    s4r = 0.0
-    s4i = 0.0
-    for v in range(v0, v1 + 1):
-        Z = vo - v
-        Z2 = Z * Z
-        for u in range(ua, ub + 1):
-            x = c[v, u]
-            X = u - uo
-            a2 = X * X - Z2
-            b2 = 2.0 * X * Z
-            s0 += x
-            s1r += x * X
-            s1i += x * Z
-            s2r += x * a2
-            s2i += x * b2
-            s3r += x * (a2 * X - b2 * Z)
-            s3i += x * (a2 * Z + b2 * X)
-            s4r += x * (a2 * a2 - b2 * b2)
-            s4i += x * (2.0 * a2 * b2)
-    mom[j] = s0
-    mom[j + 1] = s1r
-    mom[j + 2] = s1i
-    mom[j + 3] = s2r
-    mom[j + 4] = s2i
-    mom[j + 5] = s3r
-    mom[j + 6] = s3i
-    mom[j + 7] = s4r
-    mom[j + 8] = s4i
-
-
-@njit(cache=True)
-def _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom):  # pragma: no cover - compiled
-    """One pass over the window: per half (A: columns below ``u_split``, about (ua, vo); B: about (ub, vo)) the
-    coverage sum M0 and the complex moments M_k = sum c z^k, k = 1..4, with z = (u - u_o) + i (v_o - v).
-    ``mom`` = (A: M0, Re M1, Im M1, ..., Re M4, Im M4, B: the same): 18 numbers."""
-    us = int(math.ceil(u_split))
-    _half_moments(c, u0, us - 1, v0, v1, ua, vo, mom, 0)
-    _half_moments(c, us, u1, v0, v1, ub, vo, mom, 9)
-
-
-@njit(cache=True)
-def _half(mom, j, uo, vo, cen):  # pragma: no cover - compiled
-    """Centroid (u, v) of one half into ``cen`` and the face direction (mod pi/2) of its square from the fourth-order
-    complex moment about that centroid: for a square with faces along gamma, sum c (z - z_c)^4 =
-    -(16/15) a^6 exp(4 i gamma)."""
-    m0 = mom[j]
-    m1 = complex(mom[j + 1], mom[j + 2])
-    m2 = complex(mom[j + 3], mom[j + 4])
-    m3 = complex(mom[j + 5], mom[j + 6])
-    m4 = complex(mom[j + 7], mom[j + 8])
-    d = m1 / m0
-    m4c = m4 - 4.0 * d * m3 + 6.0 * d * d * m2 - 4.0 * d * d * d * m1 + d * d * d * d * m0
-    cen[0] = uo + d.real
-    cen[1] = vo - d.imag
-    return 0.25 * (math.atan2(m4c.imag, m4c.real) - math.pi)
-
-
-@njit(cache=True)
 def _hinge_corner(g, left):  # pragma: no cover - compiled
     """Index k of the face whose corner with face k + 1 is the hinge corner: the rightmost corner of cube A
     (``left``) or the leftmost of cube B, for a square with faces along ``g``."""
@@ -381,51 +314,37 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
 
 
 @njit(cache=True)
-def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
-    h, w = img.shape
+def _light_level(img, pinv, prm, row):  # pragma: no cover - compiled
+    """Step 1: the frame's light level relative to the recording's, from the border ring (the background image is
+    the recording's), and the pixel noise in coverage units.  Returns (status, level, sigma_pix); status 0: go on."""
     pol = prm[0]
     bg_ref = prm[1]
-    contrast = prm[2]
-    W = int(prm[3])
-    blur = prm[4]
-    min_area = prm[5]
-    area_ref = prm[6]
-    area_tol = prm[7]
-    fill = prm[10] > 0
+    kappa = prm[2] / bg_ref
     dark = prm[11]
-    # ---- 1. the frame's light level from the border ring (the background image is the recording's)
     bgp = np.zeros(5)
-    kappa = contrast / bg_ref
     background(img, dark, pol, kappa, pinv, bgp)
     if bgp[4] > 0:
-        row[0] = 1
-        return
+        return 1, 0.0, 0.0
     level = bgp[0]
     row[_I_BACKGROUND] = level * bg_ref - dark
     if abs(level - 1.0) > 0.25 * kappa:
-        row[0] = 1
-        return
+        return 1, level, 0.0
     if level < 0.05:  # an unlit (black) frame on a dark background
-        row[0] = 2
-        return
+        return 2, level, 0.0
     sigma_pix = bgp[3] / (kappa * level)
     row[_I_PIXEL_NOISE] = sigma_pix
-    # ---- 2. coverage and particles
-    c = np.empty((h, w), np.float32)
-    cap = 16384
-    rv = np.empty(cap, np.int32)
-    r0 = np.empty(cap, np.int32)
-    r1 = np.empty(cap, np.int32)
-    row_start = np.empty(h + 1, np.int32)
-    nruns = coverage_runs(img, dark, pinv, pol / (kappa * level), pol / kappa, c, rv, r0, r1, row_start)
-    if nruns < 0:
-        row[0] = 1
-        return
+    return 0, level, sigma_pix
+
+
+@njit(cache=True)
+def _dimer_box(rv, r0, r1, row_start, nruns, h, w, min_area, blur, M, win):  # pragma: no cover - compiled
+    """Step 2: the particles of the coverage runs and the dimer's bounding box (u0, u1, v0, v1 into ``win``): the
+    largest particle, joined by the second when both are cube-sized and touch.  Returns the status (0: a dimer
+    alone in its window ``M`` px around the box)."""
     box = np.zeros(5 * _MAX_PARTICLES)
     nbig = particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
     if nbig == 0:
-        row[0] = 2
-        return
+        return 2
     bu0, bu1, bv0, bv1 = int(box[0]), int(box[1]), int(box[2]), int(box[3])
     first_other = 1
     if nbig >= 2:
@@ -434,43 +353,32 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
         gap_v = max(box[7] - box[3], box[2] - box[8])
         if ratio <= 2.0:
             if gap_u > 3.0 + 3.0 * blur or gap_v > 3:  # two cube-sized particles apart
-                row[0] = 4
-                return
+                return 4
             bu0 = min(bu0, int(box[5]))
             bu1 = max(bu1, int(box[6]))
             bv0 = min(bv0, int(box[7]))
             bv1 = max(bv1, int(box[8]))
             first_other = 2
-    M = W + 2
     if nbig > _MAX_PARTICLES:
-        row[0] = 4
-        return
+        return 4
     for k in range(first_other, nbig):  # another particle counts only where it touches the dimer's window
         if (box[5 * k] <= bu1 + M and box[5 * k + 1] >= bu0 - M and box[5 * k + 2] <= bv1 + M
                 and box[5 * k + 3] >= bv0 - M):
-            row[0] = 4
-            return
-    if fill:
-        fill_holes(c, bu0, bu1, bv0, bv1, int(math.ceil(3.0 * blur)) + 1)
-    u0 = bu0 - M
-    u1 = bu1 + M
-    v0 = bv0 - M
-    v1 = bv1 + M
-    if u0 < BORDER_RING or v0 < BORDER_RING or u1 >= w - BORDER_RING or v1 >= h - BORDER_RING:
-        row[0] = 3
-        return
-    # ---- 3. centre of mass and 4. each half's first orientation, in one pass (the halves split at the bounding
-    #         box's middle column, the hinge of a mirror-symmetric dimer)
-    u_split = 0.5 * (bu0 + bu1)
-    ua = 0.5 * (bu0 + u_split)
-    ub = 0.5 * (u_split + bu1)
-    vo = 0.5 * (bv0 + bv1)
-    mom = np.zeros(18)
-    _moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom)
+            return 4
+    win[0] = bu0
+    win[1] = bu1
+    win[2] = bv0
+    win[3] = bv1
+    return 0
+
+
+@njit(cache=True)
+def _centre_of_mass(mom, ua, ub, vo, u0, u1, v0, v1, sigma_pix, row):  # pragma: no cover - compiled
+    """Step 3: the silhouette's centre of mass (u, v), area and the standard deviation of v from the pixel noise,
+    from the two halves' moments, into ``row``.  Returns the area (<= 0: nothing covered)."""
     s0 = mom[0] + mom[9]
     if s0 <= 0 or mom[0] <= 0 or mom[9] <= 0:
-        row[0] = 2
-        return
+        return -1.0
     ucom = (mom[0] * ua + mom[1] + mom[9] * ub + mom[10]) / s0
     vcom = vo - (mom[2] + mom[11]) / s0
     svv = 0.0
@@ -480,16 +388,15 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
     row[_I_U_COM] = ucom
     row[_I_AREA] = s0
     row[_I_SIGMA_V] = sigma_pix * math.sqrt(svv) / s0
-    if area_ref > 0 and abs(s0 / area_ref - 1.0) > area_tol:
-        row[0] = 5
-        return
-    a_half = 0.5 * math.sqrt(0.5 * s0)
-    d = a_half * math.sqrt(2.0)
-    cen = np.zeros((2, 2))
-    gam = np.zeros(2)
-    gam[0] = _half(mom, 0, ua, vo, cen[0])
-    gam[1] = _half(mom, 9, ub, vo, cen[1])
-    # bends (step 6) and the sign of a bend near face contact from the hinge's height
+    return s0
+
+
+@njit(cache=True)
+def _first_orientations(c, mom, ua, ub, vo, u_split, v0, v1, vcom, d, cen, gam):  # pragma: no cover - compiled
+    """Step 4: each half's centroid (``cen``) and face direction (``gam``) from its moments, the bend of each cube
+    put on the side the hinge's height says near face contact.  Returns the bends (phi_A, phi_B)."""
+    gam[0] = half_direction(mom, 0, ua, vo, cen[0])
+    gam[1] = half_direction(mom, 9, ub, vo, cen[1])
     phiA = wrap_angle(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
     phiB = wrap_angle(0.25 * math.pi - gam[1], 0.5 * math.pi)
     hz = 0.0
@@ -510,21 +417,31 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
                 phiB -= math.copysign(0.5 * math.pi, phiB)
     gam[0] = phiA + 0.75 * math.pi
     gam[1] = 0.25 * math.pi - phiB
-    # ---- 5. edge fits, two passes
-    resA = np.empty(24)
-    resB = np.empty(24)
+    return phiA, phiB
+
+
+@njit(cache=True)
+def _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB):  # pragma: no cover - compiled
+    """Step 5: the two squares' edge fits, two passes, each from the previous pass's centres and directions
+    (updated in ``cen``, ``gam``).  Returns False when a square has too few edge samples."""
     for it in range(2):
         fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
         fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)
         if math.isnan(resA[0]) or math.isnan(resB[0]):
-            row[0] = 6
-            return
+            return False
         gam[0] = resA[0]
         gam[1] = resB[0]
         cen[0, 0] = resA[1]
         cen[0, 1] = resA[2]
         cen[1, 0] = resB[1]
         cen[1, 1] = resB[2]
+    return True
+
+
+@njit(cache=True)
+def _angles(phiA, phiB, gam, cen, a_half, resA, resB, row):  # pragma: no cover - compiled
+    """Step 6: the opening angles alpha, beta, the tilt and the fitted squares' geometry and uncertainties into
+    ``row``, the bends kept on the side step 4 chose.  Returns (alpha, beta)."""
     phiA2 = phiA + wrap_angle(gam[0] - 0.75 * math.pi - phiA, 0.5 * math.pi)
     phiB2 = phiB + wrap_angle(0.25 * math.pi - gam[1] - phiB, 0.5 * math.pi)
     alpha = 0.5 * math.pi + phiA2 + phiB2
@@ -548,6 +465,76 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
     row[_I_EDGE_RMS] = math.sqrt(0.5 * (ra * ra + rb * rb))
     row[_I_SIGMA_THETA] = (2.0 / math.pi) * math.sqrt(ra * ra / resA[4] + rb * rb / resB[4])
     _hinge_geometry(gam, cen, a_half, resA, resB, row)
+    return alpha, beta
+
+
+@njit(cache=True)
+def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
+    """One frame's measurement into ``row`` (:data:`COLUMNS`), the steps of the module docstring; ``row[0]`` is the
+    status."""
+    h, w = img.shape
+    pol = prm[0]
+    kappa = prm[2] / prm[1]
+    W = int(prm[3])
+    blur = prm[4]
+    status, level, sigma_pix = _light_level(img, pinv, prm, row)
+    if status != 0:
+        row[0] = status
+        return
+    # ---- 2. coverage and particles
+    c = np.empty((h, w), np.float32)
+    cap = 16384
+    rv = np.empty(cap, np.int32)
+    r0 = np.empty(cap, np.int32)
+    r1 = np.empty(cap, np.int32)
+    row_start = np.empty(h + 1, np.int32)
+    nruns = coverage_runs(img, prm[11], pinv, pol / (kappa * level), pol / kappa, c, rv, r0, r1, row_start)
+    if nruns < 0:
+        row[0] = 1
+        return
+    M = W + 2
+    win = np.zeros(4, np.int64)
+    status = _dimer_box(rv, r0, r1, row_start, nruns, h, w, prm[5], blur, M, win)
+    if status != 0:
+        row[0] = status
+        return
+    bu0, bu1, bv0, bv1 = win[0], win[1], win[2], win[3]
+    if prm[10] > 0:
+        fill_holes(c, bu0, bu1, bv0, bv1, int(math.ceil(3.0 * blur)) + 1)
+    u0 = bu0 - M
+    u1 = bu1 + M
+    v0 = bv0 - M
+    v1 = bv1 + M
+    if u0 < BORDER_RING or v0 < BORDER_RING or u1 >= w - BORDER_RING or v1 >= h - BORDER_RING:
+        row[0] = 3
+        return
+    # ---- 3. centre of mass and 4. each half's first orientation, in one pass (the halves split at the bounding
+    #         box's middle column, the hinge of a mirror-symmetric dimer)
+    u_split = 0.5 * (bu0 + bu1)
+    ua = 0.5 * (bu0 + u_split)
+    ub = 0.5 * (u_split + bu1)
+    vo = 0.5 * (bv0 + bv1)
+    mom = np.zeros(18)
+    window_moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom)
+    s0 = _centre_of_mass(mom, ua, ub, vo, u0, u1, v0, v1, sigma_pix, row)
+    if s0 <= 0:
+        row[0] = 2
+        return
+    if prm[6] > 0 and abs(s0 / prm[6] - 1.0) > prm[7]:
+        row[0] = 5
+        return
+    a_half = 0.5 * math.sqrt(0.5 * s0)
+    cen = np.zeros((2, 2))
+    gam = np.zeros(2)
+    phiA, phiB = _first_orientations(c, mom, ua, ub, vo, u_split, v0, v1, row[_I_V_COM], a_half * math.sqrt(2.0),
+                                     cen, gam)
+    # ---- 5. edge fits, two passes
+    resA = np.empty(24)
+    resB = np.empty(24)
+    if not _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB):
+        row[0] = 6
+        return
+    alpha, beta = _angles(phiA, phiB, gam, cen, a_half, resA, resB, row)
     if alpha <= 0.0 or beta <= 0.0:
         row[0] = 7
         return

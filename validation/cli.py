@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -12,6 +11,7 @@ from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 from fitting.final_checks import NoSaneModelError
+from fitting.fit_output import read_model_json
 from fitting.methods import DEFAULT_METHOD, METHODS, methods_help
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_compare_parser", "add_diagnose_parser", "add_blind_parser",
@@ -56,26 +56,12 @@ def add_compare_parser(sub) -> None:
 
 
 def _read_model(path: Path) -> dict:
-    try:
-        model = json.loads(path.read_text())
-    except OSError as exc:
-        raise UserInputError(f"{path}: cannot read ({exc.strerror})") from None
-    except json.JSONDecodeError as exc:
-        raise UserInputError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
-    if not isinstance(model, dict) or "equations" not in model or not isinstance(model["equations"], dict):
-        raise UserInputError(f"{path}: not a model.json (no 'equations' object)")
-    for eq, coefs in model["equations"].items():
-        if eq not in ("yddot", "thetaddot") or not isinstance(coefs, dict):
-            raise UserInputError(f"{path}: unknown equation {eq!r}; expected yddot and thetaddot")
-        from cubedimer.terms import parse_term
-
-        for term, v in coefs.items():
-            try:
-                parse_term(term)
-                float(v)
-            except (ValueError, TypeError):
-                raise UserInputError(f"{path}: bad term or value {term!r}: {v!r} in {eq}") from None
-    return model
+    """The model.json document (:func:`fitting.fit_output.read_model_json`) of a levitated dimer."""
+    model_file = read_model_json(path)
+    if model_file.system.generic:
+        raise UserInputError(f"{path}: a model of a generic system ({', '.join(model_file.system.equation_names)}); "
+                             "compare needs a levitated-dimer model (yddot and thetaddot)")
+    return model_file.document
 
 
 def run_compare(args: argparse.Namespace) -> int:

@@ -27,7 +27,7 @@ import numpy as np
 
 import fitting.derivatives as derivatives
 from acousim.models import ExperimentConditions, dynamic_model
-from validation.blind import write_twin_like_dataset
+from validation.blind import TwinLikeConfig, write_twin_like_dataset
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 from acousim.models import ModelSpec
 
@@ -75,8 +75,8 @@ def main() -> None:
     print("|---|---|---|---|---|")
     for label, kw in cases.items():
         out = Path(tempfile.mkdtemp())
-        truth = write_twin_like_dataset(out, runs=8, duration=3.0, seed=args.seed, pressure_error=0.05,
-                                        force_model=fm, **kw)
+        truth = write_twin_like_dataset(out, TwinLikeConfig(runs=8, duration=3.0, seed=args.seed, pressure_error=0.05,
+                                                            force_model=fm, **kw))
         for smoother in SMOOTHERS:
             if smoother == "exact" and kw["noise"][1] > 1e-6:
                 continue

@@ -20,7 +20,7 @@ import numpy as np
 
 from acousim.models import ExperimentConditions, dynamic_model
 from acousim.fullwave.family import shipped_family
-from validation.blind import write_twin_like_dataset
+from validation.blind import TwinLikeConfig, write_twin_like_dataset
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 from acousim.models import ModelSpec
 
@@ -31,7 +31,8 @@ EFFECTS = {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 2.0}}  # the only d
 def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECTS, runs: int = 8,
                       duration: float = 3.0) -> list:
     """What the diagnosis names on the Gor'kov twin of the same case (same seed, effects and drift)."""
-    write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift, effects=effects)
+    write_twin_like_dataset(out, TwinLikeConfig(runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift,
+                                                effects=effects))
     d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("gorkov"))
     return d.identified
 
@@ -39,8 +40,8 @@ def gorkov_identified(seed: int, drift: float, out: Path, effects: dict = EFFECT
 def run_case(side: float, gap_ratio: float, seed: int, drift: float, out: Path, effects: dict = EFFECTS,
              runs: int = 8, duration: float = 3.0) -> dict:
     fm = dynamic_model("fullwave", ExperimentConditions(side_length_m=side, gap_m=gap_ratio * side))
-    truth = write_twin_like_dataset(out, runs=runs, duration=duration, seed=seed, pressure_error=0.05, drift=drift,
-                                    effects=effects, force_model=fm)
+    truth = write_twin_like_dataset(out, TwinLikeConfig(runs=runs, duration=duration, seed=seed, pressure_error=0.05,
+                                                        drift=drift, effects=effects, force_model=fm))
     t0 = time.perf_counter()
     d = diagnose_dataset(out, DiagnoseConfig(long_time=False), progress=False, spec=ModelSpec("fullwave"))
     cal = d.calibration

@@ -10,6 +10,7 @@ from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
 from cubedimer.meta import read_meta
 from cubedimer.system import LEVITATED_DIMER, read_system
 from fitting.cli import main
+from fitting.fit_output import read_model_json
 from fitting.model import PolynomialModel
 from fitting.synthetic import SyntheticConfig, generate_runs
 
@@ -58,7 +59,9 @@ def test_a_generic_system_is_fitted_end_to_end_in_its_declared_names(raw, tmp_pa
                                    "phi1^3": "y^3", "phi1^2*phi2": "y^2*theta"}[term]]
             assert abs(est["value"] - true) < 4 * est["std_error"], (eq, term, est, true)
     # the file reads back into the library's model (the declared names translated)
-    model = PolynomialModel.from_json(str(out / "model.json"))
+    model_file = read_model_json(out / "model.json")
+    assert model_file.system.generic and model_file.system.equation_names == ("phi1ddot", "phi2ddot")
+    model = model_file.model
     assert (model.support == TRUTH.support).all()
     # the measured rate is used in place of the derivative of phi1: present, converted from deg/s
     ds = load_dataset(data, config=LoadConfig(systems=("levitated_dimer", "generic")))

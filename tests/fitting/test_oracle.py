@@ -1,5 +1,6 @@
 """The oracle (integral-form standard errors at a model's own noise-free trajectories) and the run planner."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from fitting.cli import main
 from fitting.integral_form import detrend_windows, fit_integral_form, integral_columns, integral_window, window_starts
 from fitting.model import TERMS
 from fitting.oracle import NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise, oracle_standard_errors
-from fitting.run_planning import plan_runs
+from fitting.run_planning import PlanConfig, plan_runs
 from fitting.pipeline import prepare_runs
 from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model, write_dataset
 
@@ -151,9 +152,9 @@ def test_alias_z_predicts_how_often_least_squares_prefers_the_alias():
 def test_planner_scaling_is_measured_and_consistent(model):
     """The planner's rows at n runs: the median oracle SE over random draws falls like 1/sqrt(n) (measured on the
     draws), and its row at n = n_reference is the oracle of the reference runs themselves."""
-    kw = dict(duration=2.0, fps=FPS, term="thetaddot:theta*y^2", n_reference=32, run_counts=(8, 16, 32), n_draws=100,
-              seed=3)
-    plan = plan_runs(model, NOISE, **kw)
+    cfg = PlanConfig(duration=2.0, fps=FPS, term="thetaddot:theta*y^2", n_reference=32, run_counts=(8, 16, 32),
+                     n_draws=100, seed=3)
+    plan = plan_runs(model, NOISE, cfg)
     assert (plan.equation, plan.term) == ("thetaddot", "y^2*theta")
     se = {n: s for n, s, _, _ in plan.table}
     # pooling runs of different amplitudes also breaks near-collinearities, so few runs gain slightly more than
@@ -170,11 +171,11 @@ def test_planner_scaling_is_measured_and_consistent(model):
     assert plan.alias == d.alias and plan.alias_z_reference == pytest.approx(d.alias_z, rel=1e-9)
     assert plan.runs_needed_alias == int(np.ceil(32 * (4.0 / d.alias_z) ** 2))
     # a smaller term (the model changes with it, so does the table): the first row whose median z reaches 5
-    small = plan_runs(model, NOISE, size=5.0 * se[16], **kw)
+    small = plan_runs(model, NOISE, replace(cfg, size=5.0 * se[16]))
     assert small.table[0][2] < 5.0 <= small.table[-1][2]
     assert small.runs_needed == next(n for n, _, z, _ in small.table if z >= 5.0)
     # far beyond the table: extrapolated with 1/sqrt(n) from its largest row
-    tiny = plan_runs(model, NOISE, size=0.1 * se[32], **kw)
+    tiny = plan_runs(model, NOISE, replace(cfg, size=0.1 * se[32]))
     n_last, se_last = tiny.table[-1][:2]
     assert tiny.runs_needed == pytest.approx(n_last * (5.0 * se_last / abs(tiny.coefficient)) ** 2, rel=0.01)
     assert tiny.runs_needed_90 == 0

@@ -5,7 +5,7 @@ import pytest
 
 from validation.blind import (KINDS, OUT_OF_CANDIDATE, BlindConfig, blind_table, draw_extended_case, insert_glitches,
                               score_drift, score_glitches, score_out_of_candidate, score_unit_slip,
-                              slip_units, summarize_kind, write_twin_like_dataset)
+                              slip_units, summarize_kind, write_twin_like_dataset, TwinLikeConfig)
 
 
 def _diag_factory(make_diagnosis):
@@ -64,7 +64,7 @@ def test_glitch_case_that_loses_accuracy_scores_as_lost(tmp_path, make_diagnosis
     diagnosis that names an extra effect counts against its clean twin."""
     from cubedimer.dataset import load_dataset
 
-    write_twin_like_dataset(tmp_path, runs=3, duration=1.0, seed=4)
+    write_twin_like_dataset(tmp_path, TwinLikeConfig(runs=3, duration=1.0, seed=4))
     assert load_dataset(tmp_path).n_glitches == 0
     inserted = insert_glitches(tmp_path, seed=5)
     assert 9 <= inserted <= 24 and load_dataset(tmp_path).n_glitches == inserted
@@ -87,7 +87,7 @@ def test_unit_slip_file_is_skipped_by_name(tmp_path, slip, word, make_diagnosis)
     """The loader names the slipped file; a diagnosis that skipped another file (or none) scores as not named."""
     from cubedimer.dataset import load_dataset
 
-    write_twin_like_dataset(tmp_path, runs=4, duration=1.0, seed=6)
+    write_twin_like_dataset(tmp_path, TwinLikeConfig(runs=4, duration=1.0, seed=6))
     name = slip_units(tmp_path, slip, 5)
     assert name == "run01.csv"
     skipped = load_dataset(tmp_path).skipped_files()

@@ -13,10 +13,10 @@ from .config import KINDS, BlindConfig
 from .extended import (OUT_OF_CANDIDATE, draw_extended_case, insert_glitches, run_extended_case, score_drift,
                        score_glitches, score_out_of_candidate, score_unit_slip, slip_units)
 from .study import blind_table, run_blind, summarize_kind
-from .twin_like import TwinLikeError, write_twin_like_dataset
+from .twin_like import TwinLikeConfig, TwinLikeError, write_twin_like_dataset
 
 __all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "KINDS", "OUT_OF_CANDIDATE", "BlindConfig", "draw_case",
            "draw_extended_case", "run_case", "run_extended_case", "score_case", "score_out_of_candidate",
            "score_drift", "score_glitches", "score_unit_slip", "insert_glitches", "slip_units", "summarize",
            "summarize_kind", "run_blind", "blind_table", "candidates_table", "confusion_figure",
-           "write_twin_like_dataset", "TwinLikeError"]
+           "write_twin_like_dataset", "TwinLikeConfig", "TwinLikeError"]

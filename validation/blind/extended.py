@@ -124,7 +124,7 @@ def run_extended_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
 
 
 def _run_twin_like(case: dict, config: BlindConfig, data: Path) -> dict:
-    from .twin_like import TwinLikeError, write_twin_like_dataset
+    from .twin_like import TwinLikeConfig, TwinLikeError, write_twin_like_dataset
 
     kw = dict(runs=config.runs, duration=config.duration, pressure_error=case["pressure_error_range"],
               effects=case["effects"], drift_period=DRIFT_PERIOD)
@@ -135,7 +135,7 @@ def _run_twin_like(case: dict, config: BlindConfig, data: Path) -> dict:
     error, redraws = None, 0
     for redraws in range(5):  # a drawn start can leave the trap: redraw the data seed, same truth otherwise
         try:
-            truth = write_twin_like_dataset(data, seed=case["data_seed"] + redraws, **kw)
+            truth = write_twin_like_dataset(data, TwinLikeConfig(seed=case["data_seed"] + redraws, **kw))
             error = None
             break
         except TwinLikeError as exc:

@@ -47,6 +47,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.folds import run_folds
+
 from .gap_model import GapFit
 from .problem import DiagnosisProblem
 from .simulation_model import SimulationTerms
@@ -185,11 +187,10 @@ class _Normal:
         n = self.bb.size
         if not terms:
             return self.bb.copy()
-        k = min(folds, n)
         out = np.empty(n)
-        for f in range(k):
-            coef = self.solve([i for i in range(n) if i % k != f], terms)
-            for i in range(f, n, k):
+        for train, test in run_folds(n, folds):
+            coef = self.solve(train, terms)
+            for i in test:
                 out[i] = self.rss(i, terms, coef)
         return out
 

@@ -29,6 +29,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.folds import run_folds
+
 from .candidates import CANDIDATE_EFFECTS, acting_components
 from .gap_model import apply_gap_model, fit_gap_model
 from .metrics import fit_gaps
@@ -131,12 +133,8 @@ def held_out_gaps(problem: DiagnosisProblem, effects: Sequence[str], folds: int 
 
     Every run is held out exactly once, so each run gets one held-out score (leave-one-run-out when
     K >= the number of runs)."""
-    n = len(problem)
-    k = min(folds, n)
-    out = np.empty((n, 3))
-    for f in range(k):
-        test = [i for i in range(n) if i % k == f]
-        train = [i for i in range(n) if i % k != f]
+    out = np.empty((len(problem), 3))
+    for train, test in run_folds(len(problem), folds):
         fit = fit_gap_model(problem.subset(train), effects)
         held = problem.subset(test)
         out[test] = fit_gaps(held.runs, apply_gap_model(held, fit.calibration, fit.effects))

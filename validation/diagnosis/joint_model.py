@@ -14,6 +14,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.folds import run_folds
+
 from .discovery import (EQUATIONS, Discovery, dissipation_rows, integral_residuals, integrated_columns,
                         library_columns)
 from .gap_model import GapFit, apply_gap_model, fit_gap_model
@@ -41,12 +43,8 @@ def _held_out_scores(problem: DiagnosisProblem, effects: Sequence[str], discover
     and the energy component is the fit's own; with them, every component comes from the rows the
     energy-form terms were found on (:func:`dissipation_rows`, which subtract the integral-form terms)."""
     energy_terms = discovery.names("energy")
-    n = len(problem)
-    k = min(folds, n)
-    out = np.empty(n)
-    for f in range(k):
-        test = [i for i in range(n) if i % k == f]
-        train = [i for i in range(n) if i % k != f]
+    out = np.empty(len(problem))
+    for train, test in run_folds(len(problem), folds):
         tr, te = problem.subset(train), problem.subset(test)
         fit = fit_gap_model(tr, effects)
         held = apply_gap_model(te, fit.calibration, fit.effects)

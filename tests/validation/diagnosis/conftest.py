@@ -71,9 +71,9 @@ def synthetic_runs():
 def write_twin_like_dataset(path, **settings) -> dict:
     """:func:`validation.blind.twin_like.write_twin_like_dataset` (the surrogate's equations of motion with a
     drifting pressure or a cubic hinge term), with the true mean pressure within 3 % of nominal by default."""
-    from validation.blind.twin_like import write_twin_like_dataset as write
+    from validation.blind.twin_like import TwinLikeConfig, write_twin_like_dataset as write
 
-    return write(path, **{"pressure_error": 0.03, **settings})
+    return write(path, TwinLikeConfig(**{"pressure_error": 0.03, **settings}))
 
 
 #: the cubic hinge term of the discovery tests [1/s^2]: -CUBIC_HINGE theta^3 in thetaddot (on the soft hinge, 1.7 Hz,

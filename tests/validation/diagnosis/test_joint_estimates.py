@@ -11,10 +11,10 @@ def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_p
     the discovery then needs a linear theta (+2,350 1/s^2) beside theta^3 to undo it.  In the final joint model
     that theta is pair scattering's own column: it is folded into the effect, and kappa and the theta^3
     coefficient are fitted together (measured: 15,006 and -50,250)."""
-    from validation.blind.twin_like import write_twin_like_dataset
+    from validation.blind.twin_like import TwinLikeConfig, write_twin_like_dataset
 
-    truth = write_twin_like_dataset(tmp_path / "data", runs=8, duration=2.0, seed=5, cubic_hinge=5.0e4,
-                                    effects={"pair_scattering": {"kappa": 15000.0}})
+    truth = write_twin_like_dataset(tmp_path / "data", TwinLikeConfig(
+        runs=8, duration=2.0, seed=5, cubic_hinge=5.0e4, effects={"pair_scattering": {"kappa": 15000.0}}))
     diag = diagnose_dataset(tmp_path / "data", DiagnoseConfig(long_time=False), progress=False)
     assert diag.identified == ("pair_scattering",)
     effect = diag.effects[0]
