@@ -129,6 +129,39 @@ def segment_layout(n: int, length: int) -> tuple[NDArray[np.int64], NDArray[np.i
     return starts_a, owner.astype(np.int64), length
 
 
+@dataclass(frozen=True, eq=False)
+class _Segments:
+    """Every segment of every run, stacked: its run, start and length [frames], the measured (y, theta) padded to
+    the longest segment with NaN, and the runs' layouts (:func:`segment_layout`)."""
+
+    run: NDArray[np.int64]
+    start: NDArray[np.int64]
+    length: NDArray[np.int64]
+    data: NDArray[np.float64]  #: (B, Lmax, 2)
+    layouts: list
+
+    @property
+    def valid(self) -> NDArray[np.bool_]:
+        return np.isfinite(self.data[..., 0])
+
+
+def _segments(y: Sequence[NDArray], theta: Sequence[NDArray], lengths: Sequence[int]) -> _Segments:
+    """The segments of every run (:func:`segment_layout`) with their measured coordinates."""
+    seg_run, seg_start, seg_len, layouts = [], [], [], []
+    for r, (n_r, L) in enumerate(zip((len(v) for v in y), lengths)):
+        starts, owner, L = segment_layout(n_r, L)
+        layouts.append((starts, owner, L))
+        seg_run += [r] * starts.size
+        seg_start += starts.tolist()
+        seg_len += [L] * starts.size
+    seg_run_a, seg_start_a, seg_len_a = np.array(seg_run), np.array(seg_start), np.array(seg_len, dtype=np.int64)
+    data = np.full((seg_run_a.size, int(seg_len_a.max()), 2), np.nan)
+    for b, (r, s, L) in enumerate(zip(seg_run_a, seg_start_a, seg_len_a)):
+        data[b, :L, 0] = y[r][s:s + L]
+        data[b, :L, 1] = theta[r][s:s + L]
+    return _Segments(seg_run_a, seg_start_a, seg_len_a, data, layouts)
+
+
 def model_states(model: PolynomialModel, dts: Sequence[float], y: Sequence[NDArray], theta: Sequence[NDArray],
                  fallback: Sequence[NDArray], lengths: Sequence[int], sigma: tuple[float, float],
                  config: SegmentConfig = SegmentConfig(),
@@ -153,39 +186,36 @@ def model_states(model: PolynomialModel, dts: Sequence[float], y: Sequence[NDArr
     -------
     StateEstimate
     """
+    segs = _segments(y, theta, lengths)
+    run_scale = [np.maximum(np.nanmax(np.abs(np.asarray(fb, float)), axis=0), 1e-12) for fb in fallback]
+    scale = np.array([run_scale[r] for r in segs.run])  # (B, 4)
+    simulate = _segment_simulator(model, dts, segs, config.blowup_factor * scale, sigma, config)
+    if x0 is not None:
+        start = np.concatenate([np.asarray(v, float) for v in x0])
+    else:
+        start = np.array([fallback[r][s] for r, s in zip(segs.run, segs.start)])
+    steps = config.warm_steps if x0 is not None else config.gauss_newton_steps
+    traj, best_x, best_cost = _gauss_newton(simulate, segs, start, 1e-6 * np.maximum(np.abs(start), 0.1 * scale),
+                                            np.asarray(sigma, float), steps)
+    return _state_estimate(segs, traj, best_x, best_cost, y, theta, fallback)
+
+
+def _segment_simulator(model: PolynomialModel, dts: Sequence[float], segs: _Segments, bound: NDArray,
+                       sigma: tuple[float, float], config: SegmentConfig):
+    """``simulate(x) -> (trajectories (k, B, Lmax, 4), costs (k, B))`` of k stacked sets of the segments' initial
+    states (k, B, 4): the weighted misfit to the measured coordinates, infinite for a segment that blew up."""
     cols = np.flatnonzero(model.support.any(axis=0))
     if cols.size == 0:
         cols = np.array([0])
     exps = np.ascontiguousarray(EXPONENTS[cols])
     coef = np.ascontiguousarray(model.coef[:, cols])
     w = 1.0 / np.maximum(np.asarray(sigma, float), 1e-300)
-    seg_run, seg_start, seg_len, layouts = [], [], [], []
-    for r, (n_r, L) in enumerate(zip((len(v) for v in y), lengths)):
-        starts, owner, L = segment_layout(n_r, L)
-        layouts.append((starts, owner, L))
-        seg_run += [r] * starts.size
-        seg_start += starts.tolist()
-        seg_len += [L] * starts.size
-    seg_run_a, seg_start_a, seg_len_a = np.array(seg_run), np.array(seg_start), np.array(seg_len, dtype=np.int64)
-    B, Lmax = seg_run_a.size, int(seg_len_a.max())
-    data = np.full((B, Lmax, 2), np.nan)
-    for b, (r, s, L) in enumerate(zip(seg_run_a, seg_start_a, seg_len_a)):
-        data[b, :L, 0] = y[r][s:s + L]
-        data[b, :L, 1] = theta[r][s:s + L]
-    valid = np.isfinite(data[..., 0])
-    run_scale = [np.maximum(np.nanmax(np.abs(np.asarray(fb, float)), axis=0), 1e-12) for fb in fallback]
-    scale = np.array([run_scale[r] for r in seg_run_a])  # (B, 4)
-    bound = config.blowup_factor * scale
-    dt_seg = np.array([dts[r] for r in seg_run_a])
+    B, Lmax = segs.run.size, segs.data.shape[1]
+    dt_seg = np.array([dts[r] for r in segs.run])
     substeps = max(1, max(model.default_substeps(float(d), config.h_omega) for d in dts))
-    if x0 is not None:
-        start = np.concatenate([np.asarray(v, float) for v in x0])
-    else:
-        start = np.array([fallback[r][s] for r, s in zip(seg_run_a, seg_start_a)])
-    delta = 1e-6 * np.maximum(np.abs(start), 0.1 * scale)
+    data, valid, seg_len_a = segs.data, segs.valid, segs.length
 
     def simulate(x: NDArray) -> tuple[NDArray, NDArray]:
-        """Trajectories (k, B, Lmax, 4) for k stacked initial-state sets (k, B, 4) and their costs (k, B)."""
         k = x.shape[0]
         traj, nv = integrate_batch(coef, exps, x.reshape(-1, 4), np.tile(dt_seg, k), np.tile(seg_len_a, k),
                                    substeps, np.tile(bound, (k, 1)))
@@ -196,10 +226,19 @@ def model_states(model: PolynomialModel, dts: Sequence[float], y: Sequence[NDArr
         cost = np.where(nv.reshape(k, B) >= np.tile(seg_len_a, (k, 1)), cost, np.inf)
         return traj, cost
 
+    return simulate
+
+
+def _gauss_newton(simulate, segs: _Segments, start: NDArray, delta: NDArray, sigma: NDArray, steps: int):
+    """Gauss-Newton on every segment's initial state at once (forward-difference Jacobians of step ``delta``):
+    ``(trajectories (B, Lmax, 4), best initial states (B, 4), best costs (B,))``, the best point of every segment
+    over the iterations."""
+    w = 1.0 / np.maximum(sigma, 1e-300)
+    data, valid = segs.data, segs.valid
     x = start.copy()
-    best_x, best_cost = x.copy(), np.full(B, np.inf)
+    best_x, best_cost = x.copy(), np.full(segs.run.size, np.inf)
     eye = np.eye(4)
-    for _ in range(config.warm_steps if x0 is not None else config.gauss_newton_steps):
+    for _ in range(steps):
         pert = np.concatenate([x[None], x[None] + delta[None] * eye[:, None, :]])  # (5, B, 4)
         traj, cost = simulate(pert)
         better = cost[0] < best_cost
@@ -222,11 +261,17 @@ def model_states(model: PolynomialModel, dts: Sequence[float], y: Sequence[NDArr
     best_x[better], best_cost[better] = x[better], cost[0][better]
     if (~better).any():  # the best point was an earlier one: integrate it once more
         traj, _ = simulate(best_x[None])
-    traj = traj[0]
+    return traj[0], best_x, best_cost
+
+
+def _state_estimate(segs: _Segments, traj: NDArray, best_x: NDArray, best_cost: NDArray, y: Sequence[NDArray],
+                    theta: Sequence[NDArray], fallback: Sequence[NDArray]) -> StateEstimate:
+    """Every frame's state from its segment's fitted trajectory (the fallback where the segment failed), the warm
+    start of the next call and the RMS misfit of y and theta."""
     states, x0_out, failed = [], [], []
     sq, cnt = np.zeros(2), 0
     b0 = 0
-    for r, (starts, owner, L) in enumerate(layouts):
+    for r, (starts, owner, L) in enumerate(segs.layouts):
         nseg = starts.size
         st = np.array(fallback[r], float, copy=True)
         fail = np.zeros(len(y[r]), bool)
@@ -246,5 +291,5 @@ def model_states(model: PolynomialModel, dts: Sequence[float], y: Sequence[NDArr
     rms = np.sqrt(sq / max(cnt, 1))
     n_fail = int(np.sum(~np.isfinite(best_cost)))
     if n_fail:
-        log.info("model states: %d of %d segments failed (fallback states kept there)", n_fail, B)
+        log.info("model states: %d of %d segments failed (fallback states kept there)", n_fail, segs.run.size)
     return StateEstimate(states=states, x0=x0_out, failed=failed, rms=rms)
