@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import write_json
+from cubedimer.atomic import json_text, write_json
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES
 from .ensemble import mean_pvalues
 from .integral_form import METHOD as INTEGRAL_METHOD
@@ -16,7 +16,7 @@ from .methods import METHODS
 from .model import TERMS
 from .results import FitResult
 
-__all__ = ["model_json", "write_fit", "data_range"]
+__all__ = ["model_json", "fit_record", "write_fit", "data_range"]
 
 
 def _terms(mask) -> dict[str, list[str]]:
@@ -73,6 +73,12 @@ def model_json(res: FitResult) -> dict:
         out["integral_form"] = {"method": disc["method"], **{
             eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
     return out
+
+
+def fit_record(res: FitResult) -> dict:
+    """:func:`model_json` as a reader of the file sees it (strict JSON: non-finite numbers as None, plain Python
+    numbers), in the library's own names: what the methods' descriptions read (``FittingMethod.describe``)."""
+    return json.loads(json_text(model_json(res)))
 
 
 def data_range(res: FitResult) -> dict:

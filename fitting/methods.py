@@ -1,8 +1,9 @@
 """The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
 
 A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
-lists it) and ``fit(prepared, scales, config, context)``, which turns prepared runs into one
-:class:`fitting.results.FitResult`.  It is registered once with :func:`register_method`; the fit command,
+lists it), the method-specific options it accepts, ``fit(prepared, scales, config, context)``, which turns prepared
+runs into one :class:`fitting.results.FitResult`, and ``describe(result)``, its own account of that result
+(:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is registered once with :func:`register_method`; the fit command,
 the report command and :func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's
 ``solve_ivp`` ``METHODS``), so a registered method is selectable everywhere without further changes.
 
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, Sequence, runtime_checkable
 
 from cubedimer.executor import ExecutorConfig
+from .description import MethodDescription
 
 if TYPE_CHECKING:  # annotations only: the registry imports no implementation
     from .config import FitConfig
@@ -23,8 +25,8 @@ if TYPE_CHECKING:  # annotations only: the registry imports no implementation
     from .oracle import NoiseLevels
     from .results import FitResult, PreparedRun
 
-__all__ = ["FitContext", "FittingMethod", "METHODS", "DEFAULT_METHOD", "register_method", "method_names",
-           "get_method", "methods_help"]
+__all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
+           "method_names", "get_method", "methods_accepting", "methods_help"]
 
 #: The method a fit uses unless told otherwise.
 DEFAULT_METHOD = "discovery"
@@ -65,17 +67,35 @@ class FittingMethod(Protocol):
     private_settings : tuple of str
         :class:`~fitting.config.FitConfig` fields only this method reads; the ``settings`` recorded in
         another method's model.json leave them out.
+    options : tuple of str
+        The method-specific options (:data:`METHOD_OPTIONS`) this method accepts; the fit command and
+        :meth:`~fitting.config.FitConfig.with_heldout_tolerance` refuse one the method does not list.
+    max_evals_setting : str
+        The :class:`~fitting.config.FitConfig` field (a :class:`~fitting.refine.RefineConfig`) whose ``max_evals``
+        the fit command's ``--max-evals`` sets: the method's main long-time refinement.
     """
 
     name: str
     summary: str
     private_settings: tuple[str, ...]
+    options: tuple[str, ...]
+    max_evals_setting: str
 
     def fit(self, prepared: "Sequence[PreparedRun]", scales: "Scales", config: "FitConfig",
             context: FitContext) -> "FitResult":
         """Select and fit the model of the prepared runs; the result has every field the method produces."""
         ...
 
+    def describe(self, result: "FitResult") -> MethodDescription:
+        """The method's account of ``result`` (one of its own fits): how the model was found and what it is, in the
+        words and with the numbers of model.json."""
+        ...
+
+
+#: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method lists those it
+#: accepts in ``FittingMethod.options``): the discovery's practical threshold and the paper regression's relative
+#: threshold.
+METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "relative_threshold")
 
 #: name -> method, in registration order (the default first).
 METHODS: dict[str, FittingMethod] = {}
@@ -90,7 +110,8 @@ def register_method(method: FittingMethod) -> FittingMethod:
         ``method`` does not satisfy :class:`FittingMethod`.
     """
     if not isinstance(method, FittingMethod) or not isinstance(method.name, str) or not method.name:
-        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, fit)")
+        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, options, "
+                        "max_evals_setting, fit, describe)")
     METHODS[method.name] = method
     return method
 
@@ -106,6 +127,11 @@ def get_method(name: str) -> FittingMethod:
         return METHODS[name]
     except KeyError:
         raise ValueError(f"unknown method {name!r} (use one of {', '.join(METHODS)})") from None
+
+
+def methods_accepting(option: str) -> tuple[str, ...]:
+    """The registered methods that accept the method-specific ``option`` (an entry of :data:`METHOD_OPTIONS`)."""
+    return tuple(name for name, m in METHODS.items() if option in m.options)
 
 
 def methods_help() -> str:

@@ -30,6 +30,7 @@ from cubedimer.executor import map_ordered
 from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
 from .derivatives import Derivatives
+from .description import DescriptionTable, MethodDescription, anti_damping_text, damping_rates, model_equation_text
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
 from .integral_form import integral_form_selection
@@ -118,6 +119,10 @@ class PaperMethod:
                     "re-optimisation of the minimal model")
     #: none: a discovery fit records the whole configuration (model.json ``settings``)
     private_settings: tuple[str, ...] = ()
+    #: ``--relative-threshold`` of the per-run regressions
+    options: tuple[str, ...] = ("relative_threshold",)
+    #: ``--max-evals`` sets the evaluations of each per-run refinement
+    max_evals_setting: str = "refine"
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
@@ -192,6 +197,25 @@ class PaperMethod:
                          stats=stats, mask=mask, joint_start=joint_start, joint=joint, config=config,
                          mask_zscore=mask_z, rule=rule.name, selection=selection, candidate_fit=cand_fit,
                          integral_form=integral, fallback=fallback, oracle=oracle)
+
+    def describe(self, result: FitResult) -> MethodDescription:
+        """The regression, the per-run refinements and the selection rule (its own ``description``) that gave the
+        minimal model, with each term's z-score and the p-value of its ensemble mean."""
+        from .fit_output import fit_record
+
+        doc = fit_record(result)
+        rule = SELECTION_RULES.get(doc.get("selection", {}).get("rule", "zscore"))
+        rule_text = rule.description if rule is not None else doc.get("selection", {}).get("rule", "zscore")
+        text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
+                "rule, " + rule_text + ", plus viscous damping, give the minimal model: "
+                + "; ".join(model_equation_text(doc["equations"])) + "."
+                + anti_damping_text(damping_rates(doc["equations"])))
+        pvalues = doc.get("selection", {}).get("mean_pvalues", {})
+        table = DescriptionTable("Minimal model (SI)", ("equation", "term", "coefficient", "z-score",
+                                                        "p (ensemble mean = 0)"),
+                                 tuple((eq, t, c, doc["zscores"][eq].get(t), pvalues.get(eq, {}).get(t))
+                                       for eq in ("yddot", "thetaddot") for t, c in doc["equations"][eq].items()))
+        return MethodDescription(text, table, selected_by=rule.selected_by if rule is not None else "")
 
 
 register_method(PaperMethod())

@@ -16,6 +16,7 @@ import numpy as np
 from cubedimer.atomic import atomic_save
 from cubedimer.terms import EQUATION_NAMES
 from .discovery import KNEE_TOLERANCE
+from .methods import get_method
 from .model import TERMS
 from .results import RunFit
 
@@ -52,8 +53,7 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
         ax.set_yscale("symlog", linthresh=1)
         ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
     axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
-    rule = {"significance": "by the ensemble-mean t-test, Holm", "zscore": "by z > threshold",
-            "backward": "by backward elimination", "discovery": "by integral-form discovery"}.get(res.rule or res.method, "")
+    rule = get_method(res.method).describe(res).selected_by  # the method's (or its selection rule's) words
     axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
     paths.append(out / "zscores.png")
     _save(fig, paths[-1])

@@ -1,6 +1,7 @@
 """The registry of term-selection rules of the per-run ensemble: what ``SelectionConfig.rule`` and ``--selection`` choose.
 
-A rule is an object satisfying :class:`SelectionRule`: a name, a one-line summary, the fitting methods it
+A rule is an object satisfying :class:`SelectionRule`: a name, a one-line summary, its prose for the report and
+the figures (``description``, ``selected_by``), the fitting methods it
 applies to (:data:`fitting.methods.METHODS`; the discovery selects its terms itself, on the held-out path),
 whether it is followed by backward elimination on the joint long-time loss, and ``support(evidence, config)``,
 the support mask from the per-run fits.  :class:`fitting.selection.SelectionConfig` checks its ``rule`` against
@@ -73,11 +74,17 @@ class SelectionRule(Protocol):
         One sentence for the command-line help.
     methods : tuple of str
         The fitting methods the rule applies to.
+    description : str
+        What the rule keeps, as a noun phrase for the report's account of the fit ("terms whose ...").
+    selected_by : str
+        How it selects, completing "red: selected ..." in the z-score figure's title ("by ...").
     """
 
     name: str
     summary: str
     methods: tuple[str, ...]
+    description: str
+    selected_by: str
 
     def eliminates(self, config: "SelectionConfig") -> bool:
         """Whether backward elimination on the joint loss follows ``support``."""
@@ -95,7 +102,8 @@ SELECTION_RULES: dict[str, SelectionRule] = {}
 def register_selection_rule(rule: SelectionRule) -> SelectionRule:
     """Add ``rule`` to :data:`SELECTION_RULES` under ``rule.name``; returns it (TypeError if it is not a rule)."""
     if not isinstance(rule, SelectionRule) or not isinstance(rule.name, str) or not rule.name:
-        raise TypeError(f"{rule!r} is not a SelectionRule (name, summary, methods, eliminates, support)")
+        raise TypeError(f"{rule!r} is not a SelectionRule (name, summary, methods, description, selected_by, "
+                        "eliminates, support)")
     SELECTION_RULES[rule.name] = rule
     return rule
 
@@ -114,6 +122,9 @@ class SignificanceRule:
     summary: str = ("the mean coefficient across runs is significantly non-zero (t-test with Holm correction at "
                     "0.01; default)")
     methods: tuple[str, ...] = ("paper",)
+    description: str = ("terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
+                        "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)")
+    selected_by: str = "by the ensemble-mean t-test, Holm"
 
     def eliminates(self, config: "SelectionConfig") -> bool:
         return bool(config.prune)
@@ -132,6 +143,8 @@ class ZScoreRule:
     name: str = "zscore"
     summary: str = "the paper's z > 3 rule (always reported)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "the paper's rule (terms with z > 3 across runs)"
+    selected_by: str = "by z > threshold"
 
     def eliminates(self, config: "SelectionConfig") -> bool:
         return False
@@ -147,6 +160,8 @@ class BackwardRule:
     name: str = "backward"
     summary: str = "elimination on the joint long-time loss (slow)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "backward elimination on the joint long-time loss"
+    selected_by: str = "by backward elimination"
 
     def eliminates(self, config: "SelectionConfig") -> bool:
         return True

@@ -11,6 +11,7 @@ import pytest
 from fitting import methods, selection_rules
 from fitting.cli import build_parser, main
 from fitting.config import FitConfig
+from fitting.description import DescriptionTable, MethodDescription, model_equation_text
 from fitting.ensemble import least_squares_on_support, select_terms, term_statistics
 from fitting.fit_output import model_json
 from fitting.model import TERMS, PolynomialModel, damping_mask
@@ -33,6 +34,8 @@ class LinearMethod:
     name: str = "dummy-linear"
     summary: str = "least squares of the linear oscillator (test)"
     private_settings: tuple[str, ...] = ()
+    options: tuple[str, ...] = ()
+    max_evals_setting: str = "joint"
 
     def fit(self, prepared, scales, config, context) -> FitResult:
         derivs = [p.derivs for p in prepared]
@@ -46,6 +49,13 @@ class LinearMethod:
                          mask=LINEAR.copy(), joint_start=pooled, joint=joint, config=config,
                          mask_zscore=select_terms(stats, config.ensemble))
 
+    def describe(self, result) -> MethodDescription:
+        eqs = result.model.equations()
+        return MethodDescription("Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs)),
+                                 DescriptionTable("Linear model (SI)", ("equation", "term", "coefficient"),
+                                                  tuple((eq, t, c) for eq in eqs for t, c in eqs[eq].items())),
+                                 figures=(), selected_by="by construction")
+
 
 @dataclass(frozen=True)
 class DampingOnlyRule:
@@ -54,6 +64,8 @@ class DampingOnlyRule:
     name: str = "dummy-restoring"
     summary: str = "the damping and the linear restoring terms (test)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "the damping and the linear restoring terms"
+    selected_by: str = "as damping or linear restoring terms"
 
     def eliminates(self, config) -> bool:
         return False

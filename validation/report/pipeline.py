@@ -15,27 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .claims import PHASE_LINE_FRACTION, anti_damping_text, long_time_reading, not_significant_text, run_phase
+from fitting.description import model_equation_text
+from fitting.methods import get_method
+
+from .claims import PHASE_LINE_FRACTION, long_time_reading, not_significant_text, run_phase
 from .html import Figure, Section, Table, write_report
 
 __all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
 
 logger = logging.getLogger(__name__)
-
-
-def model_equation_text(equations: dict) -> list[str]:
-    """The minimal model as equations, e.g. ``yddot = -1.9e4 y + ...`` (SI)."""
-    lines = []
-    for eq in ("yddot", "thetaddot"):
-        terms = equations.get(eq, {})
-        parts = []
-        for t, c in terms.items():
-            sign = "-" if c < 0 else "+"
-            factor = "" if t == "1" else f" {t}"
-            parts.append(f"{sign} {abs(c):.4g}{factor}")
-        body = " ".join(parts).lstrip("+ ") if parts else "0"
-        lines.append(f"{eq} = {body}")
-    return lines
 
 
 def effect_static_coefficients(diag: dict, wavenumber: float, z_eq: float, theta_max: float, y_max: float) -> dict[str, float]:
@@ -188,8 +176,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         config = replace(config, refine=replace(config.refine, max_evals=max_evals),
                          polish=replace(config.polish, max_evals=max_evals),
                          joint=replace(config.joint, max_evals=max_evals))
-    say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
-                                    else "integral-form discovery with held-out selection, long-time polish") + ")")
+    say(f"1/5 fitting the data ({get_method(method).summary})")
     res = fit_dataset(data_dir, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
@@ -284,17 +271,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         [Figure(p, c) for p, c in pfig] + [Figure(fit_dir / "phase_portraits.png", "Phase portraits (y, ydot) and (theta, thetadot): data and minimal model, first runs."),
                                            Figure(fit_dir / "poincare.png", "Poincare maps (theta, thetadot at y = 0, ydot < 0): data and minimal model.")],
         [], {"loss_final": loss}))
-    # 3 the fit
-    eqs = model_equation_text(model_json["equations"])
+    # 3 the fit, in the method's own words
     rows = []
     if cmp is not None:
         rows = [["attractor shape", cmp.shape_test.median_difference, cmp.shape_test.p_greater, cmp.shape_test.n],
                 ["Poincare map", cmp.poincare_test.median_difference, cmp.poincare_test.p_greater, cmp.poincare_test.n]]
-    rule = model_json.get("selection", {}).get("rule", "zscore")
-    fit_figs = [Figure(fit_dir / "zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; "
-                                                "red: selected, dashed: the paper's z = 3."),
-                Figure(fit_dir / "coefficients.png", "Distribution across runs of the refined coefficients of the selected terms."),
-                Figure(fit_dir / "optimisation.png", "Optimisation trajectory of the long-time refinement.")]
+    described = get_method(res.method).describe(res)
+    fit_figs = [Figure(fit_dir / name, caption) for name, caption in described.figures if (fit_dir / name).exists()]
     if cmp is not None and (fit_dir / "compare.png").exists():
         fit_figs.append(Figure(fit_dir / "compare.png", "Per-run errors of the minimal model and of its variant without cross-coupling terms."))
     cmp_text = "" if cmp is None else (
@@ -302,24 +285,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         + " and ".join(f"{'' if t.p_greater < 0.05 else 'not significantly '}larger for the {what} "
                        + not_significant_text(t.p_greater, t.n, 0.05)
                        for t, what in ((cmp.shape_test, "attractor shape"), (cmp.poincare_test, "Poincare map"))) + ".")
-    if model_json.get("method") == "discovery":
-        fit_text, fit_table = _discovery_fit_text(model_json, eqs)
-        if (fit_dir / "pareto.png").exists():
-            fit_figs.insert(0, Figure(fit_dir / "pareto.png", "Pareto front of the discovery: held-out error (5-fold over "
-                                                              "runs) against the number of terms, per equation; red: selected; "
-                                                              "blue square: the knee."))
-    else:
-        rule_text = {"significance": "terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
-                                     "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)",
-                     "zscore": "the paper's rule (terms with z > 3 across runs)",
-                     "backward": "backward elimination on the joint long-time loss"}.get(rule, rule)
-        fit_text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
-                    "rule, " + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + "."
-                    + anti_damping_text(_damping_rates(model_json["equations"])))
-        fit_table = Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score", "p (ensemble mean = 0)"],
-                          [[eq, t, c, model_json["zscores"][eq].get(t),
-                            model_json.get("selection", {}).get("mean_pvalues", {}).get(eq, {}).get(t)]
-                           for eq in ("yddot", "thetaddot") for t, c in model_json["equations"][eq].items()])
+    fit_text = described.text
+    fit_table = Table(described.table.title, list(described.table.header), [list(r) for r in described.table.rows])
     sections.append(Section(
         "fit", "3. The fit",
         fit_text + cmp_text,
@@ -466,63 +433,3 @@ def _late_phase(p) -> float | None:
     d = p.derivs
     half = len(d.t) // 2
     return run_phase(d.state[half:, 2], float(d.t[1] - d.t[0]), p.attractor.f_y, p.attractor.phase)
-
-
-def _damping_rates(equations: dict) -> dict[str, float]:
-    """The model's linear damping as rates [1/s] (positive: damping): minus the coefficients of ydot in yddot and of
-    thetadot in thetaddot, where the model has them."""
-    out = {}
-    for eq, term, label in (("yddot", "ydot", "gamma_y (ydot in yddot)"),
-                            ("thetaddot", "thetadot", "gamma_theta (thetadot in thetaddot)")):
-        if term in equations.get(eq, {}):
-            out[label] = -float(equations[eq][term])
-    return out
-
-
-def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
-    """Section 3's reading and table for a model found by the integral-form discovery (``method == "discovery"``)."""
-    disc = model_json.get("discovery") or {}
-    oracle = model_json.get("oracle") or {}
-    n_terms = sum(len(v) for v in model_json["equations"].values())
-    rows, close = [], []
-    for eq in ("yddot", "thetaddot"):
-        for t, c in model_json["equations"][eq].items():
-            d = disc.get(eq, {}).get("terms", {}).get(t, {})
-            o = oracle.get(eq, {}).get(t, {})
-            rows.append([eq, t, c, d.get("std_error"), d.get("z"), o.get("std_error"), o.get("z"), o.get("alias"),
-                         o.get("alias_z")])
-            if o.get("alias_z") is not None and np.isfinite(o["alias_z"]) and o["alias_z"] < 3.0:
-                close.append(f"{eq}: {t} / {o['alias']} ({o['alias_z']:.1f})")
-    text = (f"The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
-            f"of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
-            f"pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "
-            f"half a standard error, gives a model of {n_terms} terms: " + "; ".join(eqs) + ". Beside each term the "
-            "oracle standard error says what the data could resolve at best (least squares on this support at the "
-            "model's own noise-free trajectories, at the tracking noise estimated from the data), and the alias z how "
-            "many noise standard deviations separate the support from the one where the term is replaced by its "
-            "closest library rival: below about 3 no estimator tells the two apart reliably (the rival wins in "
-            "Phi(-alias z / 2) of data sets).")
-    damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in model_json["equations"][eq]]
-    rates = _damping_rates(model_json["equations"])
-    if damping and (model_json.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
-        text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
-                 "the source paper; Holm's rule selects the other terms.")
-    # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
-    text += anti_damping_text(rates)
-    if close:
-        text += " Terms close to an alias: " + "; ".join(close) + "."
-    text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
-             "the library (real dimers) the data resolve many small terms, and the knee of the front is the smaller "
-             "model a physicist may prefer.")
-    knee = disc.get("knee") or {}
-    knee_terms = {eq: knee[eq] for eq in ("yddot", "thetaddot") if eq in knee}
-    if len(knee_terms) == 2 and sum(len(t) for t in knee_terms.values()) < n_terms:
-        tol = knee["tolerance"]
-        text += (f" The smallest supports within {100 * tol:g} % of the best held-out error (the knee) have "
-                 f"{sum(len(t) for t in knee_terms.values())} terms ("
-                 + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee_terms.items())
-                 + f"); `--heldout-tolerance {tol:g}` (of `python -m fitting fit` and of this report) fits that model "
-                 "(it also drops weak true terms near the information limit).")
-    return text, Table("Discovered model (SI)", ["equation", "term", "coefficient", "std error", "z", "oracle std error",
-                                                 "oracle z", "alias", "alias z"], rows)
-
