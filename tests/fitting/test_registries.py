@@ -152,3 +152,31 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_sho
     assert res.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
     assert not (res.mask & ~(LINEAR | damping_mask())).any()  # nothing beyond what the rule allows
     assert res.mask[0, TERMS.index("ydot")] and res.mask[1, TERMS.index("thetadot")]
+
+
+def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method, small_dataset, tmp_path):
+    """Section 3 of the report is the method's own description: the dummy's sentence, table and (no) figures,
+    with no word of the paper's method or of the discovery."""
+    from fitting.fit_output import write_fit
+    from validation.report.context import ReportContext
+    from validation.report.sections import fit as fit_section
+
+    res = fit_dataset(small_dataset, FitConfig(method=dummy_method.name), progress=False)
+    out = tmp_path / "report"
+    write_fit(res, out / "fit", plots=False)
+    context = ReportContext(
+        data_dir=small_dataset, out=out, model="gorkov", gap=None, edge_radius=None, atlas=None, fit=res,
+        model_json=json.loads((out / "fit" / "model.json").read_text()), variant=None, diagnosis={}, internals=None,
+        meta=None, models=None, calibrations={}, simulation=None, theta_max=0.3, y_max=1e-4, sweep_plot=None,
+        fullwave_sweep=None, coefficients={})
+    section = fit_section.section(context)
+    eqs = res.model.equations()
+    assert section.reading == "Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs))
+    for words in ("Regression on accelerations", "ensemble rule", "z > 3", "integral-form", "Holm", "Pareto"):
+        assert words not in section.reading
+    (table,) = section.tables  # no variant comparison: the linear model has no cross-coupling terms
+    assert table.title == "Linear model (SI)" and table.header == ["equation", "term", "coefficient"]
+    assert table.rows == [["yddot", "y", eqs["yddot"]["y"]], ["yddot", "ydot", eqs["yddot"]["ydot"]],
+                          ["thetaddot", "theta", eqs["thetaddot"]["theta"]],
+                          ["thetaddot", "thetadot", eqs["thetaddot"]["thetadot"]]]
+    assert section.figures == [] and section.numbers["equations"] == context.model_json["equations"]

@@ -10,7 +10,7 @@ import pytest
 
 from cubedimer.spectra import peak_frequency
 from validation.diagnosis.statistics import format_p
-from validation.report.diagnosis_section import diagnosis_section
+from validation.report.sections.diagnosis import diagnosis_section
 
 
 def test_p_values_are_bounds_below_double_precision():

@@ -9,11 +9,12 @@ import numpy as np
 
 from cubedimer.atomic import save_figure as _save
 
-from ..diagnosis.statistics import format_p
-from .claims import anti_damping_text
-from .html import Figure, Section, Table
+from ...diagnosis.statistics import format_p
+from ..claims import anti_damping_text
+from ..context import ReportContext
+from ..html import Figure, Section, Table
 
-__all__ = ["diagnosis_figures", "diagnosis_section", "write_diagnosis"]
+__all__ = ["section", "diagnosis_figures", "diagnosis_section", "write_diagnosis"]
 
 
 def write_diagnosis(diagnosis: dict, internals, out_dir: str | Path) -> list[Path]:
@@ -23,7 +24,7 @@ def write_diagnosis(diagnosis: dict, internals, out_dir: str | Path) -> list[Pat
     paths of diagnosis.json and report.html."""
     from cubedimer.atomic import write_json
 
-    from .html import write_report
+    from ..html import write_report
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -240,3 +241,12 @@ def diagnosis_section(diagnosis: dict, figures: list[Figure]) -> Section:
                     "data_warnings": [w["code"] for w in diagnosis.get("data_warnings") or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def section(context: ReportContext) -> Section:
+    """Section 6, the sim-to-real gap of the diagnosis's model: :func:`diagnosis_section` with its figures."""
+    from ...diagnosis.model_comparison import MODEL_LABELS
+
+    sec = diagnosis_section(context.diagnosis, diagnosis_figures(context.diagnosis, context.internals, context.figs_dir))
+    return Section("diagnosis", f"6. The sim-to-real gap ({MODEL_LABELS.get(context.model, context.model).split(' (')[0]} model)",
+                   sec.reading, sec.figures, sec.tables, sec.numbers)
