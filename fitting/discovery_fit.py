@@ -26,19 +26,43 @@ import numpy as np
 from .config import FitConfig
 from .description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
                           model_equation_text)
-from .discovery import discover_model
+from cubedimer.terms import EQUATION_NAMES
+from .discovery import DiscoveryResult, discover_model
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
 from .methods import FitContext, register_method
 from .model import PolynomialModel, Scales
 from .refine import refine
 from .regression import scaled_data, scaled_library
-from .results import FitResult, PreparedRun, RunEstimate
+from .results import EnsembleExtras, FitResult, PreparedRun, RunEstimate
 from .selection_rules import support_text
 
-__all__ = ["DiscoveryMethod", "discovery_description", "PARETO_FIGURE"]
+__all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE"]
 
 logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class DiscoveryExtras(EnsembleExtras):
+    """What the discovery produces beyond :class:`fitting.results.FitResult` (its ``extras``).
+
+    Attributes
+    ----------
+    stats, mask_zscore :
+        As :class:`fitting.results.EnsembleExtras` (of the per-run least squares on the selected terms).
+    discovery : DiscoveryResult
+        The integral-form discovery: its passes, standard errors and Pareto front.
+    """
+
+    discovery: DiscoveryResult | None = None
+
+    def record(self, result: FitResult) -> dict:
+        """:class:`~fitting.results.EnsembleExtras`'s keys, ``discovery`` and, in ``integral_form``, the
+        discovery's pooled integral-form estimates in the cross-check's place (same keys)."""
+        disc = self.discovery.to_json()
+        integral = {"method": disc["method"], **{
+            eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
+        return {**super().record(result), "integral_form": integral, "discovery": disc}
 
 
 @dataclass(frozen=True)
@@ -56,8 +80,8 @@ class DiscoveryMethod:
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
-        """Steps 1-5 of the module docstring on prepared runs; ``rule`` of the result is None (the discovery
-        selects the terms itself) and ``discovery`` holds its path."""
+        """Steps 1-5 of the module docstring on prepared runs; the result's ``extras`` (:class:`DiscoveryExtras`)
+        hold the discovery's path."""
         derivs = [p.derivs for p in prepared]
         disc = discover_model([p.run for p in prepared], derivs, config.discovery)
         mask = disc.mask
@@ -89,10 +113,10 @@ class DiscoveryMethod:
                                                      scales, config, first=first)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
-        return FitResult(runs=list(prepared), scales=scales, pooled_regression=disc.model, run_fits=run_fits,
-                         stats=stats, mask=mask, joint_start=joint_start, joint=joint, config=config,
-                         mask_zscore=select_terms(stats, config.ensemble), rule=None, fallback=fallback,
-                         oracle=oracle, discovery=disc)
+        extras = DiscoveryExtras(stats=stats, mask_zscore=select_terms(stats, config.ensemble), discovery=disc)
+        return FitResult(runs=list(prepared), scales=scales, pooled_regression=disc.model, run_fits=run_fits, mask=mask,
+                         joint_start=joint_start, joint=joint, config=config, extras=extras, fallback=fallback,
+                         oracle=oracle)
 
     def describe(self, result: FitResult) -> MethodDescription:
         """:func:`discovery_description` of the result's model.json record."""

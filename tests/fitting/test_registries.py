@@ -18,7 +18,7 @@ from fitting.model import TERMS, PolynomialModel, damping_mask
 from fitting.pipeline import fit_dataset
 from fitting.refine import RefineConfig, refine
 from fitting.regression import scaled_data
-from fitting.results import FitResult, RunEstimate
+from fitting.results import EnsembleExtras, FitResult, RunEstimate
 from fitting.selection import SelectionConfig
 
 #: yddot = y + ydot, thetaddot = theta + thetadot: the linear oscillator, the support of the dummy method
@@ -45,9 +45,9 @@ class LinearMethod:
         runs = [RunEstimate(p.run.name, PolynomialModel(scales.to_si(least_squares_on_support([X[k]], [A[k]], LINEAR))),
                             joint.per_run_start[k]) for k, p in enumerate(prepared)]
         stats = term_statistics([r.model for r in runs])
-        return FitResult(runs=list(prepared), scales=scales, pooled_regression=pooled, run_fits=runs, stats=stats,
+        return FitResult(runs=list(prepared), scales=scales, pooled_regression=pooled, run_fits=runs,
                          mask=LINEAR.copy(), joint_start=pooled, joint=joint, config=config,
-                         mask_zscore=select_terms(stats, config.ensemble))
+                         extras=EnsembleExtras(stats, select_terms(stats, config.ensemble)))
 
     def describe(self, result) -> MethodDescription:
         eqs = result.model.equations()
@@ -149,7 +149,7 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_sho
                     joint=RefineConfig(max_evals=8, rel_bound=0.3, abs_bound=0.005, horizons=(1.0,)),
                     selection=SelectionConfig(rule=dummy_rule.name))
     res = fit_dataset(two_short_runs, cfg, progress=False)
-    assert res.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
+    assert res.extras.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
     assert not (res.mask & ~(LINEAR | damping_mask())).any()  # nothing beyond what the rule allows
     assert res.mask[0, TERMS.index("ydot")] and res.mask[1, TERMS.index("thetadot")]
 
