@@ -9,7 +9,7 @@ from cubedimer.system import SYSTEM_KINDS
 from .derivatives import SmoothingConfig
 from .discovery import DiscoveryConfig
 from .ensemble import EnsembleConfig
-from .methods import DEFAULT_METHOD, METHODS, methods_accepting
+from .method_registry import DEFAULT_METHOD, METHODS, methods_accepting
 from .refine import JOINT_REFINE, RefineConfig
 from .regression import RegressionConfig
 from .selection import SelectionConfig

@@ -3,9 +3,11 @@
 A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
 lists it), the method-specific options it accepts, ``fit(prepared, scales, config, context)``, which turns prepared
 runs into one :class:`fitting.results.FitResult`, and ``describe(result)``, its own account of that result
-(:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is registered once with :func:`register_method`; the fit command,
-the report command and :func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's
-``solve_ivp`` ``METHODS``), so a registered method is selectable everywhere without further changes.
+(:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is
+registered once with :func:`register_method`; the fit command, the report command and
+:func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's ``solve_ivp`` ``METHODS``; the names live in
+:mod:`fitting.method_registry`, which the configuration checks against), so a registered method is selectable
+everywhere without further changes.
 
 The built-in entries are ``"discovery"`` (:mod:`fitting.discovery_fit`, the default) and ``"paper"``
 (:mod:`fitting.paper_fit`); importing :mod:`fitting` registers both.
@@ -14,22 +16,19 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, Sequence, runtime_checkable
+from typing import Protocol, Sequence, runtime_checkable
 
 from cubedimer.executor import ExecutorConfig
+from .config import FitConfig
 from .description import MethodDescription
-
-if TYPE_CHECKING:  # annotations only: the registry imports no implementation
-    from .config import FitConfig
-    from .model import Scales
-    from .oracle import NoiseLevels
-    from .results import FitResult, PreparedRun
+from .method_registry import (DEFAULT_METHOD, METHOD_OPTIONS, METHODS, get_method, method_names, methods_accepting,
+                              methods_help)
+from .model import Scales
+from .oracle import NoiseLevels
+from .results import FitResult, PreparedRun
 
 __all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
            "method_names", "get_method", "methods_accepting", "methods_help"]
-
-#: The method a fit uses unless told otherwise.
-DEFAULT_METHOD = "discovery"
 
 
 @dataclass(frozen=True)
@@ -51,7 +50,7 @@ class FitContext:
     executor: ExecutorConfig | None = None
     cache_dir: str | os.PathLike | None = None
     progress: bool = True
-    noise: "NoiseLevels | None" = None
+    noise: NoiseLevels | None = None
 
 
 @runtime_checkable
@@ -81,24 +80,15 @@ class FittingMethod(Protocol):
     options: tuple[str, ...]
     max_evals_setting: str
 
-    def fit(self, prepared: "Sequence[PreparedRun]", scales: "Scales", config: "FitConfig",
-            context: FitContext) -> "FitResult":
+    def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
+            context: FitContext) -> FitResult:
         """Select and fit the model of the prepared runs; the result has every field the method produces."""
         ...
 
-    def describe(self, result: "FitResult") -> MethodDescription:
+    def describe(self, result: FitResult) -> MethodDescription:
         """The method's account of ``result`` (one of its own fits): how the model was found and what it is, in the
         words and with the numbers of model.json."""
         ...
-
-
-#: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method lists those it
-#: accepts in ``FittingMethod.options``): the discovery's practical threshold and the paper regression's relative
-#: threshold.
-METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "relative_threshold")
-
-#: name -> method, in registration order (the default first).
-METHODS: dict[str, FittingMethod] = {}
 
 
 def register_method(method: FittingMethod) -> FittingMethod:
@@ -114,27 +104,3 @@ def register_method(method: FittingMethod) -> FittingMethod:
                         "max_evals_setting, fit, describe)")
     METHODS[method.name] = method
     return method
-
-
-def method_names() -> tuple[str, ...]:
-    """The registered method names (the ``--method`` choices)."""
-    return tuple(METHODS)
-
-
-def get_method(name: str) -> FittingMethod:
-    """The registered method ``name``; ValueError (one line, listing the choices) if there is none."""
-    try:
-        return METHODS[name]
-    except KeyError:
-        raise ValueError(f"unknown method {name!r} (use one of {', '.join(METHODS)})") from None
-
-
-def methods_accepting(option: str) -> tuple[str, ...]:
-    """The registered methods that accept the method-specific ``option`` (an entry of :data:`METHOD_OPTIONS`)."""
-    return tuple(name for name, m in METHODS.items() if option in m.options)
-
-
-def methods_help() -> str:
-    """``'name' (summary), ...`` of every registered method, for a command's ``--method`` help."""
-    return "; ".join(f"'{m.name}'{' (default)' if m.name == DEFAULT_METHOD else ''}: {m.summary}"
-                     for m in METHODS.values())

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from cubedimer.atomic import atomic_save
@@ -21,11 +19,8 @@ from .discovery import KNEE_TOLERANCE
 from .methods import get_method
 from .model import TERMS
 from .discovery_fit import DiscoveryExtras
-from .results import EnsembleExtras, RunFit
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .compare import Comparison
-    from .results import FitResult
+from .compare import Comparison
+from .results import EnsembleExtras, FitResult, RunFit
 
 __all__ = ["plot_fit", "plot_comparison"]
 
@@ -41,7 +36,7 @@ def _save(fig, path: Path) -> None:
     _plt().close(fig)
 
 
-def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> list[Path]:
+def plot_fit(res: FitResult, out_dir: str | os.PathLike, n_runs: int = 4) -> list[Path]:
     """Write the fit figures to ``out_dir``; returns their paths."""
     plt = _plt()
     out = Path(out_dir)
@@ -110,7 +105,7 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     return paths
 
 
-def _plot_zscores(res: "FitResult", stats, path: Path) -> Path:
+def _plot_zscores(res: FitResult, stats, path: Path) -> Path:
     """Every term's z-score across runs per equation, the selected terms in red, the paper's threshold dashed."""
     plt = _plt()
     fig, axes = plt.subplots(2, 1, figsize=(13, 6.5), sharex=True)
@@ -158,7 +153,7 @@ def _plot_pareto(disc, path: Path) -> Path:
     return path
 
 
-def plot_comparison(cmp: "Comparison", out_dir: str | os.PathLike) -> Path:
+def plot_comparison(cmp: Comparison, out_dir: str | os.PathLike) -> Path:
     """Per-run shape and Poincare errors of the variant against the reference model."""
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(9, 4))
