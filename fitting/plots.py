@@ -15,10 +15,9 @@ import numpy as np
 
 from cubedimer.atomic import atomic_save
 from cubedimer.terms import EQUATION_NAMES
-from .discovery import KNEE_TOLERANCE
+from .discovery import KNEE_TOLERANCE, DiscoveryResult
 from .methods import get_method
 from .model import TERMS
-from .discovery_fit import DiscoveryExtras
 from .compare import Comparison
 from .results import EnsembleExtras, FitResult, RunFit
 
@@ -43,8 +42,9 @@ def plot_fit(res: FitResult, out_dir: str | os.PathLike, n_runs: int = 4) -> lis
     paths = []
     if isinstance(res.extras, EnsembleExtras):  # a method with across-run statistics
         paths.append(_plot_zscores(res, res.extras.stats, out / "zscores.png"))
-    if isinstance(res.extras, DiscoveryExtras):
-        paths.append(_plot_pareto(res.extras.discovery, out / "pareto.png"))
+    discovery = getattr(res.extras, "discovery", None)  # a method with a discovery path (DiscoveryExtras)
+    if isinstance(discovery, DiscoveryResult):
+        paths.append(_plot_pareto(discovery, out / "pareto.png"))
     # coefficient distributions
     sel = [(q, j) for q in range(2) for j in range(len(TERMS)) if res.mask[q, j]]
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(sel)), 4))
