@@ -175,9 +175,9 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
               f"{np.median([f.loss_c0.shape for f in res.run_fits]):.4f} -> "
               f"{np.median([f.loss_refined.shape for f in res.run_fits]):.4f}; Wilcoxon p(C0 worse) = "
               f"{paired_wilcoxon([f.loss_c0.shape for f in res.run_fits], [f.loss_refined.shape for f in res.run_fits]).p_greater:.2g}",
-              f"* selection rule producing the model: {res.rule}; "
+              f"* selection rule producing the model: {res.extras.rule}; "
               f"paper's z-rule support: " + "; ".join(
-                  f"{eq}: " + ", ".join(t for t, k in zip(TERMS, res.mask_zscore[q]) if k)
+                  f"{eq}: " + ", ".join(t for t, k in zip(TERMS, res.extras.mask_zscore[q]) if k)
                   for q, eq in enumerate(("yddot", "thetaddot"))),
               "", "### Baselines vs the two methods (truth: docs/conventions.md section 6 reduced model, 11 terms)", "",
               "| method | missing true terms | spurious terms | median / max coefficient error on true terms | median shape error | median Poincare error | blown-up runs |",
@@ -194,14 +194,14 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
     lines += ["", "Per-term relative error of the final model (true terms and any spurious ones), z-scores and ensemble-mean p-values:", "",
               "| equation | term | truth | final | error | z-score | mean-test p (t-test) | inclusion |",
               "|---|---|---|---|---|---|---|---|"]
-    pvals = mean_pvalues(res.stats)
+    pvals = mean_pvalues(res.extras.stats)
     for q, eq in enumerate(("yddot", "thetaddot")):
         for j, t in enumerate(TERMS):
             if truth.coef[q, j] != 0 or res.model.coef[q, j] != 0:
                 tv, fv = truth.coef[q, j], res.model.coef[q, j]
                 err = f"{abs(fv / tv - 1):.1%}" if tv != 0 else "spurious"
                 lines.append(f"| {eq} | {t} | {tv:.4g} | {fv:.4g} | {err if fv != 0 else 'missing'} | "
-                             f"{res.stats.zscore[q, j]:.1f} | {pvals[q, j]:.1g} | {res.stats.inclusion[q, j]:.2f} |")
+                             f"{res.extras.stats.zscore[q, j]:.1f} | {pvals[q, j]:.1g} | {res.extras.stats.inclusion[q, j]:.2f} |")
     lines.append("")
 
 

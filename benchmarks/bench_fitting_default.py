@@ -49,7 +49,7 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
     res = fit_dataset(data, config or FitConfig(), progress=False)
     wall = time.perf_counter() - t0
     al = aliases(orc)
-    before = score(truth, res.discovery, se, alias=al) if res.discovery is not None else None
+    before = score(truth, res.extras.discovery, se, alias=al) if res.method == "discovery" else None
     return score(truth, _Final(res.model), se, alias=al), wall, res, before
 
 

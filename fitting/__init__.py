@@ -8,9 +8,10 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
 (:data:`SELECTION_RULES`) and joint re-optimisation of the minimal model.  Public API:
 
 * fitting a data set: :func:`fit_dataset` (load and fit, no output files), :func:`fit_runs`, :func:`prepare_runs`,
-  :class:`FitConfig` and the stage configs, :class:`FitResult`, :func:`write_fit` (model.json and figures),
-  :class:`NoSaneModelError`;
-* the registries: :data:`METHODS`, :class:`FittingMethod`, :class:`FitContext`, :func:`register_method`;
+  :class:`FitConfig` and the stage configs, :class:`FitResult` (with the method's own ``extras``, e.g.
+  :class:`EnsembleExtras`), :func:`write_fit` (model.json and figures), :class:`NoSaneModelError`;
+* the registries: :data:`METHODS`, :class:`FittingMethod` (with :class:`MethodDescription`, a method's account of its
+  result), :class:`FitContext`, :func:`register_method`;
   :data:`SELECTION_RULES`, :class:`SelectionRule`, :func:`register_selection_rule`;
 * the model: :class:`PolynomialModel`, :class:`Scales`; the discovery: :func:`discover_model`;
 * oracle standard errors and the run planner: :class:`NoiseLevels`, :func:`oracle_standard_errors`,
@@ -24,6 +25,7 @@ import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.com
 from .compare import compare_models
 from .config import FitConfig
 from .derivatives import SmoothingConfig
+from .description import MethodDescription
 from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
 from .ensemble import EnsembleConfig
 from .final_checks import NoSaneModelError
@@ -35,17 +37,18 @@ from .oracle import NoiseLevels, oracle_standard_errors
 from .pipeline import fit_dataset, fit_runs, prepare_runs
 from .refine import RefineConfig
 from .regression import RegressionConfig
-from .results import FitResult
+from .results import EnsembleExtras, FitResult
 from .run_planning import PlanConfig, plan_runs
 from .selection import SelectionConfig
 from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
 from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
 __all__ = [
-    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "write_fit", "NoSaneModelError",
+    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "EnsembleExtras", "write_fit",
+    "NoSaneModelError",
     "SmoothingConfig", "RegressionConfig", "RefineConfig", "LossWeights", "EnsembleConfig", "SelectionConfig",
     "DiscoveryConfig",
-    "METHODS", "FittingMethod", "FitContext", "register_method",
+    "METHODS", "FittingMethod", "MethodDescription", "FitContext", "register_method",
     "SELECTION_RULES", "SelectionRule", "register_selection_rule",
     "PolynomialModel", "Scales", "discover_model", "DiscoveryResult",
     "NoiseLevels", "oracle_standard_errors", "plan_runs", "PlanConfig",

@@ -23,7 +23,7 @@ from pathlib import Path
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
 from .final_checks import NoSaneModelError
-from .methods import DEFAULT_METHOD, METHODS, methods_help
+from .methods import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_accepting, methods_help
 from .selection_rules import SELECTION_RULES
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_fit_parser", "add_compare_parser", "add_synth_parser",
@@ -48,16 +48,18 @@ def _cmd_fit(a: argparse.Namespace) -> int:
     if a.selection and a.method not in SELECTION_RULES[a.selection].methods:
         raise UserInputError(f"--selection {a.selection} applies to --method "
                              f"{', '.join(SELECTION_RULES[a.selection].methods)}")
-    if a.method != "paper" and a.relative_threshold:
-        raise UserInputError("--relative-threshold applies to --method paper")
+    method = METHODS[a.method]
     try:
         cfg = FitConfig(method=a.method).with_heldout_tolerance(a.heldout_tolerance)
     except ValueError as exc:
         raise UserInputError(f"--heldout-tolerance {exc}") from None
-    if a.max_evals and a.method == "paper":
-        cfg = replace(cfg, refine=replace(cfg.refine, max_evals=a.max_evals))
-    elif a.max_evals:
-        cfg = replace(cfg, polish=replace(cfg.polish, max_evals=a.max_evals))
+    for option in METHOD_OPTIONS:  # the options only some methods accept: the method says which
+        if getattr(a, option) not in (None, False) and option not in method.options:
+            raise UserInputError(f"--{option.replace('_', '-')} applies to --method "
+                                 f"{', '.join(methods_accepting(option))}")
+    if a.max_evals:
+        main_refine = getattr(cfg, method.max_evals_setting)
+        cfg = replace(cfg, **{method.max_evals_setting: replace(main_refine, max_evals=a.max_evals)})
     if a.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
     if a.relative_threshold:

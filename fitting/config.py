@@ -9,7 +9,7 @@ from cubedimer.system import SYSTEM_KINDS
 from .derivatives import SmoothingConfig
 from .discovery import DiscoveryConfig
 from .ensemble import EnsembleConfig
-from .methods import DEFAULT_METHOD, METHODS
+from .method_registry import DEFAULT_METHOD, METHODS, methods_accepting
 from .refine import JOINT_REFINE, RefineConfig
 from .regression import RegressionConfig
 from .selection import SelectionConfig
@@ -59,10 +59,12 @@ class FitConfig:
 
     def with_heldout_tolerance(self, tolerance: float | None) -> "FitConfig":
         """This configuration with the discovery's practical threshold ``DiscoveryConfig.heldout_tolerance`` (None:
-        unchanged); ValueError for the paper's method or a tolerance outside [0, 1)."""
+        unchanged); ValueError for a method that does not accept the option (``FittingMethod.options``) or a tolerance
+        outside [0, 1)."""
         if tolerance is None:
             return self
-        if self.method != "discovery" or not 0.0 <= tolerance < 1.0:
-            raise ValueError(f"{tolerance:g}: needs a fraction in [0, 1) and --method discovery (0.002 keeps the "
+        if "heldout_tolerance" not in METHODS[self.method].options or not 0.0 <= tolerance < 1.0:
+            raise ValueError(f"{tolerance:g}: needs a fraction in [0, 1) and --method "
+                             f"{', '.join(methods_accepting('heldout_tolerance'))} (0.002 keeps the "
                              "smallest support within 0.2 % of the best held-out error)")
         return replace(self, discovery=replace(self.discovery, heldout_tolerance=float(tolerance)))

@@ -354,10 +354,41 @@ def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
         return _discover(runs, derivs, config)
 
 
-def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> DiscoveryResult:
+@dataclass(frozen=True, eq=False)
+class _Setup:
+    """What every pass of the discovery reads: the runs' positions, frequencies, first (smoothed) states and their
+    trimmed edges, the integral windows, the model-state segments, the forced terms and the tracking noise."""
+
+    dts: list[float]
+    ys: list[NDArray]
+    ths: list[NDArray]
+    first: list[NDArray]
+    edges: list[int]
+    windows: list[list[int]]
+    seg_len: list[int]
+    forced: NDArray
+    noise: tuple[float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class _Pass:
+    """One selection-and-fit pass over both equations."""
+
+    coef: NDArray
+    se: NDArray
+    res_std: NDArray
+    designs: list
+    fronts: list[tuple[list, list[float], list[int]]]
+    modes: tuple[str, str]
+    ratio: tuple[float, float]
+
+
+def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> _Setup:
+    """Step 1: the first pass's column states (smoothed), the windows from each run's dominant frequencies and
+    the noise of the positions."""
+    from cubedimer.noise import white_noise_std
     from cubedimer.spectra import dominant_frequency
 
-    t_start = time.perf_counter()
     dts = [float(r.dt) for r in runs]
     ys = [np.asarray(r.y, float) for r in runs]
     ths = [np.asarray(r.theta, float) for r in runs]
@@ -371,80 +402,106 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                for q in range(2)]
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
-    positions = (ys, ths)
-    from cubedimer.noise import white_noise_std
-    noise = (white_noise_std(ys), white_noise_std(ths))
+    return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, (white_noise_std(ys), white_noise_std(ths)))
 
+
+def _select_equation(design, forced: NDArray, noise: float, config: DiscoveryConfig):
+    """One equation's support: Holm's rule with stepwise swaps, then held-out pruning, or held-out selection when
+    the residual is far above the noise (model error).  Returns (support, path, held-out errors, mode, residual /
+    noise)."""
+    sel, path = select_support(design, forced, config.alpha, config.velocity_first, config.stepwise,
+                               config.velocity_price)
+    ratio = fit_support(design, sel)[2] / noise if noise > 0 else float("inf")
+    mode = "significance"
+    held_a = [float("nan")] * len(path)
+    if config.model_error_factor is not None and ratio > config.model_error_factor:
+        mode = "held-out (model error)"
+        sel, path, held = select_heldout(design, forced, config.alpha, config.velocity_first, config.n_folds,
+                                         config.model_error_se)
+    elif config.heldout_prune:
+        sel, path_b, held_b = prune_heldout(design, sel, forced, config.alpha, config.velocity_first, config.n_folds,
+                                            config.heldout_tolerance)
+        path, held = path + path_b, held_a + held_b
+    else:
+        held = held_a
+    return sel, path, held, mode, ratio
+
+
+def _one_pass(setup: _Setup, windows, states: Sequence[NDArray], trims: Sequence[int], caches: list[dict] | None,
+              frozen: NDArray | None, config: DiscoveryConfig) -> _Pass:
+    """Step 2: select (unless ``frozen``) and fit both equations with the columns at ``states``."""
+    lib = [evaluate_library(s) for s in states]
+    positions = (setup.ys, setup.ths)
+    designs = [reduced_design(positions[q], lib, setup.dts, windows[q], trims, caches[q] if caches else None)
+               for q in range(2)]
+    coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
+    modes, ratio = [], []
+    for q in range(2):
+        sel, path, held, mode, r = _select_equation(designs[q], setup.forced[q], setup.noise[q], config)
+        modes.append(mode)
+        ratio.append(r)
+        if frozen is not None:
+            sel = list(np.flatnonzero(frozen[q]))
+        c, e, s = fit_support(designs[q], sel)
+        coef[q, sel], se[q, sel], res_std[q] = c, e, s
+        fronts.append((path, held, sel))
+    return _Pass(coef, se, res_std, designs, fronts, (modes[0], modes[1]), (ratio[0], ratio[1]))
+
+
+def _freeze(mask: NDArray, masks: list[NDArray], it: int, config: DiscoveryConfig) -> tuple[NDArray | None, str]:
+    """Step 3's freezing of the support: a selection that returns to an earlier support (held-out errors within their
+    noise) or keeps changing is frozen: the smaller of the last two supports, then only the coefficients iterate.
+    Returns (frozen support or None, what to add to the pass's label)."""
+    if it < 1:
+        return None, ""
+    if any(np.array_equal(mask, m) for m in masks[:-1]) and not np.array_equal(mask, masks[-1]):
+        return min((masks[-1], mask), key=lambda m: int(m.sum())), ", support frozen (cycle)"
+    if it >= config.selection_passes:
+        return mask, ", support frozen"
+    return None, ""
+
+
+def _max_change(result: _Pass, mask: NDArray, prev: tuple | None) -> float:
+    """The largest change of a coefficient since the previous pass in standard errors (inf: the support changed)."""
+    if prev is None:
+        return np.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.abs(result.coef - prev[0]) / np.maximum(result.se, prev[1])
+    change = float(np.nanmax(np.where(mask | prev[2], d, 0.0)))
+    return np.inf if not np.array_equal(mask, prev[2]) else change
+
+
+def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[int]], list[IterationLog], bool]:
+    """Step 3: passes with the columns at the smoothed states, then at the selected model's states fitted to the
+    data, until the support and the coefficients converge.  Returns (last pass, windows, history, converged)."""
+    dts, ys, ths, first, edges, windows = setup.dts, setup.ys, setup.ths, setup.first, setup.edges, setup.windows
     caches: list[dict] = [{}, {}]
-    modes, ratio = ["significance", "significance"], [float("nan"), float("nan")]
-
-    def one_pass(states: Sequence[NDArray], trims: Sequence[int], cached: bool, frozen: NDArray | None):
-        lib = [evaluate_library(s) for s in states]
-        designs = [reduced_design(positions[q], lib, dts, windows[q], trims, caches[q] if cached else None)
-                   for q in range(2)]
-        coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
-        for q in range(2):
-            sel, path = select_support(designs[q], forced[q], config.alpha, config.velocity_first, config.stepwise,
-                                        config.velocity_price)
-            ratio[q] = fit_support(designs[q], sel)[2] / noise[q] if noise[q] > 0 else float("inf")
-            modes[q] = "significance"
-            held_a = [float("nan")] * len(path)
-            if config.model_error_factor is not None and ratio[q] > config.model_error_factor:
-                modes[q] = "held-out (model error)"
-                sel, path, held = select_heldout(designs[q], forced[q], config.alpha, config.velocity_first,
-                                                 config.n_folds, config.model_error_se)
-            elif config.heldout_prune:
-                sel, path_b, held_b = prune_heldout(designs[q], sel, forced[q], config.alpha, config.velocity_first,
-                                                    config.n_folds, config.heldout_tolerance)
-                path, held = path + path_b, held_a + held_b
-            else:
-                held = held_a
-            if frozen is not None:
-                sel = list(np.flatnonzero(frozen[q]))
-            c, e, s = fit_support(designs[q], sel)
-            coef[q, sel], se[q, sel], res_std[q] = c, e, s
-            fronts.append((path, held, sel))
-        return coef, se, res_std, designs, fronts
-
     states, trims, label = first, edges, "smoothed"
-    estimate = None
+    estimate = result = prev = frozen = None
     history: list[IterationLog] = []
-    prev = None
-    converged = False
-    frozen: NDArray | None = None
     masks: list[NDArray] = []
     for it in range(config.max_iterations + 1):
         t0 = time.perf_counter()
         if it == 1 and config.natural_periods is not None:
-            windows = natural_windows(coef, windows, dts, config)
+            windows = natural_windows(result.coef, windows, dts, config)
         if it > 0:
-            sigma = (float(res_std[0]), float(res_std[1]))
-            estimate = model_states(PolynomialModel(coef), dts, ys, ths, first, seg_len, sigma, config.segments,
-                                    x0=estimate.x0 if estimate is not None else None)
+            sigma = (float(result.res_std[0]), float(result.res_std[1]))
+            estimate = model_states(PolynomialModel(result.coef), dts, ys, ths, first, setup.seg_len, sigma,
+                                    config.segments, x0=estimate.x0 if estimate is not None else None)
             states = estimate.states
             if config.raw_positions:
                 states = [np.column_stack([y, s[:, 1], th, s[:, 3]]) for y, th, s in zip(ys, ths, states)]
             trims = [edge if f.any() else 0 for f, edge in zip(estimate.failed, edges)]
             label = "model"
-        coef, se, res_std, designs, fronts = one_pass(states, trims, it > 0 and config.raw_positions, frozen)
-        mask = coef != 0.0
-        if frozen is None and it >= 1:
-            # a selection that returns to an earlier support (held-out errors within their noise) or keeps
-            # changing is frozen: the smaller of the last two supports, then only the coefficients iterate
-            if any(np.array_equal(mask, m) for m in masks[:-1]) and not np.array_equal(mask, masks[-1]):
-                frozen = min((masks[-1], mask), key=lambda m: int(m.sum()))
-                label += ", support frozen (cycle)"
-            elif it >= config.selection_passes:
-                frozen = mask
-                label += ", support frozen"
+        result = _one_pass(setup, windows, states, trims, caches if it > 0 and config.raw_positions else None,
+                           frozen, config)
+        mask = result.coef != 0.0
+        if frozen is None:
+            frozen, note = _freeze(mask, masks, it, config)
+            label += note
         masks.append(mask)
-        change = np.inf
-        if prev is not None:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                d = np.abs(coef - prev[0]) / np.maximum(se, prev[1])
-            change = float(np.nanmax(np.where(mask | prev[2], d, 0.0)))
-            if not np.array_equal(mask, prev[2]):
-                change = np.inf
+        change = _max_change(result, mask, prev)
+        res_std = result.res_std
         history.append(IterationLog(
             iteration=it, states=label, n_terms=(int(mask[0].sum()), int(mask[1].sum())), max_change_se=change,
             residual_std=(float(res_std[0]), float(res_std[1])),
@@ -453,15 +510,20 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         log.info("discovery pass %d (%s states): %d + %d terms, max change %.3g SE, residual std %.3g m, %.3g",
                  it, label, mask[0].sum(), mask[1].sum(), change, res_std[0], res_std[1])
         if change < config.tolerance:
-            converged = True
-            break
-        prev = (coef, se, mask)
-    window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], dts)]) for q in range(2)])
+            return result, windows, history, True
+        prev = (result.coef, result.se, mask)
+    return result, windows, history, False
+
+
+def _pareto_fronts(result: _Pass, config: DiscoveryConfig) -> dict[str, tuple[PathPoint, ...]]:
+    """Step 4: per equation, the distinct supports of the last pass's elimination path with their residual and
+    held-out errors (computed where the path has none), the largest first."""
     pareto = {}
     for q, eq in enumerate(EQUATION_NAMES):
-        path, held, sel = fronts[q]
+        path, held, sel = result.fronts[q]
+        design = result.designs[q]
         missing = [i for i, h in enumerate(held) if not np.isfinite(h)]
-        for i, h in zip(missing, heldout_rms(designs[q], [path[i] for i in missing], config.n_folds)):
+        for i, h in zip(missing, heldout_rms(design, [path[i] for i in missing], config.n_folds)):
             held[i] = h
         seen, points = set(), []
         for cols, h in zip(path, held):
@@ -469,15 +531,26 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
             if key in seen:
                 continue
             seen.add(key)
-            points.append(PathPoint(tuple(TERMS[j] for j in key), fit_support(designs[q], key)[2], h,
+            points.append(PathPoint(tuple(TERMS[j] for j in key), fit_support(design, key)[2], h,
                                     selected=set(key) == set(sel)))
         pareto[eq] = tuple(sorted(points, key=lambda p: -p.n_terms))
+    return pareto
+
+
+def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> DiscoveryResult:
+    """Steps 1-4: set up, iterate the passes, the Pareto fronts of the last pass, the result."""
+    t_start = time.perf_counter()
+    setup = _setup(runs, derivs, config)
+    result, windows, history, converged = _iterate(setup, config)
+    mask = result.coef != 0.0
+    window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], setup.dts)]) for q in range(2)])
+    pareto = _pareto_fronts(result, config)
     log.info("discovery: %d terms in %.2f s (%s)", int(mask.sum()), time.perf_counter() - t_start,
              "converged" if converged else "not converged")
     for q, eq in enumerate(EQUATION_NAMES):
-        if modes[q] != "significance":
+        if result.modes[q] != "significance":
             log.info("%s: residual %.3g times the tracking noise (above %g): model error; terms selected by held-out "
-                     "prediction over runs", eq, ratio[q], config.model_error_factor)
-    return DiscoveryResult(mask=mask, coef=coef, std_errors=se, residual_std=res_std, window_s=window_s,
-                           pareto=pareto, iterations=tuple(history), converged=converged,
-                           selection_modes=(modes[0], modes[1]), residual_to_noise=(ratio[0], ratio[1]))
+                     "prediction over runs", eq, result.ratio[q], config.model_error_factor)
+    return DiscoveryResult(mask=mask, coef=result.coef, std_errors=result.se, residual_std=result.res_std,
+                           window_s=window_s, pareto=pareto, iterations=tuple(history), converged=converged,
+                           selection_modes=result.modes, residual_to_noise=result.ratio)

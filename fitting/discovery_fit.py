@@ -24,19 +24,45 @@ from typing import Sequence
 import numpy as np
 
 from .config import FitConfig
-from .discovery import discover_model
+from .description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
+                          model_equation_text)
+from cubedimer.terms import EQUATION_NAMES
+from .discovery import DiscoveryResult, discover_model
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
 from .methods import FitContext, register_method
 from .model import PolynomialModel, Scales
 from .refine import refine
 from .regression import scaled_data, scaled_library
-from .results import FitResult, PreparedRun, RunEstimate
+from .results import EnsembleExtras, FitResult, PreparedRun, RunEstimate
 from .selection_rules import support_text
 
-__all__ = ["DiscoveryMethod"]
+__all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE"]
 
 logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class DiscoveryExtras(EnsembleExtras):
+    """What the discovery produces beyond :class:`fitting.results.FitResult` (its ``extras``).
+
+    Attributes
+    ----------
+    stats, mask_zscore :
+        As :class:`fitting.results.EnsembleExtras` (of the per-run least squares on the selected terms).
+    discovery : DiscoveryResult
+        The integral-form discovery: its passes, standard errors and Pareto front.
+    """
+
+    discovery: DiscoveryResult | None = None
+
+    def record(self, result: FitResult) -> dict:
+        """:class:`~fitting.results.EnsembleExtras`'s keys, ``discovery`` and, in ``integral_form``, the
+        discovery's pooled integral-form estimates in the cross-check's place (same keys)."""
+        disc = self.discovery.to_json()
+        integral = {"method": disc["method"], **{
+            eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
+        return {**super().record(result), "integral_form": integral, "discovery": disc}
 
 
 @dataclass(frozen=True)
@@ -47,11 +73,15 @@ class DiscoveryMethod:
     summary: str = ("integral-form discovery with model-based states, polished by the long-time refinement")
     #: the discovery's own settings (a paper fit's model.json leaves them out)
     private_settings: tuple[str, ...] = ("discovery", "polish", "polish_se")
+    #: ``--heldout-tolerance``: the practical threshold of the held-out selection
+    options: tuple[str, ...] = ("heldout_tolerance",)
+    #: ``--max-evals`` sets the evaluations of the long-time polish
+    max_evals_setting: str = "polish"
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
-        """Steps 1-5 of the module docstring on prepared runs; ``rule`` of the result is None (the discovery
-        selects the terms itself) and ``discovery`` holds its path."""
+        """Steps 1-5 of the module docstring on prepared runs; the result's ``extras`` (:class:`DiscoveryExtras`)
+        hold the discovery's path."""
         derivs = [p.derivs for p in prepared]
         disc = discover_model([p.run for p in prepared], derivs, config.discovery)
         mask = disc.mask
@@ -83,10 +113,73 @@ class DiscoveryMethod:
                                                      scales, config, first=first)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
-        return FitResult(runs=list(prepared), scales=scales, pooled_regression=disc.model, run_fits=run_fits,
-                         stats=stats, mask=mask, joint_start=joint_start, joint=joint, config=config,
-                         mask_zscore=select_terms(stats, config.ensemble), rule=None, fallback=fallback,
-                         oracle=oracle, discovery=disc)
+        extras = DiscoveryExtras(stats=stats, mask_zscore=select_terms(stats, config.ensemble), discovery=disc)
+        return FitResult(runs=list(prepared), scales=scales, pooled_regression=disc.model, run_fits=run_fits, mask=mask,
+                         joint_start=joint_start, joint=joint, config=config, extras=extras, fallback=fallback,
+                         oracle=oracle)
+
+    def describe(self, result: FitResult) -> MethodDescription:
+        """:func:`discovery_description` of the result's model.json record."""
+        from .fit_output import fit_record
+
+        return discovery_description(fit_record(result))
+
+
+#: The Pareto-front figure of a discovery fit (written by :func:`fitting.plots.plot_fit`) and its caption.
+PARETO_FIGURE = ("pareto.png", "Pareto front of the discovery: held-out error (5-fold over runs) against the number of "
+                               "terms, per equation; red: selected; blue square: the knee.")
+
+
+def discovery_description(record: dict) -> MethodDescription:
+    """The account of a model found by the integral-form discovery, from its model.json ``record``
+    (:func:`fitting.fit_output.fit_record`): how it was found, each term with its standard error, oracle standard
+    error and closest alias, the damping rule and the knee of the Pareto front."""
+    disc = record.get("discovery") or {}
+    oracle = record.get("oracle") or {}
+    n_terms = sum(len(v) for v in record["equations"].values())
+    rows, close = [], []
+    for eq in ("yddot", "thetaddot"):
+        for t, c in record["equations"][eq].items():
+            d = disc.get(eq, {}).get("terms", {}).get(t, {})
+            o = oracle.get(eq, {}).get(t, {})
+            rows.append((eq, t, c, d.get("std_error"), d.get("z"), o.get("std_error"), o.get("z"), o.get("alias"),
+                         o.get("alias_z")))
+            if o.get("alias_z") is not None and np.isfinite(o["alias_z"]) and o["alias_z"] < 3.0:
+                close.append(f"{eq}: {t} / {o['alias']} ({o['alias_z']:.1f})")
+    text = (f"The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
+            f"of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
+            f"pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "
+            f"half a standard error, gives a model of {n_terms} terms: " + "; ".join(model_equation_text(record["equations"]))
+            + ". Beside each term the "
+            "oracle standard error says what the data could resolve at best (least squares on this support at the "
+            "model's own noise-free trajectories, at the tracking noise estimated from the data), and the alias z how "
+            "many noise standard deviations separate the support from the one where the term is replaced by its "
+            "closest library rival: below about 3 no estimator tells the two apart reliably (the rival wins in "
+            "Phi(-alias z / 2) of data sets).")
+    damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in record["equations"][eq]]
+    rates = damping_rates(record["equations"])
+    if damping and (record.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
+        text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
+                 "the source paper; Holm's rule selects the other terms.")
+    # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
+    text += anti_damping_text(rates)
+    if close:
+        text += " Terms close to an alias: " + "; ".join(close) + "."
+    text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
+             "the library (real dimers) the data resolve many small terms, and the knee of the front is the smaller "
+             "model a physicist may prefer.")
+    knee = disc.get("knee") or {}
+    knee_terms = {eq: knee[eq] for eq in ("yddot", "thetaddot") if eq in knee}
+    if len(knee_terms) == 2 and sum(len(t) for t in knee_terms.values()) < n_terms:
+        tol = knee["tolerance"]
+        text += (f" The smallest supports within {100 * tol:g} % of the best held-out error (the knee) have "
+                 f"{sum(len(t) for t in knee_terms.values())} terms ("
+                 + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee_terms.items())
+                 + f"); `--heldout-tolerance {tol:g}` (of `python -m fitting fit` and of this report) fits that model "
+                 "(it also drops weak true terms near the information limit).")
+    table = DescriptionTable("Discovered model (SI)", ("equation", "term", "coefficient", "std error", "z",
+                                                       "oracle std error", "oracle z", "alias", "alias z"), tuple(rows))
+    return MethodDescription(text, table, (PARETO_FIGURE, *FIT_FIGURES), selected_by="by integral-form discovery")
 
 
 register_method(DiscoveryMethod())

@@ -9,21 +9,23 @@ from pathlib import Path
 
 import numpy as np
 
-from cubedimer.atomic import write_json
+from cubedimer.atomic import json_text, write_json
 from cubedimer.errors import DatasetError
 from cubedimer.system import SystemSpec, read_system
-from cubedimer.terms import EQUATION_NAMES, STATE_NAMES, parse_term
-from .ensemble import mean_pvalues
-from .integral_form import METHOD as INTEGRAL_METHOD
+from cubedimer.terms import STATE_NAMES, parse_term
 from .methods import METHODS
-from .model import TERMS, PolynomialModel
-from .results import FitResult
+from .model import PolynomialModel
+from .results import FitResult, support_terms
 
-__all__ = ["model_json", "write_fit", "data_range", "ModelFile", "read_model_json"]
+__all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json"]
 
 
-def _terms(mask) -> dict[str, list[str]]:
-    return {eq: [t for t, k in zip(TERMS, mask[q]) if k] for q, eq in enumerate(EQUATION_NAMES)}
+#: model.json's keys in the order they are written; a method's own keys (``FitResult.extras.record``) take their
+#: place among them, keys not listed follow at the end.
+MODEL_JSON_KEYS = ("state", "equations", "zscores", "per_run", "units", "inclusion_frequency", "coefficient_mean",
+                   "coefficient_std", "selected_terms", "regression_c0", "joint_start", "loss", "scales", "settings",
+                   "skipped_files", "glitch_frames_masked", "selection", "integral_form", "fallback", "oracle", "method",
+                   "data_range", "discovery")
 
 
 def _recorded_settings(res: FitResult) -> dict:
@@ -37,7 +39,8 @@ def _recorded_settings(res: FitResult) -> dict:
 
 
 def model_json(res: FitResult) -> dict:
-    """The docs/formats.md ``model.json`` content (plus extra keys)."""
+    """The docs/formats.md ``model.json`` content (plus extra keys): what every method produces and the method's own
+    keys (``res.extras.record``)."""
     per_run = []
     for p, f, lt in zip(res.runs, res.run_fits, res.joint.per_run_end):
         d = f.model_json()
@@ -48,13 +51,9 @@ def model_json(res: FitResult) -> dict:
     out = {
         "state": list(STATE_NAMES),
         "equations": res.model.equations(),
-        "zscores": res.stats.as_dict(res.stats.zscore),
         "per_run": per_run,
         "units": "SI",
-        "inclusion_frequency": res.stats.as_dict(res.stats.inclusion),
-        "coefficient_mean": res.stats.as_dict(res.stats.mean),
-        "coefficient_std": res.stats.as_dict(res.stats.std),
-        "selected_terms": _terms(res.mask),
+        "selected_terms": support_terms(res.mask),
         "regression_c0": res.pooled_regression.equations(),
         "joint_start": res.joint_start.equations(),
         "loss": {"joint_start": res.joint.loss_start.to_dict(), "final": res.joint.loss_end.to_dict(),
@@ -63,19 +62,21 @@ def model_json(res: FitResult) -> dict:
         "settings": _recorded_settings(res),
         "skipped_files": list(res.skipped),
         "glitch_frames_masked": res.n_glitches,
-        "selection": _selection_json(res),
-        "integral_form": _integral_form_json(res),
         "fallback": res.fallback,
         "oracle": res.oracle.to_json() if res.oracle is not None else None,
         "method": res.method,
         "data_range": data_range(res),
     }
-    if res.discovery is not None:
-        out["discovery"] = disc = res.discovery.to_json()
-        # the discovery is the pooled integral form: its estimates in the cross-check's place (same keys)
-        out["integral_form"] = {"method": disc["method"], **{
-            eq: {k: disc[eq][k] for k in ("terms", "window_s", "residual_std")} for eq in EQUATION_NAMES}}
-    return out
+    if res.extras is not None:
+        out.update(res.extras.record(res))
+    place = {k: i for i, k in enumerate(MODEL_JSON_KEYS)}
+    return dict(sorted(out.items(), key=lambda item: place.get(item[0], len(place))))  # stable: others keep order
+
+
+def fit_record(res: FitResult) -> dict:
+    """:func:`model_json` as a reader of the file sees it (strict JSON: non-finite numbers as None, plain Python
+    numbers), in the library's own names: what the methods' descriptions read (``FittingMethod.describe``)."""
+    return json.loads(json_text(model_json(res)))
 
 
 def data_range(res: FitResult) -> dict:
@@ -85,28 +86,6 @@ def data_range(res: FitResult) -> dict:
     theta = max(float(np.max(np.abs(p.run.theta))) for p in res.runs)
     y = max(float(np.max(np.abs(p.run.y))) for p in res.runs)
     return {"theta_abs_max": theta, "y_abs_max_m": y}
-
-
-def _integral_form_json(res: FitResult) -> dict | None:
-    """The pooled integral-form selection per equation (a cross-check; not the minimal model)."""
-    if res.integral_form is None:
-        return None
-    return {"method": INTEGRAL_METHOD, **{eq: s.to_json() for eq, s in res.integral_form.items()}}
-
-
-def _selection_json(res: FitResult) -> dict:
-    """Which rule produced ``equations`` (the method's name when it selects the terms itself) and what the
-    z-score rule gives."""
-    out: dict = {"rule": res.rule if res.rule is not None else res.method,
-                 "mean_pvalues": res.stats.as_dict(mean_pvalues(res.stats))}
-    out["zscore_rule"] = {"z_threshold": res.config.ensemble.z_threshold, "selected_terms": _terms(res.mask_zscore)}
-    if res.selection is not None:
-        out["backward"] = {"alpha": res.config.selection.alpha, "selected_terms": _terms(res.selection.mask),
-                           "steps": [s.to_dict() for s in res.selection.steps]}
-    if res.candidate_fit is not None:
-        out["candidate_fit"] = {"equations": res.candidate_fit.model.equations(),
-                                "loss": res.candidate_fit.loss_end.to_dict()}
-    return out
 
 
 def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) -> Path:

@@ -1,10 +1,13 @@
 """The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
 
 A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
-lists it) and ``fit(prepared, scales, config, context)``, which turns prepared runs into one
-:class:`fitting.results.FitResult`.  It is registered once with :func:`register_method`; the fit command,
-the report command and :func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's
-``solve_ivp`` ``METHODS``), so a registered method is selectable everywhere without further changes.
+lists it), the method-specific options it accepts, ``fit(prepared, scales, config, context)``, which turns prepared
+runs into one :class:`fitting.results.FitResult`, and ``describe(result)``, its own account of that result
+(:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is
+registered once with :func:`register_method`; the fit command, the report command and
+:func:`fitting.pipeline.fit_runs` read :data:`METHODS` (like scipy's ``solve_ivp`` ``METHODS``; the names live in
+:mod:`fitting.method_registry`, which the configuration checks against), so a registered method is selectable
+everywhere without further changes.
 
 The built-in entries are ``"discovery"`` (:mod:`fitting.discovery_fit`, the default) and ``"paper"``
 (:mod:`fitting.paper_fit`); importing :mod:`fitting` registers both.
@@ -13,21 +16,19 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, Sequence, runtime_checkable
+from typing import Protocol, Sequence, runtime_checkable
 
 from cubedimer.executor import ExecutorConfig
+from .config import FitConfig
+from .description import MethodDescription
+from .method_registry import (DEFAULT_METHOD, METHOD_OPTIONS, METHODS, get_method, method_names, methods_accepting,
+                              methods_help)
+from .model import Scales
+from .oracle import NoiseLevels
+from .results import FitResult, PreparedRun
 
-if TYPE_CHECKING:  # annotations only: the registry imports no implementation
-    from .config import FitConfig
-    from .model import Scales
-    from .oracle import NoiseLevels
-    from .results import FitResult, PreparedRun
-
-__all__ = ["FitContext", "FittingMethod", "METHODS", "DEFAULT_METHOD", "register_method", "method_names",
-           "get_method", "methods_help"]
-
-#: The method a fit uses unless told otherwise.
-DEFAULT_METHOD = "discovery"
+__all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
+           "method_names", "get_method", "methods_accepting", "methods_help"]
 
 
 @dataclass(frozen=True)
@@ -49,7 +50,7 @@ class FitContext:
     executor: ExecutorConfig | None = None
     cache_dir: str | os.PathLike | None = None
     progress: bool = True
-    noise: "NoiseLevels | None" = None
+    noise: NoiseLevels | None = None
 
 
 @runtime_checkable
@@ -65,20 +66,29 @@ class FittingMethod(Protocol):
     private_settings : tuple of str
         :class:`~fitting.config.FitConfig` fields only this method reads; the ``settings`` recorded in
         another method's model.json leave them out.
+    options : tuple of str
+        The method-specific options (:data:`METHOD_OPTIONS`) this method accepts; the fit command and
+        :meth:`~fitting.config.FitConfig.with_heldout_tolerance` refuse one the method does not list.
+    max_evals_setting : str
+        The :class:`~fitting.config.FitConfig` field (a :class:`~fitting.refine.RefineConfig`) whose ``max_evals``
+        the fit command's ``--max-evals`` sets: the method's main long-time refinement.
     """
 
     name: str
     summary: str
     private_settings: tuple[str, ...]
+    options: tuple[str, ...]
+    max_evals_setting: str
 
-    def fit(self, prepared: "Sequence[PreparedRun]", scales: "Scales", config: "FitConfig",
-            context: FitContext) -> "FitResult":
+    def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
+            context: FitContext) -> FitResult:
         """Select and fit the model of the prepared runs; the result has every field the method produces."""
         ...
 
-
-#: name -> method, in registration order (the default first).
-METHODS: dict[str, FittingMethod] = {}
+    def describe(self, result: FitResult) -> MethodDescription:
+        """The method's account of ``result`` (one of its own fits): how the model was found and what it is, in the
+        words and with the numbers of model.json."""
+        ...
 
 
 def register_method(method: FittingMethod) -> FittingMethod:
@@ -90,25 +100,7 @@ def register_method(method: FittingMethod) -> FittingMethod:
         ``method`` does not satisfy :class:`FittingMethod`.
     """
     if not isinstance(method, FittingMethod) or not isinstance(method.name, str) or not method.name:
-        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, fit)")
+        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, options, "
+                        "max_evals_setting, fit, describe)")
     METHODS[method.name] = method
     return method
-
-
-def method_names() -> tuple[str, ...]:
-    """The registered method names (the ``--method`` choices)."""
-    return tuple(METHODS)
-
-
-def get_method(name: str) -> FittingMethod:
-    """The registered method ``name``; ValueError (one line, listing the choices) if there is none."""
-    try:
-        return METHODS[name]
-    except KeyError:
-        raise ValueError(f"unknown method {name!r} (use one of {', '.join(METHODS)})") from None
-
-
-def methods_help() -> str:
-    """``'name' (summary), ...`` of every registered method, for a command's ``--method`` help."""
-    return "; ".join(f"'{m.name}'{' (default)' if m.name == DEFAULT_METHOD else ''}: {m.summary}"
-                     for m in METHODS.values())

@@ -30,20 +30,59 @@ from cubedimer.executor import map_ordered
 from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
 from .derivatives import Derivatives
+from .description import DescriptionTable, MethodDescription, anti_damping_text, damping_rates, model_equation_text
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
-from .integral_form import integral_form_selection
+from .integral_form import METHOD as INTEGRAL_METHOD
+from .integral_form import IntegralSelection, integral_form_selection
 from .methods import FitContext, register_method
 from .model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
-from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
+from .refine import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from .regression import fit_regression, scaled_data, scaled_library
-from .results import FitResult, PreparedRun, RunFit
-from .selection import backward_elimination
+from .results import EnsembleExtras, FitResult, PreparedRun, RunFit, support_terms
+from .selection import SelectionResult, backward_elimination
 from .selection_rules import SELECTION_RULES, SelectionEvidence, support_text
 
-__all__ = ["PaperMethod", "candidate_terms", "refine_run"]
+__all__ = ["PaperMethod", "PaperExtras", "candidate_terms", "refine_run"]
 
 logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class PaperExtras(EnsembleExtras):
+    """What the paper's method produces beyond :class:`fitting.results.FitResult` (its ``extras``).
+
+    Attributes
+    ----------
+    stats, mask_zscore :
+        As :class:`fitting.results.EnsembleExtras` (of the per-run refined models).
+    rule : str
+        The selection rule that produced the support (:data:`fitting.selection_rules.SELECTION_RULES`).
+    selection, candidate_fit : SelectionResult, RefineResult or None
+        Backward elimination and the joint fit of its candidate support (rules that eliminate), else None.
+    integral_form : dict or None
+        The pooled integral-form cross-check per equation (None: the runs are shorter than one window).
+    """
+
+    rule: str = "zscore"
+    selection: SelectionResult | None = None
+    candidate_fit: RefineResult | None = None
+    integral_form: dict[str, IntegralSelection] | None = None
+
+    def record(self, result: FitResult) -> dict:
+        """:class:`~fitting.results.EnsembleExtras`'s keys, the elimination in ``selection`` and the cross-check
+        in ``integral_form``."""
+        selection = self.selection_record(result, self.rule)
+        if self.selection is not None:
+            selection["backward"] = {"alpha": result.config.selection.alpha,
+                                     "selected_terms": support_terms(self.selection.mask),
+                                     "steps": [s.to_dict() for s in self.selection.steps]}
+        if self.candidate_fit is not None:
+            selection["candidate_fit"] = {"equations": self.candidate_fit.model.equations(),
+                                          "loss": self.candidate_fit.loss_end.to_dict()}
+        integral = None if self.integral_form is None else {
+            "method": INTEGRAL_METHOD, **{eq: s.to_json() for eq, s in self.integral_form.items()}}
+        return {**super().record(result), "selection": selection, "integral_form": integral}
 
 
 def candidate_terms(c0_joint: PolynomialModel) -> np.ndarray:
@@ -118,6 +157,10 @@ class PaperMethod:
                     "re-optimisation of the minimal model")
     #: none: a discovery fit records the whole configuration (model.json ``settings``)
     private_settings: tuple[str, ...] = ()
+    #: ``--relative-threshold`` of the per-run regressions
+    options: tuple[str, ...] = ("relative_threshold",)
+    #: ``--max-evals`` sets the evaluations of each per-run refinement
+    max_evals_setting: str = "refine"
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
@@ -188,10 +231,30 @@ class PaperMethod:
                                                      scales, config)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
-        return FitResult(runs=list(prepared), scales=scales, pooled_regression=c0_joint, run_fits=run_fits,
-                         stats=stats, mask=mask, joint_start=joint_start, joint=joint, config=config,
-                         mask_zscore=mask_z, rule=rule.name, selection=selection, candidate_fit=cand_fit,
-                         integral_form=integral, fallback=fallback, oracle=oracle)
+        extras = PaperExtras(stats=stats, mask_zscore=mask_z, rule=rule.name, selection=selection,
+                             candidate_fit=cand_fit, integral_form=integral)
+        return FitResult(runs=list(prepared), scales=scales, pooled_regression=c0_joint, run_fits=run_fits, mask=mask,
+                         joint_start=joint_start, joint=joint, config=config, extras=extras, fallback=fallback,
+                         oracle=oracle)
+
+    def describe(self, result: FitResult) -> MethodDescription:
+        """The regression, the per-run refinements and the selection rule (its own ``description``) that gave the
+        minimal model, with each term's z-score and the p-value of its ensemble mean."""
+        from .fit_output import fit_record
+
+        doc = fit_record(result)
+        rule = SELECTION_RULES.get(doc.get("selection", {}).get("rule", "zscore"))
+        rule_text = rule.description if rule is not None else doc.get("selection", {}).get("rule", "zscore")
+        text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
+                "rule, " + rule_text + ", plus viscous damping, give the minimal model: "
+                + "; ".join(model_equation_text(doc["equations"])) + "."
+                + anti_damping_text(damping_rates(doc["equations"])))
+        pvalues = doc.get("selection", {}).get("mean_pvalues", {})
+        table = DescriptionTable("Minimal model (SI)", ("equation", "term", "coefficient", "z-score",
+                                                        "p (ensemble mean = 0)"),
+                                 tuple((eq, t, c, doc["zscores"][eq].get(t), pvalues.get(eq, {}).get(t))
+                                       for eq in ("yddot", "thetaddot") for t, c in doc["equations"][eq].items()))
+        return MethodDescription(text, table, selected_by=rule.selected_by if rule is not None else "")
 
 
 register_method(PaperMethod())

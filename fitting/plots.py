@@ -1,6 +1,8 @@
 """Figures of a fit and of a comparison (matplotlib, Agg backend, written atomically as PNG).
 
-* ``zscores.png``: bar chart of every term's z-score per equation, threshold line, selected terms highlighted;
+* ``zscores.png``: bar chart of every term's z-score per equation, threshold line, selected terms highlighted (methods
+  with across-run statistics, :class:`fitting.results.EnsembleExtras`);
+* ``pareto.png``: the discovery's Pareto front;
 * ``coefficients.png``: per-run refined coefficients (SI, normalised by the final value) of the selected terms;
 * ``optimisation.png``: loss against evaluation for every per-run refinement and the joint one;
 * ``phase_portraits.png`` / ``poincare.png``: data vs minimal model for up to four runs.
@@ -9,19 +11,15 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from cubedimer.atomic import atomic_save
 from cubedimer.terms import EQUATION_NAMES
-from .discovery import KNEE_TOLERANCE
+from .discovery import KNEE_TOLERANCE, DiscoveryResult
+from .methods import get_method
 from .model import TERMS
-from .results import RunFit
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .compare import Comparison
-    from .results import FitResult
+from .compare import Comparison
+from .results import EnsembleExtras, FitResult, RunFit
 
 __all__ = ["plot_fit", "plot_comparison"]
 
@@ -37,28 +35,16 @@ def _save(fig, path: Path) -> None:
     _plt().close(fig)
 
 
-def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> list[Path]:
+def plot_fit(res: FitResult, out_dir: str | os.PathLike, n_runs: int = 4) -> list[Path]:
     """Write the fit figures to ``out_dir``; returns their paths."""
     plt = _plt()
     out = Path(out_dir)
     paths = []
-    # z-scores
-    fig, axes = plt.subplots(2, 1, figsize=(13, 6.5), sharex=True)
-    thr = res.config.ensemble.z_threshold
-    for q, ax in enumerate(axes):
-        z = np.minimum(res.stats.zscore[q], 1e3)
-        ax.bar(range(len(TERMS)), z, color=np.where(res.mask[q], "tab:red", "tab:gray"))
-        ax.axhline(thr, color="k", ls="--", lw=1)
-        ax.set_yscale("symlog", linthresh=1)
-        ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
-    axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
-    rule = {"significance": "by the ensemble-mean t-test, Holm", "zscore": "by z > threshold",
-            "backward": "by backward elimination", "discovery": "by integral-form discovery"}.get(res.rule or res.method, "")
-    axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
-    paths.append(out / "zscores.png")
-    _save(fig, paths[-1])
-    if res.discovery is not None:
-        paths.append(_plot_pareto(res.discovery, out / "pareto.png"))
+    if isinstance(res.extras, EnsembleExtras):  # a method with across-run statistics
+        paths.append(_plot_zscores(res, res.extras.stats, out / "zscores.png"))
+    discovery = getattr(res.extras, "discovery", None)  # a method with a discovery path (DiscoveryExtras)
+    if isinstance(discovery, DiscoveryResult):
+        paths.append(_plot_pareto(discovery, out / "pareto.png"))
     # coefficient distributions
     sel = [(q, j) for q in range(2) for j in range(len(TERMS)) if res.mask[q, j]]
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(sel)), 4))
@@ -119,6 +105,24 @@ def plot_fit(res: "FitResult", out_dir: str | os.PathLike, n_runs: int = 4) -> l
     return paths
 
 
+def _plot_zscores(res: FitResult, stats, path: Path) -> Path:
+    """Every term's z-score across runs per equation, the selected terms in red, the paper's threshold dashed."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 1, figsize=(13, 6.5), sharex=True)
+    thr = res.config.ensemble.z_threshold
+    for q, ax in enumerate(axes):
+        z = np.minimum(stats.zscore[q], 1e3)
+        ax.bar(range(len(TERMS)), z, color=np.where(res.mask[q], "tab:red", "tab:gray"))
+        ax.axhline(thr, color="k", ls="--", lw=1)
+        ax.set_yscale("symlog", linthresh=1)
+        ax.set_ylabel(f"z-score ({EQUATION_NAMES[q]})")
+    axes[1].set_xticks(range(len(TERMS)), TERMS, rotation=90)
+    rule = get_method(res.method).describe(res).selected_by  # the method's (or its selection rule's) words
+    axes[0].set_title(f"term z-scores (mean / std) across runs; red: selected {rule}; dashed: the paper's z = {thr:g}")
+    _save(fig, path)
+    return path
+
+
 def _plot_pareto(disc, path: Path) -> Path:
     """Held-out error against the number of terms per equation (the discovery's elimination paths)."""
     plt = _plt()
@@ -149,7 +153,7 @@ def _plot_pareto(disc, path: Path) -> Path:
     return path
 
 
-def plot_comparison(cmp: "Comparison", out_dir: str | os.PathLike) -> Path:
+def plot_comparison(cmp: Comparison, out_dir: str | os.PathLike) -> Path:
     """Per-run shape and Poincare errors of the variant against the reference model."""
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(9, 4))

@@ -2,25 +2,29 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence, Union
+from typing import Protocol, Sequence, Union, runtime_checkable
 
 import numpy as np
 
 from cubedimer.attractors import AttractorClass
 from cubedimer.dataset import Run
 from cubedimer.system import LEVITATED_DIMER, SystemSpec
+from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
 from .derivatives import Derivatives
-from .discovery import DiscoveryResult
-from .ensemble import TermStatistics
-from .integral_form import IntegralSelection
+from .ensemble import TermStatistics, mean_pvalues
 from .losses import LossTerms
-from .model import PolynomialModel, Scales
+from .model import TERMS, PolynomialModel, Scales
 from .oracle import OracleResult
 from .refine import RefineResult
-from .selection import SelectionResult
 
-__all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "FitResult"]
+__all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "MethodExtras", "EnsembleExtras", "FitResult",
+           "support_terms"]
+
+
+def support_terms(mask: np.ndarray) -> dict[str, list[str]]:
+    """``{equation: [term, ...]}`` of a support mask (2, 35), as model.json lists selected terms."""
+    return {eq: [t for t, k in zip(TERMS, mask[q]) if k] for q, eq in enumerate(EQUATION_NAMES)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,9 +118,51 @@ class RunEstimate:
 PerRunResult = Union[RunFit, RunEstimate]
 
 
+@runtime_checkable
+class MethodExtras(Protocol):
+    """What a method produces beyond :class:`FitResult` (``FitResult.extras``, typed per method: the paper's
+    :class:`fitting.paper_fit.PaperExtras`, the discovery's :class:`fitting.discovery_fit.DiscoveryExtras`)."""
+
+    def record(self, result: "FitResult") -> dict:
+        """The method's own keys of model.json (docs/formats.md), e.g. ``zscores``, ``selection``, ``discovery``."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class EnsembleExtras:
+    """The across-run statistics of the per-run models, for a method that has them.
+
+    Attributes
+    ----------
+    stats : TermStatistics
+        Across-run statistics of the per-run models.
+    mask_zscore : ndarray of bool, shape (2, 35)
+        The paper's rule (z > threshold plus damping terms) on the per-run models, always reported.
+    """
+
+    stats: TermStatistics
+    mask_zscore: np.ndarray
+
+    def record(self, result: "FitResult") -> dict:
+        """model.json's ``zscores``, ``inclusion_frequency``, ``coefficient_mean``, ``coefficient_std`` and
+        ``selection``."""
+        s = self.stats
+        return {"zscores": s.as_dict(s.zscore), "inclusion_frequency": s.as_dict(s.inclusion),
+                "coefficient_mean": s.as_dict(s.mean), "coefficient_std": s.as_dict(s.std),
+                "selection": self.selection_record(result)}
+
+    def selection_record(self, result: "FitResult", rule: str | None = None) -> dict:
+        """Which rule produced ``equations`` (the method's name when it selects the terms itself) and what the
+        z-score rule gives."""
+        return {"rule": rule if rule is not None else result.method,
+                "mean_pvalues": self.stats.as_dict(mean_pvalues(self.stats)),
+                "zscore_rule": {"z_threshold": result.config.ensemble.z_threshold,
+                                "selected_terms": support_terms(self.mask_zscore)}}
+
+
 @dataclass(frozen=True, eq=False)
 class FitResult:
-    """Everything a fitting method produced.
+    """Everything a fitting method produced: what every method produces, and its own ``extras``.
 
     Attributes
     ----------
@@ -127,24 +173,14 @@ class FitResult:
         discovery: the integral-form least squares of the discovered support).
     run_fits : list of RunFit or RunEstimate
         One per run, of the method's kind.
-    stats : TermStatistics
-        Across-run statistics of the per-run models.
     mask : ndarray of bool, shape (2, 35)
         The final model's support.
     joint_start, joint : PolynomialModel, RefineResult
         Start and result of the final joint long-time optimisation (re-optimisation or polish).
     config : FitConfig
-    mask_zscore : ndarray of bool
-        The paper's rule (z > threshold plus damping terms) on the per-run models, always reported.
-    rule : str or None
-        The selection rule that produced ``mask`` (:data:`fitting.selection_rules.SELECTION_RULES`); None when the
-        method selects the terms itself (the discovery).
-    selection, candidate_fit : optional
-        Backward elimination and the joint fit of its candidate support (rules that eliminate), else None.
-    integral_form : dict or None
-        The pooled integral-form cross-check per equation (paper's method), else None.
-    discovery : DiscoveryResult or None
-        The integral-form discovery (method "discovery"), else None.
+    extras : MethodExtras or None
+        The method's own results (the paper's: statistics, rule, elimination, integral-form cross-check; the
+        discovery's: statistics and its path), with their keys of model.json (``extras.record``).
     fallback : dict or None
         When the selected model blew up: ``{"reason", "used", "blown_up_model", "candidates"}``.
     oracle : OracleResult or None
@@ -157,17 +193,11 @@ class FitResult:
     scales: Scales
     pooled_regression: PolynomialModel
     run_fits: Sequence[PerRunResult]
-    stats: TermStatistics
     mask: np.ndarray
     joint_start: PolynomialModel
     joint: RefineResult
     config: FitConfig
-    mask_zscore: np.ndarray
-    rule: str | None = None
-    selection: SelectionResult | None = None
-    candidate_fit: RefineResult | None = None
-    integral_form: dict[str, IntegralSelection] | None = None
-    discovery: DiscoveryResult | None = None
+    extras: MethodExtras | None = None
     fallback: dict | None = None
     oracle: OracleResult | None = None
     skipped: tuple[dict, ...] = ()

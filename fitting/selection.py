@@ -28,7 +28,7 @@ monomials (e.g. ``ydot^2`` vs ``y^2`` for a nearly harmonic y).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -40,7 +40,7 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.terms import EQUATION_NAMES
 from .model import TERMS, PolynomialModel, Scales, damping_mask
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
-from .selection_rules import DEFAULT_RULE, SELECTION_RULES
+from .selection_rules import SelectionConfig  # defined beside the rules it names
 
 def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[np.ndarray, np.ndarray]:
     """Copies of ``coef`` and ``mask`` with term j of equation q removed."""
@@ -53,56 +53,6 @@ def _without_term(coef: np.ndarray, mask: np.ndarray, q: int, j: int) -> tuple[n
 __all__ = ["SelectionConfig", "SelectionStep", "SelectionResult", "backward_elimination"]
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class SelectionConfig:
-    """Settings of the joint-loss selection.
-
-    Parameters
-    ----------
-    rule : str
-        ``"significance"`` (default): terms whose mean coefficient across the per-run refinements is
-        significantly non-zero (one-sample t-test, Holm-Bonferroni at ``alpha``, plus the damping
-        terms; :func:`fitting.ensemble.select_significant_terms`).  ``"zscore"``: the paper's rule,
-        z > ``EnsembleConfig.z_threshold`` plus damping terms; it is always computed and reported, but
-        it drops terms that a single 3-s run cannot determine however many runs agree (measured: the
-        three weak terms of the reduced model, per-run z 1.2-1.6).  ``"backward"``: backward
-        elimination on the joint long-time loss from the pooled regression's support (slow: 410 s
-        on 30 runs, and it dropped y*ydot*thetadot, to which the long-time loss is insensitive).
-    prune : bool
-        With ``"significance"``: follow it by backward elimination on the joint loss (off: measured
-        to drop y*ydot*thetadot on the 30-run benchmark, see ``rule``).
-    alpha : float
-        Family-wise level of the significance rule; level of the one-sided paired Wilcoxon test on
-        per-run losses in backward elimination.
-    n_try : int
-        Removals re-optimised per backward step (the cheapest by the no-refit loss increase).
-    screen : RefineConfig
-        Joint re-optimisation of a reduced (or enlarged) support during the search.
-    forward : bool
-        Run the forward check on eliminated terms.
-    max_steps : int
-    """
-
-    rule: str = DEFAULT_RULE
-    alpha: float = 0.01
-    n_try: int = 2
-    screen: RefineConfig = field(default_factory=lambda: RefineConfig(
-        max_evals=150, rel_bound=0.5, abs_bound=0.005, horizons=(1.0,)))
-    forward: bool = False
-    max_steps: int = 30
-    prune: bool = False
-
-    def __post_init__(self) -> None:
-        if self.rule not in SELECTION_RULES:
-            raise ValueError(f"unknown selection rule {self.rule!r} (use one of {', '.join(SELECTION_RULES)})")
-        if not 0.0 < self.alpha < 1.0:
-            raise ValueError(f"selection alpha must lie in (0, 1), got {self.alpha}")
-        for name in ("n_try", "max_steps"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"selection {name} must be a whole number >= 1, got {v!r}")
 
 
 @dataclass(frozen=True)

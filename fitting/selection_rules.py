@@ -1,9 +1,11 @@
 """The registry of term-selection rules of the per-run ensemble: what ``SelectionConfig.rule`` and ``--selection`` choose.
 
-A rule is an object satisfying :class:`SelectionRule`: a name, a one-line summary, the fitting methods it
+A rule is an object satisfying :class:`SelectionRule`: a name, a one-line summary, its prose for the report and
+the figures (``description``, ``selected_by``), the fitting methods it
 applies to (:data:`fitting.methods.METHODS`; the discovery selects its terms itself, on the held-out path),
 whether it is followed by backward elimination on the joint long-time loss, and ``support(evidence, config)``,
-the support mask from the per-run fits.  :class:`fitting.selection.SelectionConfig` checks its ``rule`` against
+the support mask from the per-run fits.  :class:`SelectionConfig` (defined here, beside the rules it names; also
+imported from :mod:`fitting.selection`) checks its ``rule`` against
 :data:`SELECTION_RULES` on construction (before any work), and the fit command offers the registered names.
 
 Built-in rules (method ``"paper"``): ``"significance"`` (default; the ensemble mean significantly non-zero,
@@ -14,8 +16,8 @@ rule, :func:`fitting.ensemble.select_terms`) and ``"backward"`` (backward elimin
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,11 +25,10 @@ from numpy.typing import NDArray
 from cubedimer.terms import EQUATION_NAMES
 from .ensemble import EnsembleConfig, TermStatistics, select_significant_terms
 from .model import TERMS
+from .refine import RefineConfig
 
-if TYPE_CHECKING:  # annotations only
-    from .selection import SelectionConfig
-
-__all__ = ["SelectionEvidence", "SelectionRule", "SELECTION_RULES", "DEFAULT_RULE", "register_selection_rule",
+__all__ = ["SelectionConfig", "SelectionEvidence", "SelectionRule", "SELECTION_RULES", "DEFAULT_RULE",
+           "register_selection_rule",
            "selection_rule_names", "support_text"]
 
 logger = logging.getLogger(__name__)
@@ -73,17 +74,23 @@ class SelectionRule(Protocol):
         One sentence for the command-line help.
     methods : tuple of str
         The fitting methods the rule applies to.
+    description : str
+        What the rule keeps, as a noun phrase for the report's account of the fit ("terms whose ...").
+    selected_by : str
+        How it selects, completing "red: selected ..." in the z-score figure's title ("by ...").
     """
 
     name: str
     summary: str
     methods: tuple[str, ...]
+    description: str
+    selected_by: str
 
-    def eliminates(self, config: "SelectionConfig") -> bool:
+    def eliminates(self, config: SelectionConfig) -> bool:
         """Whether backward elimination on the joint loss follows ``support``."""
         ...
 
-    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+    def support(self, evidence: SelectionEvidence, config: SelectionConfig) -> NDArray[np.bool_]:
         """The selected support (2, 35) (the start of the elimination when ``eliminates``)."""
         ...
 
@@ -95,7 +102,8 @@ SELECTION_RULES: dict[str, SelectionRule] = {}
 def register_selection_rule(rule: SelectionRule) -> SelectionRule:
     """Add ``rule`` to :data:`SELECTION_RULES` under ``rule.name``; returns it (TypeError if it is not a rule)."""
     if not isinstance(rule, SelectionRule) or not isinstance(rule.name, str) or not rule.name:
-        raise TypeError(f"{rule!r} is not a SelectionRule (name, summary, methods, eliminates, support)")
+        raise TypeError(f"{rule!r} is not a SelectionRule (name, summary, methods, description, selected_by, "
+                        "eliminates, support)")
     SELECTION_RULES[rule.name] = rule
     return rule
 
@@ -103,6 +111,56 @@ def register_selection_rule(rule: SelectionRule) -> SelectionRule:
 def selection_rule_names(method: str | None = None) -> tuple[str, ...]:
     """The registered rule names (those applying to ``method`` if given)."""
     return tuple(n for n, r in SELECTION_RULES.items() if method is None or method in r.methods)
+
+
+@dataclass(frozen=True)
+class SelectionConfig:
+    """Settings of the joint-loss selection.
+
+    Parameters
+    ----------
+    rule : str
+        ``"significance"`` (default): terms whose mean coefficient across the per-run refinements is
+        significantly non-zero (one-sample t-test, Holm-Bonferroni at ``alpha``, plus the damping
+        terms; :func:`fitting.ensemble.select_significant_terms`).  ``"zscore"``: the paper's rule,
+        z > ``EnsembleConfig.z_threshold`` plus damping terms; it is always computed and reported, but
+        it drops terms that a single 3-s run cannot determine however many runs agree (measured: the
+        three weak terms of the reduced model, per-run z 1.2-1.6).  ``"backward"``: backward
+        elimination on the joint long-time loss from the pooled regression's support (slow: 410 s
+        on 30 runs, and it dropped y*ydot*thetadot, to which the long-time loss is insensitive).
+    prune : bool
+        With ``"significance"``: follow it by backward elimination on the joint loss (off: measured
+        to drop y*ydot*thetadot on the 30-run benchmark, see ``rule``).
+    alpha : float
+        Family-wise level of the significance rule; level of the one-sided paired Wilcoxon test on
+        per-run losses in backward elimination.
+    n_try : int
+        Removals re-optimised per backward step (the cheapest by the no-refit loss increase).
+    screen : RefineConfig
+        Joint re-optimisation of a reduced (or enlarged) support during the search.
+    forward : bool
+        Run the forward check on eliminated terms.
+    max_steps : int
+    """
+
+    rule: str = DEFAULT_RULE
+    alpha: float = 0.01
+    n_try: int = 2
+    screen: RefineConfig = field(default_factory=lambda: RefineConfig(
+        max_evals=150, rel_bound=0.5, abs_bound=0.005, horizons=(1.0,)))
+    forward: bool = False
+    max_steps: int = 30
+    prune: bool = False
+
+    def __post_init__(self) -> None:
+        if self.rule not in SELECTION_RULES:
+            raise ValueError(f"unknown selection rule {self.rule!r} (use one of {', '.join(SELECTION_RULES)})")
+        if not 0.0 < self.alpha < 1.0:
+            raise ValueError(f"selection alpha must lie in (0, 1), got {self.alpha}")
+        for name in ("n_try", "max_steps"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"selection {name} must be a whole number >= 1, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -114,11 +172,14 @@ class SignificanceRule:
     summary: str = ("the mean coefficient across runs is significantly non-zero (t-test with Holm correction at "
                     "0.01; default)")
     methods: tuple[str, ...] = ("paper",)
+    description: str = ("terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
+                        "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)")
+    selected_by: str = "by the ensemble-mean t-test, Holm"
 
-    def eliminates(self, config: "SelectionConfig") -> bool:
+    def eliminates(self, config: SelectionConfig) -> bool:
         return bool(config.prune)
 
-    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+    def support(self, evidence: SelectionEvidence, config: SelectionConfig) -> NDArray[np.bool_]:
         mask = select_significant_terms(evidence.stats, config.alpha, evidence.ensemble.keep_damping)
         logger.info("significant ensemble means (t-test, Holm, alpha = %g): %d terms: %s", config.alpha,
                     int(mask.sum()), support_text(mask))
@@ -132,11 +193,13 @@ class ZScoreRule:
     name: str = "zscore"
     summary: str = "the paper's z > 3 rule (always reported)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "the paper's rule (terms with z > 3 across runs)"
+    selected_by: str = "by z > threshold"
 
-    def eliminates(self, config: "SelectionConfig") -> bool:
+    def eliminates(self, config: SelectionConfig) -> bool:
         return False
 
-    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+    def support(self, evidence: SelectionEvidence, config: SelectionConfig) -> NDArray[np.bool_]:
         return evidence.mask_zscore
 
 
@@ -147,11 +210,13 @@ class BackwardRule:
     name: str = "backward"
     summary: str = "elimination on the joint long-time loss (slow)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "backward elimination on the joint long-time loss"
+    selected_by: str = "by backward elimination"
 
-    def eliminates(self, config: "SelectionConfig") -> bool:
+    def eliminates(self, config: SelectionConfig) -> bool:
         return True
 
-    def support(self, evidence: SelectionEvidence, config: "SelectionConfig") -> NDArray[np.bool_]:
+    def support(self, evidence: SelectionEvidence, config: SelectionConfig) -> NDArray[np.bool_]:
         return evidence.candidates | evidence.mask_zscore
 
 

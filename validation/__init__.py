@@ -22,7 +22,7 @@ from .coefficients import CoefficientComparison, TermComparison, compare_coeffic
 from .simulation import model_from_meta
 
 _LAZY = {
-    "diagnose_dataset": ".diagnosis", "write_diagnosis": ".report.diagnosis_section", "DiagnoseConfig": ".diagnosis",
+    "diagnose_dataset": ".diagnosis", "write_diagnosis": ".report.sections.diagnosis", "DiagnoseConfig": ".diagnosis",
     "CANDIDATE_EFFECTS": ".diagnosis", "DiagnosisInternals": ".diagnosis", "GapFit": ".diagnosis",
     "Calibration": ".diagnosis", "Identification": ".diagnosis",
     "BlindConfig": ".blind", "run_blind": ".blind", "blind_table": ".blind",

@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
+
 
 from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
@@ -65,11 +65,11 @@ def _read_model(path: Path) -> dict:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    from acousim.statics.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
+    from acousim.statics.sweep import read_sweep_csv
 
     from cubedimer.atomic import atomic_write_text
 
-    from .coefficients import compare_coefficients
+    from .coefficients import static_comparison
     from cubedimer.atomic import write_json
     from cubedimer.meta import read_meta
 
@@ -91,18 +91,15 @@ def run_compare(args: argparse.Namespace) -> int:
         offset = args.origin_offset
     if args.sweep:
         try:
-            sweep = read_sweep_csv(args.sweep)
+            simulation = read_sweep_csv(args.sweep)
         except ValueError as exc:
             raise UserInputError(str(exc)) from None
     else:
         try:
-            sim = model_from_meta(read_meta(args.data))
+            simulation = model_from_meta(read_meta(args.data))
         except ValueError as exc:
             raise UserInputError(str(exc)) from None
-        sweep = static_sweep(sim, np.linspace(-theta_max, theta_max, 41), np.linspace(-y_max, y_max, 41))
-    static = fit_static_coefficients(sweep, theta_max=theta_max, y_max=y_max)
-    cmp = compare_coefficients(model, static.coefficients, static.std_errors, origin_offset=offset,
-                               n_sigma=args.n_sigma, static_box=static.box)
+    static, cmp = static_comparison(model, simulation, theta_max, y_max, origin_offset=offset, n_sigma=args.n_sigma)
     out = Path(args.out)
     d = cmp.to_dict()
     d["static_fit"] = {"relative_residual": static.relative_residual, "y_origin_of_sweep": static.y_origin}
@@ -161,7 +158,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
     from .diagnosis import DiagnoseConfig, diagnose_dataset
-    from .report.diagnosis_section import write_diagnosis
+    from .report.sections.diagnosis import write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -299,7 +296,7 @@ def run_report(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UserInputError(f"--heldout-tolerance {exc}") from None
     if args.atlas is not None:  # before anything runs
-        from .report.atlas_section import AtlasSectionError, atlas_section
+        from .report.sections.atlas import AtlasSectionError, atlas_section
 
         try:
             atlas_section(args.atlas)

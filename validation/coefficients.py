@@ -33,6 +33,8 @@ import numpy as np
 from cubedimer.terms import is_velocity_free, library_terms, parse_term, term_name
 
 __all__ = [
+    "static_comparison",
+    "STATIC_GRID_POINTS",
     "TermComparison",
     "CoefficientComparison",
     "shift_origin",
@@ -293,3 +295,40 @@ def compare_coefficients(
 
     rows.sort(key=order)
     return CoefficientComparison(rows, delta, origin, n_sigma, static_box or {})
+
+
+#: Grid points per axis of the sweep a static comparison fits (over the box, endpoints included).
+STATIC_GRID_POINTS = 41
+
+
+def static_comparison(model: dict, simulation, theta_max: float, y_max: float,
+                      origin_offset: float | str = "fitted-equilibrium", n_sigma: float = 2.0,
+                      origin_source: str = "user-given"):
+    """The static coefficients of a simulation over a box and their comparison with a fitted model: what
+    ``python -m validation compare`` and the report's section 5 both do.
+
+    Parameters
+    ----------
+    model : dict
+        The fitted model (model.json's content).
+    simulation : StaticModel or acousim.sweep.SweepResult
+        A simulation, swept on a :data:`STATIC_GRID_POINTS`-square grid over the box, or a sweep already made
+        (``compare --sweep``), fitted over the part of it inside the box.
+    theta_max, y_max : float
+        The box of the static fit: |theta| <= theta_max [-], |y| <= y_max [m] (y from the simulation's Z_eq).  The
+        compare command takes model.json's ``data_range`` (theta at most 0.9) unless told otherwise; the report takes
+        the 98 % quantiles of the fitted runs' |theta| (at most 0.9) and |y| measured from the calibrated Z_eq.
+    origin_offset, n_sigma, origin_source
+        As :func:`compare_coefficients`.
+
+    Returns
+    -------
+    (acousim.sweep.StaticCoefficients, CoefficientComparison)
+    """
+    from acousim.sweep import SweepResult, fit_static_coefficients, static_sweep
+
+    sweep = simulation if isinstance(simulation, SweepResult) else static_sweep(
+        simulation, np.linspace(-theta_max, theta_max, STATIC_GRID_POINTS), np.linspace(-y_max, y_max, STATIC_GRID_POINTS))
+    static = fit_static_coefficients(sweep, theta_max=theta_max, y_max=y_max)
+    return static, compare_coefficients(model, static.coefficients, static.std_errors, origin_offset=origin_offset,
+                                        n_sigma=n_sigma, static_box=static.box, origin_source=origin_source)

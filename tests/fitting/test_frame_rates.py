@@ -91,7 +91,7 @@ def test_the_same_model_at_500_to_50000_frames_per_second(fits_by_frame_rate):
     # standard errors of the truth (44 comparisons: a 4-sigma miss by chance has probability 0.3 %)
     truth = TRUTH.support
     for fps, res in fits_by_frame_rate.items():
-        disc = res.discovery
+        disc = res.extras.discovery
         assert (disc.mask == truth).all(), (fps, [TERMS[j] for q, j in zip(*np.nonzero(disc.mask != truth))])
         dev = np.abs(disc.coef - TRUTH.coef)[truth] / disc.std_errors[truth]
         assert dev.max() < 4.0, (fps, dev.round(2))
@@ -99,7 +99,7 @@ def test_the_same_model_at_500_to_50000_frames_per_second(fits_by_frame_rate):
     q = {fps: res.runs[0].frames_averaged for fps, res in fits_by_frame_rate.items()}
     assert q == {500.0: 1, 2000.0: 1, 20000.0: 4, 50000.0: 10}
     # more frames carry more information: the y stiffness's standard error falls with the frame rate
-    se = [fits_by_frame_rate[f].discovery.std_errors[0, TERMS.index("y")] for f in FRAME_RATES]
+    se = [fits_by_frame_rate[f].extras.discovery.std_errors[0, TERMS.index("y")] for f in FRAME_RATES]
     assert se[0] > se[1] > se[2] > se[3]
 
 

@@ -47,7 +47,7 @@ def test_coefficients_within_10_percent(recovery, truth):
 def test_papers_z_rule_is_reported_beside_the_selection(recovery, truth):
     """The paper's z > 3 rule is computed on the same refinements: it keeps every strong term of the truth (and
     only terms of the truth), while the weak ones need the ensemble-mean test."""
-    z = recovery.mask_zscore
+    z = recovery.extras.mask_zscore
     assert not (z & ~truth.support).any()
     for q, t in ((0, "y"), (0, "y^2"), (1, "theta"), (1, "y")):
         assert z[q, TERMS.index(t)]

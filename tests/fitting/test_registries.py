@@ -11,13 +11,14 @@ import pytest
 from fitting import methods, selection_rules
 from fitting.cli import build_parser, main
 from fitting.config import FitConfig
+from fitting.description import DescriptionTable, MethodDescription, model_equation_text
 from fitting.ensemble import least_squares_on_support, select_terms, term_statistics
 from fitting.fit_output import model_json
 from fitting.model import TERMS, PolynomialModel, damping_mask
 from fitting.pipeline import fit_dataset
 from fitting.refine import RefineConfig, refine
 from fitting.regression import scaled_data
-from fitting.results import FitResult, RunEstimate
+from fitting.results import EnsembleExtras, FitResult, RunEstimate
 from fitting.selection import SelectionConfig
 
 #: yddot = y + ydot, thetaddot = theta + thetadot: the linear oscillator, the support of the dummy method
@@ -33,6 +34,8 @@ class LinearMethod:
     name: str = "dummy-linear"
     summary: str = "least squares of the linear oscillator (test)"
     private_settings: tuple[str, ...] = ()
+    options: tuple[str, ...] = ()
+    max_evals_setting: str = "joint"
 
     def fit(self, prepared, scales, config, context) -> FitResult:
         derivs = [p.derivs for p in prepared]
@@ -42,9 +45,16 @@ class LinearMethod:
         runs = [RunEstimate(p.run.name, PolynomialModel(scales.to_si(least_squares_on_support([X[k]], [A[k]], LINEAR))),
                             joint.per_run_start[k]) for k, p in enumerate(prepared)]
         stats = term_statistics([r.model for r in runs])
-        return FitResult(runs=list(prepared), scales=scales, pooled_regression=pooled, run_fits=runs, stats=stats,
+        return FitResult(runs=list(prepared), scales=scales, pooled_regression=pooled, run_fits=runs,
                          mask=LINEAR.copy(), joint_start=pooled, joint=joint, config=config,
-                         mask_zscore=select_terms(stats, config.ensemble))
+                         extras=EnsembleExtras(stats, select_terms(stats, config.ensemble)))
+
+    def describe(self, result) -> MethodDescription:
+        eqs = result.model.equations()
+        return MethodDescription("Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs)),
+                                 DescriptionTable("Linear model (SI)", ("equation", "term", "coefficient"),
+                                                  tuple((eq, t, c) for eq in eqs for t, c in eqs[eq].items())),
+                                 figures=(), selected_by="by construction")
 
 
 @dataclass(frozen=True)
@@ -54,6 +64,8 @@ class DampingOnlyRule:
     name: str = "dummy-restoring"
     summary: str = "the damping and the linear restoring terms (test)"
     methods: tuple[str, ...] = ("paper",)
+    description: str = "the damping and the linear restoring terms"
+    selected_by: str = "as damping or linear restoring terms"
 
     def eliminates(self, config) -> bool:
         return False
@@ -137,6 +149,34 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_sho
                     joint=RefineConfig(max_evals=8, rel_bound=0.3, abs_bound=0.005, horizons=(1.0,)),
                     selection=SelectionConfig(rule=dummy_rule.name))
     res = fit_dataset(two_short_runs, cfg, progress=False)
-    assert res.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
+    assert res.extras.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
     assert not (res.mask & ~(LINEAR | damping_mask())).any()  # nothing beyond what the rule allows
     assert res.mask[0, TERMS.index("ydot")] and res.mask[1, TERMS.index("thetadot")]
+
+
+def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method, small_dataset, tmp_path):
+    """Section 3 of the report is the method's own description: the dummy's sentence, table and (no) figures,
+    with no word of the paper's method or of the discovery."""
+    from fitting.fit_output import write_fit
+    from validation.report.context import ReportContext
+    from validation.report.sections import fit as fit_section
+
+    res = fit_dataset(small_dataset, FitConfig(method=dummy_method.name), progress=False)
+    out = tmp_path / "report"
+    write_fit(res, out / "fit", plots=False)
+    context = ReportContext(
+        data_dir=small_dataset, out=out, model="gorkov", gap=None, edge_radius=None, atlas=None, fit=res,
+        model_json=json.loads((out / "fit" / "model.json").read_text()), variant=None, diagnosis={}, internals=None,
+        meta=None, models=None, calibrations={}, simulation=None, theta_max=0.3, y_max=1e-4, sweep_plot=None,
+        fullwave_sweep=None, coefficients={})
+    section = fit_section.section(context)
+    eqs = res.model.equations()
+    assert section.reading == "Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs))
+    for words in ("Regression on accelerations", "ensemble rule", "z > 3", "integral-form", "Holm", "Pareto"):
+        assert words not in section.reading
+    (table,) = section.tables  # no variant comparison: the linear model has no cross-coupling terms
+    assert table.title == "Linear model (SI)" and table.header == ["equation", "term", "coefficient"]
+    assert table.rows == [["yddot", "y", eqs["yddot"]["y"]], ["yddot", "ydot", eqs["yddot"]["ydot"]],
+                          ["thetaddot", "theta", eqs["thetaddot"]["theta"]],
+                          ["thetaddot", "thetadot", eqs["thetaddot"]["thetadot"]]]
+    assert section.figures == [] and section.numbers["equations"] == context.model_json["equations"]

@@ -28,8 +28,8 @@ def test_too_few_runs_for_wilcoxon_fall_back_to_zscore_rule(small_dataset, tmp_p
     cfg = FitConfig(refine=RefineConfig(max_evals=60), joint=RefineConfig(max_evals=40, rel_bound=0.3, abs_bound=0.005),
                     selection=SelectionConfig(rule="backward"), method="paper")
     res = fit_dataset(small_dataset, config=cfg, progress=False)
-    assert res.selection is None
-    np.testing.assert_array_equal(res.mask, res.mask_zscore)
+    assert res.extras.selection is None
+    np.testing.assert_array_equal(res.mask, res.extras.mask_zscore)
     assert model_json(res)["selection"]["rule"] == "zscore"
 
 

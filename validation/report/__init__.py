@@ -1,10 +1,12 @@
 """The model-vs-simulation report: its numbers, figures, HTML and the headless-browser check.
 
-* :mod:`validation.report.pipeline`: :func:`build_report` runs the fit, the variant comparison, the
-  diagnosis, the calibrated sweeps and the coefficient comparison of a data set and writes the report;
+* :mod:`validation.report.pipeline`: :func:`build_report` runs the fit, the variant comparison and the diagnosis
+  of a data set, fills the :class:`~validation.report.context.ReportContext` and writes the report from its sections;
+* :mod:`validation.report.context`: :class:`~validation.report.context.ReportContext`, everything the sections read
+  (with the calibrated sweeps and coefficient comparisons);
+* :mod:`validation.report.sections`: one module per section (data, tracking, phase space, fit, simulation, model vs
+  simulation, diagnosis, scattering, atlas), each ``section(context)``, in the order of ``SECTIONS``;
 * :mod:`validation.report.figures`: the report's figures of the data and the fitted model;
-* :mod:`validation.report.diagnosis_section`: the diagnosis's figures and report section;
-* :mod:`validation.report.tracking_section`: the tracking's section when the data set came from video;
 * :mod:`validation.report.html`: the self-contained HTML writer (:func:`write_report`);
 * :mod:`validation.report.browser_check`: render a report in headless Chromium and check it.
 """

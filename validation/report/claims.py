@@ -5,8 +5,8 @@ supports.
   :data:`REPRODUCES_BELOW`; otherwise the errors with what they mean.
 * :func:`run_phase`: the phase of theta relative to y at f_y only where theta has a line at f_y of at least
   :data:`PHASE_LINE_FRACTION` of its largest line (else there is no phase to give).
-* :func:`anti_damping_text`: a fitted velocity coefficient that feeds energy in (anti-damping) is flagged, with what
-  may cause it.
+* :func:`anti_damping_text` (from :mod:`fitting.description`, where the fitting methods' descriptions use it too): a
+  fitted velocity coefficient that feeds energy in (anti-damping) is flagged, with what may cause it.
 * :func:`not_significant_text`: beside a test that is not significant, the smallest p its number of runs allows.
 """
 from __future__ import annotations
@@ -15,6 +15,8 @@ from typing import Mapping
 
 import numpy as np
 from numpy.typing import NDArray
+
+from fitting.description import anti_damping_text
 
 from ..diagnosis.statistics import format_p
 
@@ -74,20 +76,6 @@ def run_phase(theta: NDArray, dt: float, f_y: float, phase: float) -> float | No
     if not largest > 0 or line_amplitude(theta - theta.mean(), dt, f_y) < PHASE_LINE_FRACTION * largest:
         return None
     return float(np.degrees(phase))
-
-
-def anti_damping_text(coefficients: Mapping[str, float]) -> str:
-    """A sentence flagging fitted velocity coefficients that feed energy in: ``{label: rate}`` with the rate as a
-    damping rate [1/s] (positive: damping; negative: anti-damping).  Empty when none is negative."""
-    anti = {k: v for k, v in coefficients.items() if np.isfinite(v) and v < 0}
-    if not anti:
-        return ""
-    listed = ", ".join(f"{k} {v:+.3g} 1/s" for k, v in anti.items())
-    return (f" Anti-damping: the fitted damping rate{'s' if len(anti) > 1 else ''} {listed} "
-            f"{'are' if len(anti) > 1 else 'is'} negative, i.e. the term feeds energy into the motion, which a passive "
-            "dimer in air cannot do. It may come from the y origin (a misplaced origin makes the trap's asymmetry read "
-            "as a velocity term), from a drive (a pressure or a field that does work on the dimer) or from a wrong "
-            "model (the term standing in for a missing one); it is not physical damping.")
 
 
 def smallest_wilcoxon_p(n: int) -> float:

@@ -1,11 +1,12 @@
-"""``python -m validation report``: the numbers of the model-vs-simulation report of a data set, and the report.
+"""``python -m validation report``: the model-vs-simulation report of a data set.
 
-Runs, in order (each step logged): the fitting pipeline (``fitting.pipeline.fit_dataset``), the
-variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap
-diagnosis (:mod:`validation.diagnosis`, which also calibrates the simulation), a static sweep of the
-calibrated Gor'kov model over the data's range, the coefficient comparison
-(:mod:`validation.coefficients`) and the rendered mesh; then writes ``report.html`` (self-contained),
-``figures/*.png`` and ``numbers.json``.
+:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.pipeline.fit_dataset``), the
+variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap diagnosis
+(:mod:`validation.diagnosis`, which also calibrates the simulation); then it fills the
+:class:`validation.report.context.ReportContext` (the simulations side by side, static sweeps of the calibrated
+simulations over the data's range and the coefficient comparison, :mod:`validation.coefficients`) and makes the
+sections of :data:`validation.report.sections.SECTIONS` from it; it writes ``report.html`` (self-contained),
+``figures/*.png``, ``numbers.json``, ``diagnosis.json`` and ``comparison.json``.
 """
 from __future__ import annotations
 
@@ -14,119 +15,17 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
+from fitting.description import model_equation_text
+from fitting.methods import get_method
 
-from .claims import PHASE_LINE_FRACTION, anti_damping_text, long_time_reading, not_significant_text, run_phase
-from .html import Figure, Section, Table, write_report
+from .sections.model_vs_simulation import effect_static_coefficients, lead_term_reading
 
 if TYPE_CHECKING:
     from acousim.models import ModelSpec
 
-    from ..diagnosis import Diagnosis
-
 __all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
 
 logger = logging.getLogger(__name__)
-
-
-def model_equation_text(equations: dict) -> list[str]:
-    """The minimal model as equations, e.g. ``yddot = -1.9e4 y + ...`` (SI)."""
-    lines = []
-    for eq in ("yddot", "thetaddot"):
-        terms = equations.get(eq, {})
-        parts = []
-        for t, c in terms.items():
-            sign = "-" if c < 0 else "+"
-            factor = "" if t == "1" else f" {t}"
-            parts.append(f"{sign} {abs(c):.4g}{factor}")
-        body = " ".join(parts).lstrip("+ ") if parts else "0"
-        lines.append(f"{eq} = {body}")
-    return lines
-
-
-def effect_static_coefficients(diag: "Diagnosis", wavenumber: float, z_eq: float, theta_max: float, y_max: float) -> dict[str, float]:
-    """Velocity-free thetaddot coefficients [SI] that the *identified* effects add to the static model: least
-    squares of their accelerations at zero velocity on the velocity-free cubic monomials over the same
-    box as the static sweep fit (|theta| <= theta_max, |y| <= y_max), with the effects' y measured from
-    the calibrated Z_eq (docs/conventions.md section 5).  E.g. pair scattering's -kappa cos^2(k Z) theta adds
-    kappa k^2 cos(2 k Z_eq) to theta*y^2 at the Taylor level."""
-    from cubedimer.terms import evaluate_library, is_velocity_free, library_terms
-
-    from ..diagnosis import CANDIDATE_EFFECTS, effect_regressors
-
-    th, y = np.meshgrid(np.linspace(-theta_max, theta_max, 21), np.linspace(-y_max, y_max, 41))
-    state = np.column_stack([y.ravel(), np.zeros(y.size), th.ravel(), np.zeros(y.size)])
-    total = np.zeros(y.size)
-    for name in diag.identified:
-        params = next(e.params for e in diag.effects if e.name == name)
-        pv = np.array([params[p] for p in CANDIDATE_EFFECTS[name]])
-        total += effect_regressors(name, state, z_eq + state[:, 0], wavenumber, z_eq)[:, 1, :] @ pv
-    if not np.any(total):
-        return {}
-    terms = [t for t in library_terms() if is_velocity_free(t)]
-    lib = evaluate_library(state)[:, [library_terms().index(t) for t in terms]]
-    coef = np.linalg.lstsq(lib / np.abs(lib).max(axis=0), total, rcond=None)[0] / np.abs(lib).max(axis=0)
-    return dict(zip(terms, coef.tolist()))
-
-
-def lead_term_reading(lead, n_sigma: float) -> str:
-    """Section 5's sentences on the theta*y^2 coupling (a :class:`validation.coefficients.TermComparison`), with numbers."""
-    verdict = ("agree in sign and within their combined uncertainty" if lead.signs_agree and lead.within_uncertainty else
-               "agree in sign but not within their combined uncertainty" if lead.signs_agree else
-               "disagree in sign" if lead.signs_agree is False else "cannot be compared (the term was not selected)")
-    if not lead.in_minimal_model and lead.fitted_mean == 0 and lead.fitted_std == 0:
-        ensemble = "not selected in the minimal model and absent from every run's refined model"
-    else:
-        ensemble = (f"fitted {lead.fitted:.3g}{' (not selected in the minimal model)' if not lead.in_minimal_model else ''}, "
-                    f"ensemble mean over the runs' refined models {lead.fitted_mean:.3g} +- {lead.fitted_std:.3g}")
-    sim = f"simulated {lead.simulated:.3g} +- {lead.simulated_std:.3g} 1/(m^2 s^2)"
-    if lead.verdict_from == "integral form":
-        z = lead.integral / lead.integral_std_error
-        return (f"The theta*y^2 coupling: the pooled integral-form fit (position space, coefficients shared by all runs) "
-                f"selects it with {lead.integral:.3g} +- {lead.integral_std_error:.2g} (z = {z:.1f}), against the {sim}; "
-                f"they {verdict} ({n_sigma:g} sigma; ratio {lead.ratio:.4g}, {lead.deviation_sigma:.2g} combined standard "
-                f"deviations apart). The per-run acceleration fits ({ensemble}) "
-                "scatter from run to run far more than the pooled estimate's standard error, so the verdict uses the pooled estimate.")
-    return (f"The theta*y^2 coupling: {ensemble}; the pooled integral-form fit does not select it; {sim}. "
-            + (f"On the ensemble statistics they {verdict} ({n_sigma:g} sigma"
-               + (f"; {lead.deviation_sigma:.2g} combined standard deviations apart" if np.isfinite(lead.deviation_sigma)
-                  else "") + ")." if lead.signs_agree is not None else f"On the ensemble statistics they {verdict}."))
-
-
-def _scattering_section(models) -> Section:
-    """Section 7: the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model side by side."""
-    from ..diagnosis.model_comparison import row_label
-
-    rows = {r.model: r for r in models.rows}
-    g0, gp = rows["gorkov"], rows["gorkov+pair_scattering"]
-    kappa = gp.params.get("pair_scattering", {}).get("kappa", float("nan"))
-    text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
-            f"(pressure and origin) on the same runs. The Gor'kov model leaves a gap of {g0.gap:.3g}; with the phenomenological "
-            f"pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
-    fw = rows.get("fullwave")
-    if fw is not None:
-        text += (f" The full-wave model, whose hinge comes from the boundary-element solution with no fitted stiffness, "
-                 f"leaves {fw.gap:.3g} (y equation {fw.components[0]:.3g}, theta equation {fw.components[1]:.3g}, energy "
-                 f"{fw.components[2]:.3g}). docs/fullwave.md states how far its hinge numbers are converged and verified.")
-    else:
-        text += f" The full-wave model is not compared: {models.unavailable.get('fullwave')}."
-    table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
-                  "0 perfect, about 1 for no motion)",
-                  ["simulation", "pressure [Pa]", "origin offset [um]", "y equation", "theta equation", "energy", "gap",
-                   "long-time error", "fitted parameters"],
-                  [[row_label(r.model), r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
-                    r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
-                   for r in models.rows],
-                  {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
-                   "origin offset [um]": "the data's y origin above this simulation's equilibrium height Z_eq at its "
-                                         "calibrated pressure",
-                   "y equation": "unexplained fraction of the vertical accelerations beyond the noise floor, mean over runs",
-                   "theta equation": "the same for the measured hinge angle (integral form)",
-                   "energy": "the same for the energy balance over 0.4-s windows",
-                   "gap": "the mean of the three", "long-time error": "mean of the attractor-shape, Poincare and frequency "
-                   "errors of the simulation started from each run's first state",
-                   "fitted parameters": "the parameters fitted with the simulation (SI)"})
-    return Section("scattering", "7. Scattering added: fitted or from physics", text, [], [table], models.to_dict())
 
 
 def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
@@ -147,9 +46,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         default: the fitting and comparison defaults
     method : the fit's model-discovery method (:data:`fitting.methods.METHODS`)
     spec : the simulation model the diagnosis (section 6) calibrates and its own options
-        (:class:`acousim.models.ModelSpec`; default: the Gor'kov model); the other registered models stand beside it
-        in sections 4, 5 and 7 whenever they apply to the experiment; a model parameter the spec leaves unset that
-        the data may determine (the full-wave hinge gap) is calibrated by the diagnosis
+        (:class:`acousim.models.ModelSpec`; default: the registry's first, the Gor'kov model); every other registered
+        model stands beside it in sections 4, 5 and 7 whenever it applies to the experiment; a model parameter the
+        spec leaves unset that the data may determine (the full-wave hinge gap) is calibrated by the diagnosis
     heldout_tolerance : the discovery's practical threshold (:class:`fitting.discovery.DiscoveryConfig`; default 0)
     atlas : folder of an attractor atlas (``python -m acousim atlas``), shown as the last section
 
@@ -157,366 +56,56 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     -------
     Path of report.html
     """
-    from acousim.gorkov.render import render_dimer
-    from cubedimer.spectra import peak_frequency
-    from acousim.statics.sweep import fit_static_coefficients, static_sweep
+    from cubedimer.atomic import write_json
     from cubedimer.executor import ExecutorConfig
-    from fitting.compare import compare_models, cross_coupling_mask
     from fitting.config import FitConfig
+    from acousim.models import ModelSpec
     from fitting.fit_output import model_json as fit_model_json, write_fit
     from fitting.pipeline import fit_dataset
-    from fitting.refine import JOINT_REFINE
-    from fitting.plots import plot_comparison
 
-    from ..coefficients import compare_coefficients
-    from ..diagnosis import DiagnoseConfig, compare_simulation_models, diagnose, load_for_diagnosis
+    from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
     from ..diagnosis.pipeline import check_enough_runs
-    from ..simulation import calibrated_model, model_from_meta
-    from .diagnosis_section import diagnosis_figures, diagnosis_section
-    from .figures import data_figures, phase_space_figures, restoring_overlay_figure
+    from ..simulation import model_from_meta
+    from .context import report_context, variant_comparison
+    from .html import write_report
+    from .sections import SECTIONS
 
-    from acousim.models import ModelSpec
-
-    spec = spec if spec is not None else ModelSpec()
-    model = spec.name
     level = logging.INFO if progress else logging.DEBUG
 
     def say(message: str) -> None:
         logger.log(level, "%s", message)
 
+    spec = spec if spec is not None else ModelSpec()
     # the data set, loaded once with the diagnosis's checks: the fit and the diagnosis see the same runs
     dataset = load_for_diagnosis(data_dir, progress=progress)
-    meta = dataset.meta
-    # refuse a model that does not fit the experiment (a gap with Gor'kov, a dimer outside the full-wave family)
-    # before the long fit, not after it
-    model_from_meta(meta, spec)
-    # and a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
+    # refuse a model that does not fit the experiment (a dimer outside the full-wave family) before the long fit, and
+    # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
+    model_from_meta(dataset.meta, spec)
     check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
     out = Path(out_dir)
-    figs_dir = out / "figures"
     fit_dir = out / "fit"
+    # ---- the fit, the variant comparison and the diagnosis: what the report reads --------------------------------
     config = FitConfig(method=method).with_heldout_tolerance(heldout_tolerance)
     if max_evals is not None:
         config = replace(config, refine=replace(config.refine, max_evals=max_evals),
                          polish=replace(config.polish, max_evals=max_evals),
                          joint=replace(config.joint, max_evals=max_evals))
-    say("1/5 fitting the data (" + ("SINDy, long-time refinement, ensemble z-scores, minimal model" if method == "paper"
-                                    else "integral-form discovery with held-out selection, long-time polish") + ")")
+    say(f"1/5 fitting the data ({get_method(method).summary})")
     res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
     model_json = fit_model_json(res)
-    prepared = res.runs
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
-    mask = cross_coupling_mask(res.model)
-    variant = res.model.with_mask(res.model.support & ~mask) if mask.any() else None
-    cmp = None
-    if variant is not None:
-        cmp_config = JOINT_REFINE if max_evals is None else replace(JOINT_REFINE, max_evals=max_evals)
-        cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales,
-                             [p.run.name for p in prepared], config=cmp_config)
-        plot_comparison(cmp, fit_dir)
+    variant = variant_comparison(res, fit_dir, max_evals)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
     diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
-    internals = diag.internals
-    say("   the gaps of Gor'kov, Gor'kov + fitted pair scattering and the full-wave model, side by side")
-    models = compare_simulation_models(internals.problem, spec, meta, base=internals.base)
-    # each simulation at its own calibration: the diagnosis's final one for its model, the bare one for the other
-    cals = {k: f.calibration for k, f in models.fits.items() if "+" not in k}  # simulations
-    cals[model] = internals.final.calibration
-    cal = cals["gorkov"]
-    say("4/5 sweeping the calibrated simulations and comparing coefficients")
-    sim = model_from_meta(meta, pressure_amplitude_pa=cal.pressure_amplitude_pa)
-    states = np.concatenate([p.derivs.state for p in prepared])
-    delta = cal.origin_offset_m
-    theta_max = float(min(0.9, np.quantile(np.abs(states[:, 2]), 0.98)))
-    y_max = float(np.quantile(np.abs(states[:, 0] + delta), 0.98))
-
-    def sweep_and_compare(simulation, offset: float):
-        plot = static_sweep(simulation, np.linspace(-0.9, 0.9, 61), np.linspace(-1.3 * y_max, 1.3 * y_max, 41))
-        fit = fit_static_coefficients(static_sweep(simulation, np.linspace(-theta_max, theta_max, 41),
-                                                   np.linspace(-y_max, y_max, 41)))
-        return plot, compare_coefficients(model_json, fit.coefficients, fit.std_errors, origin_offset=offset,
-                                          static_box=fit.box, origin_source="calibrated (section 6)")
-
-    sweep_plot, coef_cmp = sweep_and_compare(sim, delta)
-    fw_sweep, fw_cmp = None, None
-    if cals.get("fullwave") is not None:
-        fw_spec = spec if spec.name == "fullwave" else ModelSpec("fullwave")
-        fw_sim = calibrated_model(meta, fw_spec, cals["fullwave"].pressure_amplitude_pa, diag.calibration)
-        fw_sweep, fw_cmp = sweep_and_compare(fw_sim, cals["fullwave"].origin_offset_m)
+    # ---- the calibrated simulations and their sweeps (steps 3-4), then the sections from the one context ---------
+    context = report_context(dataset, out, res, model_json, variant, diag, spec, atlas=atlas, say=say)
     say("5/5 figures and the report")
-    sections = []
-    # 1 data
-    dfig = data_figures(prepared, figs_dir)
-    classes: dict[str, int] = {}
-    for p in prepared:
-        classes[p.attractor.label] = classes.get(p.attractor.label, 0) + 1
-    peaks = [(peak_frequency(p.run.y, p.run.dt), peak_frequency(p.run.theta, p.run.dt)) for p in prepared]
-    fy = float(np.median([py[0] for py, _ in peaks]))
-    ft = float(np.median([pt[0] for _, pt in peaks]))
-    resolution = float(max(py[1] for py, _ in peaks))  # of the shortest run
-    # a peak closer to 0 than two resolution widths (the Hann main lobe) is not resolved from the slow motion
-    ft_text = (f"the hinge's spectrum peaks at a median {ft:.2f} Hz" if ft >= 2 * resolution else
-               f"the hinge's spectrum peaks at a median {ft:.2f} Hz, within two resolution widths of 0 Hz, so the runs are "
-               "too short to resolve the hinge frequency")
-    sections.append(Section(
-        "data", "1. The data",
-        f"{len(prepared)} runs ({len(res.skipped)} files skipped as unreadable or invalid). The vertical motion's spectrum "
-        f"peaks at a median {fy:.2f} Hz and {ft_text} (peaks of the zero-padded spectra; runs of "
-        f"{1 / resolution:.3g} s resolve {resolution:.2g} Hz); the spectra show whether theta carries the y frequency and "
-        "its second harmonic (theta locked to y). The runs fall into the attractor classes "
-        + ", ".join(f"{k} ({v})" for k, v in classes.items()) + ", read from the phase of theta relative to y at f_y.",
-        [Figure(p, c) for p, c in dfig],
-        [Table("Runs (frequencies: peaks of the zero-padded spectra, each run resolving 1/duration)",
-               ["file", "class", "f_y [Hz]", "f_theta [Hz]", "resolution [Hz]", "amplitude y [um]", "amplitude theta",
-                "phase [deg]"],
-               [[p.run.name, p.attractor.label, py[0], pt[0], py[1], p.attractor.amp_y * 1e6,
-                 p.attractor.amp_theta, _late_phase(p)] for p, (py, pt) in zip(prepared, peaks)],
-               RUN_COLUMNS)],
-        {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": fy, "median_f_theta_hz": ft,
-         "frequency_resolution_hz": resolution}))
-    # the tracking, when the data set came from video (its own section module)
-    from .tracking_section import tracking_section
-
-    tracked = tracking_section(data_dir, figs_dir)
-    if tracked is not None:
-        sections.append(tracked)
-    # 2 phase space
-    pfig = phase_space_figures(prepared, res.model, figs_dir)
-    loss = model_json["loss"]["final"]
-    sections.append(Section(
-        "phase-space", "2. Phase space",
-        long_time_reading(loss),
-        [Figure(p, c) for p, c in pfig] + [Figure(fit_dir / "phase_portraits.png", "Phase portraits (y, ydot) and (theta, thetadot): data and minimal model, first runs."),
-                                           Figure(fit_dir / "poincare.png", "Poincare maps (theta, thetadot at y = 0, ydot < 0): data and minimal model.")],
-        [], {"loss_final": loss}))
-    # 3 the fit
-    eqs = model_equation_text(model_json["equations"])
-    rows = []
-    if cmp is not None:
-        rows = [["attractor shape", cmp.shape_test.median_difference, cmp.shape_test.p_greater, cmp.shape_test.n],
-                ["Poincare map", cmp.poincare_test.median_difference, cmp.poincare_test.p_greater, cmp.poincare_test.n]]
-    rule = model_json.get("selection", {}).get("rule", "zscore")
-    fit_figs = [Figure(fit_dir / "zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; "
-                                                "red: selected, dashed: the paper's z = 3."),
-                Figure(fit_dir / "coefficients.png", "Distribution across runs of the refined coefficients of the selected terms."),
-                Figure(fit_dir / "optimisation.png", "Optimisation trajectory of the long-time refinement.")]
-    if cmp is not None and (fit_dir / "compare.png").exists():
-        fit_figs.append(Figure(fit_dir / "compare.png", "Per-run errors of the minimal model and of its variant without cross-coupling terms."))
-    cmp_text = "" if cmp is None else (
-        " Without its cross-coupling terms (re-optimised) the model's per-run errors are "
-        + " and ".join(f"{'' if t.p_greater < 0.05 else 'not significantly '}larger for the {what} "
-                       + not_significant_text(t.p_greater, t.n, 0.05)
-                       for t, what in ((cmp.shape_test, "attractor shape"), (cmp.poincare_test, "Poincare map"))) + ".")
-    if model_json.get("method") == "discovery":
-        fit_text, fit_table = _discovery_fit_text(model_json, eqs)
-        if (fit_dir / "pareto.png").exists():
-            fit_figs.insert(0, Figure(fit_dir / "pareto.png", "Pareto front of the discovery: held-out error (5-fold over "
-                                                              "runs) against the number of terms, per equation; red: selected; "
-                                                              "blue square: the knee."))
-    else:
-        rule_text = {"significance": "terms whose mean coefficient across runs is significantly non-zero (one-sample t-test, "
-                                     "Holm-Bonferroni at 0.01; the paper's z > 3 rule is shown for comparison)",
-                     "zscore": "the paper's rule (terms with z > 3 across runs)",
-                     "backward": "backward elimination on the joint long-time loss"}.get(rule, rule)
-        fit_text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
-                    "rule, " + rule_text + ", plus viscous damping, give the minimal model: " + "; ".join(eqs) + "."
-                    + anti_damping_text(_damping_rates(model_json["equations"])))
-        fit_table = Table("Minimal model (SI)", ["equation", "term", "coefficient", "z-score", "p (ensemble mean = 0)"],
-                          [[eq, t, c, model_json["zscores"][eq].get(t),
-                            model_json.get("selection", {}).get("mean_pvalues", {}).get(eq, {}).get(t)]
-                           for eq in ("yddot", "thetaddot") for t, c in model_json["equations"][eq].items()])
-    sections.append(Section(
-        "fit", "3. The fit",
-        fit_text + cmp_text,
-        fit_figs,
-        [fit_table]
-        + ([Table("Variant without cross-coupling terms vs the minimal model (per-run errors)",
-                  ["error", "median difference (variant - minimal)", "Wilcoxon p (variant worse)", "runs"], rows)] if rows else []),
-        {"equations": model_json["equations"], "wilcoxon_shape_p": None if cmp is None else cmp.shape_test.p_greater,
-         "wilcoxon_poincare_p": None if cmp is None else cmp.poincare_test.p_greater}))
-    # 4 the simulation
-    overlay_models = [(sweep_plot, delta, "Gor'kov")]
-    if fw_sweep is not None:
-        overlay_models.append((fw_sweep, cals["fullwave"].origin_offset_m, "full-wave"))
-    overlay = restoring_overlay_figure(overlay_models, prepared, figs_dir)
-    render = render_dimer(sim, 0.3, 0.0, figs_dir / "dimer_gorkov.png")
-    fw_text = ""
-    if fw_sweep is not None:
-        fc = cals["fullwave"]
-        fw_text = (f" Beside it (red) the full-wave model, calibrated the same way ({fc.pressure_amplitude_pa:.0f} Pa; the data's "
-                   f"y origin lies {fc.origin_offset_m * 1e6:+.2f} um above the full-wave model's calibrated Z_eq, against "
-                   f"{delta * 1e6:+.2f} um above the Gor'kov model's calibrated Z_eq): the scattering between the cubes "
-                   "holds the hinge with no fitted stiffness.")
-    elif models.unavailable.get("fullwave"):
-        fw_text = f" The full-wave model is not shown: {models.unavailable['fullwave']}."
-    sections.append(Section(
-        "simulation", "4. The simulation",
-        f"The Gor'kov model at the calibrated pressure {cal.pressure_amplitude_pa:.0f} Pa (nominal "
-        f"{cal.nominal_pressure_pa:.0f} Pa) holds the dimer {abs(sim.equilibrium_height) * 1e6:.0f} um below the node. Its "
-        "restoring force follows the measured vertical accelerations; where the measured hinge accelerations lie far "
-        "outside the model's torque curve, the hinge is held by something the model omits." + fw_text,
-        [Figure(*overlay), Figure(render, "The posed dimer mesh (theta = 0.3) coloured by the Gor'kov potential density u.")],
-        [], {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height,
-             "fullwave_calibrated_pressure_pa": getattr(cals.get("fullwave"), "pressure_amplitude_pa", None)}))
-    # 5 model vs simulation
-    lead = coef_cmp.rows[0]
-    comparisons = {"gorkov": coef_cmp, "fullwave": fw_cmp}
-    if comparisons.get(model) is None:  # any other registered model: its own calibrated sweep
-        own = calibrated_model(meta, spec, cals[model].pressure_amplitude_pa, diag.calibration)
-        comparisons[model] = sweep_and_compare(own, cals[model].origin_offset_m)[1]
-    main_cmp = comparisons[model]  # the diagnosis's model's comparison
-    main_lead, main_cal = main_cmp.rows[0], cals[model]
-    # what the identified effects add to the static theta*y^2 of the diagnosis's model (the diagnosis is section 6)
-    added = effect_static_coefficients(diag, sim.wave.wavenumber, main_cal.equilibrium_height_m, theta_max, y_max)
-    effects_reading = ""
-    fitted_lead = main_lead.integral if main_lead.verdict_from == "integral form" else main_lead.fitted_mean
-    fitted_se = main_lead.integral_std_error if main_lead.verdict_from == "integral form" else main_lead.fitted_std
-    if added.get("y^2*theta") and np.isfinite(fitted_lead):
-        with_effects = main_lead.simulated + added["y^2*theta"]
-        n_sig = abs(fitted_lead - with_effects) / np.hypot(fitted_se, main_lead.simulated_std)
-        effects_reading = (f" The effects identified in section 6 ({', '.join(diag.identified)}) add {added['y^2*theta']:.3g} to the "
-                           f"static theta*y^2 (least squares over the same box); with them the "
-                           f"{spec.label} simulation predicts "
-                           f"{with_effects:.3g}, {n_sig:.1f} combined standard deviations from the fit.")
-    fw_reading = ""
-    fw_rows = {}
-    if fw_cmp is not None:
-        fl = fw_cmp.rows[0]
-        fw_rows = {(r.equation, r.term): r for r in fw_cmp.rows}
-        fw_reading = (f" The full-wave model, with no fitted stiffness, gives {fl.simulated:.3g} +- {fl.simulated_std:.2g} for "
-                      f"theta*y^2 (the paper's finite-element check), against the Gor'kov {lead.simulated:.3g}; its column "
-                      "below is its own calibrated sweep over the same box.")
-    header = ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
-              "simulated", "simulated std", "verdict from", "ratio", "signs agree", "deviation [combined sigma]",
-              f"within {coef_cmp.n_sigma:g} sigma"]
-    if fw_cmp is not None:
-        header += ["full wave", "full-wave std"]
-
-    def table_row(r) -> list:
-        row = [r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
-               r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
-               r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.deviation_sigma,
-               r.within_uncertainty]
-        if fw_cmp is not None:
-            f = fw_rows.get((r.equation, r.term))
-            row += [f.simulated if f else None, f.simulated_std if f else None]
-        return row
-
-    shown = [r for r in coef_cmp.rows if r.kind != "static" or r.in_minimal_model or abs(r.simulated) > 0
-             or abs(getattr(fw_rows.get((r.equation, r.term)), "simulated", 0.0) or 0.0) > 0]
-    numbers5 = coef_cmp.to_dict()
-    if fw_cmp is not None:
-        numbers5["fullwave"] = fw_cmp.to_dict()
-    sections.append(Section(
-        "model-vs-simulation", "5. Model vs simulation",
-        lead_term_reading(lead, coef_cmp.n_sigma) + fw_reading + effects_reading + " Static coefficients are "
-        f"least squares on the calibrated sweep over |theta| <= {theta_max:.2f}, |y| <= {y_max * 1e6:.0f} um and re-expanded "
-        f"about the data's origin ({coef_cmp.origin}). Velocity terms have no static prediction.",
-        [],
-        [Table("Coefficients (SI), the theta*y^2 term first; 'simulated' is the Gor'kov model; the verdict columns use the "
-               "estimate named in 'verdict from'", header, [table_row(r) for r in shown])],
-        numbers5))
-    # 7 (placed after the diagnosis) how far the gap shrinks once scattering is added
-    sections_after = [_scattering_section(models)]
-    # 6 the gap
-    dfigs = diagnosis_figures(diag, figs_dir)
-    sec = diagnosis_section(diag, dfigs)
-    sections.append(Section("diagnosis", f"6. The sim-to-real gap ({spec.label} model)",
-                            sec.reading, sec.figures, sec.tables, sec.numbers))
-    sections += sections_after
-    if atlas is not None:
-        from .atlas_section import atlas_section
-
-        sections.append(atlas_section(atlas))
-    from cubedimer.atomic import write_json
-
+    sections = [s for _, make in SECTIONS if (s := make(context)) is not None]
     write_json(out / "diagnosis.json", diag.to_json())
-    write_json(out / "comparison.json", numbers5)
+    write_json(out / "comparison.json", next(s.numbers for s in sections if s.id == "model-vs-simulation"))
     path = write_report(sections, out, "Cube dimer: model vs simulation",
                         f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
     say(f"written {path}")
     return path
-
-
-#: what each column of the runs table holds
-RUN_COLUMNS = {
-    "class": "the attractor class of the run's second half (docs/fitting.md), from theta's frequency and its phase "
-             "relative to y",
-    "f_y [Hz]": "the peak of the zero-padded spectrum of y", "f_theta [Hz]": "the same for theta",
-    "resolution [Hz]": "1/duration of the run, the spacing of independent spectral values",
-    "amplitude y [um]": "half the range between the 1 % and 99 % quantiles of the smoothed y over the run's second half "
-                        "(the late motion, after the decay from the drop)",
-    "amplitude theta": "the same for theta [-]",
-    "phase [deg]": f"phase of theta relative to y at f_y from their cross spectrum over the run's second half; given only "
-                   f"where theta's line at f_y reaches {PHASE_LINE_FRACTION:g} of its largest spectral line (blank: theta "
-                   "has no line at f_y, so there is no phase)",
-}
-
-
-def _late_phase(p) -> float | None:
-    """The runs table's phase: over the stretch the attractor was classified on (the run's second half)."""
-    d = p.derivs
-    half = len(d.t) // 2
-    return run_phase(d.state[half:, 2], float(d.t[1] - d.t[0]), p.attractor.f_y, p.attractor.phase)
-
-
-def _damping_rates(equations: dict) -> dict[str, float]:
-    """The model's linear damping as rates [1/s] (positive: damping): minus the coefficients of ydot in yddot and of
-    thetadot in thetaddot, where the model has them."""
-    out = {}
-    for eq, term, label in (("yddot", "ydot", "gamma_y (ydot in yddot)"),
-                            ("thetaddot", "thetadot", "gamma_theta (thetadot in thetaddot)")):
-        if term in equations.get(eq, {}):
-            out[label] = -float(equations[eq][term])
-    return out
-
-
-def _discovery_fit_text(model_json: dict, eqs: list[str]) -> tuple[str, Table]:
-    """Section 3's reading and table for a model found by the integral-form discovery (``method == "discovery"``)."""
-    disc = model_json.get("discovery") or {}
-    oracle = model_json.get("oracle") or {}
-    n_terms = sum(len(v) for v in model_json["equations"].values())
-    rows, close = [], []
-    for eq in ("yddot", "thetaddot"):
-        for t, c in model_json["equations"][eq].items():
-            d = disc.get(eq, {}).get("terms", {}).get(t, {})
-            o = oracle.get(eq, {}).get(t, {})
-            rows.append([eq, t, c, d.get("std_error"), d.get("z"), o.get("std_error"), o.get("z"), o.get("alias"),
-                         o.get("alias_z")])
-            if o.get("alias_z") is not None and np.isfinite(o["alias_z"]) and o["alias_z"] < 3.0:
-                close.append(f"{eq}: {t} / {o['alias']} ({o['alias_z']:.1f})")
-    text = (f"The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
-            f"of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
-            f"pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "
-            f"half a standard error, gives a model of {n_terms} terms: " + "; ".join(eqs) + ". Beside each term the "
-            "oracle standard error says what the data could resolve at best (least squares on this support at the "
-            "model's own noise-free trajectories, at the tracking noise estimated from the data), and the alias z how "
-            "many noise standard deviations separate the support from the one where the term is replaced by its "
-            "closest library rival: below about 3 no estimator tells the two apart reliably (the rival wins in "
-            "Phi(-alias z / 2) of data sets).")
-    damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in model_json["equations"][eq]]
-    rates = _damping_rates(model_json["equations"])
-    if damping and (model_json.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
-        text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
-                 "the source paper; Holm's rule selects the other terms.")
-    # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
-    text += anti_damping_text(rates)
-    if close:
-        text += " Terms close to an alias: " + "; ".join(close) + "."
-    text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
-             "the library (real dimers) the data resolve many small terms, and the knee of the front is the smaller "
-             "model a physicist may prefer.")
-    knee = disc.get("knee") or {}
-    knee_terms = {eq: knee[eq] for eq in ("yddot", "thetaddot") if eq in knee}
-    if len(knee_terms) == 2 and sum(len(t) for t in knee_terms.values()) < n_terms:
-        tol = knee["tolerance"]
-        text += (f" The smallest supports within {100 * tol:g} % of the best held-out error (the knee) have "
-                 f"{sum(len(t) for t in knee_terms.values())} terms ("
-                 + "; ".join(f"{eq}: {', '.join(t)}" for eq, t in knee_terms.items())
-                 + f"); `--heldout-tolerance {tol:g}` (of `python -m fitting fit` and of this report) fits that model "
-                 "(it also drops weak true terms near the information limit).")
-    return text, Table("Discovered model (SI)", ["equation", "term", "coefficient", "std error", "z", "oracle std error",
-                                                 "oracle z", "alias", "alias z"], rows)
-

@@ -4,7 +4,7 @@ import pytest
 from acousim.atlas.field_drops import AtlasConfig, AtlasDimer, run_atlas
 from cubedimer.executor import ExecutorConfig
 from validation.cli import main
-from validation.report.atlas_section import AtlasSectionError, atlas_section
+from validation.report.sections.atlas import AtlasSectionError, atlas_section
 from validation.report.html import write_report
 
 

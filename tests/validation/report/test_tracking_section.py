@@ -7,7 +7,7 @@ import numpy as np
 
 from acousim.twin.video import VideoCamera, record_video, write_video_tiff
 from tracking.cli import main as track
-from validation.report.tracking_section import tracking_section
+from validation.report.sections.tracking import tracking_section
 
 
 def test_a_tracked_dataset_gets_the_section_with_an_annotated_frame(tmp_path):

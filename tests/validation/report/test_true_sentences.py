@@ -10,7 +10,7 @@ import pytest
 
 from cubedimer.spectra import peak_frequency
 from validation.diagnosis.statistics import format_p
-from validation.report.diagnosis_section import diagnosis_section
+from validation.report.sections.diagnosis import diagnosis_section
 
 
 def test_p_values_are_bounds_below_double_precision():
@@ -327,11 +327,11 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
 
 def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
     """The lab's hinge damping of +8 and +16 1/s in thetaddot (anti-damping), kept by the rule, is flagged."""
-    from validation.report.pipeline import _discovery_fit_text
+    from fitting.discovery_fit import discovery_description
 
     model = {"equations": {"yddot": {"y": -1.9e4, "ydot": -0.2}, "thetaddot": {"theta": -110.0, "thetadot": 8.0}},
              "settings": {"discovery": {"keep_damping": True}}}
-    text, _ = _discovery_fit_text(model, ["..."])
+    text = discovery_description(model).text
     assert "kept as physical damping whatever their significance" in text
     assert "Anti-damping" in text and "gamma_theta (thetadot in thetaddot) -8 1/s" in text
     assert "gamma_y (ydot in yddot)" not in text  # 0.2 1/s of damping: not flagged

@@ -9,9 +9,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .html import Figure, Section, Table
+from ..context import ReportContext
+from ..html import Figure, Section, Table
 
-__all__ = ["atlas_section", "AtlasSectionError"]
+__all__ = ["section", "atlas_section", "AtlasSectionError"]
 
 
 class AtlasSectionError(ValueError):
@@ -56,3 +57,8 @@ def atlas_section(atlas_dir: str | Path) -> Section:
                   rows)
     return Section("atlas", "The attractor atlas of the simulation", reading, figures, [table],
                    {label: d.get("counts", {}) for label, d in dimers.items()})
+
+
+def section(context: ReportContext) -> Section | None:
+    """:func:`atlas_section` of the report's ``--atlas`` folder (None: none given)."""
+    return None if context.atlas is None else atlas_section(context.atlas)

@@ -17,9 +17,10 @@ import numpy as np
 
 from cubedimer.atomic import save_figure
 
-from .html import Figure, Section, Table
+from ..context import ReportContext
+from ..html import Figure, Section, Table
 
-__all__ = ["tracking_section", "annotated_frame_figure"]
+__all__ = ["section", "tracking_section", "annotated_frame_figure"]
 
 
 def _read_json(path: Path) -> dict | None:
@@ -130,3 +131,8 @@ def tracking_section(data_dir: str | Path, figs_dir: str | Path) -> Section | No
     return Section("tracking", "Tracking: from video to (t, y, theta)", reading, figures, tables,
                    {"fraction_measured": frac, "noise_y_m": ny, "noise_theta": nt, "runs": len(runs),
                     "skipped_recordings": len(skipped)})
+
+
+def section(context: ReportContext) -> Section | None:
+    """:func:`tracking_section` of the report's data set (None: not tracked from video)."""
+    return tracking_section(context.data_dir, context.figs_dir)

@@ -10,14 +10,15 @@ import numpy as np
 
 from cubedimer.atomic import save_figure as _save
 
-from ..diagnosis.statistics import format_p
-from .claims import anti_damping_text
-from .html import Figure, Section, Table
+from ...diagnosis.statistics import format_p
+from ..claims import anti_damping_text
+from ..context import ReportContext
+from ..html import Figure, Section, Table
 
 if TYPE_CHECKING:
-    from ..diagnosis import Diagnosis, EffectVerdict
+    from ...diagnosis import Diagnosis, EffectVerdict
 
-__all__ = ["diagnosis_figures", "diagnosis_section", "write_diagnosis"]
+__all__ = ["section", "diagnosis_figures", "diagnosis_section", "write_diagnosis"]
 
 
 def write_diagnosis(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Path]:
@@ -27,7 +28,7 @@ def write_diagnosis(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Path]:
     report.html."""
     from cubedimer.atomic import write_json
 
-    from .html import write_report
+    from ..html import write_report
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -243,3 +244,10 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
                     "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def section(context: ReportContext) -> Section:
+    """Section 6, the sim-to-real gap of the diagnosis's model: :func:`diagnosis_section` with its figures."""
+    sec = diagnosis_section(context.diagnosis, diagnosis_figures(context.diagnosis, context.figs_dir))
+    return Section("diagnosis", f"6. The sim-to-real gap ({context.spec.label} model)",
+                   sec.reading, sec.figures, sec.tables, sec.numbers)

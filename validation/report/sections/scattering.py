@@ -1,0 +1,48 @@
+"""Section 7, placed after the diagnosis: how far the gap shrinks once the scattering between the cubes is added
+(the reference model alone and with fitted pair scattering, and every other registered model with no fitted
+stiffness, each calibrated alone)."""
+from __future__ import annotations
+
+from ..context import ReportContext
+from ..html import Section, Table
+
+__all__ = ["section"]
+
+
+def section(context: ReportContext) -> Section:
+    """The gaps of the reference model, of it with fitted pair scattering and of the other models side by side."""
+    from acousim.models import force_model_type
+
+    from ...diagnosis.model_comparison import row_label
+
+    models = context.models
+    g0, gp = models.rows[0], models.rows[1]
+    ref_label = force_model_type(g0.model).label
+    kappa = gp.params.get("pair_scattering", {}).get("kappa", float("nan"))
+    text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
+            f"(pressure and origin) on the same runs. The {ref_label} model leaves a gap of {g0.gap:.3g}; with the "
+            f"phenomenological pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
+    for r in models.rows[2:]:
+        t = force_model_type(r.model)
+        text += (f" The {t.label} model ({t.summary}), whose hinge comes from its physics with no fitted stiffness, "
+                 f"leaves {r.gap:.3g} (y equation {r.components[0]:.3g}, theta equation {r.components[1]:.3g}, energy "
+                 f"{r.components[2]:.3g}).")
+    text += "".join(f" The {force_model_type(n).label} model is not compared: {why}."
+                    for n, why in context.unavailable().items())
+    table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
+                  "0 perfect, about 1 for no motion)",
+                  ["simulation", "pressure [Pa]", "origin offset [um]", "y equation", "theta equation", "energy", "gap",
+                   "long-time error", "fitted parameters"],
+                  [[row_label(r.model), r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
+                    r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
+                   for r in models.rows],
+                  {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
+                   "origin offset [um]": "the data's y origin above this simulation's equilibrium height Z_eq at its "
+                                         "calibrated pressure",
+                   "y equation": "unexplained fraction of the vertical accelerations beyond the noise floor, mean over runs",
+                   "theta equation": "the same for the measured hinge angle (integral form)",
+                   "energy": "the same for the energy balance over 0.4-s windows",
+                   "gap": "the mean of the three", "long-time error": "mean of the attractor-shape, Poincare and frequency "
+                   "errors of the simulation started from each run's first state",
+                   "fitted parameters": "the parameters fitted with the simulation (SI)"})
+    return Section("scattering", "7. Scattering added: fitted or from physics", text, [], [table], models.to_dict())
