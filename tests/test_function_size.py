@@ -57,7 +57,6 @@ def test_the_counter_on_known_functions():
     assert long_functions(nested) == [("C.m", 2, 102)]
 
 
-@pytest.mark.xfail(strict=False, reason="functions are still being split along their steps")
 def test_no_function_exceeds_the_line_limit():
     found = []
     for package in PACKAGES:

@@ -137,26 +137,7 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
     ident = diagnosis.identified
     rem = diagnosis.remaining_gap
     pairs = diagnosis.indistinguishable or []
-    if ident or pairs:
-        what = _cause_text(diagnosis, pairs)
-    else:
-        what = "No candidate effect improves held-out runs significantly."
-        settings = diagnosis.settings or {}
-        if settings.get("identification_possible") is False:
-            n_runs = len(diagnosis.gap_per_run["runs"])
-            what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
-                     f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
-                     f"at least {settings['runs_needed']} runs are needed.")
     drift = cal.get("drift") or {}
-    # a detected drift and the discovered terms are part of the remaining-gap statement; their tables are below
-    drift_text = ""
-    if drift.get("tested") and not drift.get("detected"):
-        if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
-            drift_text = (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
-                          f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
-                          "the simulation keeps one pressure. ")
-        else:
-            drift_text = f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
     found = ""
     replaced = rem.get("replaced_by_discovered_terms") or []
     if replaced:
@@ -169,33 +150,77 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
                      "frames masked. ")
     # what the data suggest about how they were recorded comes first: it changes how everything after it reads
     warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or [])
-    gap_text = ""
-    if "gap_m" in cal:  # the full-wave model's hinge gap: calibrated with its standard error, or why not
-        if cal.get("gap_calibrated"):
-            model_error = cal.get("gap_model_error_m")
-            gap_text = (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
-                        f"{cal['gap_std_m'] * 1e6:.2g} um (standard error; an effective gap of the inviscid full-wave "
-                        "model)"
-                        + (f", and +- {model_error * 1e6:.2g} um more from the model's own stated accuracy of the hinge "
-                           "stiffness (mesh and interpolation of the table family), which more data do not reduce"
-                           if model_error else "") + ". ")
-        else:
-            std = cal.get("gap_std_m")
-            gap_text = (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
-                        + (f" (standard error of the profile {std * 1e6:.2g} um)" if std else "") + ". ")
     reading = (
-        warnings_text + data_text + drift_text + gap_text +
+        warnings_text + data_text + _drift_text(drift) + _hinge_gap_text(cal) +
         f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
         + _origin_text(cal) +
         f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
-        f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {what} "
+        f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
         + (f"With them the gap is {100 * diagnosis.gap_after:.1f} %: {rem['statement']}" if ident or pairs else
            f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
         + f".{found}"
         + anti_damping_text({f"{k} of {e.name}": v for e in diagnosis.effects if e.significant
                              and e.name in DAMPING_RATES for k, v in e.params.items() if k in DAMPING_RATES[e.name]})
     )
+    terms = rem.get("discovered_terms") or {}
+    return Section("diagnosis", "Sim-to-real gap", reading, figures, _diagnosis_tables(diagnosis, pairs, drift, terms),
+                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after, "identified": ident,
+                    "noise_floor": diagnosis.noise_floor, "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
+                    "pressure_ratio": cal["pressure_ratio"],
+                    "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
+                    "effects": {e.name: e.params for e in diagnosis.effects if e.significant},
+                    "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
+                    "drift_detected": bool(drift.get("detected")),
+                    "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
+    """The cause (:func:`_cause_text`), or that no candidate improves held-out runs, and whether any could."""
+    if diagnosis.identified or pairs:
+        return _cause_text(diagnosis, pairs)
+    what = "No candidate effect improves held-out runs significantly."
+    settings = diagnosis.settings or {}
+    if settings.get("identification_possible") is False:
+        n_runs = len(diagnosis.gap_per_run["runs"])
+        what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
+                 f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
+                 f"at least {settings['runs_needed']} runs are needed.")
+    return what
+
+
+def _drift_text(drift: dict) -> str:
+    """A tested drift that was not detected: none, or one too small to count (a detected drift is part of the
+    remaining-gap statement, with its table)."""
+    if not drift.get("tested") or drift.get("detected"):
+        return ""
+    if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
+        return (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
+                f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
+                "the simulation keeps one pressure. ")
+    return f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
+
+
+def _hinge_gap_text(cal: dict) -> str:
+    """The model's hinge gap, when it has one: calibrated with its standard error (and the model's own stated error),
+    or why not."""
+    if "gap_m" not in cal:
+        return ""
+    if cal.get("gap_calibrated"):
+        model_error = cal.get("gap_model_error_m")
+        return (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
+                f"{cal['gap_std_m'] * 1e6:.2g} um (standard error; an effective gap of the inviscid full-wave "
+                "model)"
+                + (f", and +- {model_error * 1e6:.2g} um more from the model's own stated accuracy of the hinge "
+                   "stiffness (mesh and interpolation of the table family), which more data do not reduce"
+                   if model_error else "") + ". ")
+    std = cal.get("gap_std_m")
+    return (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
+            + (f" (standard error of the profile {std * 1e6:.2g} um)" if std else "") + ". ")
+
+
+def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
+    """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
     rows = [[e.name, _verdict(e, pairs),
              ", ".join(f"{k}={v:.3g}" for k, v in e.params.items()), e.gap_after, e.shrink, e.p_value,
              e.p_value_given_others]
@@ -216,7 +241,6 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
     }
     tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink",
                                                    "held-out p (sign-flip)", "p given the others"], rows, columns)]
-    terms = rem.get("discovered_terms") or {}
     term_rows = [[eq, t["term"], t.get("form", "integral"), t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
                  for eq, ts in terms.items() for t in ts]
     if term_rows:
@@ -232,18 +256,11 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
     if drift.get("detected"):
         tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
                             [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))
+    skipped = diagnosis.skipped_files or []
     if skipped:
         tables.append(Table("Skipped files", ["file", "reason"],
                             [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
-    return Section("diagnosis", "Sim-to-real gap", reading, figures, tables,
-                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after, "identified": ident,
-                    "noise_floor": diagnosis.noise_floor, "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
-                    "pressure_ratio": cal["pressure_ratio"],
-                    "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
-                    "effects": {e.name: e.params for e in diagnosis.effects if e.significant},
-                    "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
-                    "drift_detected": bool(drift.get("detected")),
-                    "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+    return tables
 
 
 def section(context: ReportContext) -> Section:
