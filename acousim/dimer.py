@@ -96,14 +96,6 @@ class CubeDimer:
         return (ma * da + mb * db) / (ma + mb)
 
     # ------------------------------------------------------------------ poses
-    def body_angles(self, theta: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Counter-clockwise angles (psi_A, psi_B) [rad] of each cube's body axes in the (X, Z) plane.
-
-        Cube A's body X axis is additionally mirrored (X -> -X), see :meth:`cube_rotations`.
-        """
-        phi = bend_angle(theta)
-        return -(np.pi / 4 - phi), np.pi / 4 - phi
-
     def cube_rotations(self, theta: ArrayLike) -> NDArray[np.float64]:
         """Orthogonal matrices (..., 2, 3, 3) mapping body to lab offsets for cubes A, B.
 

@@ -156,9 +156,6 @@ class PolynomialModel:
         """Boolean mask (2, 35) of non-zero terms."""
         return self.coef != 0.0
 
-    def support_names(self) -> dict[str, list[str]]:
-        return {eq: [t for t, s in zip(TERMS, self.support[q]) if s] for q, eq in enumerate(EQUATION_NAMES)}
-
     def with_mask(self, mask: ArrayLike) -> "PolynomialModel":
         """Copy with the terms outside ``mask`` (2, 35) set to zero."""
         return PolynomialModel(np.where(np.asarray(mask, bool), self.coef, 0.0))
