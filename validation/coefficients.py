@@ -311,7 +311,7 @@ def static_comparison(model: dict, simulation, theta_max: float, y_max: float,
     ----------
     model : dict
         The fitted model (model.json's content).
-    simulation : StaticModel or acousim.sweep.SweepResult
+    simulation : StaticModel or acousim.statics.sweep.SweepResult
         A simulation, swept on a :data:`STATIC_GRID_POINTS`-square grid over the box, or a sweep already made
         (``compare --sweep``), fitted over the part of it inside the box.
     theta_max, y_max : float
@@ -323,9 +323,9 @@ def static_comparison(model: dict, simulation, theta_max: float, y_max: float,
 
     Returns
     -------
-    (acousim.sweep.StaticCoefficients, CoefficientComparison)
+    (acousim.statics.sweep.StaticCoefficients, CoefficientComparison)
     """
-    from acousim.sweep import SweepResult, fit_static_coefficients, static_sweep
+    from acousim.statics.sweep import SweepResult, fit_static_coefficients, static_sweep
 
     sweep = simulation if isinstance(simulation, SweepResult) else static_sweep(
         simulation, np.linspace(-theta_max, theta_max, STATIC_GRID_POINTS), np.linspace(-y_max, y_max, STATIC_GRID_POINTS))

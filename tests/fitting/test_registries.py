@@ -165,10 +165,9 @@ def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method,
     out = tmp_path / "report"
     write_fit(res, out / "fit", plots=False)
     context = ReportContext(
-        data_dir=small_dataset, out=out, model="gorkov", gap=None, edge_radius=None, atlas=None, fit=res,
-        model_json=json.loads((out / "fit" / "model.json").read_text()), variant=None, diagnosis={}, internals=None,
-        meta=None, models=None, calibrations={}, simulation=None, theta_max=0.3, y_max=1e-4, sweep_plot=None,
-        fullwave_sweep=None, coefficients={})
+        data_dir=small_dataset, out=out, spec=None, atlas=None, fit=res,
+        model_json=json.loads((out / "fit" / "model.json").read_text()), variant=None, diagnosis=None, meta=None,
+        models=None, simulations=(), theta_max=0.3, y_max=1e-4)
     section = fit_section.section(context)
     eqs = res.model.equations()
     assert section.reading == "Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs))

@@ -235,22 +235,23 @@ def _diagnose(dataset, config: DiagnoseConfig, progress: bool, spec: ModelSpec) 
     from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
-    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
     conditions = conditions_from_meta(dataset.meta, spec)
-    cal = _calibrate(dataset, conditions, spec, config, log)
+    # refuses a model that does not fit the experiment first (a dimer outside the full-wave family): a parameter to
+    # be calibrated starts at the value the model takes by default
+    start = {n: d for n, (_, _, d) in spec.type.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
+    model = spec.static(replace(conditions, **start))
+    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
+    cal = _calibrate(dataset, conditions, model, spec, config, log)
     found = _identify(cal.problem, config, progress, log)
     discovery, replaced, identified, final = _discover(cal.problem, found, config, log)
     return _summarise(dataset, cal, found, discovery, replaced, identified, final, spec, config, log)
 
 
-def _calibrate(dataset, conditions, spec: ModelSpec, config: DiagnoseConfig, log) -> _Calibrated:
-    """The calibrated problem: the model (refused if it does not fit the experiment), y's orientation, the model's
-    own parameters the data may determine, and a pressure drift within runs (followed by the simulation)."""
-    # refuses a misfit first (a dimer outside the full-wave family); a parameter to be calibrated starts at the
-    # value the model takes by default
+def _calibrate(dataset, conditions, model, spec: ModelSpec, config: DiagnoseConfig, log) -> _Calibrated:
+    """The calibrated problem: from the starting ``model`` (the spec's at its default parameters), y's orientation,
+    the model's own parameters the data may determine, and a pressure drift within runs (followed by the
+    simulation)."""
     mtype = spec.type
-    start = {n: d for n, (_, _, d) in mtype.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
-    model = spec.static(replace(conditions, **start))
     problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
                                              config.max_frames_per_run)
     data_warnings = []
