@@ -24,7 +24,7 @@ def section(context: ReportContext) -> Section:
             f"phenomenological pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
     for r in models.rows[2:]:
         t = force_model_type(r.model)
-        text += (f" The {t.label} model ({t.summary}), whose hinge comes from its physics with no fitted stiffness, "
+        text += (f" The {t.label} model, whose hinge comes from its own physics with no fitted stiffness, "
                  f"leaves {r.gap:.3g} (y equation {r.components[0]:.3g}, theta equation {r.components[1]:.3g}, energy "
                  f"{r.components[2]:.3g}).")
     text += "".join(f" The {force_model_type(n).label} model is not compared: {why}."

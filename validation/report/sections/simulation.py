@@ -31,8 +31,8 @@ def section(context: ReportContext) -> Section:
     others_text = "".join(
         f" Beside it ({colour}) the {o.label} model, calibrated the same way ({o.calibration.pressure_amplitude_pa:.0f} "
         f"Pa; the data's y origin lies {o.calibration.origin_offset_m * 1e6:+.2f} um above the {o.label} model's "
-        f"calibrated Z_eq, against {delta * 1e6:+.2f} um above the {ref.label} model's calibrated Z_eq): {o.summary}, "
-        "holding the hinge with no fitted stiffness."
+        f"calibrated Z_eq, against {delta * 1e6:+.2f} um above the {ref.label} model's calibrated Z_eq): it holds the "
+        "hinge with no fitted stiffness."
         for o, colour in zip(context.others, _COLOURS))
     others_text += "".join(f" The {force_model_type(n).label} model is not shown: {why}."
                            for n, why in context.unavailable().items())
