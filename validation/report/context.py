@@ -26,8 +26,6 @@ class CalibratedSimulation:
     ----------
     name, label : str
         The registry name and the model's label in tables and prose.
-    summary : str
-        What the model is (the registry's one line).
     calibration : validation.diagnosis.calibration.Calibration
         Its calibration (pressure, origin): the diagnosis's final one for the diagnosis's model.
     static : acousim.static_model.StaticModel
@@ -40,7 +38,6 @@ class CalibratedSimulation:
 
     name: str
     label: str
-    summary: str
     calibration: Any
     static: Any
     sweep_plot: Any
@@ -182,7 +179,7 @@ def report_context(dataset, out: Path, res, model_json: dict, variant, diag, spe
         plot = static_sweep(static, np.linspace(-0.9, 0.9, 61), np.linspace(-1.3 * y_max, 1.3 * y_max, 41))
         cmp = static_comparison(model_json, static, theta_max, y_max, origin_offset=cal.origin_offset_m,
                                 origin_source="calibrated (section 6)")[1]
-        return CalibratedSimulation(name, mtype.label, mtype.summary, cal, static, plot, cmp)
+        return CalibratedSimulation(name, mtype.label, cal, static, plot, cmp)
 
     return ReportContext(data_dir=Path(dataset.path), out=Path(out), spec=spec,
                          atlas=None if atlas is None else Path(atlas), fit=res, model_json=model_json, variant=variant,
