@@ -86,10 +86,11 @@ def annotated_frame_figure(png: Path, run: dict, out_path: Path) -> Path:
     return save_figure(fig, out_path)
 
 
-def tracking_section(data_dir: str | Path, figs_dir: str | Path) -> Section | None:
-    """The tracking section of a data set tracked from video, or None when nothing says it came from video."""
+def tracking_section(data_dir: str | Path, figs_dir: str | Path, meta: dict | None = None) -> Section | None:
+    """The tracking section of a data set tracked from video, or None when nothing says it came from video
+    (``meta``: the data set's meta.json as loaded; read from ``data_dir`` when not given)."""
     data_dir = Path(data_dir)
-    meta = _read_json(data_dir / "meta.json") or {}
+    meta = meta if meta is not None else (_read_json(data_dir / "meta.json") or {})
     block = meta.get("tracking") if isinstance(meta.get("tracking"), dict) else None
     runs = _run_records(data_dir)
     if block is None and not runs:
@@ -128,11 +129,28 @@ def tracking_section(data_dir: str | Path, figs_dir: str | Path) -> Section | No
                   + "; ".join(f"{s['file']}: {s['reason']}" for s in skipped) + "." if skipped else ""))
     tables = [Table("Tracked runs", ["file", "frames", "measured", "fraction measured", "noise y [um]", "noise theta",
                                      "not measured (reason count)"], rows)] if rows else []
+    moving = _origins_not_at_rest(runs, block)
+    if moving:
+        reading += (f" {len(moving)} of {len(runs) or len((block or {}).get('runs') or [])} recordings did not start "
+                    f"at rest ({', '.join(moving)}): their y = 0 is the centre of the late oscillation, not the "
+                    "levitation height, so their y carries an offset of its own (the trap's asymmetry shifts an "
+                    "oscillation's centre with its amplitude), while the diagnosis calibrates one origin for all runs; "
+                    "such an offset shows as a gap in the vertical equation and can bias the damping. Record the "
+                    "first frames at rest, or give tracking --origin-row.")
     return Section("tracking", "Tracking: from video to (t, y, theta)", reading, figures, tables,
                    {"fraction_measured": frac, "noise_y_m": ny, "noise_theta": nt, "runs": len(runs),
-                    "skipped_recordings": len(skipped)})
+                    "skipped_recordings": len(skipped), "origin_not_at_rest": moving})
+
+
+def _origins_not_at_rest(runs: list[tuple[str, dict]], block: dict | None) -> list[str]:
+    """The runs whose y origin is the late oscillation's centre because the recording did not start at rest: from
+    each run's RUN.json (``y_origin.at_rest``), else from meta.json's tracking block (``runs[i].origin_at_rest``);
+    a run whose origin was given (option or file) is never listed."""
+    if runs:
+        return [name for name, d in runs if (d.get("y_origin") or {}).get("at_rest") is False]
+    return [r.get("file", "?") for r in (block or {}).get("runs") or [] if r.get("origin_at_rest") is False]
 
 
 def section(context: ReportContext) -> Section | None:
     """:func:`tracking_section` of the report's data set (None: not tracked from video)."""
-    return tracking_section(context.data_dir, context.figs_dir)
+    return tracking_section(context.data_dir, context.figs_dir, context.meta)
