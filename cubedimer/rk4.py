@@ -1,8 +1,8 @@
 """The one compiled fixed-step RK4 integrator of second-order systems in (y, theta).
 
-Every model of the suite (the twin's equations of motion, a fitted polynomial model) is a pair of
-accelerations ``(yddot, thetaddot) = accel(y, ydot, theta, thetadot, args)`` over the state
-``x = [y, ydot, theta, thetadot]``.  :func:`rk4` integrates such a model with the classical
+Every model of the suite (the twin's equations of motion, a fitted polynomial model, the field's ring-down and
+ring-up) is a pair of accelerations ``(yddot, thetaddot) = accel(t, y, ydot, theta, thetadot, args)`` over the
+state ``x = [y, ydot, theta, thetadot]``, at the time ``t`` from the first state (an autonomous model ignores it).  :func:`rk4` integrates such a model with the classical
 fourth-order Runge-Kutta method at a fixed step ``h``, writing the state every ``substeps`` steps,
 and stops at the first output sample that leaves a box:
 
@@ -80,7 +80,8 @@ def rk4(accel, args, x0, h, substeps, n_out, lower, upper, out):
     Parameters
     ----------
     accel : numba-compiled function
-        ``accel(y, ydot, theta, thetadot, args) -> (yddot, thetaddot)``.
+        ``accel(t, y, ydot, theta, thetadot, args) -> (yddot, thetaddot)``, ``t`` from the first state (the
+        stages at t, t + h/2 (twice) and t + h of each step).
     args : tuple
         Passed to ``accel`` unchanged.
     x0 : ndarray (4,)
@@ -109,19 +110,21 @@ def rk4(accel, args, x0, h, substeps, n_out, lower, upper, out):
     out[0, 3] = thd
     hh = 0.5 * h
     h6 = h / 6.0
+    t = 0.0
     for i in range(1, n_out):
         for _ in range(substeps):
-            a1, b1 = accel(y, yd, th, thd, args)
+            a1, b1 = accel(t, y, yd, th, thd, args)
             y2, yd2, th2, thd2 = y + hh * yd, yd + hh * a1, th + hh * thd, thd + hh * b1
-            a2, b2 = accel(y2, yd2, th2, thd2, args)
+            a2, b2 = accel(t + hh, y2, yd2, th2, thd2, args)
             y3, yd3, th3, thd3 = y + hh * yd2, yd + hh * a2, th + hh * thd2, thd + hh * b2
-            a3, b3 = accel(y3, yd3, th3, thd3, args)
+            a3, b3 = accel(t + hh, y3, yd3, th3, thd3, args)
             y4, yd4, th4, thd4 = y + h * yd3, yd + h * a3, th + h * thd3, thd + h * b3
-            a4, b4 = accel(y4, yd4, th4, thd4, args)
+            a4, b4 = accel(t + h, y4, yd4, th4, thd4, args)
             y = y + h6 * (yd + 2.0 * yd2 + 2.0 * yd3 + yd4)
             yd = yd + h6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             th = th + h6 * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4)
             thd = thd + h6 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+            t += h
         status = _box_check(y, yd, th, thd, lower, upper)
         if status != 0:
             return i, status

@@ -31,9 +31,9 @@ _MAXPOW = 8
 
 
 @nb.njit(cache=True)
-def _polynomial_accel(x0, x1, x2, x3, args):
-    """(yddot, thetaddot) = coef @ monomials(x); ``args = (exps, c0, c1, pw)`` with the scratch power
-    table ``pw[var, k] = x_var ** k``."""
+def _polynomial_accel(t, x0, x1, x2, x3, args):
+    """(yddot, thetaddot) = coef @ monomials(x) (autonomous: ``t`` unused); ``args = (exps, c0, c1, pw)`` with the
+    scratch power table ``pw[var, k] = x_var ** k``."""
     exps, c0, c1, pw = args
     for k in range(1, pw.shape[1]):
         pw[0, k] = pw[0, k - 1] * x0

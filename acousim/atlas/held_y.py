@@ -133,7 +133,7 @@ class HeldYConfig:
 
 # ---------------------------------------------------------------------- the held system
 @nb.njit(cache=True)
-def held_y_acceleration(y, ydot, theta, thetadot, args):
+def held_y_acceleration(t, y, ydot, theta, thetadot, args):
     """(yddot, thetaddot) with y held: y obeys the trap at the frozen hinge angle theta* without effects, the
     hinge its full equation.  ``args = (hinge args, (A_y, B_y, C_y) at theta*, theta*)`` (:func:`held_y_arguments`):
     the y force at theta* is ``A_y + B_y cos 2kZ + C_y sin 2kZ - M g``, the kernel's own series evaluated once."""
@@ -142,7 +142,7 @@ def held_y_acceleration(y, ydot, theta, thetadot, args):
     z = par[_P_ZEQ] + y
     c, s = np.cos(par[_P_TWO_K] * z), np.sin(par[_P_TWO_K] * z)
     ay = (y_series[0] + y_series[1] * c + y_series[2] * s - par[_P_MG]) / par[_P_MASS]
-    _, at = field_on_acceleration(y, ydot, theta, thetadot, args_hinge)
+    _, at = field_on_acceleration(t, y, ydot, theta, thetadot, args_hinge)
     return ay, at
 
 

@@ -129,8 +129,9 @@ def _inertia(theta, par):
 
 
 @nb.njit(cache=True)
-def field_on_acceleration(y, ydot, theta, thetadot, args):
-    """Compiled (yddot, thetaddot) of one state with the field on; ``args`` from :func:`kernel_arguments`."""
+def field_on_acceleration(t, y, ydot, theta, thetadot, args):
+    """Compiled (yddot, thetaddot) of one state with the field on; ``args`` from :func:`kernel_arguments` (``t`` [s]:
+    the :func:`cubedimer.rk4.rk4` contract; the field-on dynamics are autonomous)."""
     a_y, b_y, c_y, a_t, b_t, c_t, par, eff, registered = args
     inertia, d_inertia = _inertia(theta, par)
     z = par[_P_ZEQ] + y
@@ -143,8 +144,9 @@ def field_on_acceleration(y, ydot, theta, thetadot, args):
 
 
 @nb.njit(cache=True)
-def field_off_acceleration(y, ydot, theta, thetadot, args):
-    """Compiled (yddot, thetaddot) of one state with the field off (``args`` built with ``field_on=False``)."""
+def field_off_acceleration(t, y, ydot, theta, thetadot, args):
+    """Compiled (yddot, thetaddot) of one state with the field off (``args`` built with ``field_on=False``;
+    autonomous, ``t`` unused)."""
     par, eff, registered = args[6], args[7], args[8]
     inertia, d_inertia = _inertia(theta, par)
     ey, et = packed_effect_accelerations(y, ydot, theta, thetadot, par[_P_K], par[_P_ZEQ], eff, registered)
@@ -156,9 +158,9 @@ def state_derivative(x, args, field_on):
     """Compiled dx/dt = [ydot, yddot, thetadot, thetaddot] of one state (4,)."""
     out = np.empty(4)
     if field_on:
-        ay, at = field_on_acceleration(x[0], x[1], x[2], x[3], args)
+        ay, at = field_on_acceleration(0.0, x[0], x[1], x[2], x[3], args)
     else:
-        ay, at = field_off_acceleration(x[0], x[1], x[2], x[3], args)
+        ay, at = field_off_acceleration(0.0, x[0], x[1], x[2], x[3], args)
     out[0] = x[1]
     out[1] = ay
     out[2] = x[3]

@@ -19,8 +19,8 @@ acoustic generalised forces and the effects that need the field, so exactly thos
 
 :func:`field_drop` runs the drop protocol (off for ``t_off``, then on): with ``tau = 0`` the switch is instant, as
 the twin's default; otherwise the off phase and the first :data:`RING_SPAN` tau of the on phase are integrated
-with the envelope (a compiled fixed-step RK4 in time, the classical scheme of :func:`cubedimer.rk4.rk4` with the
-envelope evaluated at t, t + h/2 and t + h), and the rest with the field fully on (the forces are then within
+with the envelope (the core RK4, :func:`cubedimer.rk4.rk4`, which evaluates the envelope at its stages' times t,
+t + h/2 and t + h), and the rest with the field fully on (the forces are then within
 2 exp(-20) = 4e-9 of their full value, relative).
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from cubedimer.rk4 import _box_check
+from cubedimer.rk4 import rk4
 
 from .equations import field_off_acceleration, field_on_acceleration
 
@@ -64,56 +64,31 @@ def pressure_ratio(t: ArrayLike, tau: float, a_start: float, a_end: float) -> ND
 
 
 @nb.njit(cache=True)
-def switching_acceleration(y, ydot, theta, thetadot, s, args_on, args_off):
-    """(yddot, thetaddot) with the acoustic forces scaled by s = p(t)^2 / p0^2 (module docstring)."""
-    ay_on, at_on = field_on_acceleration(y, ydot, theta, thetadot, args_on)
-    ay_off, at_off = field_off_acceleration(y, ydot, theta, thetadot, args_off)
-    return ay_off + s * (ay_on - ay_off), at_off + s * (at_on - at_off)
-
-
-@nb.njit(cache=True)
 def _envelope(t, tau, a_start, a_end):
     a = a_end + (a_start - a_end) * np.exp(-t / tau)
     return a * a
 
 
 @nb.njit(cache=True)
-def _integrate_switching(args_on, args_off, tau, a_start, a_end, x0, h, substeps, n_out, lower, upper, out):
-    """Classical RK4 of :func:`switching_acceleration` with s(t) = a(t)^2, a(t) = a_end + (a_start - a_end)
-    exp(-t / tau); the same scheme and stop rules as :func:`cubedimer.rk4.rk4`, with time."""
-    y, yd, th, thd = x0[0], x0[1], x0[2], x0[3]
-    out[0, 0] = y
-    out[0, 1] = yd
-    out[0, 2] = th
-    out[0, 3] = thd
-    hh = 0.5 * h
-    h6 = h / 6.0
-    t = 0.0
-    for i in range(1, n_out):
-        for _ in range(substeps):
-            s1 = _envelope(t, tau, a_start, a_end)
-            s2 = _envelope(t + hh, tau, a_start, a_end)
-            s4 = _envelope(t + h, tau, a_start, a_end)
-            a1, b1 = switching_acceleration(y, yd, th, thd, s1, args_on, args_off)
-            y2, yd2, th2, thd2 = y + hh * yd, yd + hh * a1, th + hh * thd, thd + hh * b1
-            a2, b2 = switching_acceleration(y2, yd2, th2, thd2, s2, args_on, args_off)
-            y3, yd3, th3, thd3 = y + hh * yd2, yd + hh * a2, th + hh * thd2, thd + hh * b2
-            a3, b3 = switching_acceleration(y3, yd3, th3, thd3, s2, args_on, args_off)
-            y4, yd4, th4, thd4 = y + h * yd3, yd + h * a3, th + h * thd3, thd + h * b3
-            a4, b4 = switching_acceleration(y4, yd4, th4, thd4, s4, args_on, args_off)
-            y = y + h6 * (yd + 2.0 * yd2 + 2.0 * yd3 + yd4)
-            yd = yd + h6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            th = th + h6 * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4)
-            thd = thd + h6 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-            t += h
-        status = _box_check(y, yd, th, thd, lower, upper)
-        if status != 0:
-            return i, status
-        out[i, 0] = y
-        out[i, 1] = yd
-        out[i, 2] = th
-        out[i, 3] = thd
-    return n_out, 0
+def switching_acceleration(y, ydot, theta, thetadot, s, args_on, args_off):
+    """(yddot, thetaddot) with the acoustic forces scaled by s = p(t)^2 / p0^2 (module docstring)."""
+    ay_on, at_on = field_on_acceleration(0.0, y, ydot, theta, thetadot, args_on)
+    ay_off, at_off = field_off_acceleration(0.0, y, ydot, theta, thetadot, args_off)
+    return ay_off + s * (ay_on - ay_off), at_off + s * (at_on - at_off)
+
+
+@nb.njit(cache=True)
+def _ringing_acceleration(t, y, ydot, theta, thetadot, args):
+    """:func:`switching_acceleration` at s(t) = a(t)^2, a(t) = a_end + (a_start - a_end) exp(-t / tau), ``t`` [s]
+    from the start of the ring; ``args = (args_on, args_off, tau, a_start, a_end)``."""
+    args_on, args_off, tau, a_start, a_end = args
+    return switching_acceleration(y, ydot, theta, thetadot, _envelope(t, tau, a_start, a_end), args_on, args_off)
+
+
+@nb.njit(cache=True)
+def _integrate_switching(args, x0, h, substeps, n_out, lower, upper, out):
+    """The core RK4 (:func:`cubedimer.rk4.rk4`) of :func:`_ringing_acceleration`."""
+    return rk4(_ringing_acceleration, args, x0, h, substeps, n_out, lower, upper, out)
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,6 +176,6 @@ def _switching(dynamics, x0, duration, dt_out, tau, a_start, a_end, max_step, bo
 
     n_out, substeps = dynamics._steps(duration, dt_out, max_step)
     out = np.empty((n_out, 4))
-    n, status = _integrate_switching(dynamics._args_on, dynamics._args_off, float(tau), float(a_start), float(a_end),
-                                     np.asarray(x0, float), dt_out / substeps, substeps, n_out, *box, out)
+    args = (dynamics._args_on, dynamics._args_off, float(tau), float(a_start), float(a_end))
+    n, status = _integrate_switching(args, np.asarray(x0, float), dt_out / substeps, substeps, n_out, *box, out)
     return Trajectory(t=np.arange(n) * dt_out, state=out[:n], status=_STATUS[int(status)])

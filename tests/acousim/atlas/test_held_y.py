@@ -18,7 +18,7 @@ from cubedimer.rk4 import rk4
 
 
 @nb.njit
-def _mathieu(y, ydot, theta, thetadot, args):
+def _mathieu(t, y, ydot, theta, thetadot, args):
     """y'' = -y (so y = cos t from (1, 0)); theta'' + gamma theta' + (delta + eps y) theta = 0."""
     delta, eps, gamma = args
     return -y, -(delta + eps * y) * theta - gamma * thetadot
