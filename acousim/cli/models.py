@@ -60,12 +60,12 @@ def dynamic_model_from_args(args: argparse.Namespace, conditions: ExperimentCond
     return _checked(dynamic_model, args, conditions)
 
 
-def model_spec_from_args(args: argparse.Namespace, **extra) -> ModelSpec:
+def model_spec_from_args(args: argparse.Namespace) -> ModelSpec:
     """The :class:`~acousim.models.ModelSpec` of ``--model`` with every model option the command offers that is set
     (``--gap``, ``--edge-radius``, ``--mesh-size``...: the :data:`~acousim.models.MODEL_OPTIONS` by their
-    command-line names) and ``extra``; one-line :class:`UserInputError` when the model does not take one."""
+    command-line names); one-line :class:`UserInputError` when the model does not take one."""
     options = {name: getattr(args, OPTION_NAMES[name].lstrip("-").replace("-", "_"), None) for name in MODEL_OPTIONS}
     try:
-        return ModelSpec(args.model, {**options, **extra})
+        return ModelSpec(args.model, options)
     except ValueError as exc:
         raise UserInputError(str(exc)) from None

@@ -104,10 +104,6 @@ class ModelComparison:
     problems: dict
     unavailable: dict = field(default_factory=dict)
 
-    def row(self, key: str) -> ModelGap | None:
-        """The row of ``key`` (None when it is missing)."""
-        return next((r for r in self.rows if r.model == key), None)
-
     def to_dict(self) -> dict:
         return {"rows": [r.to_dict() for r in self.rows],
                 **{f"{name}_unavailable": reason for name, reason in self.unavailable.items()}}
@@ -167,7 +163,7 @@ def compare_simulation_models(problem: DiagnosisProblem, spec: "ModelSpec", meta
     with_scattering = f"{reference}+{SCATTERING_FITTED}"
     fits[with_scattering] = fit_gap_model(problems[reference], [SCATTERING_FITTED])
     problems[with_scattering] = problems[reference]
-    order = [reference, with_scattering] + [n for n in force_model_names()[1:]]
-    rows = [_row(k, problems[k], fits[k], long_time_duration) for k in order if k in fits]
-    unavailable.update({n: None for n in force_model_names()[1:] if n not in unavailable})
-    return ModelComparison(rows, fits, problems, {n: unavailable[n] for n in force_model_names()[1:]})
+    others = force_model_names()[1:]
+    rows = [_row(k, problems[k], fits[k], long_time_duration) for k in (reference, with_scattering, *others)
+            if k in fits]
+    return ModelComparison(rows, fits, problems, {n: unavailable.get(n) for n in others})

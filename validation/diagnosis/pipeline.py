@@ -22,7 +22,7 @@ from acousim.dynamics.effects import EFFECT_TYPES
 from acousim.models import ModelSpec
 
 if TYPE_CHECKING:
-    from cubedimer.dataset import Dataset, LoadConfig
+    from cubedimer.dataset import Dataset
 
 from .calibration import CALIBRATED_ON
 from .candidates import CANDIDATE_EFFECTS
@@ -44,7 +44,7 @@ from .verdicts import ranked_effects
 from .statistics import format_p, runs_needed, smallest_sign_flip_pvalue
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
-           "diagnosis_load_config", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
+           "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
 
 logger = logging.getLogger(__name__)
 
@@ -109,24 +109,18 @@ class DiagnoseConfig:
         return PracticalThresholds(self.min_relative_improvement, self.min_absolute_improvement, self.max_vertical_gap)
 
 
-def diagnosis_load_config() -> "LoadConfig":
-    """How a diagnosis loads a data set: the physics bounds of any levitated dimer, and with a meta.json also the
-    Gor'kov estimate of the trap frequency at its nominal pressure (:func:`acousim.analytic.nominal_trap_frequency`).
-    Load the data set once with it and pass the :class:`~cubedimer.dataset.Dataset` to the fit and the diagnosis,
-    so that both see the same runs."""
-    from acousim.analytic import nominal_trap_frequency
-    from cubedimer.dataset import LoadConfig
-
-    return LoadConfig(trap_frequency=nominal_trap_frequency)
-
-
 def load_for_diagnosis(data_dir: str | Path, strict: bool = False, progress: bool = True) -> "Dataset":
-    """Load ``data_dir`` as :func:`diagnose` reads it (:func:`diagnosis_load_config`); skipped files are warned
-    about (``progress``) or logged at DEBUG level."""
-    from cubedimer.dataset import load_dataset
+    """Load ``data_dir`` as :func:`diagnose` reads it: the physics bounds of any levitated dimer, and with a meta.json
+    also the Gor'kov estimate of the trap frequency at its nominal pressure
+    (:func:`acousim.analytic.nominal_trap_frequency`); skipped files are warned about (``progress``) or logged at
+    DEBUG level.  Load the data set once and pass the :class:`~cubedimer.dataset.Dataset` to the fit and the
+    diagnosis, so that both see the same runs."""
+    from acousim.analytic import nominal_trap_frequency
+    from cubedimer.dataset import LoadConfig, load_dataset
 
     skip = logger.warning if progress else logger.debug
-    return load_dataset(data_dir, strict=strict, config=diagnosis_load_config(), report=lambda m: skip("skipping %s", m))
+    return load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
+                        report=lambda m: skip("skipping %s", m))
 
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
@@ -228,6 +222,8 @@ class _Identified:
     identified: list[str]
     base: GapFit
     final: GapFit
+    per_before: np.ndarray  #: the calibrated simulation's gap per run
+    noise_floor: float  #: the mean noise floor
 
 
 def _diagnose(dataset, config: DiagnoseConfig, progress: bool, spec: ModelSpec) -> Diagnosis:
@@ -295,15 +291,16 @@ def _identify(problem: DiagnosisProblem, config: DiagnoseConfig, progress: bool,
                        "held-out sign-flip test, 2^-%d); record at least %d runs", n, config.alpha, p_floor,
                        n, runs_needed(config.alpha))
     base = fit_gap_model(problem, [])
-    log("gap before = %.3g (noise floor %.3g); identifying effects", scalar_gap(fit_gaps(problem.runs, base)),
-        float(np.mean(noise_floors(problem.runs, base))))
+    per_before, floor = fit_gaps(problem.runs, base), float(np.mean(noise_floors(problem.runs, base)))
+    log("gap before = %.3g (noise floor %.3g); identifying effects", scalar_gap(per_before), floor)
     held_out_cache: dict = {}
     ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
                              progress=progress, cache=held_out_cache)
     elim = backward_check(problem, ident.identified, alpha=config.alpha, thresholds=config.thresholds, log=log,
                           cache=held_out_cache)
     identified = list(elim.model_effects)  # what the model fits; the named ones are decided in the summary
-    return _Identified(ident, elim, list(elim.indistinguishable), identified, base, fit_gap_model(problem, identified))
+    return _Identified(ident, elim, list(elim.indistinguishable), identified, base, fit_gap_model(problem, identified),
+                       per_before, floor)
 
 
 def _discover(problem: DiagnosisProblem, found: _Identified, config: DiagnoseConfig, log):
@@ -344,9 +341,8 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
     pairs = [pr for pr in found.pairs if pr.kept_in_model in identified]
     in_pair = {e: pr for pr in pairs for e in pr.effects}
     named = [e for e in identified if e not in in_pair]
-    per_before, per_after = fit_gaps(runs, base), fit_gaps(runs, final)
+    per_before, per_after, floor = found.per_before, fit_gaps(runs, final), found.noise_floor
     gap_before, gap_after = scalar_gap(per_before), scalar_gap(per_after)
-    floor = float(np.mean(noise_floors(runs, base)))
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)

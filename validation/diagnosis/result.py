@@ -173,11 +173,6 @@ class Diagnosis:
                 return e
         raise KeyError(f"{name} was not a candidate of this diagnosis")
 
-    @property
-    def explained_within_noise(self) -> bool:
-        """The final model's gap is within the noise (``remaining_gap.explained_within_noise``)."""
-        return bool(self.remaining_gap["explained_within_noise"])
-
     def to_json(self) -> dict[str, Any]:
         """The diagnosis.json document, in its documented key order."""
         return {"model": self.model, "simulation": dict(self.simulation), "identified": list(self.identified),

@@ -105,11 +105,6 @@ class ReportContext:
         return self.fit.runs
 
     @property
-    def internals(self):
-        """The diagnosis's problem and fits (:class:`validation.diagnosis.DiagnosisInternals`)."""
-        return self.diagnosis.internals
-
-    @property
     def reference(self) -> CalibratedSimulation:
         """The reference model (the registry's first, the Gor'kov model)."""
         return self.simulations[0]

@@ -91,6 +91,9 @@ def test_partly_corrupt_dataset(tmp_path):
     assert list(doc)[:3] == ["model", "simulation", "identified"]
     assert Diagnosis.from_json(doc).to_json() == doc
     assert Diagnosis.from_json(doc) == diag  # equal fields (internals are not compared)
+    assert diag.effect("pair_scattering") is diag.effects[0] and diag.effect("pair_scattering").named
+    with pytest.raises(KeyError):
+        diag.effect("not_a_candidate")
 
 
 def test_diagnose_cli_bad_directory(tmp_path):

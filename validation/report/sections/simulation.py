@@ -13,7 +13,7 @@ _COLOURS = ("red", "green")
 
 def section(context: ReportContext) -> Section:
     """The restoring-force overlay of the calibrated simulations, the rendered mesh and the calibrated pressure."""
-    from acousim.models import force_model_type
+    from acousim.models import force_model_names, force_model_type
 
     from ..figures import restoring_overlay_figure
 
@@ -28,6 +28,7 @@ def section(context: ReportContext) -> Section:
         render = render_dimer(sim, 0.3, 0.0, figs_dir / f"dimer_{ref.name}.png")
         figures.append(Figure(render, f"The posed dimer mesh (theta = 0.3) coloured by the {ref.label} potential "
                                       "density u."))
+    pressures = {o.name: o.calibration.pressure_amplitude_pa for o in context.others}
     others_text = "".join(
         f" Beside it ({colour}) the {o.label} model, calibrated the same way ({o.calibration.pressure_amplitude_pa:.0f} "
         f"Pa; the data's y origin lies {o.calibration.origin_offset_m * 1e6:+.2f} um above the {o.label} model's "
@@ -44,5 +45,5 @@ def section(context: ReportContext) -> Section:
         "outside the model's torque curve, the hinge is held by something the model omits." + others_text,
         figures, [],
         {"calibrated_pressure_pa": cal.pressure_amplitude_pa, "equilibrium_height_m": sim.equilibrium_height,
-         **{f"{n}_calibrated_pressure_pa": next((o.calibration.pressure_amplitude_pa for o in context.others
-                                                 if o.name == n), None) for n in context.models.unavailable}})
+         # every other registered model's, None where it is not compared
+         **{f"{n}_calibrated_pressure_pa": pressures.get(n) for n in force_model_names()[1:]}})
