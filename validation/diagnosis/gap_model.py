@@ -180,8 +180,10 @@ def _energy_residuals(terms: SimulationTerms, cal: Calibration, params: dict) ->
         res = e["dk"] + cal.pressure_scale * e["du"] - (e["work"] @ pv if pv.size else 0.0)
         # noise of dE over a window: two independent endpoint energies, each with velocity noise
         # through the kinetic energy (M ydot sigma_vy)^2 + (I thetadot sigma_vtheta)^2
-        if r.noise is not None:
-            ke_var = (terms.mass * r.state[:, 1]) ** 2 * r.noise[2] + (d.hinge_inertia(r.state[:, 2]) * r.state[:, 3]) ** 2 * r.noise[3]
+        b = r.balance_states
+        if b.velocity_noise is not None:
+            st, nv = b.state, b.velocity_noise
+            ke_var = (terms.mass * st[:, 1]) ** 2 * nv[0] + (d.hinge_inertia(st[:, 2]) * st[:, 3]) ** 2 * nv[1]
             floor_var = 2.0 * float(np.mean(ke_var))
         else:
             floor_var = 0.0

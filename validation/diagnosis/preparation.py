@@ -6,7 +6,8 @@ the data of the integral form.
 at the interior frames, the variances the tracking noise leaves on them, the filter that produced them
 (so that the model's accelerations can be filtered the same way, :meth:`RunAccelerations.smooth`) and,
 for the integral form of the equations (:mod:`fitting.integral_form`), the raw positions and column
-states at every frame (:class:`PositionIntegrals`).
+states at every frame (:class:`PositionIntegrals`), and the states of the energy balance
+(:class:`BalanceStates`).
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["PositionIntegrals", "RunAccelerations", "prepare_diagnosis_runs", "derivative_noise", "thin_runs",
+__all__ = ["BalanceStates", "PositionIntegrals", "RunAccelerations", "BALANCE_POLYORDER", "prepare_diagnosis_runs", "derivative_noise", "thin_runs",
            "uses_integral_form"]
 
 
@@ -72,6 +73,36 @@ class PositionIntegrals:
         return all(self.starts(q).size > 0 for q in (0, 1))
 
 
+#: Order of the Savitzky-Golay polynomial of the energy balance's states (same window as the accelerations').
+BALANCE_POLYORDER = 7
+
+
+@dataclass(frozen=True, eq=False)
+class BalanceStates:
+    """One run's states for the energy balance: a Savitzky-Golay fit of order :data:`BALANCE_POLYORDER` over
+    the accelerations' window (0.75 y periods), at the same frames as :attr:`RunAccelerations.state`.
+
+    The energy balance compares the mechanical energy at the ends of each window and integrates the power
+    of the effects over it, so its states must keep every harmonic of the motion at its full amplitude.  The
+    order-5 window of the accelerations passes the velocity at f_y with a gain of 0.998 but at 2 f_y with
+    0.90 (positions 0.83) and at 3 f_y with 0.44; order 7 over the same window passes 0.9999, 0.989 and 0.85,
+    at 1.5 times the velocity noise.  On a hinge locked to f_y the 2 f_y harmonics carry a few per cent of
+    the kinetic energy, and the order-5 states left the energy balance of exact samples of the paper-like
+    twin 23 % short of closing at the true parameters (the linear damping of y then came out 9 % high);
+    order 7 closes it to 5 %.  The energy balance is linear in the effects' parameters: its rows carry no
+    matched filter, so an attenuated harmonic is a bias, where the acceleration rows' matched kernel
+    cancels it.
+    """
+
+    state: NDArray[np.float64]  # (n, 4) [y, ydot, theta, thetadot]
+    #: variances of ydot and thetadot due to tracking noise (SI^2); None: noise-free data
+    velocity_noise: NDArray[np.float64] | None = None
+
+    def subsample(self, step: int) -> "BalanceStates":
+        """Every ``step``-th frame."""
+        return BalanceStates(self.state[::step], self.velocity_noise)
+
+
 @dataclass(frozen=True, eq=False)
 class RunAccelerations:
     """One run's smoothed states and measured accelerations (interior frames only, SI)."""
@@ -91,11 +122,21 @@ class RunAccelerations:
     #: positions and states at every frame for the integral form of both equations; None: the gap
     #: components of the equations use the accelerations instead
     integral: PositionIntegrals | None = None
+    #: states of the energy balance (:class:`BalanceStates`); None: ``state`` and the velocity noise of ``noise``
+    balance: BalanceStates | None = None
 
     def subsample(self, step: int) -> "RunAccelerations":
         """Every ``step``-th frame (the integral data, the noise levels and the filter stay those of the recording)."""
         return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step], self.noise,
-                                self.smoothing, self.frame_dt, self.integral)
+                                self.smoothing, self.frame_dt, self.integral,
+                                None if self.balance is None else self.balance.subsample(step))
+
+    @property
+    def balance_states(self) -> BalanceStates:
+        """The energy balance's states: :attr:`balance`, or ``state`` when the run carries none."""
+        if self.balance is not None:
+            return self.balance
+        return BalanceStates(self.state, None if self.noise is None else self.noise[2:])
 
     def smooth(self, x: NDArray) -> NDArray:
         """Filter a model's accelerations (axis 0 along ``t``) as the data's Savitzky-Golay second derivative
@@ -162,8 +203,21 @@ def prepare_diagnosis_runs(dataset) -> list[RunAccelerations]:
         except ValueError:  # too short for the hinge window: the theta component uses the accelerations
             integral = None
         runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv,
-                                     (d.window * run.dt, smoothing.polyorder), float(run.dt), integral))
+                                     (d.window * run.dt, smoothing.polyorder), float(run.dt), integral,
+                                     _balance_states(run, d.window, sigma2, sl)))
     return runs
+
+
+def _balance_states(run, window: int, sigma2: NDArray, interior: slice) -> BalanceStates | None:
+    """The energy balance's states of ``run`` at its ``interior`` frames (None when the window is too short for
+    the order, about 10 frames per y period: the balance then uses the accelerations' states)."""
+    from fitting.derivatives import differentiate, noise_gain
+
+    if window <= BALANCE_POLYORDER + 1:
+        return None
+    columns = [c for x in (run.y, run.theta) for c in differentiate(x, run.dt, window, BALANCE_POLYORDER)[:2]]
+    noise = np.asarray(sigma2, float) * noise_gain(window, BALANCE_POLYORDER, 1, run.dt) ** 2
+    return BalanceStates(np.column_stack(columns)[interior], noise)
 
 
 def derivative_noise(run, d, polyorder: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

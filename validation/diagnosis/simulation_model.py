@@ -47,7 +47,7 @@ class SimulationTerms:
 
     def forces(self, z0: float) -> list[tuple[NDArray, NDArray]]:
         """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
-        return [(f, q) for f, q, _ in self._static(z0)]
+        return self._static(z0)
 
     def _height_harmonics(self, kind: str, holder, evaluate) -> list[NDArray]:
         """(A, B, C) of ``evaluate(z0) = A + B cos(2k z0) + C sin(2k z0)`` for one run, from three heights.
@@ -75,7 +75,7 @@ class SimulationTerms:
         c, s = np.cos(2.0 * self.k * z0), np.sin(2.0 * self.k * z0)
         return tuple(a + c * b + s * d for a, b, d in harmonics)
 
-    def _static(self, z0: float) -> list[tuple[NDArray, NDArray, NDArray]]:
+    def _static(self, z0: float) -> list[tuple[NDArray, NDArray]]:
         key = round(z0, 12)
         if key not in self._cache:
             out = [self._at_height(self._height_harmonics("static", r, lambda z, r=r: self._static_run(r, z)), z0)
@@ -85,8 +85,38 @@ class SimulationTerms:
             self._cache[key] = out
         return self._cache[key]
 
-    def _static_run(self, r: RunAccelerations, z0: float) -> tuple[NDArray, NDArray, NDArray]:
-        """(smoothed F_Z / M, smoothed Q_theta / I, raw U_ac) of one run at origin height z0.
+    def _static_run(self, r: RunAccelerations, z0: float) -> tuple[NDArray, NDArray]:
+        """(smoothed F_Z / M, smoothed Q_theta / I) of one run at origin height z0, as the data see them."""
+        y, th = r.state[:, 0], r.state[:, 2]
+        s = self.model.integrals_at_height(th, z0 + y, self.problem.orientation_sums(r))
+        fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(th)
+        f = self.problem.pressure_factor(r.name, r.t)
+        if f is not None:  # a drifting pressure scales the acoustic forces in time
+            fz, qt = f * fz, f * qt
+        return r.smooth(fz), r.smooth(qt)
+
+    @staticmethod
+    def _balance_holder(r: RunAccelerations):
+        """The holder of run r's energy-balance states (``.state``): its :class:`BalanceStates`, or the run."""
+        return r if r.balance is None else r.balance
+
+    def _potentials(self, z0: float) -> list[NDArray]:
+        """Per run: U_ac [J] at nominal pressure along the energy balance's states (:meth:`_potential_run`)."""
+        key = ("potential", round(z0, 12))
+        if key not in self._cache:
+            out = []
+            for r in self.runs:
+                holder = self._balance_holder(r)
+                harmonics = self._height_harmonics("potential", holder,
+                                                   lambda z, r=r, h=holder: (self._potential_run(r, h, z),))
+                out.append(self._at_height(harmonics, z0)[0])
+            if len(self._cache) > 64:
+                self._cache.clear()
+            self._cache[key] = out
+        return self._cache[key]
+
+    def _potential_run(self, r: RunAccelerations, holder, z0: float) -> NDArray:
+        """U_ac [J] of run r along the states ``holder.state`` at origin height z0, used raw (not filtered).
 
         For a model without a potential (``conservative = False``, the full-wave model) U_ac is the acoustic
         energy along the run's path, whose changes are minus the work of the acoustic forces: the model's
@@ -95,19 +125,14 @@ class SimulationTerms:
         (trapezoid at the frames): the work of the whole force, integrated so, would carry the trapezoid's
         error on the oscillation's power (on the fitted frames, 2 ms apart, 10-40 % of a weak damping's work
         per 0.4 s window) and the velocity noise into the energy balance."""
-        y, yd, th = r.state[:, 0], r.state[:, 1], r.state[:, 2]
-        sums = self.problem.orientation_sums(r)
+        y, yd, th = holder.state[:, 0], holder.state[:, 1], holder.state[:, 2]
+        sums = self.problem.orientation_sums(holder)
         s = self.model.integrals_at_height(th, z0 + y, sums)
-        fz, qt = s.force_z / self.mass, s.q_theta / self.model.dimer.hinge_inertia(th)
         potential = s.potential
         if not getattr(self.model, "conservative", True):
             power = self._nonconservative_force_z(th, z0 + y, sums, s) * yd
             potential = potential - np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(r.t))])
-        f = self.problem.pressure_factor(r.name, r.t)
-        if f is not None:  # a drifting pressure scales the acoustic forces in time
-            fz, qt = f * fz, f * qt
-        # accelerations as the data see them (same smoothing); the potential is used raw
-        return r.smooth(fz), r.smooth(qt), potential
+        return potential
 
     def _nonconservative_force_z(self, theta: NDArray, z: NDArray, sums, static) -> NDArray:
         """F_Z + dU/dZ [N] at (theta, Z): the part of the acoustic force that the model's potential U does not give.
@@ -132,8 +157,9 @@ class SimulationTerms:
         d = self.model.dimer
         rest_u = float(self.model.integrals_at_height(0.0, z0).potential)  # U_ac at the data's origin, theta = 0
         out = []
-        for r, (_, _, pot) in zip(self.runs, self._static(z0)):
-            y, yd, th, thd = r.state.T
+        for r, pot in zip(self.runs, self._potentials(z0)):
+            state = r.balance_states.state
+            y, yd, th, thd = state.T
             inertia = d.hinge_inertia(th)
             kin = 0.5 * self.mass * yd**2 + 0.5 * inertia * thd**2 + self.mass * self.g * y
             a, b = self.energy_windows(r)
@@ -145,7 +171,7 @@ class SimulationTerms:
                 du = cum_u[b] - cum_u[a]
                 # oscillation energy at the window's pressure: E_rest(s f) ~ E_rest(s) + s (f - 1) U_ac(rest)
                 u0 = f[a] * pot[a] - (f[a] - 1.0) * rest_u
-            regs = [effect_regressors(n, r.state, z0 + y, self.k, z_eq) for n in effects]
+            regs = [effect_regressors(n, state, z0 + y, self.k, z_eq) for n in effects]
             regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
             out.append({"dk": kin[b] - kin[a], "du": du, "work": self.window_work(r, regs), "k0": kin[a], "u0": u0})
         return out
@@ -162,8 +188,9 @@ class SimulationTerms:
 
     def window_work(self, r: RunAccelerations, accelerations: NDArray) -> NDArray[np.float64]:
         """Work per energy window (n_windows, p) [J] of p acceleration terms ``accelerations`` (n, 2, p)
-        [m/s^2, 1/s^2] of run r: the trapezoid integral of the power M ydot a_y + I(theta) thetadot a_theta."""
-        _, yd, th, thd = r.state.T
+        [m/s^2, 1/s^2] of run r, evaluated at its energy-balance states (:attr:`RunAccelerations.balance_states`):
+        the trapezoid integral of the power M ydot a_y + I(theta) thetadot a_theta."""
+        _, yd, th, thd = r.balance_states.state.T
         power = (self.mass * yd[:, None] * accelerations[:, 0, :]
                  + self.model.dimer.hinge_inertia(th)[:, None] * thd[:, None] * accelerations[:, 1, :])
         cum = np.concatenate([np.zeros((1, power.shape[1])),
