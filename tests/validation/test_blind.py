@@ -33,6 +33,8 @@ def test_blind_twin_cases_are_inviscid_apart_from_the_drawn_effects(tmp_path, mo
 
     seen = []
     monkeypatch.setattr(acousim.twin, "simulate_dataset", lambda twin, *a, **k: seen.append(twin))
+    # no data set is written: nothing to check for folded hinges
+    monkeypatch.setattr("validation.blind.candidates._too_many_folded", lambda data, runs: None)
     case = {"index": 0, "effects": {}, "pressure_error": 0.0, "twin_seed": 1}
     config = BlindConfig(cases=1, runs=3, duration=1.0, air_damping=False)
     assert generate_twin_case(case, config, tmp_path / "d", air_damping=config.air_damping) == (None, 0)
@@ -63,3 +65,23 @@ def test_the_default_blind_study_has_the_air_damping_scored_as_linear_damping(ma
     assert exact["exact"] and exact["false_effects"] == []
     s = summarize([r, exact])
     assert s["false_effect_rate"] == 0.5 and s["single_effect_parameters_within_5pct"] == 1.0
+
+
+@pytest.mark.parametrize("n_folded, scored", [(3, True), (4, False)])
+def test_a_twin_case_with_too_few_unfolded_runs_is_not_scored(tmp_path, write_csv, n_folded, scored):
+    """A drawn effect that folds the hinge (a mirror asymmetry beyond the hinge's largest restoring acceleration)
+    leaves runs the diagnosis cannot use: with fewer unfolded runs than an effect needs at alpha 0.01 (7 of 10) the
+    case is not generated (the twin redraws, then reports why), with 7 it is scored."""
+    import numpy as np
+
+    from validation.blind.candidates import _too_many_folded
+
+    rng = np.random.default_rng(5)
+    t = np.arange(2000) / 1000.0
+    for i in range(10):
+        theta = np.full(t.size, -0.96 if i < n_folded else 0.1) + rng.normal(0, 0.005, t.size)
+        write_csv(tmp_path / f"run{i + 1:02d}.csv", t, 1e-4 * np.cos(2 * np.pi * 22 * t), theta)
+    reason = _too_many_folded(tmp_path, 10)
+    assert (reason is None) == scored
+    if not scored:
+        assert "folded in 4 of 10 runs" in reason and "7 unfolded runs" in reason

@@ -77,9 +77,13 @@ def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
 def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping: bool = False) -> tuple[str | None, int]:
     """Write the twin data set of a drawn case into ``data`` with its truth.json; (error or None, redraws).
 
-    A drawn start can drive a run out of the trap or to theta = +-1 (the twin refuses such runs): the twin's
-    seed is redrawn (same effects and pressure) up to 5 times.  ``air_damping``: the twin adds the air's computed
-    drag (its default physics); off, the drawn effects are the whole truth."""
+    A drawn start can drive a run out of the trap (the twin refuses such runs), and a drawn effect can fold the hinge
+    (a mirror asymmetry beta0 beyond the hinge's largest restoring acceleration, 26 1/s^2 on the default dimer at
+    3 kPa): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.folded`), so a data set with
+    fewer unfolded runs than an effect needs to be named at the diagnosis's alpha is no case to score.  Either way the
+    twin's seed is redrawn (same effects and pressure) up to 5 times; a case that still folds is reported as not
+    generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
+    the drawn effects are the whole truth."""
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
@@ -93,10 +97,31 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
                           pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]), air_damping=air_damping)
         try:
             simulate_dataset(twin, data, progress=False, force=True)
-            return None, retries
         except TwinError as exc:
             generation_error = str(exc)
+            continue
+        generation_error = _too_many_folded(data, config.runs)
+        if generation_error is None:
+            return None, retries
     return generation_error, retries
+
+
+def _too_many_folded(data: Path, runs: int) -> str | None:
+    """Why the twin data set in ``data`` cannot be scored: fewer runs than an effect needs at the diagnosis's alpha
+    (:func:`validation.diagnosis.statistics.runs_needed`) remain once those that ended folded are left out; None if
+    enough remain."""
+    from cubedimer.dataset import load_dataset
+
+    from ..diagnosis.folded import folded_angle
+    from ..diagnosis.pipeline import DiagnoseConfig
+    from ..diagnosis.statistics import runs_needed
+
+    folded = sum(folded_angle(run) is not None for run in load_dataset(data).runs)
+    needed = min(runs, runs_needed(DiagnoseConfig().alpha))
+    if runs - folded >= needed:
+        return None
+    return (f"the hinge ended folded in {folded} of {runs} runs (theta near +-1), leaving fewer than the {needed} "
+            "unfolded runs an effect needs to be named")
 
 
 def candidate_truth(effects: dict) -> dict:

@@ -29,6 +29,7 @@ from .candidates import CANDIDATE_EFFECTS
 from .discovery import Discovery, discover_terms, discovered_equations
 from .joint_model import joint_estimates, judge_candidates
 from .drift import DriftSettings, detect_pressure_drift
+from .folded import leave_out_folded_runs
 from .gap_model import GapFit, fit_gap_model
 from .elimination import backward_check
 from .identification import PracticalThresholds, identify_effects
@@ -113,14 +114,19 @@ def load_for_diagnosis(data_dir: str | Path, strict: bool = False, progress: boo
     """Load ``data_dir`` as :func:`diagnose` reads it: the physics bounds of any levitated dimer, and with a meta.json
     also the Gor'kov estimate of the trap frequency at its nominal pressure
     (:func:`acousim.analytic.nominal_trap_frequency`); skipped files are warned about (``progress``) or logged at
-    DEBUG level.  Load the data set once and pass the :class:`~cubedimer.dataset.Dataset` to the fit and the
+    DEBUG level; runs whose hinge ended folded are left out as skipped files
+    (:func:`~validation.diagnosis.folded.leave_out_folded_runs`).  Load the data set once and pass the :class:`~cubedimer.dataset.Dataset` to the fit and the
     diagnosis, so that both see the same runs."""
     from acousim.analytic import nominal_trap_frequency
     from cubedimer.dataset import LoadConfig, load_dataset
 
     skip = logger.warning if progress else logger.debug
-    return load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
-                        report=lambda m: skip("skipping %s", m))
+    loaded = load_dataset(data_dir, strict=strict, config=LoadConfig(trap_frequency=nominal_trap_frequency),
+                          report=lambda m: skip("skipping %s", m))
+    dataset = leave_out_folded_runs(loaded)
+    for s in dataset.skipped[len(loaded.skipped):]:
+        skip("skipping %s", s)
+    return dataset
 
 
 def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConfig(), strict: bool = False,
@@ -231,6 +237,7 @@ def _diagnose(dataset, config: DiagnoseConfig, progress: bool, spec: ModelSpec) 
     from ..simulation import conditions_from_meta
 
     log = logger.info if progress else logger.debug
+    dataset = leave_out_folded_runs(dataset)  # a no-op on a data set that load_for_diagnosis loaded
     conditions = conditions_from_meta(dataset.meta, spec)
     # refuses a model that does not fit the experiment first (a dimer outside the full-wave family): a parameter to
     # be calibrated starts at the value the model takes by default
