@@ -32,6 +32,8 @@ POSES = ([(d, "standard", th, STEP, 0.0) for d in DIMERS for th in THETAS]
          + [("s500_g0.01", "coarse", 0.2, STEP, 0.0), ("s500_g0.01", "coarse", 0.2, STEP, 50e-6),
             ("s500_g0.01", "table", 0.2, STEP, 0.0)])
 # (dimer, p0, A, orbit classes): the held-y cells whose locked orbits are checked
+# the rocking stiffness times these factors: how far each orbit is from a parametric resonance of the rocking mode
+K_SCALES = (0.7, 0.8, 0.9, 1.1, 1.2, 1.3)
 CELLS = [("s500_g0.01", 3000.0, 100e-6), ("s500_g0.01", 3000.0, 200e-6), ("s500_g0.01", 3000.0, 300e-6),
          ("s500_g0.02", 3000.0, 50e-6), ("s500_g0.02", 3000.0, 100e-6),
          ("s700_g0.05", 6000.0, 300e-6), ("s700_g0.05", 6000.0, 500e-6), ("s700_g0.05", 4500.0, 300e-6)]
@@ -146,7 +148,8 @@ def print_floquet(cache: Path) -> None:
     from acousim.atlas.field_drops import AtlasDimer
 
     print("\ncell | class | lock | hinge amplitude | theta range | max |mu| rocking pair, undamped | arg(mu)/2pi | "
-          "f_psi T_y range | gamma_psi [1/s] | max |mu| with gamma_psi")
+          "f_psi T_y range | gamma_psi [1/s] | max |mu| with gamma_psi | undamped max |mu| with K_psipsi x "
+          + ", ".join(f"{k:g}" for k in K_SCALES))
     for dimer, p0, amp in CELLS:
         side, gs = DIMERS[dimer]
         table, _ = stiffness_table(cache, dimer)
@@ -182,6 +185,12 @@ def print_floquet(cache: Path) -> None:
             gamma = rocking_damping_rate(inert, float(np.mean(orbit[:, 2])), float(np.mean(f_psi)) / period)
             mu_d = rocking_multipliers(rocking_arguments(orbit[:-1], p * period, poly, table.two_k, sur.z_eq, inert,
                                                          load_scale=(p0 / P_SOLVE) ** 2, gamma_psi=gamma), p * period)
+            scaled = []
+            for ks in K_SCALES:
+                sp = {"k_psipsi": ks * poly["k_psipsi"], "k_xpsi": poly["k_xpsi"]}
+                scaled.append(np.abs(rocking_multipliers(rocking_arguments(
+                    orbit[:-1], p * period, sp, table.two_k, sur.z_eq, inert, load_scale=(p0 / P_SOLVE) ** 2),
+                    p * period)).max())
             key = (res["outcome"], res["lock_ratio"], round(res["amp_theta"], 2))
             if key in seen:
                 continue
@@ -189,7 +198,8 @@ def print_floquet(cache: Path) -> None:
             print(f"{dimer}, {p0 / 1e3:g} kPa, A {amp * 1e6:.0f} um | {res['outcome']} | {res['lock_ratio'] or '1:1'} | "
                   f"{res['amp_theta']:.3f} | {orbit[:, 2].min():+.2f}..{orbit[:, 2].max():+.2f} | "
                   f"{np.abs(mu).max():.6f} | {np.abs(np.angle(mu)).max() / (2 * np.pi):.4f} | "
-                  f"{f_psi.min():.3f}-{f_psi.max():.3f} | {gamma:.3f} | {np.abs(mu_d).max():.6f}", flush=True)
+                  f"{f_psi.min():.3f}-{f_psi.max():.3f} | {gamma:.3f} | {np.abs(mu_d).max():.6f} | "
+                  + ", ".join(f"{v:.4f}" for v in scaled), flush=True)
 
 
 def main() -> None:
