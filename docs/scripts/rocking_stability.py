@@ -4,7 +4,7 @@ held-y orbits (docs/twin.md, "Rocking and sideways").
     python docs/scripts/rocking_stability.py CACHE            # solves the missing poses (resumable), then both tables
     python docs/scripts/rocking_stability.py CACHE --no-solve # the tables from the poses already in CACHE
 
-Every pose (dimer, mesh, theta, psi, x) is one solve (about 40 s on the standard mesh, 6 min on the default table's
+Every pose (dimer, mesh, theta, psi, x) is one solve (22-44 s on the standard mesh, 7.5 min on the default table's
 mesh, one core), cached as one JSON file in CACHE: the total force and torque about the centre of mass, (A, B, C) at
 3 kPa, by the momentum flux through a sphere and by the surface tractions (acousim.fullwave.rocking).  Then, for each
 dimer, the stiffness over the bend (K_psipsi, K_xpsi at theta = 0-0.8, mirrored to negative bends) and, along the
