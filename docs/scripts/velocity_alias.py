@@ -10,8 +10,8 @@ position terms at almost no cost in the residual.
 Then the oracle alias z of b5 and b6 (fitting.oracle.oracle_aliases: sqrt of the noise-free residual sum of squares
 left when the term is replaced by its best one-for-one rival in the cubic library, the other terms refitted, over
 the tracking noise), with what the default fit would use: the integral form's windows of 0.75 periods of theta's
-dominant frequency, and the twin camera's tracking noise (sigma_y = 1 um, sigma_theta = 0.005 at 2000 fps, which the
-fit's fourth-difference estimate recovers from such data).  The run is the locked orbit itself, 4 s at 2000 fps (the
+dominant frequency, and the tracking noise the twin's camera adds (sigma_y = 1 um, sigma_theta = 0.005 at 2000 fps;
+the fit estimates it from such data by fourth differences, as their meta.json records no tracking block).  The run is the locked orbit itself, 4 s at 2000 fps (the
 length of the window data set's runs); the support is the paper's hinge equation (b0-b6) plus y*theta^2, with the
 coefficients of its least squares on the orbit's exact thetaddot ("fitted") or with b5, b6 at the paper's scale
 (fitting.synthetic.paper_reduced_model: 5e3 1/m and 8e6 1/m^2).  The alias z of a term is proportional to its own
