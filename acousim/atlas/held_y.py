@@ -41,7 +41,7 @@ from .field_drops import (AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text
 from ..dynamics.equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
 __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_period", "held_y_orbits",
-           "floquet_multipliers",
+           "floquet_multipliers", "integrate_held", "HINGE_BOX",
            "held_y_cell", "cell_summary", "run_held_y_map", "MAP_COLUMNS", "TWO_FY_SHARE", "POPULATED", "CLOSED"]
 
 logger = logging.getLogger(__name__)
@@ -147,7 +147,8 @@ def held_y_acceleration(t, y, ydot, theta, thetadot, args):
 
 
 @nb.njit(cache=True)
-def _integrate_held(args, x0, h, substeps, n_out, lower, upper, out):
+def integrate_held(args, x0, h, substeps, n_out, lower, upper, out):
+    """:func:`cubedimer.rk4.rk4` of :func:`held_y_acceleration`: the hinge on the prescribed y orbit."""
     return rk4(held_y_acceleration, args, x0, h, substeps, n_out, lower, upper, out)
 
 
@@ -165,7 +166,8 @@ def held_y_arguments(dynamics) -> tuple[tuple, NDArray[np.float64]]:
     return (dynamics._args_on, y_series, float(eq[2])), eq
 
 
-_BOX = (np.array([-np.inf, -np.inf, -np.nextafter(1.0, 0.0), -np.inf]),
+#: The state box of the held-y integrations: theta within +-1 (the faces touch at +-1), the rest unbounded.
+HINGE_BOX = (np.array([-np.inf, -np.inf, -np.nextafter(1.0, 0.0), -np.inf]),
         np.array([np.inf, np.inf, np.nextafter(1.0, 0.0), np.inf]))
 
 
@@ -175,7 +177,7 @@ def y_orbit_period(args: tuple, y_start: float, f_guess: float, max_step: float 
     n = int(math.ceil(2.6 / f_guess / max_step)) + 1
     out = np.empty((n, 4))
     x0 = np.array([y_start, 0.0, args[2], 0.0])
-    m, _ = _integrate_held(args, x0, max_step, 1, n, *_BOX, out)
+    m, _ = integrate_held(args, x0, max_step, 1, n, *HINGE_BOX, out)
     yd = out[:m, 1]
     k = np.nonzero((yd[:-1] < 0) & (yd[1:] >= 0))[0]
     if k.size < 2:
@@ -215,7 +217,7 @@ def floquet_multipliers(integrate, args, x_orbit: ArrayLike, period: float, step
             x0 = x.copy()
             x0[comp] += sign * eps * scale[j]
             out = np.empty((2, 4))
-            n, status = integrate(args, x0, period / steps, steps, 2, *_BOX, out)
+            n, status = integrate(args, x0, period / steps, steps, 2, *HINGE_BOX, out)
             if n < 2:
                 return np.full(2, np.nan + 0j)
             ends.append(out[1, 2:4])
@@ -255,7 +257,7 @@ def held_y_orbits(dynamics, amplitude_m: float, starts, periods: int, samples_pe
     b = len(x0s)
     out = np.full((b, n_out, 4), np.nan)
     n_valid, status = np.zeros(b, np.int64), np.zeros(b, np.int64)
-    lower, upper = (np.tile(v, (b, 1)) for v in _BOX)
+    lower, upper = (np.tile(v, (b, 1)) for v in HINGE_BOX)
     _integrate_held_batch(args, x0s, np.full(b, dt_out / substeps), substeps, np.full(b, n_out), lower, upper, out,
                           n_valid, status)
     return np.arange(n_out) * dt_out, out, n_valid, status, period, args, substeps
@@ -299,7 +301,7 @@ def held_y_cell(dimer: AtlasDimer, pressure_pa: float, amplitude_m: float, confi
         if res["outcome"] in LOCKED_AT_FY or res["outcome"] == "locked-p:q":
             p = int(res["lock_ratio"].split(":")[0]) if res["lock_ratio"] else 1
             x_end, x_back = out[k, n_out - 1], out[k, n_out - 1 - p * n_per]
-            mu = floquet_multipliers(_integrate_held, args, x_end, p * period, p * n_per * substeps)
+            mu = floquet_multipliers(integrate_held, args, x_end, p * period, p * n_per * substeps)
             res["floquet"] = [float(v) for v in np.sort(np.abs(mu))[::-1]]
             res["closure"] = float(np.max(np.abs(x_end[2:] - x_back[2:]) / np.array([1.0, 2 * np.pi * f_y])))
         runs.append({**run, **res})

@@ -49,7 +49,7 @@ from cubedimer.rk4 import rk4
 
 from ..dynamics.air_damping import (AIR_DYNAMIC_VISCOSITY_PA_S, dimer_drag_radii, oscillating_rotation_drag,
                                     oscillating_translation_drag, stokes_layer_thickness)
-from .held_y import _BOX, _integrate_held, floquet_multipliers
+from .held_y import HINGE_BOX, integrate_held, floquet_multipliers
 
 __all__ = ["AntisymmetricInertia", "rocking_damping_rate", "rocking_acceleration", "periodic_series", "rocking_arguments",
            "rocking_multipliers", "sample_orbit"]
@@ -202,7 +202,7 @@ def sample_orbit(args: tuple, x_orbit: ArrayLike, period: float, n: int, max_ste
     of :mod:`acousim.atlas.held_y`, ``args`` its kernel arguments), steps <= ``max_step`` [s]."""
     substeps = max(1, int(math.ceil(period / n / max_step - 1e-9)))
     out = np.empty((n + 1, 4))
-    m, status = _integrate_held(args, np.asarray(x_orbit, float), period / n / substeps, substeps, n + 1, *_BOX, out)
+    m, status = integrate_held(args, np.asarray(x_orbit, float), period / n / substeps, substeps, n + 1, *HINGE_BOX, out)
     if m < n + 1:
         raise ValueError(f"the held orbit left the box (status {status}) while being sampled")
     return out
