@@ -29,9 +29,10 @@ __all__ = ["tilt_from_gap", "tilt_from_centres", "area_factor", "overlap_shift",
 
 #: Largest tilt [degrees] a recording is measured at; beyond it the squares no longer describe the silhouette.
 MAX_TILT_DEG = 20.0
-#: Estimated tilt [degrees] above which the projection is undone: ten times the estimate's spread on an aligned
-#: camera (about 0.3 degrees), so an aligned recording is measured exactly as without this module.
-TILT_CORRECTION_DEG = 3.0
+#: Estimated tilt [degrees] above which the projection is undone: five times the hinge gap's estimate on an aligned
+#: camera (up to 0.3 degrees), so an aligned recording is measured exactly as without this module; left as it is, a
+#: tilt of 1.5 degrees would cost about 0.003 px in y and 5e-5 in theta (a quarter of 3 degrees' 0.013 px, 2e-4).
+TILT_CORRECTION_DEG = 1.5
 #: The floor of the refined tilt's error [degrees]: on renders at 5-15 degrees (image noise 0-2 %) the centres'
 #: estimate lies within 0.5 degrees of the truth (0.25 degrees high at 2 % noise; it reads 0.25 on an aligned camera).
 TILT_FLOOR_DEG = 0.5
