@@ -8,7 +8,9 @@
    cube/background contrast, then a first measurement of those frames for the dimer's silhouette area
    and the edge blur, which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check.
 2. **Measurement** of every frame (:func:`tracking.measure.measure_frames`, batches of
-   ``TrackConfig.batch`` frames).
+   ``TrackConfig.batch`` frames), undoing a hinge line's tilt out of the camera axis when the calibration found
+   one above :data:`tracking.tilt.TILT_CORRECTION_DEG` (the centre of mass then moved back by the two
+   silhouettes' overlap at the hinge, :func:`tracking.tilt.overlap_shift`).
 3. **The recording's bounds.**  Measured frames whose edges are wider than the recording's median by more
    than the motion blur of ``max_motion_blur`` px (``width^2 - median^2 > L^2 / 12``), whose edge residual
    exceeds ``max_edge_rms_factor`` x its median (+ 0.05 px), whose hinge corners are not square within
