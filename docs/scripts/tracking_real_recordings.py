@@ -95,6 +95,22 @@ def table(cases=None, seeds=SEEDS) -> str:
     return "\n".join(lines)
 
 
+def _hexagon(centre, e1, e2, half_side, tau):
+    """The outline (closed) of a cube's square of faces along ``e1``, ``e2`` (image (u, v)) seen with the hinge line
+    tilted by ``tau``: shortened across by cos(tau) about its centre, swept by +-(s/2) sin(tau) along the rows
+    (``half_side`` is the silhouette's, larger than the cube's by the root of the area factor)."""
+    from scipy.spatial import ConvexHull
+
+    from tracking.tilt import area_factor
+
+    a = half_side / np.sqrt(area_factor(tau))
+    shrink = np.array([np.cos(tau), 1.0])
+    pts = np.array([centre + a * shrink * (p * e1 + q * e2) + np.array([d * a * np.sin(tau), 0.0])
+                    for p, q in ((1, 1), (-1, 1), (-1, -1), (1, -1)) for d in (-1, 1)])
+    hull = pts[ConvexHull(pts).vertices]
+    return list(hull) + [hull[0]]
+
+
 def figure(path: str) -> None:
     """One frame of each case with the tracked squares drawn on it."""
     import matplotlib.pyplot as plt
@@ -111,10 +127,15 @@ def figure(path: str) -> None:
             r = res.rows[i]
             a = r[C["half_side"]]
             x0, y0 = (res.info["roi_px"] or [0, 0, 0, 0])[0], (res.info["roi_px"] or [0, 0, 0, 0])[2]
+            tilt = res.info.get("tilt_correction")
             for cu, cv, g in ((r[C["u_a"]], r[C["v_a"]], r[C["gamma_a"]]), (r[C["u_b"]], r[C["v_b"]], r[C["gamma_b"]])):
                 e1 = np.array([np.cos(g), -np.sin(g)])
                 e2 = np.array([-np.sin(g), -np.cos(g)])
-                pts = [np.array([cu + x0, cv + y0]) + a * (p * e1 + q * e2) for p, q in ((1, 1), (-1, 1), (-1, -1), (1, -1), (1, 1))]
+                if tilt:  # the cube's square as the tilted camera sees it: shortened across, swept along the rows
+                    pts = _hexagon(np.array([cu + x0, cv + y0]), e1, e2, a, np.radians(tilt["tilt_deg"]))
+                else:
+                    pts = [np.array([cu + x0, cv + y0]) + a * (p * e1 + q * e2)
+                           for p, q in ((1, 1), (-1, 1), (-1, -1), (1, -1), (1, 1))]
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color="tab:orange", lw=1)
             ax.set_title(f"{case[:38]}\ntheta {res.theta[i]:+.3f} (true {theta[i]:+.3f})", fontsize=8)
         else:
