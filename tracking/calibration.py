@@ -6,10 +6,12 @@ the background level and the cube/background contrast (on at most 16 of them), t
 illumination and static structures, :mod:`tracking.background`), whether the silhouettes have holes (transparent
 crystals: filled), then a first measurement of those frames for the dimer's silhouette area and the edge blur,
 which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check; and the hinge line's tilt out of the
-camera axis from the hinge gap (:mod:`tracking.tilt`), which above ``TILT_CORRECTION_DEG`` is refined from the
+camera axis from the hinge gap (:mod:`tracking.tilt`); when the gap over the squares' sides from their faces
+(:func:`tracking.tilt.tilt_from_faces`) reads more than ``TILT_CORRECTION_DEG``, the tilt is refined from the
 cubes' centres and the silhouette's area with the projection undone (:func:`tracking.tilt.tilt_from_centres`, on
-the calibration frames whose eight faces were fitted; twice), its error from the estimate's spread and its floor,
-and what that error does to theta (the calibration frames measured again at the tilt plus its error).
+the calibration frames whose eight faces were fitted; twice), its error from the estimate's spread and its floor
+(at least the difference from the faces' reading), and what that error does to theta (the calibration frames
+measured again at the tilt plus its error).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from numpy.typing import NDArray
 from .background import Background, estimate_background
 from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames, reciprocal_background
 from .recording import TrackingError
-from .tilt import MAX_TILT_DEG, TILT_CORRECTION_DEG, TILT_FLOOR_DEG, tilt_from_centres, tilt_from_gap
+from .tilt import MAX_TILT_DEG, TILT_CORRECTION_DEG, TILT_FLOOR_DEG, tilt_from_centres, tilt_from_faces, tilt_from_gap
 
 __all__ = ["Calibration", "calibrate"]
 
@@ -157,9 +159,29 @@ def calibrate(frames: NDArray, config) -> Calibration:
         window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
     cal = Calibration(polarity, polarity_from, background, contrast, su, sv, blur, window, area, int(ok.sum()),
                       dark, fill, scene, pinv, tilt)
-    if tilt is not None and TILT_CORRECTION_DEG < tilt <= MAX_TILT_DEG:
-        cal = replace(cal, tilt=_refine_tilt(sample, cal.settings(config), pinv, tilt))
+    faces = _faces_tilt(rows[ok])
+    if tilt is not None and faces is not None and TILT_CORRECTION_DEG < faces and tilt <= MAX_TILT_DEG:
+        cal = replace(cal, tilt=_refine_tilt(sample, cal.settings(config), pinv, tilt, faces))
     return cal
+
+
+def _faces_tilt(rows: NDArray) -> float | None:
+    """The tilt [degrees] from the fitted squares' hinge corners placed with their sides from the faces (not from
+    the area), :func:`tracking.tilt.tilt_from_faces` of the median gap over side; None without a fitted frame."""
+    corners = []
+    for u, v, g, side in (("u_a", "v_a", "gamma_a", "side_a"), ("u_b", "v_b", "gamma_b", "side_b")):
+        g = rows[:, _C[g]]
+        normals = g[:, None] - 0.5 * np.pi + 0.5 * np.pi * np.arange(4)[None, :]
+        cx = np.cos(normals) + np.cos(normals + 0.5 * np.pi)
+        cz = np.sin(normals) + np.sin(normals + 0.5 * np.pi)
+        k = np.argmax(cx, axis=1) if u == "u_a" else np.argmin(cx, axis=1)  # the hinge corner: A's right, B's left
+        i = np.arange(len(g))
+        half = 0.5 * rows[:, _C[side]]
+        corners.append((rows[:, _C[u]] + half * cx[i, k], -rows[:, _C[v]] + half * cz[i, k], rows[:, _C[side]]))
+    (xa, za, sa), (xb, zb, sb) = corners
+    ratio = np.hypot(xa - xb, za - zb) / (0.5 * (sa + sb))
+    ratio = ratio[np.isfinite(ratio)]
+    return tilt_from_faces(float(np.median(ratio))) if ratio.size else None
 
 
 def _centres_tilt(rows: NDArray) -> tuple[NDArray, int]:
@@ -172,11 +194,13 @@ def _centres_tilt(rows: NDArray) -> tuple[NDArray, int]:
     return t, int(t.size)
 
 
-def _refine_tilt(sample: NDArray, settings: MeasureSettings, pinv: NDArray, gap_deg: float) -> dict:
+def _refine_tilt(sample: NDArray, settings: MeasureSettings, pinv: NDArray, gap_deg: float, faces_deg: float) -> dict:
     """The tilt the measurement undoes (module docstring): from the hinge gap's estimate, twice the median of the
     centres' estimates measured with the previous one undone; its error, the standard error of that median (1.25
-    x the robust spread over the root of the frames) and :data:`tracking.tilt.TILT_FLOOR_DEG` in quadrature; and
-    the RMS change of theta over the calibration frames with the tilt off by that error."""
+    x the robust spread over the root of the frames) and :data:`tracking.tilt.TILT_FLOOR_DEG` in quadrature, and
+    at least the difference from the faces' estimate (the area the centres' estimate uses reads large when the
+    background's coverage is offset); and the RMS change of theta over the calibration frames with the tilt off by
+    that error."""
     tau = math.radians(gap_deg)
     t, used = np.zeros(0), 0
     for _ in range(2):
@@ -186,11 +210,12 @@ def _refine_tilt(sample: NDArray, settings: MeasureSettings, pinv: NDArray, gap_
         t, used = t_new, used_new
         tau = float(np.median(t))
     spread = 1.4826 * float(np.median(np.abs(t - tau))) if used else math.radians(gap_deg)
-    err = math.hypot(1.25 * spread / math.sqrt(max(used, 1)), math.radians(TILT_FLOOR_DEG))
+    err = max(math.hypot(1.25 * spread / math.sqrt(max(used, 1)), math.radians(TILT_FLOOR_DEG)),
+              abs(tau - math.radians(faces_deg)))
     rows = measure_frames(sample, replace(settings, hinge_tilt=tau), pinv=pinv)
     off = measure_frames(sample, replace(settings, hinge_tilt=tau + err), pinv=pinv)
     both = (rows[:, 0] == 0) & (off[:, 0] == 0)
     d_theta = off[both, _C["theta"]] - rows[both, _C["theta"]]
     return {"tilt_deg": math.degrees(tau), "error_deg": math.degrees(err),
             "theta_bias": float(np.sqrt(np.mean(d_theta ** 2))) if both.any() else 0.0,
-            "from_hinge_gap_deg": float(gap_deg), "frames": used}
+            "from_hinge_gap_deg": float(gap_deg), "from_faces_deg": float(faces_deg), "frames": used}

@@ -8,7 +8,7 @@ area, ``sqrt(area / 2)``, is therefore too large by the square root of the brack
 gap to that side fixes ``tau``: :func:`tilt_from_gap` inverts it (monotonic up to 40 degrees).  The angle is
 the median over the frames that were measured or failed only the fit checks.
 
-Above :data:`TILT_CORRECTION_DEG` the projection is undone.  The face fits (:func:`tracking.face_fit.fit_tilted_square`)
+Above :data:`TILT_CORRECTION_DEG` (read from the squares' faces, :func:`tilt_from_faces`) the projection is undone.  The face fits (:func:`tracking.face_fit.fit_tilted_square`)
 sample each cube's hexagon where its slanted edges are (the shortened square's faces moved by ``(s/2) sin(tau)``
 along the rows, clear of the other cube's sweep at the hinge) and turn each fitted image direction ``d`` back into
 the cube's, ``atan2(sin d, cos d / cos(tau))``: theta is then the cube's bend.  y needs one more step: each cube's
@@ -25,14 +25,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["tilt_from_gap", "tilt_from_centres", "area_factor", "overlap_shift", "MAX_TILT_DEG", "TILT_CORRECTION_DEG", "TILT_FLOOR_DEG"]
+__all__ = ["tilt_from_gap", "tilt_from_faces", "tilt_from_centres", "area_factor", "overlap_shift", "MAX_TILT_DEG", "TILT_CORRECTION_DEG", "TILT_FLOOR_DEG"]
 
 #: Largest tilt [degrees] a recording is measured at; beyond it the squares no longer describe the silhouette.
 MAX_TILT_DEG = 20.0
-#: Estimated tilt [degrees] above which the projection is undone: five times the hinge gap's estimate on an aligned
-#: camera (up to 0.3 degrees), so an aligned recording is measured exactly as without this module; left as it is, a
-#: tilt of 1.5 degrees would cost about 0.003 px in y and 5e-5 in theta (a quarter of 3 degrees' 0.013 px, 2e-4).
-TILT_CORRECTION_DEG = 1.5
+#: Tilt [degrees] above which the projection is undone, as :func:`tilt_from_faces` reads it: it reads up to 1 degree
+#: on an aligned camera at 2-3 % noise and up to 2.3 on bright cubes on black at 5 %, so an aligned recording is
+#: measured exactly as without this module; left as it is, a tilt of 3 degrees costs 0.013 px RMS in y and 2e-4 in
+#: theta (noise-free renders, |theta| <= 0.75), 2 degrees about half that.
+TILT_CORRECTION_DEG = 3.0
 #: The floor of the refined tilt's error [degrees]: on renders at 5-15 degrees (image noise 0-2 %) the centres'
 #: estimate lies within 0.5 degrees of the truth (0.25 degrees high at 2 % noise; it reads 0.25 on an aligned camera).
 TILT_FLOOR_DEG = 0.5
@@ -44,6 +45,15 @@ def area_factor(tau: NDArray | float) -> NDArray | float:
     """The silhouette area of a dimer tilted by ``tau`` [rad] over that of the untilted one (module docstring)."""
     c, s = np.cos(tau), np.sin(tau)
     return c + np.sqrt(2.0) * s - s * s / (4.0 * c)
+
+
+def tilt_from_faces(gap_over_side: float) -> float:
+    """The tilt [degrees] from the fitted squares' hinge gap over their side *from their faces* (the distances of
+    opposite faces): ``asin`` of the ratio.  Unlike :func:`tilt_from_gap` it does not use the silhouette's area,
+    which a coverage offset of the background enlarges (bright cubes on black at a few % noise: 6 %, which reads
+    as 2-6 degrees of tilt there); it reads 0.3-1 degree on an aligned camera and 1.5, 2.9, 7.9 and 9.4 degrees at
+    1.5, 3, 8 and 10 (renders at 2 % noise)."""
+    return float(np.degrees(np.arcsin(np.clip(gap_over_side, 0.0, 1.0))))
 
 
 def tilt_from_gap(gap_over_side: float) -> float:

@@ -153,7 +153,8 @@ class TrackResult:
     status : ndarray (n,) int
         :data:`tracking.measure.STATUS` code per frame.
     rows : ndarray (n, len(COLUMNS))
-        The kernel's measurement of every frame (pixel units).
+        The kernel's measurement of every frame (pixel units); with a tilted hinge line undone, ``v_com`` is the
+        cubes' centre, moved back by the silhouettes' overlap at the hinge.
     info : dict
         The RUN.json document (:func:`tracking.output.run_json`'s content).
     example : ndarray (height, width)
@@ -357,7 +358,8 @@ def _tilt_correction(cal: Calibration, rows: np.ndarray, ok: np.ndarray, pixel: 
         noise["tilt_bias"] = bias
         noise["value"] = math.hypot(noise["value"], bias)
     return {"applied": True, "tilt_deg": t["tilt_deg"], "error_deg": t["error_deg"],
-            "from_hinge_gap_deg": t["from_hinge_gap_deg"], "frames": t["frames"], "bias_y_m": bias_y,
+            "from_hinge_gap_deg": t["from_hinge_gap_deg"], "from_faces_deg": t["from_faces_deg"],
+            "frames": t["frames"], "bias_y_m": bias_y,
             "bias_theta": bias_theta,
             "method": "the face fits undo the projection of a hinge line turned by tilt_deg about the vertical (each "
                       "cube's square shortened across by cos(tilt), swept along the rows by side sin(tilt)); the "
