@@ -226,7 +226,9 @@ def inspect(a: argparse.Namespace) -> int:
         lines.append(f"hinge line: tilted about {tilt:.1f} degrees out of the camera axis ({how}); the side corrected "
                      f"for it is {true_side:.1f} px" + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size
                                                          else "")
-                     + "; track undoes the tilt, and needs --max-hinge-gap 0.5 beyond about 5 degrees")
+                     + ("; track undoes the tilt" if cal.tilt else "; track leaves it as it is (the hinge gap over the "
+                        "squares' sides from their faces reads 3 degrees or less)")
+                     + ", and needs --max-hinge-gap 0.5 beyond about 5 degrees")
     print("\n".join(lines))
     return 0
 
