@@ -5,12 +5,18 @@ bright background or bright on dark: the side of the grey-level histogram the fa
 the background level and the cube/background contrast (on at most 16 of them), the background image (its
 illumination and static structures, :mod:`tracking.background`), whether the silhouettes have holes (transparent
 crystals: filled), then a first measurement of those frames for the dimer's silhouette area and the edge blur,
-which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check.
+which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check; and the hinge line's tilt out of the
+camera axis from the hinge gap (:mod:`tracking.tilt`); when the gap over the squares' sides from their faces
+(:func:`tracking.tilt.tilt_from_faces`) reads more than ``TILT_CORRECTION_DEG``, the tilt is refined from the
+cubes' centres and the silhouette's area with the projection undone (:func:`tracking.tilt.tilt_from_centres`, on
+the calibration frames whose eight faces were fitted; twice), its error from the estimate's spread and its floor
+(at least the difference from the faces' reading), and what that error does to theta (the calibration frames
+measured again at the tilt plus its error).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,7 +24,7 @@ from numpy.typing import NDArray
 from .background import Background, estimate_background
 from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_frames, reciprocal_background
 from .recording import TrackingError
-from .tilt import tilt_from_gap
+from .tilt import MAX_TILT_DEG, TILT_CORRECTION_DEG, TILT_FLOOR_DEG, tilt_from_centres, tilt_from_faces, tilt_from_gap
 
 __all__ = ["Calibration", "calibrate"]
 
@@ -30,7 +36,10 @@ class Calibration:
     """What the calibration frames gave (grey levels in the recording's units, lengths in pixels).
 
     ``dark_offset`` grey levels are added to every pixel before the light is normalised (a background near
-    black); ``pinv`` is the reciprocal background image the kernel reads (0 on static structures)."""
+    black); ``pinv`` is the reciprocal background image the kernel reads (0 on static structures);
+    ``hinge_tilt_deg`` the tilt the hinge gap gives; ``tilt`` the tilt the measurement undoes (None: none), a dict
+    with ``tilt_deg``, ``error_deg``, ``theta_bias`` (RMS change of theta over the calibration frames when the tilt
+    is off by its error), ``from_hinge_gap_deg`` and ``frames``."""
 
     polarity: str
     polarity_from: str
@@ -47,12 +56,13 @@ class Calibration:
     scene: Background | None = None
     pinv: NDArray | None = field(default=None, repr=False)
     hinge_tilt_deg: float | None = None
+    tilt: dict | None = None
 
     def settings(self, config) -> MeasureSettings:
         return MeasureSettings(-1.0 if self.polarity == "dark" else 1.0, self.background + self.dark_offset,
                                self.contrast, self.edge_window_px, self.edge_blur_px, max(9.0, 0.01 * self.area_px2),
                                self.area_px2, config.area_tolerance, self.slope_u, self.slope_v, self.fill_holes,
-                               self.dark_offset)
+                               self.dark_offset, math.radians(self.tilt["tilt_deg"]) if self.tilt else 0.0)
 
 
 def _grey_levels(stats: NDArray, config) -> tuple[str, str, float, float]:
@@ -147,5 +157,65 @@ def calibrate(frames: NDArray, config) -> Calibration:
     tilt = tilt_from_gap(float(np.median(gap[np.isfinite(gap)]))) if np.isfinite(gap).any() else None
     if config.edge_window is None:
         window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
-    return Calibration(polarity, polarity_from, background, contrast, su, sv, blur, window, area, int(ok.sum()),
-                       dark, fill, scene, pinv, tilt)
+    cal = Calibration(polarity, polarity_from, background, contrast, su, sv, blur, window, area, int(ok.sum()),
+                      dark, fill, scene, pinv, tilt)
+    faces = _faces_tilt(rows[ok])
+    if tilt is not None and faces is not None and TILT_CORRECTION_DEG < faces and tilt <= MAX_TILT_DEG:
+        cal = replace(cal, tilt=_refine_tilt(sample, cal.settings(config), pinv, tilt, faces))
+    return cal
+
+
+def _faces_tilt(rows: NDArray) -> float | None:
+    """The tilt [degrees] from the fitted squares' hinge corners placed with their sides from the faces (not from
+    the area), :func:`tracking.tilt.tilt_from_faces` of the median gap over side; None without a fitted frame."""
+    corners = []
+    for u, v, g, side in (("u_a", "v_a", "gamma_a", "side_a"), ("u_b", "v_b", "gamma_b", "side_b")):
+        g = rows[:, _C[g]]
+        normals = g[:, None] - 0.5 * np.pi + 0.5 * np.pi * np.arange(4)[None, :]
+        cx = np.cos(normals) + np.cos(normals + 0.5 * np.pi)
+        cz = np.sin(normals) + np.sin(normals + 0.5 * np.pi)
+        k = np.argmax(cx, axis=1) if u == "u_a" else np.argmin(cx, axis=1)  # the hinge corner: A's right, B's left
+        i = np.arange(len(g))
+        half = 0.5 * rows[:, _C[side]]
+        corners.append((rows[:, _C[u]] + half * cx[i, k], -rows[:, _C[v]] + half * cz[i, k], rows[:, _C[side]]))
+    (xa, za, sa), (xb, zb, sb) = corners
+    ratio = np.hypot(xa - xb, za - zb) / (0.5 * (sa + sb))
+    ratio = ratio[np.isfinite(ratio)]
+    return tilt_from_faces(float(np.median(ratio))) if ratio.size else None
+
+
+def _centres_tilt(rows: NDArray) -> tuple[NDArray, int]:
+    """Each calibration frame's tilt [rad] from its cubes' centres and area (those with all eight faces fitted)."""
+    use = (rows[:, 0] == 0) & (rows[:, _C["n_faces"]] == 8)
+    r = rows[use]
+    t = tilt_from_centres(r[:, _C["u_b"]] - r[:, _C["u_a"]], r[:, _C["v_b"]] - r[:, _C["v_a"]], r[:, _C["theta"]],
+                          r[:, _C["tilt"]], r[:, _C["area"]])
+    t = t[np.isfinite(t)]
+    return t, int(t.size)
+
+
+def _refine_tilt(sample: NDArray, settings: MeasureSettings, pinv: NDArray, gap_deg: float, faces_deg: float) -> dict:
+    """The tilt the measurement undoes (module docstring): from the hinge gap's estimate, twice the median of the
+    centres' estimates measured with the previous one undone; its error, the standard error of that median (1.25
+    x the robust spread over the root of the frames) and :data:`tracking.tilt.TILT_FLOOR_DEG` in quadrature, and
+    at least the difference from the faces' estimate (the area the centres' estimate uses reads large when the
+    background's coverage is offset); and the RMS change of theta over the calibration frames with the tilt off by
+    that error."""
+    tau = math.radians(gap_deg)
+    t, used = np.zeros(0), 0
+    for _ in range(2):
+        t_new, used_new = _centres_tilt(measure_frames(sample, replace(settings, hinge_tilt=tau), pinv=pinv))
+        if used_new < 5:
+            break
+        t, used = t_new, used_new
+        tau = float(np.median(t))
+    spread = 1.4826 * float(np.median(np.abs(t - tau))) if used else math.radians(gap_deg)
+    err = max(math.hypot(1.25 * spread / math.sqrt(max(used, 1)), math.radians(TILT_FLOOR_DEG)),
+              abs(tau - math.radians(faces_deg)))
+    rows = measure_frames(sample, replace(settings, hinge_tilt=tau), pinv=pinv)
+    off = measure_frames(sample, replace(settings, hinge_tilt=tau + err), pinv=pinv)
+    both = (rows[:, 0] == 0) & (off[:, 0] == 0)
+    d_theta = off[both, _C["theta"]] - rows[both, _C["theta"]]
+    return {"tilt_deg": math.degrees(tau), "error_deg": math.degrees(err),
+            "theta_bias": float(np.sqrt(np.mean(d_theta ** 2))) if both.any() else 0.0,
+            "from_hinge_gap_deg": float(gap_deg), "from_faces_deg": float(faces_deg), "frames": used}

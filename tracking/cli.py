@@ -219,11 +219,16 @@ def inspect(a: argparse.Namespace) -> int:
     if cal.hinge_tilt_deg is not None and cal.hinge_tilt_deg > 3.0:
         from .tilt import area_factor
 
-        true_side = side_px / np.sqrt(area_factor(np.radians(cal.hinge_tilt_deg)))
-        lines.append(f"hinge line: tilted about {cal.hinge_tilt_deg:.1f} degrees out of the camera axis (the squares' "
-                     f"hinge corners lie apart); the side corrected for it is {true_side:.1f} px"
-                     + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size else "")
-                     + "; track needs --max-hinge-gap 0.5 beyond about 5 degrees")
+        tilt = cal.tilt["tilt_deg"] if cal.tilt else cal.hinge_tilt_deg
+        how = (f"from the cubes' centres and the area, +- {cal.tilt['error_deg']:.1f}" if cal.tilt else
+               "from the squares' hinge corners, which lie apart")
+        true_side = side_px / np.sqrt(area_factor(np.radians(tilt)))
+        lines.append(f"hinge line: tilted about {tilt:.1f} degrees out of the camera axis ({how}); the side corrected "
+                     f"for it is {true_side:.1f} px" + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size
+                                                         else "")
+                     + ("; track undoes the tilt" if cal.tilt else "; track leaves it as it is (the hinge gap over the "
+                        "squares' sides from their faces reads 3 degrees or less)")
+                     + ", and needs --max-hinge-gap 0.5 beyond about 5 degrees")
     print("\n".join(lines))
     return 0
 

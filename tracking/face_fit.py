@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["fit_square", "wrap_angle"]
+__all__ = ["fit_square", "fit_tilted_square", "wrap_angle"]
 
 
 @njit(cache=True)
@@ -173,15 +173,31 @@ def _centre_and_side(res, g, X0, Z0):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
+def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res, tilt_cos=1.0, sweep=0.0,
+               a_true=0.0):  # pragma: no cover - compiled
     """Edge fits of the four faces of one square (module docstring, step 5).
 
-    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 24):
+    ``side`` is -1 for cube A (left of ``u_split``) and +1 for cube B.  Writes into ``res`` (length 25):
     0 gamma, 1 u centre, 2 v centre, 3 pooled rms residual [px], 4 weight sum (information of gamma per
     unit residual variance), 5 number of faces fitted, 6 max edge width [px], 7 half side estimate [px],
     8..11 fitted face directions [rad] (NaN if not fitted), 12..15 face offsets rho along their normals,
-    16..19 face edge widths, 20..23 variances of the face directions [rad^2] (from each face's own residual).
+    16..19 face edge widths, 20..23 variances of the face directions [rad^2] (from each face's own residual),
+    24 the direction of the faces as the image shows them (gamma without a tilt).
+
+    With ``sweep > 0`` the hinge line is tilted out of the camera axis (:func:`fit_tilted_square`): ``gamma``
+    and the face directions are then the cube's own, ``tilt_cos`` and ``sweep`` describe the projection and
+    ``a_true`` is the cube's half side [px].
     """
+    if sweep > 0.0:
+        fit_tilted_square(c, uc, vc, gamma, a_true, W, blur, u_split, side, h, w, res, tilt_cos, sweep)
+        return
+    _fit_aligned_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res)
+    res[24] = res[0]
+
+
+@njit(cache=True)
+def _fit_aligned_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragma: no cover - compiled
+    """:func:`fit_square` of a square seen along the hinge line."""
     clear = 3.0 * blur + 1.0
     X0 = uc
     Z0 = -vc
@@ -245,3 +261,138 @@ def fit_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):  # pragm
     res[3] = math.sqrt(ss_res / n_res) if n_res > 0 else np.nan
     res[4] = sw
     _centre_and_side(res, g, X0, Z0)
+
+
+@njit(cache=True)
+def _image_normal(nu, tilt_cos):  # pragma: no cover - compiled
+    """The image's unit normal (nx, nz) of a cube face whose own normal points at angle ``nu``, the image
+    shortened across by ``tilt_cos``: normals transform with the inverse of the shortening."""
+    nx = math.cos(nu) / tilt_cos
+    nz = math.sin(nu)
+    r = math.sqrt(nx * nx + nz * nz)
+    return nx / r, nz / r
+
+
+@njit(cache=True)
+def fit_tilted_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res, tilt_cos, sweep):  # pragma: no cover
+    """:func:`fit_square` of a cube whose hinge line is turned out of the camera axis (:mod:`tracking.tilt`).
+
+    The image shows the cube's square (half side ``a``, faces along ``gamma``, centre ``(uc, vc)``) shortened
+    across by ``tilt_cos`` and swept along the rows by +-``sweep`` px: a hexagon whose four slanted edges are the
+    shortened square's faces, each moved by ``sweep`` away from the centre along the rows.  A face of normal
+    ``n`` (unit, the image's) then lies at ``a q + sweep |n_x|`` from the centre, ``q = sqrt(c^2 n_x^2 + n_z^2)``,
+    with its middle at ``a (c^2 n_x, n_z) / q + (sweep sign(n_x), 0)`` and half length ``a c / q``; it is sampled
+    there, clear of the other cube's sweep at the hinge.  Each fitted face's image direction ``d`` is the cube's
+    ``atan2(sin d, cos d / c)``, its variance scaled with the derivative; the centre (the hexagon's, in the
+    image) solves the two pairs of opposite faces' offsets along their image normals, and ``res[7]`` is the
+    cube's half side.  ``res[24]`` is the faces' mean direction in the image (for the hinge corners' gap)."""
+    clear = 3.0 * blur + 1.0 + sweep
+    X0 = uc
+    Z0 = -vc
+    tc = tilt_cos
+    sw = 0.0
+    swr = 0.0
+    swi = 0.0
+    swri = 0.0
+    ss_res = 0.0
+    n_res = 0
+    nf = 0
+    wmax = 0.0
+    for k in range(4):
+        res[8 + k] = np.nan
+        res[12 + k] = np.nan
+        res[16 + k] = np.nan
+        res[20 + k] = np.nan
+    xs = np.empty(_MAX_SAMPLES)
+    ys = np.empty(_MAX_SAMPLES)
+    g_img = math.atan2(math.sin(gamma), tc * math.cos(gamma))
+    for k in range(4):
+        nx, nz = _image_normal(gamma - 0.5 * math.pi + 0.5 * math.pi * k, tc)
+        q = math.sqrt(tc * tc * nx * nx + nz * nz)
+        rho = nx * X0 + nz * Z0 + a * q + sweep * abs(nx)
+        half = a * tc / q
+        cols = abs(nz) >= abs(nx)
+        if cols:
+            mid = X0 + a * tc * tc * nx / q + math.copysign(sweep, nx)
+            cnt, wsum = _column_samples(c, mid, rho, nx, nz, half, W, blur, u_split, side, h, w, clear, xs, ys)
+        else:
+            mid = Z0 + a * nz / q
+            cnt, wsum = _row_samples(c, mid, rho, nx, nz, half, W, blur, u_split, side, h, w, clear, xs, ys)
+        if cnt < 5:
+            continue
+        sm, rm, sss, beta, rr = _line_fit(xs, ys, cnt)
+        if sss <= 0:
+            continue
+        norm = 1.0 / (1.0 + beta * beta)
+        ss_res += rr * norm
+        n_res += cnt - 2
+        if cols:
+            delta = math.atan(beta)
+            mx = sm
+            mzp = rm
+        else:
+            delta = math.atan2(1.0, beta)
+            mx = rm
+            mzp = sm
+        width = math.sqrt(math.pi) * wsum / cnt
+        if width > wmax:
+            wmax = width
+        cd = math.cos(delta)
+        sd = math.sin(delta)
+        jac = (1.0 / tc) / (cd * cd / (tc * tc) + sd * sd)  # d(cube's direction) / d(image direction)
+        var = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
+        res[8 + k] = math.atan2(sd, cd / tc)
+        res[12 + k] = nx * mx + nz * mzp
+        res[16 + k] = width
+        res[20 + k] = var * jac * jac
+        wk = sss * (1.0 + beta * beta)
+        swi += wk
+        swri += wk * wrap_angle(delta - g_img, 0.5 * math.pi)
+        sw += wk / (jac * jac)
+        swr += wk / (jac * jac) * wrap_angle(res[8 + k] - gamma, 0.5 * math.pi)
+        nf += 1
+    res[5] = nf
+    res[6] = wmax
+    if nf < 2 or sw <= 0:
+        res[0] = np.nan
+        return
+    g = gamma + swr / sw
+    res[0] = g
+    res[24] = g_img + swri / swi
+    res[3] = math.sqrt(ss_res / n_res) if n_res > 0 else np.nan
+    res[4] = sw
+    _tilted_centre_and_side(res, g, X0, Z0, tc, sweep, a)
+
+
+@njit(cache=True)
+def _tilted_centre_and_side(res, g, X0, Z0, tc, sweep, a):  # pragma: no cover - compiled
+    """The hexagon's centre (``res[1]``, ``res[2]``) from the offsets of opposite faces along their image normals
+    (``res[12..15]``; not perpendicular under a tilt: a 2 x 2 system) and the cube's half side (``res[7]``).  A pair
+    of which one face was fitted takes that face's offset less its distance from the centre, ``a q + sweep |n_x|``
+    (near the hinge the other cube's sweep may hide the face beside it); a pair with neither keeps the starting
+    point's."""
+    n0x, n0z = _image_normal(g - 0.5 * math.pi, tc)
+    n1x, n1z = _image_normal(g, tc)
+    comp = np.array([n0x * X0 + n0z * Z0, n1x * X0 + n1z * Z0])
+    a_sum = 0.0
+    a_n = 0
+    for p, nx, nz in ((0, n0x, n0z), (1, n1x, n1z)):
+        near, far = res[12 + p], res[14 + p]
+        if not math.isnan(near) and not math.isnan(far):
+            comp[p] = 0.5 * (near - far)
+            a_sum += (0.5 * (near + far) - sweep * abs(nx)) / math.sqrt(tc * tc * nx * nx + nz * nz)
+            a_n += 1
+    a_fit = a_sum / a_n if a_n > 0 else a  # the half side of a pair both fitted, else the silhouette's
+    for p, nx, nz in ((0, n0x, n0z), (1, n1x, n1z)):
+        near, far = res[12 + p], res[14 + p]
+        d = a_fit * math.sqrt(tc * tc * nx * nx + nz * nz) + sweep * abs(nx)
+        if math.isnan(far) and not math.isnan(near):
+            comp[p] = near - d
+        elif math.isnan(near) and not math.isnan(far):
+            comp[p] = d - far
+    det = n0x * n1z - n0z * n1x
+    Xc = (comp[0] * n1z - comp[1] * n0z) / det
+    Zc = (n0x * comp[1] - n1x * comp[0]) / det
+    res[1] = Xc
+    res[2] = -Zc
+    res[7] = a_sum / a_n if a_n > 0 else np.nan

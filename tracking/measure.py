@@ -147,6 +147,9 @@ class MeasureSettings:
     dark_offset : float
         Grey levels added to every pixel before the light is normalised (``background_ref`` includes it): a
         background near black (bright cubes on a black background) is then normalised nearly additively.
+    hinge_tilt : float
+        Angle [rad] of the hinge line out of the camera axis that the face fits undo (:mod:`tracking.tilt`); 0:
+        the camera looks along the hinge line.
     """
 
     polarity: float
@@ -161,6 +164,7 @@ class MeasureSettings:
     slope_v: float = 0.0
     fill_holes: bool = False
     dark_offset: float = 0.0
+    hinge_tilt: float = 0.0
 
     def __post_init__(self) -> None:
         if self.polarity not in (-1.0, 1.0):
@@ -169,12 +173,19 @@ class MeasureSettings:
             raise ValueError(f"contrast must be positive, got {self.contrast!r}")
         if int(self.edge_window) != self.edge_window or self.edge_window < 2:
             raise ValueError(f"edge window must be a whole number >= 2, got {self.edge_window!r}")
+        if not (math.isfinite(self.hinge_tilt) and 0.0 <= self.hinge_tilt < 0.5 * math.pi):
+            raise ValueError(f"hinge tilt must lie in [0, pi/2) rad, got {self.hinge_tilt!r}")
 
     def pack(self) -> NDArray[np.float64]:
-        """The settings in the order the kernel reads them."""
+        """The settings in the order the kernel reads them (the hinge tilt as its cosine, sine and the silhouette's
+        side over the cube's, :func:`tracking.tilt.area_factor`)."""
+        from .tilt import area_factor
+
+        tau = self.hinge_tilt
         return np.array([self.polarity, self.background_ref, self.contrast, self.edge_window, self.edge_blur,
                          self.min_area, self.area_ref, self.area_tolerance, self.slope_u, self.slope_v,
-                         float(self.fill_holes), self.dark_offset], float)
+                         float(self.fill_holes), self.dark_offset, math.cos(tau), math.sin(tau),
+                         math.sqrt(area_factor(tau))], float)
 
     def plane(self, shape: tuple[int, int]) -> NDArray[np.float32]:
         """The reciprocal background image of the plane ``background_ref + slope_u (u - uc) + slope_v (v - vc)``
@@ -270,7 +281,8 @@ def _hinge_corner(g, left):  # pragma: no cover - compiled
 @njit(cache=True)
 def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - compiled
     """alpha_free, beta_free from the faces that meet at each hinge corner, fitted alone, and the distance
-    between the two squares' hinge corners (written into ``row``)."""
+    between the two squares' hinge corners (written into ``row``), the squares as the image shows them (faces along
+    ``res[24]``: the cubes' own directions unless the hinge line is tilted)."""
     free_ok = True
     var = 0.0
     dirs = np.zeros(4)  # A upper, A lower, B upper, B lower: directions pointing away from the hinge
@@ -282,8 +294,10 @@ def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - co
         k2 = (k1 + 1) % 4
         nu1 = g - 0.5 * math.pi + 0.5 * math.pi * k1
         nu2 = nu1 + 0.5 * math.pi
-        hx[sq] = cen[sq, 0] + a_half * (math.cos(nu1) + math.cos(nu2))
-        hz[sq] = -cen[sq, 1] + a_half * (math.sin(nu1) + math.sin(nu2))
+        gi = resA[24] if sq == 0 else resB[24]
+        ni = gi - 0.5 * math.pi + 0.5 * math.pi * _hinge_corner(gi, sq == 0)
+        hx[sq] = cen[sq, 0] + a_half * (math.cos(ni) + math.cos(ni + 0.5 * math.pi))
+        hz[sq] = -cen[sq, 1] + a_half * (math.sin(ni) + math.sin(ni + 0.5 * math.pi))
         if math.sin(nu1) >= math.sin(nu2):
             ku = k1
             kl = k2
@@ -421,12 +435,16 @@ def _first_orientations(c, mom, ua, ub, vo, u_split, v0, v1, vcom, d, cen, gam):
 
 
 @njit(cache=True)
-def _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB):  # pragma: no cover - compiled
+def _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB, prm):  # pragma: no cover - compiled
     """Step 5: the two squares' edge fits, two passes, each from the previous pass's centres and directions
-    (updated in ``cen``, ``gam``).  Returns False when a square has too few edge samples."""
+    (updated in ``cen``, ``gam``), undoing a tilted hinge line's projection when the settings give one (the cube's
+    half side from the silhouette's, its sweep ``a sin(tilt)``).  Returns False when a square has too few edge
+    samples."""
+    a_true = a_half / prm[14]
+    sweep = a_true * prm[13]
     for it in range(2):
-        fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA)
-        fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB)
+        fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA, prm[12], sweep, a_true)
+        fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB, prm[12], sweep, a_true)
         if math.isnan(resA[0]) or math.isnan(resB[0]):
             return False
         gam[0] = resA[0]
@@ -529,9 +547,9 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
     phiA, phiB = _first_orientations(c, mom, ua, ub, vo, u_split, v0, v1, row[_I_V_COM], a_half * math.sqrt(2.0),
                                      cen, gam)
     # ---- 5. edge fits, two passes
-    resA = np.empty(24)
-    resB = np.empty(24)
-    if not _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB):
+    resA = np.empty(25)
+    resB = np.empty(25)
+    if not _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB, prm):
         row[0] = 6
         return
     alpha, beta = _angles(phiA, phiB, gam, cen, a_half, resA, resB, row)

@@ -8,7 +8,9 @@
    cube/background contrast, then a first measurement of those frames for the dimer's silhouette area
    and the edge blur, which set the edge window ``W = ceil(3.5 blur + 2)`` px and the area check.
 2. **Measurement** of every frame (:func:`tracking.measure.measure_frames`, batches of
-   ``TrackConfig.batch`` frames).
+   ``TrackConfig.batch`` frames), undoing a hinge line's tilt out of the camera axis when the calibration found
+   one above :data:`tracking.tilt.TILT_CORRECTION_DEG` (the centre of mass then moved back by the two
+   silhouettes' overlap at the hinge, :func:`tracking.tilt.overlap_shift`).
 3. **The recording's bounds.**  Measured frames whose edges are wider than the recording's median by more
    than the motion blur of ``max_motion_blur`` px (``width^2 - median^2 > L^2 / 12``), whose edge residual
    exceeds ``max_edge_rms_factor`` x its median (+ 0.05 px), whose hinge corners are not square within
@@ -36,7 +38,7 @@ from .measure import COLUMNS, STATUS, STATUS_NAMES, STATUS_TEXT, measure_frames
 from .noise_estimate import noise_estimate
 from .origin import find_origin
 from .recording import Recording, TrackingError
-from .tilt import MAX_TILT_DEG, area_factor, tilt_from_gap
+from .tilt import MAX_TILT_DEG, area_factor, overlap_shift, tilt_from_gap
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
 
@@ -151,7 +153,8 @@ class TrackResult:
     status : ndarray (n,) int
         :data:`tracking.measure.STATUS` code per frame.
     rows : ndarray (n, len(COLUMNS))
-        The kernel's measurement of every frame (pixel units).
+        The kernel's measurement of every frame (pixel units); with a tilted hinge line undone, ``v_com`` is the
+        cubes' centre, moved back by the silhouettes' overlap at the hinge.
     info : dict
         The RUN.json document (:func:`tracking.output.run_json`'s content).
     example : ndarray (height, width)
@@ -242,13 +245,16 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     except TrackingError as exc:
         raise TrackingError(f"{rec.path}: {exc}") from None
     settings = cal.settings(config)
+    tau = settings.hinge_tilt
     rows = np.empty((n, len(COLUMNS)))
     for f0 in range(0, n, config.batch):
         rows[f0:f0 + config.batch] = measure_frames(frames[f0:f0 + config.batch], settings, pinv=cal.pinv)
     status = rows[:, 0].astype(np.int64)
+    if tau:
+        _correct_centre_of_mass(rows, status, tau, cal)
     refs = _flag(status, rows, config)
     ok = status == 0
-    tilt_deg = _hinge_line_tilt(rec, rows, status, config)
+    tilt_deg = _hinge_line_tilt(rec, rows, status, config, cal)
     origin = _origin(rec, rows, status, config)
     sign = 1.0 if config.up == "top" else -1.0
     y0 = config.roi[2] if config.roi else 0
@@ -256,9 +262,11 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     theta = np.where(ok, sign * rows[:, _C["theta"]], np.nan)
     t = np.arange(n) / float(fps)
     noise_y, noise_theta = _noise(rows, ok, y, theta, pixel)
+    correction = _tilt_correction(cal, rows, ok, pixel, noise_y, noise_theta) if tau else None
     ex = _example_frame(ok, theta)
     info = _run_info(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
                      theta)
+    info["tilt_correction"] = correction
     logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
                 ", ".join(f"{k} {v}" for k, v in info["not_measured"].items()) or "all", noise_y["value"],
                 noise_theta["value"])
@@ -295,29 +303,69 @@ def _frames_in_region(rec: Recording, config: TrackConfig) -> np.ndarray:
     return frames
 
 
-def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackConfig) -> float | None:
-    """The hinge line's tilt out of the camera axis [degrees] from the fitted squares' hinge gap (None when no frame
-    was fitted); a warning above :data:`TILT_WARNING_DEG`, a refusal above :data:`MAX_TILT_DEG` or when no frame
-    could be measured (naming the counts per reason, and the tilt with the option that measures it)."""
+def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackConfig,
+                     cal: Calibration) -> float | None:
+    """The hinge line's tilt out of the camera axis [degrees]: the one undone (the calibration's, from the cubes'
+    centres), else from the fitted squares' hinge gap (None when no frame was fitted); a warning above
+    :data:`TILT_WARNING_DEG`, a refusal above :data:`MAX_TILT_DEG` or when no frame could be measured (naming the
+    counts per reason, and the tilt with the option that measures it)."""
     ok = status == 0
     fitted = (ok | (status == STATUS["poor_fit"])) & np.isfinite(rows[:, _C["hinge_gap"]])
     tilt_deg = tilt_from_gap(float(np.median(rows[fitted, _C["hinge_gap"]] / (2.0 * rows[fitted, _C["half_side"]])))) \
         if fitted.any() else None
+    if cal.tilt is not None and tilt_deg is not None:
+        tilt_deg = cal.tilt["tilt_deg"]
     if tilt_deg is not None and tilt_deg > MAX_TILT_DEG:
         raise TrackingError(f"{rec.path}: the hinge line is tilted about {tilt_deg:.0f} degrees out of the camera axis "
                             f"(the fitted squares' hinge corners lie apart), beyond the {MAX_TILT_DEG:.0f} degrees that "
                             "can be measured; align the camera along the hinge line")
     if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG:
-        logger.warning("%s: the hinge line is tilted about %.1f degrees out of the camera axis: y and theta are measured "
-                       "on the skewed silhouettes, not corrected (docs/tracking.md); frames whose hinge corners lie "
-                       "more than --max-hinge-gap %g of the side apart are not measured", rec.name, tilt_deg,
-                       config.max_hinge_gap)
+        logger.warning("%s: the hinge line is tilted about %.1f degrees out of the camera axis: y and theta are "
+                       "corrected for it, the bias the tilt's error leaves is in the noise estimates (RUN.json "
+                       "tilt_correction, docs/tracking.md); frames whose hinge corners lie more than --max-hinge-gap %g "
+                       "of the side apart are not measured", rec.name, tilt_deg, config.max_hinge_gap)
     if not ok.any():
         why = ", ".join(f"{k} in {v}" for k, v in _status_counts(status).items())
         tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
                   "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
         raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
     return tilt_deg
+
+
+def _correct_centre_of_mass(rows: np.ndarray, status: np.ndarray, tau: float, cal: Calibration) -> None:
+    """The centre of mass of the measured frames moved back to the cubes' centres (``v_com`` in place): under a
+    tilt the two cubes' silhouettes overlap at the hinge (:func:`tracking.tilt.overlap_shift`)."""
+    ok = status == 0
+    side = math.sqrt(cal.area_px2 / 2.0 / area_factor(tau))
+    rows[ok, _C["v_com"]] += overlap_shift(rows[ok, _C["theta"]], rows[ok, _C["tilt"]], tau, side, rows[ok, _C["area"]])
+
+
+def _tilt_correction(cal: Calibration, rows: np.ndarray, ok: np.ndarray, pixel: float, noise_y: dict,
+                     noise_theta: dict) -> dict:
+    """RUN.json's ``tilt_correction``: the tilt undone and its error, and the bias that error leaves in y (the
+    centre-of-mass correction at the tilt plus its error against at the tilt, RMS over the measured frames) and
+    theta (the calibration's), added in quadrature to the noise estimates (``value`` of each, in place)."""
+    t = cal.tilt
+    tau, err = math.radians(t["tilt_deg"]), math.radians(t["error_deg"])
+    side = math.sqrt(cal.area_px2 / 2.0 / area_factor(tau))
+    args = (rows[ok, _C["theta"]], rows[ok, _C["tilt"]])
+    shift = overlap_shift(*args, tau + err, side, rows[ok, _C["area"]]) - overlap_shift(*args, tau, side,
+                                                                                       rows[ok, _C["area"]])
+    bias_y = float(np.sqrt(np.mean(shift ** 2))) * pixel if ok.any() else 0.0
+    bias_theta = t["theta_bias"]
+    for noise, bias in ((noise_y, bias_y), (noise_theta, bias_theta)):
+        noise["without_tilt_bias"] = noise["value"]
+        noise["tilt_bias"] = bias
+        noise["value"] = math.hypot(noise["value"], bias)
+    return {"applied": True, "tilt_deg": t["tilt_deg"], "error_deg": t["error_deg"],
+            "from_hinge_gap_deg": t["from_hinge_gap_deg"], "from_faces_deg": t["from_faces_deg"],
+            "frames": t["frames"], "bias_y_m": bias_y,
+            "bias_theta": bias_theta,
+            "method": "the face fits undo the projection of a hinge line turned by tilt_deg about the vertical (each "
+                      "cube's square shortened across by cos(tilt), swept along the rows by side sin(tilt)); the "
+                      "centre of mass is moved back by the two silhouettes' overlap at the hinge; the tilt from the "
+                      "cubes' centres and the silhouette's area on the calibration frames; the bias its error leaves "
+                      "is in noise_estimate (docs/tracking.md)"}
 
 
 def _origin(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackConfig) -> dict:

@@ -18,8 +18,10 @@ Every imperfection is off by default, and the camera then renders exactly as wit
 * **Tilt.**  The hinge line turned by ``tilt_deg`` about the vertical out of the camera axis: each cube's
   square cross-section is seen shortened by ``cos(tilt)`` across and swept along its depth ``s`` by
   ``s sin(tilt)``, a skewed hexagon.  y and theta (the bend about the hinge line) are unchanged; the
-  silhouettes of the two cubes overlap near the hinge.  Rendered row by row with 4 sub-rows per pixel row
-  (exact along the rows) and the Gaussian point-spread function applied as a filter.
+  silhouettes of the two cubes overlap near the hinge.  Rendered row by row with 16 sub-rows per pixel row
+  (exact along the rows; the hexagons' horizontal edges, ``s sin(tilt)`` long, are placed to 1/16 px, which moves
+  the silhouette's centre of mass by about 0.003 px RMS at 10 degrees, against 0.01 px with 4 sub-rows) and the
+  Gaussian point-spread function applied as a filter.
 * **H.264.**  :func:`encode_h264` writes an mp4 the way a high-speed camera's software or a phone exports it
   (libx264, 4:2:0, constant rate factor ``crf``), through ``imageio-ffmpeg``; :func:`h264_roundtrip` gives the
   frames a reader decodes from it.
@@ -178,7 +180,7 @@ def dust_tracks(n: int, width: int, height: int, imp: Imperfections, rng: np.ran
 
 
 def tilted_coverage(centres: NDArray, angles: NDArray, half_side: float, hinge_u: float, tilt_rad: float,
-                    shape: tuple[int, int], sigma: float, subrows: int = 4) -> NDArray[np.float32]:
+                    shape: tuple[int, int], sigma: float, subrows: int = 16) -> NDArray[np.float32]:
     """Coverage of a dimer whose hinge line is turned by ``tilt_rad`` out of the camera axis (module
     docstring): each square of ``centres`` / ``angles`` / ``half_side`` (as :func:`acousim.twin.video.dimer_squares`
     gives them) shortened across by cos(tilt) about ``hinge_u`` and swept along the rows by +-side sin(tilt) / 2;
