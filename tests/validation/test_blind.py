@@ -84,4 +84,17 @@ def test_a_twin_case_with_too_few_unfolded_runs_is_not_scored(tmp_path, write_cs
     reason = _too_many_folded(tmp_path, 10)
     assert (reason is None) == scored
     if not scored:
-        assert "folded in 4 of 10 runs" in reason and "7 unfolded runs" in reason
+        assert "in 4 of 10 runs" in reason and "7 unfolded runs" in reason
+
+
+def test_a_twin_case_whose_runs_all_stopped_at_the_fold_is_not_scored(tmp_path, write_csv):
+    """The inviscid twin stops a run at the fold: runs too short to load leave no usable run, which is a case not
+    generated (the reason), not an error that stops the study."""
+    import numpy as np
+
+    from validation.blind.candidates import _too_many_folded
+
+    t = np.arange(150) / 1000.0  # 0.15 s: fewer than 5 periods at 22 Hz
+    for i in range(10):
+        write_csv(tmp_path / f"run{i + 1:02d}.csv", t, 1e-4 * np.cos(2 * np.pi * 22 * t), np.linspace(0.1, 0.99, t.size))
+    assert "in 10 of 10 runs" in _too_many_folded(tmp_path, 10)

@@ -108,20 +108,24 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
 
 def _too_many_folded(data: Path, runs: int) -> str | None:
     """Why the twin data set in ``data`` cannot be scored: fewer runs than an effect needs at the diagnosis's alpha
-    (:func:`validation.diagnosis.statistics.runs_needed`) remain once those that ended folded are left out; None if
-    enough remain."""
+    (:func:`validation.diagnosis.statistics.runs_needed`) are usable once those that ended folded are left out (a
+    run the twin stopped at the fold may also be too short to load); None if enough are."""
     from cubedimer.dataset import load_dataset
+    from cubedimer.errors import DatasetError
 
     from ..diagnosis.folded import folded_angle
     from ..diagnosis.pipeline import DiagnoseConfig
     from ..diagnosis.statistics import runs_needed
 
-    folded = sum(folded_angle(run) is not None for run in load_dataset(data).runs)
+    try:
+        usable = sum(folded_angle(run) is None for run in load_dataset(data, report=lambda message: None).runs)
+    except DatasetError:  # no run could be loaded at all (every one stopped at a fold within a few periods)
+        usable = 0
     needed = min(runs, runs_needed(DiagnoseConfig().alpha))
-    if runs - folded >= needed:
+    if usable >= needed:
         return None
-    return (f"the hinge ended folded in {folded} of {runs} runs (theta near +-1), leaving fewer than the {needed} "
-            "unfolded runs an effect needs to be named")
+    return (f"the hinge folded (theta reached or stayed near +-1) in {runs - usable} of {runs} runs, leaving fewer "
+            f"than the {needed} unfolded runs an effect needs to be named")
 
 
 def candidate_truth(effects: dict) -> dict:
