@@ -200,7 +200,7 @@ def check_enough_runs(data_dir, n_runs: int, n_skipped: int, alpha: float) -> No
 
     if n_runs >= MIN_RUNS:
         return
-    skipped = f" ({n_skipped} file(s) skipped)" if n_skipped else ""
+    skipped = f" ({n_skipped} file(s) skipped, each with its reason above)" if n_skipped else ""
     raise DatasetError(
         f"{data_dir}: {n_runs} usable run{'' if n_runs == 1 else 's'}{skipped}; the diagnosis needs at least {MIN_RUNS}, "
         f"because it scores every fit on runs held out of it, and at least {runs_needed(alpha)} to name an effect at "

@@ -52,5 +52,5 @@ def test_a_set_whose_every_hinge_folded_is_refused_in_one_line(tmp_path, write_c
         write_csv(tmp_path / f"run{i + 1:02d}.csv", t, *_levitated(t, rng, np.full(t.size, -0.96)))
     dataset = load_for_diagnosis(tmp_path, progress=False)
     assert not dataset.runs and len(dataset.skipped) == 4
-    with pytest.raises(DatasetError, match=r"0 usable runs \(4 file\(s\) skipped\)"):
+    with pytest.raises(DatasetError, match=r"0 usable runs \(4 file\(s\) skipped, each with its reason above\)"):
         diagnose(dataset, progress=False)
