@@ -24,22 +24,28 @@ import numpy as np
 if TYPE_CHECKING:
     from cubedimer.dataset import Dataset, Run
 
-__all__ = ["FOLDED_THETA", "FOLDED_TAIL_S", "folded_angle", "leave_out_folded_runs"]
+__all__ = ["FOLDED_THETA", "FOLDED_TAIL_S", "TOUCHING_THETA", "folded_angle", "leave_out_folded_runs"]
 
 #: |theta| beyond which the hinge counts as folded (the faces touch at 1; on the default dimer the hinge's restoring
 #: acceleration peaks at 26 1/s^2 at 0.4 and is down to 7.5 1/s^2 at 0.85).
 FOLDED_THETA = 0.9
 #: Length of the run's end [s] whose median |theta| decides whether the run ended folded.
 FOLDED_TAIL_S = 0.1
+#: |theta| of a run's last frames beyond which the faces touch as the run ends (a run stopped at the fold).
+TOUCHING_THETA = 0.95
 
 
 def folded_angle(run: "Run") -> float | None:
-    """The median theta [-] over the last :data:`FOLDED_TAIL_S` seconds of ``run`` when its |theta| exceeds
-    :data:`FOLDED_THETA` (the run ended folded), else None."""
+    """The angle at which ``run`` ended folded, else None: the median theta [-] over its last :data:`FOLDED_TAIL_S`
+    seconds when its |theta| exceeds :data:`FOLDED_THETA` (a hinge that stays closed), or the median of its last 5
+    frames when their |theta| exceeds :data:`TOUCHING_THETA` (a run that ends as the faces touch, as the inviscid
+    twin's runs stop at a fold: the final plunge from the top of the restoring acceleration takes about 0.15 s)."""
     n = max(10, int(round(FOLDED_TAIL_S / run.dt)))
-    tail = run.theta[-n:]
-    median = float(np.median(tail))
-    return median if abs(median) > FOLDED_THETA else None
+    median = float(np.median(run.theta[-n:]))
+    if abs(median) > FOLDED_THETA:
+        return median
+    last = float(np.median(run.theta[-5:]))
+    return last if abs(last) > TOUCHING_THETA else None
 
 
 def leave_out_folded_runs(dataset: "Dataset") -> "Dataset":
@@ -54,9 +60,8 @@ def leave_out_folded_runs(dataset: "Dataset") -> "Dataset":
             kept.append(run)
             continue
         skipped.append(SkippedFile(run.name, (
-            f"the hinge ended folded (theta {angle:+.3f} over the last {FOLDED_TAIL_S:g} s, beyond +-{FOLDED_THETA:g}; "
-            "the faces touch at +-1): the mirror-symmetric model does not describe a closed dimer, so the run is "
-            "left out")))
+            f"the hinge ended folded (theta {angle:+.3f} at the end of the run, beyond +-{FOLDED_THETA:g}; the faces "
+            "touch at +-1): the mirror-symmetric model does not describe a closed dimer, so the run is left out")))
     if len(kept) == len(dataset.runs):
         return dataset
     return replace(dataset, runs=tuple(kept), skipped=tuple(skipped))

@@ -15,13 +15,15 @@ def _levitated(t, rng, theta):
 
 @pytest.fixture
 def mixed_set(tmp_path, write_csv):
-    """Three runs: a hinge swinging +-0.95 about 0, one that closes to -0.98 after 1 s and stays there (the squeeze
-    film's creep), and one resting at +0.88, just inside the bound."""
+    """Four runs: a hinge swinging +-0.95 about 0, one that closes to -0.98 after 1 s and stays there (the squeeze
+    film's creep), one resting at +0.88, just inside the bound, and one that plunges to the fold in its last 0.15 s
+    (the inviscid twin stops a run there)."""
     rng = np.random.default_rng(3)
     t = np.arange(3000) / 1000.0
     angles = {"run01.csv": 0.95 * np.sin(2 * np.pi * 1.7 * t),
               "run02.csv": np.where(t < 1.0, -0.3 + 0.2 * np.sin(2 * np.pi * 1.7 * t), -0.98),
-              "run03.csv": np.full(t.size, 0.88)}
+              "run03.csv": np.full(t.size, 0.88),
+              "run04.csv": np.where(t < 2.85, 0.3, 0.3 + 0.685 * ((t - 2.85) / 0.149) ** 2)}
     for name, theta in angles.items():
         write_csv(tmp_path / name, t, *_levitated(t, rng, theta))
     return tmp_path
@@ -33,10 +35,12 @@ def test_only_the_run_that_ended_folded_is_left_out_with_its_angle(mixed_set):
     assert angles["run01.csv"] is None  # a wide swing through 0 is not a fold: the median is near 0
     assert angles["run03.csv"] is None  # inside the bound
     np.testing.assert_allclose(angles["run02.csv"], -0.98, atol=0.003)  # the median of 100 frames with 0.005 noise
+    assert angles["run04.csv"] > 0.95  # the last 0.1 s has a median of about 0.6: only its last frames tell
     kept = leave_out_folded_runs(dataset)
     assert [r.name for r in kept.runs] == ["run01.csv", "run03.csv"]
-    [skipped] = kept.skipped_files()
-    assert skipped["file"] == "run02.csv" and "-0.98" in skipped["reason"] and f"{FOLDED_THETA:g}" in skipped["reason"]
+    skipped = kept.skipped_files()
+    assert [s["file"] for s in skipped] == ["run02.csv", "run04.csv"]
+    assert "-0.98" in skipped[0]["reason"] and f"{FOLDED_THETA:g}" in skipped[0]["reason"]
     assert leave_out_folded_runs(kept) is kept  # nothing left to leave out: the same object
 
 
