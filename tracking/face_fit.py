@@ -145,6 +145,27 @@ def _line_fit(xs, ys, cnt):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _fitted_edge(xs, ys, cnt, wsum, cols):  # pragma: no cover - compiled
+    """The straight edge through the first ``cnt`` samples of a face (sampled along columns when ``cols``, else
+    along rows; ``wsum`` the sum of their blur weights): (found, direction [rad], mean point (x, z') [px], blur
+    width [px], the residual sum of squares normal to the edge, S_ss (1 + beta^2)); not found when all samples
+    share one coordinate."""
+    sm, rm, sss, beta, rr = _line_fit(xs, ys, cnt)
+    if sss <= 0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if cols:
+        delta = math.atan(beta)
+        mx = sm
+        mzp = rm
+    else:
+        delta = math.atan2(1.0, beta)
+        mx = rm
+        mzp = sm
+    width = math.sqrt(math.pi) * wsum / cnt
+    return True, delta, mx, mzp, width, rr * (1.0 / (1.0 + beta * beta)), sss * (1.0 + beta * beta)
+
+
+@njit(cache=True)
 def _centre_and_side(res, g, X0, Z0):  # pragma: no cover - compiled
     """The square's centre (``res[1]``, ``res[2]``) and half side (``res[7]``) from the offsets of opposite faces
     (``res[12..15]``) along the fitted direction ``g``; a pair of faces not both fitted keeps the centre's
@@ -226,28 +247,17 @@ def _fit_aligned_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res):
             cnt, wsum = _row_samples(c, Z0 + a * nz, rho, nx, nz, a, W, blur, u_split, side, h, w, clear, xs, ys)
         if cnt < 5:
             continue
-        sm, rm, sss, beta, rr = _line_fit(xs, ys, cnt)
-        if sss <= 0:
+        ok, delta, mx, mzp, width, r_normal, wk = _fitted_edge(xs, ys, cnt, wsum, cols)
+        if not ok:
             continue
-        norm = 1.0 / (1.0 + beta * beta)
-        ss_res += rr * norm
+        ss_res += r_normal
         n_res += cnt - 2
-        if cols:
-            delta = math.atan(beta)
-            mx = sm
-            mzp = rm
-        else:
-            delta = math.atan2(1.0, beta)
-            mx = rm
-            mzp = sm
-        width = math.sqrt(math.pi) * wsum / cnt
         if width > wmax:
             wmax = width
         res[8 + k] = delta
         res[12 + k] = nx * mx + nz * mzp
         res[16 + k] = width
-        res[20 + k] = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
-        wk = sss * (1.0 + beta * beta)  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
+        res[20 + k] = r_normal / max(1, cnt - 2) / wk  # var(direction) = normal residual^2 / (Sss (1 + beta^2))
         sw += wk
         swr += wk * wrap_angle(delta - gamma, 0.5 * math.pi)
         nf += 1
@@ -320,32 +330,21 @@ def fit_tilted_square(c, uc, vc, gamma, a, W, blur, u_split, side, h, w, res, ti
             cnt, wsum = _row_samples(c, mid, rho, nx, nz, half, W, blur, u_split, side, h, w, clear, xs, ys)
         if cnt < 5:
             continue
-        sm, rm, sss, beta, rr = _line_fit(xs, ys, cnt)
-        if sss <= 0:
+        ok, delta, mx, mzp, width, r_normal, wk = _fitted_edge(xs, ys, cnt, wsum, cols)
+        if not ok:
             continue
-        norm = 1.0 / (1.0 + beta * beta)
-        ss_res += rr * norm
+        ss_res += r_normal
         n_res += cnt - 2
-        if cols:
-            delta = math.atan(beta)
-            mx = sm
-            mzp = rm
-        else:
-            delta = math.atan2(1.0, beta)
-            mx = rm
-            mzp = sm
-        width = math.sqrt(math.pi) * wsum / cnt
         if width > wmax:
             wmax = width
         cd = math.cos(delta)
         sd = math.sin(delta)
         jac = (1.0 / tc) / (cd * cd / (tc * tc) + sd * sd)  # d(cube's direction) / d(image direction)
-        var = rr * norm / max(1, cnt - 2) / (sss * (1.0 + beta * beta))
+        var = r_normal / max(1, cnt - 2) / wk
         res[8 + k] = math.atan2(sd, cd / tc)
         res[12 + k] = nx * mx + nz * mzp
         res[16 + k] = width
         res[20 + k] = var * jac * jac
-        wk = sss * (1.0 + beta * beta)
         swi += wk
         swri += wk * wrap_angle(delta - g_img, 0.5 * math.pi)
         sw += wk / (jac * jac)
