@@ -23,7 +23,7 @@ import sys
 import numpy as np
 
 from acousim.atlas.field_drops import atlas_dynamics, settled_outcome
-from acousim.atlas.held_y import _BOX, _integrate_held, held_y_acceleration, held_y_arguments, held_y_orbits
+from acousim.atlas.held_y import HINGE_BOX, integrate_held, held_y_acceleration, held_y_arguments, held_y_orbits
 from fitting.model import PolynomialModel
 from fitting.oracle import NoiseLevels, OracleRun, oracle_aliases
 
@@ -45,15 +45,20 @@ def r_squared(target, columns):
     return 1.0 - (resid @ resid) / (target @ target)
 
 
-seen = set()
-for k in range(len(starts)):
-    if status[k]:
-        continue
-    c = settled_outcome(t[-208 * n_per:], states[k, -208 * n_per:])
-    key = (c["outcome"], c["lock_ratio"], round(c["amp_theta"], 2))
-    if not c["outcome"].startswith("locked-") or key in seen:
-        continue
-    seen.add(key)
+def locked_orbits():
+    """(start index, settled outcome) of each distinct locked orbit the hinge starts reached."""
+    seen = set()
+    for k in range(len(starts)):
+        if status[k]:
+            continue
+        c = settled_outcome(t[-208 * n_per:], states[k, -208 * n_per:])
+        key = (c["outcome"], c["lock_ratio"], round(c["amp_theta"], 2))
+        if c["outcome"].startswith("locked-") and key not in seen:
+            seen.add(key)
+            yield k, c
+
+
+for k, c in locked_orbits():
     y, yd, th, thd = states[k, -4 * n_per:].T
     y = y - y_eq
     three = [y, th * y ** 2, th ** 2 * y]
@@ -69,7 +74,7 @@ def oracle_alias_z(x_end):
     n = int(DURATION * FPS) + 1
     substeps = int(math.ceil(1.0 / FPS / 1e-4))
     out = np.empty((n, 4))
-    m, _ = _integrate_held(args, x_end, 1.0 / FPS / substeps, substeps, n, *_BOX, out)
+    m, _ = integrate_held(args, x_end, 1.0 / FPS / substeps, substeps, n, *HINGE_BOX, out)
     traj = out[:m].copy()
     acc = np.array([held_y_acceleration(0.0, *x, args)[1] for x in traj])
     traj[:, 0] -= y_eq
@@ -86,15 +91,7 @@ def oracle_alias_z(x_end):
     return result
 
 
-seen = set()
-for k in range(len(starts)):
-    if status[k]:
-        continue
-    c = settled_outcome(t[-208 * n_per:], states[k, -208 * n_per:])
-    key = (c["outcome"], c["lock_ratio"], round(c["amp_theta"], 2))
-    if not c["outcome"].startswith("locked-") or key in seen:
-        continue
-    seen.add(key)
+for k, c in locked_orbits():
     for label, terms in oracle_alias_z(states[k, -1]).items():
         print(f"{side * 1e6:.0f} um, g/s {gap_ratio:g}, {p0 / 1e3:g} kPa, A {amp * 1e6:.0f} um, {c['outcome']} "
               f"{c['lock_ratio']} (amplitude {c['amp_theta']:.3f}), oracle alias z ({label}): " + "; ".join(
