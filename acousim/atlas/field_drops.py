@@ -24,6 +24,7 @@ import json
 import logging
 import math
 import os
+import shutil
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -282,9 +283,13 @@ def cells_csv_text(columns: tuple[str, ...], rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def check_pinned_settings(pinned: Path, settings: dict, what: str) -> None:
+def check_pinned_settings(pinned: Path, settings: dict, what: str, force: bool = False) -> None:
     """Refuse a study folder whose ``pinned`` settings file holds other settings (:class:`AtlasError`, naming
-    ``what``: "an atlas", "a held-y map")."""
+    ``what``: "an atlas", "a held-y map"); with ``force``, discard the study in the folder instead (its pinned
+    settings and its finished cells)."""
+    if force and pinned.exists():
+        shutil.rmtree(pinned.parent / "cells", ignore_errors=True)
+        pinned.unlink()
     if pinned.exists() and json.loads(pinned.read_text()) != json.loads(json_text(settings)):
         raise AtlasError(f"--out {pinned.parent} holds {what} with other settings; choose another --out (or --force)")
 
@@ -307,11 +312,11 @@ def run_resumable_cells(out: Path, cells: list, cell_path, task, item, executor:
 
 
 def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorConfig | None = None,
-              progress: bool = True, figures: bool = True) -> dict:
+              progress: bool = True, figures: bool = True, force: bool = False) -> dict:
     """Run (or resume) the atlas into ``out``; returns the ``atlas.json`` content.
 
     ``out/atlas_settings.json`` pins the settings: a folder holding an atlas with other settings is refused
-    (:class:`AtlasError`).  Finished cells are ``out/cells/*.json`` (written as each finishes, atomically) and
+    (:class:`AtlasError`), or with ``force`` that atlas is discarded first.  Finished cells are ``out/cells/*.json`` (written as each finishes, atomically) and
     are skipped on a rerun.  Then ``atlas.csv`` (:data:`CSV_COLUMNS`), ``atlas.json`` (settings, per-dimer
     outcome counts and :func:`observations`, every cell) and, with ``figures``, one basin map per dimer and the
     phase histogram (:func:`acousim.atlas.field_drop_figures.write_atlas_figures`).
@@ -319,7 +324,7 @@ def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorCon
     out = Path(out)
     settings = config.to_dict()
     pinned = out / "atlas_settings.json"
-    check_pinned_settings(pinned, settings, "an atlas")
+    check_pinned_settings(pinned, settings, "an atlas", force)
     for dimer in config.dimers:  # every dimer must be buildable before anything is written
         try:
             atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_amplitude_pa, config.frequency_hz)

@@ -355,10 +355,11 @@ def _cell_path(out: Path, config: HeldYConfig, d: int, p: int, a: int) -> Path:
 
 
 def run_held_y_map(config: HeldYConfig, out: str | os.PathLike, executor: ExecutorConfig | None = None,
-                   progress: bool = True, figures: bool = True) -> dict:
+                   progress: bool = True, figures: bool = True, force: bool = False) -> dict:
     """Run (or resume) the held-y map into ``out``; returns the ``held_y.json`` content.
 
-    ``out/held_y_settings.json`` pins the settings (another map in the folder is refused, :class:`AtlasError`);
+    ``out/held_y_settings.json`` pins the settings (another map in the folder is refused, :class:`AtlasError`, or
+    with ``force`` discarded first);
     finished cells are ``out/cells/*.json`` (written as each finishes, atomically) and are skipped on a rerun.
     Then ``held_y.csv`` (:func:`cell_summary` per cell), ``held_y.json`` (settings, the summaries, every cell)
     and, with ``figures``, :func:`acousim.atlas.held_y_figures.write_held_y_figures`.
@@ -366,7 +367,7 @@ def run_held_y_map(config: HeldYConfig, out: str | os.PathLike, executor: Execut
     out = Path(out)
     settings = config.to_dict()
     pinned = out / "held_y_settings.json"
-    check_pinned_settings(pinned, settings, "a held-y map")
+    check_pinned_settings(pinned, settings, "a held-y map", force)
     for dimer in config.dimers:  # every dimer and pressure must be buildable before anything is written
         for p in config.pressures_pa:
             try:

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
 
 import numpy as np
@@ -86,12 +85,9 @@ def run(args: argparse.Namespace) -> int:
     except AtlasError as exc:
         raise UserInputError(str(exc)) from None
     out = prepare_output_dir(args.out, "--out", create=False)
-    if args.force and (out / "atlas_settings.json").exists():
-        shutil.rmtree(out / "cells", ignore_errors=True)
-        (out / "atlas_settings.json").unlink()
     try:
         result = run_atlas(config, out, executor_config(args), progress=not args.no_progress,
-                           figures=not args.no_figures)
+                           figures=not args.no_figures, force=args.force)
     except AtlasError as exc:
         raise UserInputError(str(exc)) from None
     for label, d in result["dimers"].items():

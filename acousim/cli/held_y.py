@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
@@ -58,12 +57,9 @@ def run(args: argparse.Namespace) -> int:
     except AtlasError as exc:
         raise UserInputError(str(exc)) from None
     out = prepare_output_dir(args.out, "--out", create=False)
-    if args.force and (out / "held_y_settings.json").exists():
-        shutil.rmtree(out / "cells", ignore_errors=True)
-        (out / "held_y_settings.json").unlink()
     try:
         result = run_held_y_map(config, out, executor_config(args), progress=not args.no_progress,
-                                figures=not args.no_figures)
+                                figures=not args.no_figures, force=args.force)
     except AtlasError as exc:
         raise UserInputError(str(exc)) from None
     rows = result["summary"]

@@ -106,3 +106,19 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys):
     assert "--t-off" in capsys.readouterr().err and not out.exists()
     assert main(["atlas", "--out", str(out), "--dimers", "100e-6:0.03"]) == 2   # outside the full-wave family
     assert "--dimers" in capsys.readouterr().err and not out.exists()
+
+
+def test_force_discards_the_study_in_the_folder(tmp_path):
+    """The pinned settings refuse a study with other settings; ``force`` discards the folder's study (its pin and
+    its finished cells) instead, so that nothing of the old one is taken for the new one."""
+    from acousim.atlas.field_drops import check_pinned_settings
+
+    pinned = tmp_path / "atlas_settings.json"
+    pinned.write_text(json.dumps({"duration": 1.5}))
+    (tmp_path / "cells").mkdir()
+    (tmp_path / "cells" / "c0.json").write_text("{}")
+    with pytest.raises(AtlasError, match="other settings"):
+        check_pinned_settings(pinned, {"duration": 2.0}, "an atlas")
+    assert pinned.exists() and (tmp_path / "cells" / "c0.json").exists()  # refused: nothing touched
+    check_pinned_settings(pinned, {"duration": 2.0}, "an atlas", force=True)
+    assert not pinned.exists() and not (tmp_path / "cells").exists()
