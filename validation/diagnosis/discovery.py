@@ -356,7 +356,7 @@ def energy_balance_residuals(problem: DiagnosisProblem, fit: GapFit, discovery: 
 
         names = library_terms()
         for i, r in enumerate(problem.runs):
-            lib = evaluate_library(r.balance_states.state)
+            lib = evaluate_library(r.balance.state)
             acc = np.zeros((len(r.t), 2, 1))
             for q, t in found:
                 acc[:, q, 0] += t.coefficient * lib[:, names.index(t.term)]
@@ -373,7 +373,7 @@ def _dissipation_work(problem: DiagnosisProblem, names_per_eq: dict[str, list[st
     lib_names = library_terms()
     out = []
     for r in problem.runs:
-        lib = evaluate_library(r.balance_states.state)
+        lib = evaluate_library(r.balance.state)
         blocks = []
         for q, eq in enumerate(EQUATIONS):
             acc = np.zeros((len(r.t), 2, len(names_per_eq[eq])))

@@ -180,7 +180,7 @@ def _energy_residuals(terms: SimulationTerms, cal: Calibration, params: dict) ->
         res = e["dk"] + cal.pressure_scale * e["du"] - (e["work"] @ pv if pv.size else 0.0)
         # noise of dE over a window: two independent endpoint energies, each with velocity noise
         # through the kinetic energy (M ydot sigma_vy)^2 + (I thetadot sigma_vtheta)^2
-        b = r.balance_states
+        b = r.balance
         if b.velocity_noise is not None:
             st, nv = b.state, b.velocity_noise
             ke_var = (terms.mass * st[:, 1]) ** 2 * nv[0] + (d.hinge_inertia(st[:, 2]) * st[:, 3]) ** 2 * nv[1]

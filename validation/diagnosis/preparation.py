@@ -122,21 +122,18 @@ class RunAccelerations:
     #: positions and states at every frame for the integral form of both equations; None: the gap
     #: components of the equations use the accelerations instead
     integral: PositionIntegrals | None = None
-    #: states of the energy balance (:class:`BalanceStates`); None: ``state`` and the velocity noise of ``noise``
+    #: states of the energy balance (:class:`BalanceStates`); not given (None): ``state`` with the velocity noise
+    #: of ``noise``
     balance: BalanceStates | None = None
+
+    def __post_init__(self) -> None:
+        if self.balance is None:
+            object.__setattr__(self, "balance", BalanceStates(self.state, None if self.noise is None else self.noise[2:]))
 
     def subsample(self, step: int) -> "RunAccelerations":
         """Every ``step``-th frame (the integral data, the noise levels and the filter stay those of the recording)."""
         return RunAccelerations(self.name, self.t[::step], self.state[::step], self.accel[::step], self.noise,
-                                self.smoothing, self.frame_dt, self.integral,
-                                None if self.balance is None else self.balance.subsample(step))
-
-    @property
-    def balance_states(self) -> BalanceStates:
-        """The energy balance's states: :attr:`balance`, or ``state`` when the run carries none."""
-        if self.balance is not None:
-            return self.balance
-        return BalanceStates(self.state, None if self.noise is None else self.noise[2:])
+                                self.smoothing, self.frame_dt, self.integral, self.balance.subsample(step))
 
     def smooth(self, x: NDArray) -> NDArray:
         """Filter a model's accelerations (axis 0 along ``t``) as the data's Savitzky-Golay second derivative

@@ -43,7 +43,7 @@ class SimulationTerms:
         self.mass = model.dimer.total_mass
         self.g = model.gravity
         self.k = model.wave.wavenumber
-        self._cache: dict[float, list[tuple[NDArray, NDArray]]] = {}
+        self._cache: dict = {}  # the memoised per-run values by origin height (:meth:`_memo`)
 
     def forces(self, z0: float) -> list[tuple[NDArray, NDArray]]:
         """Per run: (F_Z/M [m/s^2], Q_theta/I [1/s^2]) at nominal pressure."""
@@ -75,15 +75,18 @@ class SimulationTerms:
         c, s = np.cos(2.0 * self.k * z0), np.sin(2.0 * self.k * z0)
         return tuple(a + c * b + s * d for a, b, d in harmonics)
 
-    def _static(self, z0: float) -> list[tuple[NDArray, NDArray]]:
-        key = round(z0, 12)
+    def _memo(self, key, build):
+        """``build()``, computed once per ``key`` (beyond 64 entries the cache starts over)."""
         if key not in self._cache:
-            out = [self._at_height(self._height_harmonics("static", r, lambda z, r=r: self._static_run(r, z)), z0)
-                   for r in self.runs]
             if len(self._cache) > 64:
                 self._cache.clear()
-            self._cache[key] = out
+            self._cache[key] = build()
         return self._cache[key]
+
+    def _static(self, z0: float) -> list[tuple[NDArray, NDArray]]:
+        return self._memo(round(z0, 12), lambda: [
+            self._at_height(self._height_harmonics("static", r, lambda z, r=r: self._static_run(r, z)), z0)
+            for r in self.runs])
 
     def _static_run(self, r: RunAccelerations, z0: float) -> tuple[NDArray, NDArray]:
         """(smoothed F_Z / M, smoothed Q_theta / I) of one run at origin height z0, as the data see them."""
@@ -95,28 +98,15 @@ class SimulationTerms:
             fz, qt = f * fz, f * qt
         return r.smooth(fz), r.smooth(qt)
 
-    @staticmethod
-    def _balance_holder(r: RunAccelerations):
-        """The holder of run r's energy-balance states (``.state``): its :class:`BalanceStates`, or the run."""
-        return r if r.balance is None else r.balance
-
     def _potentials(self, z0: float) -> list[NDArray]:
         """Per run: U_ac [J] at nominal pressure along the energy balance's states (:meth:`_potential_run`)."""
-        key = ("potential", round(z0, 12))
-        if key not in self._cache:
-            out = []
-            for r in self.runs:
-                holder = self._balance_holder(r)
-                harmonics = self._height_harmonics("potential", holder,
-                                                   lambda z, r=r, h=holder: (self._potential_run(r, h, z),))
-                out.append(self._at_height(harmonics, z0)[0])
-            if len(self._cache) > 64:
-                self._cache.clear()
-            self._cache[key] = out
-        return self._cache[key]
+        return self._memo(("potential", round(z0, 12)), lambda: [
+            self._at_height(self._height_harmonics("potential", r.balance, lambda z, r=r: (self._potential_run(r, z),)),
+                            z0)[0]
+            for r in self.runs])
 
-    def _potential_run(self, r: RunAccelerations, holder, z0: float) -> NDArray:
-        """U_ac [J] of run r along the states ``holder.state`` at origin height z0, used raw (not filtered).
+    def _potential_run(self, r: RunAccelerations, z0: float) -> NDArray:
+        """U_ac [J] of run r along its energy balance's states at origin height z0, used raw (not filtered).
 
         For a model without a potential (``conservative = False``, the full-wave model) U_ac is the acoustic
         energy along the run's path, whose changes are minus the work of the acoustic forces: the model's
@@ -125,8 +115,8 @@ class SimulationTerms:
         (trapezoid at the frames): the work of the whole force, integrated so, would carry the trapezoid's
         error on the oscillation's power (on the fitted frames, 2 ms apart, 10-40 % of a weak damping's work
         per 0.4 s window) and the velocity noise into the energy balance."""
-        y, yd, th = holder.state[:, 0], holder.state[:, 1], holder.state[:, 2]
-        sums = self.problem.orientation_sums(holder)
+        y, yd, th = r.balance.state[:, 0], r.balance.state[:, 1], r.balance.state[:, 2]
+        sums = self.problem.orientation_sums(r.balance)
         s = self.model.integrals_at_height(th, z0 + y, sums)
         potential = s.potential
         if not getattr(self.model, "conservative", True):
@@ -158,7 +148,7 @@ class SimulationTerms:
         rest_u = float(self.model.integrals_at_height(0.0, z0).potential)  # U_ac at the data's origin, theta = 0
         out = []
         for r, pot in zip(self.runs, self._potentials(z0)):
-            state = r.balance_states.state
+            state = r.balance.state
             y, yd, th, thd = state.T
             inertia = d.hinge_inertia(th)
             kin = 0.5 * self.mass * yd**2 + 0.5 * inertia * thd**2 + self.mass * self.g * y
@@ -188,9 +178,9 @@ class SimulationTerms:
 
     def window_work(self, r: RunAccelerations, accelerations: NDArray) -> NDArray[np.float64]:
         """Work per energy window (n_windows, p) [J] of p acceleration terms ``accelerations`` (n, 2, p)
-        [m/s^2, 1/s^2] of run r, evaluated at its energy-balance states (:attr:`RunAccelerations.balance_states`):
+        [m/s^2, 1/s^2] of run r, evaluated at its energy-balance states (:attr:`RunAccelerations.balance`):
         the trapezoid integral of the power M ydot a_y + I(theta) thetadot a_theta."""
-        _, yd, th, thd = r.balance_states.state.T
+        _, yd, th, thd = r.balance.state.T
         power = (self.mass * yd[:, None] * accelerations[:, 0, :]
                  + self.model.dimer.hinge_inertia(th)[:, None] * thd[:, None] * accelerations[:, 1, :])
         cum = np.concatenate([np.zeros((1, power.shape[1])),
@@ -211,17 +201,15 @@ class SimulationTerms:
         columns of (the acoustic acceleration at nominal pressure, to be scaled by s; the rest of the
         simulation's acceleration): (F_Z / M, -g) or (Q_theta / I, -I' thetadot^2 / (2 I)), at every frame.
         Only the coordinate asked for is integrated (the calibration's height search needs y alone)."""
-        key = ("integral", q, round(z0, 12))
-        if key not in self._cache:
+        def build():
             out = []
             for r in self.runs:
                 acoustic, rest = self._height_harmonics(f"integral{q}", r.integral,
                                                         lambda z, r=r: self._integral_run(r, z, q))
                 out.append((self._at_height([acoustic], z0)[0], rest[0]))
-            if len(self._cache) > 64:
-                self._cache.clear()
-            self._cache[key] = out
-        return self._cache[key]
+            return out
+
+        return self._memo(("integral", q, round(z0, 12)), build)
 
     def integral_known_harmonics(self, q: int) -> list[tuple[tuple[NDArray, NDArray, NDArray], NDArray]]:
         """Per run: ((A, B, C), rest) with :meth:`integral_known` ``(z0, q)`` = (A + B cos(2k z0) + C sin(2k z0), rest)."""
