@@ -144,6 +144,9 @@ class DiscoveryConfig:
         meaning: that equation is selected by held-out prediction over runs instead
         (:func:`fitting.support_search.select_heldout`: the smallest support on the elimination path from the full
         library within ``model_error_se`` paired standard errors of the smallest held-out error).  None: never.
+        1.05: on sparse truths the ratio is at most 1.0005 (37 data sets: the discovery benchmark's seven truths
+        and three near-resonance truths, fresh seeds), while a levitated dimer's full-wave twin with air damping
+        reaches 1.06-1.13 in y (docs/fitting.md, "Model error").
     model_error_se : float
         The standard errors of that rule (1: the one-standard-error rule).
     """
@@ -164,7 +167,7 @@ class DiscoveryConfig:
     stepwise: bool = True
     velocity_price: float | None = None
     natural_periods: float | None = 0.875
-    model_error_factor: float | None = 1.1
+    model_error_factor: float | None = 1.05
     model_error_se: float = 1.0
 
     def __post_init__(self) -> None:

@@ -123,5 +123,7 @@ def test_a_sparse_truth_keeps_the_significance_rule():
     derivs = [run_derivatives(r.t, r.y, r.theta, dominant_frequency(r.y, r.dt)) for r in runs]
     res = discover_model(runs, derivs, DiscoveryConfig())
     assert res.selection_modes == ("significance",) * 2
-    assert max(res.residual_to_noise) < 1.05  # the residual is the tracking noise
+    # the residual is the tracking noise: 0.971-1.0005 on 37 sparse data sets (docs/fitting.md), 3 % below the
+    # default factor of 1.05 at which the selection turns to held-out prediction
+    assert max(res.residual_to_noise) < 1.02 < DiscoveryConfig().model_error_factor
     assert (res.mask == default.TRUTH.support).all()
