@@ -61,7 +61,7 @@ def add_parser(subparsers) -> None:
             "write the figures (restoring force and torque, thetaddot map), the static coefficients "
             "(least squares on the velocity-free cubic monomials) and a rendering of the posed mesh. "
             "With --model fullwave the full-wave (boundary-element) model is swept instead (docs/fullwave.md): the "
-            "direct-solve table of the default dimer, or any dimer of the table family (ks = k x side 0.3-0.65, "
+            "direct-solve table of the default dimer, or any dimer of the table family (ks = k x side 0.28-0.65, "
             "--gap 0.01-0.05 x side) scaled exactly in side, frequency and pressure; |theta| <= 0.9, no potential "
             "column, the interpolation accuracy in the CSV header."
         ),
