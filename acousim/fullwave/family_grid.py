@@ -43,7 +43,7 @@ def _lobatto(lo: float, hi: float, n: int) -> tuple[float, ...]:
 #: the nodes reproduces the left-out interior one within 1.2e-4 (F_Z) and 8.3e-4 (Q_theta) of their maxima over
 #: |theta| <= 0.9 and every height below the node, so three nodes suffice; the lowest node was then moved from 0.3
 #: to 0.28 to cover a 400-um dimer at 40 kHz, and the quadratic through (0.28, 0.3875, 0.65) reproduces the 0.3 row's
-#: tables (kept as check tables, like 0.5625) within 0.01 % of max |Q| (docs/fullwave.md).
+#: tables (kept as check tables, like 0.5625) within 0.011 % of max |Q| (docs/fullwave.md).
 FAMILY_KS: tuple[float, ...] = (0.28, 0.3875, 0.65)
 #: g/s nodes: 4 Chebyshev-Lobatto points in log(g/s) on [0.01, 0.05].
 FAMILY_GAP_RATIOS: tuple[float, ...] = tuple(round(float(np.exp(v)), 6)

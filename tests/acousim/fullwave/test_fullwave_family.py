@@ -49,9 +49,12 @@ def test_uniformly_refined_family_mesh_scales_every_size(q):
     assert hinge.h_max == base.h_max and hinge.h_hinge == pytest.approx(q * base.h_hinge)
 
 
+#: The lab range's corners: sides 400-700 um at 40-50 kHz in air at 343 m/s, ks = 2 pi f s / c0.
+LAB_KS = tuple(2 * np.pi * f * s / 343.0 for f, s in ((40e3, 400e-6), (50e3, 700e-6)))
+
+
 def test_nodes_span_the_lab_range():
-    # the lab range: sides 400-700 um at 40-50 kHz in air at 343 m/s, ks = 2 pi f s / c0 from 0.293 to 0.641
-    ks_lab = [2 * np.pi * f * s / 343.0 for f, s in ((40e3, 400e-6), (50e3, 700e-6))]
+    ks_lab = LAB_KS
     np.testing.assert_allclose(ks_lab, [0.2931, 0.6411], atol=1e-4)
     assert FAMILY_KS[0] == 0.28 < ks_lab[0] and ks_lab[1] < FAMILY_KS[-1] == 0.65 and len(FAMILY_KS) == 3
     assert FAMILY_GAP_RATIOS[0] == 0.01 and FAMILY_GAP_RATIOS[-1] == 0.05
@@ -180,9 +183,9 @@ def test_shipped_family_covers_the_lab_range_within_its_accuracy_targets():
 
     fam = shipped_family()
     assert fam.ks_nodes == FAMILY_KS and fam.gap_nodes == FAMILY_GAP_RATIOS
-    for side, f in ((400e-6, 40e3), (700e-6, 50e3)):
+    for ks in LAB_KS:
         for g in FAMILY_GAP_RATIOS:
-            fam.check_covers(2 * np.pi * f * side / 343.0, g)  # raises FamilyRangeError when outside
+            fam.check_covers(ks, g)  # raises FamilyRangeError when outside
     checks = json.loads((fam.directory / "accuracy.json").read_text())["checks"]
     assert sorted(round(c["gap_over_side"], 4) for c in checks if abs(c["ks"] - 0.3) < 1e-6) == [0.01, 0.015, 0.0334,
                                                                                                 0.05]
