@@ -27,7 +27,7 @@ from .config import FitConfig
 from .description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
                           model_equation_text)
 from cubedimer.terms import EQUATION_NAMES
-from .discovery import DiscoveryResult, discover_model
+from .discovery import MODEL_ERROR_MODE, DiscoveryResult, discover_model
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
 from .methods import FitContext, register_method
@@ -163,6 +163,7 @@ def discovery_description(record: dict) -> MethodDescription:
                  "the source paper; Holm's rule selects the other terms.")
     # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
     text += anti_damping_text(rates)
+    text += model_error_text(disc)
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
@@ -180,6 +181,30 @@ def discovery_description(record: dict) -> MethodDescription:
     table = DescriptionTable("Discovered model (SI)", ("equation", "term", "coefficient", "std error", "z",
                                                        "oracle std error", "oracle z", "alias", "alias z"), tuple(rows))
     return MethodDescription(text, table, (PARETO_FIGURE, *FIT_FIGURES), selected_by="by integral-form discovery")
+
+
+def model_error_text(disc: dict) -> str:
+    """The sentence on the equations selected by held-out prediction because their residual showed model error
+    (model.json's ``discovery[eq]["selection"]``); empty when every equation was selected by significance."""
+    parts = []
+    for eq in ("yddot", "thetaddot"):
+        sel = (disc.get(eq) or {}).get("selection") or {}
+        if sel.get("rule") != MODEL_ERROR_MODE:
+            continue
+        ratio, infl = sel.get("residual_to_noise"), sel.get("heldout_inflation")
+        signs = []
+        if ratio is not None and np.isfinite(ratio):
+            signs.append(f"residual {ratio:.3g} times the tracking noise")
+        if infl is not None and np.isfinite(infl):
+            signs.append(f"held-out misfit above the in-sample one by {infl:.3g} times what white noise explains")
+        parts.append(f"{eq} ({', '.join(signs)})" if signs else eq)
+    if not parts:
+        return ""
+    return (" Model error: the cubic library does not hold the truth in " + " and ".join(parts) + ", so the "
+            "standard errors and Holm's rule lose their meaning there; those equations were selected by held-out "
+            "prediction over runs instead (the smallest support on the elimination path within one paired standard "
+            "error of the best held-out error), and their standard errors are those of a residual that is partly "
+            "model error.")
 
 
 register_method(DiscoveryMethod())

@@ -10,6 +10,8 @@ paths and stepwise searches are cheap.
   stepwise additions, swaps and two-for-one merges (:func:`_stepwise`).
 * :func:`prune_heldout`: the elimination continued from a support down to the forced terms, keeping the
   support with the smallest held-out error.
+* :func:`heldout_inflation`: how far a support's held-out misfit exceeds its in-sample residual, in units of what
+  white noise explains (a sign of model error that spare terms cannot hide).
 * :func:`numerov_columns`: the prefilter that makes the trapezoid double integral fourth-order accurate.
 """
 from __future__ import annotations
@@ -26,8 +28,8 @@ from .integral_form import detrend_windows, integral_columns, window_starts
 from .model import TERMS
 from .multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
-__all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "heldout_rms", "select_support",
-           "prune_heldout"]
+__all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "heldout_rms", "heldout_inflation",
+           "select_support", "prune_heldout"]
 
 @dataclass(frozen=True)
 class ReducedDesign:
@@ -133,6 +135,21 @@ def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) 
                 sse += float(res @ res)
         out.append(float(np.sqrt(sse / max(dof, 1.0))))
     return out
+
+
+def heldout_inflation(design: ReducedDesign, support: Sequence[int], n_folds: int) -> float:
+    """How far the held-out misfit (K-fold over runs) of ``support`` exceeds its in-sample residual, in units of what
+    white noise explains: ``(heldout^2 / residual^2 - 1) * dof / terms`` with the residual per degree of freedom
+    (:func:`fitting.support_search.fit_support`) and ``dof`` the design's frames less two per window.  Of order 1
+    when the residual is white noise; large when the support's terms fit model error that differs between runs
+    (runs of other amplitudes).  NaN with fewer than two runs."""
+    support = list(support)
+    held = heldout_rms(design, [support], n_folds)[0]
+    resid = fit_support(design, support)[2]
+    dof = float(design.rows.sum() - 2 * design.windows.sum())
+    if not (np.isfinite(held) and resid > 0):
+        return float("nan")
+    return float(((held / resid) ** 2 - 1.0) * dof / max(len(support), 1))
 
 
 def heldout_per_run(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) -> NDArray[np.float64]:

@@ -89,7 +89,7 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse):
     runs, derivs, heldout, residual = non_sparse
     assert 0.02 < residual < 0.05
     new = discover_model(runs, derivs, DiscoveryConfig())
-    old = discover_model(runs, derivs, DiscoveryConfig(model_error_factor=None))
+    old = discover_model(runs, derivs, DiscoveryConfig(model_error_factor=None, model_error_inflation=None))
     # the residual at the significance rule's support is above 1.1 times the tracking noise in both equations
     # (sparse truths: within 3.6 %, docs/fitting.md), and the selection says how it chose
     assert min(new.residual_to_noise) > 1.1 and new.selection_modes == ("held-out (model error)",) * 2
@@ -126,4 +126,44 @@ def test_a_sparse_truth_keeps_the_significance_rule():
     # the residual is the tracking noise: 0.971-1.0005 on 37 sparse data sets (docs/fitting.md), 3 % below the
     # default factor of 1.05 at which the selection turns to held-out prediction
     assert max(res.residual_to_noise) < 1.02 < DiscoveryConfig().model_error_factor
+    # the held-out misfit is the in-sample one's plus what white noise explains: -0.2 to 7.0 on 42 sparse equations
+    # (docs/fitting.md), well below the default limit of 20
+    assert max(res.heldout_inflation) < 10.0 < DiscoveryConfig().model_error_inflation
     assert (res.mask == default.TRUTH.support).all()
+
+
+@pytest.mark.slow
+def test_model_error_that_spare_terms_absorb_is_detected_by_the_heldout_inflation():
+    """At amplitudes where the library's spare terms bring the residual down to the noise (ratio below 1.05), the
+    runs' model error still differs with their amplitude: the held-out misfit exceeds the in-sample residual by far
+    more than white noise explains, and that sign turns the selection to held-out prediction."""
+    exact = _runs(0.55, 8, seed=21)  # amplitudes up to 0.44 rad
+    runs, derivs = _prepared(exact, 1e-3 * 0.44, seed=22)
+    res = discover_model(runs, derivs, DiscoveryConfig())
+    ratio_only = discover_model(runs, derivs, DiscoveryConfig(model_error_inflation=None))
+    assert max(ratio_only.residual_to_noise) < DiscoveryConfig().model_error_factor
+    assert ratio_only.selection_modes == ("significance",) * 2
+    # 41-51 here (sparse truths: at most 7, docs/fitting.md)
+    assert max(res.heldout_inflation) > DiscoveryConfig().model_error_inflation
+    assert "held-out (model error)" in res.selection_modes
+    assert res.to_json()["yddot"]["selection"]["heldout_inflation"] == pytest.approx(res.heldout_inflation[0])
+    # the held-out rule is the more compact one
+    assert res.mask.sum() < ratio_only.mask.sum()
+
+
+@pytest.mark.parametrize("rules, said", [
+    (("held-out (model error)", "significance"), True),
+    (("significance", "significance"), False),
+])
+def test_the_report_says_which_equations_were_selected_under_model_error(rules, said):
+    from fitting.discovery_fit import discovery_description
+
+    disc = {eq: {"selection": {"rule": rule, "residual_to_noise": 1.02, "heldout_inflation": 64.0}}
+            for eq, rule in zip(("yddot", "thetaddot"), rules)}
+    model = {"equations": {"yddot": {"y": -40.0, "ydot": -0.2}, "thetaddot": {"theta": -120.0, "thetadot": -0.15}},
+             "discovery": disc}
+    text = discovery_description(model).text
+    assert ("Model error:" in text) == said
+    if said:
+        assert "yddot (residual 1.02 times the tracking noise, held-out misfit above the in-sample one by 64 times" in text
+        assert "thetaddot (" not in text
