@@ -156,8 +156,9 @@ class DiscoveryConfig:
     model_error_inflation : float or None
         The second sign of model error, one that the library's spare terms cannot hide: the held-out misfit
         (K-fold over runs) at the significance rule's support exceeds the in-sample residual by more than white noise
-        explains.  The statistic (:func:`fitting.support_search.heldout_inflation`) is ``(heldout^2 / residual^2 - 1) * dof / terms``, of
-        order 1 under white noise.  Above this value the equation is selected by held-out prediction, as above.
+        explains.  The statistic (:func:`fitting.support_search.heldout_inflation`) is
+        ``(heldout^2 / residual^2 - 1) * dof / terms``, of order 1 under white noise.  Above this value the equation
+        is selected by held-out prediction, as above.
         None: never.  20: on sparse truths it is -0.55 to 7.0 (158 equations of 79 data sets: the discovery
         benchmark's seven truths and three near-resonance truths at fresh seeds), while on the non-sparse truths of
         ``benchmarks/bench_model_error.py`` whose residual stayed within 1.05 of the noise it is 11-1,120 at
@@ -279,7 +280,8 @@ class DiscoveryResult:
     residual_to_noise : tuple of float
         Per equation, the residual standard deviation at the significance rule's support over the tracking noise.
     heldout_inflation : tuple of float
-        Per equation, :func:`fitting.support_search.heldout_inflation` at the significance rule's support (NaN with fewer than two runs).
+        Per equation, :func:`fitting.support_search.heldout_inflation` at the significance rule's support (NaN with
+        fewer than two runs).
     """
 
     mask: NDArray[np.bool_]
@@ -584,8 +586,8 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
              "converged" if converged else "not converged")
     for q, eq in enumerate(EQUATION_NAMES):
         if result.modes[q] != "significance":
-            log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model error; "
-                     "terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
+            log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model "
+                     "error; terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
                      config.model_error_factor, config.model_error_inflation)
     return DiscoveryResult(mask=mask, coef=result.coef, std_errors=result.se, residual_std=result.res_std,
                            window_s=window_s, pareto=pareto, iterations=tuple(history), converged=converged,

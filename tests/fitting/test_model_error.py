@@ -126,8 +126,8 @@ def test_a_sparse_truth_keeps_the_significance_rule():
     # the residual is the tracking noise: 0.971-1.0005 on 37 sparse data sets (docs/fitting.md), 3 % below the
     # default factor of 1.05 at which the selection turns to held-out prediction
     assert max(res.residual_to_noise) < 1.02 < DiscoveryConfig().model_error_factor
-    # the held-out misfit is the in-sample one's plus what white noise explains: -0.2 to 7.0 on 42 sparse equations
-    # (docs/fitting.md), well below the default limit of 20
+    # the held-out misfit is the in-sample one's plus what white noise explains: -0.55 to 7.0 on 158 sparse
+    # equations (docs/fitting.md), well below the default limit of 20
     assert max(res.heldout_inflation) < 10.0 < DiscoveryConfig().model_error_inflation
     assert (res.mask == default.TRUTH.support).all()
 
@@ -143,7 +143,7 @@ def test_model_error_that_spare_terms_absorb_is_detected_by_the_heldout_inflatio
     ratio_only = discover_model(runs, derivs, DiscoveryConfig(model_error_inflation=None))
     assert max(ratio_only.residual_to_noise) < DiscoveryConfig().model_error_factor
     assert ratio_only.selection_modes == ("significance",) * 2
-    # 41-51 here (sparse truths: at most 7, docs/fitting.md)
+    # 41-51 here (sparse truths: at most 7.0, docs/fitting.md)
     assert max(res.heldout_inflation) > DiscoveryConfig().model_error_inflation
     assert "held-out (model error)" in res.selection_modes
     assert res.to_json()["yddot"]["selection"]["heldout_inflation"] == pytest.approx(res.heldout_inflation[0])
@@ -165,5 +165,6 @@ def test_the_report_says_which_equations_were_selected_under_model_error(rules, 
     text = discovery_description(model).text
     assert ("Model error:" in text) == said
     if said:
-        assert "yddot (residual 1.02 times the tracking noise, held-out misfit above the in-sample one by 64 times" in text
+        assert ("yddot (residual 1.02 times the tracking noise, held-out misfit above the in-sample one by 64 times"
+                in text)
         assert "thetaddot (" not in text
