@@ -194,7 +194,7 @@ def model_error_text(disc: dict) -> str:
         ratio, infl = sel.get("residual_to_noise"), sel.get("heldout_inflation")
         signs = []
         if ratio is not None and np.isfinite(ratio):
-            signs.append(f"residual {ratio:.3g} times the tracking noise")
+            signs.append(f"residual {ratio:.3f} times the tracking noise")
         if infl is not None and np.isfinite(infl):
             signs.append(f"held-out misfit above the in-sample one by {infl:.3g} times what white noise explains")
         parts.append(f"{eq} ({', '.join(signs)})" if signs else eq)

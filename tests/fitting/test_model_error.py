@@ -165,6 +165,6 @@ def test_the_report_says_which_equations_were_selected_under_model_error(rules, 
     text = discovery_description(model).text
     assert ("Model error:" in text) == said
     if said:
-        assert ("yddot (residual 1.02 times the tracking noise, held-out misfit above the in-sample one by 64 times"
+        assert ("yddot (residual 1.020 times the tracking noise, held-out misfit above the in-sample one by 64 times"
                 in text)
         assert "thetaddot (" not in text
