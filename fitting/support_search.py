@@ -40,6 +40,11 @@ class ReducedDesign:
     windows: NDArray[np.int64]           # windows per run
     total: NDArray[np.float64]           # R factor of all runs
 
+    @property
+    def dof(self) -> int:
+        """Frames less the two integration constants (offset and slope) of every window."""
+        return int(self.rows.sum() - 2 * self.windows.sum())
+
 
 def _r_factor(blocks: Sequence[NDArray]) -> NDArray[np.float64]:
     return np.linalg.qr(np.vstack(blocks), mode="r")
@@ -108,10 +113,10 @@ def fit_support(d: ReducedDesign, cols: Sequence[int]) -> tuple[NDArray, NDArray
     """Coefficients, standard errors and residual std on ``cols`` (dof: frames - 2 per window - terms)."""
     cols = list(cols)
     if not cols:
-        dof = max(int(d.rows.sum() - 2 * d.windows.sum()), 1)
+        dof = max(d.dof, 1)
         return np.zeros(0), np.zeros(0), float(np.sqrt(d.total[:, -1] @ d.total[:, -1] / dof))
     c, cov, rss = _lstsq(d.total, cols)
-    dof = max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)
+    dof = max(d.dof - len(cols), 1)
     s2 = rss / dof
     return c, np.sqrt(np.clip(np.diag(cov), 0.0, None) * s2), float(np.sqrt(s2))
 
@@ -124,7 +129,7 @@ def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) 
     split = run_folds(R, n_folds)
     folds = [test for _, test in split]
     train = [_r_factor([d.per_run[r] for r in tr]) for tr, _ in split]
-    dof = float(d.rows.sum() - 2 * d.windows.sum())
+    dof = float(d.dof)
     out = []
     for cols in paths:
         sse = 0.0
@@ -146,7 +151,7 @@ def heldout_inflation(design: ReducedDesign, support: Sequence[int], n_folds: in
     support = list(support)
     held = heldout_rms(design, [support], n_folds)[0]
     resid = fit_support(design, support)[2]
-    dof = float(design.rows.sum() - 2 * design.windows.sum())
+    dof = float(design.dof)
     if not (np.isfinite(held) and resid > 0):
         return float("nan")
     return float(((held / resid) ** 2 - 1.0) * dof / max(len(support), 1))
@@ -181,7 +186,7 @@ def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0
     n_lib = d.total.shape[1] - 1
     path = [keep for keep, _ in _eliminate(d, range(n_lib), forced, alpha, velocity_first)]
     err = heldout_per_run(d, path, n_folds)
-    dof = float(d.rows.sum() - 2 * d.windows.sum())
+    dof = float(d.dof)
     held = [float(np.sqrt(e / max(dof, 1.0))) for e in err.sum(axis=1)]
     R = err.shape[1]
     if R < 2 or not np.all(np.isfinite(err)):
@@ -281,7 +286,7 @@ def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alph
     velocity = ~_VELOCITY_FREE[:n_lib]
     z_alpha_sq = float(ndtri(1.0 - 0.5 * alpha)) ** 2
     tau = z_alpha_sq if velocity_price is None else float(velocity_price)
-    tau_merge = max(z_alpha_sq, float(np.log(max(int(d.rows.sum() - 2 * d.windows.sum()), 2))))
+    tau_merge = max(z_alpha_sq, float(np.log(max(d.dof, 2))))
     cols = sorted(cols)
     visited = {tuple(cols)}
 
@@ -328,7 +333,7 @@ def _stepwise(d: ReducedDesign, cols: list[int], forced: NDArray[np.bool_], alph
         outside = [j for j in range(n_lib) if j not in cols]
         free = [i for i in cols if not forced[i]]
         base = _rss(d, cols)
-        s2 = base / max(int(d.rows.sum() - 2 * d.windows.sum() - len(cols)), 1)
+        s2 = base / max(d.dof - len(cols), 1)
         moved = False
         for kind in (additions, swaps, merges):
             for trial in kind(outside, free, base, s2):
