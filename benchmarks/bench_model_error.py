@@ -265,11 +265,6 @@ def long_time_errors(coef: NDArray, data: Data, f_slow: float) -> NDArray:
     return np.array(errs)
 
 
-def long_time_error(coef: NDArray, data: Data, f_slow: float) -> float:
-    """The median over the held-out runs of :func:`long_time_errors`."""
-    return float(np.median(long_time_errors(coef, data, f_slow)))
-
-
 def score(coef: NDArray, taylor: NDArray) -> dict:
     """Terms, terms outside the Taylor support, median relative error on the Taylor terms found."""
     sel, true = coef != 0, taylor != 0

@@ -187,7 +187,7 @@ def model_error_text(disc: dict) -> str:
     """The sentence on the equations selected by held-out prediction because their residual showed model error
     (model.json's ``discovery[eq]["selection"]``); empty when every equation was selected by significance."""
     parts = []
-    for eq in ("yddot", "thetaddot"):
+    for eq in EQUATION_NAMES:
         sel = (disc.get(eq) or {}).get("selection") or {}
         if sel.get("rule") != MODEL_ERROR_MODE:
             continue
