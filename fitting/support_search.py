@@ -175,13 +175,18 @@ def heldout_per_run(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: i
 
 
 def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,
-                   n_folds: int = 5, se_rule: float = 1.0) -> tuple[list[int], list[list[int]], list[float]]:
+                   n_folds: int = 5, se_rule: float = 1.0, tolerance: float = 0.0,
+                   noise: float | None = None) -> tuple[list[int], list[list[int]], list[float]]:
     """Selection by held-out prediction over runs, for data whose residual is model error rather than noise.
 
     Backward elimination from the full library (least |z| first, velocity terms first while one is below the
     Bonferroni level) down to the forced terms; on that path the smallest support whose held-out error (K-fold over
     runs) exceeds the path's smallest by at most ``se_rule`` standard errors of the difference, the standard error
-    from the paired per-run differences (the one-standard-error rule of cross-validation, paired over runs).
+    from the paired per-run differences (the one-standard-error rule of cross-validation, paired over runs), or by
+    at most ``tolerance`` (the mean over runs of each run's relative excess of held-out sum of squares), whichever
+    is larger: an excess that small is the same held-out error even where its standard error is smaller.  Given the
+    white ``noise`` (residual standard deviation units), the tolerance is taken as a share of the model error alone,
+    ``tolerance * (1 - noise^2 / heldout^2)`` at the best support: the noise's part of the misfit no model reduces.
     Returns the support, the path and the path's held-out RMS errors (as :func:`heldout_rms`)."""
     n_lib = d.total.shape[1] - 1
     path = [keep for keep, _ in _eliminate(d, range(n_lib), forced, alpha, velocity_first)]
@@ -195,7 +200,9 @@ def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0
     best = int(np.argmin(total))
     rel = err / err[best] - 1.0  # each run's relative increase over the best support
     mean, se = rel.mean(axis=1), rel.std(axis=1, ddof=1) / np.sqrt(R)
-    chosen = max(i for i in range(len(path)) if mean[i] <= se_rule * se[i])
+    if noise is not None:  # the tolerance is a share of the model error, the part of the misfit a model can reduce
+        tolerance *= max(0.0, 1.0 - (noise / held[best]) ** 2) if held[best] > 0 else 0.0
+    chosen = max(i for i in range(len(path)) if mean[i] <= max(se_rule * se[i], tolerance))
     return path[chosen], path, held
 
 

@@ -98,8 +98,8 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse):
     n_taylor = int(TAYLOR.support.sum())
     # compact: at most 1.5 times the Taylor support's terms, and no more than the significance rule keeps
     assert new.mask.sum() <= 1.5 * n_taylor and new.mask.sum() <= old.mask.sum()
-    # the selected support is the smallest on the elimination path within one paired standard error of the best
-    # held-out error: its held-out error is within a few per cent of the path's best (the rule's own scale)
+    # the selected support is the smallest on the elimination path within one paired standard error or 3 % (of
+    # the held-out sum of squares) of the best: its held-out RMS error is within a few per cent of the path's best
     for eq in ("yddot", "thetaddot"):
         front = new.pareto[eq]
         chosen = [p for p in front if p.selected]
