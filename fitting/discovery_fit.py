@@ -163,7 +163,7 @@ def discovery_description(record: dict) -> MethodDescription:
                  "the source paper; Holm's rule selects the other terms.")
     # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
     text += anti_damping_text(rates)
-    text += model_error_text(disc)
+    text += model_error_text(disc, (record.get("settings") or {}).get("discovery") or {})
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
@@ -183,9 +183,10 @@ def discovery_description(record: dict) -> MethodDescription:
     return MethodDescription(text, table, (PARETO_FIGURE, *FIT_FIGURES), selected_by="by integral-form discovery")
 
 
-def model_error_text(disc: dict) -> str:
+def model_error_text(disc: dict, settings: dict) -> str:
     """The sentence on the equations selected by held-out prediction because their residual showed model error
-    (model.json's ``discovery[eq]["selection"]``); empty when every equation was selected by significance."""
+    (model.json's ``discovery[eq]["selection"]``, the rule's settings from ``settings["discovery"]``); empty when
+    every equation was selected by significance."""
     parts = []
     for eq in EQUATION_NAMES:
         sel = (disc.get(eq) or {}).get("selection") or {}
@@ -200,11 +201,14 @@ def model_error_text(disc: dict) -> str:
         parts.append(f"{eq} ({', '.join(signs)})" if signs else eq)
     if not parts:
         return ""
+    se, tol = settings.get("model_error_se", 1.0), settings.get("model_error_tolerance", 0.0)
+    within = f"{se:g} paired standard error{'' if se == 1 else 's'}"
+    if tol:
+        within += f", or {100 * tol:g} % of the held-out misfit's model-error part,"
     return (" Model error: the cubic library does not hold the truth in " + " and ".join(parts) + ", so the "
             "standard errors and Holm's rule lose their meaning there; those equations were selected by held-out "
-            "prediction over runs instead (the smallest support on the elimination path within one paired standard "
-            "error of the best held-out error), and their standard errors are those of a residual that is partly "
-            "model error.")
+            f"prediction over runs instead (the smallest support on the elimination path within {within} of the "
+            "best held-out error), and their standard errors are those of a residual that is partly model error.")
 
 
 register_method(DiscoveryMethod())

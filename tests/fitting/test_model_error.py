@@ -168,3 +168,9 @@ def test_the_report_says_which_equations_were_selected_under_model_error(rules, 
         assert ("yddot (residual 1.020 times the tracking noise, held-out misfit above the in-sample one by 64 times"
                 in text)
         assert "thetaddot (" not in text
+        # the rule is stated as model.json's settings give it: without a tolerance (files written before it
+        # existed) the one-standard-error rule alone, with it both bounds
+        assert "within 1 paired standard error of the best held-out error" in text
+        model["settings"] = {"discovery": {"model_error_se": 1.0, "model_error_tolerance": 0.03}}
+        assert ("within 1 paired standard error, or 3 % of the held-out misfit's model-error part, of the best "
+                "held-out error" in discovery_description(model).text)
