@@ -122,24 +122,15 @@ def fit_support(d: ReducedDesign, cols: Sequence[int]) -> tuple[NDArray, NDArray
 
 
 def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) -> list[float]:
-    """Held-out RMS misfit per degree of freedom of every support in ``paths`` (K-fold over runs)."""
+    """Held-out RMS misfit per degree of freedom of every support in ``paths`` (K-fold over runs): the runs' sums of
+    :func:`heldout_per_run`, added fold by fold."""
     R = len(d.per_run)
     if R < 2:
         return [float("nan")] * len(paths)
-    split = run_folds(R, n_folds)
-    folds = [test for _, test in split]
-    train = [_r_factor([d.per_run[r] for r in tr]) for tr, _ in split]
-    dof = float(d.dof)
-    out = []
-    for cols in paths:
-        sse = 0.0
-        for fold, Rt in zip(folds, train):
-            c = _lstsq(Rt, cols, covariance=False)[0] if len(cols) else np.zeros(0)
-            for r in fold:
-                res = d.per_run[r][:, list(cols)] @ c - d.per_run[r][:, -1]
-                sse += float(res @ res)
-        out.append(float(np.sqrt(sse / max(dof, 1.0))))
-    return out
+    err = heldout_per_run(d, paths, n_folds)
+    order = [r for _, test in run_folds(R, n_folds) for r in test]
+    dof = max(float(d.dof), 1.0)
+    return [float(np.sqrt(sum(float(e[r]) for r in order) / dof)) for e in err]
 
 
 def heldout_inflation(design: ReducedDesign, support: Sequence[int], n_folds: int) -> float:
