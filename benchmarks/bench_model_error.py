@@ -14,7 +14,8 @@ exact minus the cubic Taylor acceleration over RMS of the exact one, along the r
 noise of 0.1 % of the angle amplitude.  The Taylor coefficients are exact (sympy).  Methods:
 
 * ``ours``: :func:`fitting.discovery.discover_model` with ``DiscoveryConfig()`` (its model-error rule decides
-  whether the selection is by significance or by held-out prediction);
+  whether the selection is by significance or by held-out prediction, and under model error the coefficients are
+  refined by the output error, :mod:`fitting.output_error`);
 * ``STLSQ-CV``: pysindy STLSQ on the Savitzky-Golay states and accelerations (order 5 over
   ``SINDY_WINDOW_PERIODS`` = 0.25 periods of the faster coordinate; cubic library, scaled variables of :mod:`fitting.regression`, ridge alpha 0.3), its threshold
   chosen from ``THRESHOLDS`` by 5-fold cross-validation over runs (held-out acceleration RMS, each equation in
@@ -288,6 +289,8 @@ def run_case(name: str, level: float, seed: int) -> list[dict]:
             res = discover_model(data.runs, data.derivs, DiscoveryConfig())
             coef = res.coef
             note = "; ".join(f"{eq}: {m}" for eq, m in zip(("y", "theta"), res.selection_modes))
+            if res.output_error is not None:
+                note += f"; output-error misfit {res.output_error.misfit_start:.3g} -> {res.output_error.misfit:.3g}"
         else:
             coef, thr = stlsq_cv(data, method.startswith("E-"), seed)
             note = f"threshold {thr:g}"

@@ -33,6 +33,9 @@ Method
 4. **Trade-off.**  Every support met on the elimination paths, with its held-out error (fit on the other
    runs; root-mean-square misfit of the held-out runs' detrended positions per degree of freedom),
    forms the Pareto front of number of terms against held-out error (:attr:`DiscoveryResult.pareto`).
+5. **Output error under model error.**  No least squares is efficient then, and each weights the misfit its own
+   way; the coefficients are refined so that the model's trajectories follow the runs over segments of several
+   periods (:mod:`fitting.output_error`), which is what a long-time prediction needs.
 
 Everything after the column evaluation works on the R factor of each run's design ``[X b]`` (35 + 1 columns),
 so a least squares on any support, a whole elimination path and the cross-validation cost microseconds each.
@@ -49,9 +52,10 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import single_blas_thread
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
-from .integral_form import column_states, integral_window
+from .integral_form import column_states, integral_window, natural_windows
 from .model import TERMS, PolynomialModel, damping_mask
 from .model_states import SegmentConfig, model_states, segment_length
+from .output_error import OutputErrorConfig, OutputErrorFit, refine_output_error
 from .support_search import (fit_support, heldout_inflation, heldout_rms, prune_heldout, reduced_design,
                              select_heldout, select_support)
 
@@ -59,7 +63,7 @@ if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
-__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model", "natural_windows",
+__all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model",
            "METHOD", "KNEE_TOLERANCE", "MODEL_ERROR_MODE"]
 
 log = logging.getLogger(__name__)
@@ -74,12 +78,13 @@ KNEE_TOLERANCE = 0.002
 #: One-line description of the method (written next to the result).
 METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, in the model passes "
           "at most 0.875 periods of the equation's natural frequency; Numerov-corrected double integrals); per "
-          "equation backward elimination from the 35-term library until Holm's rule at "
-          "family-wise alpha declares every remaining term significant, stepwise additions, swaps and two-for-one "
-          "merges that keep every term significant, then the support with the smallest held-out error (K-fold over "
-          "runs) on the continued elimination path; damping terms always kept; repeated with the columns at the raw "
-          "positions and the velocities of the selected model's trajectories fitted segment by segment to the data "
-          "until the support and coefficients converge")
+          "equation backward elimination from the 35-term library until Holm's rule at family-wise alpha declares "
+          "every remaining term significant, stepwise additions, swaps and two-for-one merges that keep every term "
+          "significant, then the support with the smallest held-out error (K-fold over runs) on the continued "
+          "elimination path; damping terms always kept; repeated with the columns at the raw positions and the "
+          "velocities of the selected model's trajectories fitted segment by segment to the data until the support "
+          "and coefficients converge; under model error, the coefficients refined by the output error over segments "
+          "of 5 slow periods")
 
 
 @dataclass(frozen=True)
@@ -166,6 +171,10 @@ class DiscoveryConfig:
         seeds); on the non-sparse truths of ``benchmarks/bench_model_error.py`` whose residual stayed within 1.05 of
         the noise it is 11-1,120 at truncation residuals of 0.4-1.9 % (spare terms fit one amplitude range's model
         error and miss the others').
+    output_error : OutputErrorConfig or None
+        When either equation is under model error, the selected coefficients are refined by the output error over
+        segments of several periods (:func:`fitting.output_error.refine_output_error`); the standard errors stay
+        the integral form's.  None: never.
     """
 
     alpha: float = 0.01
@@ -188,6 +197,7 @@ class DiscoveryConfig:
     model_error_se: float = 1.0
     model_error_tolerance: float = 0.03
     model_error_inflation: float | None = 20.0
+    output_error: OutputErrorConfig | None = field(default_factory=OutputErrorConfig)
 
     def __post_init__(self) -> None:
         if not 0 < self.alpha < 1:
@@ -201,15 +211,14 @@ class DiscoveryConfig:
             raise ValueError("max_iterations must be >= 0, n_folds >= 2 and selection_passes >= 1")
         if not (self.tolerance > 0 and 0 <= self.heldout_tolerance < 1):
             raise ValueError("tolerance must be positive and heldout_tolerance in [0, 1)")
-        if self.natural_periods is not None and not self.natural_periods > 0:
-            raise ValueError(f"natural_periods must be positive or None, got {self.natural_periods}")
+        for name in ("natural_periods", "model_error_inflation"):
+            if getattr(self, name) is not None and not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive or None, got {getattr(self, name)}")
         if ((self.model_error_factor is not None and not self.model_error_factor > 1) or not self.model_error_se >= 0
                 or not 0 <= self.model_error_tolerance < 1):
             raise ValueError(f"model_error_factor must exceed 1 (or be None), model_error_se be >= 0 and "
                              f"model_error_tolerance lie in [0, 1), got {self.model_error_factor}, "
                              f"{self.model_error_se}, {self.model_error_tolerance}")
-        if self.model_error_inflation is not None and not self.model_error_inflation > 0:
-            raise ValueError(f"model_error_inflation must be positive or None, got {self.model_error_inflation}")
 
 
 @dataclass(frozen=True)
@@ -300,6 +309,7 @@ class DiscoveryResult:
     selection_modes: tuple[str, str] = ("significance", "significance")
     residual_to_noise: tuple[float, float] = (float("nan"), float("nan"))
     heldout_inflation: tuple[float, float] = (float("nan"), float("nan"))
+    output_error: OutputErrorFit | None = None
 
     @property
     def z(self) -> NDArray[np.float64]:
@@ -342,28 +352,8 @@ class DiscoveryResult:
                                       "heldout_inflation": float(self.heldout_inflation[q])}}
                    for q, eq in enumerate(EQUATION_NAMES)},
                 "knee": {"tolerance": KNEE_TOLERANCE, **{eq: list(t) for eq, t in knee.items()}},
-                "iterations": [it.to_json() for it in self.iterations], "converged": self.converged}
-
-
-#: The stiffness term of each equation (its natural frequency is sqrt(-coefficient) / 2 pi).
-_STIFFNESS = (TERMS.index("y"), TERMS.index("theta"))
-
-
-def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequence[float],
-                    config: DiscoveryConfig) -> list[list[int]]:
-    """Per equation and run, the window [frames] shortened to at most ``config.natural_periods`` periods of the
-    equation's natural frequency ``sqrt(-coef[stiffness]) / 2 pi``, also below the lower bound of
-    ``config.window_bounds_s``; unchanged for an equation without a restoring stiffness."""
-    out = []
-    for q in range(2):
-        k = -float(coef[q, _STIFFNESS[q]])
-        if not k > 0:
-            out.append(list(windows[q]))
-            continue
-        f_nat = np.sqrt(k) / (2.0 * np.pi)
-        cap = [integral_window(dt, f_nat, config.natural_periods, (dt, config.window_bounds_s[1])) for dt in dts]
-        out.append([min(int(w), c) for w, c in zip(windows[q], cap)])
-    return out
+                "iterations": [it.to_json() for it in self.iterations], "converged": self.converged,
+                "output_error": self.output_error.to_json() if self.output_error is not None else None}
 
 
 # ---- the discovery loop ----------------------------------------------------------------------------------------
@@ -387,8 +377,7 @@ def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
 
 @dataclass(frozen=True, eq=False)
 class _Setup:
-    """What every pass of the discovery reads: the runs' positions, frequencies, first (smoothed) states and their
-    trimmed edges, the integral windows, the model-state segments, the forced terms and the tracking noise."""
+    """What the passes read: positions, first states and edges, windows, segments, forced terms, noise, frequencies."""
 
     dts: list[float]
     ys: list[NDArray]
@@ -399,6 +388,7 @@ class _Setup:
     seg_len: list[int]
     forced: NDArray
     noise: tuple[float, float]
+    slow_freqs: list[float]
 
 
 @dataclass(frozen=True, eq=False)
@@ -434,14 +424,14 @@ def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Disco
                for q in range(2)]
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
-    return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, (white_noise_std(ys), white_noise_std(ths)))
+    return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, (white_noise_std(ys), white_noise_std(ths)),
+                  [min((v for v in f if v > 0), default=float("nan")) for f in freqs])
 
 
 def _is_model_error(ratio: float, inflation: float, config: DiscoveryConfig) -> bool:
     """Either sign of model error (``model_error_factor``, ``model_error_inflation``)."""
-    return ((config.model_error_factor is not None and ratio > config.model_error_factor)
-            or (config.model_error_inflation is not None and np.isfinite(inflation)
-                and inflation > config.model_error_inflation))
+    factor, limit = config.model_error_factor, config.model_error_inflation
+    return (factor is not None and ratio > factor) or (limit is not None and 0 < inflation - limit < np.inf)
 
 
 def _select_equation(design, forced: NDArray, noise: float, config: DiscoveryConfig):
@@ -525,7 +515,7 @@ def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[i
     for it in range(config.max_iterations + 1):
         t0 = time.perf_counter()
         if it == 1 and config.natural_periods is not None:
-            windows = natural_windows(result.coef, windows, dts, config)
+            windows = natural_windows(result.coef, windows, dts, config.natural_periods, config.window_bounds_s[1])
         if it > 0:
             sigma = (float(result.res_std[0]), float(result.res_std[1]))
             estimate = model_states(PolynomialModel(result.coef), dts, ys, ths, first, setup.seg_len, sigma,
@@ -580,21 +570,30 @@ def _pareto_fronts(result: _Pass, config: DiscoveryConfig) -> dict[str, tuple[Pa
 
 
 def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> DiscoveryResult:
-    """Steps 1-4: set up, iterate the passes, the Pareto fronts of the last pass, the result."""
+    """Steps 1-5: set up, iterate the passes, the output error under model error, the Pareto fronts, the result."""
     t_start = time.perf_counter()
     setup = _setup(runs, derivs, config)
     result, windows, history, converged = _iterate(setup, config)
+    refined = _refine_output_error(setup, [d.state for d in derivs], result, config)
     mask = result.coef != 0.0
     window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], setup.dts)]) for q in range(2)])
     pareto = _pareto_fronts(result, config)
-    log.info("discovery: %d terms in %.2f s (%s)", int(mask.sum()), time.perf_counter() - t_start,
-             "converged" if converged else "not converged")
+    log.info("discovery: %d terms in %.2f s (%sconverged)", mask.sum(), time.perf_counter() - t_start,
+             "" if converged else "not ")
     for q, eq in enumerate(EQUATION_NAMES):
         if result.modes[q] != "significance":
             log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model "
                      "error; terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
                      config.model_error_factor, config.model_error_inflation)
-    return DiscoveryResult(mask=mask, coef=result.coef, std_errors=result.se, residual_std=result.res_std,
-                           window_s=window_s, pareto=pareto, iterations=tuple(history), converged=converged,
-                           selection_modes=result.modes, residual_to_noise=result.ratio,
-                           heldout_inflation=result.inflation)
+    return DiscoveryResult(mask=mask, coef=refined.coef if refined else result.coef, std_errors=result.se,
+                           residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
+                           converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
+                           heldout_inflation=result.inflation, output_error=refined)
+
+
+def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, config: DiscoveryConfig):
+    """Step 5: under model error, the coefficients whose trajectories best follow the runs over several periods."""
+    if config.output_error is None or all(m == "significance" for m in result.modes):
+        return None
+    return refine_output_error(PolynomialModel(result.coef), setup.dts, setup.ys, setup.ths, smoothed,
+                               setup.slow_freqs, setup.noise, config.output_error)

@@ -184,9 +184,10 @@ def discovery_description(record: dict) -> MethodDescription:
 
 
 def model_error_text(disc: dict, settings: dict) -> str:
-    """The sentence on the equations selected by held-out prediction because their residual showed model error
-    (model.json's ``discovery[eq]["selection"]``, the rule's settings from ``settings["discovery"]``); empty when
-    every equation was selected by significance."""
+    """The sentences on the equations selected by held-out prediction because their residual showed model error
+    (model.json's ``discovery[eq]["selection"]``, the rule's settings from ``settings["discovery"]``) and on the
+    output-error refinement of the coefficients (``discovery["output_error"]``); empty when every equation was
+    selected by significance."""
     parts = []
     for eq in EQUATION_NAMES:
         sel = (disc.get(eq) or {}).get("selection") or {}
@@ -205,10 +206,16 @@ def model_error_text(disc: dict, settings: dict) -> str:
     within = f"{se:g} paired standard error{'' if se == 1 else 's'}"
     if tol:
         within += f", or {100 * tol:g} % of the held-out misfit's model-error part,"
-    return (" Model error: the cubic library does not hold the truth in " + " and ".join(parts) + ", so the "
+    text = (" Model error: the cubic library does not hold the truth in " + " and ".join(parts) + ", so the "
             "standard errors and Holm's rule lose their meaning there; those equations were selected by held-out "
             f"prediction over runs instead (the smallest support on the elimination path within {within} of the "
             "best held-out error), and their standard errors are those of a residual that is partly model error.")
+    oe = disc.get("output_error") or {}
+    if oe.get("segments"):
+        text += (f" The discovered coefficients were then refined by the output error: the model's trajectories "
+                 f"fitted to {oe['segments']} segments of {oe['segment_s']:.3g} s of the runs, which lowered their "
+                 f"RMS misfit from {oe['misfit_start']:.3g} to {oe['misfit']:.3g} times the tracking noise.")
+    return text
 
 
 register_method(DiscoveryMethod())

@@ -44,13 +44,15 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .model import TERMS
 from .multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .derivatives import Derivatives
 
-__all__ = ["column_states", "double_integral", "integral_window", "window_starts", "detrend_windows", "integral_columns",
+__all__ = ["column_states", "double_integral", "integral_window", "natural_windows", "window_starts", "detrend_windows",
+           "integral_columns",
            "IntegralFit", "fit_integral_form", "IntegralSelection",
            "select_integral_form", "integral_form_selection", "METHOD"]
 
@@ -74,6 +76,27 @@ def integral_window(dt: float, frequency_hz: float, periods: float = 0.75,
     w_s = periods / f if f > 0 and np.isfinite(f) else bounds_s[1]
     w_s = float(np.clip(w_s, *bounds_s))
     return max(8, int(round(w_s / dt)))
+
+
+#: The stiffness term of each equation (its natural frequency is sqrt(-coefficient) / 2 pi).
+_STIFFNESS = (TERMS.index("y"), TERMS.index("theta"))
+
+
+def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequence[float], natural_periods: float,
+                    max_window_s: float) -> list[list[int]]:
+    """Per equation and run, the window [frames] shortened to at most ``natural_periods`` periods of the
+    equation's natural frequency ``sqrt(-coef[stiffness]) / 2 pi`` (and to ``max_window_s`` [s]), also below the
+    usual lower bound of :func:`integral_window`; unchanged for an equation without a restoring stiffness."""
+    out = []
+    for q in range(2):
+        k = -float(coef[q, _STIFFNESS[q]])
+        if not k > 0:
+            out.append(list(windows[q]))
+            continue
+        f_nat = np.sqrt(k) / (2.0 * np.pi)
+        cap = [integral_window(dt, f_nat, natural_periods, (dt, max_window_s)) for dt in dts]
+        out.append([min(int(w), c) for w, c in zip(windows[q], cap)])
+    return out
 
 
 def window_starts(n: int, window: int, trim: int = 0) -> NDArray[np.int64]:

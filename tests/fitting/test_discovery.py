@@ -15,7 +15,8 @@ import pytest
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
 from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model, natural_windows
+from fitting.discovery import DiscoveryConfig, discover_model
+from fitting.integral_form import natural_windows
 from fitting.support_search import numerov_columns
 from fitting.integral_form import detrend_windows, integral_columns, window_starts
 from fitting.model import TERMS, PolynomialModel
@@ -133,9 +134,9 @@ def test_windows_are_capped_at_the_natural_period():
     coef[1, TERMS.index("theta")] = -(2 * np.pi * 43.0) ** 2
     # y: 0.75 periods at 22 Hz (51 frames) is within 0.875 natural periods; theta moving at f_y (51 frames) gets
     # 0.875 / 43 Hz = 30.5 frames, below the 25-ms floor (38 frames)
-    assert natural_windows(coef, [[51, 51], [51, 38]], [dt, dt], cfg) == [[51, 51], [31, 31]]
+    assert natural_windows(coef, [[51, 51], [51, 38]], [dt, dt], cfg.natural_periods, cfg.window_bounds_s[1]) == [[51, 51], [31, 31]]
     coef[1, TERMS.index("theta")] = 5.0  # no restoring stiffness: the dominant frequency alone
-    assert natural_windows(coef, [[51], [51]], [dt], cfg)[1] == [51]
+    assert natural_windows(coef, [[51], [51]], [dt], cfg.natural_periods, cfg.window_bounds_s[1])[1] == [51]
     with pytest.raises(ValueError):
         DiscoveryConfig(natural_periods=0.0)
 

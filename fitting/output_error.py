@@ -1,0 +1,330 @@
+"""Output-error refinement: the coefficients whose trajectories best follow the measured runs over several periods.
+
+Why
+---
+Under model error (a truth that the cubic library cannot represent) no least-squares estimate of the
+coefficients is efficient, and each weights the misfit differently: the integral form
+(:mod:`fitting.integral_form`) weights the slow part of the residual, a least squares on differentiated data
+the fast part.  Neither is the coefficient set that predicts the motion best, and the long-time error, the
+quantity a user compares against experiment, differs between them by up to a factor of two.
+
+Method
+------
+Each run is cut into segments of ``periods`` periods of its slower dominant frequency, overlapping by half
+(:func:`fitting.model_states.segment_layout`; at most ``max_segments`` in all, evenly spread).  The parameters
+are the coefficients of the given support and the initial state of every segment (4 per segment); the objective
+is the misfit of the simulated y and theta to the measured ones, each in units of its tracking noise, summed over
+all frames of all segments: the maximum-likelihood fit for white tracking noise when the model is exact, and the
+best predictor over the segment length when it is not.  It is minimised by Levenberg-Marquardt from the start
+coefficients with the segment states first fitted alone (Gauss-Newton); the Jacobian is a forward difference
+with every perturbed trajectory integrated in one compiled call per chunk of segments
+(:func:`fitting.integrate.integrate_batch`), and the segment states are eliminated from the normal equations by
+their Schur complement, so a step costs one solve of the size of the support.  Fitting the segment states removes
+the error of smoothed initial states, which otherwise dominates a trajectory misfit.  A segment whose trajectory
+leaves ten times the run's range at the start coefficients, or whose misfit there is above ``outlier_factor`` (5)
+times the median segment's, is left out: where the motion is chaotic (a double pendulum at large swings) a few
+diverged segments would otherwise decide the coefficients.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cubedimer.config_checks import check_positive, check_whole
+from .integrate import integrate_batch
+from .model import EXPONENTS, PolynomialModel
+from .model_states import segment_layout
+
+__all__ = ["OutputErrorConfig", "OutputErrorFit", "refine_output_error"]
+
+log = logging.getLogger(__name__)
+
+#: trajectories of a chunk's Jacobian integrated per compiled call, in frames (bounds the memory to ~100 MB)
+_CHUNK_FRAMES = 3_000_000
+
+
+@dataclass(frozen=True)
+class OutputErrorConfig:
+    """Settings of :func:`refine_output_error`.
+
+    Parameters
+    ----------
+    periods : float
+        Segment length in periods of the run's slower dominant frequency: the horizon over which the
+        trajectories are fitted.
+    max_segments : int
+        At most this many segments in all (evenly spread over the runs' segments).
+    iterations : int
+        Levenberg-Marquardt iterations at most.
+    rtol : float
+        Stop when an iteration lowers the misfit by less than this fraction.
+    h_omega : float
+        RK4 step times the model's fastest linear angular frequency.
+    outlier_factor : float
+        Segments whose RMS misfit at the start coefficients (states fitted) exceeds this many times the median
+        segment's are left out: the model's trajectory has diverged from the motion there (a chaotic stretch, or a
+        range the cubic cannot follow), and a sum of squares would be decided by them alone.
+    """
+
+    periods: float = 5.0
+    max_segments: int = 256
+    iterations: int = 20
+    rtol: float = 1e-6
+    h_omega: float = 0.1
+    outlier_factor: float = 5.0
+
+    def __post_init__(self) -> None:
+        for name in ("periods", "rtol", "h_omega", "outlier_factor"):
+            check_positive(self, name)
+        check_whole(self, "max_segments")
+        check_whole(self, "iterations")
+
+
+@dataclass(frozen=True, eq=False)
+class OutputErrorFit:
+    """Result of :func:`refine_output_error`.
+
+    Attributes
+    ----------
+    coef : ndarray (2, 35)
+        Refined coefficients (SI), zero outside the support.
+    misfit_start, misfit : float
+        Root-mean-square misfit of the segments' trajectories to y and theta, in units of the tracking noise
+        (about 1 for an exact model), at the start coefficients (segment states fitted) and after the refinement.
+    segments : int
+        Segments fitted.
+    segment_s : float
+        Median segment length [s].
+    iterations : int
+        Levenberg-Marquardt iterations taken.
+    dropped : int
+        Segments left out because their trajectory left the run's range, or did not follow the motion
+        (``outlier_factor``), at the start coefficients.
+    """
+
+    coef: NDArray[np.float64]
+    misfit_start: float
+    misfit: float
+    segments: int
+    segment_s: float
+    iterations: int
+    dropped: int = 0
+
+    def to_json(self) -> dict:
+        return {"misfit_start": self.misfit_start, "misfit": self.misfit, "segments": self.segments,
+                "segment_s": self.segment_s, "iterations": self.iterations, "dropped": self.dropped}
+
+
+@dataclass(frozen=True, eq=False)
+class _Segments:
+    """Segments of all runs: frame interval, length [frames], measured (y, theta) padded with NaN (S, Lmax, 2),
+    start states (S, 4) and blow-up bounds (S, 4)."""
+
+    dt: NDArray[np.float64]
+    length: NDArray[np.int64]
+    data: NDArray[np.float64]
+    x0: NDArray[np.float64]
+    bound: NDArray[np.float64]
+
+    def subset(self, keep: NDArray) -> "_Segments":
+        return _Segments(self.dt[keep], self.length[keep], self.data[keep], self.x0[keep], self.bound[keep])
+
+
+def _segments(dts: Sequence[float], ys: Sequence[NDArray], thetas: Sequence[NDArray], states: Sequence[NDArray],
+              slow_freqs: Sequence[float], config: OutputErrorConfig) -> _Segments:
+    rows = []
+    for dt, y, th, st, f in zip(dts, ys, thetas, states, slow_freqs):
+        n = len(y)
+        length = n if not (np.isfinite(f) and f > 0) else max(8, int(round(config.periods / (f * dt))))
+        bound = 10.0 * np.maximum(np.nanmax(np.abs(st), axis=0), 1e-300)
+        starts, _, L = segment_layout(n, length)
+        for s in starts:
+            rows.append((dt, L, np.column_stack([y[s:s + L], th[s:s + L]]), st[s], bound))
+    if len(rows) > config.max_segments:
+        rows = [rows[i] for i in np.unique(np.linspace(0, len(rows) - 1, config.max_segments).round().astype(int))]
+    lmax = max(r[1] for r in rows)
+    data = np.full((len(rows), lmax, 2), np.nan)
+    for b, r in enumerate(rows):
+        data[b, :r[1]] = r[2]
+    return _Segments(np.array([r[0] for r in rows]), np.array([r[1] for r in rows], dtype=np.int64), data,
+                     np.array([r[3] for r in rows], dtype=float), np.array([r[4] for r in rows]))
+
+
+class _Problem:
+    """The weighted residuals of the segments' trajectories as functions of (support coefficients, segment states)."""
+
+    def __init__(self, coef: NDArray, segs: _Segments, sigma: Sequence[float], h_omega: float):
+        self.mask = coef != 0.0
+        self.cols = np.flatnonzero(self.mask.any(axis=0))
+        self.exps = np.ascontiguousarray(EXPONENTS[self.cols])
+        self.where = np.argwhere(self.mask[:, self.cols])
+        self.segs = segs
+        self.w = 1.0 / np.maximum(np.asarray(sigma, float), 1e-300)
+        self.valid = np.isfinite(segs.data[..., 0])
+        self.substeps = max(1, max(PolynomialModel(coef).default_substeps(float(d), h_omega)
+                                   for d in np.unique(segs.dt)))
+
+    def matrix(self, p: NDArray) -> NDArray:
+        c = np.zeros((2, self.cols.size))
+        c[self.where[:, 0], self.where[:, 1]] = p
+        return c
+
+    def residuals(self, coefs: NDArray, x0s: NDArray, idx: NDArray) -> tuple[NDArray, NDArray]:
+        """Weighted residuals (B, Lmax, 2), zero on padding, of the trajectories from ``x0s`` (B, 4) with the
+        coefficient matrices ``coefs`` (B, 2, n_cols) of segments ``idx`` (B,); and which of them stayed in
+        bounds."""
+        s = self.segs
+        traj, nv = integrate_batch(np.ascontiguousarray(coefs), self.exps, x0s, s.dt[idx], s.length[idx],
+                                   self.substeps, s.bound[idx])
+        res = (traj[..., [0, 2]] - s.data[idx, :traj.shape[1]]) * self.w
+        ok = nv >= s.length[idx]
+        return np.where(self.valid[idx, :traj.shape[1], None], np.nan_to_num(res), 0.0), ok
+
+    def cost(self, p: NDArray, x0: NDArray) -> tuple[float, NDArray]:
+        """Sum of squared weighted residuals over the segments that stayed in bounds, and which did."""
+        seg = self.segment_costs(p, x0)
+        ok = np.isfinite(seg)
+        return float(np.sum(seg[ok])), ok
+
+    def segment_costs(self, p: NDArray, x0: NDArray) -> NDArray:
+        """Per segment the sum of squared weighted residuals (inf where the trajectory left its bounds)."""
+        idx = np.arange(x0.shape[0])
+        res, ok = self.residuals(np.broadcast_to(self.matrix(p), (idx.size, 2, self.cols.size)), x0, idx)
+        return np.where(ok, np.sum(res ** 2, axis=(1, 2)), np.inf)
+
+    def normal_equations(self, p: NDArray, x0: NDArray, states_only: bool = False):
+        """(A_cc, A_cx (S, nc, 4), A_xx (S, 4, 4), g_c, g_x (S, 4)) of the forward-difference Jacobian (with respect
+        to the segment states alone when ``states_only``: nc = 0)."""
+        nc, S = (0 if states_only else p.size), x0.shape[0]
+        dp = 1e-6 * np.maximum(np.abs(p[:nc]), 1e-300)
+        dx = 1e-6 * np.maximum(self.segs.bound / 10.0, 1e-300)
+        base = self.matrix(p)
+        pert = np.stack([base] + [self.matrix(p + dp[j] * np.eye(p.size)[j]) for j in range(nc)] + [base] * 4)
+        k = pert.shape[0]
+        chunk = max(1, _CHUNK_FRAMES // (k * self.segs.data.shape[1]))
+        acc = (np.zeros((nc, nc)), np.zeros((S, nc, 4)), np.zeros((S, 4, 4)), np.zeros(nc), np.zeros((S, 4)))
+        for lo in range(0, S, chunk):
+            idx = np.arange(lo, min(S, lo + chunk))
+            b = idx.size
+            xs = np.repeat(x0[idx][None], k, axis=0)
+            for j in range(4):
+                xs[1 + nc + j, :, j] += dx[idx, j]
+            res, _ = self.residuals(np.repeat(pert, b, axis=0), xs.reshape(-1, 4), np.tile(idx, k))
+            res = res.reshape(k, b, -1)
+            jac_c = (res[1:1 + nc] - res[0][None]) / dp[:, None, None]
+            jac_x = (res[1 + nc:] - res[0][None]) / dx[idx].T[:, :, None]
+            acc[0][...] += np.einsum("ibt,jbt->ij", jac_c, jac_c)
+            acc[1][idx] = np.einsum("ibt,jbt->bij", jac_c, jac_x)
+            acc[2][idx] = np.einsum("ibt,jbt->bij", jac_x, jac_x)
+            acc[3][...] += np.einsum("ibt,bt->i", jac_c, res[0])
+            acc[4][idx] = np.einsum("ibt,bt->bi", jac_x, res[0])
+        return acc
+
+
+def _lm_step(normal, lam: float) -> tuple[NDArray, NDArray]:
+    """Levenberg-Marquardt step (coefficients, segment states) with the states eliminated by their Schur
+    complement; Marquardt's scaling by the diagonal."""
+    a_cc, a_cx, a_xx, g_c, g_x = normal
+    eye4 = np.eye(4)
+    d_xx = a_xx + lam * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4
+    inv = np.linalg.inv(d_xx)
+    schur = a_cc + lam * np.diag(np.diag(a_cc)) - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx)
+    rhs = g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x)
+    step_c = -np.linalg.lstsq(schur, rhs, rcond=None)[0]
+    step_x = -np.einsum("sij,sj->si", inv, g_x + np.einsum("sij,i->sj", a_cx, step_c))
+    return step_c, step_x
+
+
+def _fit_states(problem: _Problem, p: NDArray, x0: NDArray, steps: int = 4) -> NDArray:
+    """Gauss-Newton on the segment states alone at fixed coefficients (the start of the refinement); a segment
+    keeps its state where a step does not lower its misfit."""
+    eye4 = np.eye(4)
+    seg_cost = problem.segment_costs(p, x0)
+    for _ in range(steps):
+        _, _, a_xx, _, g_x = problem.normal_equations(p, x0, states_only=True)
+        step = -np.linalg.solve(a_xx + 1e-9 * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4,
+                                g_x[..., None])[..., 0]
+        trial = problem.segment_costs(p, x0 + step)
+        better = trial < seg_cost
+        x0 = np.where(better[:, None], x0 + step, x0)
+        seg_cost = np.where(better, trial, seg_cost)
+    return x0
+
+
+def _followed(mean_square: NDArray, factor: float) -> NDArray[np.bool_]:
+    """The segments whose trajectory stays in range and whose RMS misfit is at most ``factor`` times the median
+    segment's."""
+    finite = np.isfinite(mean_square)
+    if not finite.any():
+        return finite
+    return finite & (mean_square <= factor**2 * np.median(mean_square[finite]))
+
+
+def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequence[NDArray],
+                        thetas: Sequence[NDArray], states: Sequence[NDArray], slow_freqs: Sequence[float],
+                        sigma: Sequence[float], config: OutputErrorConfig = OutputErrorConfig()) -> OutputErrorFit:
+    """Refine the model's coefficients on its support by the output error over segments (module docstring).
+
+    Parameters
+    ----------
+    model : PolynomialModel
+        Start model (SI); its non-zero coefficients are the support.
+    dts : per run frame interval [s]
+    ys, thetas : per run measured y [m] and theta [-] at every frame (gaps filled)
+    states : per run (n_i, 4) state estimates [y, ydot, theta, thetadot] (the segments' start states and ranges)
+    slow_freqs : per run the slower dominant frequency [Hz]
+    sigma : (float, float)
+        Tracking noise of y [m] and theta [-] (the misfit's units).
+    config : OutputErrorConfig
+
+    Returns
+    -------
+    OutputErrorFit
+        The start coefficients unchanged when no segment can be integrated.
+    """
+    coef = np.asarray(model.coef, float)
+    segs = _segments(dts, ys, thetas, states, slow_freqs, config)
+    # noiseless or unmeasured noise: a floor of 1e-6 of each coordinate's RMS keeps the two weighted alike
+    floor = 1e-6 * np.sqrt(np.nanmean(segs.data ** 2, axis=(0, 1)))
+    sigma = np.asarray(sigma, float)
+    sigma = np.where(np.isfinite(sigma) & (sigma > floor), sigma, floor)
+    problem = _Problem(coef, segs, sigma, config.h_omega)
+    p = coef[:, problem.cols][problem.mask[:, problem.cols]].astype(float)
+    x0 = _fit_states(problem, p, segs.x0.copy())
+    ok = _followed(problem.segment_costs(p, x0) / (2.0 * segs.length), config.outlier_factor)
+    dropped = int((~ok).sum())
+    segment_s = float(np.median(segs.length * segs.dt))
+    if not ok.any():
+        log.info("output-error refinement: no segment is followed at the start coefficients; not refined")
+        return OutputErrorFit(coef, float("nan"), float("nan"), 0, segment_s, 0, dropped)
+    problem = _Problem(coef, segs.subset(ok), sigma, config.h_omega)
+    x0 = x0[ok]
+    n_obs = max(int(problem.valid.sum()) * 2, 1)
+    cost, _ = problem.cost(p, x0)
+    cost_start, lam, it = cost, 1e-3, 0
+    for it in range(1, config.iterations + 1):
+        normal = problem.normal_equations(p, x0)
+        for _ in range(10):
+            step_c, step_x = _lm_step(normal, lam)
+            trial_cost, trial_ok = problem.cost(p + step_c, x0 + step_x)
+            if trial_ok.all() and trial_cost < cost:
+                break
+            lam *= 4.0
+        else:
+            break
+        gain = (cost - trial_cost) / cost
+        log.debug("output-error iteration %d: misfit %.6g -> %.6g, lambda %.3g", it, cost, trial_cost, lam)
+        p, x0, cost, lam = p + step_c, x0 + step_x, trial_cost, max(lam / 3.0, 1e-9)
+        if gain < config.rtol:
+            break
+    out = np.zeros_like(coef)
+    out[:, problem.cols] = problem.matrix(p)
+    fit = OutputErrorFit(out, float(np.sqrt(cost_start / n_obs)), float(np.sqrt(cost / n_obs)), int(ok.sum()),
+                         segment_s, it, dropped)
+    log.info("output-error refinement: misfit %.4g -> %.4g noise units over %d segments of %.3g s (%d iterations)",
+             fit.misfit_start, fit.misfit, fit.segments, segment_s, it)
+    return fit
