@@ -431,7 +431,7 @@ def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Disco
 def _is_model_error(ratio: float, inflation: float, config: DiscoveryConfig) -> bool:
     """Either sign of model error (``model_error_factor``, ``model_error_inflation``)."""
     factor, limit = config.model_error_factor, config.model_error_inflation
-    return (factor is not None and ratio > factor) or (limit is not None and 0 < inflation - limit < np.inf)
+    return (factor is not None and ratio > factor) or (limit is not None and bool(limit < inflation < np.inf))
 
 
 def _select_equation(design, forced: NDArray, noise: float, config: DiscoveryConfig):
@@ -585,7 +585,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
             log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model "
                      "error; terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
                      config.model_error_factor, config.model_error_inflation)
-    return DiscoveryResult(mask=mask, coef=refined.coef if refined else result.coef, std_errors=result.se,
+    return DiscoveryResult(mask=mask, coef=result.coef if refined is None else refined.coef, std_errors=result.se,
                            residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined)
@@ -593,7 +593,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
 
 def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, config: DiscoveryConfig):
     """Step 5: under model error, the coefficients whose trajectories best follow the runs over several periods."""
-    if config.output_error is None or all(m == "significance" for m in result.modes):
+    if config.output_error is None or MODEL_ERROR_MODE not in result.modes:
         return None
     return refine_output_error(PolynomialModel(result.coef), setup.dts, setup.ys, setup.ths, smoothed,
                                setup.slow_freqs, setup.noise, config.output_error)

@@ -239,9 +239,10 @@ def _lm_step(normal, lam: float) -> tuple[NDArray, NDArray]:
     return step_c, step_x
 
 
-def _fit_states(problem: _Problem, p: NDArray, x0: NDArray, steps: int = 4) -> NDArray:
+def _fit_states(problem: _Problem, p: NDArray, x0: NDArray, steps: int = 4) -> tuple[NDArray, NDArray]:
     """Gauss-Newton on the segment states alone at fixed coefficients (the start of the refinement); a segment
-    keeps its state where a step does not lower its misfit."""
+    keeps its state where a step does not lower its misfit.  Returns the states and every segment's misfit there
+    (:meth:`_Problem.segment_costs`)."""
     eye4 = np.eye(4)
     seg_cost = problem.segment_costs(p, x0)
     for _ in range(steps):
@@ -252,7 +253,7 @@ def _fit_states(problem: _Problem, p: NDArray, x0: NDArray, steps: int = 4) -> N
         better = trial < seg_cost
         x0 = np.where(better[:, None], x0 + step, x0)
         seg_cost = np.where(better, trial, seg_cost)
-    return x0
+    return x0, seg_cost
 
 
 def _followed(mean_square: NDArray, factor: float) -> NDArray[np.bool_]:
@@ -294,8 +295,8 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
     sigma = np.where(np.isfinite(sigma) & (sigma > floor), sigma, floor)
     problem = _Problem(coef, segs, sigma, config.h_omega)
     p = coef[:, problem.cols][problem.mask[:, problem.cols]].astype(float)
-    x0 = _fit_states(problem, p, segs.x0.copy())
-    ok = _followed(problem.segment_costs(p, x0) / (2.0 * segs.length), config.outlier_factor)
+    x0, seg_cost = _fit_states(problem, p, segs.x0.copy())
+    ok = _followed(seg_cost / (2.0 * segs.length), config.outlier_factor)
     dropped = int((~ok).sum())
     segment_s = float(np.median(segs.length * segs.dt))
     if not ok.any():
