@@ -290,7 +290,10 @@ def run_case(name: str, level: float, seed: int) -> list[dict]:
             coef = res.coef
             note = "; ".join(f"{eq}: {m}" for eq, m in zip(("y", "theta"), res.selection_modes))
             if res.output_error is not None:
-                note += f"; output-error misfit {res.output_error.misfit_start:.3g} -> {res.output_error.misfit:.3g}"
+                oe = res.output_error
+                note += f"; output-error misfit {oe.misfit_start:.3g} -> {oe.misfit_support:.3g}"
+                if oe.pruned:
+                    note += f", {len(oe.pruned)} terms pruned -> {oe.misfit:.3g}"
         else:
             coef, thr = stlsq_cv(data, method.startswith("E-"), seed)
             note = f"threshold {thr:g}"

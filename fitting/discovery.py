@@ -33,9 +33,9 @@ Method
 4. **Trade-off.**  Every support met on the elimination paths, with its held-out error (fit on the other
    runs; root-mean-square misfit of the held-out runs' detrended positions per degree of freedom),
    forms the Pareto front of number of terms against held-out error (:attr:`DiscoveryResult.pareto`).
-5. **Output error under model error.**  No least squares is efficient then, and each weights the misfit its own
-   way; the coefficients are refined so that the model's trajectories follow the runs over segments of several
-   periods (:mod:`fitting.output_error`), which is what a long-time prediction needs.
+5. **Output error under model error.**  No least squares is efficient then; the coefficients are refined so that
+   the model's trajectories follow the runs over segments of several periods, what a long-time prediction needs,
+   and the terms a trajectory does not need are pruned (:mod:`fitting.output_error`).
 
 Everything after the column evaluation works on the R factor of each run's design ``[X b]`` (35 + 1 columns),
 so a least squares on any support, a whole elimination path and the cross-validation cost microseconds each.
@@ -173,8 +173,8 @@ class DiscoveryConfig:
         error and miss the others').
     output_error : OutputErrorConfig or None
         When either equation is under model error, the selected coefficients are refined by the output error over
-        segments of several periods (:func:`fitting.output_error.refine_output_error`); the standard errors stay
-        the integral form's.  None: never.
+        segments of several periods, and the terms a trajectory does not need are pruned
+        (:func:`fitting.output_error.refine_output_error`); standard errors stay the integral form's.  None: never.
     """
 
     alpha: float = 0.01
@@ -575,7 +575,8 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     setup = _setup(runs, derivs, config)
     result, windows, history, converged = _iterate(setup, config)
     refined = _refine_output_error(setup, [d.state for d in derivs], result, config)
-    mask = result.coef != 0.0
+    coef = result.coef if refined is None else refined.coef
+    mask = coef != 0.0
     window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], setup.dts)]) for q in range(2)])
     pareto = _pareto_fronts(result, config)
     log.info("discovery: %d terms in %.2f s (%sconverged)", mask.sum(), time.perf_counter() - t_start,
@@ -585,7 +586,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
             log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model "
                      "error; terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
                      config.model_error_factor, config.model_error_inflation)
-    return DiscoveryResult(mask=mask, coef=result.coef if refined is None else refined.coef, std_errors=result.se,
+    return DiscoveryResult(mask=mask, coef=coef, std_errors=np.where(mask, result.se, 0.0),
                            residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined)
@@ -596,4 +597,4 @@ def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, 
     if config.output_error is None or MODEL_ERROR_MODE not in result.modes:
         return None
     return refine_output_error(PolynomialModel(result.coef), setup.dts, setup.ys, setup.ths, smoothed,
-                               setup.slow_freqs, setup.noise, config.output_error)
+                               setup.slow_freqs, setup.noise, config.output_error, setup.forced)

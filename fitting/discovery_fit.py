@@ -212,9 +212,15 @@ def model_error_text(disc: dict, settings: dict) -> str:
             "best held-out error), and their standard errors are those of a residual that is partly model error.")
     oe = disc.get("output_error") or {}
     if oe.get("segments"):
+        pruned = oe.get("pruned") or []
+        support = oe.get("misfit_support", oe["misfit"]) if pruned else oe["misfit"]
         text += (f" The discovered coefficients were then refined by the output error: the model's trajectories "
                  f"fitted to {oe['segments']} segments of {oe['segment_s']:.3g} s of the runs, which lowered their "
-                 f"RMS misfit from {oe['misfit_start']:.3g} to {oe['misfit']:.3g} times the tracking noise.")
+                 f"RMS misfit from {oe['misfit_start']:.3g} to {support:.3g} times the tracking noise.")
+        if pruned:
+            text += (f" {len(pruned)} term{'s' if len(pruned) > 1 else ''} the trajectories do not need "
+                     f"{'were' if len(pruned) > 1 else 'was'} then pruned ({', '.join(pruned)}), at a misfit of "
+                     f"{oe['misfit']:.3g}.")
     return text
 
 

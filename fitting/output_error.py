@@ -24,6 +24,17 @@ the error of smoothed initial states, which otherwise dominates a trajectory mis
 leaves ten times the run's range at the start coefficients, or whose misfit there is above ``outlier_factor`` (5)
 times the median segment's, is left out: where the motion is chaotic (a double pendulum at large swings) a few
 diverged segments would otherwise decide the coefficients.
+
+Pruning
+-------
+A support selected by held-out prediction under model error keeps terms whose only use is to absorb a little of the
+model error in the acceleration; along a trajectory they do nothing.  After the refinement the terms are tried for
+removal one at a time, the weakest first (smallest RMS contribution to its equation's acceleration over the
+smoothed states); a term goes when the support without it, refined again over the same segments, has a squared
+misfit within ``prune_tolerance`` (3 %) of the model-error part of the full support's, ``misfit**2 - 1`` in noise
+units: the tolerance of the held-out selection (:func:`fitting.selection_rules.select_heldout`), on the quantity a
+long-time prediction needs.  Pruning stops at the ``prune_rejections``-th (2nd) term that must stay.  Terms the
+caller forces (``forced``) are never tried.
 """
 from __future__ import annotations
 
@@ -34,9 +45,10 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from cubedimer.config_checks import check_positive, check_whole
+from cubedimer.config_checks import check_non_negative, check_positive, check_whole
+from cubedimer.terms import EQUATION_NAMES, evaluate_library
 from .integrate import integrate_batch
-from .model import EXPONENTS, PolynomialModel
+from .model import EXPONENTS, TERMS, PolynomialModel
 from .model_states import segment_layout
 
 __all__ = ["OutputErrorConfig", "OutputErrorFit", "refine_output_error"]
@@ -68,6 +80,11 @@ class OutputErrorConfig:
         Segments whose RMS misfit at the start coefficients (states fitted) exceeds this many times the median
         segment's are left out: the model's trajectory has diverged from the motion there (a chaotic stretch, or a
         range the cubic cannot follow), and a sum of squares would be decided by them alone.
+    prune_tolerance : float or None
+        A term is pruned when the refined squared misfit without it exceeds the full support's by at most this
+        fraction of the full support's model-error part (``misfit**2 - 1``); None: no pruning.
+    prune_rejections : int
+        Pruning stops after this many terms were tried and kept.
     """
 
     periods: float = 5.0
@@ -76,12 +93,17 @@ class OutputErrorConfig:
     rtol: float = 1e-6
     h_omega: float = 0.1
     outlier_factor: float = 5.0
+    prune_tolerance: float | None = 0.03
+    prune_rejections: int = 2
 
     def __post_init__(self) -> None:
         for name in ("periods", "rtol", "h_omega", "outlier_factor"):
             check_positive(self, name)
         check_whole(self, "max_segments")
         check_whole(self, "iterations")
+        check_whole(self, "prune_rejections")
+        if self.prune_tolerance is not None:
+            check_non_negative(self, "prune_tolerance")
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,10 +113,11 @@ class OutputErrorFit:
     Attributes
     ----------
     coef : ndarray (2, 35)
-        Refined coefficients (SI), zero outside the support.
+        Refined coefficients (SI), zero outside the (pruned) support.
     misfit_start, misfit : float
         Root-mean-square misfit of the segments' trajectories to y and theta, in units of the tracking noise
-        (about 1 for an exact model), at the start coefficients (segment states fitted) and after the refinement.
+        (about 1 for an exact model), at the start coefficients (segment states fitted) and after the refinement
+        and pruning.
     segments : int
         Segments fitted.
     segment_s : float
@@ -104,6 +127,10 @@ class OutputErrorFit:
     dropped : int
         Segments left out because their trajectory left the run's range, or did not follow the motion
         (``outlier_factor``), at the start coefficients.
+    misfit_support : float
+        The misfit refined on the start support, before pruning (NaN when nothing was fitted).
+    pruned : tuple of str
+        The terms pruned, as ``equation:term`` (``thetaddot:ydot^2``), in the order they went.
     """
 
     coef: NDArray[np.float64]
@@ -113,10 +140,13 @@ class OutputErrorFit:
     segment_s: float
     iterations: int
     dropped: int = 0
+    misfit_support: float = float("nan")
+    pruned: tuple[str, ...] = ()
 
     def to_json(self) -> dict:
         return {"misfit_start": self.misfit_start, "misfit": self.misfit, "segments": self.segments,
-                "segment_s": self.segment_s, "iterations": self.iterations, "dropped": self.dropped}
+                "segment_s": self.segment_s, "iterations": self.iterations, "dropped": self.dropped,
+                "misfit_support": self.misfit_support, "pruned": list(self.pruned)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,6 +197,10 @@ class _Problem:
         self.valid = np.isfinite(segs.data[..., 0])
         self.substeps = max(1, max(PolynomialModel(coef).default_substeps(float(d), h_omega)
                                    for d in np.unique(segs.dt)))
+
+    def matrix_values(self, coef: NDArray) -> NDArray:
+        """The parameter vector of the support's coefficients in ``coef`` (2, 35)."""
+        return np.asarray(coef, float)[:, self.cols][self.mask[:, self.cols]]
 
     def matrix(self, p: NDArray) -> NDArray:
         c = np.zeros((2, self.cols.size))
@@ -267,8 +301,10 @@ def _followed(mean_square: NDArray, factor: float) -> NDArray[np.bool_]:
 
 def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequence[NDArray],
                         thetas: Sequence[NDArray], states: Sequence[NDArray], slow_freqs: Sequence[float],
-                        sigma: Sequence[float], config: OutputErrorConfig = OutputErrorConfig()) -> OutputErrorFit:
-    """Refine the model's coefficients on its support by the output error over segments (module docstring).
+                        sigma: Sequence[float], config: OutputErrorConfig = OutputErrorConfig(),
+                        forced: NDArray | None = None) -> OutputErrorFit:
+    """Refine the model's coefficients on its support by the output error over segments, then prune the terms a
+    trajectory does not need (module docstring).
 
     Parameters
     ----------
@@ -281,6 +317,8 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
     sigma : (float, float)
         Tracking noise of y [m] and theta [-] (the misfit's units).
     config : OutputErrorConfig
+    forced : (2, 35) bool, optional
+        Terms never pruned.
 
     Returns
     -------
@@ -293,19 +331,43 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
     floor = 1e-6 * np.sqrt(np.nanmean(segs.data ** 2, axis=(0, 1)))
     sigma = np.asarray(sigma, float)
     sigma = np.where(np.isfinite(sigma) & (sigma > floor), sigma, floor)
-    problem = _Problem(coef, segs, sigma, config.h_omega)
-    p = coef[:, problem.cols][problem.mask[:, problem.cols]].astype(float)
-    x0, seg_cost = _fit_states(problem, p, segs.x0.copy())
+    segment_s = float(np.median(segs.length * segs.dt))
+    start = _Problem(coef, segs, sigma, config.h_omega)
+    x0, seg_cost = _fit_states(start, start.matrix_values(coef), segs.x0.copy())
     ok = _followed(seg_cost / (2.0 * segs.length), config.outlier_factor)
     dropped = int((~ok).sum())
-    segment_s = float(np.median(segs.length * segs.dt))
     if not ok.any():
         log.info("output-error refinement: no segment is followed at the start coefficients; not refined")
         return OutputErrorFit(coef, float("nan"), float("nan"), 0, segment_s, 0, dropped)
-    problem = _Problem(coef, segs.subset(ok), sigma, config.h_omega)
-    x0 = x0[ok]
+    segs = segs.subset(ok)
+    fit = _refine(coef, segs, sigma, x0[ok], config)
+    out = OutputErrorFit(fit.coef, fit.misfit_start, fit.misfit, int(ok.sum()), segment_s, fit.iterations, dropped,
+                         fit.misfit)
+    log.info("output-error refinement: misfit %.4g -> %.4g noise units over %d segments of %.3g s (%d iterations)",
+             out.misfit_start, out.misfit, out.segments, segment_s, out.iterations)
+    if config.prune_tolerance is None:
+        return out
+    return _prune(out, fit.x0, segs, sigma, states, config, forced)
+
+
+@dataclass(frozen=True, eq=False)
+class _Refined:
+    coef: NDArray
+    x0: NDArray
+    misfit_start: float
+    misfit: float
+    iterations: int
+
+
+def _refine(coef: NDArray, segs: _Segments, sigma: NDArray, x0: NDArray, config: OutputErrorConfig) -> _Refined:
+    """Levenberg-Marquardt on the support's coefficients and the segment states from (``coef``, ``x0``); every
+    segment must stay in bounds at every accepted step (misfit inf when one leaves them at the start)."""
+    problem = _Problem(coef, segs, sigma, config.h_omega)
+    p = problem.matrix_values(coef)
     n_obs = max(int(problem.valid.sum()) * 2, 1)
-    cost, _ = problem.cost(p, x0)
+    cost, ok = problem.cost(p, x0)
+    if not ok.all():
+        return _Refined(coef, x0, np.inf, np.inf, 0)
     cost_start, lam, it = cost, 1e-3, 0
     for it in range(1, config.iterations + 1):
         normal = problem.normal_equations(p, x0)
@@ -324,8 +386,42 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
             break
     out = np.zeros_like(coef)
     out[:, problem.cols] = problem.matrix(p)
-    fit = OutputErrorFit(out, float(np.sqrt(cost_start / n_obs)), float(np.sqrt(cost / n_obs)), int(ok.sum()),
-                         segment_s, it, dropped)
-    log.info("output-error refinement: misfit %.4g -> %.4g noise units over %d segments of %.3g s (%d iterations)",
-             fit.misfit_start, fit.misfit, fit.segments, segment_s, it)
-    return fit
+    return _Refined(out, x0, float(np.sqrt(cost_start / n_obs)), float(np.sqrt(cost / n_obs)), it)
+
+
+def _contributions(coef: NDArray, states: Sequence[NDArray]) -> NDArray[np.float64]:
+    """(2, 35) RMS of every term's contribution to its equation's acceleration over ``states`` (the runs' (n_i, 4)
+    states), relative to the RMS of that equation's modelled acceleration; zero outside the support."""
+    library = evaluate_library(np.vstack(states))
+    acc_rms = np.sqrt(np.mean((library @ np.asarray(coef, float).T) ** 2, axis=0))
+    return np.abs(coef) * np.sqrt(np.mean(library ** 2, axis=0))[None] / np.maximum(acc_rms, 1e-300)[:, None]
+
+
+def _prune(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, states: Sequence[NDArray],
+           config: OutputErrorConfig, forced: NDArray | None) -> OutputErrorFit:
+    """Backward elimination by the refined output error over the same segments (module docstring, Pruning)."""
+    limit = fit.misfit ** 2 + config.prune_tolerance * max(fit.misfit ** 2 - 1.0, 0.0)
+    frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool).copy()
+    coef, misfit, pruned, kept = fit.coef, fit.misfit, [], 0
+    while kept < config.prune_rejections:
+        weight = np.where((coef != 0) & ~frozen, _contributions(coef, states), np.inf)
+        weight[(coef != 0).sum(axis=1) <= 1] = np.inf  # an equation keeps at least one term
+        q, j = np.unravel_index(np.argmin(weight), weight.shape)
+        if not np.isfinite(weight[q, j]):
+            break
+        trial = coef.copy()
+        trial[q, j] = 0.0
+        cand = _refine(trial, segs, sigma, x0, config)
+        name = f"{EQUATION_NAMES[q]}:{TERMS[j]}"
+        log.debug("output-error pruning: without %s misfit %.5g (limit %.5g)", name, cand.misfit, np.sqrt(limit))
+        if cand.misfit ** 2 <= limit:
+            coef, x0, misfit = cand.coef, cand.x0, cand.misfit
+            pruned.append(name)
+        else:
+            frozen[q, j] = True
+            kept += 1
+    if pruned:
+        log.info("output-error pruning: %d terms removed (%s), misfit %.4g -> %.4g noise units", len(pruned),
+                 ", ".join(pruned), fit.misfit, misfit)
+    return OutputErrorFit(coef, fit.misfit_start, misfit, fit.segments, fit.segment_s, fit.iterations, fit.dropped,
+                          fit.misfit, tuple(pruned))

@@ -10,9 +10,10 @@ from scipy.integrate import solve_ivp
 
 from cubedimer.dataset import Run
 from cubedimer.spectra import dominant_frequency
+from cubedimer.terms import EQUATION_NAMES
 from fitting.derivatives import run_derivatives
 from fitting.discovery import DiscoveryConfig, discover_model
-from fitting.model import PolynomialModel
+from fitting.model import TERMS, PolynomialModel
 
 W1, W2, MU, C2, K = 2 * np.pi * 1.0, 2 * np.pi * 1.6, 0.2, 0.15, 20.0
 
@@ -110,7 +111,13 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse):
     # pysindy in benchmarks/bench_model_error.py)
     integral = discover_model(runs, derivs, DiscoveryConfig(output_error=None))
     assert new.output_error is not None and integral.output_error is None and old.output_error is None
-    assert (integral.mask == new.mask).all() and new.output_error.misfit < 0.8 * new.output_error.misfit_start
+    # the support is the integral form's less the terms the pruning removed, and only those lost their coefficient
+    pruned = np.zeros_like(new.mask)
+    for name in new.output_error.pruned:
+        eq, term = name.split(":")
+        pruned[EQUATION_NAMES.index(eq), TERMS.index(term)] = True
+    assert (new.mask == (integral.mask & ~pruned)).all() and (new.std_errors[~new.mask] == 0).all()
+    assert new.output_error.misfit < 0.8 * new.output_error.misfit_start
     assert new.to_json()["output_error"]["segments"] == new.output_error.segments > 0
     assert _long_time(new.model, heldout) < 0.8 * _long_time(integral.model, heldout)
     # the two stiffnesses and couplings (linear terms) are found
@@ -188,3 +195,7 @@ def test_the_report_says_which_equations_were_selected_under_model_error(rules, 
         assert ("refined by the output error: the model's trajectories fitted to 24 segments of 4.36 s of the runs, "
                 "which lowered their RMS misfit from 8.15 to 5.69 times the tracking noise"
                 in discovery_description(model).text)
+        model["discovery"]["output_error"].update(misfit=5.71, misfit_support=5.69,
+                                                  pruned=["thetaddot:ydot^2", "yddot:y*theta"])
+        assert ("from 8.15 to 5.69 times the tracking noise. 2 terms the trajectories do not need were then pruned "
+                "(thetaddot:ydot^2, yddot:y*theta), at a misfit of 5.71." in discovery_description(model).text)

@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from cubedimer.spectra import dominant_frequency
-from fitting.model import PolynomialModel
+from fitting.model import TERMS, PolynomialModel
 from fitting.model_states import segment_layout
 from fitting.output_error import OutputErrorConfig, refine_output_error
 
@@ -102,8 +102,58 @@ def test_on_a_non_polynomial_truth_the_refined_cubic_predicts_better_than_the_ta
     assert after < 0.5 * before, (before, after)
 
 
+#: the pendulums' Taylor cubic: its support and start coefficients
+PENDULUM_TAYLOR = {"yddot": {"y": -W1**2 - 2.0, "ydot": -0.1, "theta": 2.0, "y^3": W1**2 / 6},
+                   "thetaddot": {"y": 2.0, "theta": -W2**2 - 2.0, "thetadot": -0.1, "theta^3": W2**2 / 6}}
+#: terms even in the coordinates: the pendulums' forces are odd, so these are zero at every order of the series
+EVEN_TERMS = {"yddot": {"y^2": 0.5}, "thetaddot": {"y*theta": 0.5}}
+
+
+def _with_even_terms():
+    return PolynomialModel.from_equations({eq: {**PENDULUM_TAYLOR[eq], **EVEN_TERMS[eq]} for eq in PENDULUM_TAYLOR})
+
+
+@pytest.fixture(scope="module")
+def pendulum_runs():
+    return _runs(_pendulums, 1.2, 8, seed=5)
+
+
+def test_pruning_removes_the_terms_a_trajectory_does_not_need(pendulum_runs):
+    """Under model error (swings of 1.2 rad) a support with two terms of the wrong symmetry: pruning removes both
+    and keeps every term of the Taylor support, and the pruned cubic predicts held-out runs as well."""
+    fit = _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6)
+    taylor = PolynomialModel.from_equations(PENDULUM_TAYLOR).support
+    assert sorted(fit.pruned) == ["thetaddot:y*theta", "yddot:y^2"]
+    assert ((fit.coef != 0) == taylor).all()
+    # the rule itself: the squared misfit within 3 % of the full support's model-error part
+    assert fit.misfit_support > 1.3  # a model-error part (misfit**2 - 1; 1.0 here) of the size of the noise
+    assert fit.misfit**2 <= fit.misfit_support**2 + 0.03 * (fit.misfit_support**2 - 1)
+    unpruned = _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6,
+                       config=OutputErrorConfig(prune_tolerance=None))
+    assert unpruned.pruned == () and unpruned.misfit == fit.misfit_support
+    # the held-out long-time error of the pruned cubic is that of the unpruned one within 10 % (both fit the same
+    # amplitude range; the even terms' refined coefficients are near zero)
+    before = _long_time(PolynomialModel(unpruned.coef), pendulum_runs[6:])
+    after = _long_time(PolynomialModel(fit.coef), pendulum_runs[6:])
+    assert after < 1.1 * before, (before, after)
+
+
+def test_forced_terms_are_never_pruned(pendulum_runs):
+    model = _with_even_terms()
+    forced = np.zeros_like(model.support)
+    forced[0, TERMS.index("y^2")] = True
+    rng = np.random.default_rng(6)
+    runs = pendulum_runs[:6]
+    ys = [s[:, 0] + 1e-3 * rng.standard_normal(len(t)) for t, s in runs]
+    ths = [s[:, 2] + 1e-3 * rng.standard_normal(len(t)) for t, s in runs]
+    fit = refine_output_error(model, [1 / FPS] * 6, ys, ths, [s for _, s in runs], [1.0] * 6, (1e-3, 1e-3),
+                              forced=forced)
+    assert fit.pruned == ("thetaddot:y*theta",) and fit.coef[forced].all()
+
+
 def test_config_validates_itself():
-    for bad in ({"periods": 0.0}, {"max_segments": 0}, {"iterations": 1.5}, {"rtol": -1.0}):
+    for bad in ({"periods": 0.0}, {"max_segments": 0}, {"iterations": 1.5}, {"rtol": -1.0}, {"prune_tolerance": -0.1},
+                {"prune_rejections": 0}):
         with pytest.raises(ValueError):
             OutputErrorConfig(**bad)
 
