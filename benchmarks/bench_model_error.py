@@ -293,7 +293,7 @@ def run_case(name: str, level: float, seed: int) -> list[dict]:
                 oe = res.output_error
                 note += f"; output-error misfit {oe.misfit_start:.3g} -> {oe.misfit_support:.3g}"
                 if oe.pruned:
-                    note += f", {len(oe.pruned)} terms pruned -> {oe.misfit:.3g}"
+                    note += f", {len(oe.pruned)} term{'s' if len(oe.pruned) > 1 else ''} pruned -> {oe.misfit:.3g}"
         else:
             coef, thr = stlsq_cv(data, method.startswith("E-"), seed)
             note = f"threshold {thr:g}"

@@ -198,7 +198,7 @@ class _Problem:
         self.substeps = max(1, max(PolynomialModel(coef).default_substeps(float(d), h_omega)
                                    for d in np.unique(segs.dt)))
 
-    def matrix_values(self, coef: NDArray) -> NDArray:
+    def parameters(self, coef: NDArray) -> NDArray:
         """The parameter vector of the support's coefficients in ``coef`` (2, 35)."""
         return np.asarray(coef, float)[:, self.cols][self.mask[:, self.cols]]
 
@@ -333,7 +333,7 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
     sigma = np.where(np.isfinite(sigma) & (sigma > floor), sigma, floor)
     segment_s = float(np.median(segs.length * segs.dt))
     start = _Problem(coef, segs, sigma, config.h_omega)
-    x0, seg_cost = _fit_states(start, start.matrix_values(coef), segs.x0.copy())
+    x0, seg_cost = _fit_states(start, start.parameters(coef), segs.x0.copy())
     ok = _followed(seg_cost / (2.0 * segs.length), config.outlier_factor)
     dropped = int((~ok).sum())
     if not ok.any():
@@ -363,7 +363,7 @@ def _refine(coef: NDArray, segs: _Segments, sigma: NDArray, x0: NDArray, config:
     """Levenberg-Marquardt on the support's coefficients and the segment states from (``coef``, ``x0``); every
     segment must stay in bounds at every accepted step (misfit inf when one leaves them at the start)."""
     problem = _Problem(coef, segs, sigma, config.h_omega)
-    p = problem.matrix_values(coef)
+    p = problem.parameters(coef)
     n_obs = max(int(problem.valid.sum()) * 2, 1)
     cost, ok = problem.cost(p, x0)
     if not ok.all():
