@@ -1,7 +1,7 @@
 """Command line: ``python -m fitting fit|compare|synth``.
 
 * ``fit DATA_DIR --out OUT_DIR [--method discovery|paper] [--workers N | --scheduler ADDRESS] [--strict]
-  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION] [--no-glitch-mask]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
+  [--no-plots] [--max-evals N] [--heldout-tolerance FRACTION] [--output-error MODE] [--no-glitch-mask]``: steps 1-4; writes ``OUT_DIR/model.json`` (docs/formats.md), per-run caches in ``OUT_DIR/runs/``
   (resume) and plots.
 * ``compare DATA_DIR --model OUT_DIR/model.json --out OUT_DIR [--drop eq:term ...]
   [--no-reoptimise]``: step 5; writes ``compare.json`` (per-run shape and Poincare errors,
@@ -53,6 +53,10 @@ def _cmd_fit(a: argparse.Namespace) -> int:
         cfg = FitConfig(method=a.method).with_heldout_tolerance(a.heldout_tolerance)
     except ValueError as exc:
         raise UserInputError(f"--heldout-tolerance {exc}") from None
+    try:
+        cfg = cfg.with_output_error(a.output_error)
+    except ValueError as exc:
+        raise UserInputError(f"--output-error {exc}") from None
     for option in METHOD_OPTIONS:  # the options only some methods accept: the method says which
         if getattr(a, option) not in (None, False) and option not in method.options:
             raise UserInputError(f"--{option.replace('_', '-')} applies to --method "
@@ -230,6 +234,11 @@ def add_fit_parser(subparsers) -> None:
                         "A practical threshold for data whose truth is not sparse in the library (real dimers): 0.002 "
                         "gives the 11-term Gor'kov form on the paper-like twin, but also drops weak true terms near the "
                         "information limit; model.json's Pareto front shows the trade-off")
+    f.add_argument("--output-error", choices=("prune", "refine", "off"), default=None,
+                   help="discovery, for equations whose residual is model error (a truth not sparse in the library): "
+                        "'prune' (default) refines the coefficients so that the model's trajectories follow the runs "
+                        "over 5-period segments, then drops the terms those trajectories do not need; 'refine' only "
+                        "refines; 'off' keeps the integral form's coefficients and support")
     f.add_argument("--relative-threshold", action="store_true",
                    help="apply the regression threshold to each equation relative to its signal size (for a hinge "
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")

@@ -10,11 +10,17 @@ from .derivatives import SmoothingConfig
 from .discovery import DiscoveryConfig
 from .ensemble import EnsembleConfig
 from .method_registry import DEFAULT_METHOD, METHODS, methods_accepting
+from .output_error import OutputErrorConfig
 from .refine import JOINT_REFINE, RefineConfig
 from .regression import RegressionConfig
 from .selection import SelectionConfig
 
-__all__ = ["FitConfig"]
+__all__ = ["FitConfig", "OUTPUT_ERROR_MODES"]
+
+#: ``--output-error``: the discovery's coefficients under model error (``DiscoveryConfig.output_error``):
+#: refined by the output error and pruned (the default), refined only, or the integral form's
+OUTPUT_ERROR_MODES: dict[str, OutputErrorConfig | None] = {
+    "prune": OutputErrorConfig(), "refine": OutputErrorConfig(prune_tolerance=None), "off": None}
 
 
 @dataclass(frozen=True)
@@ -68,3 +74,14 @@ class FitConfig:
                              f"{', '.join(methods_accepting('heldout_tolerance'))} (0.002 keeps the "
                              "smallest support within 0.2 % of the best held-out error)")
         return replace(self, discovery=replace(self.discovery, heldout_tolerance=float(tolerance)))
+
+    def with_output_error(self, mode: str | None) -> "FitConfig":
+        """This configuration with the discovery's coefficients under model error (``DiscoveryConfig.output_error``)
+        set by ``mode`` (:data:`OUTPUT_ERROR_MODES`; None: unchanged); ValueError for another mode or a method that
+        does not accept the option."""
+        if mode is None:
+            return self
+        if mode not in OUTPUT_ERROR_MODES or "output_error" not in METHODS[self.method].options:
+            raise ValueError(f"{mode}: needs one of {', '.join(OUTPUT_ERROR_MODES)} and --method "
+                             f"{', '.join(methods_accepting('output_error'))}")
+        return replace(self, discovery=replace(self.discovery, output_error=OUTPUT_ERROR_MODES[mode]))

@@ -74,7 +74,7 @@ class DiscoveryMethod:
     #: the discovery's own settings (a paper fit's model.json leaves them out)
     private_settings: tuple[str, ...] = ("discovery", "polish", "polish_se")
     #: ``--heldout-tolerance``: the practical threshold of the held-out selection
-    options: tuple[str, ...] = ("heldout_tolerance",)
+    options: tuple[str, ...] = ("heldout_tolerance", "output_error")
     #: ``--max-evals`` sets the evaluations of the long-time polish
     max_evals_setting: str = "polish"
 

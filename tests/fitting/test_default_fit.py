@@ -100,6 +100,26 @@ def test_method_is_validated():
     assert main(["fit", "nowhere", "--out", "x", "--selection", "zscore"]) == 2  # a paper-only option
     assert main(["fit", "nowhere", "--out", "x", "--method", "paper", "--heldout-tolerance", "0.002"]) == 2
     assert main(["fit", "nowhere", "--out", "x", "--heldout-tolerance", "1.5"]) == 2  # a fraction in [0, 1)
+    assert main(["fit", "nowhere", "--out", "x", "--method", "paper", "--output-error", "off"]) == 2
+
+
+@pytest.mark.parametrize("mode, refined, pruned", [("prune", True, True), ("refine", True, False), ("off", False, False)])
+def test_output_error_modes_set_the_discovery_config(mode, refined, pruned):
+    """``--output-error``: the discovery's coefficients under model error refined and pruned (the default), refined
+    only, or the integral form's; model.json's settings record the choice (fit_output serialises the config)."""
+    import dataclasses
+
+    from fitting.config import FitConfig
+
+    cfg = FitConfig().with_output_error(mode)
+    oe = cfg.discovery.output_error
+    assert (oe is not None) == refined and (oe is not None and oe.prune_tolerance is not None) == pruned
+    assert (cfg.discovery.output_error == FitConfig().discovery.output_error) == (mode == "prune")
+    recorded = json.loads(json.dumps(dataclasses.asdict(cfg), default=float))["discovery"]["output_error"]
+    assert (recorded is None) == (not refined)
+    with pytest.raises(ValueError):
+        FitConfig().with_output_error("polish")
+    assert FitConfig().with_output_error(None) == FitConfig()
 
 
 def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp_path):
