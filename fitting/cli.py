@@ -22,6 +22,7 @@ from pathlib import Path
 
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            positive_float, positive_int, prepare_output_dir, run_cli)
+from .config import OUTPUT_ERROR_MODES
 from .final_checks import NoSaneModelError
 from .methods import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_accepting, methods_help
 from .selection_rules import SELECTION_RULES
@@ -234,7 +235,7 @@ def add_fit_parser(subparsers) -> None:
                         "A practical threshold for data whose truth is not sparse in the library (real dimers): 0.002 "
                         "gives the 11-term Gor'kov form on the paper-like twin, but also drops weak true terms near the "
                         "information limit; model.json's Pareto front shows the trade-off")
-    f.add_argument("--output-error", choices=("prune", "refine", "off"), default=None,
+    f.add_argument("--output-error", choices=tuple(OUTPUT_ERROR_MODES), default=None,
                    help="discovery, for equations whose residual is model error (a truth not sparse in the library): "
                         "'prune' (default) refines the coefficients so that the model's trajectories follow the runs "
                         "over 5-period segments, then drops the terms those trajectories do not need; 'refine' only "

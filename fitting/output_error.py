@@ -389,12 +389,12 @@ def _refine(coef: NDArray, segs: _Segments, sigma: NDArray, x0: NDArray, config:
     return _Refined(out, x0, float(np.sqrt(cost_start / n_obs)), float(np.sqrt(cost / n_obs)), it)
 
 
-def _contributions(coef: NDArray, states: Sequence[NDArray]) -> NDArray[np.float64]:
-    """(2, 35) RMS of every term's contribution to its equation's acceleration over ``states`` (the runs' (n_i, 4)
-    states), relative to the RMS of that equation's modelled acceleration; zero outside the support."""
-    library = evaluate_library(np.vstack(states))
+def _contributions(coef: NDArray, library: NDArray, column_rms: NDArray) -> NDArray[np.float64]:
+    """(2, 35) RMS of every term's contribution to its equation's acceleration over the states whose library
+    columns are ``library`` (n, 35; their RMS ``column_rms``), relative to the RMS of that equation's modelled
+    acceleration; zero outside the support."""
     acc_rms = np.sqrt(np.mean((library @ np.asarray(coef, float).T) ** 2, axis=0))
-    return np.abs(coef) * np.sqrt(np.mean(library ** 2, axis=0))[None] / np.maximum(acc_rms, 1e-300)[:, None]
+    return np.abs(coef) * column_rms[None] / np.maximum(acc_rms, 1e-300)[:, None]
 
 
 def _prune(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, states: Sequence[NDArray],
@@ -402,9 +402,11 @@ def _prune(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, st
     """Backward elimination by the refined output error over the same segments (module docstring, Pruning)."""
     limit = fit.misfit ** 2 + config.prune_tolerance * max(fit.misfit ** 2 - 1.0, 0.0)
     frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool).copy()
+    library = evaluate_library(np.vstack(states))  # the smoothed states' columns, once for every candidate
+    column_rms = np.sqrt(np.mean(library ** 2, axis=0))
     coef, misfit, pruned, kept = fit.coef, fit.misfit, [], 0
     while kept < config.prune_rejections:
-        weight = np.where((coef != 0) & ~frozen, _contributions(coef, states), np.inf)
+        weight = np.where((coef != 0) & ~frozen, _contributions(coef, library, column_rms), np.inf)
         weight[(coef != 0).sum(axis=1) <= 1] = np.inf  # an equation keeps at least one term
         q, j = np.unravel_index(np.argmin(weight), weight.shape)
         if not np.isfinite(weight[q, j]):
