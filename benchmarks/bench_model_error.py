@@ -292,8 +292,10 @@ def run_case(name: str, level: float, seed: int) -> list[dict]:
             if res.output_error is not None:
                 oe = res.output_error
                 note += f"; output-error misfit {oe.misfit_start:.3g} -> {oe.misfit_support:.3g}"
-                if oe.pruned:
-                    note += f", {len(oe.pruned)} term{'s' if len(oe.pruned) > 1 else ''} pruned -> {oe.misfit:.3g}"
+                changes = [f"{len(v)} term{'s' if len(v) > 1 else ''} {w}" for v, w in ((oe.pruned, "pruned"),
+                                                                                     (oe.added, "added")) if v]
+                if changes:
+                    note += f", {' and '.join(changes)} -> {oe.misfit:.3g}"
         else:
             coef, thr = stlsq_cv(data, method.startswith("E-"), seed)
             note = f"threshold {thr:g}"

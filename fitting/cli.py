@@ -237,9 +237,10 @@ def add_fit_parser(subparsers) -> None:
                         "information limit; model.json's Pareto front shows the trade-off")
     f.add_argument("--output-error", choices=tuple(OUTPUT_ERROR_MODES), default=None,
                    help="discovery, for equations whose residual is model error (a truth not sparse in the library): "
-                        "'prune' (default) refines the coefficients so that the model's trajectories follow the runs "
-                        "over 5-period segments, then drops the terms those trajectories do not need; 'refine' only "
-                        "refines; 'off' keeps the integral form's coefficients and support")
+                        "'select' (default) refines the coefficients so that the model's trajectories follow the runs "
+                        "over 5-period segments, then drops the terms those trajectories do not need and adds those "
+                        "they need (a slow nonlinear damping, say); 'refine' only refines; 'off' keeps the integral "
+                        "form's coefficients and support")
     f.add_argument("--relative-threshold", action="store_true",
                    help="apply the regression threshold to each equation relative to its signal size (for a hinge "
                         "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")

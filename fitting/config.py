@@ -18,9 +18,10 @@ from .selection import SelectionConfig
 __all__ = ["FitConfig", "OUTPUT_ERROR_MODES"]
 
 #: ``--output-error``: the discovery's coefficients under model error (``DiscoveryConfig.output_error``):
-#: refined by the output error and pruned (the default), refined only, or the integral form's
+#: refined by the output error with its support pruned and grown by it (the default), refined only, or the integral
+#: form's
 OUTPUT_ERROR_MODES: dict[str, OutputErrorConfig | None] = {
-    "prune": OutputErrorConfig(), "refine": OutputErrorConfig(prune_tolerance=None), "off": None}
+    "select": OutputErrorConfig(), "refine": OutputErrorConfig(support_tolerance=None), "off": None}
 
 
 @dataclass(frozen=True)

@@ -34,8 +34,8 @@ Method
    runs; root-mean-square misfit of the held-out runs' detrended positions per degree of freedom),
    forms the Pareto front of number of terms against held-out error (:attr:`DiscoveryResult.pareto`).
 5. **Output error under model error.**  No least squares is efficient then; the coefficients are refined so that
-   the model's trajectories follow the runs over segments of several periods, what a long-time prediction needs,
-   and the terms a trajectory does not need are pruned (:mod:`fitting.output_error`).
+   the model's trajectories follow the runs over segments of several periods, what a long-time prediction needs;
+   the terms a trajectory does not need are pruned and those it needs added (:mod:`fitting.output_error`).
 
 Everything after the column evaluation works on the R factor of each run's design ``[X b]`` (35 + 1 columns),
 so a least squares on any support, a whole elimination path and the cross-validation cost microseconds each.
@@ -172,9 +172,8 @@ class DiscoveryConfig:
         the noise it is 11-1,120 at truncation residuals of 0.4-1.9 % (spare terms fit one amplitude range's model
         error and miss the others').
     output_error : OutputErrorConfig or None
-        When either equation is under model error, the selected coefficients are refined by the output error over
-        segments of several periods, and the terms a trajectory does not need are pruned
-        (:func:`fitting.output_error.refine_output_error`); standard errors stay the integral form's.  None: never.
+        Under model error in either equation, the coefficients are refined by the output error over segments of
+        several periods and the support pruned and grown by it (:func:`fitting.output_error.refine_output_error`).
     """
 
     alpha: float = 0.01
@@ -279,7 +278,7 @@ class DiscoveryResult:
     coef : ndarray (2, 35)
         Least-squares coefficients on the selected support [SI]; zero elsewhere.
     std_errors : ndarray (2, 35)
-        Their standard errors [SI]; zero outside the support.
+        Their standard errors [SI] (an output-error addition's from the output error); zero outside the support.
     residual_std : ndarray (2,)
         Residual standard deviation of y [m] and theta [-] (compare with the tracking noise).
     window_s : ndarray (2,)
@@ -575,7 +574,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     setup = _setup(runs, derivs, config)
     result, windows, history, converged = _iterate(setup, config)
     refined = _refine_output_error(setup, [d.state for d in derivs], result, config)
-    coef = result.coef if refined is None else refined.coef
+    coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
     mask = coef != 0.0
     window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], setup.dts)]) for q in range(2)])
     pareto = _pareto_fronts(result, config)
@@ -586,7 +585,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
             log.info("%s: residual %.3g times the tracking noise, held-out inflation %.3g (limits %s, %s): model "
                      "error; terms selected by held-out prediction over runs", eq, result.ratio[q], result.inflation[q],
                      config.model_error_factor, config.model_error_inflation)
-    return DiscoveryResult(mask=mask, coef=coef, std_errors=np.where(mask, result.se, 0.0),
+    return DiscoveryResult(mask=mask, coef=coef, std_errors=np.where(mask, se, 0.0),
                            residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined)

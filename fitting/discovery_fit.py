@@ -212,16 +212,29 @@ def model_error_text(disc: dict, settings: dict) -> str:
             "best held-out error), and their standard errors are those of a residual that is partly model error.")
     oe = disc.get("output_error") or {}
     if oe.get("segments"):
-        pruned = oe.get("pruned") or []
-        support = oe.get("misfit_support", oe["misfit"]) if pruned else oe["misfit"]
+        pruned, added = oe.get("pruned") or [], oe.get("added") or []
+        support = oe.get("misfit_support", oe["misfit"]) if pruned or added else oe["misfit"]
         text += (f" The discovered coefficients were then refined by the output error: the model's trajectories "
                  f"fitted to {oe['segments']} segments of {oe['segment_s']:.3g} s of the runs, which lowered their "
                  f"RMS misfit from {oe['misfit_start']:.3g} to {support:.3g} times the tracking noise.")
+        changes = []
         if pruned:
-            text += (f" {len(pruned)} term{'s' if len(pruned) > 1 else ''} the trajectories do not need "
-                     f"{'were' if len(pruned) > 1 else 'was'} then pruned ({', '.join(pruned)}), at a misfit of "
-                     f"{oe['misfit']:.3g}.")
+            changes.append(f"{_count(pruned)} the trajectories do not need {_were(pruned)} then pruned "
+                           f"({', '.join(pruned)})")
+        if added:
+            changes.append(f"{_count(added)} {'they' if pruned else 'the trajectories'} need {_were(added)} "
+                           f"{'' if pruned else 'then '}added ({', '.join(added)})")
+        if changes:
+            text += f" {' and '.join(changes)}, at a misfit of {oe['misfit']:.3g}."
     return text
+
+
+def _count(terms: list[str]) -> str:
+    return f"{len(terms)} term{'s' if len(terms) > 1 else ''}"
+
+
+def _were(terms: list[str]) -> str:
+    return "were" if len(terms) > 1 else "was"
 
 
 register_method(DiscoveryMethod())

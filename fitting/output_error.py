@@ -25,16 +25,29 @@ leaves ten times the run's range at the start coefficients, or whose misfit ther
 times the median segment's, is left out: where the motion is chaotic (a double pendulum at large swings) a few
 diverged segments would otherwise decide the coefficients.
 
-Pruning
--------
+Pruning and additions
+---------------------
 A support selected by held-out prediction under model error keeps terms whose only use is to absorb a little of the
-model error in the acceleration; along a trajectory they do nothing.  After the refinement the terms are tried for
-removal one at a time, the weakest first (smallest RMS contribution to its equation's acceleration over the
-smoothed states); a term goes when the support without it, refined again over the same segments, has a squared
-misfit within ``prune_tolerance`` (3 %) of the model-error part of the full support's, ``misfit**2 - 1`` in noise
-units: the tolerance of the held-out selection (:func:`fitting.selection_rules.select_heldout`), on the quantity a
-long-time prediction needs.  Pruning stops at the ``prune_rejections``-th (2nd) term that must stay.  Terms the
-caller forces (``forced``) are never tried.
+model error in the acceleration; along a trajectory they do nothing.  And it misses terms whose share of the
+acceleration is small but whose effect accumulates along a trajectory: a nonlinear damping (``y^2*ydot`` in a van
+der Pol oscillator) decides the amplitude after a few periods.  So after the refinement the support is changed by
+the output error itself, in three steps.
+
+1. Pruning: terms are tried for removal one at a time, the weakest first (smallest RMS contribution to its
+   equation's acceleration over the smoothed states); a term goes when the support without it, refined again over
+   the same segments, has a squared misfit within ``support_tolerance`` (3 %) of the model-error part of the full
+   support's, ``misfit**2 - 1`` in noise units: the tolerance of the held-out selection
+   (:func:`fitting.selection_rules.select_heldout`), on the quantity a long-time prediction needs.  Pruning stops at
+   the ``support_rejections``-th (2nd) term that must stay.  Terms the caller forces (``forced``) are never tried.
+2. Additions: a score test ranks every absent term of the library by the drop of the squared misfit that adding it
+   would give to first order, the support's coefficients and the segment states re-optimised with it
+   (Gauss-Newton on the forward-difference Jacobian of all 70 coefficients, the states eliminated by their Schur
+   complement: one Jacobian for all candidates).  The best is added, and the support refined, when its refitted
+   misfit drops by more than ``support_tolerance`` of the model-error part, the same rule read the other way; and
+   only when the drop is beyond what the noise explains (a chi-square test at a family-wise 1 % over the
+   candidates).  The additions stop at the ``support_rejections``-th candidate that fails.  An added term's standard
+   error is the output error's own (Gauss-Newton, scaled by the misfit squared).
+3. After an addition, pruning again from the grown support: a term the added one makes redundant goes.
 """
 from __future__ import annotations
 
@@ -44,6 +57,7 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.stats import chi2
 
 from cubedimer.config_checks import check_non_negative, check_positive, check_whole
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
@@ -57,6 +71,8 @@ log = logging.getLogger(__name__)
 
 #: trajectories of a chunk's Jacobian integrated per compiled call, in frames (bounds the memory to ~100 MB)
 _CHUNK_FRAMES = 3_000_000
+#: family-wise false-alarm probability of the score test over the absent terms (an added term must beat the noise)
+_ADDITION_LEVEL = 0.01
 
 
 @dataclass(frozen=True)
@@ -80,11 +96,14 @@ class OutputErrorConfig:
         Segments whose RMS misfit at the start coefficients (states fitted) exceeds this many times the median
         segment's are left out: the model's trajectory has diverged from the motion there (a chaotic stretch, or a
         range the cubic cannot follow), and a sum of squares would be decided by them alone.
-    prune_tolerance : float or None
+    support_tolerance : float or None
         A term is pruned when the refined squared misfit without it exceeds the full support's by at most this
-        fraction of the full support's model-error part (``misfit**2 - 1``); None: no pruning.
-    prune_rejections : int
-        Pruning stops after this many terms were tried and kept.
+        fraction of the full support's model-error part (``misfit**2 - 1``), and added when the refined squared
+        misfit with it is lower by more than this fraction of the current model-error part; None: the support is
+        kept as given.
+    support_rejections : int
+        Pruning stops after this many terms were tried and kept, and the additions after this many were tried and
+        not added.
     """
 
     periods: float = 5.0
@@ -93,17 +112,17 @@ class OutputErrorConfig:
     rtol: float = 1e-6
     h_omega: float = 0.1
     outlier_factor: float = 5.0
-    prune_tolerance: float | None = 0.03
-    prune_rejections: int = 2
+    support_tolerance: float | None = 0.03
+    support_rejections: int = 2
 
     def __post_init__(self) -> None:
         for name in ("periods", "rtol", "h_omega", "outlier_factor"):
             check_positive(self, name)
         check_whole(self, "max_segments")
         check_whole(self, "iterations")
-        check_whole(self, "prune_rejections")
-        if self.prune_tolerance is not None:
-            check_non_negative(self, "prune_tolerance")
+        check_whole(self, "support_rejections")
+        if self.support_tolerance is not None:
+            check_non_negative(self, "support_tolerance")
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,6 +150,11 @@ class OutputErrorFit:
         The misfit refined on the start support, before pruning (NaN when nothing was fitted).
     pruned : tuple of str
         The terms pruned, as ``equation:term`` (``thetaddot:ydot^2``), in the order they went.
+    added : tuple of str
+        The terms added, in the order they came.
+    std_errors : ndarray (2, 35) or None
+        Where terms were added: the Gauss-Newton standard errors of the final support's coefficients (SI), from
+        the output error's normal matrix with the segment states eliminated, scaled by the misfit squared.
     """
 
     coef: NDArray[np.float64]
@@ -142,11 +166,18 @@ class OutputErrorFit:
     dropped: int = 0
     misfit_support: float = float("nan")
     pruned: tuple[str, ...] = ()
+    added: tuple[str, ...] = ()
+    std_errors: NDArray[np.float64] | None = None
+
+    def merged_std_errors(self, start: NDArray) -> NDArray[np.float64]:
+        """The standard errors ``start`` (2, 35) of the start support, with the output error's on added terms."""
+        start = np.asarray(start, float)
+        return start if self.std_errors is None else np.where(start != 0.0, start, self.std_errors)
 
     def to_json(self) -> dict:
         return {"misfit_start": self.misfit_start, "misfit": self.misfit, "segments": self.segments,
                 "segment_s": self.segment_s, "iterations": self.iterations, "dropped": self.dropped,
-                "misfit_support": self.misfit_support, "pruned": list(self.pruned)}
+                "misfit_support": self.misfit_support, "pruned": list(self.pruned), "added": list(self.added)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,8 +218,9 @@ def _segments(dts: Sequence[float], ys: Sequence[NDArray], thetas: Sequence[NDAr
 class _Problem:
     """The weighted residuals of the segments' trajectories as functions of (support coefficients, segment states)."""
 
-    def __init__(self, coef: NDArray, segs: _Segments, sigma: Sequence[float], h_omega: float):
-        self.mask = coef != 0.0
+    def __init__(self, coef: NDArray, segs: _Segments, sigma: Sequence[float], h_omega: float,
+                 mask: NDArray | None = None):
+        self.mask = coef != 0.0 if mask is None else np.asarray(mask, bool)
         self.cols = np.flatnonzero(self.mask.any(axis=0))
         self.exps = np.ascontiguousarray(EXPONENTS[self.cols])
         self.where = np.argwhere(self.mask[:, self.cols])
@@ -230,11 +262,12 @@ class _Problem:
         res, ok = self.residuals(np.broadcast_to(self.matrix(p), (idx.size, 2, self.cols.size)), x0, idx)
         return np.where(ok, np.sum(res ** 2, axis=(1, 2)), np.inf)
 
-    def normal_equations(self, p: NDArray, x0: NDArray, states_only: bool = False):
+    def normal_equations(self, p: NDArray, x0: NDArray, states_only: bool = False, dp: NDArray | None = None):
         """(A_cc, A_cx (S, nc, 4), A_xx (S, 4, 4), g_c, g_x (S, 4)) of the forward-difference Jacobian (with respect
-        to the segment states alone when ``states_only``: nc = 0)."""
+        to the segment states alone when ``states_only``: nc = 0); ``dp``: the coefficients' steps (default 1e-6
+        of each)."""
         nc, S = (0 if states_only else p.size), x0.shape[0]
-        dp = 1e-6 * np.maximum(np.abs(p[:nc]), 1e-300)
+        dp = 1e-6 * np.maximum(np.abs(p[:nc]), 1e-300) if dp is None else np.asarray(dp, float)[:nc]
         dx = 1e-6 * np.maximum(self.segs.bound / 10.0, 1e-300)
         base = self.matrix(p)
         pert = np.stack([base] + [self.matrix(p + dp[j] * np.eye(p.size)[j]) for j in range(nc)] + [base] * 4)
@@ -345,9 +378,9 @@ def refine_output_error(model: PolynomialModel, dts: Sequence[float], ys: Sequen
                          fit.misfit)
     log.info("output-error refinement: misfit %.4g -> %.4g noise units over %d segments of %.3g s (%d iterations)",
              out.misfit_start, out.misfit, out.segments, segment_s, out.iterations)
-    if config.prune_tolerance is None:
+    if config.support_tolerance is None:
         return out
-    return _prune(out, fit.x0, segs, sigma, states, config, forced)
+    return _select(out, fit.x0, segs, sigma, states, config, forced)
 
 
 @dataclass(frozen=True, eq=False)
@@ -397,15 +430,15 @@ def _contributions(coef: NDArray, library: NDArray, column_rms: NDArray) -> NDAr
     return np.abs(coef) * column_rms[None] / np.maximum(acc_rms, 1e-300)[:, None]
 
 
-def _prune(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, states: Sequence[NDArray],
-           config: OutputErrorConfig, forced: NDArray | None) -> OutputErrorFit:
-    """Backward elimination by the refined output error over the same segments (module docstring, Pruning)."""
-    limit = fit.misfit ** 2 + config.prune_tolerance * max(fit.misfit ** 2 - 1.0, 0.0)
-    frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool).copy()
-    library = evaluate_library(np.vstack(states))  # the smoothed states' columns, once for every candidate
+def _prune(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDArray, library: NDArray,
+           config: OutputErrorConfig, frozen: NDArray) -> tuple[NDArray, NDArray, float, list[str]]:
+    """Backward elimination by the refined output error over the same segments (module docstring, Pruning):
+    the pruned (coefficients, segment states, misfit, terms)."""
+    limit = misfit ** 2 + config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
+    frozen = frozen.copy()
     column_rms = np.sqrt(np.mean(library ** 2, axis=0))
-    coef, misfit, pruned, kept = fit.coef, fit.misfit, [], 0
-    while kept < config.prune_rejections:
+    pruned, kept = [], 0
+    while kept < config.support_rejections:
         weight = np.where((coef != 0) & ~frozen, _contributions(coef, library, column_rms), np.inf)
         weight[(coef != 0).sum(axis=1) <= 1] = np.inf  # an equation keeps at least one term
         q, j = np.unravel_index(np.argmin(weight), weight.shape)
@@ -422,8 +455,113 @@ def _prune(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, st
         else:
             frozen[q, j] = True
             kept += 1
-    if pruned:
-        log.info("output-error pruning: %d terms removed (%s), misfit %.4g -> %.4g noise units", len(pruned),
-                 ", ".join(pruned), fit.misfit, misfit)
+    return coef, x0, misfit, pruned
+
+
+def _reduced(normal) -> tuple[NDArray, NDArray]:
+    """The coefficients' normal matrix and gradient with the segment states eliminated (Schur complement)."""
+    a_cc, a_cx, a_xx, g_c, g_x = normal
+    eye4 = np.eye(4)
+    inv = np.linalg.inv(a_xx + 1e-12 * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4)
+    return a_cc - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx), g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x)
+
+
+def _standard_errors(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray,
+                     config: OutputErrorConfig) -> NDArray[np.float64]:
+    """(2, 35) Gauss-Newton standard errors of the support's coefficients, the segment states eliminated: the
+    inverse normal matrix scaled by the misfit squared (a residual that is partly model error) and by 2 (the
+    half-overlapping segments count every frame twice); zero outside the support."""
+    problem = _Problem(coef, segs, sigma, config.h_omega)
+    p = problem.parameters(coef)
+    a, _ = _reduced(problem.normal_equations(p, x0))
+    cost, _ = problem.cost(p, x0)
+    n_obs = max(int(problem.valid.sum()) * 2, 1)
+    var = np.diag(np.linalg.pinv(a)) * 2.0 * cost / max(n_obs - p.size, 1)
+    out = np.zeros(coef.shape)
+    out[:, problem.cols] = problem.matrix(np.sqrt(np.maximum(var, 0.0)))
+    return out
+
+
+def _addition_gains(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray, library: NDArray,
+                    config: OutputErrorConfig) -> tuple[NDArray, NDArray]:
+    """Score test of every absent term: (2, 35) the drop of the squared misfit (noise units) that adding it and
+    refitting the support and segment states would give to first order (Gauss-Newton, the other coefficients
+    and the states re-optimised), and the coefficient it would take; -inf and 0 on the support."""
+    support = coef != 0
+    problem = _Problem(coef, segs, sigma, config.h_omega, mask=np.ones_like(support))
+    p = problem.parameters(coef)
+    on = support[:, problem.cols][problem.mask[:, problem.cols]]
+    # an absent term's step moves its equation's acceleration by 1e-6 of its RMS over the smoothed states
+    acc_rms = np.sqrt(np.mean((library @ coef.T) ** 2, axis=0))
+    column_rms = np.sqrt(np.mean(library ** 2, axis=0))
+    q_of, j_of = problem.where[:, 0], problem.cols[problem.where[:, 1]]
+    usable = column_rms[j_of] > 0
+    step = 1e-6 * acc_rms[q_of] / np.where(usable, column_rms[j_of], 1.0)
+    dp = np.where(on, 1e-6 * np.maximum(np.abs(p), 1e-300), np.maximum(step, 1e-300))
+    a, g = _reduced(problem.normal_equations(p, x0, dp=dp))
+    off = ~on
+    proj = np.linalg.lstsq(a[np.ix_(on, on)], a[np.ix_(on, off)], rcond=None)[0]  # (n_on, n_off)
+    curv = np.diag(a)[off] - np.einsum("ij,ij->j", a[np.ix_(on, off)], proj)
+    score = g[off] - proj.T @ g[on]
+    n_obs = max(int(problem.valid.sum()) * 2, 1)
+    # a term the noise alone could explain is never a candidate: its drop of the sum of squares must pass a
+    # chi-square test at a family-wise level of 1 % over the candidates, doubled since the half-overlapping
+    # segments count every frame twice
+    floor = 2.0 * chi2.isf(_ADDITION_LEVEL / max(int(off.sum()), 1), 1)
+    ok = usable[off] & (curv > 0) & (score ** 2 > floor * np.maximum(curv, 0.0))
+    gain, delta = np.full(coef.shape, -np.inf), np.zeros(coef.shape)
+    gain[q_of[off][ok], j_of[off][ok]] = score[ok] ** 2 / curv[ok] / n_obs
+    delta[q_of[off][ok], j_of[off][ok]] = -score[ok] / curv[ok]
+    return gain, delta
+
+
+def _add(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDArray, library: NDArray,
+         config: OutputErrorConfig) -> tuple[NDArray, NDArray, float, list[str]]:
+    """Forward selection by the refined output error (module docstring, Pruning): the absent term of the largest
+    score is added when, refitted, it lowers the squared misfit by more than ``support_tolerance`` of the model-error
+    part; the grown (coefficients, segment states, misfit, terms)."""
+    added, tried, rejected = [], np.zeros(coef.shape, bool), 0
+    while rejected < config.support_rejections:
+        need = config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
+        gain, delta = _addition_gains(coef, x0, segs, sigma, library, config)
+        gain[tried] = -np.inf
+        q, j = np.unravel_index(np.argmax(gain), gain.shape)
+        if not gain[q, j] > need:
+            break
+        trial = coef.copy()
+        trial[q, j] = delta[q, j]
+        cand = _refine(trial, segs, sigma, x0, config)
+        name = f"{EQUATION_NAMES[q]}:{TERMS[j]}"
+        log.debug("output-error addition: with %s misfit %.5g -> %.5g (predicted %.5g, needed %.5g)", name, misfit,
+                  cand.misfit, np.sqrt(max(misfit ** 2 - gain[q, j], 0.0)), np.sqrt(max(misfit ** 2 - need, 0.0)))
+        if cand.misfit ** 2 <= misfit ** 2 - need:
+            coef, x0, misfit = cand.coef, cand.x0, cand.misfit
+            added.append(name)
+        else:
+            tried[q, j] = True
+            rejected += 1
+    return coef, x0, misfit, added
+
+
+def _select(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, states: Sequence[NDArray],
+            config: OutputErrorConfig, forced: NDArray | None) -> OutputErrorFit:
+    """Prune, add the terms the trajectories need, and prune again after an addition (module docstring)."""
+    frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool)
+    library = evaluate_library(np.vstack(states))  # the smoothed states' columns, once for every candidate
+    coef, x0, misfit, pruned = _prune(fit.coef, x0, fit.misfit, segs, sigma, library, config, frozen)
+    coef, x0, misfit, added = _add(coef, x0, misfit, segs, sigma, library, config)
+    if added:
+        coef, x0, misfit, again = _prune(coef, x0, misfit, segs, sigma, library, config,
+                                         frozen | np.isin(_names(coef.shape), added))
+        pruned += again
+    if pruned or added:
+        log.info("output-error support: %d terms removed (%s), %d added (%s), misfit %.4g -> %.4g noise units",
+                 len(pruned), ", ".join(pruned), len(added), ", ".join(added), fit.misfit, misfit)
+    se = _standard_errors(coef, x0, segs, sigma, config) if added else None
     return OutputErrorFit(coef, fit.misfit_start, misfit, fit.segments, fit.segment_s, fit.iterations, fit.dropped,
-                          fit.misfit, tuple(pruned))
+                          fit.misfit, tuple(pruned), tuple(added), se)
+
+
+def _names(shape: tuple[int, int]) -> NDArray:
+    """(2, 35) the terms' names as ``equation:term``."""
+    return np.array([[f"{eq}:{t}" for t in TERMS] for eq in EQUATION_NAMES[:shape[0]]])

@@ -103,9 +103,11 @@ def test_method_is_validated():
     assert main(["fit", "nowhere", "--out", "x", "--method", "paper", "--output-error", "off"]) == 2
 
 
-@pytest.mark.parametrize("mode, refined, pruned", [("prune", True, True), ("refine", True, False), ("off", False, False)])
-def test_output_error_modes_set_the_discovery_config(mode, refined, pruned):
-    """``--output-error``: the discovery's coefficients under model error refined and pruned (the default), refined
+@pytest.mark.parametrize("mode, refined, selected",
+                         [("select", True, True), ("refine", True, False), ("off", False, False)])
+def test_output_error_modes_set_the_discovery_config(mode, refined, selected):
+    """``--output-error``: the discovery's coefficients under model error refined with the support selected by the
+    output error (the default), refined
     only, or the integral form's; model.json's settings record the choice (fit_output serialises the config)."""
     import dataclasses
 
@@ -113,8 +115,8 @@ def test_output_error_modes_set_the_discovery_config(mode, refined, pruned):
 
     cfg = FitConfig().with_output_error(mode)
     oe = cfg.discovery.output_error
-    assert (oe is not None) == refined and (oe is not None and oe.prune_tolerance is not None) == pruned
-    assert (cfg.discovery.output_error == FitConfig().discovery.output_error) == (mode == "prune")
+    assert (oe is not None) == refined and (oe is not None and oe.support_tolerance is not None) == selected
+    assert (cfg.discovery.output_error == FitConfig().discovery.output_error) == (mode == "select")
     recorded = json.loads(json.dumps(dataclasses.asdict(cfg), default=float))["discovery"]["output_error"]
     assert (recorded is None) == (not refined)
     with pytest.raises(ValueError):
