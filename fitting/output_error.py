@@ -45,8 +45,9 @@ the output error itself, in three steps.
    complement: one Jacobian for all candidates).  The best is added, and the support refined, when its refitted
    misfit drops by more than ``support_tolerance`` of the model-error part, the same rule read the other way; and
    only when the drop is beyond what the noise explains (a chi-square test at a family-wise 1 % over the
-   candidates).  The additions stop at the ``support_rejections``-th candidate that fails.  An added term's standard
-   error is the output error's own (Gauss-Newton, scaled by the misfit squared).
+   candidates).  The additions stop at the ``support_rejections``-th candidate that fails (``additions=False``: no
+   additions, pruning alone).  An added term's standard error is the output error's own (Gauss-Newton, scaled by
+   the misfit squared).
 3. After an addition, pruning again from the grown support: a term the added one makes redundant goes.
 """
 from __future__ import annotations
@@ -104,6 +105,8 @@ class OutputErrorConfig:
     support_rejections : int
         Pruning stops after this many terms were tried and kept, and the additions after this many were tried and
         not added.
+    additions : bool
+        Whether terms are added (False: pruning alone).
     """
 
     periods: float = 5.0
@@ -114,6 +117,7 @@ class OutputErrorConfig:
     outlier_factor: float = 5.0
     support_tolerance: float | None = 0.03
     support_rejections: int = 2
+    additions: bool = True
 
     def __post_init__(self) -> None:
         for name in ("periods", "rtol", "h_omega", "outlier_factor"):
@@ -432,8 +436,8 @@ def _contributions(coef: NDArray, library: NDArray, column_rms: NDArray) -> NDAr
 
 def _prune(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDArray, library: NDArray,
            config: OutputErrorConfig, frozen: NDArray) -> tuple[NDArray, NDArray, float, list[str]]:
-    """Backward elimination by the refined output error over the same segments (module docstring, Pruning):
-    the pruned (coefficients, segment states, misfit, terms)."""
+    """Backward elimination by the refined output error over the same segments (module docstring, Pruning and
+    additions): the pruned (coefficients, segment states, misfit, terms)."""
     limit = misfit ** 2 + config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
     frozen = frozen.copy()
     column_rms = np.sqrt(np.mean(library ** 2, axis=0))
@@ -517,9 +521,9 @@ def _addition_gains(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray,
 
 def _add(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDArray, library: NDArray,
          config: OutputErrorConfig) -> tuple[NDArray, NDArray, float, list[str]]:
-    """Forward selection by the refined output error (module docstring, Pruning): the absent term of the largest
-    score is added when, refitted, it lowers the squared misfit by more than ``support_tolerance`` of the model-error
-    part; the grown (coefficients, segment states, misfit, terms)."""
+    """Forward selection by the refined output error (module docstring, Pruning and additions): the absent term of
+    the largest score is added when, refitted, it lowers the squared misfit by more than ``support_tolerance`` of the
+    model-error part; the grown (coefficients, segment states, misfit, terms)."""
     added, tried, rejected = [], np.zeros(coef.shape, bool), 0
     while rejected < config.support_rejections:
         need = config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
@@ -549,7 +553,8 @@ def _select(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, s
     frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool)
     library = evaluate_library(np.vstack(states))  # the smoothed states' columns, once for every candidate
     coef, x0, misfit, pruned = _prune(fit.coef, x0, fit.misfit, segs, sigma, library, config, frozen)
-    coef, x0, misfit, added = _add(coef, x0, misfit, segs, sigma, library, config)
+    coef, x0, misfit, added = _add(coef, x0, misfit, segs, sigma, library, config) if config.additions else (
+        coef, x0, misfit, [])
     if added:
         coef, x0, misfit, again = _prune(coef, x0, misfit, segs, sigma, library, config,
                                          frozen | np.isin(_names(coef.shape), added))

@@ -164,6 +164,9 @@ def test_a_damping_the_trajectories_need_is_added(pendulum_runs):
     without = _refine(PolynomialModel.from_equations(eqs), pendulum_runs[:6], 1e-3, seed=6,
                       config=OutputErrorConfig(support_tolerance=None))
     assert fit.misfit < 0.1 * without.misfit  # 24.5 -> 1.34 noise units
+    pruning_alone = _refine(PolynomialModel.from_equations(eqs), pendulum_runs[:6], 1e-3, seed=6,
+                            config=OutputErrorConfig(additions=False))
+    assert pruning_alone.added == () and pruning_alone.coef[0, TERMS.index("ydot")] == 0
     before = _long_time(PolynomialModel(without.coef), pendulum_runs[6:])
     after = _long_time(PolynomialModel(fit.coef), pendulum_runs[6:])
     assert after < 0.05 * before, (before, after)  # 15 % -> 0.7 %
