@@ -305,7 +305,10 @@ def _lm_step(normal, lam: float) -> tuple[NDArray, NDArray]:
     inv = np.linalg.inv(d_xx)
     schur = a_cc + lam * np.diag(np.diag(a_cc)) - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx)
     rhs = g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x)
-    step_c = -np.linalg.lstsq(schur, rhs, rcond=None)[0]
+    # equilibrated: the coefficients' SI units span ten decades, and a least squares on the raw matrix would cut
+    # the directions of the large coefficients as round-off (a step that depends on the units)
+    d = np.sqrt(np.maximum(np.diag(schur), 1e-300))
+    step_c = -np.linalg.lstsq(schur / np.outer(d, d), rhs / d, rcond=None)[0] / d
     step_x = -np.einsum("sij,sj->si", inv, g_x + np.einsum("sij,i->sj", a_cx, step_c))
     return step_c, step_x
 
@@ -480,7 +483,10 @@ def _standard_errors(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray
     a, _ = _reduced(problem.normal_equations(p, x0))
     cost, _ = problem.cost(p, x0)
     n_obs = max(int(problem.valid.sum()) * 2, 1)
-    var = np.diag(np.linalg.pinv(a)) * 2.0 * cost / max(n_obs - p.size, 1)
+    # equilibrated first: the coefficients' units span ten decades (y^2*theta ~1e10 against 1 ~1e3 in SI), and a
+    # pseudo-inverse of the raw matrix would cut the large-variance directions as round-off
+    d = np.sqrt(np.maximum(np.diag(a), 1e-300))
+    var = np.diag(np.linalg.pinv(a / np.outer(d, d))) / d ** 2 * 2.0 * cost / max(n_obs - p.size, 1)
     out = np.zeros(coef.shape)
     out[:, problem.cols] = problem.matrix(np.sqrt(np.maximum(var, 0.0)))
     return out
@@ -503,6 +509,8 @@ def _addition_gains(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray,
     step = 1e-6 * acc_rms[q_of] / np.where(usable, column_rms[j_of], 1.0)
     dp = np.where(on, 1e-6 * np.maximum(np.abs(p), 1e-300), np.maximum(step, 1e-300))
     a, g = _reduced(problem.normal_equations(p, x0, dp=dp))
+    d = np.sqrt(np.maximum(np.diag(a), 1e-300))  # equilibrated (see _standard_errors); undone in delta
+    a, g = a / np.outer(d, d), g / d
     off = ~on
     proj = np.linalg.lstsq(a[np.ix_(on, on)], a[np.ix_(on, off)], rcond=None)[0]  # (n_on, n_off)
     curv = np.diag(a)[off] - np.einsum("ij,ij->j", a[np.ix_(on, off)], proj)
@@ -515,7 +523,7 @@ def _addition_gains(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray,
     ok = usable[off] & (curv > 0) & (score ** 2 > floor * np.maximum(curv, 0.0))
     gain, delta = np.full(coef.shape, -np.inf), np.zeros(coef.shape)
     gain[q_of[off][ok], j_of[off][ok]] = score[ok] ** 2 / curv[ok] / n_obs
-    delta[q_of[off][ok], j_of[off][ok]] = -score[ok] / curv[ok]
+    delta[q_of[off][ok], j_of[off][ok]] = -score[ok] / (curv[ok] * d[off][ok])
     return gain, delta
 
 

@@ -172,22 +172,34 @@ def test_a_damping_the_trajectories_need_is_added(pendulum_runs):
     assert after < 0.05 * before, (before, after)  # 15 % -> 0.7 %
 
 
+def _taylor_refit(runs, y_unit=1.0):
+    """The pendulums' Taylor cubic refined on noisy runs with y in units of ``y_unit`` m (internals of the support
+    search: segments, refined fit, smoothed states' library)."""
+    from cubedimer.terms import evaluate_library
+    from fitting.output_error import _fit_states, _Problem, _refine as refine, _segments
+
+    rng = np.random.default_rng(6)
+    config, sigma = OutputErrorConfig(), np.array([1e-3 / y_unit, 1e-3])
+    states = [s * np.array([1 / y_unit, 1 / y_unit, 1.0, 1.0]) for _, s in runs]
+    ys = [s[:, 0] + sigma[0] * rng.standard_normal(len(s)) for s in states]
+    ths = [s[:, 2] + sigma[1] * rng.standard_normal(len(s)) for s in states]
+    segs = _segments([1 / FPS] * len(runs), ys, ths, states, [1.0] * len(runs), config)
+    # y in units of y_unit: a term's coefficient scales with y_unit to the power of its powers of y and ydot, less
+    # 1 in yddot
+    power = EXPONENTS[:, 0] + EXPONENTS[:, 1] - np.array([[1], [0]])
+    coef = PolynomialModel.from_equations(PENDULUM_TAYLOR).coef * float(y_unit) ** power
+    start = _Problem(coef, segs, sigma, config.h_omega)
+    fit = refine(coef, segs, sigma, _fit_states(start, start.parameters(coef), segs.x0.copy())[0], config)
+    return fit, segs, sigma, config, evaluate_library(np.vstack(states)), power
+
+
 def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(pendulum_runs):
     """The additions' score test (one Jacobian of all 70 coefficients, segment states eliminated) against the refit
     with the term: the first-order drop of the squared misfit and the coefficient it predicts."""
-    from cubedimer.terms import evaluate_library
-    from fitting.output_error import _addition_gains, _fit_states, _Problem, _refine as refine, _segments
+    from fitting.output_error import _addition_gains, _refine as refine
 
-    rng = np.random.default_rng(6)
-    runs, config, sigma = pendulum_runs[:6], OutputErrorConfig(), np.array([1e-3, 1e-3])
-    ys = [s[:, 0] + 1e-3 * rng.standard_normal(len(t)) for t, s in runs]
-    ths = [s[:, 2] + 1e-3 * rng.standard_normal(len(t)) for t, s in runs]
-    states = [s for _, s in runs]
-    segs = _segments([1 / FPS] * 6, ys, ths, states, [1.0] * 6, config)
-    coef = PolynomialModel.from_equations(PENDULUM_TAYLOR).coef
-    start = _Problem(coef, segs, sigma, config.h_omega)
-    fit = refine(coef, segs, sigma, _fit_states(start, start.parameters(coef), segs.x0.copy())[0], config)
-    gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, evaluate_library(np.vstack(states)), config)
+    fit, segs, sigma, config, library, _ = _taylor_refit(pendulum_runs[:6])
+    gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, library, config)
     assert np.isneginf(gain[fit.coef != 0]).all()
     # even terms cannot help odd forces: the few that pass the noise's chi-square floor (the residual is partly
     # model error, not white) gain 0.1 % of the model-error part, 30 times less than an addition needs
@@ -202,6 +214,29 @@ def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(pendulum_runs):
     # first order in a term that lowers the squared misfit by 6 %: the prediction is within 0.3 % at this draw
     np.testing.assert_allclose(gain[q, j], fit.misfit**2 - with_term.misfit**2, rtol=0.03)
     np.testing.assert_allclose(delta[q, j], with_term.coef[q, j], rtol=0.05)
+
+
+def test_scores_and_standard_errors_do_not_depend_on_the_units(pendulum_runs):
+    """y in micrometres instead of metres moves the coefficients over twelve decades (y^3 in yddot by 1e-12): the
+    score test's gains and the standard errors' z must not move (an unequilibrated pseudo-inverse cuts the
+    large-variance directions as round-off)."""
+    from fitting.output_error import _addition_gains, _standard_errors
+
+    out = []
+    for unit in (1.0, 1e-6):
+        fit, segs, sigma, config, library, power = _taylor_refit(pendulum_runs[:6], unit)
+        gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, library, config)
+        se = _standard_errors(fit.coef, fit.x0, segs, sigma, config)
+        on = fit.coef != 0
+        out.append((fit.coef[on] / se[on], gain, delta / float(unit) ** power))
+    # the same fit in other units: agreement to the forward differences' and the refinement's stopping (1e-3)
+    np.testing.assert_allclose(out[1][0], out[0][0], rtol=1e-3)
+    ok = np.isfinite(out[0][1])
+    assert (np.isfinite(out[1][1]) == ok).all()
+    np.testing.assert_allclose(out[1][1][ok], out[0][1][ok], rtol=1e-3)
+    np.testing.assert_allclose(out[1][2][ok], out[0][2][ok], rtol=1e-3)
+    # and the z of the linear stiffness is a few thousand (a coefficient known to 0.03 %), not round-off's 1e12
+    assert 1e2 < abs(out[0][0][0]) < 1e6
 
 
 def test_forced_terms_are_never_pruned(pendulum_runs):
