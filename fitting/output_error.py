@@ -45,9 +45,10 @@ the output error itself, in three steps.
    complement: one Jacobian for all candidates).  The best is added, and the support refined, when its refitted
    misfit drops by more than ``support_tolerance`` of the model-error part, the same rule read the other way; and
    only when the drop is beyond what the noise explains (a chi-square test at a family-wise 1 % over the
-   candidates).  The additions stop at the ``support_rejections``-th candidate that fails (``additions=False``: no
-   additions, pruning alone).  An added term's standard error is the output error's own (Gauss-Newton, scaled by
-   the misfit squared).
+   candidates).  Terms are added only while the misfit exceeds ``addition_misfit`` (1.05, the discovery's model-error
+   factor) times the noise.  The additions stop at the ``support_rejections``-th candidate that fails
+   (``additions=False``: no additions, pruning alone).  An added term's standard error is the output error's own
+   (Gauss-Newton, scaled by the misfit squared).
 3. After an addition, pruning again from the grown support: a term the added one makes redundant goes.
 """
 from __future__ import annotations
@@ -107,6 +108,10 @@ class OutputErrorConfig:
         not added.
     additions : bool
         Whether terms are added (False: pruning alone).
+    addition_misfit : float
+        Terms are added only while the misfit exceeds this many times the tracking noise (the discovery's
+        ``model_error_factor``): below it the trajectories follow the runs to the noise, and an added term fits
+        the noise's correlations between segments and the collinear leftovers of the others.
     """
 
     periods: float = 5.0
@@ -118,9 +123,10 @@ class OutputErrorConfig:
     support_tolerance: float | None = 0.03
     support_rejections: int = 2
     additions: bool = True
+    addition_misfit: float = 1.05
 
     def __post_init__(self) -> None:
-        for name in ("periods", "rtol", "h_omega", "outlier_factor"):
+        for name in ("periods", "rtol", "h_omega", "outlier_factor", "addition_misfit"):
             check_positive(self, name)
         check_whole(self, "max_segments")
         check_whole(self, "iterations")
@@ -533,7 +539,7 @@ def _add(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDAr
     the largest score is added when, refitted, it lowers the squared misfit by more than ``support_tolerance`` of the
     model-error part; the grown (coefficients, segment states, misfit, terms)."""
     added, tried, rejected = [], np.zeros(coef.shape, bool), 0
-    while rejected < config.support_rejections:
+    while rejected < config.support_rejections and misfit > config.addition_misfit:
         need = config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
         gain, delta = _addition_gains(coef, x0, segs, sigma, library, config)
         gain[tried] = -np.inf

@@ -254,7 +254,7 @@ def test_forced_terms_are_never_pruned(pendulum_runs):
 
 def test_config_validates_itself():
     for bad in ({"periods": 0.0}, {"max_segments": 0}, {"iterations": 1.5}, {"rtol": -1.0}, {"support_tolerance": -0.1},
-                {"support_rejections": 0}):
+                {"support_rejections": 0}, {"addition_misfit": 0.0}):
         with pytest.raises(ValueError):
             OutputErrorConfig(**bad)
 
