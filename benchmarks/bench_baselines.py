@@ -93,11 +93,10 @@ def score_terms(true_coef: NDArray[np.float64], coef: NDArray[np.float64]) -> Te
     -------
     TermScore
     """
-    from cubedimer.terms import EQUATION_NAMES
-    from fitting.model import TERMS
+    from cubedimer.terms import coefficient_label
 
     true, sel = np.asarray(true_coef) != 0, np.asarray(coef) != 0
-    name = lambda q, j: f"{EQUATION_NAMES[q]}:{TERMS[j]}"  # noqa: E731
+    name = coefficient_label
     missing = tuple(name(q, j) for q, j in zip(*np.nonzero(true & ~sel)))
     spurious = tuple(name(q, j) for q, j in zip(*np.nonzero(sel & ~true)))
     found = true & sel
@@ -235,9 +234,8 @@ class Detection:
 def detection_data(base: Case, n_runs: int, seed: int) -> list[Detection]:
     """Oracle z of every true term of ``base`` at ``n_runs`` runs and whether ours and STLSQ selected it."""
     from cubedimer.spectra import dominant_frequency
-    from cubedimer.terms import EQUATION_NAMES
+    from cubedimer.terms import coefficient_label
     from fitting.discovery import DiscoveryConfig, discover_model
-    from fitting.model import TERMS
     from fitting.regression import RegressionConfig, dataset_scales, fit_regression
 
     case = dataclasses.replace(base, n_runs=n_runs)
@@ -250,7 +248,7 @@ def detection_data(base: Case, n_runs: int, seed: int) -> list[Detection]:
     spurious = {m: int((s & ~truth.support).sum()) for m, s in sel.items()}
     out = []
     for q, j in zip(*np.nonzero(truth.support)):
-        out.append(Detection(base.name, n_runs, seed, f"{EQUATION_NAMES[q]}:{TERMS[j]}",
+        out.append(Detection(base.name, n_runs, seed, coefficient_label(q, j),
                              float(abs(truth.coef[q, j]) / se[q, j]), {m: bool(s[q, j]) for m, s in sel.items()},
                              spurious))
     return out

@@ -190,8 +190,8 @@ class Data:
     noise: tuple[float, float]
 
 
-def make_data(name: str, level: float, seed: int) -> Data:
-    """``FIT_RUNS`` noisy runs and ``HELDOUT_RUNS`` exact ones at the truncation residual ``level``."""
+def make_data(name: str, level: float, seed: int, fit_runs: int = FIT_RUNS) -> Data:
+    """``fit_runs`` noisy runs and ``HELDOUT_RUNS`` exact ones at the truncation residual ``level``."""
     from cubedimer.dataset import Run
     from cubedimer.spectra import dominant_frequency
     from fitting.derivatives import SmoothingConfig, run_derivatives
@@ -201,12 +201,12 @@ def make_data(name: str, level: float, seed: int) -> Data:
     # the fitted runs and the held-out ones from independent streams: the fit's data do not depend on HELDOUT_RUNS
     rng, rng_heldout = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     t = np.arange(0, DURATION_S, 1 / FPS)
-    x0 = np.vstack([_initial_states(truth, scale, FIT_RUNS, rng),
+    x0 = np.vstack([_initial_states(truth, scale, fit_runs, rng),
                     _initial_states(truth, scale, HELDOUT_RUNS, rng_heldout)])
     exact = [simulate(name, x, t) for x in x0]
     sigma = tuple(NOISE_FRACTION * a * scale for a in truth.amplitude)
     runs, derivs, sindy = [], [], []
-    for i, s in enumerate(exact[:FIT_RUNS]):
+    for i, s in enumerate(exact[:fit_runs]):
         y = s[:, 0] + sigma[0] * rng.standard_normal(t.size)
         th = s[:, 2] + sigma[1] * rng.standard_normal(t.size)
         r = Run(name=f"run{i:02d}", t=t, y=y, theta=th)
@@ -215,7 +215,7 @@ def make_data(name: str, level: float, seed: int) -> Data:
         # from the faster coordinate: from y's alone a faster second coordinate would be attenuated by the filter
         fast = max(dominant_frequency(y, r.dt), dominant_frequency(th, r.dt))
         sindy.append(run_derivatives(t, y, th, fast, SmoothingConfig(window_periods=SINDY_WINDOW_PERIODS)))
-    return Data(runs, derivs, sindy, [(t, s) for s in exact[FIT_RUNS:]], truncation_residual(name, exact[:FIT_RUNS]),
+    return Data(runs, derivs, sindy, [(t, s) for s in exact[fit_runs:]], truncation_residual(name, exact[:fit_runs]),
                 sigma)
 
 
@@ -275,12 +275,12 @@ def score(coef: NDArray, taylor: NDArray) -> dict:
             "median_error": float(np.median(rel)) if rel.size else np.nan}
 
 
-def run_case(name: str, level: float, seed: int) -> list[dict]:
+def run_case(name: str, level: float, seed: int, fit_runs: int = FIT_RUNS) -> list[dict]:
     from fitting.discovery import DiscoveryConfig, discover_model
 
     truth = TRUTHS[name]
     taylor = compiled(name)[1]
-    data = make_data(name, level, seed)
+    data = make_data(name, level, seed, fit_runs)
     rows, per_run = [], {}
     for method in ("ours", "STLSQ-CV", "E-STLSQ-CV"):
         t0 = time.perf_counter()
@@ -300,8 +300,8 @@ def run_case(name: str, level: float, seed: int) -> list[dict]:
             coef, thr = stlsq_cv(data, method.startswith("E-"), seed)
             note = f"threshold {thr:g}"
         per_run[method] = long_time_errors(coef, data, truth.f_slow)
-        row = {"truth": name, "level": level, "seed": seed, "residual": data.residual, "method": method,
-               "taylor_terms": int((taylor != 0).sum()), **score(coef, taylor),
+        row = {"truth": name, "level": level, "seed": seed, "fit_runs": len(data.runs), "residual": data.residual,
+               "method": method, "taylor_terms": int((taylor != 0).sum()), **score(coef, taylor),
                "long_time": float(np.median(per_run[method])), "wall": time.perf_counter() - t0, "note": note}
         print(f"[model-error] {name} {level:g} seed {seed} {method}: {row['terms']} terms "
               f"({row['outside']} outside Taylor, {row['missed']} Taylor missed), median error "
@@ -330,11 +330,17 @@ def main(argv: list[str] | None = None) -> str:
     p.add_argument("--truths", nargs="+", default=list(TRUTHS), choices=list(TRUTHS))
     p.add_argument("--levels", nargs="+", type=float, default=[0.01, 0.05, 0.12])
     p.add_argument("--seeds", nargs="+", type=int, default=[1])
+    p.add_argument("--fit-runs", type=int, default=FIT_RUNS,
+                   help=f"noisy runs fitted per data set (default {FIT_RUNS}; the held-out runs stay {HELDOUT_RUNS})")
     a = p.parse_args(argv if argv is not None else [])
-    rows = [r for name in a.truths for level in a.levels for seed in a.seeds for r in run_case(name, level, seed)]
+    if a.fit_runs < 2:
+        p.error(f"--fit-runs must be at least 2 (the cross-validation needs runs to hold out), got {a.fit_runs}")
+    rows = [r for name in a.truths for level in a.levels for seed in a.seeds
+            for r in run_case(name, level, seed, a.fit_runs)]
+    runs_arg = f" --fit-runs {a.fit_runs}" if a.fit_runs != FIT_RUNS else ""
     report = "\n".join(["## Non-sparse truths: ours against pysindy with a cross-validated threshold", "",
                         f"`python -m benchmarks.bench_model_error --truths {' '.join(a.truths)} --levels "
-                        f"{' '.join(f'{v:g}' for v in a.levels)} --seeds {' '.join(map(str, a.seeds))}`", "",
+                        f"{' '.join(f'{v:g}' for v in a.levels)} --seeds {' '.join(map(str, a.seeds))}{runs_arg}`", "",
                         *table(rows), ""])
     return report
 

@@ -16,6 +16,8 @@ __all__ = [
     "library_exponents",
     "term_name",
     "library_terms",
+    "coefficient_label",
+    "coefficient_labels",
     "evaluate_library",
     "parse_term",
     "is_velocity_free",
@@ -55,6 +57,24 @@ def term_name(exponents: ArrayLike, names: tuple[str, ...] = STATE_NAMES) -> str
 def library_terms(degree: int = 3) -> list[str]:
     """Names of the library's monomials in canonical order (35 for degree 3)."""
     return [term_name(e) for e in library_exponents(degree)]
+
+
+def coefficient_label(equation: int, term: int, degree: int = 3) -> str:
+    """The coefficient of library term ``term`` in equation ``equation`` as ``equation:term`` (``thetaddot:y^2*theta``),
+    the form model.json's term lists and the logs use."""
+    return f"{EQUATION_NAMES[equation]}:{_terms(degree)[term]}"
+
+
+def coefficient_labels(degree: int = 3) -> NDArray[np.str_]:
+    """(2, n_terms) every coefficient's :func:`coefficient_label`, shaped like a model's coefficient array."""
+    return np.array([[f"{eq}:{t}" for t in _terms(degree)] for eq in EQUATION_NAMES])
+
+
+def _terms(degree: int) -> tuple[str, ...]:
+    return _TERM_CACHE.setdefault(degree, tuple(library_terms(degree)))
+
+
+_TERM_CACHE: dict[int, tuple[str, ...]] = {}
 
 
 def parse_term(name: str, names: tuple[str, ...] = STATE_NAMES) -> NDArray[np.int64]:

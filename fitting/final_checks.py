@@ -14,13 +14,13 @@ from typing import Sequence
 
 import numpy as np
 
-from cubedimer.terms import EQUATION_NAMES
+from cubedimer.terms import coefficient_labels
 from .config import FitConfig
 from .derivatives import Derivatives
 from .ensemble import TermStatistics, mean_pvalues
 from .integral_form import IntegralSelection
 from .losses import LossTerms
-from .model import TERMS, PolynomialModel, Scales, damping_mask
+from .model import PolynomialModel, Scales, damping_mask
 from .oracle import NoiseLevels, OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
 from .refine import Objective, RefineResult, default_substeps, refine, scaled_reference
 
@@ -55,7 +55,7 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
     p = mean_pvalues(stats)
     removable = np.flatnonzero((model.support & ~damping_mask()).ravel())
     order = removable[np.argsort(-p.ravel()[removable], kind="stable")]  # least significant first
-    names = [f"{EQUATION_NAMES[i // len(TERMS)]}:{TERMS[i % len(TERMS)]}" for i in order]
+    names = [coefficient_labels().ravel()[i] for i in order]
     keep = model.support.copy().ravel()
     for k, idx in enumerate(order[:-1] if len(order) > 1 else []):
         keep[idx] = False

@@ -62,9 +62,9 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from cubedimer.config_checks import check_non_negative, check_positive, check_whole
-from cubedimer.terms import EQUATION_NAMES, evaluate_library
+from cubedimer.terms import coefficient_label, coefficient_labels, evaluate_library
 from .integrate import integrate_batch
-from .model import EXPONENTS, TERMS, PolynomialModel
+from .model import EXPONENTS, PolynomialModel
 from .model_states import segment_layout
 
 __all__ = ["OutputErrorConfig", "OutputErrorFit", "refine_output_error"]
@@ -460,7 +460,7 @@ def _prune(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: ND
         trial = coef.copy()
         trial[q, j] = 0.0
         cand = _refine(trial, segs, sigma, x0, config)
-        name = f"{EQUATION_NAMES[q]}:{TERMS[j]}"
+        name = coefficient_label(q, j)
         log.debug("output-error pruning: without %s misfit %.5g (limit %.5g)", name, cand.misfit, np.sqrt(limit))
         if cand.misfit ** 2 <= limit:
             coef, x0, misfit = cand.coef, cand.x0, cand.misfit
@@ -549,7 +549,7 @@ def _add(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDAr
         trial = coef.copy()
         trial[q, j] = delta[q, j]
         cand = _refine(trial, segs, sigma, x0, config)
-        name = f"{EQUATION_NAMES[q]}:{TERMS[j]}"
+        name = coefficient_label(q, j)
         log.debug("output-error addition: with %s misfit %.5g -> %.5g (predicted %.5g, needed %.5g)", name, misfit,
                   cand.misfit, np.sqrt(max(misfit ** 2 - gain[q, j], 0.0)), np.sqrt(max(misfit ** 2 - need, 0.0)))
         if cand.misfit ** 2 <= misfit ** 2 - need:
@@ -571,7 +571,7 @@ def _select(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, s
         coef, x0, misfit, [])
     if added:
         coef, x0, misfit, again = _prune(coef, x0, misfit, segs, sigma, library, config,
-                                         frozen | np.isin(_names(coef.shape), added))
+                                         frozen | np.isin(coefficient_labels(), added))
         pruned += again
     if pruned or added:
         log.info("output-error support: %d terms removed (%s), %d added (%s), misfit %.4g -> %.4g noise units",
@@ -580,7 +580,3 @@ def _select(fit: OutputErrorFit, x0: NDArray, segs: _Segments, sigma: NDArray, s
     return OutputErrorFit(coef, fit.misfit_start, misfit, fit.segments, fit.segment_s, fit.iterations, fit.dropped,
                           fit.misfit, tuple(pruned), tuple(added), se)
 
-
-def _names(shape: tuple[int, int]) -> NDArray:
-    """(2, 35) the terms' names as ``equation:term``."""
-    return np.array([[f"{eq}:{t}" for t in TERMS] for eq in EQUATION_NAMES[:shape[0]]])

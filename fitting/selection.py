@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from .compare import paired_wilcoxon
 from .derivatives import Derivatives
 from cubedimer.executor import ExecutorConfig, map_ordered
-from cubedimer.terms import EQUATION_NAMES
+from cubedimer.terms import EQUATION_NAMES, coefficient_label
 from .model import TERMS, PolynomialModel, Scales, damping_mask
 from .refine import Objective, RefineConfig, default_substeps, refine, scaled_reference
 from .selection_rules import SelectionConfig  # defined beside the rules it names
@@ -111,7 +111,7 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
     cur_loss = _per_run(cache, cur, cur_mask, derivs, scales, config.screen)
     steps: list[SelectionStep] = []
     dropped: list[tuple[int, int]] = []
-    name = lambda q, j: f"{EQUATION_NAMES[q]}:{TERMS[j]}"  # noqa: E731
+    name = coefficient_label
     for _ in range(config.max_steps):
         removable = [(q, j) for q, j in zip(*np.nonzero(cur_mask & ~keep))]
         if not removable:
