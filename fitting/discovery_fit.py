@@ -9,7 +9,8 @@ Steps of :meth:`DiscoveryMethod.fit` (``FitConfig(method="discovery")``, the def
    standard errors around them (``FitConfig.polish``), so the polish cannot undo what the data resolve.
    The per-run losses of the polished model are the attractor check.
 3. If the polished model blows up on any run, the fallbacks are tried: the discovered model as the
-   regression gave it, then those of :func:`fitting.final_checks.fallback_candidates`; the best sane one is
+   regression gave it, then those of :func:`fitting.final_checks.fallback_candidates` (the terms dropped in
+   the order of the discovery's own z, smallest first); the best sane one is
    re-optimised and ``model.json["fallback"]`` says so; with none, :class:`fitting.final_checks.NoSaneModelError`.
 4. Per run, least squares of the smoothed accelerations on the selected terms (one run at a time) gives
    ``per_run`` and the across-run ``zscores`` of ``model.json`` (docs/formats.md); it is not refined per run.
@@ -110,7 +111,7 @@ class DiscoveryMethod:
         if joint.loss_end.blown_up:
             first = [("discovered model without the polish (integral-form least squares)", start)]
             joint_start, joint, fallback = fall_back(joint, mask, stats, [f.model for f in run_fits], None, derivs,
-                                                     scales, config, first=first)
+                                                     scales, config, first=first, z=disc.z)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
         extras = DiscoveryExtras(stats=stats, mask_zscore=select_terms(stats, config.ensemble), discovery=disc)

@@ -1,7 +1,8 @@
 """What every method does to its final model: the fallback when it blows up, and its oracle standard errors.
 
 Never a blown-up model: when the final model leaves the blow-up bound on any run, :func:`fall_back` replaces it
-by the best of the candidates the method offers first, (a) the model without its least significant terms, (b)
+by the best of the candidates the method offers first, (a) the model without its least significant terms (by the
+method's own z when it has them, else by the per-run ensemble's p-values), (b)
 the regression-only ensemble (median of the per-run regressions on the selected terms) and (c) the pooled
 integral-form model, each integrated over every run and scored with the long-time loss; the winner is
 re-optimised jointly and ``model.json["fallback"]`` says what happened.  If none of them integrates over every
@@ -43,16 +44,26 @@ def _n_blown(per_run: Sequence[LossTerms]) -> int:
 
 def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermStatistics,
                         per_run_regressions: Sequence[PolynomialModel],
-                        integral: dict[str, IntegralSelection] | None) -> list[tuple[str, PolynomialModel]]:
+                        integral: dict[str, IntegralSelection] | None,
+                        z: np.ndarray | None = None) -> list[tuple[str, PolynomialModel]]:
     """The models tried when the final model blows up, in order of preference.
 
-    1. ``model`` without its k least significant terms (largest ensemble-mean p-value; the damping terms
-       stay), for k = 1, 2, ...: the terms the selection let in last.
+    1. ``model`` without its k least significant terms (the damping terms stay), for k = 1, 2, ...: the
+       smallest ``|z|`` first when the method gives its own ``z`` (the discovery's coefficient over standard
+       error, from all runs pooled), else the largest ensemble-mean p-value of the per-run models.  Per-run
+       p-values make collinear terms (the cubic couplings of a large hinge swing) all look weak, and their
+       chain then drops a term the motion needs first.
     2. The regression-only ensemble: the median over runs of the per-run regression models on ``mask``.
     3. The pooled integral-form model (its selected terms and coefficients), if available.
+
+    Parameters
+    ----------
+    z : ndarray (2, 35), optional
+        The method's coefficient / standard error of every term on ``model``'s support.
     """
     out: list[tuple[str, PolynomialModel]] = []
-    p = mean_pvalues(stats)
+    with np.errstate(divide="ignore"):
+        p = mean_pvalues(stats) if z is None else 1.0 / np.abs(np.asarray(z, float))  # larger: weaker
     removable = np.flatnonzero((model.support & ~damping_mask()).ravel())
     order = removable[np.argsort(-p.ravel()[removable], kind="stable")]  # least significant first
     names = [coefficient_labels().ravel()[i] for i in order]
@@ -73,7 +84,8 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
 def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
               per_run_regressions: Sequence[PolynomialModel], integral: dict[str, IntegralSelection] | None,
               derivs: Sequence[Derivatives], scales: Scales, config: FitConfig,
-              first: Sequence[tuple[str, PolynomialModel]] = ()) -> tuple[PolynomialModel, RefineResult, dict]:
+              first: Sequence[tuple[str, PolynomialModel]] = (),
+              z: np.ndarray | None = None) -> tuple[PolynomialModel, RefineResult, dict]:
     """Replace a blown-up final model by the best sane fallback (module docstring), re-optimised jointly.
 
     Parameters
@@ -93,6 +105,8 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
         ``config.joint`` scores and re-optimises the candidates.
     first : sequence of (name, PolynomialModel)
         Candidates tried before those of :func:`fallback_candidates`.
+    z : ndarray (2, 35), optional
+        The method's own z of the terms, which orders the terms dropped (:func:`fallback_candidates`).
 
     Returns
     -------
@@ -109,7 +123,7 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     logger.info("%s: trying fallbacks", reason)
     refs = [scaled_reference(d, scales) for d in derivs]
     tried, best = [], None
-    for name, model in [*first, *fallback_candidates(joint.model, mask, stats, per_run_regressions, integral)]:
+    for name, model in [*first, *fallback_candidates(joint.model, mask, stats, per_run_regressions, integral, z)]:
         c = scales.to_scaled(model.coef)
         m = model.support
         obj = Objective(refs, m, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
@@ -129,7 +143,7 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     res = refine(model, derivs, scales, config.joint, mask=model.support)
     logger.info("fallback final mean loss %.4g (shape %.3g, Poincare %.3g, frequency %.3g)", res.loss_end.total,
                 res.loss_end.shape, res.loss_end.poincare, res.loss_end.frequency)
-    record = {"reason": reason, "used": name, "candidates": tried,
+    record = {"reason": reason, "used": name, "order": "ensemble p-value" if z is None else "z", "candidates": tried,
               "blown_up_model": {"equations": joint.model.equations(), "loss": joint.loss_end.to_dict()}}
     return model, res, record
 

@@ -305,12 +305,8 @@ class _Problem:
 def _lm_step(normal, lam: float) -> tuple[NDArray, NDArray]:
     """Levenberg-Marquardt step (coefficients, segment states) with the states eliminated by their Schur
     complement; Marquardt's scaling by the diagonal."""
-    a_cc, a_cx, a_xx, g_c, g_x = normal
-    eye4 = np.eye(4)
-    d_xx = a_xx + lam * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4
-    inv = np.linalg.inv(d_xx)
-    schur = a_cc + lam * np.diag(np.diag(a_cc)) - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx)
-    rhs = g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x)
+    _, a_cx, _, _, g_x = normal
+    schur, rhs, inv = _eliminate_states(normal, lam)
     # equilibrated: the coefficients' SI units span ten decades, and a least squares on the raw matrix would cut
     # the directions of the large coefficients as round-off (a step that depends on the units)
     d = np.sqrt(np.maximum(np.diag(schur), 1e-300))
@@ -471,12 +467,22 @@ def _prune(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: ND
     return coef, x0, misfit, pruned
 
 
-def _reduced(normal) -> tuple[NDArray, NDArray]:
-    """The coefficients' normal matrix and gradient with the segment states eliminated (Schur complement)."""
+def _eliminate_states(normal, lam: float = 0.0, state_ridge: float = 0.0) -> tuple[NDArray, NDArray, NDArray]:
+    """The coefficients' normal matrix and gradient with the segment states eliminated (Schur complement), both
+    blocks damped by Marquardt's ``lam`` times their diagonal (the states' by ``lam + state_ridge``); also the
+    states' inverted blocks (S, 4, 4)."""
     a_cc, a_cx, a_xx, g_c, g_x = normal
     eye4 = np.eye(4)
-    inv = np.linalg.inv(a_xx + 1e-12 * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4)
-    return a_cc - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx), g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x)
+    inv = np.linalg.inv(a_xx + (lam + state_ridge) * np.einsum("sii->si", a_xx)[:, :, None] * eye4 + 1e-300 * eye4)
+    schur = a_cc + lam * np.diag(np.diag(a_cc)) - np.einsum("sij,sjk,slk->il", a_cx, inv, a_cx)
+    return schur, g_c - np.einsum("sij,sjk,sk->i", a_cx, inv, g_x), inv
+
+
+def _reduced(normal) -> tuple[NDArray, NDArray]:
+    """The coefficients' normal matrix and gradient with the segment states eliminated (a ridge of 1e-12 on the
+    states' blocks)."""
+    schur, rhs, _ = _eliminate_states(normal, 0.0, 1e-12)
+    return schur, rhs
 
 
 def _standard_errors(coef: NDArray, x0: NDArray, segs: _Segments, sigma: NDArray,

@@ -38,6 +38,7 @@ def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, 
     d = json.loads((out / "model.json").read_text())
     fb = d["fallback"]
     assert "blows up on 3 of 3 runs" in fb["reason"]
+    assert fb["order"] == "ensemble p-value"  # the paper's method has no pooled z of its own
     # the model without its weakest terms and the regression-only ensemble still lack the restoring term and blow up;
     # the pooled integral-form model is the one that integrates
     assert fb["used"] == "pooled integral-form model"
