@@ -15,7 +15,7 @@ from typing import Mapping
 import numpy as np
 
 __all__ = ["DescriptionTable", "MethodDescription", "FIT_FIGURES", "model_equation_text", "damping_rates",
-           "anti_damping_text"]
+           "anti_damping_text", "fallback_text"]
 
 #: The figures :func:`fitting.plots.plot_fit` writes for every method: (file name in the fit's output directory,
 #: caption).
@@ -98,3 +98,24 @@ def anti_damping_text(coefficients: Mapping[str, float]) -> str:
             "dimer in air cannot do. It may come from the y origin (a misplaced origin makes the trap's asymmetry read "
             "as a velocity term), from a drive (a pressure or a field that does work on the dimer) or from a wrong "
             "model (the term standing in for a missing one); it is not physical damping.")
+
+
+#: What ordered the terms a fallback dropped (model.json ``fallback["order"]``), in words.
+_FALLBACK_ORDER = {"z": "the smallest z of the fit first", "ensemble p-value": "the largest per-run p-value first"}
+
+
+def fallback_text(record: Mapping) -> str:
+    """The sentences on a fallback (model.json ``fallback``): the model the method found blew up, and the one written
+    is the best candidate that integrates over every run, re-optimised; empty without a fallback."""
+    fb = record.get("fallback")
+    if not fb:
+        return ""
+    n = sum(len(v) for v in record["equations"].values())
+    cands = fb.get("candidates") or []
+    sane = sum(1 for c in cands if not c.get("blown_up_runs"))
+    order = _FALLBACK_ORDER.get(fb.get("order", ""), "")
+    return (f" That model was not written: {fb['reason']}. The model written ({n} terms) is its fallback, the "
+            f"candidate of least long-time loss among those that integrate over every run ({sane} of {len(cands)}"
+            + (f"; terms dropped with {order}" if order else "") + f"): {fb['used']}, re-optimised jointly against the "
+            "long-time behaviour. Its coefficients have moved from those the standard errors and z of the table "
+            "belong to.")

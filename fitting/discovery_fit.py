@@ -26,7 +26,7 @@ import numpy as np
 
 from .config import FitConfig
 from .description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
-                          model_equation_text)
+                          fallback_text, model_equation_text)
 from cubedimer.terms import EQUATION_NAMES
 from .discovery import MODEL_ERROR_MODE, DiscoveryResult, discover_model
 from .ensemble import least_squares_on_support, select_terms, term_statistics
@@ -147,11 +147,15 @@ def discovery_description(record: dict) -> MethodDescription:
                          o.get("alias_z")))
             if o.get("alias_z") is not None and np.isfinite(o["alias_z"]) and o["alias_z"] < 3.0:
                 close.append(f"{eq}: {t} / {o['alias']} ({o['alias_z']:.1f})")
-    text = (f"The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
-            f"of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
-            f"pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "
-            f"half a standard error, gives a model of {n_terms} terms: " + "; ".join(model_equation_text(record["equations"]))
-            + ". Beside each term the "
+    equations = "; ".join(model_equation_text(record["equations"]))
+    fb = record.get("fallback")
+    found = (f"gives a model of {n_terms} terms: {equations}." if not fb else
+             f"gave a model of {sum(len(v) for v in fb['blown_up_model']['equations'].values())} terms."
+             + fallback_text(record) + f" It reads {equations}.")
+    text = ("The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
+            "of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
+            "pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "
+            f"half a standard error, {found} Beside each term the "
             "oracle standard error says what the data could resolve at best (least squares on this support at the "
             "model's own noise-free trajectories, at the tracking noise estimated from the data), and the alias z how "
             "many noise standard deviations separate the support from the one where the term is replaced by its "

@@ -62,3 +62,32 @@ def test_candidates_zero_the_dropped_terms_and_keep_the_rest(model):
         assert int(m.support.sum()) == int(model.support.sum()) - k
         np.testing.assert_array_equal(m.coef[m.support], model.coef[m.support])  # the kept values unchanged
         assert np.all(m.support[damping_mask()])
+
+
+#: model.json of a discovery whose polished 5-term model blew up on 2 of 8 runs and whose fallback of 3 terms is written
+FALLBACK_RECORD = {
+    "equations": {"yddot": {"y": -1.9e4, "ydot": -0.6}, "thetaddot": {"theta": -110.0}},
+    "fallback": {"reason": "the re-optimised minimal model (5 terms) blows up on 2 of 8 runs",
+                 "used": "minimal model without thetaddot:y^2*theta, yddot:y^3", "order": "z",
+                 "candidates": [{"name": "a", "loss": 190.0, "blown_up_runs": 2, "n_terms": 5},
+                                {"name": "b", "loss": 0.3, "blown_up_runs": 0, "n_terms": 4},
+                                {"name": "c", "loss": 0.2, "blown_up_runs": 0, "n_terms": 3}],
+                 "blown_up_model": {"equations": {"yddot": {"y": -1.9e4, "ydot": -0.6, "y^3": 1e9},
+                                                  "thetaddot": {"theta": -110.0, "y^2*theta": 2e8}},
+                                    "loss": {"total": 500.0, "blown_up": True}}},
+    "settings": {"discovery": {"keep_damping": True}},
+}
+
+
+def test_the_report_says_the_written_model_is_a_fallback():
+    from fitting.discovery_fit import discovery_description
+
+    text = discovery_description(FALLBACK_RECORD).text
+    # the blown-up model's size, why it was not written, what was written instead and how many candidates held
+    assert "gave a model of 5 terms. That model was not written: the re-optimised minimal model (5 terms) blows up " \
+           "on 2 of 8 runs. The model written (3 terms) is its fallback" in text
+    assert "(2 of 3; terms dropped with the smallest z of the fit first)" in text
+    assert "minimal model without thetaddot:y^2*theta, yddot:y^3, re-optimised jointly" in text
+    assert "gives a model of" not in text  # the discovery did not give the model written
+    no_fallback = discovery_description({**FALLBACK_RECORD, "fallback": None}).text
+    assert "gives a model of 3 terms" in no_fallback and "fallback" not in no_fallback

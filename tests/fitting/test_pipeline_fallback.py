@@ -32,7 +32,14 @@ FAST = ["--method", "paper", "--no-plots", "--quiet", "--workers", "1", "--max-e
 
 
 @pytest.mark.slow
-def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, lost_restoring_term, capsys):
+def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, lost_restoring_term, capsys,
+                                                       monkeypatch):
+    import fitting.fit_output as fit_output
+    from fitting.methods import get_method
+
+    written = []
+    write = fit_output.write_fit
+    monkeypatch.setattr(fit_output, "write_fit", lambda res, *a, **k: (written.append(res), write(res, *a, **k))[1])
     out = tmp_path / "out"
     assert main(["fit", str(small_dataset), "--out", str(out)] + FAST) == 0
     d = json.loads((out / "model.json").read_text())
@@ -53,6 +60,11 @@ def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, 
     # the oracle reports every written term
     assert {eq: set(d["oracle"][eq]) for eq in ("yddot", "thetaddot")} == {eq: set(t) for eq, t in d["equations"].items()}
     assert "fallback used: pooled integral-form model" in capsys.readouterr().err
+    # the report's account of the fit says that the minimal model was not written, and what was
+    text = get_method("paper").describe(written[0]).text
+    assert "gave a minimal model of 7 terms. That model was not written: the re-optimised minimal model (7 terms) " \
+           "blows up on 3 of 3 runs." in text
+    assert "terms dropped with the largest per-run p-value first): pooled integral-form model, re-optimised" in text
 
 
 def test_nothing_sane_exits_2_and_writes_no_model(small_dataset, tmp_path, lost_restoring_term, monkeypatch, capsys):
