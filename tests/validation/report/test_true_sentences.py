@@ -56,6 +56,11 @@ def test_no_sentence_about_identified_effects_when_there_are_none():
     assert "No candidate effect improves held-out runs significantly." in reading
     reading = diagnosis_section(_diagnosis(identified=["pair_scattering"]), []).reading
     assert "With them the gap is 1.0 %" in reading  # numbers.json gap_after 0.01
+    # a gap just below the noise floor rounds to 0.0, not to a signed -0.0; a clearly negative one keeps its sign
+    import dataclasses
+    for gap, said in ((-4e-4, "0.0"), (-4e-3, "-0.4")):
+        diag = dataclasses.replace(_diagnosis(identified=["pair_scattering"]), gap_after=gap)
+        assert f"With them the gap is {said} %" in diagnosis_section(diag, []).reading
 
 
 def test_a_significant_but_negligible_drift_is_not_called_no_drift():

@@ -157,7 +157,9 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
         f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
         f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
-        + (f"With them the gap is {100 * diagnosis.gap_after:.1f} %: {rem['statement']}" if ident or pairs else
+        # + 0.0 turns a rounded -0.0 (a gap just below the noise floor) into 0.0
+        + (f"With them the gap is {round(100 * diagnosis.gap_after, 1) + 0.0:.1f} %: {rem['statement']}"
+           if ident or pairs else
            f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
         + f".{found}"
         + anti_damping_text({f"{k} of {e.name}": v for e in diagnosis.effects if e.significant
