@@ -95,7 +95,7 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     mask : ndarray of bool
         Its support.
     stats : TermStatistics
-        Across-run statistics of the per-run models (which terms are least significant).
+        Across-run statistics of the per-run models (which terms are least significant when ``z`` is not given).
     per_run_regressions : sequence of PolynomialModel
         Every run's regression model (their median on ``mask`` is a candidate).
     integral : dict or None
