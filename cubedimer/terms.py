@@ -5,6 +5,7 @@ n >= 2, the constant as ``1``.  There are 35 monomials of degree <= 3 in four va
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from itertools import combinations_with_replacement
 
 import numpy as np
@@ -67,14 +68,13 @@ def coefficient_label(equation: int, term: int, degree: int = 3) -> str:
 
 def coefficient_labels(degree: int = 3) -> NDArray[np.str_]:
     """(2, n_terms) every coefficient's :func:`coefficient_label`, shaped like a model's coefficient array."""
-    return np.array([[f"{eq}:{t}" for t in _terms(degree)] for eq in EQUATION_NAMES])
+    return np.array([[coefficient_label(q, j, degree) for j in range(len(_terms(degree)))]
+                     for q in range(len(EQUATION_NAMES))])
 
 
+@lru_cache(maxsize=None)
 def _terms(degree: int) -> tuple[str, ...]:
-    return _TERM_CACHE.setdefault(degree, tuple(library_terms(degree)))
-
-
-_TERM_CACHE: dict[int, tuple[str, ...]] = {}
+    return tuple(library_terms(degree))
 
 
 def parse_term(name: str, names: tuple[str, ...] = STATE_NAMES) -> NDArray[np.int64]:

@@ -15,7 +15,7 @@ from typing import Mapping
 import numpy as np
 
 __all__ = ["DescriptionTable", "MethodDescription", "FIT_FIGURES", "model_equation_text", "damping_rates",
-           "anti_damping_text", "fallback_text"]
+           "anti_damping_text", "fallback_text", "model_found_text"]
 
 #: The figures :func:`fitting.plots.plot_fit` writes for every method: (file name in the fit's output directory,
 #: caption).
@@ -119,3 +119,14 @@ def fallback_text(record: Mapping) -> str:
             + (f"; terms dropped with {order}" if order else "") + f"): {fb['used']}, re-optimised jointly against the "
             "long-time behaviour. Its coefficients have moved from those the standard errors and z of the table "
             "belong to.")
+
+
+def model_found_text(record: Mapping, gives: str, gave: str) -> str:
+    """How a method's account names the model written: ``"{gives}: <equations>."``; after a fallback,
+    ``"{gave} of <n> terms."`` (the blown-up model's size), :func:`fallback_text` and ``" It reads <equations>."``."""
+    equations = "; ".join(model_equation_text(record["equations"]))
+    fb = record.get("fallback")
+    if not fb:
+        return f"{gives}: {equations}."
+    n_found = sum(len(v) for v in fb["blown_up_model"]["equations"].values())
+    return f"{gave} of {n_found} terms." + fallback_text(record) + f" It reads {equations}."

@@ -26,7 +26,7 @@ import numpy as np
 
 from .config import FitConfig
 from .description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
-                          fallback_text, model_equation_text)
+                          model_found_text)
 from cubedimer.terms import EQUATION_NAMES
 from .discovery import MODEL_ERROR_MODE, DiscoveryResult, discover_model
 from .ensemble import least_squares_on_support, select_terms, term_statistics
@@ -147,11 +147,7 @@ def discovery_description(record: dict) -> MethodDescription:
                          o.get("alias_z")))
             if o.get("alias_z") is not None and np.isfinite(o["alias_z"]) and o["alias_z"] < 3.0:
                 close.append(f"{eq}: {t} / {o['alias']} ({o['alias_z']:.1f})")
-    equations = "; ".join(model_equation_text(record["equations"]))
-    fb = record.get("fallback")
-    found = (f"gives a model of {n_terms} terms: {equations}." if not fb else
-             f"gave a model of {sum(len(v) for v in fb['blown_up_model']['equations'].values())} terms."
-             + fallback_text(record) + f" It reads {equations}.")
+    found = model_found_text(record, f"gives a model of {n_terms} terms", "gave a model")
     text = ("The integral-form discovery (positions regressed on the double integrals of the 35 library terms in windows "
             "of 0.75 periods, pooled over the runs; Holm's rule at family-wise 0.01 with stepwise swaps; held-out "
             "pruning over runs; columns at the model's own velocities), polished against the long-time behaviour within "

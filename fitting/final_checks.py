@@ -66,7 +66,8 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
         p = mean_pvalues(stats) if z is None else 1.0 / np.abs(np.asarray(z, float))  # larger: weaker
     removable = np.flatnonzero((model.support & ~damping_mask()).ravel())
     order = removable[np.argsort(-p.ravel()[removable], kind="stable")]  # least significant first
-    names = [coefficient_labels().ravel()[i] for i in order]
+    labels = coefficient_labels().ravel()
+    names = [labels[i] for i in order]
     keep = model.support.copy().ravel()
     for k, idx in enumerate(order[:-1] if len(order) > 1 else []):
         keep[idx] = False

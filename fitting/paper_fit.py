@@ -30,8 +30,7 @@ from cubedimer.executor import map_ordered
 from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
 from .derivatives import Derivatives
-from .description import (DescriptionTable, MethodDescription, anti_damping_text, damping_rates, fallback_text,
-                          model_equation_text)
+from .description import DescriptionTable, MethodDescription, anti_damping_text, damping_rates, model_found_text
 from .ensemble import least_squares_on_support, select_terms, term_statistics
 from .final_checks import fall_back, final_oracle
 from .integral_form import METHOD as INTEGRAL_METHOD
@@ -246,13 +245,9 @@ class PaperMethod:
         doc = fit_record(result)
         rule = SELECTION_RULES.get(doc.get("selection", {}).get("rule", "zscore"))
         rule_text = rule.description if rule is not None else doc.get("selection", {}).get("rule", "zscore")
-        equations = "; ".join(model_equation_text(doc["equations"]))
-        fb = doc.get("fallback")
         text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "
                 "rule, " + rule_text + ", plus viscous damping, "
-                + (f"give the minimal model: {equations}." if not fb else
-                   f"gave a minimal model of {sum(len(v) for v in fb['blown_up_model']['equations'].values())} terms."
-                   + fallback_text(doc) + f" It reads {equations}.")
+                + model_found_text(doc, "give the minimal model", "gave a minimal model")
                 + anti_damping_text(damping_rates(doc["equations"])))
         pvalues = doc.get("selection", {}).get("mean_pvalues", {})
         table = DescriptionTable("Minimal model (SI)", ("equation", "term", "coefficient", "z-score",

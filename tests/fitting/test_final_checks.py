@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
+from cubedimer.terms import coefficient_labels
 from fitting.ensemble import term_statistics
 from fitting.final_checks import fallback_candidates
-from fitting.model import TERMS, PolynomialModel, damping_mask
+from fitting.model import PolynomialModel, damping_mask
 
 #: a hinge-like model: both equations' stiffness and damping plus three couplings of the hinge
 SUPPORT = {"yddot": {"y": -1.0e5, "ydot": -0.5, "y^3": 2.0e9},
@@ -17,13 +18,17 @@ def model() -> PolynomialModel:
     return PolynomialModel.from_equations(SUPPORT)
 
 
+def _at(label: str) -> tuple[int, int]:
+    """(equation, term) index of an ``equation:term`` label."""
+    return tuple(np.argwhere(coefficient_labels() == label)[0])
+
+
 def _per_run(model: PolynomialModel, spread: dict[str, float], n: int = 8, seed: int = 0) -> list[PolynomialModel]:
     """Per-run models scattered about ``model`` by a relative spread per ``equation:term`` (default 1 %)."""
     rng = np.random.default_rng(seed)
     rel = np.full(model.coef.shape, 0.01)
     for label, s in spread.items():
-        eq, term = label.split(":")
-        rel[0 if eq == "yddot" else 1, TERMS.index(term)] = s
+        rel[_at(label)] = s
     return [PolynomialModel(model.coef * (1 + rel * rng.standard_normal(model.coef.shape))) for _ in range(n)]
 
 
@@ -41,8 +46,7 @@ def test_own_z_orders_the_chain_and_damping_stays(model):
     for label, value in {"yddot:y": 900, "yddot:ydot": 2.0, "yddot:y^3": 40, "thetaddot:theta": 800,
                          "thetaddot:thetadot": 1.5, "thetaddot:y*theta": 3.0, "thetaddot:y^2*theta": -6.0,
                          "thetaddot:y*theta^2": 25}.items():
-        eq, term = label.split(":")
-        z[0 if eq == "yddot" else 1, TERMS.index(term)] = value
+        z[_at(label)] = value
     by_p = _dropped(fallback_candidates(model, model.support, stats, [], None))
     by_z = _dropped(fallback_candidates(model, model.support, stats, [], None, z=z))
     assert by_p[0] == "thetaddot:y*theta^2"
