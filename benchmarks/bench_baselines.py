@@ -96,9 +96,8 @@ def score_terms(true_coef: NDArray[np.float64], coef: NDArray[np.float64]) -> Te
     from cubedimer.terms import coefficient_label
 
     true, sel = np.asarray(true_coef) != 0, np.asarray(coef) != 0
-    name = coefficient_label
-    missing = tuple(name(q, j) for q, j in zip(*np.nonzero(true & ~sel)))
-    spurious = tuple(name(q, j) for q, j in zip(*np.nonzero(sel & ~true)))
+    missing = tuple(coefficient_label(q, j) for q, j in zip(*np.nonzero(true & ~sel)))
+    spurious = tuple(coefficient_label(q, j) for q, j in zip(*np.nonzero(sel & ~true)))
     found = true & sel
     rel = np.abs(np.asarray(coef)[found] / np.asarray(true_coef)[found] - 1.0)
     return TermScore(missing, spurious, rel)

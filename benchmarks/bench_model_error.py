@@ -43,10 +43,13 @@ import sys
 import time
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from fitting.model import PolynomialModel
 
 #: runs fitted, runs held out for the long-time error, run length [s], frame rate [1/s].  The held-out runs'
 #: errors spread over two decades (a double pendulum's run of large amplitude is lost within 5 periods by any cubic
@@ -269,7 +272,7 @@ def long_time_errors(coef: NDArray, data: Data, f_slow: float, along: bool = Fal
     return np.array(errs)
 
 
-def _horizon_error(model, t: NDArray, exact: NDArray, i0: int, n: int) -> float:
+def _horizon_error(model: "PolynomialModel", t: NDArray, exact: NDArray, i0: int, n: int) -> float:
     """Relative RMS position error of ``model`` over ``n`` frames from the exact state at frame ``i0``."""
     sim, n_valid = model.simulate(exact[i0], t[i0:i0 + n], substeps=8)
     if n_valid < n or not np.all(np.isfinite(sim)):

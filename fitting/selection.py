@@ -111,7 +111,6 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
     cur_loss = _per_run(cache, cur, cur_mask, derivs, scales, config.screen)
     steps: list[SelectionStep] = []
     dropped: list[tuple[int, int]] = []
-    name = coefficient_label
     for _ in range(config.max_steps):
         removable = [(q, j) for q, j in zip(*np.nonzero(cur_mask & ~keep))]
         if not removable:
@@ -128,8 +127,8 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
         for (q, j), (c, loss) in zip(order, outs):
             w = paired_wilcoxon(loss, cur_loss)
             d = float(np.mean(loss) - np.mean(cur_loss))
-            logger.info("  drop %s: mean loss %.4g -> %.4g, p = %.2g", name(q, j), np.mean(cur_loss), np.mean(loss),
-                        w.p_greater)
+            logger.info("  drop %s: mean loss %.4g -> %.4g, p = %.2g", coefficient_label(q, j), np.mean(cur_loss),
+                        np.mean(loss), w.p_greater)
             if w.p_greater >= config.alpha and (best is None or d < best[0]):
                 best = (d, q, j, c, loss, w.p_greater)
             else:
@@ -159,8 +158,8 @@ def backward_elimination(model: PolynomialModel, mask: NDArray[np.bool_], derivs
         best = None
         for (q, j), (c, loss) in zip(dropped, outs):
             w = paired_wilcoxon(cur_loss, loss)  # H1: the smaller (current) model is worse
-            logger.info("  add back %s: mean loss %.4g -> %.4g, p = %.2g", name(q, j), np.mean(cur_loss), np.mean(loss),
-                        w.p_greater)
+            logger.info("  add back %s: mean loss %.4g -> %.4g, p = %.2g", coefficient_label(q, j), np.mean(cur_loss),
+                        np.mean(loss), w.p_greater)
             ok = w.p_greater < config.alpha
             steps.append(SelectionStep("add" if ok else "reject-add", EQUATION_NAMES[q], TERMS[j],
                                        float(np.mean(cur_loss)), float(np.mean(loss)), w.p_greater))
