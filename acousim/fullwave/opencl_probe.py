@@ -13,7 +13,10 @@ succeeds.)
 The verdict is cached in the suite's user cache (``<cache>/opencl/verdict-<key>.json``) under a key of the
 versions of pyopencl, pocl, bempp-cl and numpy, the Python version and the processor, so that the probe (about
 half a minute) runs once per environment, not once per command; a cached verdict that cannot be read is
-probed again.
+probed again.  Processes that need the verdict at once (the parallel workers of a build) wait for the first one's
+probe (:func:`cubedimer.cache_lock.cache_entry_lock`) instead of each running their own.  A trial assembly that
+runs out of time, or cannot start, says nothing about the driver (a loaded machine is slow, not broken): the
+command assembles on numba, and the verdict is not cached, so that the next command probes again.
 """
 from __future__ import annotations
 
@@ -30,9 +33,10 @@ from importlib import metadata
 from pathlib import Path
 
 from cubedimer.atomic import write_json
+from cubedimer.cache_lock import cache_entry_lock
 from cubedimer.compile_cache import suite_cache_root
 
-__all__ = ["OpenCLVerdict", "opencl_verdict", "environment_key", "PROBE_TIMEOUT_S"]
+__all__ = ["OpenCLVerdict", "TrialAssembly", "opencl_verdict", "run_probe", "environment_key", "PROBE_TIMEOUT_S"]
 
 log = logging.getLogger(__name__)
 
@@ -78,6 +82,26 @@ class OpenCLVerdict:
     key: str
 
 
+@dataclass(frozen=True)
+class TrialAssembly:
+    """How the trial assembly in the child process went.
+
+    Attributes
+    ----------
+    works : bool
+        True when it ran on OpenCL and gave a finite field.
+    reason : str
+        One line: what ran, or how it failed (exit status or signal, and the child's last error line).
+    conclusive : bool
+        False when it ran out of time or could not start: that is the machine's state, not the driver's, and is
+        not cached.
+    """
+
+    works: bool
+    reason: str
+    conclusive: bool = True
+
+
 def _version(package: str) -> str:
     try:
         return metadata.version(package)
@@ -113,23 +137,22 @@ def _read_cached(path: Path) -> OpenCLVerdict | None:
         return None  # absent or unreadable: probe again
 
 
-def run_probe(code: str = PROBE_CODE, timeout_s: float = PROBE_TIMEOUT_S) -> tuple[bool, str]:
-    """Run ``code`` in a child Python; (True, its last line) when it printed ``opencl-probe-ok``, else (False,
-    one line on how it failed: exit status or signal, and the child's last error line)."""
+def run_probe(code: str = PROBE_CODE, timeout_s: float = PROBE_TIMEOUT_S) -> TrialAssembly:
+    """Run ``code`` in a child Python; it works when the child's last line starts with ``opencl-probe-ok``."""
     env = dict(os.environ, POCL_MAX_PTHREAD_COUNT=os.environ.get("POCL_MAX_PTHREAD_COUNT", "1"))
     try:
         res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                              timeout=timeout_s, stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:
-        return False, f"the trial assembly did not finish in {timeout_s:.0f} s"
+        return TrialAssembly(False, f"the trial assembly did not finish in {timeout_s:.0f} s", conclusive=False)
     except OSError as exc:
-        return False, f"the trial assembly could not start ({exc})"
+        return TrialAssembly(False, f"the trial assembly could not start ({exc})", conclusive=False)
     out = res.stdout.strip().splitlines()
     if res.returncode == 0 and out and out[-1].startswith("opencl-probe-ok"):
-        return True, f"trial assembly of {out[-1].split()[-1]} DOFs ran on OpenCL"
+        return TrialAssembly(True, f"trial assembly of {out[-1].split()[-1]} DOFs ran on OpenCL")
     lines = [ln.strip() for ln in res.stderr.strip().splitlines() if ln.strip()]
     status = f"killed by signal {-res.returncode}" if res.returncode < 0 else f"exit status {res.returncode}"
-    return False, f"the trial assembly failed ({status}): {lines[-1][:300] if lines else 'no message'}"
+    return TrialAssembly(False, f"the trial assembly failed ({status}): {lines[-1][:300] if lines else 'no message'}")
 
 
 def _opencl_device_found() -> bool:
@@ -157,13 +180,18 @@ def opencl_verdict(refresh: bool = False) -> OpenCLVerdict:
     cached = None if refresh else _read_cached(path)
     if cached is not None and cached.key == key:
         return cached
-    log.info("probing bempp-cl's OpenCL backend once for this environment (a trial assembly in a child process)")
-    works, reason = run_probe()
-    verdict = OpenCLVerdict(works, reason, key)
-    if not works:
-        log.warning("OpenCL backend not used: %s; assembling on numba", reason)
-    try:
-        write_json(path, {"works": works, "reason": reason, "key": key})
-    except OSError as exc:  # an unwritable cache only costs a probe next time
-        log.debug("could not cache the OpenCL verdict: %s", exc)
-    return verdict
+    with cache_entry_lock(path, "the OpenCL verdict"):
+        cached = None if refresh else _read_cached(path)  # another process may have probed while this one waited
+        if cached is not None and cached.key == key:
+            return cached
+        log.info("probing bempp-cl's OpenCL backend once for this environment (a trial assembly in a child process)")
+        trial = run_probe()
+        if not trial.works:
+            log.warning("OpenCL backend not used: %s; assembling on numba%s", trial.reason,
+                        "" if trial.conclusive else " (not cached: the next command probes again)")
+        if trial.conclusive:
+            try:
+                write_json(path, {"works": trial.works, "reason": trial.reason, "key": key})
+            except OSError as exc:  # an unwritable cache only costs a probe next time
+                log.debug("could not cache the OpenCL verdict: %s", exc)
+    return OpenCLVerdict(trial.works, trial.reason, key)

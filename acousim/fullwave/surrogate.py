@@ -38,6 +38,7 @@ from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
 from cubedimer.atomic import write_json
+from cubedimer.cache_lock import cache_entry_lock
 from cubedimer.compile_cache import suite_cache_root
 
 from ..force_model import ChebyshevSurrogate, ForceCoefficients, levitation_height
@@ -497,29 +498,45 @@ def cached_fullwave_surrogate(
     ``~/.cache/cubedimer/fullwave``), one JSON file per settings hash.
 
     Tables are keyed by geometry, mesh, medium, density and build settings; the pressure amplitude is
-    applied afterwards by the exact p0^2 scaling.
+    applied afterwards by the exact p0^2 scaling.  Processes that miss the same table at once build it once: the
+    others wait for the first (:func:`cubedimer.cache_lock.cache_entry_lock`) and load its table.
     """
     key_settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces, flux_disc_points)
-    candidates = [DEFAULT_TABLE, Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"]
-    for path in candidates:
-        if path.exists():
-            try:
-                sur = FullwaveSurrogate.load(path)
-            except Exception as exc:  # a cached table that cannot be read is rebuilt, never fatal
-                if path == DEFAULT_TABLE:
-                    raise
-                log.warning("the cached full-wave table %s cannot be read (%s: %s); building it again", path,
-                            type(exc).__name__, exc)
-                continue
-            if build_settings_of(sur) == key_settings and sur.gravity == gravity:
-                log.debug("full-wave surrogate from %s", path)
-                return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
-    sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half, theta_max,
-                                   forces=forces, flux_disc_points=flux_disc_points)
+    cached = Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"
+    sur = _stored_table(DEFAULT_TABLE, key_settings, gravity) or _stored_table(cached, key_settings, gravity)
+    if sur is None:
+        with cache_entry_lock(cached, "this full-wave table"):
+            # another process may have built it while this one waited; a file it found unreadable is not re-read
+            sur = _stored_table(cached, key_settings, gravity, quiet=True)
+            if sur is None:
+                sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half,
+                                               theta_max, forces=forces, flux_disc_points=flux_disc_points)
+                try:
+                    sur.save(cached)
+                except OSError as exc:  # read-only install: keep the result in memory only
+                    log.warning("could not cache the full-wave surrogate: %s", exc)
+    return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
+
+
+def _stored_table(path: Path, key_settings: dict, gravity: float, quiet: bool = False) -> FullwaveSurrogate | None:
+    """The table stored at ``path`` when it exists, can be read and was built with these settings, else None.
+
+    A cached table that cannot be read is passed over with a warning (``quiet``: without), never fatal; the shipped
+    default table must be readable."""
+    if not path.exists():
+        return None
     try:
-        sur.save(candidates[1])
-    except OSError as exc:  # read-only install: keep the result in memory only
-        log.warning("could not cache the full-wave surrogate: %s", exc)
+        sur = FullwaveSurrogate.load(path)
+    except Exception as exc:  # a cached table that cannot be read is rebuilt, never fatal
+        if path == DEFAULT_TABLE:
+            raise
+        if not quiet:
+            log.warning("the cached full-wave table %s cannot be read (%s: %s); building it again", path,
+                        type(exc).__name__, exc)
+        return None
+    if build_settings_of(sur) != key_settings or sur.gravity != gravity:
+        return None
+    log.debug("full-wave surrogate from %s", path)
     return sur
 
 

@@ -48,6 +48,33 @@ def test_coarse_surrogate_cache_and_symmetry(coarse_surrogate):
             np.testing.assert_allclose(b, -a, rtol=1e-12, atol=1e-12 * np.max(np.abs(a)))
 
 
+def test_processes_that_miss_the_same_table_at_once_build_it_once(coarse_surrogate, tmp_path, monkeypatch):
+    """Three workers miss the table at once; the first builds (here 0.5 s), the others wait and load its file."""
+    import threading
+    import time
+
+    from acousim.fullwave import surrogate as module
+
+    sur, _ = coarse_surrogate
+    builds = []
+
+    def build(*args, **kwargs):
+        builds.append(1)
+        time.sleep(0.5)
+        return sur
+
+    monkeypatch.setattr(module, "build_fullwave_surrogate", build)
+    got = []
+    workers = [threading.Thread(target=lambda: got.append(cached_fullwave_surrogate(**TINY_BUILD, cache_dir=tmp_path)))
+               for _ in range(3)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(timeout=60)
+    assert len(builds) == 1 and len(got) == 3
+    assert all(g.coefficients == sur.coefficients for g in got)
+
+
 def _check_common(sur: FullwaveSurrogate) -> None:
     q_y, _ = sur.generalized_forces(0.0, 0.0)
     assert abs(q_y) < 1e-9 * sur.mass * sur.gravity

@@ -3,6 +3,8 @@ OpenCL" rather than a crash of the command, cached per environment and never fat
 from __future__ import annotations
 
 import json
+import threading
+import time
 
 import pytest
 
@@ -17,23 +19,35 @@ from acousim.fullwave import opencl_probe
     ("print('half a line')", False, "exit status 0"),
 ])
 def test_the_trial_run_survives_every_way_a_driver_fails(code, works, reason):
-    ok, text = opencl_probe.run_probe(code, timeout_s=60)
-    assert ok is works and reason in text and "\n" not in text
+    trial = opencl_probe.run_probe(code, timeout_s=60)
+    assert trial.works is works and reason in trial.reason and "\n" not in trial.reason and trial.conclusive
 
 
 def test_a_trial_run_that_hangs_is_stopped():
-    ok, text = opencl_probe.run_probe("import time; time.sleep(30)", timeout_s=1)
-    assert not ok and "did not finish in 1 s" in text
+    trial = opencl_probe.run_probe("import time; time.sleep(30)", timeout_s=1)
+    assert not trial.works and "did not finish in 1 s" in trial.reason
+    assert not trial.conclusive  # a slow machine says nothing about the driver
+
+
+def _counted_probe(monkeypatch, tmp_path, trial, seconds=0.0):
+    """The verdict with a device 'found' and a counted trial run giving ``trial``; the cache under tmp_path."""
+    calls = []
+
+    def probe():
+        calls.append(1)
+        time.sleep(seconds)
+        return trial
+
+    monkeypatch.setattr(opencl_probe, "_opencl_device_found", lambda: True)
+    monkeypatch.setattr(opencl_probe, "suite_cache_root", lambda: tmp_path)
+    monkeypatch.setattr(opencl_probe, "run_probe", probe)
+    return calls
 
 
 @pytest.fixture
 def probes(monkeypatch, tmp_path):
-    """The verdict with a device 'found' and a counted trial run that fails; the cache under tmp_path."""
-    calls = []
-    monkeypatch.setattr(opencl_probe, "_opencl_device_found", lambda: True)
-    monkeypatch.setattr(opencl_probe, "suite_cache_root", lambda: tmp_path)
-    monkeypatch.setattr(opencl_probe, "run_probe", lambda: calls.append(1) or (False, "exit status 1: broken"))
-    return calls
+    """A trial run that fails, counted."""
+    return _counted_probe(monkeypatch, tmp_path, opencl_probe.TrialAssembly(False, "exit status 1: broken"))
 
 
 def test_the_verdict_is_probed_once_per_environment(probes, tmp_path):
@@ -64,3 +78,24 @@ def test_no_device_means_no_probe(monkeypatch, probes):
     monkeypatch.setattr(opencl_probe, "_opencl_device_found", lambda: False)
     verdict = opencl_probe.opencl_verdict()
     assert not verdict.works and "no OpenCL CPU device" in verdict.reason and probes == []
+
+
+def test_a_trial_run_out_of_time_is_not_cached(monkeypatch, tmp_path):
+    """A timeout is the machine's load, not the driver's verdict: numba for this command, a new probe next time."""
+    calls = _counted_probe(monkeypatch, tmp_path, opencl_probe.TrialAssembly(False, "did not finish", conclusive=False))
+    assert not opencl_probe.opencl_verdict().works
+    assert not opencl_probe.opencl_verdict().works
+    assert len(calls) == 2 and not list((tmp_path / "opencl").glob("verdict-*.json"))
+
+
+def test_processes_that_need_the_verdict_at_once_probe_once(monkeypatch, tmp_path):
+    """Four workers asking while the first probe runs (0.5 s) wait for it and read its verdict: one probe, not four
+    (each thread opens the lock file itself, so that they contend as processes do)."""
+    calls = _counted_probe(monkeypatch, tmp_path, opencl_probe.TrialAssembly(True, "ran on OpenCL"), seconds=0.5)
+    verdicts = []
+    workers = [threading.Thread(target=lambda: verdicts.append(opencl_probe.opencl_verdict())) for _ in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(timeout=30)
+    assert len(verdicts) == 4 and all(v.works for v in verdicts) and len(calls) == 1
