@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -121,8 +121,11 @@ class DiscoveryConfig:
     heldout_prune : bool
         After Holm's rule, continue the elimination and keep the support with the smallest held-out error.
     heldout_tolerance : float
-        Keep the smallest support whose held-out RMS error is at most ``1 + heldout_tolerance`` times the
-        smallest on that path (0: the minimum itself).
+        The user's practical threshold (``--heldout-tolerance``): keep the smallest support whose held-out RMS error
+        is at most ``1 + heldout_tolerance`` times the smallest on that path (0: the minimum itself).  In equations
+        selected under model error it widens that rule's allowance (a support this close to the best counts as the
+        same), and the output error's pruning and additions apply it to the trajectories' RMS misfit
+        (``OutputErrorConfig.misfit_tolerance``).
     n_folds : int
         Folds over runs of the held-out error (at most the number of runs).
     raw_positions : bool
@@ -446,7 +449,8 @@ def _select_equation(design, forced: NDArray, noise: float, config: DiscoveryCon
     if _is_model_error(ratio, inflation, config):
         mode = MODEL_ERROR_MODE
         sel, path, held = select_heldout(design, forced, config.alpha, config.velocity_first, config.n_folds,
-                                         config.model_error_se, config.model_error_tolerance, noise)
+                                         config.model_error_se, config.model_error_tolerance, noise,
+                                         config.heldout_tolerance)
     elif config.heldout_prune:
         sel, path_b, held_b = prune_heldout(design, sel, forced, config.alpha, config.velocity_first, config.n_folds,
                                             config.heldout_tolerance)
@@ -595,5 +599,8 @@ def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, 
     """Step 5: under model error, the coefficients whose trajectories best follow the runs over several periods."""
     if config.output_error is None or MODEL_ERROR_MODE not in result.modes:
         return None
+    oe = config.output_error
+    if config.heldout_tolerance > oe.misfit_tolerance:  # the user's practical threshold holds for the trajectories too
+        oe = replace(oe, misfit_tolerance=config.heldout_tolerance)
     return refine_output_error(PolynomialModel(result.coef), setup.dts, setup.ys, setup.ths, smoothed,
-                               setup.slow_freqs, setup.noise, config.output_error, setup.forced)
+                               setup.slow_freqs, setup.noise, oe, setup.forced)

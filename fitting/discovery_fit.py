@@ -207,6 +207,9 @@ def model_error_text(disc: dict, settings: dict) -> str:
     within = f"{se:g} paired standard error{'' if se == 1 else 's'}"
     if tol:
         within += f", or {100 * tol:g} % of the held-out misfit's model-error part,"
+    practical = settings.get("heldout_tolerance") or 0.0
+    if practical:
+        within += f" or {100 * practical:g} % of the best held-out RMS error (the practical threshold),"
     text = (" Model error: the cubic library does not hold the truth in " + " and ".join(parts) + ", so the "
             "standard errors and Holm's rule lose their meaning there; those equations were selected by held-out "
             f"prediction over runs instead (the smallest support on the elimination path within {within} of the "
@@ -227,6 +230,9 @@ def model_error_text(disc: dict, settings: dict) -> str:
                            f"{'' if pruned else 'then '}added ({', '.join(added)})")
         if changes:
             text += f" {' and '.join(changes)}, at a misfit of {oe['misfit']:.3g}."
+        if practical and (settings.get("output_error") or {}).get("support_tolerance") is not None:
+            text += (f" The practical threshold held there too: a term went if it raised the RMS misfit by at most "
+                     f"{100 * practical:g} %, and none was added that lowered it by less.")
     return text
 
 

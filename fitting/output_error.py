@@ -37,7 +37,7 @@ the output error itself, in three steps.
    equation's acceleration over the smoothed states); a term goes when the support without it, refined again over
    the same segments, has a squared misfit within ``support_tolerance`` (3 %) of the model-error part of the full
    support's, ``misfit**2 - 1`` in noise units: the tolerance of the held-out selection
-   (:func:`fitting.selection_rules.select_heldout`), on the quantity a long-time prediction needs.  Pruning stops at
+   (:func:`fitting.support_search.select_heldout`), on the quantity a long-time prediction needs.  Pruning stops at
    the ``support_rejections``-th (2nd) term that must stay.  Terms the caller forces (``forced``) are never tried.
 2. Additions: a score test ranks every absent term of the library by the drop of the squared misfit that adding it
    would give to first order, the support's coefficients and the segment states re-optimised with it
@@ -50,6 +50,10 @@ the output error itself, in three steps.
    (``additions=False``: no additions, pruning alone).  An added term's standard error is the output error's own
    (Gauss-Newton, scaled by the misfit squared).
 3. After an addition, pruning again from the grown support: a term the added one makes redundant goes.
+
+A user's practical threshold (``misfit_tolerance``, the discovery's ``--heldout-tolerance``) widens both rules on the
+whole RMS misfit: a term also goes when the misfit without it is within that fraction of the full support's, and an
+addition must lower it by more than that fraction.
 """
 from __future__ import annotations
 
@@ -103,6 +107,10 @@ class OutputErrorConfig:
         fraction of the full support's model-error part (``misfit**2 - 1``), and added when the refined squared
         misfit with it is lower by more than this fraction of the current model-error part; None: the support is
         kept as given.
+    misfit_tolerance : float
+        A practical threshold on top (the discovery passes its ``heldout_tolerance``, ``--heldout-tolerance``): a
+        term is also pruned when the refined RMS misfit without it is within this fraction of the full support's,
+        and an addition must lower the RMS misfit by more than this fraction.  0: none.
     support_rejections : int
         Pruning stops after this many terms were tried and kept, and the additions after this many were tried and
         not added.
@@ -121,6 +129,7 @@ class OutputErrorConfig:
     h_omega: float = 0.1
     outlier_factor: float = 5.0
     support_tolerance: float | None = 0.03
+    misfit_tolerance: float = 0.0
     support_rejections: int = 2
     additions: bool = True
     addition_misfit: float = 1.05
@@ -133,6 +142,7 @@ class OutputErrorConfig:
         check_whole(self, "support_rejections")
         if self.support_tolerance is not None:
             check_non_negative(self, "support_tolerance")
+        check_non_negative(self, "misfit_tolerance")
 
 
 @dataclass(frozen=True, eq=False)
@@ -443,7 +453,8 @@ def _prune(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: ND
            config: OutputErrorConfig, frozen: NDArray) -> tuple[NDArray, NDArray, float, list[str]]:
     """Backward elimination by the refined output error over the same segments (module docstring, Pruning and
     additions): the pruned (coefficients, segment states, misfit, terms)."""
-    limit = misfit ** 2 + config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
+    limit = max(misfit ** 2 + config.support_tolerance * max(misfit ** 2 - 1.0, 0.0),
+                (misfit * (1.0 + config.misfit_tolerance)) ** 2)
     frozen = frozen.copy()
     column_rms = np.sqrt(np.mean(library ** 2, axis=0))
     pruned, kept = [], 0
@@ -546,7 +557,8 @@ def _add(coef: NDArray, x0: NDArray, misfit: float, segs: _Segments, sigma: NDAr
     model-error part; the grown (coefficients, segment states, misfit, terms)."""
     added, tried, rejected = [], np.zeros(coef.shape, bool), 0
     while rejected < config.support_rejections and misfit > config.addition_misfit:
-        need = config.support_tolerance * max(misfit ** 2 - 1.0, 0.0)
+        need = max(config.support_tolerance * max(misfit ** 2 - 1.0, 0.0),
+                   misfit ** 2 * (1.0 - (1.0 + config.misfit_tolerance) ** -2))
         gain, delta = _addition_gains(coef, x0, segs, sigma, library, config)
         gain[tried] = -np.inf
         q, j = np.unravel_index(np.argmax(gain), gain.shape)

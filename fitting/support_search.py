@@ -167,7 +167,8 @@ def heldout_per_run(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: i
 
 def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0.01, velocity_first: bool = True,
                    n_folds: int = 5, se_rule: float = 1.0, tolerance: float = 0.0,
-                   noise: float | None = None) -> tuple[list[int], list[list[int]], list[float]]:
+                   noise: float | None = None,
+                   rms_tolerance: float = 0.0) -> tuple[list[int], list[list[int]], list[float]]:
     """Selection by held-out prediction over runs, for data whose residual is model error rather than noise.
 
     Backward elimination from the full library (least |z| first, velocity terms first while one is below the
@@ -178,6 +179,8 @@ def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0
     is larger: an excess that small is the same held-out error even where its standard error is smaller.  Given the
     white ``noise`` (residual standard deviation units), the tolerance is taken as a share of the model error alone,
     ``tolerance * (1 - noise^2 / heldout^2)`` at the best support: the noise's part of the misfit no model reduces.
+    A support whose held-out RMS error is within the relative ``rms_tolerance`` of the path's smallest counts as the
+    same too (the user's practical threshold, as in :func:`prune_heldout`; 0: no such allowance).
     Returns the support, the path and the path's held-out RMS errors (as :func:`heldout_rms`)."""
     n_lib = d.total.shape[1] - 1
     path = [keep for keep, _ in _eliminate(d, range(n_lib), forced, alpha, velocity_first)]
@@ -193,7 +196,8 @@ def select_heldout(d: ReducedDesign, forced: NDArray[np.bool_], alpha: float = 0
     mean, se = rel.mean(axis=1), rel.std(axis=1, ddof=1) / np.sqrt(R)
     if noise is not None:  # the tolerance is a share of the model error, the part of the misfit a model can reduce
         tolerance *= max(0.0, 1.0 - (noise / held[best]) ** 2) if held[best] > 0 else 0.0
-    chosen = max(i for i in range(len(path)) if mean[i] <= max(se_rule * se[i], tolerance))
+    limit = min(held) * (1.0 + rms_tolerance) if rms_tolerance > 0 else -np.inf
+    chosen = max(i for i in range(len(path)) if mean[i] <= max(se_rule * se[i], tolerance) or held[i] <= limit)
     return path[chosen], path, held
 
 

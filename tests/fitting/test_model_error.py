@@ -214,3 +214,26 @@ def test_the_report_says_which_equations_were_selected_under_model_error(rules, 
         model["discovery"]["output_error"].update(pruned=[])
         assert ("from 8.15 to 5.69 times the tracking noise. 1 term the trajectories need was then added "
                 "(yddot:y^2*ydot), at a misfit of 5.52." in discovery_description(model).text)
+        # a practical threshold (--heldout-tolerance) is part of both rules, and is said to be
+        assert "practical threshold" not in discovery_description(model).text
+        model["settings"]["discovery"].update(heldout_tolerance=0.05, output_error={"support_tolerance": 0.03})
+        text = discovery_description(model).text
+        assert ("within 1 paired standard error, or 3 % of the held-out misfit's model-error part, or 5 % of the best "
+                "held-out RMS error (the practical threshold), of the best held-out error" in text)
+        assert ("The practical threshold held there too: a term went if it raised the RMS misfit by at most 5 %, and "
+                "none was added that lowered it by less." in text)
+
+
+@pytest.mark.parametrize("practical, expected", [(0.0, 0.0), (0.05, 0.05)])
+def test_the_practical_threshold_reaches_the_output_error(monkeypatch, practical, expected):
+    """``--heldout-tolerance`` is the output error's ``misfit_tolerance`` too (the default's is 0)."""
+    from types import SimpleNamespace
+
+    from fitting import discovery
+
+    seen = []
+    monkeypatch.setattr(discovery, "refine_output_error", lambda *args: seen.append(args[7]))
+    setup = SimpleNamespace(dts=[], ys=[], ths=[], slow_freqs=[], noise=(1.0, 1.0), forced=None)
+    result = SimpleNamespace(modes=(discovery.MODEL_ERROR_MODE, "significance"), coef=np.zeros((2, len(TERMS))))
+    discovery._refine_output_error(setup, [], result, DiscoveryConfig(heldout_tolerance=practical))
+    assert seen[0].misfit_tolerance == expected and seen[0].support_tolerance == 0.03

@@ -61,3 +61,14 @@ def test_the_tolerance_is_a_share_of_the_misfit_above_the_noise(seed, noise, kee
     # model error and the 3 % tolerance applies almost whole
     sel, _, _ = select_heldout(_design(0.1, seed), FORCED, velocity_first=False, tolerance=0.03, noise=noise)
     assert (WEAK in sel) is keeps_weak and {1, STRONG} <= set(sel)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("rms_tolerance, keeps_weak", [(0.0, True), (0.002, True), (0.01, False)])
+def test_the_users_practical_threshold_applies_under_model_error_too(seed, rms_tolerance, keeps_weak):
+    # told the misfit is all noise, the model-error tolerance is ~0 and the rule keeps the weak term, whose 1 % of
+    # the held-out sum of squares is 0.5 % of its RMS: a practical threshold of 0.2 % of the RMS keeps it, one of 1 %
+    # drops it; the strong term (12 % of the RMS) stays under either
+    sel, _, _ = select_heldout(_design(0.1, seed), FORCED, velocity_first=False, tolerance=0.03, noise=1.0,
+                               rms_tolerance=rms_tolerance)
+    assert (WEAK in sel) is keeps_weak and {1, STRONG} <= set(sel)
