@@ -121,11 +121,9 @@ class DiscoveryConfig:
     heldout_prune : bool
         After Holm's rule, continue the elimination and keep the support with the smallest held-out error.
     heldout_tolerance : float
-        The user's practical threshold (``--heldout-tolerance``): keep the smallest support whose held-out RMS error
-        is at most ``1 + heldout_tolerance`` times the smallest on that path (0: the minimum itself).  In equations
-        selected under model error it widens that rule's allowance (a support this close to the best counts as the
-        same), and the output error's pruning and additions apply it to the trajectories' RMS misfit
-        (``OutputErrorConfig.misfit_tolerance``).
+        Keep the smallest support whose held-out RMS error is at most ``1 + heldout_tolerance`` times the smallest
+        on that path (0: the minimum itself); under model error it widens the held-out rule and is the output
+        error's ``misfit_tolerance`` (docs/fitting.md, "The practical threshold under model error").
     n_folds : int
         Folds over runs of the held-out error (at most the number of runs).
     raw_positions : bool
@@ -160,20 +158,15 @@ class DiscoveryConfig:
         The standard errors of that rule (1: the one-standard-error rule).
     model_error_tolerance : float
         The relative excess of held-out error, as a share of its model-error part, that counts as the same held-out
-        error however small its standard error: the one-standard-error rule alone keeps every spare term that
-        generalises by a fraction of a per cent (24-36 terms against the 15 of the Taylor support in
-        ``benchmarks/bench_model_error.py``).  0.03: within 1.5 times the Taylor support on 33 of its 36 data sets
-        (31 at 0) at an unchanged long-time error (docs/fitting.md, "Model error").
+        error however small its standard error (the one-standard-error rule alone keeps spare terms that generalise
+        by a fraction of a per cent).  0.03: docs/fitting.md, "Model error".
     model_error_inflation : float or None
         The second sign of model error, one that the library's spare terms cannot hide: the held-out misfit
         (K-fold over runs) at the significance rule's support exceeds the in-sample residual by more than white noise
         explains.  The statistic (:func:`fitting.support_search.heldout_inflation`) is
         ``(heldout^2 / residual^2 - 1) * dof / terms``, of order 1 under white noise.  Above this value the equation
-        is selected by held-out prediction, as above.
-        None: never.  20: on sparse truths it is -0.55 to 7.0 (158 equations of 79 data sets of ten truths, fresh
-        seeds); on the non-sparse truths of ``benchmarks/bench_model_error.py`` whose residual stayed within 1.05 of
-        the noise it is 11-1,120 at truncation residuals of 0.4-1.9 % (spare terms fit one amplitude range's model
-        error and miss the others').
+        is selected by held-out prediction, as above.  None: never.  20: -0.55 to 7.0 on sparse truths, 11-1,120 on
+        non-sparse ones whose residual stayed within 1.05 of the noise (docs/fitting.md, "Why 20").
     output_error : OutputErrorConfig or None
         Under model error in either equation, the coefficients are refined by the output error over segments of
         several periods and the support pruned and grown by it (:func:`fitting.output_error.refine_output_error`).
@@ -599,8 +592,7 @@ def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, 
     """Step 5: under model error, the coefficients whose trajectories best follow the runs over several periods."""
     if config.output_error is None or MODEL_ERROR_MODE not in result.modes:
         return None
-    oe = config.output_error
-    if config.heldout_tolerance > oe.misfit_tolerance:  # the user's practical threshold holds for the trajectories too
-        oe = replace(oe, misfit_tolerance=config.heldout_tolerance)
+    oe = replace(config.output_error, misfit_tolerance=max(config.output_error.misfit_tolerance,
+                                                           config.heldout_tolerance))  # the practical threshold
     return refine_output_error(PolynomialModel(result.coef), setup.dts, setup.ys, setup.ths, smoothed,
                                setup.slow_freqs, setup.noise, oe, setup.forced)
