@@ -16,7 +16,8 @@ half a minute) runs once per environment, not once per command; a cached verdict
 probed again.  Processes that need the verdict at once (the parallel workers of a build) wait for the first one's
 probe (:func:`cubedimer.cache_lock.cache_entry_lock`) instead of each running their own.  A trial assembly that
 runs out of time, or cannot start, says nothing about the driver (a loaded machine is slow, not broken): the
-command assembles on numba, and the verdict is not cached, so that the next command probes again.
+command assembles on numba, and that verdict holds for :data:`RETRY_AFTER_S` only (so that the other workers of the
+same command do not each wait out the timeout again), after which a command probes again.
 """
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ import platform
 import subprocess
 import sys
 import textwrap
+import time
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -36,12 +38,16 @@ from cubedimer.atomic import write_json
 from cubedimer.cache_lock import cache_entry_lock
 from cubedimer.compile_cache import suite_cache_root
 
-__all__ = ["OpenCLVerdict", "TrialAssembly", "opencl_verdict", "run_probe", "environment_key", "PROBE_TIMEOUT_S"]
+__all__ = ["OpenCLVerdict", "TrialAssembly", "opencl_verdict", "run_probe", "environment_key", "PROBE_TIMEOUT_S",
+           "RETRY_AFTER_S"]
 
 log = logging.getLogger(__name__)
 
 #: Seconds the child process may take (compiling the OpenCL kernels takes 10-30 s on one core).
 PROBE_TIMEOUT_S = 600.0
+
+#: Seconds an inconclusive verdict (a trial that ran out of time or could not start) is kept before probing again.
+RETRY_AFTER_S = 3600.0
 
 #: Packages whose versions key the cached verdict.
 KEY_PACKAGES = ("pyopencl", "pocl-binary-distribution", "bempp-cl", "numpy", "numba")
@@ -94,7 +100,7 @@ class TrialAssembly:
         One line: what ran, or how it failed (exit status or signal, and the child's last error line).
     conclusive : bool
         False when it ran out of time or could not start: that is the machine's state, not the driver's, and is
-        not cached.
+        kept for :data:`RETRY_AFTER_S` only.
     """
 
     works: bool
@@ -130,10 +136,13 @@ def _cache_file(key: str) -> Path:
 
 
 def _read_cached(path: Path) -> OpenCLVerdict | None:
+    """The cached verdict; None when absent, unreadable, or inconclusive and older than :data:`RETRY_AFTER_S`."""
     try:
         d = json.loads(path.read_text())
+        if not d.get("conclusive", True) and not time.time() - float(d["written"]) < RETRY_AFTER_S:
+            return None
         return OpenCLVerdict(works=bool(d["works"]), reason=str(d["reason"]), key=str(d["key"]))
-    except (OSError, ValueError, KeyError, TypeError):
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None  # absent or unreadable: probe again
 
 
@@ -187,11 +196,14 @@ def opencl_verdict(refresh: bool = False) -> OpenCLVerdict:
         log.info("probing bempp-cl's OpenCL backend once for this environment (a trial assembly in a child process)")
         trial = run_probe()
         if not trial.works:
+            again = f" (probed again after {RETRY_AFTER_S / 60:.0f} min: a loaded machine is not a broken driver)"
             log.warning("OpenCL backend not used: %s; assembling on numba%s", trial.reason,
-                        "" if trial.conclusive else " (not cached: the next command probes again)")
-        if trial.conclusive:
-            try:
-                write_json(path, {"works": trial.works, "reason": trial.reason, "key": key})
-            except OSError as exc:  # an unwritable cache only costs a probe next time
-                log.debug("could not cache the OpenCL verdict: %s", exc)
+                        "" if trial.conclusive else again)
+        record = {"works": trial.works, "reason": trial.reason, "key": key}
+        if not trial.conclusive:
+            record.update(conclusive=False, written=time.time())
+        try:
+            write_json(path, record)
+        except OSError as exc:  # an unwritable cache only costs a probe next time
+            log.debug("could not cache the OpenCL verdict: %s", exc)
     return OpenCLVerdict(trial.works, trial.reason, key)

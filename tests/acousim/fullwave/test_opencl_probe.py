@@ -80,12 +80,15 @@ def test_no_device_means_no_probe(monkeypatch, probes):
     assert not verdict.works and "no OpenCL CPU device" in verdict.reason and probes == []
 
 
-def test_a_trial_run_out_of_time_is_not_cached(monkeypatch, tmp_path):
-    """A timeout is the machine's load, not the driver's verdict: numba for this command, a new probe next time."""
+def test_a_trial_run_out_of_time_is_kept_for_a_while_only(monkeypatch, tmp_path):
+    """A timeout is the machine's load, not the driver's verdict: numba for this command and for the other workers
+    that ask within RETRY_AFTER_S (they would each wait out the timeout again), a new probe after it."""
     calls = _counted_probe(monkeypatch, tmp_path, opencl_probe.TrialAssembly(False, "did not finish", conclusive=False))
+    now = time.time()
     assert not opencl_probe.opencl_verdict().works
-    assert not opencl_probe.opencl_verdict().works
-    assert len(calls) == 2 and not list((tmp_path / "opencl").glob("verdict-*.json"))
+    assert not opencl_probe.opencl_verdict().works and len(calls) == 1
+    monkeypatch.setattr(opencl_probe.time, "time", lambda: now + opencl_probe.RETRY_AFTER_S + 1)
+    assert not opencl_probe.opencl_verdict().works and len(calls) == 2
 
 
 def test_processes_that_need_the_verdict_at_once_probe_once(monkeypatch, tmp_path):
