@@ -186,11 +186,8 @@ def opencl_verdict(refresh: bool = False) -> OpenCLVerdict:
     if not _opencl_device_found():
         return OpenCLVerdict(False, "pyopencl finds no OpenCL CPU device", key)
     path = _cache_file(key)
-    cached = None if refresh else _read_cached(path)
-    if cached is not None and cached.key == key:
-        return cached
-    with cache_entry_lock(path, "the OpenCL verdict"):
-        cached = None if refresh else _read_cached(path)  # another process may have probed while this one waited
+    with cache_entry_lock(path, "the OpenCL verdict"):  # a process that waited finds the first one's verdict
+        cached = None if refresh else _read_cached(path)
         if cached is not None and cached.key == key:
             return cached
         log.info("probing bempp-cl's OpenCL backend once for this environment (a trial assembly in a child process)")

@@ -503,11 +503,10 @@ def cached_fullwave_surrogate(
     """
     key_settings = build_settings(spec, medium, particle_density, n_half, theta_max, forces, flux_disc_points)
     cached = Path(cache_dir or _cache_dir()) / f"fullwave_{_key(key_settings)}.json"
-    sur = _stored_table(DEFAULT_TABLE, key_settings, gravity) or _stored_table(cached, key_settings, gravity)
+    sur = _stored_table(DEFAULT_TABLE, key_settings, gravity)
     if sur is None:
-        with cache_entry_lock(cached, "this full-wave table"):
-            # another process may have built it while this one waited; a file it found unreadable is not re-read
-            sur = _stored_table(cached, key_settings, gravity, quiet=True)
+        with cache_entry_lock(cached, "this full-wave table"):  # a process that waited finds the first one's table
+            sur = _stored_table(cached, key_settings, gravity)
             if sur is None:
                 sur = build_fullwave_surrogate(spec, medium, particle_density, pressure_amplitude_pa, gravity, n_half,
                                                theta_max, forces=forces, flux_disc_points=flux_disc_points)
@@ -518,11 +517,11 @@ def cached_fullwave_surrogate(
     return sur if sur.pressure_amplitude_pa == pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)
 
 
-def _stored_table(path: Path, key_settings: dict, gravity: float, quiet: bool = False) -> FullwaveSurrogate | None:
+def _stored_table(path: Path, key_settings: dict, gravity: float) -> FullwaveSurrogate | None:
     """The table stored at ``path`` when it exists, can be read and was built with these settings, else None.
 
-    A cached table that cannot be read is passed over with a warning (``quiet``: without), never fatal; the shipped
-    default table must be readable."""
+    A cached table that cannot be read is passed over with a warning, never fatal; the shipped default table must be
+    readable."""
     if not path.exists():
         return None
     try:
@@ -530,9 +529,8 @@ def _stored_table(path: Path, key_settings: dict, gravity: float, quiet: bool = 
     except Exception as exc:  # a cached table that cannot be read is rebuilt, never fatal
         if path == DEFAULT_TABLE:
             raise
-        if not quiet:
-            log.warning("the cached full-wave table %s cannot be read (%s: %s); building it again", path,
-                        type(exc).__name__, exc)
+        log.warning("the cached full-wave table %s cannot be read (%s: %s); building it again", path,
+                    type(exc).__name__, exc)
         return None
     if build_settings_of(sur) != key_settings or sur.gravity != gravity:
         return None
