@@ -20,6 +20,7 @@ Gor'kov potential density, the tetrahedral quadrature or one class per effect, a
 * closed-form references: :mod:`acousim.analytic`
 """
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
+from cubedimer.distribution import __version__
 from .dimer import CubeDimer
 from .field import StandingWave
 from .gorkov.forces import GorkovDimer

@@ -23,12 +23,18 @@ here, so that ``acousim`` and ``fitting`` never import each other:
   one lazy-import mechanism of the package ``__init__`` modules
 
 * :mod:`cubedimer.compile_cache` - numba's on-disk cache keyed by the suite's sources (set up on import)
+* :mod:`cubedimer.distribution` - the installed version (``__version__`` of every package, ``--version``) and the
+  check, on import, that no other installation claims one of the suite's top-level names
 
 This package imports none of the three user-facing packages.
 """
 from .compile_cache import configure_compile_cache
 
 configure_compile_cache()  # before any compiled function of the suite is defined
+
+from .distribution import __version__, warn_foreign_import_names
+
+warn_foreign_import_names()  # another distribution's `fitting` or `validation` would silently replace the suite's
 
 from .atomic import atomic_save, atomic_write_text, json_safe, save_figure, write_json
 from .dataset import Dataset, DatasetError, LoadConfig, Run, load_dataset, load_run

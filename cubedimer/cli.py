@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from .dataset import DatasetError
+from .distribution import DISTRIBUTION, __version__
 from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
 __all__ = ["UserInputError", "OneLineParser", "command_parser", "run_cli", "configure_logging", "join_negative_values",
@@ -230,12 +231,14 @@ def invoked_as(module_prog: str, argv0: str | None = None) -> str:
 def command_parser(prog: str, description: str,
                    commands: Sequence[Callable[[argparse._SubParsersAction], None]]) -> OneLineParser:
     """The parser of a package's command line: one sub-parser per ``add_parser(subparsers)`` function in ``commands``,
-    named as it was invoked (:func:`invoked_as`; ``prog`` is the ``python -m`` form).
+    named as it was invoked (:func:`invoked_as`; ``prog`` is the ``python -m`` form), with ``--version``.
 
     Every package's command module has this one shape: each command is a function that adds its sub-parser to
     ``subparsers`` and sets ``func`` (the function :func:`run_cli` calls with the parsed arguments).
     """
     parser = OneLineParser(prog=invoked_as(prog), description=description)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__} ({DISTRIBUTION})",
+                        help="print the installed version of the suite and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser)
     for add_parser in commands:
         add_parser(sub)

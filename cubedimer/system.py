@@ -81,6 +81,12 @@ class SystemSpec:
         a, b = self.names
         return (f"{a}ddot", f"{b}ddot")
 
+    def describe(self, values: tuple[float, float]) -> str:
+        """``values`` of the two coordinates as a log line writes them, named and in their declared SI units:
+        ``"y 0.000415 m, theta 0.308"`` for the levitated dimer, ``"phi1 0.415 rad, phi2 0.308 rad"``."""
+        return ", ".join(f"{c.name} {v:.3g}" + ("" if c.unit == "-" else f" {c.unit}")
+                         for c, v in zip(self.coordinates, values))
+
     def term(self, name: str) -> str:
         """A library term name (``y^2*theta``) in the declared coordinates (``phi1^2*phi2``)."""
         return term_name(parse_term(name), self.state_names)

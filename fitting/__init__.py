@@ -22,6 +22,7 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
 The building blocks (regression, refinement, ensemble statistics, Holm's rule) are in their modules.
 """
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
+from cubedimer.distribution import __version__
 from .compare import compare_models
 from .config import FitConfig
 from .derivatives import SmoothingConfig

@@ -128,8 +128,13 @@ def _cmd_compare(a: argparse.Namespace) -> int:
 
 
 def _cmd_synth(a: argparse.Namespace) -> int:
-    from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
+    from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset, write_generic_example
 
+    if a.system == "generic":
+        prepare_output_dir(a.out_dir, "OUT_DIR", create=False)
+        cfg = write_generic_example(a.out_dir, seed=a.seed)
+        _log(f"wrote {cfg.n_runs} runs of a generic two-coordinate system, meta.json and truth.json to {a.out_dir}")
+        return 0
     check_limit("--runs", a.runs, MAX_SYNTH_RUNS)
     check_limit("frames per run (--duration x --fps)", a.duration * a.fps, MAX_SYNTH_FRAMES_PER_RUN)
     prepare_output_dir(a.out_dir, "OUT_DIR", create=False)
@@ -281,6 +286,10 @@ def add_synth_parser(subparsers) -> None:
     s.add_argument("--noise-y", type=float, default=1e-6, help="tracking noise of y [m] (standard deviation)")
     s.add_argument("--noise-theta", type=float, default=0.005, help="tracking noise of theta [-] (standard deviation)")
     s.add_argument("--seed", type=int, default=0, help="seed of the initial conditions and the noise")
+    s.add_argument("--system", choices=("dimer", "generic"), default="dimer",
+                   help="dimer: the paper's reduced model (the options above); generic: the worked example of a "
+                        "generic two-coordinate system (docs/fitting.md, 'Any two coordinates'; its own runs and "
+                        "noise, only --seed applies)")
     s.set_defaults(func=_cmd_synth)
 
 

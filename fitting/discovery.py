@@ -535,7 +535,7 @@ def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[i
             residual_std=(float(res_std[0]), float(res_std[1])),
             state_rms=tuple(float(v) for v in (estimate.rms if estimate is not None else (np.nan, np.nan))),
             failed_frames=estimate.n_failed if estimate is not None else 0, seconds=time.perf_counter() - t0))
-        log.info("discovery pass %d (%s states): %d + %d terms, max change %.3g SE, residual std %.3g m, %.3g",
+        log.info("discovery pass %d (%s states): %d + %d terms, max change %.3g SE, residual std (y, theta) %.3g, %.3g (SI)",
                  it, label, mask[0].sum(), mask[1].sum(), change, res_std[0], res_std[1])
         if change < config.tolerance:
             return result, windows, history, True

@@ -162,7 +162,7 @@ def final_oracle(model: PolynomialModel, prepared: Sequence, noise: NoiseLevels 
     except ValueError as err:
         logger.info("oracle skipped: %s", err)
         return None
-    logger.info("oracle z at tracking noise %.3g m / %.3g: %s", noise.sigma_y, noise.sigma_theta, "; ".join(
+    logger.info("oracle z at tracking noise (y, theta) %.3g, %.3g (SI): %s", noise.sigma_y, noise.sigma_theta, "; ".join(
         f"{eq}: " + ", ".join(f"{t} {o.z:.3g}" for t, o in terms.items()) for eq, terms in res.terms.items()))
     close = [f"{eq}: {t} / {o.alias} (alias z {o.alias_z:.2g})" for eq, terms in res.terms.items()
              for t, o in terms.items() if o.alias_z < 3.0]

@@ -103,11 +103,12 @@ def fit_dataset(data: Dataset | str | os.PathLike, config: FitConfig = FitConfig
     if len(ds.runs) < 2:
         raise DatasetError(f"{ds.path}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
     prepared, scales = prepare_runs(ds.runs, config)
-    logger.info("%d runs loaded (%d skipped, %d glitch frames masked); scales: y %.3g m, theta %.3g, time %.3g s",
-                len(prepared), len(ds.skipped), ds.n_glitches, scales.length_y, scales.length_theta, scales.time)
+    logger.info("%d runs loaded (%d skipped, %d glitch frames masked); scales: %s, time %.3g s", len(prepared),
+                len(ds.skipped), ds.n_glitches, ds.system.describe((scales.length_y, scales.length_theta)), scales.time)
     noise = _fitted_noise(recorded_tracking_noise(ds.meta), prepared)
     if noise is not None:
-        logger.info("oracle noise from meta.json's tracking block: %.3g m / %.3g", noise.sigma_y, noise.sigma_theta)
+        logger.info("oracle noise from meta.json's tracking block: %s",
+                    ds.system.describe((noise.sigma_y, noise.sigma_theta)))
     res = fit_runs(prepared, scales, config, executor, cache_dir=cache_dir, progress=progress, noise=noise)
     return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches, system=ds.system)
 

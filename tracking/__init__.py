@@ -16,6 +16,7 @@ settings, counts and per-frame quality (``python -m tracking``; ``docs/tracking.
 This package imports only :mod:`cubedimer` from the suite.
 """
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
+from cubedimer.distribution import __version__
 from .recording import Recording, TrackingError, find_recordings, read_recording
 from .track import TrackConfig, TrackResult, track_recording
 

@@ -17,6 +17,7 @@ The diagnosis, blind check and report are imported on first use.
 from __future__ import annotations
 
 from cubedimer.lazy import lazy_attributes
+from cubedimer.distribution import __version__
 
 from .coefficients import CoefficientComparison, TermComparison, compare_coefficients, origin_sensitivity, shift_origin
 from .simulation import model_from_meta
