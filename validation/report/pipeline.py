@@ -37,7 +37,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     Parameters
     ----------
     data_dir : path of the data set (CSV runs and meta.json)
-    out_dir : report directory: report.html, figures/*.png, numbers.json, fit/, diagnosis.json, comparison.json
+    out_dir : report directory: report.html, ``figures/*.png``, numbers.json, fit/, diagnosis.json, comparison.json
     workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
     progress : progress bars, and the steps logged at INFO level (else DEBUG)
     max_evals : evaluations of every long-time refinement: per run and joint for ``"paper"``, of the polish (and
