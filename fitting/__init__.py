@@ -17,7 +17,8 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
 * oracle standard errors and the run planner: :class:`NoiseLevels`, :func:`oracle_standard_errors`,
   :func:`plan_runs` with its :class:`PlanConfig`;
 * paired comparison of a variant: :func:`compare_models`; synthetic data: :func:`paper_reduced_model`,
-  :func:`write_dataset`, :class:`SyntheticConfig`.
+  :func:`write_dataset`, :class:`SyntheticConfig`, and the generic-system example :func:`write_generic_example`
+  (:func:`generic_example_model`).
 
 The building blocks (regression, refinement, ensemble statistics, Holm's rule) are in their modules.
 """
@@ -42,7 +43,7 @@ from .results import EnsembleExtras, FitResult
 from .run_planning import PlanConfig, plan_runs
 from .selection import SelectionConfig
 from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
-from .synthetic import SyntheticConfig, paper_reduced_model, write_dataset
+from .synthetic import SyntheticConfig, generic_example_model, paper_reduced_model, write_dataset, write_generic_example
 
 __all__ = [
     "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "EnsembleExtras", "write_fit",
@@ -53,5 +54,6 @@ __all__ = [
     "SELECTION_RULES", "SelectionRule", "register_selection_rule",
     "PolynomialModel", "Scales", "discover_model", "DiscoveryResult",
     "NoiseLevels", "oracle_standard_errors", "plan_runs", "PlanConfig",
-    "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset",
+    "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset", "generic_example_model",
+    "write_generic_example",
 ]
