@@ -57,6 +57,7 @@ autosummary_generate = True
 autosummary_imported_members = True
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_typehints = "none"  # numpydoc's Parameters section states types and units
+autodoc_preserve_defaults = True  # signatures show defaults as written (FitConfig()), not their whole repr
 autodoc_member_order = "bysource"
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
@@ -84,6 +85,7 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"cubedimer {release}"
 html_theme_options = {
     "navigation_with_keys": False,
+    "header_links_before_dropdown": 4,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
