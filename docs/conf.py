@@ -47,7 +47,7 @@ _BARS = ("theta", "y", "thetaddot", "direct", "surrogate - direct", "Delta U_ac"
 rst_prolog = "\n".join(f".. |{b}| replace:: \\|{b}\\|" for b in _BARS) + "\n"
 
 # --- markdown (the guides in docs/ as they are)
-myst_enable_extensions = ["colon_fence", "dollarmath"]
+myst_enable_extensions = ["colon_fence"]
 myst_heading_anchors = 4
 
 # --- API reference: one page per public name of each package's __init__ (its __all__), documented under the
