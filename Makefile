@@ -105,7 +105,7 @@ test-fast: venv
 # public API and the example gallery of examples/, executed (a few minutes on 2 cores); open docs/_build/html/index.html.
 # `make docs-quick` builds the same pages without executing the gallery (CI).
 DOCS_STAMP := $(VENV)/.installed-docs
-SPHINX = cd docs && $(CURDIR)/$(BIN)/python -m sphinx -b html -W --keep-going -q . _build/html
+SPHINX = $(abspath $(BIN))/python -m sphinx -b html -W --keep-going -q . _build/html
 
 $(DOCS_STAMP): $(STAMP)
 	PIP_CONSTRAINT=$(CONSTRAINTS) $(BIN)/python -m pip install --quiet -e '.[test,docs]'
@@ -113,12 +113,12 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: venv $(DOCS_STAMP)
 	rm -rf docs/_build docs/auto_examples docs/api/generated
-	NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(SPHINX)
+	cd docs && NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(SPHINX)
 	@echo "site written: docs/_build/html/index.html"
 
 docs-quick: venv $(DOCS_STAMP)
 	rm -rf docs/_build docs/auto_examples docs/api/generated
-	$(SPHINX) -D plot_gallery=0
+	cd docs && $(SPHINX) -D plot_gallery=0
 	@echo "site written without executing the gallery: docs/_build/html/index.html"
 
 bench: venv
