@@ -9,8 +9,8 @@ loader reads such files by their unit labels (:doc:`/formats`), checks every run
 levitated dimer, and the diagnosis tells which unmodelled effects explain the gap between the data and the
 Gor'kov simulation.
 
-The "lab" here is the digital twin with a hidden linear damping of 0.5 1/s on both coordinates on top of the
-air's own damping and an 8 % pressure error, so the answer is known. The command-line form of the last step is
+The "lab" here is the digital twin (8 runs of 2 s at 1000 frames/s) with a hidden linear damping of 0.5 1/s on
+both coordinates on top of the air's own damping and an 8 % pressure error, so the answer is known. The command-line form of the last step is
 ``cubedimer-validation diagnose lab/ --out diag/``.
 """
 
@@ -27,12 +27,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import validation
-from acousim import EffectSet, TwinConfig, simulate_dataset
+from acousim import Camera, EffectSet, TwinConfig, simulate_dataset
 from cubedimer import load_dataset
 
 start = time.perf_counter()
 work = Path(tempfile.mkdtemp(prefix="lab_diagnosis_"))
-twin = TwinConfig(runs=8, duration=3.0, seed=7, pressure_error=0.08,
+twin = TwinConfig(runs=8, duration=2.0, seed=7, pressure_error=0.08, camera=Camera(fps=1000.0),
                   effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=0.5"]))
 truth = simulate_dataset(twin, work / "twin", progress=False)
 
