@@ -54,6 +54,14 @@ axes[0].set_ylabel("thetaddot [1/s^2]")
 axes[1].legend(fontsize=8)
 
 # %%
+# The Gor'kov hinge force vanishes at theta = 0 at every height. The full-wave one does not: it carries the
+# ``1`` and ``y`` terms that :doc:`/fullwave` tabulates, and its hinge comes to rest at a small positive angle.
+for label, sweep in sweeps.items():
+    at_rest = sweep["thetaddot"][:, 6]  # y = 0
+    print(f"{label}: thetaddot(theta=0, y=0) = {at_rest[6]:+.4g} 1/s^2, rest angle at y = 0: "
+          f"theta = {np.interp(0.0, -at_rest, sweep.theta_grid):+.3f}")
+
+# %%
 # Static coefficients
 # -------------------
 # A cubic least-squares fit of each sweep gives the equations' coefficients with their standard errors (from

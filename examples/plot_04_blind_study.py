@@ -8,7 +8,7 @@ a pressure error, simulates the runs, diagnoses them without knowing the truth, 
 is resumable (each finished case is kept) and runs its cases through the executor, on local processes or a dask
 cluster (``cubedimer-validation blind --cases 50 --workers 2``).
 
-This example is a very small study (2 cases of 8 runs of 2 s, on two local processes) to show the output; the
+This example is a very small study (2 cases of 8 runs of 1.5 s, on two local processes) to show the output; the
 numbers that characterise the method come from the studies of :doc:`/diagnosis` (hundreds of cases).
 """
 
@@ -25,7 +25,7 @@ from validation import BlindConfig, blind_table, run_blind
 
 start = time.perf_counter()
 study = Path(tempfile.mkdtemp(prefix="blind_")) / "study"
-config = BlindConfig(cases=2, seed=0, runs=8, duration=2.0)
+config = BlindConfig(cases=2, seed=0, runs=8, duration=1.5)
 summaries = run_blind(config, study, executor=ExecutorConfig(workers=2), progress=False)
 
 # %%
