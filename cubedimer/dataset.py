@@ -19,6 +19,7 @@ from scipy.interpolate import PchipInterpolator
 from .config_checks import check_fraction, check_non_negative, check_whole
 from .errors import DatasetError
 from .meta import read_meta
+from .drop_phases import MAX_FALL_S, find_drop_phases, starts_at_rest
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
@@ -289,6 +290,28 @@ def _check_theta_range(path: Path, th: NDArray, line_no: list[int | None]) -> No
                            f"theta is the dimensionless (alpha - beta)/pi{hint}")
 
 
+def _field_on_start(path: Path, t: NDArray, y: NDArray) -> int:
+    """The first frame of the field-on motion of a run that still holds its field drop (at rest, then the free fall
+    with the field off; :mod:`cubedimer.drop_phases`): the run is cut there, with a warning; 0 for a run that does not
+    start at rest.  A run that starts at rest and then moves without a free fall is refused in one line."""
+    rest = starts_at_rest(y)
+    if rest is None:
+        return 0
+    ph = find_drop_phases(t, y)
+    if ph is None or not ph.free_fall:
+        how = ("does not come back under a field within {:g} ms".format(1e3 * MAX_FALL_S) if ph is None else
+               f"moves with an acceleration of {ph.fall_acceleration:.3g} m/s^2, not a free fall (g = 9.81)")
+        raise DatasetError(f"{path}: starts with {rest[0]} frames at rest and then {how}: not the field-on motion "
+                           "of a field drop; cut the file to the motion with the field on (python -m tracking track "
+                           "writes it so; docs/formats.md)")
+    k = ph.first_field_on_frame
+    logger.warning("%s: the run still holds its field drop (at rest for %d frames, the field off for %.2f ms, a fall "
+                   "of %.3g m/s^2): cut at the field's return, t = %.6g s; the first %d frames are left out", path.name,
+                   ph.rest_frames, 1e3 * ph.field_off_s, ph.fall_acceleration, t[0] + ph.field_on_frame *
+                   ph.frame_interval, k)
+    return k
+
+
 def _oscillation_frequency(path: Path, t: NDArray, y: NDArray, config: LoadConfig, system: SystemSpec) -> float:
     """The dominant frequency [Hz] of the first coordinate (gaps filled): enough periods in the run, and inside
     a generic system's declared range."""
@@ -365,6 +388,8 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     _check_uniform(path, t, line_no, config.uniform_tol)
     if not system.generic:
         _check_theta_range(path, th, line_no)
+        first = _field_on_start(path, t, y)
+        t, y, th, vel, line_no = t[first:], y[first:], th[first:], [v[first:] for v in vel], line_no[first:]
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")

@@ -109,6 +109,10 @@ def add_track_parser(sub) -> None:
                    help="largest distance between the two cubes' fitted hinge corners, as a fraction of the side "
                    "(default 0.1); a hinge line tilted out of the camera axis separates them")
     _add_roi_argument(p)
+    p.add_argument("--keep-drop", action="store_true",
+                   help="a recording of a field drop (at rest, the free fall with the field off, the field back on) "
+                   "is written whole, t from its first frame; by default the run is the field-on motion, t = 0 at the "
+                   "field's return (the phases are in RUN.json either way)")
     p.add_argument("--strict", action="store_true",
                    help="a folder of recordings: refuse the set on the first bad recording instead of skipping it")
     p.add_argument("--force", action="store_true", help="replace an existing output")
@@ -154,7 +158,7 @@ def _config(a: argparse.Namespace):
     return TrackConfig(fps=a.fps, pixel_size=a.pixel_size, origin_frames=a.origin_frames, origin_row=a.origin_row,
                        polarity=a.polarity, up=a.up, edge_window=a.edge_window, area_tolerance=a.area_tolerance,
                        max_motion_blur=a.max_motion_blur, max_squareness=a.max_squareness,
-                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi))
+                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi), keep_drop=a.keep_drop)
 
 
 def _track_task(item):

@@ -28,10 +28,12 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
+
+from cubedimer.drop_phases import DropPhases, find_drop_phases
 
 from .calibration import Calibration, calibrate
 from .measure import COLUMNS, STATUS, STATUS_NAMES, STATUS_TEXT, measure_frames
@@ -93,6 +95,9 @@ class TrackConfig:
     roi : (x0, x1, y0, y1), optional
         Region of interest: columns ``x0 <= u < x1`` and rows ``y0 <= v < y1`` of the frames [px]; only it is
         measured (a dimer that reaches its border is out of view).
+    keep_drop : bool
+        A recording of a field drop (rest, free fall, field back on; :mod:`cubedimer.drop_phases`) is written whole,
+        with t from its first frame, instead of as the field-on motion with t = 0 at the field's return.
     """
 
     fps: float | None = None
@@ -110,6 +115,7 @@ class TrackConfig:
     calibration_frames: int = 100
     batch: int = 1024
     roi: tuple[int, int, int, int] | None = None
+    keep_drop: bool = False
 
     def __post_init__(self) -> None:
         for name in ("fps", "pixel_size"):
@@ -173,6 +179,15 @@ class TrackResult:
     @property
     def n_measured(self) -> int:
         return int(np.sum(self.status == 0))
+
+    def run_series(self) -> tuple[NDArray, NDArray, NDArray]:
+        """(t, y, theta) of the run as written: the field-on motion with t = 0 at the field's return when the
+        recording holds a field drop that is cut (``info["phases"]``), else every frame with t from the first."""
+        ph = self.info.get("phases")
+        if not ph or ph.get("kept") != "field-on motion":
+            return self.t, self.y, self.theta
+        k = int(ph["field_on_first_frame"])
+        return self.t[k:] - ph["field_on_time_s"], self.y[k:], self.theta[k:]
 
 
 def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
@@ -255,7 +270,9 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     refs = _flag(status, rows, config)
     ok = status == 0
     tilt_deg = _hinge_line_tilt(rec, rows, status, config, cal)
-    origin = _origin(rec, rows, status, config)
+    phases = _drop_phases(rows, status, fps, pixel, config)
+    origin = _origin(rec, rows, status, replace(config, origin_frames=min(config.origin_frames, phases.rest_frames))
+                     if phases is not None and phases.rest_frames >= 1 else config)
     sign = 1.0 if config.up == "top" else -1.0
     y0 = config.roi[2] if config.roi else 0
     y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
@@ -267,10 +284,42 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     info = _run_info(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
                      theta)
     info["tilt_correction"] = correction
+    info["phases"] = _phases_record(phases, config, rec.name) if phases is not None else None
     logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
                 ", ".join(f"{k} {v}" for k, v in info["not_measured"].items()) or "all", noise_y["value"],
                 noise_theta["value"])
     return TrackResult(rec.name, t, y, theta, status, rows, info, np.array(frames[ex]))
+
+
+def _drop_phases(rows: np.ndarray, status: np.ndarray, fps: float, pixel: float, config: TrackConfig
+                 ) -> DropPhases | None:
+    """The recording's field-drop phases (:func:`cubedimer.drop_phases.find_drop_phases` on the centre-of-mass
+    height, up, with the frames' own noise), or None when it does not start at rest before a fall."""
+    ok = status == 0
+    if ok.sum() < 50:
+        return None
+    up = -1.0 if config.up == "top" else 1.0
+    height = np.where(ok, up * rows[:, _C["v_com"]] * pixel, np.nan)
+    noise = float(np.sqrt(np.median(rows[ok, _C["sigma_v"]] ** 2))) * pixel
+    return find_drop_phases(np.arange(len(status)) / fps, height, noise)
+
+
+def _phases_record(phases: DropPhases, config: TrackConfig, name: str) -> dict:
+    """RUN.json's ``phases``: the frames and times of the rest, the fall and the field's return, and what the run
+    keeps (a fall whose acceleration is not g is kept whole, with a warning)."""
+    out = phases.to_dict()
+    cut = phases.free_fall and not config.keep_drop
+    out["kept"] = "field-on motion" if cut else "whole recording"
+    if not phases.free_fall:
+        logger.warning("%s: the recording starts at rest and then moves with an acceleration of %.3g m/s^2, not a "
+                       "free fall (g = 9.81): kept whole; cut it to the field-on motion before fitting", name,
+                       phases.fall_acceleration)
+    else:
+        logger.info("%s: at rest for %d frames, the field off for %.2f ms (fall %.3g +- %.2g m/s^2), back at t = "
+                    "%.5f s: %s", name, phases.rest_frames, 1e3 * phases.field_off_s, phases.fall_acceleration,
+                    phases.fall_acceleration_error, out["field_on_time_s"],
+                    "the run is the field-on motion, t = 0 at the field's return" if cut else "kept whole (--keep-drop)")
+    return out
 
 
 def _frame_rate_and_pixel_size(rec: Recording, config: TrackConfig) -> tuple[float, float]:

@@ -222,3 +222,21 @@ def test_meta_plausibility_names_a_micrometre_file_even_alone(tmp_path, write_cs
         load_dataset(tmp_path)
     with pytest.raises(DatasetError, match="um.csv: y amplitude .* quarter wavelength .*micrometres"):
         load_dataset(tmp_path, strict=True)
+
+
+def test_a_run_that_still_holds_its_field_drop_is_cut_at_the_return(tmp_path, write_csv, drop_heights, caplog):
+    rng = np.random.default_rng(4)
+    t, y, on = drop_heights(3000, 2000.0, 59.6, 3.5e-3)
+    th = 0.2 * np.sin(2 * np.pi * 3.1 * t)
+    run = load_run(write_csv(tmp_path / "drop.csv", t, y + 0.2e-6 * rng.standard_normal(t.size), th))
+    first = 3000 - run.t.size
+    assert on - 1 <= first <= on + 5  # the rest and the fall left out (tests/cubedimer/test_drop_phases.py)
+    assert run.n_glitches == 0 and "cut at the field's return" in caplog.text
+
+
+def test_rest_frames_then_a_jump_are_refused_in_one_line(tmp_path, write_csv):
+    t = np.arange(3000) / 2000.0
+    y = np.where(t < 0.03, 0.0, -8e-5 * np.cos(2 * np.pi * 22 * (t - 0.03)))
+    y = y + 0.2e-6 * np.random.default_rng(3).standard_normal(t.size)
+    with pytest.raises(DatasetError, match=r"jump.csv: starts with \d+ frames at rest and then .*cut the file"):
+        load_run(write_csv(tmp_path / "jump.csv", t, y, 0.1 * np.sin(2 * np.pi * 3 * t)))
