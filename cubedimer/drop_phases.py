@@ -35,10 +35,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import logging
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["DropPhases", "find_drop_phases", "starts_at_rest", "STANDARD_GRAVITY", "DEPARTURE_SIGMA", "MAX_FALL_S",
+from .errors import DatasetError
+
+__all__ = ["DropPhases", "find_drop_phases", "starts_at_rest", "field_on_start", "STANDARD_GRAVITY", "DEPARTURE_SIGMA", "MAX_FALL_S",
            "AFTER_S", "FALL_TOLERANCE", "MIN_REST_FRAMES"]
 
 #: Standard gravity [m/s^2] (docs/conventions.md).
@@ -53,6 +57,7 @@ AFTER_S = 0.002
 FALL_TOLERANCE = 0.25
 #: Frames at rest a recording must begin with for its drop to be found.
 MIN_REST_FRAMES = 16
+logger = logging.getLogger("cubedimer.dataset")
 _GRID = 0.05  # grid step of t_d and t_on [frames]
 
 
@@ -278,3 +283,25 @@ def find_drop_phases(t: ArrayLike, y: ArrayLike, noise: float | None = None,
                       fall_acceleration=-float(beta[1]) / (dt * dt), fall_acceleration_error=a_err,
                       rest_level=float(beta[0]), noise=sigma,
                       frame_interval=dt)
+
+
+def field_on_start(path, t: NDArray, y: NDArray) -> int:
+    """The first frame of the field-on motion of a run that still holds its field drop (at rest, then the free fall
+    with the field off; :mod:`cubedimer.drop_phases`): the run is cut there, with a warning; 0 for a run that does not
+    start at rest.  A run that starts at rest and then moves without a free fall is refused in one line."""
+    rest = starts_at_rest(y)
+    if rest is None:
+        return 0
+    ph = find_drop_phases(t, y)
+    if ph is None or not ph.free_fall:
+        how = ("does not come back under a field within {:g} ms".format(1e3 * MAX_FALL_S) if ph is None else
+               f"moves with an acceleration of {ph.fall_acceleration:.3g} m/s^2, not a free fall (g = 9.81)")
+        raise DatasetError(f"{path}: starts with {rest[0]} frames at rest and then {how}: not the field-on motion "
+                           "of a field drop; cut the file to the motion with the field on (python -m tracking track "
+                           "writes it so; docs/formats.md)")
+    k = ph.first_field_on_frame
+    logger.warning("%s: the run still holds its field drop (at rest for %d frames, the field off for %.2f ms, a fall "
+                   "of %.3g m/s^2): cut at the field's return, t = %.6g s; the first %d frames are left out", path.name,
+                   ph.rest_frames, 1e3 * ph.field_off_s, ph.fall_acceleration, t[0] + ph.field_on_frame *
+                   ph.frame_interval, k)
+    return k

@@ -240,3 +240,26 @@ def test_rest_frames_then_a_jump_are_refused_in_one_line(tmp_path, write_csv):
     y = y + 0.2e-6 * np.random.default_rng(3).standard_normal(t.size)
     with pytest.raises(DatasetError, match=r"jump.csv: starts with \d+ frames at rest and then .*cut the file"):
         load_run(write_csv(tmp_path / "jump.csv", t, y, 0.1 * np.sin(2 * np.pi * 3 * t)))
+
+
+@pytest.mark.parametrize("gap_at, kept", [(1500, 2), (150, 1)])
+def test_a_long_gap_splits_the_run_and_a_short_part_is_dropped(tmp_path, write_csv, gap_at, kept):
+    # 4 s at 1500 fps of a 21.8-Hz run with a 200-frame gap: split into two parts; a part of 150 frames
+    # (0.1 s, 2.2 periods) is below the 5 periods a run needs and is skipped with its reason, the other kept
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y, th = y.copy(), th.copy()
+    y[gap_at:gap_at + 200] = np.nan
+    th[gap_at:gap_at + 200] = np.nan
+    write_csv(tmp_path / "run03.csv", t, y, th)
+    for i in (1, 2):  # the consistency check needs company
+        (t2, y2, th2), = _noisy_runs(1, 30 + i, duration=4.0)
+        write_csv(tmp_path / f"run0{i}.csv", t2, y2, th2)
+    ds = load_dataset(tmp_path)
+    parts = [r for r in ds.runs if r.source == "run03.csv"]
+    assert len(parts) == kept
+    assert parts[-1].frames == (gap_at + 200, t.size) and parts[-1].name.startswith("run03_part")
+    if kept == 1:
+        (entry,) = ds.skipped_files()
+        assert entry["file"] == "run03_part1.csv" and "oscillation periods" in entry["reason"]
+    else:
+        assert parts[0].frames == (0, gap_at) and not ds.skipped
