@@ -23,7 +23,8 @@ Method (``y`` up, or down: a fall is then a rise at ``+g``).
    230 um oscillation at 22 Hz) gives the switching times by least squares with the fall at g (with the field off
    nothing but gravity acts; a free ``a`` would let the field-on cubic take up a short fall): a grid of a
    twentieth of a frame, refined (Nelder-Mead), the other parameters linear.  At those times every parameter is
-   fitted freely, ``a`` included; ``a``'s error comes from the covariance of all six (the Jacobian in the switching
+   fitted freely, ``a`` included (a free fall: ``g`` within :data:`FALL_TOLERANCE` and the residuals' RMS within 3
+   noise and 1 % of the fall's depth); ``a``'s error comes from the covariance of all six (the Jacobian in the switching
    times by central differences), ``t_on``'s from the half width of the grid's times whose residual sum lies within
    one noise variance of the least.  A fall whose fitted acceleration is not ``g`` within :data:`FALL_TOLERANCE` (relative) is not a
    free fall (:attr:`DropPhases.free_fall` False).
@@ -80,6 +81,8 @@ class DropPhases:
     fall_acceleration, fall_acceleration_error : float
         The fitted acceleration of the fall [m/s^2] (negative: down in the series' sense of y) and its standard
         error.
+    fit_scatter : float
+        The RMS of the fit's residuals over its frames [the series' unit].
     rest_level : float
         The height at rest [the series' unit].
     noise : float
@@ -98,11 +101,15 @@ class DropPhases:
     rest_level: float
     noise: float
     frame_interval: float
+    fit_scatter: float = 0.0
 
     @property
     def free_fall(self) -> bool:
-        """The fall's acceleration is g (either sign) within :data:`FALL_TOLERANCE`."""
-        return abs(abs(self.fall_acceleration) / STANDARD_GRAVITY - 1.0) <= FALL_TOLERANCE
+        """The fall's acceleration is g (either sign) within :data:`FALL_TOLERANCE` and the model fits the frames to
+        within 3 noise RMS and 1 % of the fall's depth (a jump from rest does not)."""
+        depth = 0.5 * STANDARD_GRAVITY * self.field_off_s ** 2  # the fall's depth: 1 % of it for the model's error
+        return (abs(abs(self.fall_acceleration) / STANDARD_GRAVITY - 1.0) <= FALL_TOLERANCE
+                and self.fit_scatter <= 3.0 * self.noise + 0.01 * depth)
 
     @property
     def field_off_s(self) -> float:
@@ -236,6 +243,7 @@ def _switching_fit(y: NDArray, k: int, e: int, after: int, g_frames: float) -> t
     J = np.column_stack([X, *jac])
     cov = var * np.linalg.pinv(J.T @ J)
     cov[5, 5] = err_on ** 2
+    cov[0, 0] = var  # the residuals' variance in place of y_r's (not used): the fit's scatter
     return td, ton, beta, cov
 
 
@@ -281,7 +289,7 @@ def find_drop_phases(t: ArrayLike, y: ArrayLike, noise: float | None = None,
     return DropPhases(rest_frames=int(math.floor(td)) + 1 if td >= 0 else 0, drop_frame=td, field_on_frame=ton,
                       field_on_frame_error=err_on, first_field_on_frame=min(first, y.size - 1),
                       fall_acceleration=-float(beta[1]) / (dt * dt), fall_acceleration_error=a_err,
-                      rest_level=float(beta[0]), noise=sigma,
+                      rest_level=float(beta[0]), noise=sigma, fit_scatter=math.sqrt(float(cov[0, 0])),
                       frame_interval=dt)
 
 
@@ -295,7 +303,8 @@ def field_on_start(path, t: NDArray, y: NDArray) -> int:
     ph = find_drop_phases(t, y)
     if ph is None or not ph.free_fall:
         how = ("does not come back under a field within {:g} ms".format(1e3 * MAX_FALL_S) if ph is None else
-               f"moves with an acceleration of {ph.fall_acceleration:.3g} m/s^2, not a free fall (g = 9.81)")
+               f"moves, but not in a free fall (acceleration {ph.fall_acceleration:.3g} m/s^2 against g = 9.81, "
+               f"residual RMS {ph.fit_scatter:.2g} m against a noise of {ph.noise:.2g} m)")
         raise DatasetError(f"{path}: starts with {rest[0]} frames at rest and then {how}: not the field-on motion "
                            "of a field drop; cut the file to the motion with the field on (python -m tracking track "
                            "writes it so; docs/formats.md)")

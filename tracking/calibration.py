@@ -26,7 +26,7 @@ from .measure import COLUMNS, STATUS, STATUS_TEXT, MeasureSettings, measure_fram
 from .recording import TrackingError
 from .tilt import MAX_TILT_DEG, TILT_CORRECTION_DEG, TILT_FLOOR_DEG, tilt_from_centres, tilt_from_faces, tilt_from_gap
 
-__all__ = ["Calibration", "calibrate"]
+__all__ = ["Calibration", "calibrate", "faces_tilt"]
 
 _C = {name: i for i, name in enumerate(COLUMNS)}
 
@@ -159,13 +159,13 @@ def calibrate(frames: NDArray, config) -> Calibration:
         window = int(np.clip(math.ceil(3.5 * blur + 2.0), 4, 25))
     cal = Calibration(polarity, polarity_from, background, contrast, su, sv, blur, window, area, int(ok.sum()),
                       dark, fill, scene, pinv, tilt)
-    faces = _faces_tilt(rows[ok])
+    faces = faces_tilt(rows[ok])
     if tilt is not None and faces is not None and TILT_CORRECTION_DEG < faces and tilt <= MAX_TILT_DEG:
         cal = replace(cal, tilt=_refine_tilt(sample, cal.settings(config), pinv, tilt, faces))
     return cal
 
 
-def _faces_tilt(rows: NDArray) -> float | None:
+def faces_tilt(rows: NDArray) -> float | None:
     """The tilt [degrees] from the fitted squares' hinge corners placed with their sides from the faces (not from
     the area), :func:`tracking.tilt.tilt_from_faces` of the median gap over side; None without a fitted frame."""
     corners = []
