@@ -58,3 +58,29 @@ def test_the_pooled_noise_is_never_below_the_runs_rms():
     noise, frames = np.array([1e-3, 1e-3, 1e-3, 4e-3]), np.array([4000, 4000, 4000, 500])
     assert pooled_noise(noise, frames) == pytest.approx(np.sqrt(np.mean(noise ** 2)))
     assert pooled_noise(noise, frames) > np.sqrt(np.sum(frames * noise ** 2) / frames.sum())
+
+
+def test_overlay_video_and_quality_plot(tmp_path, drop_video):
+    import imageio.v3 as iio
+
+    from tracking.measure import STATUS
+
+    src, *_ = drop_video
+    out = tmp_path / "drop.csv"
+    assert main(["track", str(src), "--out", str(out), "--overlay"]) == 0
+    video, plot = tmp_path / "drop.overlay.mp4", tmp_path / "drop.quality.png"
+    assert plot.stat().st_size > 10_000
+    frames = iio.imread(video)
+    # every frame, enlarged twice, in colour; the status bar along the top: grey at rest, blue with the field off,
+    # green for the measured field-on frames (H.264 shifts colours by a few levels: a margin of 60)
+    assert frames.shape == (400, 2 * CAM.height, 2 * CAM.width, 3)
+    info = json.loads(out.with_suffix(".json").read_text())
+    assert info["quality"]["status"].count(STATUS["measured"]) == 400
+    bar = frames[:, 2, CAM.width].astype(int)
+    on = info["phases"]["field_on_first_frame"]
+    assert np.all(np.abs(bar[10] - [150, 150, 150]) < 60) and np.all(np.abs(bar[on + 5] - [40, 200, 40]) < 60)
+    assert bar[info["phases"]["field_off_frames"][0] + 1, 2] > bar[info["phases"]["field_off_frames"][0] + 1, 1]
+    # the fitted squares are drawn in green on the frame
+    f = frames[on + 5].astype(int)
+    green = (f[..., 1] > f[..., 0] + 60) & (f[..., 1] > f[..., 2] + 60)
+    assert green[6:].sum() > 200
