@@ -24,11 +24,11 @@ CASES = {
     "a dust speck crossing (200 frames)": (dict(dust=1), "dark", {}, False),
     "transparent crystals, dark outline": (dict(transparent=True), "dark", {}, False),
     "transparent crystals, bright outline": (dict(transparent=True), "bright", {}, False),
-    "hinge line tilted 10 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=10.0), "dark", dict(max_hinge_gap=0.5), False),
+    "hinge line tilted 10 degrees (no option)": (dict(tilt_deg=10.0), "dark", {}, False),
     "H.264 mp4 (crf 23)": (dict(codec="h264"), "dark", {}, False),
     "starts mid-oscillation (no rest frame)": ({}, "dark", {}, True),
-    "hinge line tilted 6 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=6.0), "dark", dict(max_hinge_gap=0.5), False),
-    "hinge line tilted 14 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=14.0), "dark", dict(max_hinge_gap=0.5), False),
+    "hinge line tilted 6 degrees (no option)": (dict(tilt_deg=6.0), "dark", {}, False),
+    "hinge line tilted 14 degrees (no option)": (dict(tilt_deg=14.0), "dark", {}, False),
 }
 
 
