@@ -432,6 +432,15 @@ def _velocities(path: Path, t: NDArray, x: tuple[NDArray, NDArray], vel: list[ND
     return out
 
 
+def _with_recorded_max_gap(config: LoadConfig, meta: dict) -> LoadConfig:
+    """The fill limit a tracked data set records (meta.json ``tracking.max_gap_frames``, ``tracking track --max-gap``)
+    in place of the default one (a limit the caller chose stays)."""
+    block = meta.get("tracking")
+    if isinstance(block, dict) and "max_gap_frames" in block and config.max_gap == LoadConfig.max_gap:
+        return replace(config, max_gap=int(block["max_gap_frames"]))
+    return config
+
+
 def _log_skip(message: str) -> None:
     logger.warning("skipping %s", message)
 
@@ -465,6 +474,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
     meta = read_meta(p)
+    config = _with_recorded_max_gap(config, meta)
     system = read_system(meta, str(p / "meta.json"))
     if system.kind not in config.systems:
         raise DatasetError(f"{p / 'meta.json'}: declares a {system.kind.replace('_', ' ')} system "

@@ -57,6 +57,7 @@ TRACKING_RANGES: dict[str, tuple[float, float]] = {
     "fraction_measured": (0.0, 1.0),
     "pixel_size_m": (0.0, 1e-2),
     "side_length_m_measured": (0.0, 1e-2),
+    "max_gap_frames": (0.0, 1e6),
 }
 
 #: Open ranges a value must lie in (a generous envelope around acoustic levitation in air or water).

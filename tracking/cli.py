@@ -113,6 +113,9 @@ def add_track_parser(sub) -> None:
                    help="a recording of a field drop (at rest, the free fall with the field off, the field back on) "
                    "is written whole, t from its first frame; by default the run is the field-on motion, t = 0 at the "
                    "field's return (the phases are in RUN.json either way)")
+    p.add_argument("--max-gap", type=positive_int, default=None, metavar="FRAMES",
+                   help="a folder of recordings: the longest run of unmeasured frames the data set's loader fills "
+                   "(meta.json tracking.max_gap_frames; default the loader's 10); a run is split at longer gaps")
     p.add_argument("--overlay", action="store_true",
                    help="also write RUN.overlay.mp4 (the frames with the fitted squares and each frame's status, "
                    "played at 25 frames/s) and RUN.quality.png (each frame's edge residual and why frames were not "
@@ -292,7 +295,7 @@ def run(a: argparse.Namespace) -> int:
         reasons = {s["reason"].split(": ", 1)[-1] for s in skipped}
         raise TrackingError(f"{src}: no recording could be tracked" + (f" ({reasons.pop()})" if len(reasons) == 1 else
                                                                        f" ({len(skipped)} failed; first: {skipped[0]['reason']})"))
-    write_dataset(out, results, skipped, force=a.force)
+    write_dataset(out, results, skipped, force=a.force, max_gap=a.max_gap)
     if a.overlay:
         for r in results:
             _write_overlay(out, r.name, read_recording(r.info["source"]).frames, r)

@@ -110,9 +110,10 @@ def _phases_summary(ph: dict | None) -> dict | None:
 
 
 def write_dataset(out_dir: str | os.PathLike, results: list[TrackResult], skipped: list[dict],
-                  force: bool = False) -> Path:
+                  force: bool = False, max_gap: int | None = None) -> Path:
     """Write a data set of tracked runs (module docstring) into ``out_dir``, built beside it and renamed into
-    place; an existing ``out_dir`` is replaced only with ``force``."""
+    place; an existing ``out_dir`` is replaced only with ``force``.  ``max_gap`` [frames], when given, is recorded
+    as ``tracking.max_gap_frames``: the loader's fill limit for the set (longer gaps split a run)."""
     out = Path(out_dir)
     with atomic_directory(out) as tmp:
         for r in results:
@@ -120,6 +121,8 @@ def write_dataset(out_dir: str | os.PathLike, results: list[TrackResult], skippe
         fps = sorted({r.info["frame_rate_hz"] for r in results})
         meta = {"frame_rate_hz": fps[0] if len(fps) == 1 else None,
                 "tracking": dataset_tracking_block(results, skipped)}
+        if max_gap is not None:
+            meta["tracking"]["max_gap_frames"] = int(max_gap)
         if meta["frame_rate_hz"] is None:
             del meta["frame_rate_hz"]
         write_json(tmp / "meta.json", meta)

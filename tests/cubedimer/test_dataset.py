@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from cubedimer.dataset import DatasetError, load_dataset, load_run
+from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
 
 
 def test_good_file_with_comments_extra_columns_and_gaps(tmp_path, sine_run):
@@ -263,3 +263,16 @@ def test_a_long_gap_splits_the_run_and_a_short_part_is_dropped(tmp_path, write_c
         assert entry["file"] == "run03_part1.csv" and "oscillation periods" in entry["reason"]
     else:
         assert parts[0].frames == (0, gap_at) and not ds.skipped
+
+
+def test_a_tracked_set_s_recorded_fill_limit_is_the_loader_s(tmp_path, write_csv):
+    # a 40-frame gap: split at the default limit of 10, filled under the set's recorded 50 (tracking track --max-gap)
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y = y.copy()
+    y[3000:3040] = np.nan
+    write_csv(tmp_path / "run01.csv", t, y, th)
+    assert [r.name for r in load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs] == [
+        "run01_part1.csv", "run01_part2.csv"]
+    (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
+    (run,) = load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs
+    assert run.name == "run01.csv" and run.n_filled == 40
