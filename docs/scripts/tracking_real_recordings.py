@@ -21,7 +21,7 @@ CASES = {
     "clean": ({}, "dark", {}, False),
     "light: 30 % gradient, 5 % flicker at 100 Hz": (dict(gradient=0.3, flicker=0.05), "dark", {}, False),
     "static bands of 12 px at top and bottom": (dict(bands_px=12), "dark", {}, False),
-    "a dust speck crossing (200 frames)": (dict(dust=1), "dark", {}, False),
+    "a dust speck crossing (200 frames; masked near the dimer)": (dict(dust=1), "dark", {}, False),
     "transparent crystals, dark outline": (dict(transparent=True), "dark", {}, False),
     "transparent crystals, bright outline": (dict(transparent=True), "bright", {}, False),
     "hinge line tilted 10 degrees (no option)": (dict(tilt_deg=10.0), "dark", {}, False),
