@@ -167,7 +167,8 @@ def starts_at_rest(y: ArrayLike, noise: float | None = None) -> tuple[int, float
             return None
         rest = y[:k][np.isfinite(y[:k])]
         level = float(np.median(rest))
-        sigma = max(float(noise or 0.0), float(np.std(rest)))  # the rest frames' scatter is the noise
+        # the rest frames' scatter is the noise; below 1e-6 of the run's half range it is round-off (noise-free data)
+        sigma = max(float(noise or 0.0), float(np.std(rest)), 1e-6 * half_range)
     return k, level, sigma
 
 

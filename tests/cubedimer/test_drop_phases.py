@@ -51,3 +51,12 @@ def test_rest_then_a_jump_is_not_a_free_fall():
     assert starts_at_rest(y) is not None
     ph = find_drop_phases(t, y)
     assert ph is None or not ph.free_fall
+
+
+def test_a_noise_free_drop_is_found_exactly(drop_heights):
+    # no noise: the rest's scatter is round-off (floored at 1e-6 of the range); the times and g come out exact
+    t, y, on = drop_heights(3000, FPS, 59.6, 3.5e-3)
+    ph = find_drop_phases(t, y)
+    assert ph.free_fall and ph.first_field_on_frame == int(np.ceil(on))
+    assert ph.field_on_frame == pytest.approx(on, abs=0.01) and ph.drop_frame == pytest.approx(59.6, abs=0.01)
+    assert ph.fall_acceleration == pytest.approx(-STANDARD_GRAVITY, rel=1e-4)
