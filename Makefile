@@ -53,9 +53,9 @@ demo: venv
 
 # The same job from camera frames: the twin renders high-speed video, the tracking measures it, the report reads it.
 demo-video: venv
-	@echo "[demo-video 1/3] digital twin with its camera: 4 runs of 2 s as 180 x 150 px video (OUT/video_twin/video/)"
-	$(BIN)/python -m acousim simulate --preset paper-like --runs 4 --duration 2 --seed 3 --video --out $(OUT)/video_twin --force --no-progress
-	@echo "[demo-video 2/3] tracking: video to runs of (t, y, theta)"
+	@echo "[demo-video 1/3] digital twin with its camera: 8 field drops (60 frames at rest, the fall, 2 s of motion) as 180 x 150 px video (OUT/video_twin/video/)"
+	$(BIN)/python -m acousim simulate --preset paper-like --runs 8 --duration 2 --seed 3 --video --rest-frames 60 --out $(OUT)/video_twin --force --no-progress
+	@echo "[demo-video 2/3] tracking: video to runs of (t, y, theta), each the field-on motion with t = 0 at the field's return"
 	$(BIN)/python -m tracking track $(OUT)/video_twin/video --out $(OUT)/tracked --force
 	@echo "[demo-video 3/3] fit, compare, diagnose and report, with the tracking's section"
 	$(BIN)/python -m validation report $(OUT)/tracked --out $(OUT)/report_video

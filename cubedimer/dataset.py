@@ -8,24 +8,26 @@ from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import PchipInterpolator
 
 from .config_checks import check_fraction, check_non_negative, check_whole
 from .errors import DatasetError
 from .meta import read_meta
+from .drop_phases import field_on_start
+from .gaps import fill_gaps, gap_segments
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
 from .spectra import dominant_frequency
 from .system import LEVITATED_DIMER, SystemSpec, check_velocity, coordinate_unit_factor, read_system
 
-__all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_dataset", "fill_gaps"]
+__all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_run_parts", "load_dataset",
+           "fill_gaps", "gap_segments"]
 
 logger = logging.getLogger(__name__)
 
@@ -100,6 +102,10 @@ class Run:
     velocities : ndarray (n, 2) or None
         Measured rates of the two coordinates [SI per s] (a generic system's declared velocity columns; NaN for a
         coordinate without one), or None.  In a generic system y and theta hold its first and second coordinate.
+    source : str, optional
+        For a part of a run split at a long gap (:func:`load_run_parts`): the file it came from.
+    frames : (int, int), optional
+        For such a part: its frames ``[start, stop)`` in the file.
     """
 
     name: str
@@ -109,6 +115,8 @@ class Run:
     n_filled: int = 0
     glitch_frames: tuple[int, ...] = ()
     velocities: NDArray[np.float64] | None = None
+    source: str | None = None
+    frames: tuple[int, int] | None = None
 
     @property
     def n_glitches(self) -> int:
@@ -154,29 +162,6 @@ class SkippedFile:
 
     def __str__(self) -> str:
         return f"{self.file}: {self.reason}"
-
-
-def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tuple[NDArray, int]:
-    """Fill runs of at most ``max_gap`` non-finite samples by PCHIP interpolation.
-
-    Raises DatasetError on a longer gap or on missing first/last frames beyond ``max_gap``.
-    """
-    bad = ~np.isfinite(x)
-    if not bad.any():
-        return x, 0
-    # lengths of consecutive missing runs
-    d = np.diff(np.r_[0, bad.astype(np.int8), 0])
-    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    longest = int((ends - starts).max())
-    if longest > max_gap:
-        raise DatasetError(f"{name}: {longest} consecutive missing values of {what} at t={t[starts[np.argmax(ends - starts)]]:.4g} s "
-                           f"(at most {max_gap} are filled)")
-    good = ~bad
-    if good.sum() < 4:
-        raise DatasetError(f"{name}: almost no valid values of {what}")
-    out = x.copy()
-    out[bad] = PchipInterpolator(t[good], x[good], extrapolate=True)(t[bad])
-    return out, int(bad.sum())
 
 
 def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
@@ -347,7 +332,50 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
         One-line message ``"<file>: <problem>"``.
     """
     path = Path(path)
-    name = path.name
+    t, y, th, vel = _read_columns(path, config, frame_rate_hz, system)
+    return _prepared_run(path, path.name, t, y, th, vel, config, system)
+
+
+def load_run_parts(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None,
+                   system: SystemSpec = LEVITATED_DIMER) -> tuple[list[Run], list[SkippedFile]]:
+    """:func:`load_run`, with a run split at every gap longer than ``config.max_gap`` frames (a lost stretch of a
+    tracking) into parts named ``RUN_part1.csv``, ``RUN_part2.csv``, ... (each ``Run.source`` the file, ``Run.frames``
+    its frames in it): every part is checked like a run, and a part too short to hold the oscillation periods (or
+    otherwise bad) is skipped with its reason, the others kept.
+
+    Raises
+    ------
+    DatasetError
+        A file that cannot be read as a run, or of which no part is usable (one line naming the file).
+    """
+    path = Path(path)
+    t, y, th, vel = _read_columns(path, config, frame_rate_hz, system)
+    bad = ~np.isfinite(y) | ~np.isfinite(th)
+    parts = gap_segments(bad, config.max_gap)
+    if len(parts) <= 1 and not (len(parts) == 1 and parts[0] != (0, t.size)):
+        return [_prepared_run(path, path.name, t, y, th, vel, config, system)], []
+    runs, skipped = [], []
+    for j, (a, b) in enumerate(parts, 1):
+        name = f"{path.stem}_part{j}{path.suffix}"
+        try:
+            run = _prepared_run(path.parent / name, name, t[a:b], y[a:b], th[a:b], [v[a:b] for v in vel], config,
+                                system)
+            runs.append(replace(run, source=path.name, frames=(int(a), int(b))))
+        except DatasetError as exc:
+            skipped.append(SkippedFile(name, str(exc).split(": ", 1)[-1] + f" (frames {a}-{b - 1} of {path.name})"))
+    gaps = len(parts) - 1
+    if not runs:
+        raise DatasetError(f"{path}: split at {gaps} gap(s) longer than {config.max_gap} frames, and no part is "
+                           f"usable: {skipped[0].file}: {skipped[0].reason}")
+    logger.warning("%s: split at %d gap(s) longer than %d missing frames into %s%s", path.name, gaps,
+                   config.max_gap, ", ".join(f"{r.name} (frames {r.frames[0]}-{r.frames[1] - 1})" for r in runs),
+                   f"; {len(skipped)} part(s) too short or bad, skipped" if skipped else "")
+    return runs, skipped
+
+
+def _read_columns(path: Path, config: LoadConfig, frame_rate_hz: float | None, system: SystemSpec
+                  ) -> tuple[NDArray, NDArray, NDArray, list[NDArray]]:
+    """The file's t, coordinates and velocity columns (SI), lost frames inserted, uniform, a field drop cut."""
     lines = _data_lines(path)
     header_line, header_text = lines[0]
     sep = separator(header_text)
@@ -361,10 +389,18 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
     t = _frame_times(path, t, time_col, frame_rate_hz, line_no)
     t, (y, th, *vel), line_no, n_lost = _fill_lost_frames(path, t, [y, th, *vel], line_no, config.uniform_tol)
     if n_lost:
-        logger.info("%s: %d omitted frame(s) taken as missing", name, n_lost)
+        logger.info("%s: %d omitted frame(s) taken as missing", path.name, n_lost)
     _check_uniform(path, t, line_no, config.uniform_tol)
     if not system.generic:
         _check_theta_range(path, th, line_no)
+        first = field_on_start(path, t, y)
+        t, y, th, vel, line_no = t[first:], y[first:], th[first:], [v[first:] for v in vel], line_no[first:]
+    return t, y, th, vel
+
+
+def _prepared_run(path: Path, name: str, t: NDArray, y: NDArray, th: NDArray, vel: list[NDArray], config: LoadConfig,
+                  system: SystemSpec) -> Run:
+    """A run from its columns: the missing frames checked and filled, enough periods, velocities, glitches."""
     nmiss = int((~np.isfinite(y) | ~np.isfinite(th)).sum())
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
@@ -394,6 +430,15 @@ def _velocities(path: Path, t: NDArray, x: tuple[NDArray, NDArray], vel: list[ND
             check_velocity(path, c.velocity, t, x[k], v, periods)
             out[:, k] = v
     return out
+
+
+def _with_recorded_max_gap(config: LoadConfig, meta: dict) -> LoadConfig:
+    """The fill limit a tracked data set records (meta.json ``tracking.max_gap_frames``, ``tracking track --max-gap``)
+    in place of the default one (a limit the caller chose stays)."""
+    block = meta.get("tracking")
+    if isinstance(block, dict) and "max_gap_frames" in block and config.max_gap == LoadConfig.max_gap:
+        return replace(config, max_gap=int(block["max_gap_frames"]))
+    return config
 
 
 def _log_skip(message: str) -> None:
@@ -429,6 +474,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     if not files:
         raise DatasetError(f"{p}: no CSV files in the data set")
     meta = read_meta(p)
+    config = _with_recorded_max_gap(config, meta)
     system = read_system(meta, str(p / "meta.json"))
     if system.kind not in config.systems:
         raise DatasetError(f"{p / 'meta.json'}: declares a {system.kind.replace('_', ' ')} system "
@@ -449,7 +495,10 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     codes: dict[str, str] = {}
     for f in files:
         try:
-            runs.append(load_run(f, config, frame_rate_hz=meta.get("frame_rate_hz"), system=system))
+            parts, short = load_run_parts(f, config, frame_rate_hz=meta.get("frame_rate_hz"), system=system)
+            runs.extend(parts)
+            skipped.extend(short)
+            pending.extend(f"{p / x.file}: {x.reason}" for x in short)
         except DatasetError as exc:
             if strict:
                 raise

@@ -17,6 +17,11 @@ threshold of 7 the false-alarm rate on Gaussian noise is ~3e-12 per frame, and a
 leaves ``h (1 - c0)`` in the residual, so glitches from about 14 noise standard deviations on are
 found with certainty (c0 ~ 0.42 for the 9-frame window of a 22 Hz oscillation at 2000 fps); smaller ones
 are hard to tell from the noise and do little harm.
+
+A change of acceleration is not a glitch: the onset of a free fall when the field drops (the acceleration jumps by
+g) or the field's return leave a residual of a few noise standard deviations at the kink, over several frames.  Each
+candidate is therefore predicted from its neighbours by a cubic plus up to two
+breaks of the acceleration near it; a candidate the breaks predict within the threshold is a kink and is kept.
 """
 from __future__ import annotations
 
@@ -74,6 +79,39 @@ def _fill(x: NDArray, bad: NDArray) -> NDArray:
     return np.where(good, x, np.interp(i, i[good], x[good]))
 
 
+def _explained_by_acceleration_change(x: NDArray, candidates: NDArray, excluded: NDArray, w: int,
+                                      bound: float) -> NDArray[np.bool_]:
+    """For each candidate frame: whether changes of acceleration explain it (kinks, not a glitch).
+
+    Around the candidate (``w // 2 + 2`` frames either side), a cubic plus up to two breaks of the acceleration,
+    ``(t - b1)_+^2`` and ``(t - b2)_+^2`` (a field drop's fall and the field's return may lie a few frames apart), is
+    fitted to the other frames not ``excluded`` (earlier glitches, missing frames), the breaks on
+    a grid of half frames at the least residual sum; the candidate is explained when that fit predicts it within
+    ``bound``.  A glitch is a frame off the smooth motion, which its neighbours do not predict; the onset of a fall or
+    the field's return is a jump of the acceleration, which a break takes up.
+    """
+    out = np.zeros(candidates.size, bool)
+    half = w // 2 + 2
+    grid = np.arange(-half + 1.0, half - 0.99, 0.5)
+    pairs = np.array([(b1, b2) for b1 in grid for b2 in grid if b2 > b1])
+    for j, i in enumerate(candidates):
+        idx = np.arange(max(0, i - half), min(x.size, i + half + 1))
+        use = idx[~excluded[idx] & (idx != i)]
+        if use.size < 9:
+            continue
+        s = (use - i).astype(float)
+        design = np.concatenate([np.broadcast_to(np.stack([np.ones_like(s), s, s ** 2, s ** 3], axis=1),
+                                                 (len(pairs), s.size, 4)),
+                                 np.maximum(s[None, :, None] - pairs[:, None, :], 0.0) ** 2], axis=2)
+        gram = np.einsum("pmk,pml->pkl", design, design) + 1e-9 * np.eye(6)
+        coef = np.linalg.solve(gram, np.einsum("pmk,m->pk", design, x[use])[..., None])[..., 0]
+        rss = np.sum((x[use][None, :] - np.einsum("pmk,pk->pm", design, coef)) ** 2, axis=1)
+        k = int(np.argmin(rss))
+        pred = coef[k, 0] + coef[k, 4] * max(-pairs[k, 0], 0.0) ** 2 + coef[k, 5] * max(-pairs[k, 1], 0.0) ** 2
+        out[j] = abs(x[i] - pred) <= bound
+    return out
+
+
 def find_glitches(x: ArrayLike, frames_per_period: float, config: GlitchConfig = GlitchConfig()) -> NDArray[np.bool_]:
     """Frames of ``x`` that are isolated outliers (see the module docstring).
 
@@ -114,7 +152,10 @@ def find_glitches(x: ArrayLike, frames_per_period: float, config: GlitchConfig =
         if not scale > 0:
             break
         a = np.abs(r)
-        new = (a > config.threshold * scale) & (a >= maximum_filter1d(a, w, mode="nearest"))
+        over = a > config.threshold * scale
+        new = over & (a >= maximum_filter1d(a, w, mode="nearest"))
+        cand = np.flatnonzero(new)
+        new[cand[_explained_by_acceleration_change(filled, cand, glitch | missing, w, config.threshold * scale)]] = False
         if not new.any():
             break
         glitch |= new

@@ -20,7 +20,8 @@ import logging
 from .errors import DatasetError
 
 __all__ = ["META_KEYS", "META_DEFAULTS", "META_RANGES", "META_RECORDING_KEYS", "META_TEXT_KEYS", "META_BLOCK_KEYS",
-           "TRACKING_RANGES", "read_meta", "validate_meta", "check_meta_value", "check_tracking_block"]
+           "TRACKING_RANGES", "read_meta", "validate_meta", "check_meta_value", "check_tracking_block",
+           "unknown_keys_message"]
 
 logger = logging.getLogger(__name__)
 
@@ -56,6 +57,7 @@ TRACKING_RANGES: dict[str, tuple[float, float]] = {
     "fraction_measured": (0.0, 1.0),
     "pixel_size_m": (0.0, 1e-2),
     "side_length_m_measured": (0.0, 1e-2),
+    "max_gap_frames": (0.0, 1e6),
 }
 
 #: Open ranges a value must lie in (a generous envelope around acoustic levitation in air or water).
@@ -137,9 +139,23 @@ def validate_meta(meta: Any, source: str = "meta.json") -> dict:
     unknown = [k for k in meta if k not in META_RANGES and k not in META_TEXT_KEYS and k not in META_BLOCK_KEYS
                and k != "system"]
     if unknown:
-        logger.warning("%s: unknown key(s) %s ignored; the known keys are %s (docs/formats.md)", source,
-                       ", ".join(repr(k) for k in unknown), ", ".join(META_RANGES))
+        logger.warning("%s: %s", source, unknown_keys_message(unknown))
     return out
+
+
+def unknown_keys_message(unknown: list[str]) -> str:
+    """The warning for meta.json keys this suite does not read: each with the known key it most likely misspells
+    (``difflib``, e.g. ``side_lenght_m`` -> ``side_length_m``), and what is used instead."""
+    import difflib
+
+    known = [*META_RANGES, *META_TEXT_KEYS, *META_BLOCK_KEYS, "system"]
+    parts = []
+    for k in unknown:
+        close = difflib.get_close_matches(str(k), known, n=1, cutoff=0.75)
+        parts.append(f"{k!r} (did you mean {close[0]!r}?)" if close else repr(k))
+    guessed = any("did you mean" in p for p in parts)
+    return (f"unknown key(s) {', '.join(parts)} ignored" + ("; the default is used for a misspelt constant: correct "
+            "the key" if guessed else "") + f"; the known keys are {', '.join(META_RANGES)} (docs/formats.md)")
 
 
 def read_meta(data_dir: str | os.PathLike) -> dict:

@@ -174,6 +174,32 @@ def sine_run():
     return t, 1e-4 * np.cos(2 * np.pi * 22 * t), 0.2 * np.sin(2 * np.pi * 9 * t)
 
 
+def field_drop_heights(n: int, fps: float, rest: float, t_off: float, f_y: float = 22.0, decay: float = 0.5):
+    """The height [m] of a field drop as a lab records it, analytic: at rest (0) until the drive stops after ``rest``
+    frames (fractional), the free fall ``-g t^2 / 2`` for ``t_off`` [s], then the trap's damped oscillation at ``f_y``
+    from that height and velocity (continuous in both).  Returns (t [s] from the first frame, y, the field's return
+    [frames])."""
+    g = 9.80665
+    t = np.arange(n) / fps
+    t_d = rest / fps
+    t_on = t_d + t_off
+    y = np.zeros(n)
+    fall = (t >= t_d) & (t < t_on)
+    y[fall] = -0.5 * g * (t[fall] - t_d) ** 2
+    on = t >= t_on
+    tau = t[on] - t_on
+    w = 2 * np.pi * f_y
+    y0, v0 = -0.5 * g * t_off ** 2, -g * t_off
+    y[on] = np.exp(-decay * tau) * (y0 * np.cos(w * tau) + (v0 + decay * y0) / w * np.sin(w * tau))
+    return t, y, t_on * fps
+
+
+@pytest.fixture
+def drop_heights():
+    """:func:`field_drop_heights`: ``drop_heights(n, fps, rest, t_off)`` -> (t, y, field-on frame)."""
+    return field_drop_heights
+
+
 @pytest.fixture(scope="session")
 def process_cluster():
     """A real dask cluster on the loopback for the whole session: a scheduler and two daemonic worker

@@ -109,6 +109,17 @@ def add_track_parser(sub) -> None:
                    help="largest distance between the two cubes' fitted hinge corners, as a fraction of the side "
                    "(default 0.1); a hinge line tilted out of the camera axis separates them")
     _add_roi_argument(p)
+    p.add_argument("--keep-drop", action="store_true",
+                   help="a recording of a field drop (at rest, the free fall with the field off, the field back on) "
+                   "is written whole, t from its first frame; by default the run is the field-on motion, t = 0 at the "
+                   "field's return (the phases are in RUN.json either way)")
+    p.add_argument("--max-gap", type=positive_int, default=None, metavar="FRAMES",
+                   help="a folder of recordings: the longest run of unmeasured frames the data set's loader fills "
+                   "(meta.json tracking.max_gap_frames; default the loader's 10); a run is split at longer gaps")
+    p.add_argument("--overlay", action="store_true",
+                   help="also write RUN.overlay.mp4 (the frames with the fitted squares and each frame's status, "
+                   "played at 25 frames/s) and RUN.quality.png (each frame's edge residual and why frames were not "
+                   "measured): the tracking checked by eye")
     p.add_argument("--strict", action="store_true",
                    help="a folder of recordings: refuse the set on the first bad recording instead of skipping it")
     p.add_argument("--force", action="store_true", help="replace an existing output")
@@ -154,7 +165,7 @@ def _config(a: argparse.Namespace):
     return TrackConfig(fps=a.fps, pixel_size=a.pixel_size, origin_frames=a.origin_frames, origin_row=a.origin_row,
                        polarity=a.polarity, up=a.up, edge_window=a.edge_window, area_tolerance=a.area_tolerance,
                        max_motion_blur=a.max_motion_blur, max_squareness=a.max_squareness,
-                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi))
+                       max_hinge_gap=a.max_hinge_gap, roi=parse_roi(a.roi), keep_drop=a.keep_drop)
 
 
 def _track_task(item):
@@ -226,9 +237,9 @@ def inspect(a: argparse.Namespace) -> int:
         lines.append(f"hinge line: tilted about {tilt:.1f} degrees out of the camera axis ({how}); the side corrected "
                      f"for it is {true_side:.1f} px" + (f" = {true_side * rec.pixel_size * 1e6:.0f} um" if rec.pixel_size
                                                          else "")
-                     + ("; track undoes the tilt" if cal.tilt else "; track leaves it as it is (the hinge gap over the "
-                        "squares' sides from their faces reads 3 degrees or less)")
-                     + ", and needs --max-hinge-gap 0.5 beyond about 5 degrees")
+                     + ("; track undoes the tilt and judges the hinge corners where the tilt puts them" if cal.tilt
+                        else "; track leaves it as it is (the hinge gap over the squares' sides from their faces reads "
+                        "3 degrees or less)"))
     print("\n".join(lines))
     return 0
 
@@ -252,8 +263,11 @@ def run(a: argparse.Namespace) -> int:
         existing = [p for p in (out, out.with_suffix(".json")) if p.exists()]
         if existing and not a.force:
             raise UserInputError(f"--out {out}: {existing[0]} exists (use --force to replace it)")
-        result = track_recording(read_recording(src), config)
+        rec = read_recording(src)
+        result = track_recording(rec, config)
         write_run(out, result)
+        if a.overlay:
+            _write_overlay(out.parent, out.stem, rec.frames, result)
         print(f"wrote {out} ({result.n_measured} of {result.info['frames']} frames measured) and "
               f"{out.with_suffix('.json').name}", file=sys.stderr)
         return 0
@@ -281,9 +295,24 @@ def run(a: argparse.Namespace) -> int:
         reasons = {s["reason"].split(": ", 1)[-1] for s in skipped}
         raise TrackingError(f"{src}: no recording could be tracked" + (f" ({reasons.pop()})" if len(reasons) == 1 else
                                                                        f" ({len(skipped)} failed; first: {skipped[0]['reason']})"))
-    write_dataset(out, results, skipped, force=a.force)
+    write_dataset(out, results, skipped, force=a.force, max_gap=a.max_gap)
+    if a.overlay:
+        for r in results:
+            _write_overlay(out, r.name, read_recording(r.info["source"]).frames, r)
     print(f"wrote {len(results)} runs to {out} ({len(skipped)} recordings skipped)", file=sys.stderr)
     return 0
+
+
+def _write_overlay(directory: Path, stem: str, frames, result) -> None:
+    """``STEM.overlay.mp4`` and ``STEM.quality.png`` of one tracked recording (:mod:`tracking.overlay`), the frames
+    cut to the region of interest the measurement used."""
+    from .overlay import write_overlay, write_quality_plot
+
+    roi = result.info.get("roi_px")
+    if roi:
+        frames = frames[:, roi[2]:roi[3], roi[0]:roi[1]]
+    write_overlay(directory / f"{stem}.overlay.mp4", frames, result.rows, result.status, result.info)
+    write_quality_plot(directory / f"{stem}.quality.png", result.status, result.info)
 
 
 def main(argv: list[str] | None = None) -> int:

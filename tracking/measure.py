@@ -1,4 +1,4 @@
-"""The per-frame measurement of the dimer: compiled (numba); a batch of frames is shared between threads.
+"""The per-frame measurement of the dimer: compiled (numba); a batch of frames is shared by the kernel's own threads.
 
 Image coordinates: pixel centres at integer ``(u, v)``, ``u`` the column (right) and ``v`` the row
 (counting down); the lab frame of the measurement has ``X = u`` and ``Z = -v`` (up).  Every frame goes
@@ -14,7 +14,8 @@ through these steps (:func:`measure_frames`):
    8-connected components.  Components larger
    than ``min_area`` are particles: the largest (with the second when of similar size and less than
    ``3 + 3 blur`` px apart: the cubes meet at a corner, where the coverage may stay below 1/2) is the dimer;
-   another particle counts (third particle) only where it reaches the dimer's window.  A dimer whose window
+   another particle in the dimer's window is masked (its box widened by ``ceil(2.5 blur)`` set to background) when
+   the dimer's silhouette lies at least twice that from its box, and counts (third particle) only when closer.  A dimer whose window
    reaches the border is out of view.  With ``fill_holes`` the holes of the dimer's silhouette (a transparent
    crystal's bright interior) become cube.
 3. **Height.**  The centre of mass of the coverage over the dimer's window (its bounding box widened by
@@ -48,7 +49,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from .face_fit import fit_square, wrap_angle
@@ -106,7 +107,8 @@ STATUS_TEXT = {
     "corrupt": "blank or corrupt frame (background far from the recording's, or non-finite pixels)",
     "no_dimer": "no particle in view",
     "out_of_view": "the dimer touches the frame's border (partly out of view)",
-    "third_particle": "another particle within the dimer's window, or the two cubes apart",
+    "third_particle": "another particle within the dimer's window too close to be masked (its blurred edge within "
+                      "reach of the dimer's), or the two cubes apart",
     "occlusion": "the silhouette's area differs from the dimer's (occlusion or a particle touching it)",
     "fit_failed": "too few edge samples on a cube's faces",
     "faces_cross": "fitted faces cross (alpha <= 0 or beta <= 0): no physical bend",
@@ -217,7 +219,8 @@ def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | No
         Grey levels (any real or integer type).
     settings : MeasureSettings
     threads : int, optional
-        Threads sharing the batch (default :func:`numba_threads`).
+        Threads sharing the batch (default :func:`numba_threads`): the compiled kernel's own (numba's prange, at
+        most ``NUMBA_NUM_THREADS``), never a pool of Python threads.
     pinv : ndarray (height, width), optional
         The recording's reciprocal background image (:func:`reciprocal_background`; 0 on static structures);
         default: the plane of ``settings`` (:meth:`MeasureSettings.plane`).
@@ -240,13 +243,14 @@ def measure_frames(frames: NDArray, settings: MeasureSettings, threads: int | No
     if threads == 1:
         _measure_batch(f, pinv, prm, out)
         return out
-    from concurrent.futures import ThreadPoolExecutor
+    import numba
 
-    edges = np.linspace(0, n, threads + 1).astype(int)
-    with ThreadPoolExecutor(threads) as pool:  # the compiled kernel releases the GIL
-        list(pool.map(lambda k: _measure_batch(f[edges[k]:edges[k + 1]], pinv, prm,
-                                                     out[edges[k]:edges[k + 1]]),
-                      range(threads)))
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:  # the compiled kernel's own threads (prange over frames): no pool is opened
+        _measure_batch_parallel(f, pinv, prm, out)
+    finally:
+        numba.set_num_threads(before)
     return out
 
 
@@ -351,10 +355,12 @@ def _light_level(img, pinv, prm, row):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _dimer_box(rv, r0, r1, row_start, nruns, h, w, min_area, blur, M, win):  # pragma: no cover - compiled
+def _dimer_box(c, rv, r0, r1, row_start, nruns, h, w, min_area, blur, M, win):  # pragma: no cover - compiled
     """Step 2: the particles of the coverage runs and the dimer's bounding box (u0, u1, v0, v1 into ``win``): the
-    largest particle, joined by the second when both are cube-sized and touch.  Returns the status (0: a dimer
-    alone in its window ``M`` px around the box)."""
+    largest particle, joined by the second when both are cube-sized and touch.  Another particle in the dimer's
+    window ``M`` px around the box is masked in the coverage ``c`` (:func:`_mask_particle`, its box widened by its
+    blurred edge's reach ``ceil(2.5 blur)``) when the dimer's silhouette stays twice that reach from its box.  Returns the status
+    (0: a dimer alone in its window, once such particles are masked; 4: a particle too close)."""
     box = np.zeros(5 * _MAX_PARTICLES)
     nbig = particles(rv, r0, r1, row_start, nruns, h, w, min_area, box)
     if nbig == 0:
@@ -375,15 +381,32 @@ def _dimer_box(rv, r0, r1, row_start, nruns, h, w, min_area, blur, M, win):  # p
             first_other = 2
     if nbig > _MAX_PARTICLES:
         return 4
-    for k in range(first_other, nbig):  # another particle counts only where it touches the dimer's window
-        if (box[5 * k] <= bu1 + M and box[5 * k + 1] >= bu0 - M and box[5 * k + 2] <= bv1 + M
-                and box[5 * k + 3] >= bv0 - M):
-            return 4
+    r = int(math.ceil(2.5 * blur))  # a blurred edge's reach: 0.6 % of full coverage beyond it
+    for k in range(first_other, nbig):  # another particle counts only where it reaches the dimer's window
+        pu0, pu1, pv0, pv1 = int(box[5 * k]), int(box[5 * k + 1]), int(box[5 * k + 2]), int(box[5 * k + 3])
+        if pu0 <= bu1 + M and pu1 >= bu0 - M and pv0 <= bv1 + M and pv1 >= bv0 - M:
+            if not _mask_particle(c, pu0, pu1, pv0, pv1, r, h, w):
+                return 4
     win[0] = bu0
     win[1] = bu1
     win[2] = bv0
     win[3] = bv1
     return 0
+
+
+@njit(cache=True)
+def _mask_particle(c, pu0, pu1, pv0, pv1, r, h, w):  # pragma: no cover - compiled
+    """Mask a particle near the dimer: its box widened by ``r`` (its blurred edge) set to background in ``c``, when
+    no other pixel of coverage above 1/2 lies within ``2 r`` of its box (the dimer's blurred edge then keeps clear of
+    the mask by ``r``).  Returns whether it was masked (False: too close, nothing changed)."""
+    for v in range(max(0, pv0 - 2 * r), min(h, pv1 + 2 * r + 1)):
+        for u in range(max(0, pu0 - 2 * r), min(w, pu1 + 2 * r + 1)):
+            if c[v, u] > 0.5 and not (pu0 <= u <= pu1 and pv0 <= v <= pv1):
+                return False
+    for v in range(max(0, pv0 - r), min(h, pv1 + r + 1)):
+        for u in range(max(0, pu0 - r), min(w, pu1 + r + 1)):
+            c[v, u] = 0.0
+    return True
 
 
 @njit(cache=True)
@@ -512,7 +535,7 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
         return
     M = W + 2
     win = np.zeros(4, np.int64)
-    status = _dimer_box(rv, r0, r1, row_start, nruns, h, w, prm[5], blur, M, win)
+    status = _dimer_box(c, rv, r0, r1, row_start, nruns, h, w, prm[5], blur, M, win)
     if status != 0:
         row[0] = status
         return
@@ -563,4 +586,10 @@ def _measure_one(img, pinv, prm, row):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def _measure_batch(frames, pinv, prm, out):  # pragma: no cover - compiled
     for i in range(frames.shape[0]):
+        _measure_one(frames[i], pinv, prm, out[i])
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _measure_batch_parallel(frames, pinv, prm, out):  # pragma: no cover - compiled
+    for i in prange(frames.shape[0]):
         _measure_one(frames[i], pinv, prm, out[i])

@@ -28,12 +28,14 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .calibration import Calibration, calibrate
+from cubedimer.drop_phases import DropPhases, find_drop_phases
+
+from .calibration import Calibration, faces_tilt, calibrate
 from .measure import COLUMNS, STATUS, STATUS_NAMES, STATUS_TEXT, measure_frames
 from .noise_estimate import noise_estimate
 from .origin import find_origin
@@ -93,6 +95,9 @@ class TrackConfig:
     roi : (x0, x1, y0, y1), optional
         Region of interest: columns ``x0 <= u < x1`` and rows ``y0 <= v < y1`` of the frames [px]; only it is
         measured (a dimer that reaches its border is out of view).
+    keep_drop : bool
+        A recording of a field drop (rest, free fall, field back on; :mod:`cubedimer.drop_phases`) is written whole,
+        with t from its first frame, instead of as the field-on motion with t = 0 at the field's return.
     """
 
     fps: float | None = None
@@ -110,6 +115,7 @@ class TrackConfig:
     calibration_frames: int = 100
     batch: int = 1024
     roi: tuple[int, int, int, int] | None = None
+    keep_drop: bool = False
 
     def __post_init__(self) -> None:
         for name in ("fps", "pixel_size"):
@@ -174,9 +180,21 @@ class TrackResult:
     def n_measured(self) -> int:
         return int(np.sum(self.status == 0))
 
+    def run_series(self) -> tuple[NDArray, NDArray, NDArray]:
+        """(t, y, theta) of the run as written: the field-on motion with t = 0 at the field's return when the
+        recording holds a field drop that is cut (``info["phases"]``), else every frame with t from the first."""
+        ph = self.info.get("phases")
+        if not ph or ph.get("kept") != "field-on motion":
+            return self.t, self.y, self.theta
+        k = int(ph["field_on_first_frame"])
+        return self.t[k:] - ph["field_on_time_s"], self.y[k:], self.theta[k:]
 
-def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
-    """Step 3 of the module docstring: the recording's bounds; returns the reference values used."""
+
+def _flag(status: NDArray, rows: NDArray, config: TrackConfig, tau: float = 0.0) -> dict:
+    """Step 3 of the module docstring: the recording's bounds; returns the reference values used.  With a hinge
+    line's tilt ``tau`` [rad] undone, the hinge corners are judged in the corrected geometry: the image's squares'
+    corners lie ``side sin(tau) / sqrt(area_factor(tau))`` apart there (:mod:`tracking.tilt`), and only the distance
+    beyond that counts against ``max_hinge_gap``."""
     ok = status == 0
     if not ok.any():
         return {}
@@ -201,8 +219,9 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig) -> dict:
     # the squareness check counts beyond its own noise (short hinge faces at large bends fit loosely)
     square = np.abs(rows[:, _C["alpha_free"]] + rows[:, _C["beta_free"]] - math.pi) - 5.0 * rows[:, _C["squareness_sigma"]]
     side = 2.0 * rows[:, _C["half_side"]]
+    gap = np.abs(rows[:, _C["hinge_gap"]] - side * math.sin(tau) / math.sqrt(area_factor(tau)))
     poor = ok & ((rms > config.max_edge_rms_factor * rms_ref + 0.05) | (np.nan_to_num(square) > config.max_squareness)
-                 | (rows[:, _C["hinge_gap"]] > config.max_hinge_gap * side))
+                 | (gap > config.max_hinge_gap * side))
     status[poor] = STATUS["poor_fit"]
     return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
 
@@ -252,10 +271,12 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     status = rows[:, 0].astype(np.int64)
     if tau:
         _correct_centre_of_mass(rows, status, tau, cal)
-    refs = _flag(status, rows, config)
+    refs = _flag(status, rows, config, tau)
     ok = status == 0
     tilt_deg = _hinge_line_tilt(rec, rows, status, config, cal)
-    origin = _origin(rec, rows, status, config)
+    phases = _drop_phases(rows, status, fps, pixel, config)
+    origin = _origin(rec, rows, status, replace(config, origin_frames=min(config.origin_frames, phases.rest_frames))
+                     if phases is not None and phases.free_fall and phases.rest_frames >= 1 else config)
     sign = 1.0 if config.up == "top" else -1.0
     y0 = config.roi[2] if config.roi else 0
     y = np.where(ok, sign * (origin["row_px"] - y0 - rows[:, _C["v_com"]]) * pixel, np.nan)
@@ -267,10 +288,43 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     info = _run_info(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
                      theta)
     info["tilt_correction"] = correction
+    info["phases"] = _phases_record(phases, config, rec.name) if phases is not None else None
     logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
                 ", ".join(f"{k} {v}" for k, v in info["not_measured"].items()) or "all", noise_y["value"],
                 noise_theta["value"])
     return TrackResult(rec.name, t, y, theta, status, rows, info, np.array(frames[ex]))
+
+
+def _drop_phases(rows: np.ndarray, status: np.ndarray, fps: float, pixel: float, config: TrackConfig
+                 ) -> DropPhases | None:
+    """The recording's field-drop phases (:func:`cubedimer.drop_phases.find_drop_phases` on the centre-of-mass
+    height, up, with the frames' own noise), or None when it does not start at rest before a fall."""
+    ok = status == 0
+    if ok.sum() < 50:
+        return None
+    up = -1.0 if config.up == "top" else 1.0
+    height = np.where(ok, up * rows[:, _C["v_com"]] * pixel, np.nan)
+    noise = float(np.sqrt(np.median(rows[ok, _C["sigma_v"]] ** 2))) * pixel
+    return find_drop_phases(np.arange(len(status)) / fps, height, noise)
+
+
+def _phases_record(phases: DropPhases, config: TrackConfig, name: str) -> dict:
+    """RUN.json's ``phases``: the frames and times of the rest, the fall and the field's return, and what the run
+    keeps (a fall whose acceleration is not g is kept whole, with a warning)."""
+    out = phases.to_dict()
+    cut = phases.free_fall and not config.keep_drop
+    out["kept"] = "field-on motion" if cut else "whole recording"
+    if not phases.free_fall:
+        logger.warning("%s: the recording starts at rest for %d frames and then moves, but not in a free fall "
+                       "(acceleration %.3g m/s^2 against g = 9.81, residual RMS %.2g m against a noise of %.2g m): kept "
+                       "whole; cut it to the field-on motion before fitting", name, phases.rest_frames,
+                       phases.fall_acceleration, phases.fit_scatter, phases.noise)
+    else:
+        logger.info("%s: at rest for %d frames, the field off for %.2f ms (fall %.3g +- %.2g m/s^2), back at t = "
+                    "%.5f s: %s", name, phases.rest_frames, 1e3 * phases.field_off_s, phases.fall_acceleration,
+                    phases.fall_acceleration_error, out["field_on_time_s"],
+                    "the run is the field-on motion, t = 0 at the field's return" if cut else "kept whole (--keep-drop)")
+    return out
 
 
 def _frame_rate_and_pixel_size(rec: Recording, config: TrackConfig) -> tuple[float, float]:
@@ -315,6 +369,10 @@ def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, confi
         if fitted.any() else None
     if cal.tilt is not None and tilt_deg is not None:
         tilt_deg = cal.tilt["tilt_deg"]
+    elif tilt_deg is not None and tilt_deg > TILT_WARNING_DEG:
+        # nothing undone: the faces' reading, which a coverage offset of the background (bright cubes on black under
+        # noise: edges read outward) does not enlarge as it does the area's (tracking.tilt.tilt_from_faces)
+        tilt_deg = min(tilt_deg, faces_tilt(rows[fitted]) or tilt_deg)
     if tilt_deg is not None and tilt_deg > MAX_TILT_DEG:
         raise TrackingError(f"{rec.path}: the hinge line is tilted about {tilt_deg:.0f} degrees out of the camera axis "
                             f"(the fitted squares' hinge corners lie apart), beyond the {MAX_TILT_DEG:.0f} degrees that "
@@ -323,7 +381,8 @@ def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, confi
         logger.warning("%s: the hinge line is tilted about %.1f degrees out of the camera axis: y and theta are "
                        "corrected for it, the bias the tilt's error leaves is in the noise estimates (RUN.json "
                        "tilt_correction, docs/tracking.md); frames whose hinge corners lie more than --max-hinge-gap %g "
-                       "of the side apart are not measured", rec.name, tilt_deg, config.max_hinge_gap)
+                       "of the side from where the tilt puts them are not measured", rec.name, tilt_deg,
+                       config.max_hinge_gap)
     if not ok.any():
         why = ", ".join(f"{k} in {v}" for k, v in _status_counts(status).items())
         tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "

@@ -39,9 +39,11 @@ def add_compare_parser(sub) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--model", required=True, help="model.json written by `python -m fitting fit`")
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
-    src.add_argument("--data", help="data set directory: the sweep is computed from its meta.json (nominal pressure)")
+    p.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
+    p.add_argument("--data", help="the fitted data set's directory: without --sweep the sweep is computed from its "
+                   "meta.json (nominal pressure); with --sweep the sweep's dimer is checked against it")
+    p.add_argument("--other-dimer", action="store_true",
+                   help="compare with a sweep of another dimer (side, frequency, ks, gap) than the data's anyway")
     p.add_argument("--fit-theta-max", type=float, default=None,
                    help="static fitting box |theta| <= (default: the data range model.json records, at most 0.9; "
                         "0.3 for a model.json without one)")
@@ -64,6 +66,33 @@ def _read_model(path: Path) -> dict:
     return model_file.document
 
 
+def _check_same_dimer(sweep: str, settings: dict, meta: dict, data: str) -> None:
+    """A sweep of another dimer than the data's (side, frequency, ks = 2 pi f s / c, the gap when both state it) is
+    refused in one line (0.5 % apart: beyond a record's rounding), naming --other-dimer."""
+    import math
+
+    from cubedimer.meta import META_DEFAULTS
+
+    facts = {**META_DEFAULTS, **meta}
+    side = settings.get("side_a_m", settings.get("side_m"))
+    swept = {"side": side, "frequency": settings.get("frequency_hz"),
+             "ks": (2 * math.pi * settings["frequency_hz"] * side / settings["sound_speed_m_s"]
+                    if side and settings.get("frequency_hz") and settings.get("sound_speed_m_s") else None),
+             "gap": settings.get("gap_m")}
+    wanted = {"side": facts["side_length_m"], "frequency": facts["frequency_hz"],
+              "ks": 2 * math.pi * facts["frequency_hz"] * facts["side_length_m"] / facts["sound_speed_m_s"],
+              "gap": meta.get("gap_m")}
+    units = {"side": ("um", 1e6), "frequency": ("Hz", 1.0), "ks": ("", 1.0), "gap": ("um", 1e6)}
+    off = [k for k in swept if swept[k] is not None and wanted[k] is not None
+           and abs(swept[k] / wanted[k] - 1.0) > 0.005]
+    if off:
+        said = ", ".join(f"{k} {swept[k] * units[k][1]:.4g}{(' ' + units[k][0]) if units[k][0] else ''} against "
+                         f"{wanted[k] * units[k][1]:.4g}" for k in off)
+        raise UserInputError(f"--sweep {sweep}: a sweep of another dimer than the data's ({data}/meta.json): {said}; "
+                             "sweep the data's dimer (python -m acousim sweep with its side and frequency), or give "
+                             "--other-dimer to compare anyway")
+
+
 def run_compare(args: argparse.Namespace) -> int:
     from acousim.statics.sweep import read_sweep_csv
 
@@ -75,6 +104,8 @@ def run_compare(args: argparse.Namespace) -> int:
 
     from .simulation import model_from_meta
 
+    if not (args.sweep or args.data):
+        raise UserInputError("give --sweep (a sweep CSV) or --data (the fitted data set: its meta.json's dimer)")
     prepare_output_dir(args.out, "--out", create=False)
     model = _read_model(Path(args.model))
     rng = model.get("data_range", {})
@@ -94,6 +125,8 @@ def run_compare(args: argparse.Namespace) -> int:
             simulation = read_sweep_csv(args.sweep)
         except ValueError as exc:
             raise UserInputError(str(exc)) from None
+        if args.data and not args.other_dimer:
+            _check_same_dimer(args.sweep, simulation.settings, read_meta(args.data), args.data)
     else:
         try:
             simulation = model_from_meta(read_meta(args.data))

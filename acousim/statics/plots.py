@@ -15,7 +15,8 @@ import numpy as np
 
 from .sweep import SweepResult
 
-__all__ = ["plot_restoring_force", "plot_restoring_torque", "plot_thetaddot_map", "save_sweep_figures"]
+__all__ = ["plot_restoring_force", "plot_restoring_torque", "plot_thetaddot_map", "save_sweep_figures", "model_label",
+           "MODEL_LABELS"]
 
 UM = 1e6  # metres -> micrometres for axes
 
@@ -24,6 +25,16 @@ def _figure(figsize=(5.0, 3.8)):
     import matplotlib.pyplot as plt
 
     return plt.subplots(figsize=figsize, constrained_layout=True)
+
+
+#: Titles of the force models a sweep records (``settings["model"]``).
+MODEL_LABELS = {"gorkov": "Gor'kov model", "fullwave": "full-wave model"}
+
+
+def model_label(sweep: SweepResult) -> str:
+    """The force model a sweep was made with, for a title (``settings["model"]``; the name itself when unlisted)."""
+    name = str(sweep.settings.get("model", "unknown model"))
+    return MODEL_LABELS.get(name, name)
 
 
 def _nearest_indices(grid: np.ndarray, values) -> list[int]:
@@ -43,7 +54,7 @@ def plot_restoring_force(sweep: SweepResult, thetas=(0.0, 0.5, 0.9), ax=None):
     ax.axvline(0, color="0.6", lw=0.8)
     ax.set_xlabel(r"$y$ = $Z_{com} - Z_{eq}$ [$\mu$m]")
     ax.set_ylabel(r"$\ddot y$ [m/s$^2$]")
-    ax.set_title("Restoring force (Gor'kov model)")
+    ax.set_title(f"Restoring force ({model_label(sweep)})")
     ax.legend(frameon=False)
     return fig
 
@@ -63,7 +74,7 @@ def plot_restoring_torque(sweep: SweepResult, ys=None, ax=None):
     ax.axvline(0, color="0.6", lw=0.8)
     ax.set_xlabel(r"$\theta$ = $(\alpha - \beta)/\pi$")
     ax.set_ylabel(r"$\ddot\theta$ [1/s$^2$]")
-    ax.set_title("Restoring torque on the hinge (Gor'kov model)")
+    ax.set_title(f"Restoring torque on the hinge ({model_label(sweep)})")
     ax.legend(frameon=False, fontsize=8)
     return fig
 

@@ -25,8 +25,8 @@ Every imperfection is off by default, and the camera then renders exactly as wit
 * **H.264.**  :func:`encode_h264` writes an mp4 the way a high-speed camera's software or a phone exports it
   (libx264, 4:2:0, constant rate factor ``crf``), through ``imageio-ffmpeg``; :func:`h264_roundtrip` gives the
   frames a reader decodes from it.
-* **Rest frames and the start.**  ``rest_frames`` frames at rest (y = 0, the run's first theta) precede the
-  drop; ``record_origin = False`` leaves the levitation row out of the file (as a real camera's file).
+* **Rest frames and the start.**  ``rest_frames`` frames at rest (y = 0, the drop's theta) precede the drop, and
+  the free fall with the drive off follows them (:func:`acousim.twin.video.drop_protocol_motion`); ``record_origin = False`` leaves the levitation row out of the file (as a real camera's file).
 """
 from __future__ import annotations
 

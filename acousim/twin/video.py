@@ -37,7 +37,7 @@ from .config import TwinError
 from .imperfections import Imperfections, band_coverage, dust_tracks, illumination, tilted_coverage
 
 __all__ = ["VideoCamera", "dimer_squares", "render_coverage", "render_frames", "record_video", "write_video_tiff",
-           "POLARITIES"]
+           "drop_protocol_motion", "POLARITIES"]
 
 #: Dark cubes on a bright background (shadowgraph) or bright cubes on a dark one.
 POLARITIES = ("dark", "bright")
@@ -369,6 +369,53 @@ def _record_imperfect(t, centres, angles, half, camera: VideoCamera, rng, frames
         if camera.noise > 0:
             img += np.float32(camera.noise * abs(fg - bg)) * rng.standard_normal(img.shape, dtype=np.float32)
         frames[sl] = np.clip(np.rint(img * full), 0, full)
+
+
+def drop_protocol_motion(dynamics, run, rest_frames: int, ring_time_s: float = 0.0,
+                         max_step: float | None = None) -> tuple[NDArray, NDArray, dict]:
+    """The whole field-drop protocol a camera records, frame by frame: ``rest_frames`` frames at rest (y = 0 and the
+    hinge at the run's ``theta_drop``), the free fall with the drive off (the frames that fall inside ``t_off``), then
+    the run's motion from the field's return (its ring-up included).
+
+    The fall's frames come from the twin's own integration of the drop (:func:`acousim.dynamics.switching.field_drop`,
+    with the transducer's ring time): the state ``s`` after the drive stops is the state at the field's return of a
+    drop of duration ``s``, so the fall is continuous in height and velocity with the run's first frame.
+
+    Parameters
+    ----------
+    dynamics : acousim.dynamics.integrator.DimerDynamics
+        The run's (true) dynamics.
+    run : acousim.twin.simulation.SimulatedRun
+        Its ``drop`` (``t_off_s``, ``theta_drop``, ``thetadot_drop``), frame times (0 at the field's return) and
+        exact states.
+    rest_frames : int
+        Frames at rest before the drive stops.
+    ring_time_s : float
+        The transducer's ring time [s] (0: instant switching).
+    max_step : float, optional
+        Longest internal step of the integration [s].
+
+    Returns
+    -------
+    y, theta : ndarray (n,)
+        The true motion of every frame [m], [-].
+    phases : dict
+        ``drop_frame`` (when the drive stops, in frames from the first; fractional), ``field_on_frame`` (the run's
+        first frame) and ``fall_frames`` (frames inside the fall).
+    """
+    from ..dynamics.switching import field_drop
+
+    dt = float(run.t[1] - run.t[0])
+    t_off = float(run.drop["t_off_s"])
+    x_drop = np.array([0.0, 0.0, run.drop["theta_drop"], run.drop["thetadot_drop"]])
+    m = max(0, int(math.ceil(t_off / dt - 1e-9)) - 1)  # frames strictly inside the fall
+    fall = [field_drop(dynamics, x_drop, t_off - j * dt, dt, dt, tau=ring_time_s, max_step=max_step).state_at_field_on
+            for j in range(m, 0, -1)]
+    k = int(rest_frames)
+    rest = np.tile(x_drop, (k, 1))
+    states = np.concatenate([rest, np.reshape(fall, (m, 4)), run.state])
+    phases = {"drop_frame": k + m - t_off / dt, "field_on_frame": k + m, "fall_frames": m, "rest_frames": k}
+    return states[:, 0], states[:, 2], phases
 
 
 def write_video_tiff(path, frames: NDArray, fps: float, camera: VideoCamera, extra: dict | None = None) -> None:

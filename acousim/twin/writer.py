@@ -23,7 +23,7 @@ from ..dynamics.integrator import DimerDynamics
 from ..medium import ParticleMaterial
 from .config import TwinConfig, TwinError
 from .simulation import SimulatedRun, simulate_field_drop_runs
-from .video import VideoCamera, record_video, write_video_tiff
+from .video import VideoCamera, drop_protocol_motion, record_video, write_video_tiff
 
 __all__ = ["simulate_dataset", "meta_dict", "truth_dict", "check_output_dir", "write_run", "write_run_video",
            "video_seed"]
@@ -44,7 +44,8 @@ def video_seed(seed: int, index: int) -> np.random.SeedSequence:
 
 
 def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, side: float, camera: VideoCamera,
-                    seed: np.random.SeedSequence | int) -> list[int]:
+                    seed: np.random.SeedSequence | int, dynamics: DimerDynamics | None = None,
+                    ring_time_s: float = 0.0) -> list[int]:
     """Write one run's video (``stem.tif``, or ``stem.mp4`` with the H.264 codec) and its true ``t, y, theta``
     (``stem_truth.csv``) into ``directory``; returns the indices of the lost frames.  With rest frames
     (:class:`~acousim.twin.imperfections.Imperfections`) the video and the truth begin with the dimer at rest at
@@ -55,7 +56,12 @@ def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, 
     fps = 1.0 / dt
     y, theta = run.state[:, 0], run.state[:, 2]
     k = int(imp.rest_frames)
-    if k:
+    note = ""
+    if k and dynamics is not None:
+        y, theta, ph = drop_protocol_motion(dynamics, run, k, ring_time_s)
+        note = (f"; the drive stops at frame {ph['drop_frame']:.3f} and the field is back at frame "
+                f"{ph['field_on_frame']} (t = {ph['field_on_frame'] * dt:.9f} s)")
+    elif k:
         y = np.concatenate([np.zeros(k), y])
         theta = np.concatenate([np.full(k, theta[0]), theta])
     t = np.arange(y.size) * dt
@@ -72,7 +78,7 @@ def write_run_video(directory: str | os.PathLike, stem: str, run: SimulatedRun, 
             extra["levitation_row_px"] = None
         write_video_tiff(directory / name, frames, fps, camera, extra)
     write_run_csv(directory / f"{stem}_truth.csv", t, y, theta,
-                  ["acousim digital twin: the true motion recorded in " + f"{name} (lost frames included)",
+                  ["acousim digital twin: the true motion recorded in " + f"{name} (lost frames included){note}",
                    "units: t [s], y [m] (centre-of-mass height above the levitation height), theta [-]"],
                   t_decimals=9, y_digits=10, theta_decimals=10)
     return [int(i) for i in lost]
@@ -170,7 +176,8 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
                 if f is None or r.t.size < 2:  # a video needs two frames
                     continue
                 lost[Path(f).stem] = write_run_video(tmp / "video", Path(f).stem, r, config.side, video,
-                                                     video_seed(config.seed, i))
+                                                     video_seed(config.seed, i), dynamics,
+                                                     config.transducer_q / (np.pi * config.frequency))
             truth["video"] = {**video.to_dict(), "fps": float(config.camera.fps), "lost_frames_per_run": lost,
                               "files": [f"video/{stem}.{'mp4' if video.imperfections.codec == 'h264' else 'tif'}"
                                         for stem in lost]}

@@ -21,14 +21,14 @@ CASES = {
     "clean": ({}, "dark", {}, False),
     "light: 30 % gradient, 5 % flicker at 100 Hz": (dict(gradient=0.3, flicker=0.05), "dark", {}, False),
     "static bands of 12 px at top and bottom": (dict(bands_px=12), "dark", {}, False),
-    "a dust speck crossing (200 frames)": (dict(dust=1), "dark", {}, False),
+    "a dust speck crossing (200 frames; masked near the dimer)": (dict(dust=1), "dark", {}, False),
     "transparent crystals, dark outline": (dict(transparent=True), "dark", {}, False),
     "transparent crystals, bright outline": (dict(transparent=True), "bright", {}, False),
-    "hinge line tilted 10 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=10.0), "dark", dict(max_hinge_gap=0.5), False),
+    "hinge line tilted 10 degrees (no option)": (dict(tilt_deg=10.0), "dark", {}, False),
     "H.264 mp4 (crf 23)": (dict(codec="h264"), "dark", {}, False),
     "starts mid-oscillation (no rest frame)": ({}, "dark", {}, True),
-    "hinge line tilted 6 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=6.0), "dark", dict(max_hinge_gap=0.5), False),
-    "hinge line tilted 14 degrees (--max-hinge-gap 0.5)": (dict(tilt_deg=14.0), "dark", dict(max_hinge_gap=0.5), False),
+    "hinge line tilted 6 degrees (no option)": (dict(tilt_deg=6.0), "dark", {}, False),
+    "hinge line tilted 14 degrees (no option)": (dict(tilt_deg=14.0), "dark", {}, False),
 }
 
 

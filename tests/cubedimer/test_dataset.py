@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from cubedimer.dataset import DatasetError, load_dataset, load_run
+from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
 
 
 def test_good_file_with_comments_extra_columns_and_gaps(tmp_path, sine_run):
@@ -222,3 +222,57 @@ def test_meta_plausibility_names_a_micrometre_file_even_alone(tmp_path, write_cs
         load_dataset(tmp_path)
     with pytest.raises(DatasetError, match="um.csv: y amplitude .* quarter wavelength .*micrometres"):
         load_dataset(tmp_path, strict=True)
+
+
+def test_a_run_that_still_holds_its_field_drop_is_cut_at_the_return(tmp_path, write_csv, drop_heights, caplog):
+    rng = np.random.default_rng(4)
+    t, y, on = drop_heights(3000, 2000.0, 59.6, 3.5e-3)
+    th = 0.2 * np.sin(2 * np.pi * 3.1 * t)
+    run = load_run(write_csv(tmp_path / "drop.csv", t, y + 0.2e-6 * rng.standard_normal(t.size), th))
+    first = 3000 - run.t.size
+    assert on - 1 <= first <= on + 5  # the rest and the fall left out (tests/cubedimer/test_drop_phases.py)
+    assert run.n_glitches == 0 and "cut at the field's return" in caplog.text
+
+
+def test_rest_frames_then_a_jump_are_refused_in_one_line(tmp_path, write_csv):
+    t = np.arange(3000) / 2000.0
+    y = np.where(t < 0.03, 0.0, -8e-5 * np.cos(2 * np.pi * 22 * (t - 0.03)))
+    y = y + 0.2e-6 * np.random.default_rng(3).standard_normal(t.size)
+    with pytest.raises(DatasetError, match=r"jump.csv: starts with \d+ frames at rest and then .*cut the file"):
+        load_run(write_csv(tmp_path / "jump.csv", t, y, 0.1 * np.sin(2 * np.pi * 3 * t)))
+
+
+@pytest.mark.parametrize("gap_at, kept", [(1500, 2), (150, 1)])
+def test_a_long_gap_splits_the_run_and_a_short_part_is_dropped(tmp_path, write_csv, gap_at, kept):
+    # 4 s at 1500 fps of a 21.8-Hz run with a 200-frame gap: split into two parts; a part of 150 frames
+    # (0.1 s, 2.2 periods) is below the 5 periods a run needs and is skipped with its reason, the other kept
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y, th = y.copy(), th.copy()
+    y[gap_at:gap_at + 200] = np.nan
+    th[gap_at:gap_at + 200] = np.nan
+    write_csv(tmp_path / "run03.csv", t, y, th)
+    for i in (1, 2):  # the consistency check needs company
+        (t2, y2, th2), = _noisy_runs(1, 30 + i, duration=4.0)
+        write_csv(tmp_path / f"run0{i}.csv", t2, y2, th2)
+    ds = load_dataset(tmp_path)
+    parts = [r for r in ds.runs if r.source == "run03.csv"]
+    assert len(parts) == kept
+    assert parts[-1].frames == (gap_at + 200, t.size) and parts[-1].name.startswith("run03_part")
+    if kept == 1:
+        (entry,) = ds.skipped_files()
+        assert entry["file"] == "run03_part1.csv" and "oscillation periods" in entry["reason"]
+    else:
+        assert parts[0].frames == (0, gap_at) and not ds.skipped
+
+
+def test_a_tracked_set_s_recorded_fill_limit_is_the_loader_s(tmp_path, write_csv):
+    # a 40-frame gap: split at the default limit of 10, filled under the set's recorded 50 (tracking track --max-gap)
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y = y.copy()
+    y[3000:3040] = np.nan
+    write_csv(tmp_path / "run01.csv", t, y, th)
+    assert [r.name for r in load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs] == [
+        "run01_part1.csv", "run01_part2.csv"]
+    (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
+    (run,) = load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs
+    assert run.name == "run01.csv" and run.n_filled == 40

@@ -1,0 +1,317 @@
+"""The phases of a field-drop recording: the dimer at rest, its free fall with the field off, the field back on.
+
+A lab records a field drop from before the drive stops: the dimer levitates at rest (its height there is the
+origin of y), the drive stops and the dimer falls freely (``yddot = -g``: with the field off nothing holds it),
+then the drive is back and the dimer oscillates in the trap.  Only the last phase is the motion the suite's
+models describe; the rest and the fall must be cut off before a fit, and the field's return is the natural
+t = 0.  :func:`find_drop_phases` finds the phases in a series of heights.
+
+Method (``y`` up, or down: a fall is then a rise at ``+g``).
+
+1. **Rest.**  The first frames are at rest when their spread is within the noise (``noise``, else the robust
+   scale of their successive differences) and below 2 % of the run's half range, and the trend and curvature of a
+   parabola through the first :data:`MIN_REST_FRAMES` are below 6 times their scatter about it (a smooth motion has
+   them, noise-free or not, at a turning point too).  The rest ends at the first of
+   three frames in a row that lie more than :data:`DEPARTURE_SIGMA` noise on the same side of the rest level
+   (the fall has then lasted about ``sqrt(12 noise / g)``: one frame at 2000 frames/s and 0.2 um of noise).
+2. **Where the field comes back, roughly.**  The free fall from the rest level, ``y_r -+ (g/2) (t - t_d)^2``
+   (``t_d`` fitted on a grid of a hundredth of a frame), is extended frame by frame until the next three frames lie
+   beyond 5 noise (the rest frames' scatter) on the side the field pushes (a fall decelerated, within :data:`MAX_FALL_S`).
+3. **Both switching times.**  On the frames from before the departure to :data:`AFTER_S` after that rough return
+   the model ``y = y_r - (a/2) (t - t_d)_+^2 + (b/2) (t - t_on)_+^2 + (c/6) (t - t_on)_+^3``
+   (continuous in height and velocity; the field-on motion a cubic over those few milliseconds, to 0.1 um of a
+   230 um oscillation at 22 Hz) gives the switching times by least squares with the fall at g (with the field off
+   nothing but gravity acts; a free ``a`` would let the field-on cubic take up a short fall): a grid of a
+   twentieth of a frame, refined (Nelder-Mead), the other parameters linear.  At those times every parameter is
+   fitted freely, ``a`` included (a free fall: ``g`` within :data:`FALL_TOLERANCE` and the residuals' RMS within 3
+   noise and 1 % of the fall's depth); ``a``'s error comes from the covariance of all six (the Jacobian in the switching
+   times by central differences), ``t_on``'s from the half width of the grid's times whose residual sum lies within
+   one noise variance of the least.  A fall whose fitted acceleration is not ``g`` within :data:`FALL_TOLERANCE` (relative) is not a
+   free fall (:attr:`DropPhases.free_fall` False).
+
+A series that does not start at rest has no drop phases (None): it is the field-on motion already.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import logging
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import DatasetError
+
+__all__ = ["DropPhases", "find_drop_phases", "starts_at_rest", "field_on_start", "STANDARD_GRAVITY", "DEPARTURE_SIGMA", "MAX_FALL_S",
+           "AFTER_S", "FALL_TOLERANCE", "MIN_REST_FRAMES"]
+
+#: Standard gravity [m/s^2] (docs/conventions.md).
+STANDARD_GRAVITY = 9.80665
+#: Noise standard deviations beyond the rest level at which the fall has begun.
+DEPARTURE_SIGMA = 6.0
+#: Longest field-off phase searched [s] (the drops of the source paper last 2-5 ms).
+MAX_FALL_S = 0.03
+#: Field-on time fitted after the rough return [s]: the motion is a cubic to 0.01 px over it at 22 Hz.
+AFTER_S = 0.002
+#: Relative tolerance of the fall's fitted acceleration about g for a free fall.
+FALL_TOLERANCE = 0.25
+#: Frames at rest a recording must begin with for its drop to be found.
+MIN_REST_FRAMES = 16
+logger = logging.getLogger("cubedimer.dataset")
+_GRID = 0.05  # grid step of t_d and t_on [frames]
+
+
+@dataclass(frozen=True)
+class DropPhases:
+    """The phases of one field-drop recording (frame indices from 0 at the first frame; fractional where a
+    switching time lies between frames).
+
+    Attributes
+    ----------
+    rest_frames : int
+        Frames ``[0, rest_frames)`` show the dimer at rest.
+    drop_frame : float
+        When the drive stops [frames].
+    field_on_frame, field_on_frame_error : float
+        When the field is back [frames], and its standard error.
+    first_field_on_frame : int
+        The run's first frame: after the field's return by twice its error, and not before the first of the frames
+        that leave the free fall (step 2).
+    fall_acceleration, fall_acceleration_error : float
+        The fitted acceleration of the fall [m/s^2] (negative: down in the series' sense of y) and its standard
+        error.
+    fit_scatter : float
+        The RMS of the fit's residuals over its frames [the series' unit].
+    rest_level : float
+        The height at rest [the series' unit].
+    noise : float
+        The noise of one frame used [the series' unit].
+    frame_interval : float
+        [s].
+    """
+
+    rest_frames: int
+    drop_frame: float
+    field_on_frame: float
+    field_on_frame_error: float
+    first_field_on_frame: int
+    fall_acceleration: float
+    fall_acceleration_error: float
+    rest_level: float
+    noise: float
+    frame_interval: float
+    fit_scatter: float = 0.0
+
+    @property
+    def free_fall(self) -> bool:
+        """The fall's acceleration is g (either sign) within :data:`FALL_TOLERANCE` and the model fits the frames to
+        within 3 noise RMS and 1 % of the fall's depth (a jump from rest does not)."""
+        depth = 0.5 * STANDARD_GRAVITY * self.field_off_s ** 2  # the fall's depth: 1 % of it for the model's error
+        return (abs(abs(self.fall_acceleration) / STANDARD_GRAVITY - 1.0) <= FALL_TOLERANCE
+                and self.fit_scatter <= 3.0 * self.noise + 0.01 * depth)
+
+    @property
+    def field_off_s(self) -> float:
+        """How long the field was off [s]."""
+        return (self.field_on_frame - self.drop_frame) * self.frame_interval
+
+    def to_dict(self) -> dict:
+        """JSON-ready (frames, seconds and SI units; times from the first frame)."""
+        dt = self.frame_interval
+        return {"rest_frames": [0, int(self.rest_frames)],
+                "field_off_frames": [int(math.floor(self.drop_frame)) + 1, int(self.first_field_on_frame)],
+                "field_on_first_frame": int(self.first_field_on_frame),
+                "drop_time_s": self.drop_frame * dt, "field_on_time_s": self.field_on_frame * dt,
+                "field_on_time_error_s": self.field_on_frame_error * dt, "field_off_s": self.field_off_s,
+                "fall_acceleration_m_s2": self.fall_acceleration,
+                "fall_acceleration_error_m_s2": self.fall_acceleration_error, "free_fall": self.free_fall,
+                "method": "rest: the first frames within the noise of their level; field off: the free fall "
+                          "y_r - (a/2)(t - t_drop)^2; field on: continuous in height and velocity, a cubic over "
+                          "3 ms; both times fitted to a twentieth of a frame (cubedimer.drop_phases)"}
+
+
+def _robust_noise(y: NDArray) -> float:
+    d = np.diff(y[np.isfinite(y)])
+    return 1.4826 * float(np.median(np.abs(d))) / math.sqrt(2.0) if d.size >= 4 else 0.0
+
+
+def starts_at_rest(y: ArrayLike, noise: float | None = None) -> tuple[int, float, float] | None:
+    """``(departure frame, rest level, noise)`` of a series that begins at rest (step 1 of the module docstring),
+    or None.  The departure frame is the first of the three frames in a row beyond the rest."""
+    y = np.asarray(y, float)
+    fin = np.flatnonzero(np.isfinite(y))
+    if fin.size < 4 * MIN_REST_FRAMES:
+        return None
+    head_at = fin[:MIN_REST_FRAMES]
+    head = y[head_at]
+    sigma = max(float(noise or 0.0), _robust_noise(y[: fin[2 * MIN_REST_FRAMES]]))
+    half_range = 0.5 * float(np.subtract(*np.percentile(y[fin], [99, 1])))
+    x = (head_at - head_at.mean()) / max(float(np.ptp(head_at)), 1.0)
+    curve, slope, icpt = np.polyfit(x, head, 2)
+    resid = float(np.std(head - np.polyval([curve, slope, icpt], x)))
+    # at rest: no trend or curvature beyond the noise (a smooth motion has them, even at a turning point or
+    # noise-free), a spread within the noise
+    trend = max(abs(slope), abs(curve)) > 6.0 * max(resid, float(noise or 0.0))
+    if not half_range > 0 or trend or np.std(head) > max(2.0 * sigma, 1e-300) or np.std(head) > 0.02 * half_range:
+        return None
+    level = float(np.median(head))
+    for _ in range(2):
+        out = np.abs(np.nan_to_num(y - level, nan=0.0)) > DEPARTURE_SIGMA * max(sigma, 1e-300)
+        side = np.sign(np.nan_to_num(y - level))
+        run = out[:-2] & out[1:-1] & out[2:] & (side[:-2] == side[1:-1]) & (side[1:-1] == side[2:])
+        if not run.any():
+            return None
+        k = int(np.argmax(run))
+        if k < MIN_REST_FRAMES:
+            return None
+        rest = y[:k][np.isfinite(y[:k])]
+        level = float(np.median(rest))
+        # the rest frames' scatter is the noise; below 1e-6 of the run's half range it is round-off (noise-free data)
+        sigma = max(float(noise or 0.0), float(np.std(rest)), 1e-6 * half_range)
+    return k, level, sigma
+
+
+def _fall_only_fit(y: NDArray, k: int, level: float, g: float, e: int) -> tuple[float, NDArray]:
+    """t_d [frames] of the free fall ``level + g/2 (t - t_d)^2`` (g signed) best fitting frames ``k - 1 .. e``."""
+    idx = np.arange(max(0, k - 1), e + 1)
+    idx = idx[np.isfinite(y[idx])]
+    td = np.arange(k - 3.0, k + 0.005, 0.01)
+    model = level + 0.5 * g * np.maximum(idx[None, :] - td[:, None], 0.0) ** 2
+    best = int(np.argmin(np.sum((y[idx][None, :] - model) ** 2, axis=1)))
+    return float(td[best]), idx
+
+
+def _rough_return(y: NDArray, k: int, level: float, g_frames: float, sigma: float, max_frames: int) -> int | None:
+    """The last frame of the free fall, roughly (step 2), or None when the fall never ends within the search."""
+    n = y.size
+    for e in range(k + 1, min(n - 4, k + max_frames)):
+        td, _ = _fall_only_fit(y, k, level, g_frames, e)
+        nxt = np.arange(e + 1, e + 4)
+        pred = level + 0.5 * g_frames * (nxt - td) ** 2
+        push = -np.sign(g_frames) * (y[nxt] - pred)  # the field decelerates the fall
+        if np.all(np.isfinite(push)) and np.all(push > 5.0 * sigma):
+            return e
+    return None
+
+
+def _columns(t: NDArray, td: float, ton: float) -> NDArray:
+    """The model's columns at the switching times ``td``, ``ton`` [frames]: y_r, a (the fall), b, c (field on)."""
+    s = np.maximum(t - td, 0.0)
+    u = np.maximum(t - ton, 0.0)
+    s, u = np.broadcast_arrays(s, u)
+    return np.stack([np.ones_like(s), -0.5 * s ** 2, 0.5 * u ** 2, u ** 3 / 6.0], axis=-1)
+
+
+def _fixed_fall_rss(y: NDArray, t: NDArray, td: NDArray, ton: NDArray, g_frames: float) -> NDArray:
+    """Residual sums of the model with the fall at ``g_frames`` (signed, per frame squared), over pairs of times."""
+    td, ton = np.atleast_1d(td), np.atleast_1d(ton)
+    X = _columns(t[None, :], td[:, None], ton[:, None])
+    rhs = y[None, :] - 0.5 * g_frames * np.maximum(t[None, :] - td[:, None], 0.0) ** 2
+    X = X[..., [0, 2, 3]]
+    gram = np.einsum("prk,prl->pkl", X, X) + 1e-12 * np.eye(3)
+    beta = np.linalg.solve(gram, np.einsum("prk,pr->pk", X, rhs)[..., None])[..., 0]
+    return np.sum((rhs - np.einsum("prk,pk->pr", X, beta)) ** 2, axis=1)
+
+
+def _switching_fit(y: NDArray, k: int, e: int, after: int, g_frames: float) -> tuple[float, float, NDArray, NDArray]:
+    """Step 3: the switching times with the fall at g (a grid, then refined), then every parameter free at them:
+    returns (t_d, t_on, the linear parameters, the covariance of (y_r, a, b, c, t_d, t_on), t_on's variance from the residual sum's profile)."""
+    from scipy.optimize import minimize
+
+    rows = np.arange(max(0, k - 20), min(y.size, e + 1 + after))
+    rows = rows[np.isfinite(y[rows])]
+    t, yr = rows.astype(float), y[rows]
+    pd, po = np.meshgrid(np.arange(k - 4.0, k + _GRID / 2, _GRID), np.arange(e - 2.0, e + 1.5 + _GRID / 2, _GRID),
+                         indexing="ij")
+    keep = po > pd + 0.5
+    pd, po = pd[keep], po[keep]
+    rss = _fixed_fall_rss(yr, t, pd, po, g_frames)
+    best = int(np.argmin(rss))
+    res = minimize(lambda p: float(_fixed_fall_rss(yr, t, p[0], p[1], g_frames)[0]), [pd[best], po[best]],
+                   method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-30, "maxiter": 400})
+    inside = pd.min() <= res.x[0] <= pd.max() and po.min() <= res.x[1] <= po.max() and res.x[1] > res.x[0]
+    td, ton = (float(v) for v in res.x) if inside and res.fun <= rss[best] else (float(pd[best]), float(po[best]))
+    X = _columns(t, td, ton)
+    beta, *_ = np.linalg.lstsq(X, yr, rcond=None)
+    var = float(np.sum((yr - X @ beta) ** 2)) / max(rows.size - 6, 1)
+    # t_on's error: the half width of the times whose residual sum lies within one noise variance of the least
+    near = po[rss <= min(float(res.fun) if inside else np.inf, float(rss[best])) + var]
+    err_on = max(0.5 * float(near.max() - near.min()), abs(ton - po[best]), _GRID) if near.size else _GRID
+    h = 1e-3  # a's error with the switching times free: the Jacobian in them by central differences [frames]
+    jac = [(_columns(t, td + h, ton) @ beta - _columns(t, td - h, ton) @ beta) / (2 * h),
+           (_columns(t, td, ton + h) @ beta - _columns(t, td, ton - h) @ beta) / (2 * h)]
+    J = np.column_stack([X, *jac])
+    cov = var * np.linalg.pinv(J.T @ J)
+    cov[5, 5] = err_on ** 2
+    cov[0, 0] = var  # the residuals' variance in place of y_r's (not used): the fit's scatter
+    return td, ton, beta, cov
+
+
+def find_drop_phases(t: ArrayLike, y: ArrayLike, noise: float | None = None,
+                     g: float = STANDARD_GRAVITY) -> DropPhases | None:
+    """The rest, the fall and the field's return in a recording's heights (module docstring).
+
+    Parameters
+    ----------
+    t : array_like (n,)
+        Frame times [s], uniform.
+    y : array_like (n,)
+        Heights [m] (NaN where a frame was not measured), up or down.
+    noise : float, optional
+        The noise of one frame [m]; default: the robust scale of the rest frames' successive differences.
+    g : float
+        The acceleration of free fall [m/s^2].
+
+    Returns
+    -------
+    DropPhases or None
+        None when the series does not begin at rest, or its departure from rest does not end within
+        :data:`MAX_FALL_S` (a series at rest throughout, or one that never comes back under the field).
+    """
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    if t.size < 4 * MIN_REST_FRAMES:
+        return None
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    rest = starts_at_rest(y, noise)
+    if rest is None:
+        return None
+    k, level, sigma = rest
+    g_frames = float(np.sign(y[k] - level)) * g * dt * dt  # the signed free fall per frame squared
+    e = _rough_return(y, k, level, g_frames, sigma, int(math.ceil(MAX_FALL_S / dt)))
+    if e is None:
+        return None
+    after = max(4, int(round(AFTER_S / dt)))
+    td, ton, beta, cov = _switching_fit(y, k, e, after, g_frames)
+    err_on = math.sqrt(float(cov[5, 5]))
+    a_err = math.sqrt(max(float(cov[1, 1]), 0.0)) / (dt * dt)
+    first = max(int(math.ceil(ton + 2.0 * err_on)), e + 1)  # never before the frames that leave the fall
+    return DropPhases(rest_frames=int(math.floor(td)) + 1 if td >= 0 else 0, drop_frame=td, field_on_frame=ton,
+                      field_on_frame_error=err_on, first_field_on_frame=min(first, y.size - 1),
+                      fall_acceleration=-float(beta[1]) / (dt * dt), fall_acceleration_error=a_err,
+                      rest_level=float(beta[0]), noise=sigma, fit_scatter=math.sqrt(float(cov[0, 0])),
+                      frame_interval=dt)
+
+
+def field_on_start(path, t: NDArray, y: NDArray) -> int:
+    """The first frame of the field-on motion of a run that still holds its field drop (at rest, then the free fall
+    with the field off; :mod:`cubedimer.drop_phases`): the run is cut there, with a warning; 0 for a run that does not
+    start at rest.  A run that starts at rest and then moves without a free fall is refused in one line."""
+    rest = starts_at_rest(y)
+    if rest is None:
+        return 0
+    ph = find_drop_phases(t, y)
+    if ph is None or not ph.free_fall:
+        how = ("does not come back under a field within {:g} ms".format(1e3 * MAX_FALL_S) if ph is None else
+               f"moves, but not in a free fall (acceleration {ph.fall_acceleration:.3g} m/s^2 against g = 9.81, "
+               f"residual RMS {ph.fit_scatter:.2g} m against a noise of {ph.noise:.2g} m)")
+        raise DatasetError(f"{path}: starts with {rest[0]} frames at rest and then {how}: not the field-on motion "
+                           "of a field drop; cut the file to the motion with the field on (python -m tracking track "
+                           "writes it so; docs/formats.md)")
+    k = ph.first_field_on_frame
+    logger.warning("%s: the run still holds its field drop (at rest for %d frames, the field off for %.2f ms, a fall "
+                   "of %.3g m/s^2): cut at the field's return, t = %.6g s; the first %d frames are left out", path.name,
+                   ph.rest_frames, 1e3 * ph.field_off_s, ph.fall_acceleration, t[0] + ph.field_on_frame *
+                   ph.frame_interval, k)
+    return k
