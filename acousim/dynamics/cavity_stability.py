@@ -26,6 +26,12 @@ For motion slow against the ring time, ``s = s_qs(Delta) - T(Delta) s_qs'(Delta)
 ``s_qs = (Gamma^2 + Delta_0^2) / (Gamma^2 + Delta^2)`` and the lag ``T = 2 Gamma / (Gamma^2 + Delta^2)``; with
 ``dDelta/dt = -(w / E_mode) (F_Z,ac ydot + Q_theta thetadot)`` this is a force linear in the velocities whose
 coefficients, expanded about rest, are those of the suite's term names (:func:`lag_couplings`).
+
+At a finite amplitude Y of y the same energy balance gives the describing-function gain (:func:`cycle_gain`): with
+y held on ``Y cos(w_y t)`` (theta at rest) the mode is integrated to its periodic response and the work of the
+modulated force over a cycle, ``W = int (|a|^2 - 1) F_Z,ac(y) ydot dt``, sets ``sigma(Y) = W / (2 E T) - gamma_y / 2``
+(E = M w_y^2 Y^2 / 2, T = 2 pi / w_y).  It tends to the first-order growth rate as Y -> 0; a limit cycle of y sits
+where sigma(Y) = 0 with d sigma / dY < 0.
 """
 from __future__ import annotations
 
@@ -39,7 +45,7 @@ from cubedimer.terms import term_name
 
 from .resonator import CoupledCavity
 
-__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS"]
+__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "cycle_gain"]
 
 
 @dataclass(frozen=True)
@@ -184,3 +190,42 @@ def lag_couplings(cavity: CoupledCavity, y_scale: float = 50e-6, theta_scale: fl
         coef = np.concatenate([fit(gy), fit(gt)])
         out[eq] = {name: float(c) for name, c in zip(LAG_TERMS, coef)}
     return out
+
+
+def cycle_gain(cavity: CoupledCavity, amplitudes, gamma_y: float = 0.0, omega_y: float | None = None,
+               cycles: int | None = None, steps_per_cycle: int = 2000) -> NDArray[np.float64]:
+    """sigma(Y) [1/s] of the module docstring for each amplitude Y [m] (vectorised RK4 of the mode over ``cycles``
+    periods, the last one integrated; by default enough periods for the mode's transient to decay to exp(-12))."""
+    fm = cavity.dynamics.force_model
+    w = 2 * math.pi * fm.linear_frequencies()[0] if omega_y is None else float(omega_y)
+    period = 2 * math.pi / w
+    ga = cavity.decay_rate
+    if cycles is None:
+        cycles = 1 + int(math.ceil(12.0 / (ga * period)))
+    amp = np.atleast_1d(np.asarray(amplitudes, float))
+    h = period / steps_per_cycle
+    a = np.full(amp.shape, cavity.mode.steady_amplitude(), complex)
+    drive = ga * cavity.mode.drive_amplitude()
+
+    def rate(t, a):
+        y = amp * np.cos(w * t)
+        return -(ga + 1j * cavity.detuning_rad_s(0.0, y)) * a + drive
+
+    def power(t, a):
+        y, ydot = amp * np.cos(w * t), -amp * w * np.sin(w * t)
+        f_z = fm.generalized_forces(0.0, y)[0] + fm.mass * fm.gravity
+        return (np.abs(a) ** 2 - 1.0) * f_z * ydot
+
+    work = np.zeros(amp.shape)
+    t = 0.0
+    for step in range(cycles * steps_per_cycle):
+        k1 = rate(t, a)
+        k2 = rate(t + h / 2, a + h / 2 * k1)
+        k3 = rate(t + h / 2, a + h / 2 * k2)
+        k4 = rate(t + h, a + h * k3)
+        a_next = a + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if step >= (cycles - 1) * steps_per_cycle:  # trapezoid over the last cycle (periodic integrand: spectral)
+            work += 0.5 * h * (power(t, a) + power(t + h, a_next))
+        a, t = a_next, t + h
+    energy = 0.5 * fm.mass * w * w * amp * amp
+    return work / (2.0 * energy * period) - 0.5 * gamma_y
