@@ -9,8 +9,10 @@ factor Q and cross-section A_cav, and for each detuning x (half-widths), a cell 
   y = ``small_amplitude`` above rest: the slope of the log of y's successive maxima (parabolic peaks) after the mode's
   transient (``settle_time``), over ``growth_time`` or until y reaches ten times its start;
 * the fate of a larger start (y = ``start_amplitude``) after ``duration``: ``decayed`` (below a tenth of the start),
-  ``limit cycle`` (the amplitude of the last ``window`` seconds within 2 % of the window before), ``growing`` or
-  ``decaying`` (neither yet), ``escaped`` (left the trap) or ``folded``, with y's and theta's amplitudes at the end.
+  ``limit cycle`` (the amplitude of the last ``window`` seconds within 2 % of the window before, where the linear
+  growth rate would have changed it by more than 10 %: a saturation, :func:`fate`), ``near threshold`` (within 2 %,
+  but so would the linear rate), ``growing`` or ``decaying`` (neither yet), ``escaped`` (left the trap) or
+  ``folded``, with y's and theta's amplitudes at the end.
 
 The hinge starts at the force model's static equilibrium (theta = 0 for the Gor'kov dimer, which keeps it there by
 symmetry).  :func:`run_resonator_map` runs the cells (dimer x Q x A_cav, every detuning in one task) through
@@ -32,7 +34,7 @@ from cubedimer.executor import ExecutorConfig
 
 from .field_drops import AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
 
-__all__ = ["ResonatorMapConfig", "map_dynamics", "growth_from_peaks", "detuning_row", "run_resonator_map",
+__all__ = ["ResonatorMapConfig", "map_dynamics", "growth_from_peaks", "fate", "detuning_row", "run_resonator_map",
            "MAP_COLUMNS", "DEFAULT_DIMERS"]
 
 #: Default dimers: the Gor'kov default (500 um at 3 kPa) and two full-wave family dimers (side:gap ratio:pressure).
@@ -129,6 +131,14 @@ def _envelope(y: np.ndarray, n: int) -> np.ndarray:
     return np.max(np.abs(blocks - blocks.mean(axis=1, keepdims=True)), axis=1)
 
 
+def fate(outcome: str, growth_exact: float, window: float) -> str:
+    """The outcome of a map row: a ``limit cycle`` (amplitude within 2 % over ``window`` [s]) whose linear growth rate
+    would change the amplitude by less than 10 % over the window is ``near threshold`` (no saturation shown)."""
+    if outcome == "limit cycle" and abs(growth_exact) * window < 0.1:
+        return "near threshold"
+    return outcome
+
+
 def detuning_row(dyn, x_rest, quality_factor: float, area: float, detuning: float, config: ResonatorMapConfig) -> dict:
     """One detuning of a cell (module docstring)."""
     import time
@@ -170,7 +180,7 @@ def detuning_row(dyn, x_rest, quality_factor: float, area: float, detuning: floa
             "f_y_hz": lin.omega_y / (2 * math.pi), "gamma_y": gamma_y, "kappa": lin.kappa,
             "growth_exact": lin.growth_rate(), "growth_first_order": lin.first_order_growth_rate(),
             "growth_simulated": growth, "static_stiffness_ratio": lin.static_stiffness() / lin.omega_y**2,
-            "band_low": band[0], "band_high": band[1], "outcome": outcome,
+            "band_low": band[0], "band_high": band[1], "outcome": fate(outcome, lin.growth_rate(), config.window),
             "y_amplitude_m": float(0.5 * np.ptp(tail[:, 0])), "theta_amplitude": float(0.5 * np.ptp(tail[:, 2])),
             "seconds": time.perf_counter() - t0}
 
@@ -204,7 +214,7 @@ def run_resonator_map(config: ResonatorMapConfig, out: str | os.PathLike, execut
     write_json(pinned, settings)
     cells = run_resumable_cells(out, config.cells(), lambda c: out / "cells" / f"d{c[0]}_q{c[1]}_a{c[2]}.json",
                                 _cell_task, lambda c: (config, c), executor, progress, "resonator map")
-    rows = [r for c in cells for r in c["rows"]]
+    rows = [dict(r, outcome=fate(r["outcome"], r["growth_exact"], config.window)) for c in cells for r in c["rows"]]
     atomic_write_text(out / "resonator_map.csv", cells_csv_text(MAP_COLUMNS, rows))
     result = {"settings": settings, "rows": rows, "units": "SI; detuning in half-widths f/(2Q), growth rates in 1/s"}
     write_json(out / "resonator_map.json", result)
@@ -214,6 +224,7 @@ def run_resonator_map(config: ResonatorMapConfig, out: str | os.PathLike, execut
 
 
 _OUTCOME_MARKERS = {"decayed": ("o", "tab:blue"), "decaying": ("o", "tab:cyan"), "limit cycle": ("*", "tab:red"),
+                    "near threshold": ("D", "tab:green"),
                     "growing": ("^", "tab:orange"), "escaped": ("x", "black"), "folded": ("s", "tab:purple")}
 
 
@@ -238,7 +249,7 @@ def write_resonator_map_figure(config: ResonatorMapConfig, rows: list[dict], pat
                 ax.plot(x, [r["growth_exact"] for r in mine], color=col, lw=1.2)
                 for r in mine:
                     m, c = _OUTCOME_MARKERS.get(r["outcome"], ("d", "grey"))
-                    if math.isfinite(r["growth_simulated"]):
+                    if r["growth_simulated"] is not None and math.isfinite(r["growth_simulated"]):  # NaN is null in JSON
                         ax.plot(r["detuning"], r["growth_simulated"], m, color=c, ms=5, mec=col)
             ax.axhline(0.0, color="grey", lw=0.6)
             ax.set_title(f"{spec}, Q = {q:g}", fontsize=8)

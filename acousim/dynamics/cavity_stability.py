@@ -19,8 +19,9 @@ in the coupling (lambda = i w_y + delta):
 (:meth:`LinearCavityCoupling.first_order_growth_rate`).  kappa < 0 below the node, so the drive above the resonance
 (x < 0) feeds y and below it (x > 0) damps it; y oscillates by itself where sigma > 0 (the threshold,
 :meth:`LinearCavityCoupling.unstable_detunings`).  The quasi-static part adds the stiffness
-``-2 g_ac kappa Delta_0 / (Gamma^2 + Delta_0^2)`` to w_y^2 (:meth:`LinearCavityCoupling.static_stiffness`): the
-trap is lost when the sum is <= 0.
+``2 g_ac kappa Delta_0 / (Gamma^2 + Delta_0^2)`` to w_y^2 (:meth:`LinearCavityCoupling.static_stiffness`; > 0, a
+stiffer trap, for x < 0): the trap is lost when the sum is <= 0, the quartic's constant term, which then has a
+real positive root.
 
 For motion slow against the ring time, ``s = s_qs(Delta) - T(Delta) s_qs'(Delta) dDelta/dt`` with
 ``s_qs = (Gamma^2 + Delta_0^2) / (Gamma^2 + Delta^2)`` and the lag ``T = 2 Gamma / (Gamma^2 + Delta^2)``; with
@@ -118,7 +119,7 @@ class LinearCavityCoupling:
     def static_stiffness(self) -> float:
         """w_y^2 plus the quasi-static stiffness of the cavity's response [1/s^2] (<= 0: the trap is lost)."""
         ga, d = self.decay_rate, self.detuning
-        return self.omega_y**2 - 2.0 * self.force_per_mass * self.kappa * d / (ga**2 + d**2)
+        return self.omega_y**2 + 2.0 * self.force_per_mass * self.kappa * d / (ga**2 + d**2)
 
     def unstable_detunings(self) -> tuple[float, float] | None:
         """The detunings x = Delta_0 / Gamma [half-widths] between which the first-order sigma > 0, or None.

@@ -4,7 +4,7 @@ import json
 import pytest
 
 from acousim.atlas.field_drops import AtlasError
-from acousim.atlas.resonator_map import ResonatorMapConfig, run_resonator_map
+from acousim.atlas.resonator_map import ResonatorMapConfig, fate, run_resonator_map
 from cubedimer.executor import ExecutorConfig
 
 SMALL = dict(dimers=("gorkov:500e-6:3000",), quality_factors=(250.0,), areas_m2=(1e-4,), detunings=(-1.5, 2.0),
@@ -28,8 +28,16 @@ def test_a_small_map_agrees_with_the_linear_theory_and_resumes(tmp_path):
     mark = json.loads(cell.read_text())
     mark["rows"][0]["seconds"] = -1.0  # a rerun keeps what is written
     cell.write_text(json.dumps(mark))
-    again = run_resonator_map(config, tmp_path / "m", ExecutorConfig(workers=1), progress=False, figures=False)
+    mark["rows"][1]["growth_simulated"] = None  # a NaN rate is null in JSON: drawn without a marker
+    cell.write_text(json.dumps(mark))
+    again = run_resonator_map(config, tmp_path / "m", ExecutorConfig(workers=1), progress=False, figures=True)
     assert again["rows"][0]["seconds"] == -1.0
+
+
+def test_a_constant_amplitude_counts_as_a_limit_cycle_only_against_the_linear_rate():
+    assert fate("limit cycle", 0.5, 5.0) == "limit cycle"
+    assert fate("limit cycle", -0.005, 5.0) == "near threshold"
+    assert fate("escaped", 0.0, 5.0) == "escaped"
 
 
 @pytest.mark.parametrize("kwargs, fragment", [

@@ -82,7 +82,7 @@ def test_preset_and_override(tmp_path):
         (["--detuning", "1", "--cavity-area", "-1e-4"], "--cavity-area: the cavity area must lie in"),
         (["--cavity-area", "1e-4"], "--cavity-area needs the resonator: give --detuning"),
         (["--detuning", "1", "--transducer-q", "0"], "needs the cavity's quality factor: give --transducer-q > 0"),
-        (["--detuning", "-1", "--cavity-area", "1e-5"], "--detuning -1: the cavity's response removes the trap's"),
+        (["--detuning", "1", "--cavity-area", "1e-5"], "--detuning 1: the cavity's response removes the trap's"),
     ],
 )
 def test_user_errors_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, extra, fragment):

@@ -125,6 +125,25 @@ def test_the_unstable_band_brackets_the_threshold(gorkov):
         assert inside.growth_rate() > 0 > outside.growth_rate()
 
 
+@pytest.mark.parametrize("detuning", [-1.0, 1.0])
+def test_the_static_stiffness_is_the_quasi_static_forces(gorkov, detuning):
+    """The quasi-static stiffness is -d/dy of (s_qs(Delta(y)) F_Z,ac(y) - M g) / M with s_qs = (Gamma^2 + Delta_0^2) /
+    (Gamma^2 + Delta(y)^2), by central differences (h = 1e-7 m: truncation ~(k h)^2 ~ 1e-8); the drive above the
+    resonance (x < 0) stiffens the trap, below it softens it; and it is the quartic's constant term over the mode's."""
+    cav = CoupledCavity(gorkov, CavityMode(250.0, detuning, 5e-5), AIR)
+    lin = LinearCavityCoupling.from_cavity(cav)
+    fm, ga, d0 = gorkov.force_model, cav.decay_rate, cav.decay_rate * detuning
+
+    def accel(y):
+        s = (ga**2 + d0**2) / (ga**2 + cav.detuning_rad_s(0.0, y) ** 2)
+        return (s * (fm.generalized_forces(0.0, y)[0] + fm.mass * fm.gravity) - fm.mass * fm.gravity) / fm.mass
+
+    assert lin.static_stiffness() == pytest.approx(-(accel(1e-7) - accel(-1e-7)) / 2e-7, rel=1e-6)
+    assert np.sign(lin.static_stiffness() - lin.omega_y**2) == -np.sign(detuning)
+    poly = lin.characteristic_polynomial()
+    assert poly[-1] / (ga**2 + d0**2) == pytest.approx(lin.static_stiffness(), rel=1e-12)
+
+
 def test_q_to_zero_is_the_instantaneous_field(gorkov):
     """With Q -> 0 the mode follows the dimer at once and its detuning swing 2Q d eps vanishes: the motion tends to
     that of the instantaneous field, the difference shrinking in proportion to Q."""
