@@ -169,14 +169,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--transducer-q", type=float, default=None, metavar="Q",
                    help="the transducer's quality factor: the field rings down when the drive stops and up when it "
                    "is back, with tau = Q / (pi f), and the acoustic forces follow p(t)^2 / p0^2 (docs/twin.md); "
-                   "0: instant switching (default 0 or the preset's; 250 is the value docs/twin.md states)")
+                   "0: instant switching (default 0, 250 with --detuning, or the preset's; 250 is the value docs/twin.md "
+                   "states); with --detuning the cavity mode's Q")
     r = p.add_argument_group("the levitator as a resonator (docs/twin.md)",
                              "The cavity mode's amplitude as a state of every run, detuned by the dimer's position; "
                              "off unless --detuning is given (every output then as without it).")
     r.add_argument("--detuning", type=float, default=None, metavar="HALF_WIDTHS",
                    help="switch the resonator on: the cavity's resonance minus the drive's frequency with the dimer at "
                    "rest, in half-widths f / (2Q) (> 0: drive below the resonance, damps y; < 0: above it, feeds y); "
-                   "within +-20; the Q is --transducer-q (default 250 with --detuning)")
+                   "within +-20; the Q is --transducer-q (default 250 with --detuning); default: off, or the preset's "
+                   "(window-resonator: -2.2)")
     r.add_argument("--cavity-area", type=float, default=None, metavar="M2",
                    help="the cavity's effective cross-section [m^2] (the transducer's area; mode volume = area x "
                    "lambda/2), in [1e-5, 1e-2] (default 3.14e-4: a 20 mm transducer, or the preset's)")
