@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 from cubedimer.rk4 import _box_check
 
 from .equations import _chebval
+from .integrator import _STATUS, DEFAULT_MAX_STEP, Trajectory
 from .switching import FieldDrop, ring_time, switching_acceleration
 from ..force_model import ForceModel
 from ..medium import Medium
@@ -316,7 +317,7 @@ class ModeTrajectory:
 
 
 def integrate_coupled(cavity: CoupledCavity, x0: ArrayLike, a0: complex, duration: float, dt_out: float,
-                      drive_on: bool = True, max_step: float = 5e-5) -> ModeTrajectory:
+                      drive_on: bool = True, max_step: float = DEFAULT_MAX_STEP) -> ModeTrajectory:
     """Integrate the dimer and its cavity mode from ``x0`` = [y, ydot, theta, thetadot] and ``a0`` = A / p0.
 
     Parameters
@@ -337,8 +338,6 @@ def integrate_coupled(cavity: CoupledCavity, x0: ArrayLike, a0: complex, duratio
         Stops, as :meth:`acousim.dynamics.integrator.DimerDynamics.integrate`, when the dimer leaves the trap (the
         field-on box while the drive is on), folds or the state stops being finite.
     """
-    from .integrator import _STATUS
-
     dyn = cavity.dynamics
     n_out, substeps = dyn._steps(duration, dt_out, cavity.max_step(max_step))
     x = np.empty(6)
@@ -355,7 +354,7 @@ def integrate_coupled(cavity: CoupledCavity, x0: ArrayLike, a0: complex, duratio
 
 
 def coupled_field_drop(cavity: CoupledCavity, x_drop: ArrayLike, t_off: float, duration: float, dt_out: float,
-                       max_step: float = 5e-5) -> FieldDrop:
+                       max_step: float = DEFAULT_MAX_STEP) -> FieldDrop:
     """The field-drop protocol of :func:`acousim.dynamics.switching.field_drop` with the cavity mode as a state.
 
     The mode starts at its steady amplitude with the dimer at ``x_drop``'s rest, rings down with the drive off for
@@ -363,8 +362,6 @@ def coupled_field_drop(cavity: CoupledCavity, x_drop: ArrayLike, t_off: float, d
     all along.  With an uncoupled cavity (``area = inf``) and zero detuning this is the closed-form ring of
     :func:`~acousim.dynamics.switching.field_drop` with tau = Q / (pi f), integrated instead of evaluated.
     """
-    from .integrator import Trajectory
-
     x, a = np.asarray(x_drop, float).reshape(4), cavity.mode.steady_amplitude()
     if t_off > 0:
         fall = integrate_coupled(cavity, x, a, t_off, t_off, drive_on=False, max_step=max_step)
