@@ -401,8 +401,9 @@ PAPER = TwinPreset(
 #: The levitator as a resonator near its threshold (docs/twin.md, "The levitator as a resonator"): the full-wave
 #: 500 um, g/s 0.02 dimer at 3 kPa (inside the held-y window, f_theta / f_y = 1.195) with the air's computed damping,
 #: its cavity mode at Q = 250 driven 2.2 half-widths above the resonance with a 20 mm transducer, where the lagged
-#: force nearly cancels the air's damping of y (net growth rate +0.016 1/s), and drive-off times of 3-5 ms, which
-#: keep it trapped (1 mm falls) and start y at 0.1-0.3 mm.  No parameter is fitted to the paper's observations.
+#: force nearly cancels the air's damping of y (net growth rate +0.016 1/s), and drive-off times of 3-5 ms.  The
+#: detuning and the drop were chosen by a scan (docs/twin.md) as those where both phase classes appear: tuned, within
+#: a tenth of a half-width of the threshold, not derived.
 WINDOW_RESONATOR = TwinPreset(
     name="window-resonator",
     effects=EffectSet(),
