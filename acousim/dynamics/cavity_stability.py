@@ -46,7 +46,7 @@ from cubedimer.terms import term_name
 
 from .resonator import CoupledCavity
 
-__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "cycle_gain"]
+__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "cycle_gain", "limit_cycle_amplitude"]
 
 
 @dataclass(frozen=True)
@@ -230,3 +230,16 @@ def cycle_gain(cavity: CoupledCavity, amplitudes, gamma_y: float = 0.0, omega_y:
         a, t = a_next, t + h
     energy = 0.5 * fm.mass * w * w * amp * amp
     return work / (2.0 * energy * period) - 0.5 * gamma_y
+
+
+def limit_cycle_amplitude(cavity: CoupledCavity, gamma_y: float, amplitudes) -> float:
+    """The smallest amplitude Y [m] among the increasing grid ``amplitudes`` where the describing-function gain
+    :func:`cycle_gain` (with the air's ``gamma_y`` [1/s]) falls through zero (a stable limit cycle of y), linearly
+    interpolated; NaN if it does not within the grid."""
+    amp = np.asarray(amplitudes, float)
+    sigma = cycle_gain(cavity, amp, gamma_y=gamma_y, steps_per_cycle=600)
+    down = np.flatnonzero((sigma[:-1] > 0) & (sigma[1:] <= 0))
+    if not down.size:
+        return float("nan")
+    j = down[0]
+    return float(amp[j] + (amp[j + 1] - amp[j]) * sigma[j] / (sigma[j] - sigma[j + 1]))

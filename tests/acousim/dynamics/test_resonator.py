@@ -259,3 +259,20 @@ def test_the_cycle_gain_tends_to_the_linear_growth_rate():
     assert sigma[0] == pytest.approx(lin.first_order_growth_rate(), rel=1e-4)
     assert sigma[1] == pytest.approx(sigma[0], rel=1e-4)  # linear regime: independent of the amplitude
     assert lin.growth_rate() == pytest.approx(sigma[0], rel=0.01)
+
+
+def test_the_limit_cycle_of_y_has_the_describing_functions_amplitude():
+    """The 700 um family dimer at 6 kPa with a strongly coupled cavity (Q 500, 30 mm^2, x -0.5) settles on a limit
+    cycle of y; its amplitude is where the describing-function gain falls through zero, within 5 % (measured 2 %:
+    the gain assumes a harmonic y and the hinge at rest, the simulation has neither exactly)."""
+    from acousim.atlas.resonator_map import map_dynamics
+    from acousim.dynamics.cavity_stability import limit_cycle_amplitude
+
+    dyn, x_rest = map_dynamics("fullwave:700e-6:0.05:6000", AIR.frequency_hz)
+    cav = CoupledCavity(dyn, CavityMode(500.0, -0.5, 3e-5), AIR)
+    predicted = limit_cycle_amplitude(cav, dyn.effects["air_damping"].gamma_y, np.linspace(50e-6, 600e-6, 23))
+    tr = integrate_coupled(cav, x_rest + [30e-6, 0, 0, 0], cav.mode.steady_amplitude(), 6.0, 1e-3)
+    assert tr.ok
+    last, before = (0.5 * np.ptp(tr.state[i - 1000:i, 0]) for i in (6000, 5000))
+    assert last == pytest.approx(before, rel=0.01)  # settled
+    assert last == pytest.approx(predicted, rel=0.05)
