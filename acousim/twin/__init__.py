@@ -9,7 +9,8 @@
 * :mod:`acousim.twin.video` - the high-speed camera: rendered frames of the dimer (:class:`VideoCamera`,
   :func:`record_video`).
 """
-from .config import PAPER, PAPER_LIKE, PRESETS, Camera, DropProtocol, TwinConfig, TwinError, TwinPreset
+from .config import (PAPER, PAPER_LIKE, PRESETS, WINDOW_RESONATOR, Camera, DropProtocol, TwinConfig, TwinError,
+                     TwinPreset)
 from .figures import write_twin_figures
 from .simulation import SimulatedRun, run_seeds, simulate_field_drop_runs, simulate_run, true_pressure, twin_dynamics
 from .video import VideoCamera, dimer_squares, record_video, render_coverage, render_frames, write_video_tiff
@@ -23,6 +24,7 @@ __all__ = [
     "TwinError",
     "PAPER_LIKE",
     "PAPER",
+    "WINDOW_RESONATOR",
     "PRESETS",
     "SimulatedRun",
     "simulate_run",

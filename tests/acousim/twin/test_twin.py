@@ -237,3 +237,20 @@ def test_figures_are_written(tmp_path):
     assert sorted(p.name for p in paths) == ["twin_phase_hist.png", "twin_phase_portraits.png",
                                              "twin_poincare.png", "twin_timeseries.png"]
     assert all(p.stat().st_size > 10_000 for p in paths)
+
+
+def test_the_window_resonator_preset_sits_just_above_its_threshold():
+    """The window-resonator preset: the cavity mode on (Q 250, x -2.2, a 20 mm transducer), and the lagged force
+    nearly cancels the air's damping of y: the linear growth rate is +0.016 1/s (docs/twin.md), inside the
+    first-order unstable band near its edge."""
+    from acousim.dynamics.cavity_stability import LinearCavityCoupling
+    from acousim.twin import WINDOW_RESONATOR
+    from acousim.twin.simulation import twin_cavity
+
+    config = TwinConfig.from_preset(WINDOW_RESONATOR, runs=1, duration=1.0)
+    assert config.cavity_mode.quality_factor == 250.0 and config.to_dict()["resonator"]["detuning_half_widths"] == -2.2
+    dyn, _ = twin_dynamics(config)
+    lin = LinearCavityCoupling.from_cavity(twin_cavity(config, dyn), gamma_y=dyn.effects["air_damping"].gamma_y)
+    assert 0 < lin.growth_rate() < 0.05
+    low, high = lin.unstable_detunings()
+    assert low < -2.2 < low + 0.2 and high < 0
