@@ -86,21 +86,26 @@ class ResonatorMapConfig:
 
 
 def _parse_dimer(spec: str) -> tuple:
+    from ..fullwave.statics import MODEL_NAME as FULLWAVE
+    from ..gorkov.forces import GORKOV
+
     parts = spec.split(":")
     try:
-        if parts[0] == "gorkov" and len(parts) == 3:
-            return ("gorkov", float(parts[1]), float(parts[2]))
-        if parts[0] == "fullwave" and len(parts) == 4:
-            return ("fullwave", float(parts[1]), float(parts[2]), float(parts[3]))
+        if parts[0] == GORKOV and len(parts) == 3:
+            return (GORKOV, float(parts[1]), float(parts[2]))
+        if parts[0] == FULLWAVE and len(parts) == 4:
+            return (FULLWAVE, float(parts[1]), float(parts[2]), float(parts[3]))
     except ValueError:
         pass
-    raise AtlasError(f"--dimers {spec!r}: expected gorkov:SIDE:PRESSURE or fullwave:SIDE:GAP_RATIO:PRESSURE")
+    raise AtlasError(f"--dimers {spec!r}: expected {GORKOV}:SIDE:PRESSURE or {FULLWAVE}:SIDE:GAP_RATIO:PRESSURE")
 
 
 def map_dynamics(spec: str, frequency_hz: float):
     """(DimerDynamics with the air's computed damping, x_rest = [y*, 0, theta*, 0]) of a dimer spec."""
+    from ..fullwave.statics import MODEL_NAME as FULLWAVE
+
     kind, *par = _parse_dimer(spec)
-    if kind == "fullwave":
+    if kind == FULLWAVE:
         dyn = atlas_dynamics(par[0], par[1], par[2], frequency_hz)
         theta, y = dyn.force_model.equilibrium()
         return dyn, np.array([y, 0.0, theta, 0.0])

@@ -42,6 +42,8 @@ __all__ = [
     "acoustic_torque",
 ]
 
+#: The model's registry name (:mod:`acousim.models`), for modules that name it.
+GORKOV = "gorkov"
 #: Default target tetrahedron edge length as a fraction of the cube side (see docs in README).
 DEFAULT_MESH_FRACTION = 0.2
 #: Default quadrature degree per tetrahedron.
@@ -124,7 +126,7 @@ class GorkovDimer:
     """
 
     #: registry name (:mod:`acousim.models`)
-    name = "gorkov"
+    name = GORKOV
     #: the forces derive from the acoustic potential U_ac
     conservative = True
     #: the model covers every bend |theta| < 1

@@ -15,8 +15,7 @@ import numpy as np
 
 from .sweep import SweepResult
 
-__all__ = ["plot_restoring_force", "plot_restoring_torque", "plot_thetaddot_map", "save_sweep_figures", "model_label",
-           "MODEL_LABELS"]
+__all__ = ["plot_restoring_force", "plot_restoring_torque", "plot_thetaddot_map", "save_sweep_figures", "model_label"]
 
 UM = 1e6  # metres -> micrometres for axes
 
@@ -27,14 +26,13 @@ def _figure(figsize=(5.0, 3.8)):
     return plt.subplots(figsize=figsize, constrained_layout=True)
 
 
-#: Titles of the force models a sweep records (``settings["model"]``).
-MODEL_LABELS = {"gorkov": "Gor'kov model", "fullwave": "full-wave model"}
-
-
 def model_label(sweep: SweepResult) -> str:
-    """The force model a sweep was made with, for a title (``settings["model"]``; the name itself when unlisted)."""
+    """The force model a sweep was made with, for a title: the registry's label of ``settings["model"]`` (e.g.
+    "Gor'kov model"), the recorded name itself when it is not a registered model."""
+    from ..models import force_model_names, force_model_type
+
     name = str(sweep.settings.get("model", "unknown model"))
-    return MODEL_LABELS.get(name, name)
+    return f"{force_model_type(name).label} model" if name in force_model_names() else name
 
 
 def _nearest_indices(grid: np.ndarray, values) -> list[int]:

@@ -13,7 +13,7 @@ def _sweep(model: str) -> SweepResult:
     return SweepResult(theta, y, cols, {"model": model})
 
 
-@pytest.mark.parametrize("model, label", [("gorkov", "Gor'kov model"), ("fullwave", "full-wave model")])
+@pytest.mark.parametrize("model, label", [("gorkov", "Gor'kov model"), ("fullwave", "full wave model")])
 def test_the_titles_name_the_sweeps_model(model, label):
     import matplotlib.pyplot as plt
 
