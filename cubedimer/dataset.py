@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
-from .config_checks import check_fraction, check_non_negative, check_whole
+from .config_checks import check_fraction, check_non_negative, check_that, check_whole
 from .errors import DatasetError
 from .meta import read_meta
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
@@ -75,8 +75,8 @@ class LoadConfig:
         check_fraction(self, "max_missing_fraction", closed=True)
         check_fraction(self, "uniform_tol")
         check_non_negative(self, "min_periods")
-        if self.trap_frequency is not None and not callable(self.trap_frequency):
-            raise ValueError(f"LoadConfig.trap_frequency must be callable or None, got {self.trap_frequency!r}")
+        check_that(self, self.trap_frequency is None or callable(self.trap_frequency),
+                   f"trap_frequency must be callable or None, got {self.trap_frequency!r}")
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,4 +1,4 @@
-"""Tests of the integral-form discovery with model-based states (fitting.discovery, fitting.model_states).
+"""Tests of the integral-form discovery with model-based states (fitting.selection.integral_discovery, fitting.refinement.model_states).
 
 The criterion of the slow tests, on data of sparse models of docs/conventions.md section 6's form at the paper's data
 size: every true term whose oracle z (|true coefficient| / standard error of integral-form least squares on the
@@ -14,14 +14,14 @@ import pytest
 
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
-from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model
-from fitting.integral_form import natural_windows
-from fitting.support_search import numerov_columns
-from fitting.integral_form import detrend_windows, integral_columns, window_starts
+from fitting.derivatives.savitzky_golay import run_derivatives
+from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+from fitting.derivatives.integral_form import natural_windows
+from fitting.selection.support_search import numerov_columns
+from fitting.derivatives.integral_form import detrend_windows, integral_columns, window_starts
 from fitting.model import TERMS, PolynomialModel
-from fitting.model_states import SegmentConfig, model_states, segment_layout
-from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
+from fitting.refinement.model_states import SegmentConfig, model_states, segment_layout
+from fitting.uncertainty.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 W_Y, W_9, W_35 = 2 * np.pi * 22.0, 2 * np.pi * 9.0, 2 * np.pi * 35.0
