@@ -15,6 +15,9 @@ Gor'kov potential density, the tetrahedral quadrature or one class per effect, a
   docs/conventions.md section 5: the registry :data:`EFFECT_TYPES` (:func:`register_effect` adds one),
   :class:`EffectSet`, :func:`parse_effect`;
   the air's damping from geometry (:func:`air_damping_rates`, :func:`air_damping_for`, docs/damping.md)
+* the levitator as a resonator (docs/twin.md): :class:`CavityMode`, :class:`CoupledCavity` (the mode's envelope
+  equation coupled to a dimer), :func:`potential_series`, :func:`integrate_coupled`, the linear theory
+  :class:`LinearCavityCoupling` and the lag's velocity couplings :func:`lag_couplings`
 * the digital twin (:mod:`acousim.twin`): :class:`TwinConfig`, :class:`Camera`, :class:`DropProtocol`,
   :func:`simulate_run`, :func:`simulate_dataset`, the ``PAPER`` (physics only) and ``PAPER_LIKE`` (tuned) presets and :class:`TwinError`
 * closed-form references: :mod:`acousim.analytic`
@@ -30,6 +33,8 @@ from .gorkov.surrogate import ForceSurrogate, build_surrogate, cached_surrogate
 from .dynamics.effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
 from .dynamics.integrator import DimerDynamics
 from .dynamics.air_damping import air_damping_rates
+from .dynamics.resonator import CavityMode, CoupledCavity, integrate_coupled, potential_series
+from .dynamics.cavity_stability import LinearCavityCoupling, lag_couplings
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
 from .static_model import StaticModel
 from .models import (ExperimentConditions, ForceModelType, dynamic_model, force_model_names, register_force_model,
@@ -41,6 +46,7 @@ __all__ = [
     "ForceModel", "ForceSurrogate", "build_surrogate", "cached_surrogate",
     "ExperimentConditions", "StaticModel", "ForceModelType", "register_force_model", "force_model_names",
     "static_model", "dynamic_model",
+    "CavityMode", "CoupledCavity", "integrate_coupled", "potential_series", "LinearCavityCoupling", "lag_couplings",
     "DimerDynamics", "EFFECT_TYPES", "EffectSet", "parse_effect", "register_effect", "air_damping_rates", "air_damping_for",
     "PAPER", "PAPER_LIKE", "Camera", "DropProtocol", "TwinConfig", "simulate_dataset", "simulate_run", "TwinError",
 ]

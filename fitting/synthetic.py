@@ -22,7 +22,8 @@ __all__ = ["SyntheticConfig", "paper_reduced_model", "generate_runs", "write_dat
 
 
 def paper_reduced_model() -> PolynomialModel:
-    """The paper's reduced model with chosen SI coefficients (the recovery-test truth).
+    """The paper's reduced model with SI coefficients of the suite's own choice (the recovery-test truth; the
+    paper gives no numeric values).
 
     yddot = a0 + a1 y + a2 y^2 + a3 ydot, thetaddot = b0 + b1 theta + b2 y + b3 theta y^2
     + b4 thetadot + b5 thetadot^2 y + b6 thetadot ydot y, with f_y = 22 Hz, f_theta = 9 Hz,

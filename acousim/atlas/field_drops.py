@@ -200,7 +200,7 @@ def settled_outcome(t: np.ndarray, state: np.ndarray) -> dict:
 
 
 def drop_and_settle(dynamics, t_off: float, theta_drop: float, duration: float, sample_rate: float,
-                    thetadot_drop: float = 0.0, ring_time_s: float = 0.0) -> dict:
+                    thetadot_drop: float = 0.0, ring_time_s: float = 0.0, cavity=None) -> dict:
     """One field drop from rest at the levitation height and what it settles on.
 
     The drive is off for ``t_off`` [s] (free fall, free hinge, the air's damping acting; with a ring time
@@ -208,11 +208,19 @@ def drop_and_settle(dynamics, t_off: float, theta_drop: float, duration: float, 
     sampled at ``sample_rate`` [1/s].  Returns the :func:`settled_outcome` dict, or
     ``{"outcome": "escaped" | "folded", "t_end_s": time after the field came back}`` for a run that left the trap
     or whose faces touched (``t_end_s`` is NaN for a completed run, ``-t_off`` for one lost during the drop).
+    With a coupled cavity (:class:`acousim.dynamics.resonator.CoupledCavity`, built on ``dynamics``) the drop is
+    :func:`acousim.dynamics.resonator.coupled_field_drop` (``ring_time_s`` must then be 0).
     """
+    from ..dynamics.resonator import coupled_field_drop
     from ..dynamics.switching import field_drop
 
-    motion = field_drop(dynamics, [0.0, 0.0, float(theta_drop), float(thetadot_drop)], t_off, duration,
-                        1.0 / sample_rate, tau=ring_time_s)
+    x_drop = [0.0, 0.0, float(theta_drop), float(thetadot_drop)]
+    if cavity is not None:
+        if ring_time_s:
+            raise ValueError("a coupled cavity has its own ring time: give ring_time_s = 0")
+        motion = coupled_field_drop(cavity, x_drop, t_off, duration, 1.0 / sample_rate)
+    else:
+        motion = field_drop(dynamics, x_drop, t_off, duration, 1.0 / sample_rate, tau=ring_time_s)
     if not motion.ok:
         return {"outcome": "folded" if motion.status == 2 else "escaped", "t_end_s": float(motion.t_stop)}
     traj = motion.trajectory

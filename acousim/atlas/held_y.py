@@ -46,7 +46,8 @@ __all__ = ["HeldYConfig", "held_y_acceleration", "held_y_arguments", "y_orbit_pe
 
 logger = logging.getLogger(__name__)
 
-#: The paper's 2 f_y criterion: theta's 2 f_y line at least this share of its f_y line.
+#: The 2 f_y criterion: theta's 2 f_y line at least this share of its f_y line (the suite's choice: the paper reports
+#: a visible 2 f_y line, with no threshold).
 TWO_FY_SHARE = 0.05
 #: A class counts as populated in a cell when it holds at least this share of the hinge starts.
 POPULATED = 0.15

@@ -16,6 +16,7 @@ Examples
         --effect linear_damping:gamma_y=0.3,gamma_theta=0.8 --duration 4 --fps 2000 \\
         --noise-y 1e-6 --noise-theta 0.005 --out data/two_effects
     python -m acousim simulate --preset paper-like --runs 4 --duration 2 --video --out data/video_twin
+    python -m acousim simulate --detuning 1 --transducer-q 250 --runs 10 --out data/resonator   # the resonator
 
 Every twin has the air's drag computed from the dimer's geometry (effect ``air_damping``, docs/damping.md) unless
 ``--no-air-damping`` is given or the preset leaves it out (``paper-like``, whose tuned linear damping is the total);
@@ -169,6 +170,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="the transducer's quality factor: the field rings down when the drive stops and up when it "
                    "is back, with tau = Q / (pi f), and the acoustic forces follow p(t)^2 / p0^2 (docs/twin.md); "
                    "0: instant switching (default 0 or the preset's; 250 is the value docs/twin.md states)")
+    r = p.add_argument_group("the levitator as a resonator (docs/twin.md)",
+                             "The cavity mode's amplitude as a state of every run, detuned by the dimer's position; "
+                             "off unless --detuning is given (every output then as without it).")
+    r.add_argument("--detuning", type=float, default=None, metavar="HALF_WIDTHS",
+                   help="switch the resonator on: the cavity's resonance minus the drive's frequency with the dimer at "
+                   "rest, in half-widths f / (2Q) (> 0: drive below the resonance, damps y; < 0: above it, feeds y); "
+                   "within +-20; the Q is --transducer-q (default 250 with --detuning)")
+    r.add_argument("--cavity-area", type=float, default=None, metavar="M2",
+                   help="the cavity's effective cross-section [m^2] (the transducer's area; mode volume = area x "
+                   "lambda/2), in [1e-5, 1e-2] (default 3.14e-4: a 20 mm transducer, or the preset's)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="M",
                    help="tetrahedron edge of the Gor'kov mesh model [m] (Gor'kov model only; default 0.2 x side)")
     p.add_argument("--max-step", type=float, default=5e-5, metavar="SEC", help="longest internal RK4 step [s]")
@@ -245,10 +256,36 @@ def build_config(args: argparse.Namespace):
             mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=model,
             gap=gap, edge_radius=args.edge_radius, frequency=frequency,
             air_damping=not args.no_air_damping and dimer.get("air_damping", True),
-            transducer_q=args.transducer_q if args.transducer_q is not None else dimer.get("transducer_q", 0.0),
+            transducer_q=_quality_factor(args, dimer), **_resonator_settings(args, dimer),
         )
     except (EffectError, TwinError) as exc:
         raise UserInputError(str(exc)) from None
+
+
+def _quality_factor(args: argparse.Namespace, dimer: dict) -> float:
+    """--transducer-q, else the preset's, else 250 with the resonator on and 0 (instant switching) without."""
+    if args.transducer_q is not None:
+        return args.transducer_q
+    if "transducer_q" in dimer:
+        return dimer["transducer_q"]
+    from ..dynamics.switching import DEFAULT_TRANSDUCER_Q
+
+    on = getattr(args, "detuning", None) is not None or dimer.get("cavity_detuning") is not None
+    return DEFAULT_TRANSDUCER_Q if on else 0.0
+
+
+def _resonator_settings(args: argparse.Namespace, dimer: dict) -> dict:
+    """The TwinConfig fields of the resonator options (those given or the preset's)."""
+    out = {}
+    detuning = args.detuning if args.detuning is not None else dimer.get("cavity_detuning")
+    if detuning is not None:
+        out["cavity_detuning"] = detuning
+    area = args.cavity_area if args.cavity_area is not None else dimer.get("cavity_area")
+    if area is not None:
+        if detuning is None:
+            raise UserInputError("--cavity-area needs the resonator: give --detuning too (e.g. --detuning -1)")
+        out["cavity_area"] = area
+    return out
 
 
 def run(args: argparse.Namespace) -> int:

@@ -11,7 +11,7 @@ name                   parameters (SI)              adds to (yddot, thetaddot)
 ``quadratic_drag``     c_y [1/m], c_theta [-]       (-c_y |ydot| ydot, -c_theta |thetadot| thetadot)
 ``pair_scattering``    kappa [1/s^2]                (0, -kappa cos^2(k Z_com) theta)
 ``mirror_asymmetry``   beta0 [1/s^2], beta1 [1/(m s^2)]  (0, beta0 + beta1 y)
-``velocity_coupling``  c5, c6 [1/m]                 (0, c5 thetadot^2 y + c6 thetadot ydot y)
+``velocity_coupling``  c5 [1/m], c6 [1/m^2]          (0, c5 thetadot^2 y + c6 thetadot ydot y)
 ``air_damping``        gamma_y, gamma_theta [1/s],  (-gamma_y ydot, -gamma_theta S(theta) thetadot)
                        sway_ratio, wedge_ratio,
                        gap_ratio [-]
@@ -235,7 +235,7 @@ class MirrorAsymmetry(Effect):
 
 @dataclass(frozen=True)
 class VelocityCoupling(Effect):
-    """Velocity-dependent acoustic forces: thetaddot += c5 thetadot^2 y + c6 thetadot ydot y; c5, c6 in 1/m."""
+    """Velocity-dependent acoustic forces: thetaddot += c5 thetadot^2 y + c6 thetadot ydot y; c5 in 1/m, c6 in 1/m^2."""
 
     name: ClassVar[str] = "velocity_coupling"
     columns: ClassVar[Callable] = staticmethod(_velocity_coupling_columns)

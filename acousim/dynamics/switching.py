@@ -22,6 +22,12 @@ the twin's default; otherwise the off phase and the first :data:`RING_SPAN` tau 
 with the envelope (the core RK4, :func:`cubedimer.rk4.rk4`, which evaluates the envelope at its stages' times t,
 t + h/2 and t + h), and the rest with the field fully on (the forces are then within
 2 exp(-20) = 4e-9 of their full value, relative).
+
+The ring is the levitator's cavity mode (:mod:`acousim.dynamics.resonator`) when the dimer does not detune it: the
+envelope equation ``da/dt = -(Gamma + i Delta) a + Gamma a_d`` with Delta = 0, Gamma = 1 / tau and the drive a_d
+switched from 1 to 0 and back, whose exact solution is the a(t) above.  With the dimer detuning the mode,
+:func:`acousim.dynamics.resonator.coupled_field_drop` integrates the same equation with the motion; with the coupling
+removed it reproduces this module's ring (tests/acousim/dynamics/test_resonator.py).
 """
 from __future__ import annotations
 
@@ -107,7 +113,10 @@ class FieldDrop:
     t_stop : float
         When it stopped [s] from the moment the drive is back (negative: during the off phase); NaN if it did not.
     pressure_at_field_on : float
-        p / p0 when the drive comes back (exp(-t_off / tau); 0 for an instant switch).
+        |p| / p0 when the drive comes back (exp(-t_off / tau); 0 for an instant switch).
+    mode : ndarray of complex or None
+        With a coupled cavity (:func:`acousim.dynamics.resonator.coupled_field_drop`): the mode's amplitude a = A / p0 at the
+        trajectory's samples (:mod:`acousim.dynamics.resonator`); None otherwise.
     """
 
     state_at_field_on: NDArray[np.float64]
@@ -115,6 +124,7 @@ class FieldDrop:
     status: int
     t_stop: float
     pressure_at_field_on: float
+    mode: NDArray[np.complex128] | None = None
 
     @property
     def ok(self) -> bool:

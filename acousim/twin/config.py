@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP
+from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
 from ..dynamics.effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..fullwave.statics import MODEL_NAME as FULLWAVE
 from ..models import ExperimentConditions, ModelSpec, force_model_names
@@ -148,11 +149,14 @@ class TwinPreset:
     frequency: float | None = None
     air_damping: bool = True
     transducer_q: float | None = None
+    cavity_detuning: float | None = None
+    cavity_area: float | None = None
 
     def dimer_settings(self) -> dict:
         """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets, and
         ``air_damping`` always)."""
-        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency", "transducer_q")
+        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency", "transducer_q",
+                                             "cavity_detuning", "cavity_area")
                if getattr(self, k) is not None}
         out["air_damping"] = bool(self.air_damping)
         return out
@@ -204,7 +208,17 @@ class TwinConfig:
         with the amplitude's ring time tau = Q / (pi ``frequency``), and the acoustic forces follow p(t)^2 / p0^2
         (:mod:`acousim.dynamics.switching`).  0 (the default) switches the field instantly;
         :data:`acousim.dynamics.switching.DEFAULT_TRANSDUCER_Q` (250, tau = 1.74 ms at 45.65 kHz) is the value stated for
-        a Langevin transducer of a levitator (Q 150-400).
+        a Langevin transducer of a levitator (Q 150-400).  With ``cavity_detuning`` it is the cavity mode's Q.
+    cavity_detuning : float, optional
+        The levitator as a resonator (:mod:`acousim.dynamics.resonator`, docs/twin.md): the cavity's resonance minus
+        the drive's frequency with the dimer at rest, in half-widths f / (2 ``transducer_q``) (> 0: the drive below
+        the resonance, which damps y; < 0: above it, which feeds y).  The mode's amplitude is then a state of every
+        run, detuned by the dimer at its present (y, theta), and needs ``transducer_q`` > 0.  None (the default):
+        the field does not respond to the dimer (every output as without a resonator).
+    cavity_area : float
+        The cavity's effective cross-section A_cav [m^2] (the transducer's area; the mode's volume is
+        A_cav lambda / 2), used with ``cavity_detuning``; default :data:`acousim.dynamics.resonator.DEFAULT_CAVITY_AREA`
+        (a 20 mm transducer, 3.14e-4 m^2), within :data:`acousim.dynamics.resonator.CAVITY_AREA_RANGE`.
     """
 
     runs: int = 10
@@ -225,12 +239,15 @@ class TwinConfig:
     frequency: float = 45_650.0
     air_damping: bool = True
     transducer_q: float = 0.0
+    cavity_detuning: float | None = None
+    cavity_area: float = DEFAULT_CAVITY_AREA
 
     def __post_init__(self) -> None:
         if not isinstance(self.transducer_q, (int, float)) or not np.isfinite(self.transducer_q) \
                 or not 0 <= self.transducer_q <= 1e5:
-            raise TwinError(f"transducer quality factor must lie in [0, 1e5] (0: instant switching), "
-                            f"got {self.transducer_q!r}")
+            raise TwinError(f"transducer quality factor (--transducer-q) must lie in [0, 1e5] (0: instant "
+                            f"switching), got {self.transducer_q!r}")
+        self.cavity_mode  # noqa: B018 (checks the resonator's settings)
         if int(self.runs) != self.runs or self.runs < 1:
             raise TwinError(f"runs must be a positive integer, got {self.runs!r}")
         if not np.isfinite(self.duration) or self.duration <= 0:
@@ -280,6 +297,20 @@ class TwinConfig:
                                             "mesh_size_m": self.mesh_size})
 
     @property
+    def cavity_mode(self) -> CavityMode | None:
+        """The levitator's cavity mode (:class:`acousim.dynamics.resonator.CavityMode`), None without a resonator."""
+        if self.cavity_detuning is None:
+            return None
+        if not self.transducer_q > 0:
+            raise TwinError("the resonator (--detuning) needs the cavity's quality factor: give --transducer-q > 0 "
+                            "(e.g. 250)")
+        try:
+            return CavityMode(float(self.transducer_q), self.cavity_detuning, self.cavity_area)
+        except (TypeError, ValueError) as exc:
+            option = "--detuning" if "detuning" in str(exc) else "--cavity-area" if "area" in str(exc) else "--transducer-q"
+            raise TwinError(f"{option}: {exc}") from None
+
+    @property
     def n_frames(self) -> int:
         """Frames per run."""
         return int(round(self.duration * self.camera.fps))
@@ -317,6 +348,8 @@ class TwinConfig:
                                   "model": "instant" if self.transducer_q == 0 else
                                   "p(t)/p0 = exp(-t/tau) with the drive off, 1 - (1 - p_on/p0) exp(-t/tau) once it "
                                   "is back; forces scale as (p/p0)^2"}
+        if self.cavity_mode is not None:  # listed only with the resonator: every other output as without it
+            out["resonator"] = self.cavity_mode.to_dict(self.frequency)
         return out
 
 

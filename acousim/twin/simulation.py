@@ -13,7 +13,10 @@ A synthetic experiment follows the protocol of the source paper:
 
 With a transducer quality factor (``TwinConfig.transducer_q``) the field does not switch instantly: it rings down
 while the drive is off and rings up when it is back, with tau = Q / (pi f), and the acoustic forces follow
-p(t)^2 / p0^2 (:mod:`acousim.dynamics.switching`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
+p(t)^2 / p0^2 (:mod:`acousim.dynamics.switching`).  With a resonator (``TwinConfig.cavity_detuning``) the mode's
+complex amplitude is a state of the run (:mod:`acousim.dynamics.resonator`): it starts at its steady value with the
+dimer at rest, rings down while the drive is off, and is detuned by the dimer's position all along
+(:func:`twin_cavity`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
 outcome, not an error: it is recorded up to the fold and its ``event`` says so.
 
 Randomness: one :class:`numpy.random.SeedSequence` from the seed is split into a stream for the
@@ -31,10 +34,12 @@ from cubedimer.executor import ExecutorConfig, map_ordered
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP, STATUS_MESSAGES, DimerDynamics
 from ..dynamics.effects import EffectSet, air_damping_for
+from ..dynamics.resonator import CoupledCavity, coupled_field_drop
 from ..dynamics.switching import field_drop, ring_time
+from ..medium import Medium
 from .config import Camera, DropProtocol, TwinConfig, TwinError
 
-__all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics",
+__all__ = ["SimulatedRun", "run_seeds", "true_pressure", "simulate_run", "twin_dynamics", "twin_cavity",
            "simulate_field_drop_runs"]
 
 
@@ -60,6 +65,10 @@ class SimulatedRun:
         None for a run recorded over the whole duration.
     field_on_state : ndarray (4,), optional
         The state when the drive comes back (``state[0]``, or the state at the fold during the drop).
+    mode : ndarray of complex (n,), optional
+        With a resonator: the cavity mode's amplitude A / p0 at the frames.
+    pressure_at_field_on : float, optional
+        With a resonator: |A| / p0 when the drive comes back.
     """
 
     t: NDArray[np.float64]
@@ -70,6 +79,8 @@ class SimulatedRun:
     missing: NDArray[np.int64]
     event: dict | None = None
     field_on_state: NDArray[np.float64] | None = None
+    mode: NDArray[np.complex128] | None = None
+    pressure_at_field_on: float | None = None
 
     @property
     def state_at_field_on(self) -> NDArray[np.float64]:
@@ -96,7 +107,7 @@ def true_pressure(nominal: float, error: float, seed: int) -> float:
 
 def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera, duration: float,
                  seed: np.random.SeedSequence | int, max_step: float = DEFAULT_MAX_STEP,
-                 ring_time_s: float = 0.0) -> SimulatedRun:
+                 ring_time_s: float = 0.0, cavity: CoupledCavity | None = None) -> SimulatedRun:
     """Simulate one field-drop run and record it with the camera.
 
     Parameters
@@ -113,6 +124,8 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
         Longest internal RK4 step [s].
     ring_time_s : float
         The transducer's ring time tau [s] (:mod:`acousim.dynamics.switching`; 0: the field switches instantly).
+    cavity : CoupledCavity, optional
+        The levitator as a resonator (:func:`twin_cavity`); ``ring_time_s`` must then be 0 (the cavity has its own).
 
     Returns
     -------
@@ -128,28 +141,59 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
     drop = protocol.draw(rng)
     x_drop = np.array([0.0, 0.0, drop["theta_drop"], drop["thetadot_drop"]])
     n = int(round(duration * camera.fps))
-    motion = field_drop(dynamics, x_drop, drop["t_off_s"], (n - 1) / camera.fps, 1.0 / camera.fps,
-                        tau=ring_time_s, max_step=max_step)
+    if cavity is None:
+        motion = field_drop(dynamics, x_drop, drop["t_off_s"], (n - 1) / camera.fps, 1.0 / camera.fps,
+                            tau=ring_time_s, max_step=max_step)
+    else:
+        if ring_time_s:
+            raise ValueError("a coupled cavity has its own ring time: give ring_time_s = 0")
+        motion = coupled_field_drop(cavity, x_drop, drop["t_off_s"], (n - 1) / camera.fps, 1.0 / camera.fps,
+                                    max_step=max_step)
     if motion.status not in (0, 2):
         where = (f"during the drop (t_off = {drop['t_off_s'] * 1e3:.2f} ms)" if motion.trajectory is None else
                  f"at t = {motion.t_stop:.3f} s (t_off = {drop['t_off_s'] * 1e3:.2f} ms, theta_drop = "
                  f"{drop['theta_drop']:.3f}, thetadot_drop = {drop['thetadot_drop']:.3g} 1/s)")
         raise TwinError(f"{STATUS_MESSAGES[motion.status]} {where}; use shorter drops or a smaller hinge range")
     event = None if motion.ok else {"event": "folded", "t_s": float(motion.t_stop)}
+    extra = {} if cavity is None else {"mode": motion.mode, "pressure_at_field_on": motion.pressure_at_field_on}
     if motion.trajectory is None:
         empty = np.zeros(0)
         return SimulatedRun(t=empty, y=empty, theta=empty, state=np.zeros((0, 4)), drop=drop,
-                            missing=np.zeros(0, np.int64), event=event, field_on_state=motion.state_at_field_on)
+                            missing=np.zeros(0, np.int64), event=event, field_on_state=motion.state_at_field_on,
+                            **extra)
     traj = motion.trajectory
     if event is not None:  # a short run keeps its missing frames apart: at most one in two interior frames
         camera = replace(camera, missing_frames=min(int(camera.missing_frames), max(0, (len(traj.t) - 2) // 2)))
     y, th, idx = camera.record(traj.state, rng)
-    return SimulatedRun(t=traj.t, y=y, theta=th, state=traj.state, drop=drop, missing=idx, event=event)
+    return SimulatedRun(t=traj.t, y=y, theta=th, state=traj.state, drop=drop, missing=idx, event=event, **extra)
 
 
 def _run_task(item: tuple) -> SimulatedRun:
-    dynamics, protocol, camera, duration, seed, max_step, tau = item
-    return simulate_run(dynamics, protocol, camera, duration, seed, max_step, tau)
+    dynamics, protocol, camera, duration, seed, max_step, tau, cavity = item
+    return simulate_run(dynamics, protocol, camera, duration, seed, max_step, tau, cavity)
+
+
+def twin_cavity(config: TwinConfig, dynamics: DimerDynamics) -> CoupledCavity | None:
+    """The resonator of a configuration coupled to its dynamics, None without one.
+
+    Raises
+    ------
+    TwinError
+        The cavity's quasi-static response removes y's stiffness (the detuning and coupling are so large that the
+        dimer is not trapped; :meth:`acousim.dynamics.cavity_stability.LinearCavityCoupling.static_stiffness`).
+    """
+    from ..dynamics.cavity_stability import LinearCavityCoupling
+
+    mode = config.cavity_mode
+    if mode is None:
+        return None
+    cavity = CoupledCavity(dynamics, mode, Medium(frequency_hz=config.frequency))
+    ratio = LinearCavityCoupling.from_cavity(cavity).static_stiffness()
+    if not ratio > 0:
+        raise TwinError(f"--detuning {mode.detuning:g}: the cavity's response removes the trap's vertical stiffness "
+                        f"(dimer not trapped); use a smaller |detuning|, a larger --cavity-area or a lower "
+                        f"--transducer-q")
+    return cavity
 
 
 def twin_dynamics(config: TwinConfig) -> tuple[DimerDynamics, float]:
@@ -181,8 +225,10 @@ def simulate_field_drop_runs(config: TwinConfig, executor=None, progress: bool =
     """
     dynamics, p_true = twin_dynamics(config)
     _, seeds = run_seeds(config.seed, config.runs)
-    tau = ring_time(config.transducer_q, config.frequency)
-    items = [(dynamics, config.protocol, config.camera, config.duration, s, config.max_step, tau) for s in seeds]
+    cavity = twin_cavity(config, dynamics)
+    tau = ring_time(config.transducer_q, config.frequency) if cavity is None else 0.0
+    items = [(dynamics, config.protocol, config.camera, config.duration, s, config.max_step, tau, cavity)
+             for s in seeds]
     executor = executor or ExecutorConfig()
     try:
         runs = map_ordered(_run_task, items, executor, desc="simulate", progress=progress)

@@ -3,7 +3,8 @@
 :func:`simulate_dataset` writes ``runNN.csv`` (columns ``t, y, theta``), ``meta.json`` (the
 *nominal* settings, docs/formats.md keys), ``truth.json`` (the true pressure, the effects with their
 parameters, the seed and every other setting, including each run's drawn initial conditions) and
-``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics), into
+``truth_states.npz`` (the exact integrated states at every frame, for tests and diagnostics; with a resonator
+also ``truth_mode.npz``, the cavity mode's complex amplitude A / p0 at every frame), into
 a temporary folder renamed into place at the end, so a failure leaves nothing behind.  With a
 :class:`~acousim.twin.video.VideoCamera` it also writes, per run, the frames the high-speed camera
 records (``video/runNN.tif``, :mod:`acousim.twin.video`) and the true ``t, y, theta`` beside them
@@ -115,7 +116,8 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         "state": ["y", "ydot", "theta", "thetadot"],
         "runs_detail": [
             {"file": f, **r.drop, "state_at_field_on": [float(v) for v in r.state_at_field_on],
-             "pressure_at_field_on": _pressure_at_field_on(config, r.drop["t_off_s"]),
+             "pressure_at_field_on": _pressure_at_field_on(config, r.drop["t_off_s"]) if r.pressure_at_field_on is None
+             else float(r.pressure_at_field_on),
              "missing_frames": [int(i) for i in r.missing], "frames": int(r.t.size), "event": r.event}
             for f, r in zip(files, runs)
         ],
@@ -181,6 +183,10 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
         # folded runs: NaN after the fold, so that every run shares the frame times
         states = {f"run{i:0{width}d}": np.concatenate([r.state, np.full((n - r.t.size, 4), np.nan)])
                   for i, r in enumerate(runs, 1)}
+        modes = {f"run{i:0{width}d}": np.concatenate([r.mode, np.full(n - r.mode.size, np.nan + 0j)])
+                 for i, r in enumerate(runs, 1) if r.mode is not None}
+        if modes:  # with a resonator: the cavity mode's amplitude A / p0 at the frames (complex), NaN after a fold
+            atomic_save(tmp / "truth_mode.npz", lambda path: np.savez(path, t=np.arange(n) / config.camera.fps, **modes))
         atomic_save(tmp / "truth_states.npz", lambda path: np.savez(path, t=np.arange(n) * (1.0 / config.camera.fps),
                                                                      **states))
     return truth

@@ -77,6 +77,12 @@ def test_preset_and_override(tmp_path):
         (["--runs", "9000", "--duration", "10"], "frames in the data set"),
         (["--runs", "1000000"], "--runs = 1,000,000 exceeds the limit"),
         (["--pressure", "1e300"], "--pressure: pressure_amplitude_pa = 1e+300 is outside the plausible range"),
+        (["--detuning", "nan"], "--detuning: the detuning must be finite"),
+        (["--detuning", "25"], "--detuning: the detuning must be finite and within +-20"),
+        (["--detuning", "1", "--cavity-area", "-1e-4"], "--cavity-area: the cavity area must lie in"),
+        (["--cavity-area", "1e-4"], "--cavity-area needs the resonator: give --detuning"),
+        (["--detuning", "1", "--transducer-q", "0"], "needs the cavity's quality factor: give --transducer-q > 0"),
+        (["--detuning", "-1", "--cavity-area", "1e-5"], "--detuning -1: the cavity's response removes the trap's"),
     ],
 )
 def test_user_errors_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, extra, fragment):
@@ -210,3 +216,28 @@ def test_the_ring_time_is_recorded_and_checked(tmp_path, capsys):
                for r in truth["runs_detail"])
     assert main(["simulate", "--out", str(tmp_path / "bad"), *FAST, "--transducer-q", "-1"]) == 2
     assert "transducer quality factor" in capsys.readouterr().err and not (tmp_path / "bad").exists()
+
+
+def test_the_resonator_is_recorded_and_off_by_default(tmp_path):
+    """--detuning switches the cavity mode on: truth.json records its settings, each run's |A|/p0 when the drive is
+    back is the mode's (its ring-down, exp(-t_off / tau) as the plain ring: the drive is off, the detuning only turns
+    the phase) and truth_mode.npz holds A/p0 at the frames, near 1 in modulus after the ring-up.  Without it nothing
+    of the resonator appears."""
+    out = tmp_path / "d"
+    assert main(["simulate", "--runs", "2", "--seed", "3", "--out", str(out), *FAST, "--detuning", "1.5",
+                 "--cavity-area", "2e-4"]) == 0
+    truth = json.loads((out / "truth.json").read_text())
+    res = truth["resonator"]
+    assert res["quality_factor"] == 250.0 and res["detuning_half_widths"] == 1.5 and res["cavity_area_m2"] == 2e-4
+    assert res["detuning_hz"] == pytest.approx(1.5 * 45_650.0 / 500.0)
+    tau = res["ring_time_s"]
+    # the ring-down is integrated (RK4 at h Gamma = 0.03: ~1e-8)
+    assert all(r["pressure_at_field_on"] == pytest.approx(np.exp(-r["t_off_s"] / tau), rel=1e-7)
+               for r in truth["runs_detail"])
+    modes = np.load(out / "truth_mode.npz")
+    assert sorted(modes.files) == ["run01", "run02", "t"]
+    assert abs(np.abs(modes["run01"][-1]) - 1.0) < 0.01  # back at the steady amplitude, detuned by the motion
+    plain = tmp_path / "plain"
+    assert main(["simulate", "--runs", "1", "--out", str(plain), *FAST]) == 0
+    assert "resonator" not in json.loads((plain / "truth.json").read_text())
+    assert not (plain / "truth_mode.npz").exists()
