@@ -68,12 +68,23 @@ def double_integral(f: NDArray, dt: float, axis: int = 0) -> NDArray[np.float64]
 
 
 def integral_window(dt: float, frequency_hz: float, periods: float = 0.75,
-                    bounds_s: tuple[float, float] = (0.03, 0.5)) -> int:
+                    bounds_s: tuple[float, float] = (0.03, 0.5), *,
+                    bounds_periods: tuple[float, float] | None = None, reference_hz: float | None = None) -> int:
     """Window length [frames] for the integral form: ``periods`` of the coordinate's dominant period,
     clipped to ``bounds_s`` seconds (module docstring: longer windows accumulate the smoothing noise of
-    the library columns on a stiff equation; shorter ones throw away the low-frequency information)."""
+    the library columns on a stiff equation; shorter ones throw away the low-frequency information).
+
+    With ``bounds_periods`` the bounds are instead that many periods of ``reference_hz`` (the run's fastest dominant
+    frequency), so that the window does not depend on the unit of time the data are written in; a non-positive or
+    non-finite ``reference_hz`` leaves the window unbounded."""
+    if bounds_periods is not None:
+        ref = float(reference_hz) if reference_hz is not None else float("nan")
+        bounds_s = ((bounds_periods[0] / ref, bounds_periods[1] / ref) if ref > 0 and np.isfinite(ref)
+                    else (0.0, np.inf))
     f = float(frequency_hz)
     w_s = periods / f if f > 0 and np.isfinite(f) else bounds_s[1]
+    if not np.isfinite(w_s):  # no oscillation and no reference: 64 frames
+        return 64
     w_s = float(np.clip(w_s, *bounds_s))
     return max(8, int(round(w_s / dt)))
 
@@ -82,11 +93,11 @@ def integral_window(dt: float, frequency_hz: float, periods: float = 0.75,
 _STIFFNESS = (TERMS.index("y"), TERMS.index("theta"))
 
 
-def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequence[float], natural_periods: float,
-                    max_window_s: float) -> list[list[int]]:
+def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequence[float],
+                    natural_periods: float) -> list[list[int]]:
     """Per equation and run, the window [frames] shortened to at most ``natural_periods`` periods of the
-    equation's natural frequency ``sqrt(-coef[stiffness]) / 2 pi`` (and to ``max_window_s`` [s]), also below the
-    usual lower bound of :func:`integral_window`; unchanged for an equation without a restoring stiffness."""
+    equation's natural frequency ``sqrt(-coef[stiffness]) / 2 pi``, also below the usual lower bound of
+    :func:`integral_window`; unchanged for an equation without a restoring stiffness."""
     out = []
     for q in range(2):
         k = -float(coef[q, _STIFFNESS[q]])
@@ -94,7 +105,7 @@ def natural_windows(coef: NDArray, windows: Sequence[Sequence[int]], dts: Sequen
             out.append(list(windows[q]))
             continue
         f_nat = np.sqrt(k) / (2.0 * np.pi)
-        cap = [integral_window(dt, f_nat, natural_periods, (dt, max_window_s)) for dt in dts]
+        cap = [integral_window(dt, f_nat, natural_periods, (dt, np.inf)) for dt in dts]
         out.append([min(int(w), c) for w, c in zip(windows[q], cap)])
     return out
 

@@ -12,7 +12,7 @@ it is the best available estimate of the states there.
 Method
 ------
 Each run is cut into overlapping segments (length :attr:`SegmentConfig.periods` of the slower
-dominant period, within :attr:`SegmentConfig.bounds_s`; hop half a segment).  Per segment the
+dominant period, within :attr:`SegmentConfig.bounds_periods`; hop half a segment).  Per segment the
 initial state ``x0`` (4 numbers) is fitted by Gauss-Newton so that the model's simulation from
 ``x0`` matches the measured y and theta, weighted by their noise levels; the Jacobian is a forward
 difference, and all segments of all runs (with their four perturbed copies) are integrated in one
@@ -49,8 +49,10 @@ class SegmentConfig:
     ----------
     periods : float
         Segment length in periods of the slower of the two dominant frequencies.
-    bounds_s : (float, float)
-        Minimum and maximum segment length [s].
+    bounds_periods : (float, float)
+        Minimum and maximum segment length in periods of the first coordinate's (y's) dominant frequency (the other's
+        when y does not oscillate): 2.2 and 11, 0.1 and 0.5 s at 22 Hz; in periods, so that the segments are the
+        same whatever unit of time the data are written in.
     gauss_newton_steps : int
         Gauss-Newton steps per call from the fallback states (each: one batched integration of 5
         trajectories per segment).
@@ -64,7 +66,7 @@ class SegmentConfig:
     """
 
     periods: float = 2.0
-    bounds_s: tuple[float, float] = (0.1, 0.5)
+    bounds_periods: tuple[float, float] = (2.2, 11.0)
     gauss_newton_steps: int = 3
     warm_steps: int = 1
     h_omega: float = 0.15
@@ -72,7 +74,7 @@ class SegmentConfig:
 
     def __post_init__(self) -> None:
         check_positive(self, "periods")
-        check_bounds(self, "bounds_s")
+        check_bounds(self, "bounds_periods")
         check_whole(self, "gauss_newton_steps")
         check_whole(self, "warm_steps")
         check_positive(self, "h_omega")
@@ -107,10 +109,14 @@ class StateEstimate:
 
 
 def segment_length(dt: float, f_y: float, f_theta: float, config: SegmentConfig = SegmentConfig()) -> int:
-    """Segment length [frames] for a run with frame interval ``dt`` [s] and dominant frequencies [Hz]."""
+    """Segment length [frames] for a run with frame interval ``dt`` [s] and dominant frequencies [Hz]:
+    ``config.periods`` of the slower one within ``config.bounds_periods`` of y's (of the other's when y does not
+    oscillate); 16 frames at least, 64 for a run that does not oscillate."""
     freqs = [f for f in (f_y, f_theta) if np.isfinite(f) and f > 0]
-    length_s = config.periods / min(freqs) if freqs else config.bounds_s[1]
-    return max(16, int(round(float(np.clip(length_s, *config.bounds_s)) / dt)))
+    if not freqs:
+        return 64
+    lo, hi = (b / freqs[0] for b in config.bounds_periods)
+    return max(16, int(round(float(np.clip(config.periods / min(freqs), lo, hi)) / dt)))
 
 
 def segment_layout(n: int, length: int) -> tuple[NDArray[np.int64], NDArray[np.int64], int]:

@@ -21,7 +21,7 @@ MODEL_ERROR_MODE = "held-out (model error)"
 KNEE_TOLERANCE = 0.002
 
 #: One-line description of the method (written next to the result).
-METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, 25-500 ms, in the model passes "
+METHOD = ("pooled integral form (windows of 0.75 of the coordinate's dominant period, within 0.55-11 periods of the first coordinate, in the model passes "
           "at most 0.875 periods of the equation's natural frequency; Numerov-corrected double integrals); per "
           "equation backward elimination from the 35-term library until Holm's rule at family-wise alpha declares "
           "every remaining term significant, stepwise additions, swaps and two-for-one merges that keep every term "
@@ -43,13 +43,15 @@ class DiscoveryConfig:
     window_periods : float
         Integral-form window in periods of the coordinate's dominant frequency
         (:func:`fitting.derivatives.integral_form.integral_window`).
-    window_bounds_s : (float, float)
-        Its minimum and maximum [s].  The raw positions' noise in the columns, double integrated over a
-        window W, grows like (omega W)^2 times the coordinate's stiffness, while shorter windows lose
-        information.  Measured on a 35-Hz hinge (1500 fps, 12 runs): with the 30-ms minimum of the
-        cross-check (1.05 periods) its damping came out 4 oracle standard errors off; at 0.75 periods
-        (21 ms) the standard errors of the hinge terms were 1.3-1.7 times the oracle's; at 25 ms (0.875
-        periods) every coefficient was within 2.4 oracle standard errors on 5 data sets.
+    window_bounds_periods : (float, float)
+        Its minimum and maximum in periods of the run's first coordinate (y) at its dominant frequency, so that the
+        windows are the same whatever unit of time the data are written in.  The raw positions' noise in the
+        columns, double integrated over a window W, grows like (omega W)^2 times the coordinate's stiffness, while
+        shorter windows lose information.  Measured on a 35-Hz hinge beside a 22-Hz y (1500 fps, 12 runs): with
+        a minimum of 1.05 hinge periods its damping came out 4 oracle standard errors off; at 0.75 hinge periods
+        (21 ms) the standard errors of the hinge terms were 1.3-1.7 times the oracle's; at 0.55 y periods (25 ms,
+        0.875 hinge periods) every coefficient was within 2.4 oracle standard errors on 5 data sets.  The maximum,
+        11 y periods (0.5 s at 22 Hz), bounds the windows of a hinge much slower than y.
     segments : SegmentConfig
         The model-based state estimate.
     max_iterations : int
@@ -85,7 +87,7 @@ class DiscoveryConfig:
         pass), also below the lower bound of ``window_bounds_s``; None: the dominant frequency alone.  The raw
         positions' white noise averages out in the double integral only over windows below about one period of the
         equation's stiffness.  A strongly damped hinge near f_theta = 2 f_y, driven by y, moves at f_y: 0.75 of its
-        dominant period is 1.5 natural periods, and even the 25-ms floor is 1.07 periods of a 43-Hz hinge.  There
+        dominant period is 1.5 natural periods, and even the 0.55-y-period floor is 1.07 periods of a 43-Hz hinge.  There
         the theta residual came out 3.6 % above the tracking noise and up to 5 spurious thetaddot terms per data set
         were selected at z 3.8-5.8 (a constant, theta^3, y^2, y*thetadot, ...).  0.875 is the floor's own share of
         the 35-Hz hinge it was chosen on (docs/fitting.md, "Near parametric resonance").
@@ -115,11 +117,15 @@ class DiscoveryConfig:
     output_error : OutputErrorConfig or None
         Under model error in either equation, the coefficients are refined by the output error over segments of
         several periods and the support pruned and grown by it (:func:`fitting.refinement.output_error.refine_output_error`).
+    max_terms : int or None
+        At most this many terms per equation (``fit --max-terms``): each equation whose selection is larger takes the
+        largest support on its elimination path within the cap (the front's point at that cap,
+        :func:`fitting.selection.front.capped_support`), refitted on all runs.  None: the selection itself.
     """
 
     alpha: float = 0.01
     window_periods: float = 0.75
-    window_bounds_s: tuple[float, float] = (0.025, 0.5)
+    window_bounds_periods: tuple[float, float] = (0.55, 11.0)
     segments: SegmentConfig = field(default_factory=SegmentConfig)
     max_iterations: int = 6
     tolerance: float = 0.5
@@ -138,11 +144,12 @@ class DiscoveryConfig:
     model_error_tolerance: float = 0.03
     model_error_inflation: float | None = 20.0
     output_error: OutputErrorConfig | None = field(default_factory=OutputErrorConfig)
+    max_terms: int | None = None
 
     def __post_init__(self) -> None:
         check_fraction(self, "alpha")
         check_positive(self, "window_periods")
-        check_bounds(self, "window_bounds_s")
+        check_bounds(self, "window_bounds_periods")
         check_whole(self, "max_iterations", minimum=0)
         check_whole(self, "n_folds", minimum=2)
         check_whole(self, "selection_passes")
@@ -154,3 +161,5 @@ class DiscoveryConfig:
                    f"model_error_factor must exceed 1 (or be None), got {self.model_error_factor!r}")
         check_non_negative(self, "model_error_se")
         check_fraction(self, "model_error_tolerance", zero=True)
+        check_that(self, self.max_terms is None or (isinstance(self.max_terms, int) and self.max_terms >= 1),
+                   f"max_terms must be a whole number >= 1 (or None), got {self.max_terms!r}")

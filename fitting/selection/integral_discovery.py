@@ -57,6 +57,7 @@ from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
+from .front import Front, HeldOutRun, capped_support, long_time_front
 from .support_search import (fit_support, heldout_inflation, heldout_rms, prune_heldout, reduced_design,
                              select_heldout, select_support)
 
@@ -144,6 +145,11 @@ class DiscoveryResult:
     heldout_inflation : tuple of float
         Per equation, :func:`fitting.selection.support_search.heldout_inflation` at the significance rule's support (NaN with
         fewer than two runs).
+    output_error : OutputErrorFit or None
+    front : Front or None
+        Model size against the held-out long-time error (:mod:`fitting.selection.front`); None with fewer than two runs.
+    max_terms : int or None
+        The cap on terms per equation that picked this model from the front (``DiscoveryConfig.max_terms``).
     """
 
     mask: NDArray[np.bool_]
@@ -158,6 +164,8 @@ class DiscoveryResult:
     residual_to_noise: tuple[float, float] = (float("nan"), float("nan"))
     heldout_inflation: tuple[float, float] = (float("nan"), float("nan"))
     output_error: OutputErrorFit | None = None
+    front: Front | None = None
+    max_terms: int | None = None
 
     @property
     def z(self) -> NDArray[np.float64]:
@@ -201,7 +209,8 @@ class DiscoveryResult:
                    for q, eq in enumerate(EQUATION_NAMES)},
                 "knee": {"tolerance": KNEE_TOLERANCE, **{eq: list(t) for eq, t in knee.items()}},
                 "iterations": [it.to_json() for it in self.iterations], "converged": self.converged,
-                "output_error": self.output_error.to_json() if self.output_error is not None else None}
+                "output_error": self.output_error.to_json() if self.output_error is not None else None,
+                "front": ({**self.front.to_json(), "max_terms": self.max_terms} if self.front is not None else None)}
 
 
 # ---- the discovery loop ----------------------------------------------------------------------------------------
@@ -268,12 +277,18 @@ def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Disco
         st, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
         first.append(st)
         edges.append(edge)
-    windows = [[integral_window(dt, f[q], config.window_periods, config.window_bounds_s) for f, dt in zip(freqs, dts)]
-               for q in range(2)]
+    windows = [[integral_window(dt, f[q], config.window_periods, bounds_periods=config.window_bounds_periods,
+                                reference_hz=_reference_frequency(f)) for f, dt in zip(freqs, dts)] for q in range(2)]
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
     return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, (white_noise_std(ys), white_noise_std(ths)),
                   [min((v for v in f if v > 0), default=float("nan")) for f in freqs])
+
+
+def _reference_frequency(freqs: tuple[float, float]) -> float:
+    """The frequency [Hz] whose periods bound a run's windows and segments: the first coordinate's dominant one, or
+    the second's when the first does not oscillate (NaN when neither does)."""
+    return next((float(f) for f in freqs if np.isfinite(f) and f > 0), float("nan"))
 
 
 def _is_model_error(ratio: float, inflation: float, config: DiscoveryConfig) -> bool:
@@ -364,7 +379,7 @@ def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[i
     for it in range(config.max_iterations + 1):
         t0 = time.perf_counter()
         if it == 1 and config.natural_periods is not None:
-            windows = natural_windows(result.coef, windows, dts, config.natural_periods, config.window_bounds_s[1])
+            windows = natural_windows(result.coef, windows, dts, config.natural_periods)
         if it > 0:
             sigma = (float(result.res_std[0]), float(result.res_std[1]))
             estimate = model_states(PolynomialModel(result.coef), dts, ys, ths, first, setup.seg_len, sigma,
@@ -423,6 +438,11 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     t_start = time.perf_counter()
     setup = _setup(runs, derivs, config)
     result, windows, history, converged = _iterate(setup, config)
+    held_out = [HeldOutRun(dt, y[d.trim:], th[d.trim:], np.asarray(d.state[d.trim], float))
+                for dt, y, th, d in zip(setup.dts, setup.ys, setup.ths, derivs)]
+    front = long_time_front(result.designs, result.fronts, held_out, config.n_folds)
+    if config.max_terms is not None:
+        result = _capped(result, config.max_terms)
     refined = _refine_output_error(setup, [d.state for d in derivs], result, config)
     coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
     mask = coef != 0.0
@@ -438,7 +458,20 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     return DiscoveryResult(mask=mask, coef=coef, std_errors=np.where(mask, se, 0.0),
                            residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
-                           heldout_inflation=result.inflation, output_error=refined)
+                           heldout_inflation=result.inflation, output_error=refined, front=front,
+                           max_terms=config.max_terms)
+
+
+def _capped(result: _Pass, cap: int) -> _Pass:
+    """The last pass with each equation's support replaced by the front's point at ``cap`` terms
+    (:func:`fitting.selection.front.capped_support`), refitted on all runs."""
+    coef, se, res_std, fronts = np.zeros_like(result.coef), np.zeros_like(result.se), result.res_std.copy(), []
+    for q, (path, held, sel) in enumerate(result.fronts):
+        cols = list(capped_support(path, held, sel, cap))
+        c, e, s = fit_support(result.designs[q], cols)
+        coef[q, cols], se[q, cols], res_std[q] = c, e, s
+        fronts.append((path, held, cols))
+    return replace(result, coef=coef, se=se, res_std=res_std, fronts=fronts)
 
 
 def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, config: DiscoveryConfig):

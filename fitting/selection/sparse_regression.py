@@ -64,10 +64,11 @@ class RegressionConfig:
 
 
 def dataset_scales(derivs: Sequence[Derivatives], f_y: Sequence[float]) -> Scales:
-    """Common scales of a data set: median over runs of max|y|, max|theta| and 1/(2 pi f_y)."""
+    """Common scales of a data set: median over runs of max|y|, max|theta| and 1/(2 pi f_y) (1 for a coordinate that
+    does not move, whatever its unit)."""
     ly = float(np.median([np.max(np.abs(d.state[:, 0])) for d in derivs]))
     lt = float(np.median([np.max(np.abs(d.state[:, 2])) for d in derivs]))
-    return Scales(length_y=ly, length_theta=max(lt, 1e-6), time=1.0 / (2 * np.pi * float(np.median(f_y))))
+    return Scales(length_y=ly if ly > 0 else 1.0, length_theta=lt if lt > 0 else 1.0, time=1.0 / (2 * np.pi * float(np.median(f_y))))
 
 
 def scaled_data(derivs: Sequence[Derivatives], scales: Scales) -> tuple[list[NDArray], list[NDArray]]:

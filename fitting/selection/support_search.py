@@ -28,7 +28,7 @@ from ..derivatives.integral_form import detrend_windows, integral_columns, windo
 from ..model import TERMS
 from ..multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
-__all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "heldout_rms", "heldout_inflation",
+__all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "fit_on_runs", "heldout_rms", "heldout_inflation",
            "select_support", "prune_heldout"]
 
 @dataclass(frozen=True)
@@ -119,6 +119,14 @@ def fit_support(d: ReducedDesign, cols: Sequence[int]) -> tuple[NDArray, NDArray
     dof = max(d.dof - len(cols), 1)
     s2 = rss / dof
     return c, np.sqrt(np.clip(np.diag(cov), 0.0, None) * s2), float(np.sqrt(s2))
+
+
+def fit_on_runs(d: ReducedDesign, runs: Sequence[int], cols: Sequence[int]) -> NDArray[np.float64]:
+    """Least-squares coefficients on ``cols`` from the runs ``runs`` alone (a fold's training runs)."""
+    cols = list(cols)
+    if not cols:
+        return np.zeros(0)
+    return _lstsq(_r_factor([d.per_run[r] for r in runs]), cols, covariance=False)[0]
 
 
 def heldout_rms(d: ReducedDesign, paths: Sequence[Sequence[int]], n_folds: int) -> list[float]:
