@@ -18,7 +18,7 @@ DEFAULT_METHOD = "discovery"
 #: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method lists those it
 #: accepts in ``FittingMethod.options``): the discovery's practical threshold and the paper regression's relative
 #: threshold.
-METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "output_error", "relative_threshold")
+METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "output_error", "max_terms", "relative_threshold")
 
 #: name -> method, in registration order (the default first).
 METHODS: dict[str, Any] = {}  # values: fitting.methods.registry.FittingMethod

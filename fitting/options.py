@@ -23,7 +23,7 @@ __all__ = ["add_fit_options", "fit_config_from_args"]
 
 def add_fit_options(parser: argparse.ArgumentParser) -> None:
     """The fit's options: ``--method``, ``--max-evals``, ``--joint-max-evals``, ``--selection``,
-    ``--heldout-tolerance``, ``--output-error``, ``--relative-threshold``, ``--no-glitch-mask``, ``--min-periods``."""
+    ``--heldout-tolerance``, ``--output-error``, ``--max-terms``, ``--relative-threshold``, ``--no-glitch-mask``, ``--min-periods``."""
     parser.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD, help=methods_help())
     parser.add_argument("--max-evals", type=positive_int, default=None,
                         help="objective evaluations per run refinement (paper) or of the polish (discovery)")
@@ -50,6 +50,9 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
              "over 5-period segments, then drops the terms those trajectories do not need and adds those "
              "they need (a slow nonlinear damping, say); 'refine' only refines; 'off' keeps the integral "
              "form's coefficients and support")
+    parser.add_argument("--max-terms", type=positive_int, default=None, metavar="N",
+                        help="discovery: at most N terms per equation, the front's point at that size (model.json's "
+                             "discovery.front; default: the discovery's own selection)")
     parser.add_argument("--relative-threshold", action="store_true",
                         help="apply the regression threshold to each equation relative to its signal size (for a "
                              "hinge much slower than the vertical oscillation, whose scaled theta coefficients are "
@@ -87,6 +90,8 @@ def fit_config_from_args(args: argparse.Namespace) -> FitConfig:
         cfg = replace(cfg, **{method.max_evals_setting: replace(main_refine, max_evals=args.max_evals)})
     if args.joint_max_evals:
         cfg = replace(cfg, joint=replace(cfg.joint, max_evals=args.joint_max_evals))
+    if getattr(args, "max_terms", None) is not None:
+        cfg = replace(cfg, discovery=replace(cfg.discovery, max_terms=args.max_terms))
     if args.relative_threshold:
         cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
     if args.selection:

@@ -38,7 +38,7 @@ from ..selection.sparse_regression import scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
 from .registry import FitContext, register_method
 
-__all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE"]
+__all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE", "FRONT_FIGURE"]
 
 logger = logging.getLogger(__name__)
 
@@ -75,7 +75,7 @@ class DiscoveryMethod:
     #: the discovery's own settings (a paper fit's model.json leaves them out)
     private_settings: tuple[str, ...] = ("discovery", "polish", "polish_se")
     #: ``--heldout-tolerance``: the practical threshold of the held-out selection
-    options: tuple[str, ...] = ("heldout_tolerance", "output_error")
+    options: tuple[str, ...] = ("heldout_tolerance", "output_error", "max_terms")
     #: ``--max-evals`` sets the evaluations of the long-time polish
     max_evals_setting: str = "polish"
 
@@ -131,6 +131,13 @@ PARETO_FIGURE = ("pareto.png", "Pareto front of the discovery: held-out error (5
                                "terms, per equation; red: selected; blue square: the knee.")
 
 
+#: The front figure of a discovery fit (model size against the held-out long-time error) and its caption.
+FRONT_FIGURE = ("front.png", "Front of the discovery: held-out long-time error from each held-out run's first state "
+                             "(mean and standard error over folds of runs) against the terms of both equations; red: the "
+                             "selected model (the default); blue square: the knee (smallest within one standard error "
+                             "of the best).")
+
+
 def discovery_description(record: dict) -> MethodDescription:
     """The account of a model found by the integral-form discovery, from its model.json ``record``
     (:func:`fitting.output.model_file.fit_record`): how it was found, each term with its standard error, oracle standard
@@ -181,7 +188,34 @@ def discovery_description(record: dict) -> MethodDescription:
                  "(it also drops weak true terms near the information limit).")
     table = DescriptionTable("Discovered model (SI)", ("equation", "term", "coefficient", "std error", "z",
                                                        "oracle std error", "oracle z", "alias", "alias z"), tuple(rows))
-    return MethodDescription(text, table, (PARETO_FIGURE, *FIT_FIGURES), selected_by="by integral-form discovery")
+    front = disc.get("front")
+    figures = (PARETO_FIGURE, FRONT_FIGURE) if front else (PARETO_FIGURE,)
+    text += front_text(front)
+    return MethodDescription(text, table, (*figures, *FIT_FIGURES), selected_by="by integral-form discovery")
+
+
+def front_text(front: dict | None) -> str:
+    """The sentence on the front (model.json's ``discovery["front"]``): the selected model's held-out long-time error
+    and the knee's; empty without a front."""
+    if not front:
+        return ""
+    points = front["points"]
+    sel = next((p for p in points if p["selected"]), None)
+    knee = next((p for p in points if p["max_terms"] == front.get("knee_max_terms")), None)
+
+    def said(p: dict) -> str:
+        n = sum(p["n_terms"].values())
+        se = f" +- {100 * p['error_se']:.2g}" if p.get("error_se") is not None else ""
+        return f"{n} terms at {100 * p['error']:.3g}{se} %" if p.get("error") is not None else f"{n} terms (blown up)"
+
+    text = (f" On the front of model size against the held-out long-time error ({front['n_folds']}-fold over runs, "
+            "from each held-out run's first state)")
+    if sel is not None:
+        text += f", the selected model has {said(sel)}"
+    if knee is not None and knee is not sel:
+        text += (f"; the smallest within one standard error of the best has {said(knee)} (`--max-terms "
+                 f"{knee['max_terms']}` fits it)")
+    return text + "."
 
 
 def model_error_text(disc: dict, settings: dict) -> str:

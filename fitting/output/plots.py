@@ -3,6 +3,7 @@
 * ``zscores.png``: bar chart of every term's z-score per equation, threshold line, selected terms highlighted (methods
   with across-run statistics, :class:`fitting.results.EnsembleExtras`);
 * ``pareto.png``: the discovery's Pareto front;
+* ``front.png``: the discovery's front of model size against the held-out long-time error, with error bars over folds;
 * ``coefficients.png``: per-run refined coefficients (SI, normalised by the final value) of the selected terms;
 * ``optimisation.png``: loss against evaluation for every per-run refinement and the joint one;
 * ``phase_portraits.png`` / ``poincare.png``: data vs minimal model for up to four runs.
@@ -45,6 +46,8 @@ def plot_fit(res: FitResult, out_dir: str | os.PathLike, n_runs: int = 4) -> lis
     discovery = getattr(res.extras, "discovery", None)  # a method with a discovery path (DiscoveryExtras)
     if isinstance(discovery, DiscoveryResult):
         paths.append(_plot_pareto(discovery, out / "pareto.png"))
+        if discovery.front is not None:
+            paths.append(_plot_front(discovery, out / "front.png"))
     # coefficient distributions
     sel = [(q, j) for q in range(2) for j in range(len(TERMS)) if res.mask[q, j]]
     fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(sel)), 4))
@@ -149,6 +152,38 @@ def _plot_pareto(disc, path: Path) -> Path:
         ax.set_ylabel("held-out RMS error above the smallest [%]")
         ax.set_title(f"{eq}: Pareto front (5-fold over runs)")
         ax.legend(fontsize=7)
+    _save(fig, path)
+    return path
+
+
+def _plot_front(disc, path: Path) -> Path:
+    """Held-out long-time error (mean and standard error over folds) against the terms of both equations; the
+    discovery's selection, the knee (one-standard-error rule) and the ``--max-terms`` pick marked."""
+    plt = _plt()
+    front = disc.front
+    pts = [p for p in front.points if np.isfinite(p.error)]
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    n = np.array([sum(p.n_terms) for p in pts])
+    err = np.array([100.0 * p.error for p in pts])
+    se = np.array([100.0 * p.error_se if np.isfinite(p.error_se) else 0.0 for p in pts])
+    ax.errorbar(n, err, yerr=se, fmt="o-", color="tab:gray", ms=4, capsize=2,
+                label=f"held-out long-time error ({front.n_folds}-fold over runs, +- 1 standard error)")
+    marks = [(front.selected, "o", "tab:red", "selected (the default)"),
+             (front.knee, "s", "tab:blue", "knee: smallest within 1 standard error of the best")]
+    if disc.max_terms is not None:
+        fitted = {eq: tuple(t) for eq, t in disc.terms().items()}
+        picked = next((p for p in pts if {eq: tuple(sorted(t)) for eq, t in p.terms.items()}
+                       == {eq: tuple(sorted(t)) for eq, t in fitted.items()}), None)
+        marks.append((picked, "D", "tab:green", f"--max-terms {disc.max_terms}"))
+    for point, marker, colour, label in marks:
+        if point is not None and np.isfinite(point.error):
+            ax.plot(sum(point.n_terms), 100.0 * point.error, marker, mfc="none", mec=colour, ms=11, mew=1.5,
+                    label=label)
+    ax.set_yscale("log")
+    ax.set_xlabel("terms (both equations)")
+    ax.set_ylabel("long-time error from the first state [% of the RMS motion]")
+    ax.set_title("front: model size against held-out long-time error")
+    ax.legend(fontsize=7)
     _save(fig, path)
     return path
 

@@ -1,8 +1,9 @@
 """The accuracy/sparsity front of a discovery: model size against the held-out long-time error.
 
 For every cap ``n`` on the number of terms per equation, each equation takes the largest support on its elimination
-path with at most ``n`` terms (the discovery's own selection where it fits under the cap; among supports of one size
-the one with the smallest integral-form held-out error).  That model is fitted on the training runs of each fold
+path with at most ``n`` terms (among supports of one size the one with the smallest integral-form held-out error):
+up to the size of the discovery's own selection (its larger equation's) the smaller supports of the pruning paths
+and the selection itself, above it the larger supports of the backward elimination from the full library.  That model is fitted on the training runs of each fold
 (K-fold over runs, :func:`cubedimer.folds.run_folds`) and integrated from the first state of every held-out run; its
 **long-time error** is the RMS of the trajectory's error over the RMS of the run's motion about its mean, averaged
 over the two coordinates (:func:`long_time_error`), a dimensionless number that does not depend on the units of time
@@ -133,14 +134,19 @@ class Front:
 
 
 def capped_support(path: Sequence[Sequence[int]], held: Sequence[float], selected: Sequence[int],
-                   cap: int) -> tuple[int, ...]:
+                   cap: int, enlarge: bool = False) -> tuple[int, ...]:
     """The support of one equation at a cap of ``cap`` terms: the selection when it fits, else the largest support
     on the elimination ``path`` with at most ``cap`` terms (the smallest held-out error among equal sizes; the
-    smallest support on the path when none fits)."""
+    smallest support on the path when none fits).  With ``enlarge``, a cap above the selection's size takes the
+    largest path support within it that is larger than the selection (the selection when there is none)."""
     sel = tuple(sorted(selected))
-    if len(sel) <= cap:
-        return sel
     cands = [(tuple(sorted(c)), h if np.isfinite(h) else np.inf) for c, h in zip(path, held)]
+    if len(sel) <= cap:
+        if not enlarge:
+            return sel
+        cands = [c for c in cands if len(sel) < len(c[0])]
+        if not any(len(c[0]) <= cap for c in cands):
+            return sel
     fit = [c for c in cands if len(c[0]) <= cap]
     if not fit:
         return min(cands, key=lambda c: len(c[0]))[0]
@@ -170,9 +176,10 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
     folds = run_folds(R, n_folds)
     if caps is None:
         caps = sorted({len(c) for path, _, sel in fronts for c in [*path, sel]})
+    largest = max(len(sel) for _, _, sel in fronts)  # up to the selection's size caps shrink, above it they enlarge
     seen, points = set(), []
     for cap in caps:
-        supports = tuple(capped_support(path, held, sel, cap) for path, held, sel in fronts)
+        supports = tuple(capped_support(path, held, sel, cap, enlarge=cap > largest) for path, held, sel in fronts)
         if supports in seen:
             continue
         seen.add(supports)
