@@ -32,7 +32,7 @@ from ..model import PolynomialModel, Scales
 from ..refinement.long_time import refine
 from ..results import EnsembleExtras, FitResult, PreparedRun, RunEstimate
 from ..selection.ensemble import least_squares_on_support, select_terms, term_statistics
-from ..selection.integral_discovery import MODEL_ERROR_MODE, DiscoveryResult, discover_model
+from ..selection.integral_discovery import FEW_RUNS_MODE, MODEL_ERROR_MODE, DiscoveryResult, discover_model
 from ..selection.rules import support_text
 from ..selection.sparse_regression import scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
@@ -226,7 +226,7 @@ def model_error_text(disc: dict, settings: dict) -> str:
     parts = []
     for eq in EQUATION_NAMES:
         sel = (disc.get(eq) or {}).get("selection") or {}
-        if sel.get("rule") != MODEL_ERROR_MODE:
+        if sel.get("rule") not in (MODEL_ERROR_MODE, FEW_RUNS_MODE):
             continue
         ratio, infl = sel.get("residual_to_noise"), sel.get("heldout_inflation")
         signs = []
@@ -248,6 +248,11 @@ def model_error_text(disc: dict, settings: dict) -> str:
             "standard errors and Holm's rule lose their meaning there; those equations were selected by held-out "
             f"prediction over runs instead (the smallest support on the elimination path within {within} of the "
             "best held-out error), and their standard errors are those of a residual that is partly model error.")
+    overruled = [eq for eq in EQUATION_NAMES if ((disc.get(eq) or {}).get("selection") or {}).get("rule") == FEW_RUNS_MODE]
+    if overruled:
+        text += (f" In {' and '.join(overruled)} the few runs disagreed (a held-out run predicted more than "
+                 f"{100 * (settings.get('few_runs_excess') or 0.1):g} % worse without terms the significance rule "
+                 "holds), so the significance rule's support was kept instead.")
     oe = disc.get("output_error") or {}
     if oe.get("segments"):
         pruned, added = oe.get("pruned") or [], oe.get("added") or []

@@ -56,9 +56,9 @@ from ..derivatives.integral_form import column_states, integral_window, natural_
 from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
-from .discovery_config import KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
+from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
 from .front import Front, HeldOutRun, capped_support, long_time_front
-from .support_search import (fit_support, heldout_inflation, heldout_rms, prune_heldout, reduced_design,
+from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
                              select_heldout, select_support)
 
 if TYPE_CHECKING:
@@ -66,7 +66,7 @@ if TYPE_CHECKING:
     from ..derivatives.savitzky_golay import Derivatives
 
 __all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model",
-           "METHOD", "KNEE_TOLERANCE", "MODEL_ERROR_MODE"]
+           "METHOD", "KNEE_TOLERANCE", "MODEL_ERROR_MODE", "FEW_RUNS_MODE"]
 
 log = logging.getLogger(__name__)
 
@@ -102,7 +102,9 @@ class PathPoint:
 
 @dataclass(frozen=True)
 class IterationLog:
-    """One pass: which states, how many terms, how far the coefficients moved."""
+    """One pass: which states, how many terms, how far the coefficients moved (in standard errors, over the equations
+    selected by significance) and how far the held-out error of the selection moved (relative, over those under
+    model error)."""
 
     iteration: int
     states: str
@@ -112,6 +114,7 @@ class IterationLog:
     state_rms: tuple[float, float]
     failed_frames: int
     seconds: float
+    heldout_change: float = float("nan")
 
     def to_json(self) -> dict:
         return dict(self.__dict__)
@@ -260,6 +263,7 @@ class _Pass:
     modes: tuple[str, str]
     ratio: tuple[float, float]
     inflation: tuple[float, float]
+    heldout: tuple[float, float] = (float("nan"), float("nan"))
 
 
 def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> _Setup:
@@ -291,6 +295,30 @@ def _reference_frequency(freqs: tuple[float, float]) -> float:
     return next((float(f) for f in freqs if np.isfinite(f) and f > 0), float("nan"))
 
 
+def _runs_disagree(design, chosen: Sequence[int], significant: Sequence[int], config: DiscoveryConfig) -> bool:
+    """Whether the held-out selection ``chosen`` drops terms of the significance rule's support ``significant`` on
+    the word of runs that disagree: some held-out run's misfit is higher without them by more than
+    ``DiscoveryConfig.few_runs_excess`` (relative), with fewer runs than ``DiscoveryConfig.few_runs``.  Logged as a
+    warning with more runs."""
+    dropped = set(significant) - set(chosen)
+    n_runs = len(design.per_run)
+    if not dropped or n_runs < 2 or config.few_runs_excess is None:
+        return False
+    err = heldout_per_run(design, [list(chosen), list(significant)], config.n_folds)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        excess = float(np.nanmax(err[0] / err[1] - 1.0))
+    if not excess > config.few_runs_excess:
+        return False
+    if n_runs < config.few_runs:
+        log.warning("held-out selection over %d runs drops %d terms of the significance rule's support while a held-out "
+                    "run's misfit rises by %.0f %% without them: the runs disagree, the significance support is kept",
+                    n_runs, len(dropped), 100 * excess)
+        return True
+    log.warning("held-out selection drops %d terms of the significance rule's support while a held-out run's misfit "
+                "rises by %.0f %% without them", len(dropped), 100 * excess)
+    return False
+
+
 def _is_model_error(ratio: float, inflation: float, config: DiscoveryConfig) -> bool:
     """Either sign of model error (``model_error_factor``, ``model_error_inflation``)."""
     factor, limit = config.model_error_factor, config.model_error_inflation
@@ -309,9 +337,12 @@ def _select_equation(design, forced: NDArray, noise: float, config: DiscoveryCon
     held_a = [float("nan")] * len(path)
     if _is_model_error(ratio, inflation, config):
         mode = MODEL_ERROR_MODE
+        significant = list(sel)
         sel, path, held = select_heldout(design, forced, config.alpha, config.velocity_first, config.n_folds,
                                          config.model_error_se, config.model_error_tolerance, noise,
                                          config.heldout_tolerance)
+        if _runs_disagree(design, sel, significant, config):
+            sel, mode = significant, FEW_RUNS_MODE
     elif config.heldout_prune:
         sel, path_b, held_b = prune_heldout(design, sel, forced, config.alpha, config.velocity_first, config.n_folds,
                                             config.heldout_tolerance)
@@ -340,8 +371,9 @@ def _one_pass(setup: _Setup, windows, states: Sequence[NDArray], trims: Sequence
         c, e, s = fit_support(designs[q], sel)
         coef[q, sel], se[q, sel], res_std[q] = c, e, s
         fronts.append((path, held, sel))
+    held = tuple(heldout_rms(designs[q], [fronts[q][2]], config.n_folds)[0] for q in range(2))
     return _Pass(coef, se, res_std, designs, fronts, (modes[0], modes[1]), (ratio[0], ratio[1]),
-                 (inflation[0], inflation[1]))
+                 (inflation[0], inflation[1]), held)
 
 
 def _freeze(mask: NDArray, masks: list[NDArray], it: int, config: DiscoveryConfig) -> tuple[NDArray | None, str]:
@@ -357,14 +389,24 @@ def _freeze(mask: NDArray, masks: list[NDArray], it: int, config: DiscoveryConfi
     return None, ""
 
 
-def _max_change(result: _Pass, mask: NDArray, prev: tuple | None) -> float:
-    """The largest change of a coefficient since the previous pass in standard errors (inf: the support changed)."""
+def _max_change(result: _Pass, mask: NDArray, prev: _Pass | None, config: DiscoveryConfig) -> tuple[float, float]:
+    """Step 3's convergence measures since the previous pass: the largest change of a coefficient in standard errors
+    over the equations selected by significance, and the largest relative change of the held-out RMS error of the
+    selection over those under model error, where standard errors mean nothing (both inf when the support changed;
+    0 where no equation is of that kind)."""
     if prev is None:
-        return np.inf
+        return np.inf, np.inf
+    prev_mask = prev.coef != 0.0
+    if not np.array_equal(mask, prev_mask):
+        return np.inf, np.inf
+    model_error = np.array([m in (MODEL_ERROR_MODE, FEW_RUNS_MODE) for m in result.modes])
     with np.errstate(divide="ignore", invalid="ignore"):
-        d = np.abs(result.coef - prev[0]) / np.maximum(result.se, prev[1])
-    change = float(np.nanmax(np.where(mask | prev[2], d, 0.0)))
-    return np.inf if not np.array_equal(mask, prev[2]) else change
+        d = np.abs(result.coef - prev.coef) / np.maximum(result.se, prev.se)
+        held = np.abs(np.subtract(result.heldout, prev.heldout)) / np.asarray(prev.heldout)
+    se_rows = ~model_error[:, None] & mask
+    change = float(np.nanmax(np.where(se_rows, d, 0.0)))
+    held_change = float(np.nanmax(np.where(model_error, held, 0.0)))
+    return change, (held_change if np.isfinite(held_change) or not model_error.any() else np.inf)
 
 
 def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[int]], list[IterationLog], bool]:
@@ -396,18 +438,19 @@ def _iterate(setup: _Setup, config: DiscoveryConfig) -> tuple[_Pass, list[list[i
             frozen, note = _freeze(mask, masks, it, config)
             label += note
         masks.append(mask)
-        change = _max_change(result, mask, prev)
+        change, held_change = _max_change(result, mask, prev, config)
         res_std = result.res_std
         history.append(IterationLog(
             iteration=it, states=label, n_terms=(int(mask[0].sum()), int(mask[1].sum())), max_change_se=change,
+            heldout_change=held_change,
             residual_std=(float(res_std[0]), float(res_std[1])),
             state_rms=tuple(float(v) for v in (estimate.rms if estimate is not None else (np.nan, np.nan))),
             failed_frames=estimate.n_failed if estimate is not None else 0, seconds=time.perf_counter() - t0))
         log.info("discovery pass %d (%s states): %d + %d terms, max change %.3g SE, residual std %.3g m, %.3g",
                  it, label, mask[0].sum(), mask[1].sum(), change, res_std[0], res_std[1])
-        if change < config.tolerance:
+        if change < config.tolerance and held_change < config.heldout_convergence:
             return result, windows, history, True
-        prev = (result.coef, result.se, mask)
+        prev = result
     return result, windows, history, False
 
 
@@ -476,7 +519,7 @@ def _capped(result: _Pass, cap: int) -> _Pass:
 
 def _refine_output_error(setup: _Setup, smoothed: list[NDArray], result: _Pass, config: DiscoveryConfig):
     """Step 5: under model error, the coefficients whose trajectories best follow the runs over several periods."""
-    if config.output_error is None or MODEL_ERROR_MODE not in result.modes:
+    if config.output_error is None or not {MODEL_ERROR_MODE, FEW_RUNS_MODE} & set(result.modes):
         return None
     oe = replace(config.output_error, misfit_tolerance=max(config.output_error.misfit_tolerance,
                                                            config.heldout_tolerance))  # the practical threshold
