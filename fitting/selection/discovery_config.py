@@ -175,6 +175,8 @@ class DiscoveryConfig:
         check_whole(self, "selection_passes")
         check_positive(self, "tolerance")
         check_positive(self, "heldout_convergence")
+        check_whole(self, "few_runs", minimum=2)
+        check_positive(self, "few_runs_excess", optional=True)
         check_fraction(self, "heldout_tolerance", zero=True)
         check_positive(self, "natural_periods", optional=True)
         check_positive(self, "model_error_inflation", optional=True)
