@@ -23,7 +23,8 @@ from ..integrate import integrate_batch
 from ..model import EXPONENTS, PolynomialModel, Scales
 from .losses import LossTerms, LossWeights, Reference, loss_terms, make_reference
 
-__all__ = ["RefineConfig", "JOINT_REFINE", "RefineResult", "Objective", "scaled_reference", "refine", "default_substeps"]
+__all__ = ["RefineConfig", "JOINT_REFINE", "RefineResult", "Objective", "scaled_reference", "refine", "default_substeps",
+           "significant_digits", "START_DIGITS"]
 
 
 #: The nlopt local derivative-free algorithms :class:`RefineConfig` accepts.
@@ -189,6 +190,19 @@ def default_substeps(coef_scaled: NDArray, dt_scaled: float, h_omega: float) -> 
     return max(1, int(np.ceil(dt_scaled * om / h_omega)))
 
 
+#: significant digits of the refinement's start and box (:func:`significant_digits`)
+START_DIGITS = 9
+
+
+def significant_digits(x: NDArray, digits: int = START_DIGITS) -> NDArray[np.float64]:
+    """``x`` rounded to ``digits`` significant decimal digits, element by element (zeros stay zero)."""
+    x = np.asarray(x, float)
+    nz = (x != 0) & np.isfinite(x)
+    e = np.floor(np.log10(np.abs(np.where(nz, x, 1.0))))
+    scale = 10.0 ** (digits - 1 - e)
+    return np.where(nz, np.round(x * scale) / scale, x)
+
+
 def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales,
            config: RefineConfig = RefineConfig(), mask: NDArray[np.bool_] | None = None,
            half_width: NDArray[np.float64] | None = None) -> RefineResult:
@@ -212,8 +226,11 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
 
     refs = [scaled_reference(d, scales) for d in derivs]
     mask = start.support if mask is None else np.asarray(mask, bool)
-    c0 = scales.to_scaled(start.coef)
-    c0 = np.where(mask, c0, 0.0)
+    # the start and the box to START_DIGITS significant digits in the data's own scaled units: the optimiser's path
+    # on the non-smooth loss turns a 1e-10 change of its start into 0.5 standard errors, so without this the unit
+    # a data set is written in (whose conversion changes the last bits) would change the result (docs/fitting.md,
+    # "Units and time scale")
+    c0 = significant_digits(np.where(mask, scales.to_scaled(start.coef), 0.0))
     sub = default_substeps(c0, refs[0].dt, config.h_omega)
     obj = Objective(refs, mask, sub, config.weights)
     x0 = c0[mask]
@@ -224,7 +241,7 @@ def refine(start: PolynomialModel, derivs: Sequence[Derivatives], scales: Scales
     if half_width is None:
         half = np.maximum(config.rel_bound * np.abs(x0), config.abs_bound)
     else:
-        half = np.asarray(half_width, float)[mask]
+        half = significant_digits(np.asarray(half_width, float)[mask])
         if not np.all(half > 0):
             raise ValueError("half_width must be positive on every optimised term")
     x = x0.copy()
