@@ -1,10 +1,12 @@
 """Few runs under model error: when the held-out selection over 4 runs drops terms of the significance rule's support
-on the word of runs that disagree, the significance support is kept (``DiscoveryConfig.few_runs``)."""
+on the word of runs that disagree, the significance support is kept (``DiscoveryConfig.few_runs``); and the passes'
+convergence under model error is judged on the support and the held-out error, not on standard errors."""
 from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fitting.selection.integral_discovery import FEW_RUNS_MODE, MODEL_ERROR_MODE, DiscoveryConfig, discover_model
@@ -36,3 +38,38 @@ def test_the_fallback_needs_few_runs_and_a_large_excess():
         DiscoveryConfig(few_runs=1)
     with pytest.raises(ValueError):
         DiscoveryConfig(few_runs_excess=-0.1)
+
+
+def _pass(coef, se, modes, heldout):
+    from fitting.selection.integral_discovery import _Pass
+
+    return _Pass(np.asarray(coef, float), np.asarray(se, float), np.ones(2), [], [], modes, (1.0, 1.0), (0.0, 0.0),
+                 heldout)
+
+
+def test_convergence_under_model_error_is_judged_on_the_support_and_the_heldout_error():
+    from fitting.selection.integral_discovery import _max_change
+
+    cfg = DiscoveryConfig()
+    coef = np.zeros((2, 35))
+    coef[:, :3] = 1.0
+    se = np.where(coef != 0, 0.01, 0.0)
+    mask = coef != 0
+    moved = coef.copy()
+    moved[1, :3] += 0.05  # 5 standard errors in thetaddot: no convergence by standard errors
+    prev = _pass(coef, se, ("significance", MODEL_ERROR_MODE), (1e-3, 2e-3))
+    # thetaddot under model error: its held-out error moved by 0.2 % (< 0.5 %): converged, whatever the 5 SE
+    cur = _pass(moved, se, ("significance", MODEL_ERROR_MODE), (1e-3, 2.004e-3))
+    change, held = _max_change(cur, mask, prev, cfg)
+    assert change < cfg.tolerance and held == pytest.approx(0.002) and held < cfg.heldout_convergence
+    # by significance the same move is 5 standard errors: not converged
+    cur = _pass(moved, se, ("significance", "significance"), (1e-3, 2.004e-3))
+    assert _max_change(cur, mask, _pass(coef, se, ("significance", "significance"), (1e-3, 2e-3)), cfg)[0] == \
+        pytest.approx(5.0)
+    # a held-out error that moved by 1 % is not converged; a changed support never is
+    cur = _pass(moved, se, ("significance", MODEL_ERROR_MODE), (1e-3, 2.02e-3))
+    assert _max_change(cur, mask, prev, cfg)[1] > cfg.heldout_convergence
+    grown = moved.copy()
+    grown[1, 5] = 0.3
+    assert _max_change(_pass(grown, se, ("significance", MODEL_ERROR_MODE), (1e-3, 2e-3)), grown != 0, prev, cfg) == \
+        (np.inf, np.inf)
