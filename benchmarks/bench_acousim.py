@@ -7,10 +7,13 @@ point (``GorkovDimer.direct_integrals``), is timed on a subset of points in the 
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from benchmarks import best_time
+from cubedimer.meta import META_DEFAULTS
+
+#: the default dimer's cube side [m] (docs/conventions.md)
+SIDE = META_DEFAULTS["side_length_m"]
 
 
 def main() -> str:
@@ -25,12 +28,12 @@ def main() -> str:
         for degree, sym in ((1, False), (2, False), (2, True), (5, True)):
             if degree == 5 and frac < 0.1:
                 continue  # 27 nodes per tet x 16 images: memory-bound, adds nothing
-            model = GorkovDimer(mesh_size=frac * 500e-6, quadrature_degree=degree, symmetrize=sym)
+            model = GorkovDimer(mesh_size=frac * SIDE, quadrature_degree=degree, symmetrize=sym)
             z = model.equilibrium_height
             sweep_s = best_time(lambda: static_sweep(model, theta, y), 3)
             sw = static_sweep(model, theta, y)
-            _, _, exact = analytic.dimer_generalized_forces(500e-6, sw["theta"], sw["z_com"], model.wave)
-            f_exact, _, _ = analytic.dimer_generalized_forces(500e-6, sw["theta"], sw["z_com"], model.wave)
+            _, _, exact = analytic.dimer_generalized_forces(SIDE, sw["theta"], sw["z_com"], model.wave)
+            f_exact, _, _ = analytic.dimer_generalized_forces(SIDE, sw["theta"], sw["z_com"], model.wave)
             err_q = np.abs(sw["q_theta"] - exact).max() / np.abs(exact).max()
             err_f = np.abs(sw["force_z"] / f_exact - 1).max()
             n_pts = theta.size * y.size

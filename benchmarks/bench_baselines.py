@@ -5,16 +5,16 @@ Two modes, both on the data sets of :mod:`benchmarks.bench_discovery` (same gene
 * ``--baselines``: on each data set, pysindy STLSQ on the Savitzky-Golay accelerations with the cubic
   library, pysindy's ``EnsembleOptimizer`` (bagged STLSQ), pysindy's weak form (``WeakPDELibrary`` on the
   first-order state), the paper's pipeline (``FitConfig(method="paper")``, one worker process) and ours
-  (:func:`fitting.discovery.discover_model`).  Per method and data set: missing true terms, spurious
+  (:func:`fitting.selection.integral_discovery.discover_model`).  Per method and data set: missing true terms, spurious
   terms, median and max relative coefficient error on the true terms found, wall time.
 * ``--detection-curve``: the ``paper``, ``weak8`` and ``weak20`` truths at 6, 8, 12, 20 and 30 runs (other
-  settings of each case); every true term's oracle z (:mod:`fitting.oracle`) and whether ours and STLSQ
+  settings of each case); every true term's oracle z (:mod:`fitting.uncertainty.oracle`) and whether ours and STLSQ
   selected it; the fraction found per oracle-z bin and run count, and the spurious terms, optionally
   plotted (``--figure PATH``).
 
 The pysindy settings are fixed once for every data set (:data:`STLSQ_THRESHOLD`, :data:`STLSQ_ALPHA`,
 :data:`WEAK_WINDOW_S`, :data:`WEAK_WINDOWS_PER_RUN`; the thresholds are those of
-:class:`fitting.regression.RegressionConfig`, dimensionless in the scaled variables).
+:class:`fitting.selection.sparse_regression.RegressionConfig`, dimensionless in the scaled variables).
 
 Run ``python -m benchmarks.bench_baselines --baselines --detection-curve [--cases paper signs stiff]
 [--seeds 101 102] [--paper-seeds 101] [--curve-seeds 101 102 103 104]
@@ -118,7 +118,7 @@ def weak_sindy(derivs: Sequence, scales) -> NDArray[np.float64]:
     import pysindy as ps
 
     from cubedimer.terms import STATE_NAMES
-    from fitting.regression import pysindy_to_canonical
+    from fitting.selection.sparse_regression import pysindy_to_canonical
 
     X = [d.state / scales.state for d in derivs]
     t = (derivs[0].t - derivs[0].t[0]) / scales.time
@@ -156,10 +156,11 @@ def run_baselines(case: Case, seed: int, paper: bool) -> list[MethodResult]:
     """Every method on one data set (the paper's pipeline only when ``paper``)."""
     from cubedimer.executor import ExecutorConfig
     from cubedimer.spectra import dominant_frequency
-    from fitting.discovery import DiscoveryConfig, discover_model
+    from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
     from fitting.config import FitConfig
-    from fitting.pipeline import fit_runs, prepare_runs
-    from fitting.regression import RegressionConfig, dataset_scales, fit_ensemble_regression, fit_regression
+    from fitting.fit import fit_runs, prepare_runs
+    from fitting.selection.sparse_regression import (RegressionConfig, dataset_scales, fit_ensemble_regression,
+                                                     fit_regression)
 
     truth, runs, derivs, _ = make_data(case, seed)
     scales = dataset_scales(derivs, [dominant_frequency(r.y, r.dt) for r in runs])
@@ -234,8 +235,8 @@ def detection_data(base: Case, n_runs: int, seed: int) -> list[Detection]:
     """Oracle z of every true term of ``base`` at ``n_runs`` runs and whether ours and STLSQ selected it."""
     from cubedimer.spectra import dominant_frequency
     from cubedimer.terms import coefficient_label
-    from fitting.discovery import DiscoveryConfig, discover_model
-    from fitting.regression import RegressionConfig, dataset_scales, fit_regression
+    from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+    from fitting.selection.sparse_regression import RegressionConfig, dataset_scales, fit_regression
 
     case = dataclasses.replace(base, n_runs=n_runs)
     truth, runs, derivs, exact = make_data(case, seed)

@@ -11,6 +11,11 @@ import time
 
 import numpy as np
 
+from cubedimer.meta import META_DEFAULTS
+
+#: the default dimer's cube side [m] (docs/conventions.md)
+SIDE = META_DEFAULTS["side_length_m"]
+
 os.environ.setdefault("POCL_MAX_PTHREAD_COUNT", "1")  # before pocl starts: one core, as numba below
 
 LEVELS = (1.4, 1.0, 0.7)
@@ -36,10 +41,10 @@ def main() -> str:
         for device in ("numba", "opencl"):  # first calls: compilation
             os.environ[solver.BEM_DEVICE_ENV] = device
             t0 = time.perf_counter()
-            solver.solve_scattering(dimer_bodies(0.3, edge_graded_mesh_spec(500e-6, GAP * 500e-6, 2.0)), medium)
+            solver.solve_scattering(dimer_bodies(0.3, edge_graded_mesh_spec(SIDE, GAP * SIDE, 2.0)), medium)
             first[device] = time.perf_counter() - t0
         for q in LEVELS:
-            bodies = dimer_bodies(0.3, edge_graded_mesh_spec(500e-6, GAP * 500e-6, q))
+            bodies = dimer_bodies(0.3, edge_graded_mesh_spec(SIDE, GAP * SIDE, q))
             sol = {}
             for device in ("numba", "opencl"):
                 os.environ[solver.BEM_DEVICE_ENV] = device

@@ -73,10 +73,10 @@ def _integrator_section(lines: list[str]) -> None:
 
 def _shape_loss_section(lines: list[str], seed: int) -> None:
     """The long-time loss on one run (4500 samples): the exact nearest-point search of the shape term
-    (:class:`fitting.nearest.PointGrid`) against scipy's k-d tree, near the data and far from it."""
+    (:class:`fitting.refinement.nearest.PointGrid`) against scipy's k-d tree, near the data and far from it."""
     from scipy.spatial import cKDTree
 
-    from fitting.losses import attractor_shape_loss, loss_terms, make_reference
+    from fitting.refinement.losses import attractor_shape_loss, loss_terms, make_reference
     from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model
 
     run = generate_runs(paper_reduced_model(), SyntheticConfig(n_runs=1, seed=seed))[0]
@@ -129,14 +129,14 @@ def _support_stats(model, truth):
 
 def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) -> None:
     from fitting.compare import paired_wilcoxon, per_run_losses
-    from fitting.ensemble import mean_pvalues
+    from fitting.selection.ensemble import mean_pvalues
     from cubedimer.executor import ExecutorConfig
     from fitting.model import TERMS
     from fitting.config import FitConfig
-    from fitting.fit_output import write_fit
-    from fitting.pipeline import fit_dataset
-    from fitting.regression import RegressionConfig, fit_ensemble_regression, fit_regression
-    from fitting.selection import SelectionConfig
+    from fitting.output.model_file import write_fit
+    from fitting.fit import fit_dataset
+    from fitting.selection.sparse_regression import RegressionConfig, fit_ensemble_regression, fit_regression
+    from fitting.selection.backward_elimination import SelectionConfig
     from fitting.synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
     truth = paper_reduced_model()

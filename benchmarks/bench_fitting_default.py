@@ -2,7 +2,7 @@
 
 ``python -m benchmarks.bench_fitting_default [--cases paper signs ...] [--seeds 601 602 603] [--no-speed]``
 writes each data set as CSV (:func:`fitting.synthetic.write_dataset`), runs
-:func:`fitting.pipeline.fit_dataset` with the default :class:`fitting.pipeline.FitConfig` (method
+:func:`fitting.fit.fit_dataset` with the default :class:`fitting.fit.FitConfig` (method
 "discovery": discovery, long-time polish, attractor check) and scores the final model with the criterion of
 :func:`benchmarks.bench_discovery.score` (true terms with oracle z >= 5 found, at most one spurious term,
 coefficients within max(10 %, 3 oracle standard errors)), then the wall time on 12 and 30 runs
@@ -34,7 +34,7 @@ def fit_case(case, seed: int, workdir: Path, config=None) -> tuple[dict, float, 
     from cubedimer.dataset import Run
     from fitting.model import PolynomialModel
     from fitting.config import FitConfig
-    from fitting.pipeline import fit_dataset
+    from fitting.fit import fit_dataset
     from fitting.synthetic import SyntheticConfig, write_dataset
 
     truth = PolynomialModel.from_equations(case.equations)
@@ -57,7 +57,7 @@ def speed(n_runs: int, workdir: Path, seed: int = 0) -> tuple[float, float]:
     """Wall and CPU time [s] of the default fit (no plots) on ``n_runs`` runs of 3 s (paper's reduced model,
     1500 fps); the fit runs in one process, so on an idle machine the wall time is about the CPU time."""
     from fitting.config import FitConfig
-    from fitting.pipeline import fit_dataset
+    from fitting.fit import fit_dataset
     from fitting.synthetic import SyntheticConfig, paper_reduced_model, write_dataset
 
     data = workdir / f"speed{n_runs}"

@@ -13,11 +13,11 @@ cubic Taylor series leaves a chosen share of the acceleration unexplained (``tru
 exact minus the cubic Taylor acceleration over RMS of the exact one, along the runs: 1, 5 and 12 %), with white
 noise of 0.1 % of the angle amplitude.  The Taylor coefficients are exact (sympy).  Methods:
 
-* ``ours``: :func:`fitting.discovery.discover_model` with ``DiscoveryConfig()`` (its model-error rule decides
+* ``ours``: :func:`fitting.selection.integral_discovery.discover_model` with ``DiscoveryConfig()`` (its model-error rule decides
   whether the selection is by significance or by held-out prediction, and under model error the coefficients are
-  refined by the output error, :mod:`fitting.output_error`);
+  refined by the output error, :mod:`fitting.refinement.output_error`);
 * ``STLSQ-CV``: pysindy STLSQ on the Savitzky-Golay states and accelerations (order 5 over
-  ``SINDY_WINDOW_PERIODS`` = 0.25 periods of the faster coordinate; cubic library, scaled variables of :mod:`fitting.regression`, ridge alpha 0.3), its threshold
+  ``SINDY_WINDOW_PERIODS`` = 0.25 periods of the faster coordinate; cubic library, scaled variables of :mod:`fitting.selection.sparse_regression`, ridge alpha 0.3), its threshold
   chosen from ``THRESHOLDS`` by 5-fold cross-validation over runs (held-out acceleration RMS, each equation in
   units of its own acceleration's standard deviation);
 * ``E-STLSQ-CV``: pysindy's ``EnsembleOptimizer`` (50 bagged STLSQ fits at the cross-validated threshold; terms
@@ -200,7 +200,7 @@ def make_data(name: str, level: float, seed: int, fit_runs: int = FIT_RUNS) -> D
     """``fit_runs`` noisy runs and ``HELDOUT_RUNS`` exact ones at the truncation residual ``level``."""
     from cubedimer.dataset import Run
     from cubedimer.spectra import dominant_frequency
-    from fitting.derivatives import SmoothingConfig, run_derivatives
+    from fitting.derivatives.savitzky_golay import SmoothingConfig, run_derivatives
 
     truth = TRUTHS[name]
     scale = SCALES.get((name, level)) or scale_for(name, level)
@@ -229,7 +229,8 @@ def stlsq_cv(data: Data, ensemble: bool, seed: int) -> tuple[NDArray, float]:
     """pysindy STLSQ (or its bagged ensemble) at the threshold of least 5-fold held-out acceleration error."""
     from cubedimer.folds import run_folds
     from cubedimer.spectra import dominant_frequency
-    from fitting.regression import RegressionConfig, dataset_scales, fit_ensemble_regression, fit_regression
+    from fitting.selection.sparse_regression import (RegressionConfig, dataset_scales, fit_ensemble_regression,
+                                                     fit_regression)
 
     derivs = data.sindy_derivs
     scales = dataset_scales(derivs, [dominant_frequency(r.y, r.dt) for r in data.runs])
@@ -291,7 +292,7 @@ def score(coef: NDArray, taylor: NDArray) -> dict:
 
 
 def run_case(name: str, level: float, seed: int, fit_runs: int = FIT_RUNS) -> list[dict]:
-    from fitting.discovery import DiscoveryConfig, discover_model
+    from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
 
     truth = TRUTHS[name]
     taylor = compiled(name)[1]

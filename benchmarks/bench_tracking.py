@@ -19,7 +19,9 @@ import time
 
 import numpy as np
 
-SIDE = 500e-6
+from cubedimer.meta import META_DEFAULTS
+
+SIDE = META_DEFAULTS["side_length_m"]
 FPS = 2000.0
 
 

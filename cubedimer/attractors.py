@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .config_checks import check_fraction, check_non_negative, check_positive, check_that, check_whole
 from .poincare import poincare_section
 from .spectra import spectral_features
 
@@ -61,10 +62,13 @@ class ClassifyConfig:
     max_lock_order: int = 3
 
     def __post_init__(self) -> None:
-        if not (self.theta_rest >= 0 and self.lock_tol > 0 and 0 < self.phase_tol <= np.pi / 2
-                and 0 <= self.coherence_min <= 1 and int(self.max_lock_order) == self.max_lock_order
-                and 1 <= self.max_lock_order <= 8):
-            raise ValueError(f"bad classification thresholds: {self!r}")
+        check_non_negative(self, "theta_rest")
+        check_positive(self, "lock_tol")
+        check_positive(self, "phase_tol")
+        check_that(self, self.phase_tol <= np.pi / 2, f"phase_tol must be at most pi/2, got {self.phase_tol!r}")
+        check_fraction(self, "coherence_min", closed=True)
+        check_whole(self, "max_lock_order")
+        check_that(self, self.max_lock_order <= 8, f"max_lock_order must be at most 8, got {self.max_lock_order!r}")
 
 
 @dataclass(frozen=True)

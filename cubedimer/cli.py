@@ -31,7 +31,7 @@ from .executor import ExecutorConfig, ExecutorError, single_blas_thread
 
 __all__ = ["UserInputError", "OneLineParser", "command_parser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
-           "positive_int", "positive_float", "float_list", "invoked_as"]
+           "positive_int", "positive_float", "float_list", "invoked_as", "field_default"]
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf)")
 
@@ -73,6 +73,13 @@ def configure_logging(quiet: bool = False, verbose: bool = False) -> None:
         log.handlers[:] = [handler]
         log.setLevel(level)
         log.propagate = False
+
+
+def field_default(config_class: type, name: str):
+    """The default of the field ``name`` of the dataclass ``config_class``: a command's option reads its default (and
+    the default its help names) from the config it fills, never a copy."""
+    f = config_class.__dataclass_fields__[name]
+    return f.default_factory() if callable(f.default_factory) else f.default
 
 
 def positive_int(text: str) -> int:
@@ -250,7 +257,7 @@ def run_cli(parser: argparse.ArgumentParser, argv: list[str] | None = None,
     """Parse ``argv`` and run the chosen subcommand's ``func``: user errors become one line and exit 2.
 
     ``errors``: the package's library errors that mean "nothing can be written for this input" (e.g. the fit's
-    :class:`fitting.final_checks.NoSaneModelError`); they are reported like user errors, one line and exit
+    :class:`fitting.uncertainty.final_checks.NoSaneModelError`); they are reported like user errors, one line and exit
     status 2.  The command runs with one BLAS thread (:func:`cubedimer.executor.single_blas_thread`), as every
     executor task does: its numbers are then the same whether it runs here or inside a task, and the
     many small factorisations are faster so (parallel work goes through the executor's processes)."""

@@ -41,6 +41,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .config_checks import check_above, check_bounds
 from .meta import META_DEFAULTS
 from .noise import white_noise_std
 from .spectra import dominant_frequency
@@ -70,12 +71,11 @@ class ConsistencyConfig:
     trap_frequency_range_hz: tuple[float, float] = TRAP_FREQUENCY_RANGE_HZ
 
     def __post_init__(self) -> None:
-        for k, v in self.__dict__.items():
-            if k == "trap_frequency_range_hz":
-                if not 0 < v[0] < v[1]:
-                    raise ValueError(f"{k} must be (low, high) with 0 < low < high, got {v!r}")
-            elif not v > 1:
-                raise ValueError(f"{k} must exceed 1, got {v!r}")
+        for name in self.__dataclass_fields__:
+            if name == "trap_frequency_range_hz":
+                check_bounds(self, name, strict=True)
+            else:
+                check_above(self, name, 1.0)
 
 
 @dataclass(frozen=True)

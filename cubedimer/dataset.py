@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from .config_checks import check_fraction, check_non_negative, check_whole
+from .config_checks import check_fraction, check_non_negative, check_that, check_whole
 from .errors import DatasetError
 from .meta import read_meta
 from .drop_phases import field_on_start
@@ -77,8 +77,8 @@ class LoadConfig:
         check_fraction(self, "max_missing_fraction", closed=True)
         check_fraction(self, "uniform_tol")
         check_non_negative(self, "min_periods")
-        if self.trap_frequency is not None and not callable(self.trap_frequency):
-            raise ValueError(f"LoadConfig.trap_frequency must be callable or None, got {self.trap_frequency!r}")
+        check_that(self, self.trap_frequency is None or callable(self.trap_frequency),
+                   f"trap_frequency must be callable or None, got {self.trap_frequency!r}")
 
 
 @dataclass(frozen=True, eq=False)

@@ -25,10 +25,11 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
-import numbers
 import os
 import sys
 import threading
+
+from .config_checks import check_choice, check_that, check_whole
 from contextlib import contextmanager
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -67,13 +68,10 @@ class ExecutorConfig:
     start_method: str | None = None
 
     def __post_init__(self) -> None:
-        if self.workers is not None and (isinstance(self.workers, bool) or not isinstance(self.workers, numbers.Integral)
-                                         or self.workers < 1):
-            raise ValueError(f"workers must be a whole number >= 1, got {self.workers!r}")
-        if self.scheduler is not None and not isinstance(self.scheduler, str):
-            raise ValueError(f"scheduler must be an address string, got {self.scheduler!r}")
-        if self.start_method not in (None, "fork", "spawn", "forkserver"):
-            raise ValueError(f"start_method must be None, 'fork', 'spawn' or 'forkserver', got {self.start_method!r}")
+        check_whole(self, "workers", optional=True)
+        check_that(self, self.scheduler is None or isinstance(self.scheduler, str),
+                   f"scheduler must be an address string, got {self.scheduler!r}")
+        check_choice(self, "start_method", (None, "fork", "spawn", "forkserver"), what="start_method")
 
     def resolved_scheduler(self) -> str | None:
         return self.scheduler or os.environ.get("CUBEDIMER_SCHEDULER") or None

@@ -2,7 +2,7 @@
 
 Run ``i`` is in fold ``i mod K`` (``K = min(k, n_runs)``): the folds interleave the runs, every run is held out
 exactly once, and ``k >= n_runs`` is leave-one-run-out.  Used by the held-out supports of the fit
-(:mod:`fitting.support_search`) and the held-out tests of the diagnosis (:mod:`validation.diagnosis`).
+(:mod:`fitting.selection.support_search`) and the held-out tests of the diagnosis (:mod:`validation.diagnosis`).
 """
 from __future__ import annotations
 

@@ -174,3 +174,11 @@ def read_meta(data_dir: str | os.PathLike) -> dict:
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise DatasetError(f"{path}: unreadable meta.json ({exc})") from None
     return validate_meta(meta, str(path))
+
+
+#: The white tracking noise (standard deviations) that a simulated data set carries unless told otherwise: y [m]
+#: and theta [-], sub-pixel tracking of a 500-um dimer by a high-speed camera (the synthetic data sets of the fit and
+#: the twin-like data sets of the diagnosis read it here).
+DEFAULT_TRACKING_NOISE: dict[str, float] = {"noise_y_m": 1e-6, "noise_theta": 0.005}
+
+__all__ += ["DEFAULT_TRACKING_NOISE"]

@@ -5,7 +5,7 @@ deviation ``sqrt(70) sigma``, while that of the motion is ``(omega dt)^4`` times
 and 1500 fps: 0.007 um on 100 um), so the scaled fourth differences are the noise; sigma is their median
 absolute deviation times 1.4826 / sqrt(70), robust to isolated tracking glitches (a glitch touches five
 differences).  Used by the cross-run consistency checks (:mod:`cubedimer.consistency`) and the oracle
-(:func:`fitting.oracle.estimate_tracking_noise`).
+(:func:`fitting.uncertainty.oracle.estimate_tracking_noise`).
 """
 from __future__ import annotations
 

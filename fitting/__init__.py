@@ -20,30 +20,38 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
   :func:`write_dataset`, :class:`SyntheticConfig`, and the generic-system example :func:`write_generic_example`
   (:func:`generic_example_model`).
 
-The building blocks (regression, refinement, ensemble statistics, Holm's rule) are in their modules.
+The building blocks are laid out as the fit runs, one subpackage per step (docs/architecture.md):
+:mod:`fitting.derivatives` (smoothing, derivatives, the integral form) -> :mod:`fitting.methods` (the registry and
+the two methods) -> :mod:`fitting.selection` (which terms) -> :mod:`fitting.refinement` (their coefficients over
+many periods) -> :mod:`fitting.uncertainty` (oracle standard errors, the fallback, the run planner) ->
+:mod:`fitting.output` (model.json and figures).  The model (:mod:`fitting.model`, :mod:`fitting.integrate`), the
+settings (:mod:`fitting.config`), the results and Holm's rule (:mod:`fitting.multiple_testing`) are shared by all.
 """
+import importlib
+import sys
+
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
 from cubedimer.distribution import __version__
 from .compare import compare_models
 from .config import FitConfig
-from .derivatives import SmoothingConfig
+from .derivatives.savitzky_golay import SmoothingConfig
 from .description import MethodDescription
-from .discovery import DiscoveryConfig, DiscoveryResult, discover_model
-from .ensemble import EnsembleConfig
-from .final_checks import NoSaneModelError
-from .fit_output import write_fit
-from .losses import LossWeights
-from .methods import METHODS, FitContext, FittingMethod, register_method
+from .fit import fit_dataset, fit_runs, prepare_runs
+from .methods.registry import METHODS, FitContext, FittingMethod, register_method
 from .model import PolynomialModel, Scales
-from .oracle import NoiseLevels, oracle_standard_errors
-from .pipeline import fit_dataset, fit_runs, prepare_runs
-from .refine import RefineConfig
-from .regression import RegressionConfig
+from .output.model_file import write_fit
+from .refinement.long_time import RefineConfig
+from .refinement.losses import LossWeights
 from .results import EnsembleExtras, FitResult
-from .run_planning import PlanConfig, plan_runs
-from .selection import SelectionConfig
-from .selection_rules import SELECTION_RULES, SelectionRule, register_selection_rule
+from .selection.ensemble import EnsembleConfig
+from .selection.integral_discovery import DiscoveryConfig, DiscoveryResult, discover_model
+from .selection.rules import SelectionConfig
+from .selection.rules import SELECTION_RULES, SelectionRule, register_selection_rule
+from .selection.sparse_regression import RegressionConfig
 from .synthetic import SyntheticConfig, generic_example_model, paper_reduced_model, write_dataset, write_generic_example
+from .uncertainty.final_checks import NoSaneModelError
+from .uncertainty.oracle import NoiseLevels, oracle_standard_errors
+from .uncertainty.run_planning import PlanConfig, plan_runs
 
 __all__ = [
     "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "EnsembleExtras", "write_fit",
@@ -57,3 +65,8 @@ __all__ = [
     "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset", "generic_example_model",
     "write_generic_example",
 ]
+
+#: Module paths of earlier releases that scripts still import: the same module objects under their former names.
+_FORMER_MODULES = {"discovery": ".selection.integral_discovery", "oracle": ".uncertainty.oracle"}
+for _former, _current in _FORMER_MODULES.items():
+    sys.modules.setdefault(f"{__name__}.{_former}", importlib.import_module(_current, __name__))

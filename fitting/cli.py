@@ -21,11 +21,9 @@ from dataclasses import replace
 from pathlib import Path
 
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
-                           positive_float, positive_int, prepare_output_dir, run_cli)
-from .config import OUTPUT_ERROR_MODES
-from .final_checks import NoSaneModelError
-from .methods import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_accepting, methods_help
-from .selection_rules import SELECTION_RULES
+                           field_default, positive_float, positive_int, prepare_output_dir, run_cli)
+from .options import add_fit_options, fit_config_from_args
+from .uncertainty.final_checks import NoSaneModelError
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_fit_parser", "add_compare_parser", "add_synth_parser",
            "add_plan_parser"]
@@ -40,41 +38,11 @@ def _log(msg: str) -> None:
 
 
 def _cmd_fit(a: argparse.Namespace) -> int:
-    from .config import FitConfig
-    from .fit_output import write_fit
-    from .pipeline import fit_dataset
-    from .selection_rules import SELECTION_RULES
+    from .fit import fit_dataset
+    from .output.model_file import write_fit
 
     prepare_output_dir(a.out, "--out", create=False)
-    if a.selection and a.method not in SELECTION_RULES[a.selection].methods:
-        raise UserInputError(f"--selection {a.selection} applies to --method "
-                             f"{', '.join(SELECTION_RULES[a.selection].methods)}")
-    method = METHODS[a.method]
-    try:
-        cfg = FitConfig(method=a.method).with_heldout_tolerance(a.heldout_tolerance)
-    except ValueError as exc:
-        raise UserInputError(f"--heldout-tolerance {exc}") from None
-    try:
-        cfg = cfg.with_output_error(a.output_error)
-    except ValueError as exc:
-        raise UserInputError(f"--output-error {exc}") from None
-    for option in METHOD_OPTIONS:  # the options only some methods accept: the method says which
-        if getattr(a, option) not in (None, False) and option not in method.options:
-            raise UserInputError(f"--{option.replace('_', '-')} applies to --method "
-                                 f"{', '.join(methods_accepting(option))}")
-    if a.max_evals:
-        main_refine = getattr(cfg, method.max_evals_setting)
-        cfg = replace(cfg, **{method.max_evals_setting: replace(main_refine, max_evals=a.max_evals)})
-    if a.joint_max_evals:
-        cfg = replace(cfg, joint=replace(cfg.joint, max_evals=a.joint_max_evals))
-    if a.relative_threshold:
-        cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
-    if a.selection:
-        cfg = replace(cfg, selection=replace(cfg.selection, rule=a.selection))
-    if a.no_glitch_mask:
-        cfg = replace(cfg, load=replace(cfg.load, glitches=None))
-    if a.min_periods is not None:
-        cfg = replace(cfg, load=replace(cfg.load, min_periods=a.min_periods))
+    cfg = fit_config_from_args(a)
     t0 = time.perf_counter()
     res = fit_dataset(a.data_dir, cfg, executor_config(a), strict=a.strict, progress=not a.no_progress,
                       cache_dir=Path(a.out) / "runs")
@@ -90,9 +58,9 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     from cubedimer.atomic import write_json
     from .compare import compare_models, cross_coupling_mask, drop_terms
     from cubedimer.dataset import load_dataset
-    from .fit_output import read_model_json
+    from .fit import prepare_runs
     from .model import Scales
-    from .pipeline import prepare_runs
+    from .output.model_file import read_model_json
 
     prepare_output_dir(a.out, "--out", create=False)
     model_file = read_model_json(a.model)
@@ -122,7 +90,7 @@ def _cmd_compare(a: argparse.Namespace) -> int:
         print(f"{name}: median(variant - minimal) = {t.median_difference:.4g}, "
               f"Wilcoxon p(variant worse) = {t.p_greater:.3g}, two-sided p = {t.p_two_sided:.3g} (n = {t.n})")
     if not a.no_plots:
-        from .plots import plot_comparison
+        from .output.plots import plot_comparison
         plot_comparison(cmp, Path(a.out))
     return 0
 
@@ -146,8 +114,8 @@ def _cmd_synth(a: argparse.Namespace) -> int:
 
 
 def _cmd_plan(a: argparse.Namespace) -> int:
-    from .fit_output import read_model_json
-    from .run_planning import PlanConfig, plan_runs
+    from .output.model_file import read_model_json
+    from .uncertainty.run_planning import PlanConfig, plan_runs
 
     model = read_model_json(a.model).model
     noise = _plan_noise(a)
@@ -165,8 +133,8 @@ def _cmd_plan(a: argparse.Namespace) -> int:
 
 def _plan_noise(a: argparse.Namespace):
     """The planner's tracking noise: --noise-y/--noise-theta where given, else the noise the data set of --data
-    records in meta.json (:func:`fitting.oracle.recorded_tracking_noise`), else the noise estimated from its runs."""
-    from .oracle import NoiseLevels, estimate_tracking_noise, recorded_tracking_noise
+    records in meta.json (:func:`fitting.uncertainty.oracle.recorded_tracking_noise`), else the noise estimated from its runs."""
+    from .uncertainty.oracle import NoiseLevels, estimate_tracking_noise, recorded_tracking_noise
 
     if a.noise_y is not None and a.noise_theta is not None:
         return NoiseLevels(a.noise_y, a.noise_theta, source="given on the command line")
@@ -204,18 +172,25 @@ def add_plan_parser(subparsers) -> None:
                    help="tracking noise of y [m] (required without --data; overrides the data set's)")
     p.add_argument("--noise-theta", type=positive_float, default=None,
                    help="tracking noise of theta [-] (required without --data; overrides the data set's)")
-    p.add_argument("--duration", type=positive_float, default=3.0, help="run length [s]")
-    p.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
-    p.add_argument("--target-z", type=positive_float, default=5.0, help="oracle z that counts as resolvable")
-    p.add_argument("--runs", type=positive_int, nargs="+", default=[4, 6, 8, 10, 12, 16, 20, 30, 50],
+    from .synthetic import SyntheticConfig
+    from .uncertainty.run_planning import PlanConfig
+
+    p.add_argument("--duration", type=positive_float, default=field_default(SyntheticConfig, "duration"),
+                   help="run length [s]")
+    p.add_argument("--fps", type=positive_float, default=field_default(SyntheticConfig, "fps"),
+                   help="frame rate [1/s]")
+    p.add_argument("--target-z", type=positive_float, default=field_default(PlanConfig, "target_z"),
+                   help="oracle z that counts as resolvable")
+    p.add_argument("--runs", type=positive_int, nargs="+", default=list(field_default(PlanConfig, "run_counts")),
                    help="rows of the table (numbers of runs)")
-    p.add_argument("--reference-runs", type=positive_int, default=48,
+    p.add_argument("--reference-runs", type=positive_int, default=field_default(PlanConfig, "n_reference"),
                    help="reference runs the per-run information is measured on")
     p.add_argument("--y-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
-                   help="range of initial y amplitudes [m] (default 60e-6 150e-6)")
+                   help="range of initial y amplitudes [m] (default %g %g)" % field_default(SyntheticConfig, "y_amplitude"))
     p.add_argument("--theta-amplitude", type=positive_float, nargs=2, default=None, metavar=("LO", "HI"),
-                   help="range of initial theta amplitudes [-] (default 0.08 0.4)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the reference runs")
+                   help="range of initial theta amplitudes [-] (default %g %g)"
+                        % field_default(SyntheticConfig, "theta_amplitude"))
+    p.add_argument("--seed", type=int, default=field_default(PlanConfig, "seed"), help="seed of the reference runs")
     p.set_defaults(func=_cmd_plan)
 
 
@@ -227,38 +202,7 @@ def add_fit_parser(subparsers) -> None:
     f.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     f.add_argument("--no-plots", action="store_true", help="write model.json only, no PNG plots")
     f.add_argument("--quiet", dest="no_progress", action="store_true", help="no progress bar")
-    f.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD, help=methods_help())
-    f.add_argument("--max-evals", type=positive_int, default=None,
-                   help="objective evaluations per run refinement (paper) or of the polish (discovery)")
-    f.add_argument("--joint-max-evals", type=positive_int, default=None, help="evaluations of the joint re-optimisation")
-    f.add_argument("--selection", choices=tuple(SELECTION_RULES), default=None,
-                   help="term selection of the per-run ensemble: " + "; ".join(
-                       f"'{r.name}' ({', '.join(r.methods)}): {r.summary}" for r in SELECTION_RULES.values()))
-    f.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
-                   help="discovery: keep the smallest support whose held-out error (5-fold over runs) is within FRACTION "
-                        "of the best on the elimination path (default 0: the best itself, every term the data resolve). "
-                        "A practical threshold for data whose truth is not sparse in the library (real dimers): 0.002 "
-                        "gives the 11-term Gor'kov form on the paper-like twin, but also drops weak true terms near the "
-                        "information limit; model.json's Pareto front shows the trade-off. In equations under model "
-                        "error it widens the held-out rule's allowance, and the output error drops a term that raises "
-                        "the trajectories' RMS misfit by at most FRACTION and adds none that lowers it by less "
-                        "(0.02-0.05 there: one to three terms fewer per model at long-time errors 0-14 %% higher on average, "
-                        "up to 2.3 times on single 4-run data sets; docs/fitting.md)")
-    f.add_argument("--output-error", choices=tuple(OUTPUT_ERROR_MODES), default=None,
-                   help="discovery, for equations whose residual is model error (a truth not sparse in the library): "
-                        "'select' (default) refines the coefficients so that the model's trajectories follow the runs "
-                        "over 5-period segments, then drops the terms those trajectories do not need and adds those "
-                        "they need (a slow nonlinear damping, say); 'refine' only refines; 'off' keeps the integral "
-                        "form's coefficients and support")
-    f.add_argument("--relative-threshold", action="store_true",
-                   help="apply the regression threshold to each equation relative to its signal size (for a hinge "
-                        "much slower than the vertical oscillation, whose scaled theta coefficients are all small)")
-    f.add_argument("--no-glitch-mask", action="store_true",
-                   help="keep every recorded frame: no isolated tracking glitch is masked and filled (by default the "
-                        "frames masked per run are counted in model.json's per_run entries)")
-    f.add_argument("--min-periods", type=positive_float, default=None, metavar="N",
-                   help="oscillation periods (of the dominant frequency of y, or of the first declared coordinate) a "
-                        "run must hold to be fitted (default 5)")
+    add_fit_options(f)
     add_executor_arguments(f)
     f.set_defaults(func=_cmd_fit)
 
@@ -280,12 +224,19 @@ def add_synth_parser(subparsers) -> None:
     """``synth``: a synthetic data set from the paper's reduced model."""
     s = subparsers.add_parser("synth", help="write a synthetic data set from the paper's reduced model")
     s.add_argument("out_dir", help="directory to write the run CSVs, meta.json and truth.json into")
-    s.add_argument("--runs", type=positive_int, default=15, help="number of runs")
-    s.add_argument("--duration", type=positive_float, default=3.0, help="length of each run [s]")
-    s.add_argument("--fps", type=positive_float, default=1500.0, help="frame rate [1/s]")
-    s.add_argument("--noise-y", type=float, default=1e-6, help="tracking noise of y [m] (standard deviation)")
-    s.add_argument("--noise-theta", type=float, default=0.005, help="tracking noise of theta [-] (standard deviation)")
-    s.add_argument("--seed", type=int, default=0, help="seed of the initial conditions and the noise")
+    from .synthetic import SyntheticConfig
+
+    def default(name):
+        return field_default(SyntheticConfig, name)
+
+    s.add_argument("--runs", type=positive_int, default=default("n_runs"), help="number of runs")
+    s.add_argument("--duration", type=positive_float, default=default("duration"), help="length of each run [s]")
+    s.add_argument("--fps", type=positive_float, default=default("fps"), help="frame rate [1/s]")
+    s.add_argument("--noise-y", type=float, default=default("noise_y"),
+                   help="tracking noise of y [m] (standard deviation)")
+    s.add_argument("--noise-theta", type=float, default=default("noise_theta"),
+                   help="tracking noise of theta [-] (standard deviation)")
+    s.add_argument("--seed", type=int, default=default("seed"), help="seed of the initial conditions and the noise")
     s.add_argument("--system", choices=("dimer", "generic"), default="dimer",
                    help="dimer: the paper's reduced model (the options above); generic: the worked example of a "
                         "generic two-coordinate system (docs/fitting.md, 'Any two coordinates'; its own runs and "

@@ -1,7 +1,7 @@
 """Model comparison: a variant against the minimal model on every run.
 
 Each model is simulated from every run's initial state; the per-run shape and Poincare errors
-(:mod:`fitting.losses`) are compared with the Wilcoxon signed-rank test on the paired per-run
+(:mod:`fitting.refinement.losses`) are compared with the Wilcoxon signed-rank test on the paired per-run
 differences (scipy.stats.wilcoxon, one-sided ``variant worse than reference``, and two-sided).
 A variant is typically the minimal model without some terms (by default its cross-coupling
 terms: theta/thetadot terms in yddot and y/ydot terms in thetaddot), re-optimised jointly on all
@@ -16,11 +16,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import wilcoxon
 
-from .derivatives import Derivatives
+from .derivatives.savitzky_golay import Derivatives
 from cubedimer.terms import EQUATION_NAMES, parse_term
-from .losses import LossTerms, LossWeights
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
-from .refine import JOINT_REFINE, Objective, RefineConfig, default_substeps, refine, scaled_reference
+from .refinement.long_time import JOINT_REFINE, Objective, RefineConfig, default_substeps, refine, scaled_reference
+from .refinement.losses import LossTerms, LossWeights
 
 __all__ = ["per_run_losses", "cross_coupling_mask", "drop_terms", "WilcoxonResult", "paired_wilcoxon",
            "Comparison", "compare_models"]

@@ -4,16 +4,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from cubedimer.attractors import ClassifyConfig
+from cubedimer.config_checks import check_choice, check_positive
 from cubedimer.dataset import LoadConfig
 from cubedimer.system import SYSTEM_KINDS
-from .derivatives import SmoothingConfig
-from .discovery import DiscoveryConfig
-from .ensemble import EnsembleConfig
-from .method_registry import DEFAULT_METHOD, METHODS, methods_accepting
-from .output_error import OutputErrorConfig
-from .refine import JOINT_REFINE, RefineConfig
-from .regression import RegressionConfig
-from .selection import SelectionConfig
+from .derivatives.savitzky_golay import SmoothingConfig
+from .method_names import DEFAULT_METHOD, METHODS, methods_accepting
+from .refinement.long_time import JOINT_REFINE, RefineConfig
+from .refinement.output_error import OutputErrorConfig
+from .selection.backward_elimination import SelectionConfig
+from .selection.ensemble import EnsembleConfig
+from .selection.integral_discovery import DiscoveryConfig
+from .selection.sparse_regression import RegressionConfig
 
 __all__ = ["FitConfig", "OUTPUT_ERROR_MODES"]
 
@@ -31,7 +32,7 @@ class FitConfig:
     Raises
     ------
     ValueError
-        One line, on construction: a method that is not registered (:data:`fitting.methods.METHODS`) or a
+        One line, on construction: a method that is not registered (:data:`fitting.methods.registry.METHODS`) or a
         non-positive ``polish_se``.
     """
 
@@ -47,8 +48,8 @@ class FitConfig:
     candidate_joint: RefineConfig = field(default_factory=lambda: RefineConfig(
         max_evals=300, rel_bound=0.3, abs_bound=0.005, horizons=(0.5, 1.0)))
     classify: ClassifyConfig = field(default_factory=ClassifyConfig)
-    #: the registered method (:data:`fitting.methods.METHODS`): ``"discovery"``: integral-form discovery
-    #: (:func:`fitting.discovery.discover_model`) selects and fits the model, the long-time refinement polishes it
+    #: the registered method (:data:`fitting.methods.registry.METHODS`): ``"discovery"``: integral-form discovery
+    #: (:func:`fitting.selection.integral_discovery.discover_model`) selects and fits the model, the long-time refinement polishes it
     #: inside a box of ``polish_se`` of its standard errors; ``"paper"``: per-run SINDy and long-time refinement,
     #: ensemble selection (``selection.rule``), joint re-optimisation of the minimal model
     method: str = DEFAULT_METHOD
@@ -59,10 +60,8 @@ class FitConfig:
     polish_se: float = 0.5
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ValueError(f"unknown method {self.method!r} (use one of {', '.join(METHODS)})")
-        if not self.polish_se > 0:
-            raise ValueError(f"polish_se must be positive, got {self.polish_se}")
+        check_choice(self, "method", tuple(METHODS), what="method")
+        check_positive(self, "polish_se")
 
     def with_heldout_tolerance(self, tolerance: float | None) -> "FitConfig":
         """This configuration with the discovery's practical threshold ``DiscoveryConfig.heldout_tolerance`` (None:

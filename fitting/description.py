@@ -1,7 +1,7 @@
 """How a fitting method describes its result to a reader: :class:`MethodDescription` and the text pieces every
 method's description uses.
 
-Each registered method (:class:`fitting.methods.FittingMethod`) returns a :class:`MethodDescription` from
+Each registered method (:class:`fitting.methods.registry.FittingMethod`) returns a :class:`MethodDescription` from
 ``describe(result)``: the paragraph the report (``python -m validation report``, section 3) prints about the fit, the
 table of the fitted model, the figures of the fit output directory the section shows and the phrase the z-score
 figure's title uses for the selected terms.  The report writes what the method says and nothing of its own, so a
@@ -17,7 +17,7 @@ import numpy as np
 __all__ = ["DescriptionTable", "MethodDescription", "FIT_FIGURES", "model_equation_text", "damping_rates",
            "anti_damping_text", "fallback_text", "model_found_text"]
 
-#: The figures :func:`fitting.plots.plot_fit` writes for every method: (file name in the fit's output directory,
+#: The figures :func:`fitting.output.plots.plot_fit` writes for every method: (file name in the fit's output directory,
 #: caption).
 FIT_FIGURES: tuple[tuple[str, str], ...] = (
     ("zscores.png", "z-scores (mean / std across runs, zeros included) of every library term; red: selected, dashed: "

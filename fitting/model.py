@@ -134,7 +134,7 @@ class PolynomialModel:
 
     @classmethod
     def from_json(cls, data: Mapping | str) -> "PolynomialModel":
-        """From a dict or a JSON string of the docs/formats.md model (files: :func:`fitting.fit_output.read_model_json`)."""
+        """From a dict or a JSON string of the docs/formats.md model (files: :func:`fitting.output.model_file.read_model_json`)."""
         if isinstance(data, str):
             data = json.loads(data)
         if "units" in data and data["units"] != "SI":

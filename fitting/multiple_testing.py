@@ -1,9 +1,9 @@
 """Holm's step-down procedure and the backward elimination along it: the one multiple-testing rule of the selections.
 
 The selection rules of :mod:`fitting` (the significance of the ensemble mean across runs in
-:mod:`fitting.ensemble`, the pooled integral-form selection in :mod:`fitting.integral_form`, the discovery's
-support search in :mod:`fitting.support_search`) and the diagnosis's library search
-(:mod:`validation.diagnosis.discovery`) control the family-wise error rate over the library terms with Holm's rule: sort the p-values,
+:mod:`fitting.selection.ensemble`, the pooled integral-form selection in :mod:`fitting.derivatives.integral_form`, the discovery's
+support search in :mod:`fitting.selection.support_search`) and the diagnosis's library search
+(:mod:`validation.diagnosis.discover.library_terms`) control the family-wise error rate over the library terms with Holm's rule: sort the p-values,
 reject the k-th smallest (k = 1, 2, ...) while ``p_(k) <= alpha / (m - k + 1)``, stop at the first
 that fails.  Hypotheses that were removed before testing (e.g. terms already eliminated) count as
 the least significant ones: pass their number in ``n_hypotheses``.  :func:`holm_all_significant` is the one

@@ -11,12 +11,12 @@ from cubedimer.dataset import Run
 from cubedimer.system import LEVITATED_DIMER, SystemSpec
 from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
-from .derivatives import Derivatives
-from .ensemble import TermStatistics, mean_pvalues
-from .losses import LossTerms
+from .derivatives.savitzky_golay import Derivatives
 from .model import TERMS, PolynomialModel, Scales
-from .oracle import OracleResult
-from .refine import RefineResult
+from .refinement.long_time import RefineResult
+from .refinement.losses import LossTerms
+from .selection.ensemble import TermStatistics, mean_pvalues
+from .uncertainty.oracle import OracleResult
 
 __all__ = ["PreparedRun", "RunFit", "RunEstimate", "PerRunResult", "MethodExtras", "EnsembleExtras", "FitResult",
            "support_terms"]
@@ -32,7 +32,7 @@ class PreparedRun:
     """A loaded run with its derivatives and attractor class.
 
     ``run`` is the run as fitted: block-averaged by ``frames_averaged`` recorded frames per fitted frame at high
-    frame rates (:mod:`fitting.decimation`; 1: every recorded frame)."""
+    frame rates (:mod:`fitting.derivatives.decimation`; 1: every recorded frame)."""
 
     run: Run
     derivs: Derivatives
@@ -121,7 +121,7 @@ PerRunResult = Union[RunFit, RunEstimate]
 @runtime_checkable
 class MethodExtras(Protocol):
     """What a method produces beyond :class:`FitResult` (``FitResult.extras``, typed per method: the paper's
-    :class:`fitting.paper_fit.PaperExtras`, the discovery's :class:`fitting.discovery_fit.DiscoveryExtras`)."""
+    :class:`fitting.methods.paper.PaperExtras`, the discovery's :class:`fitting.methods.discovery.DiscoveryExtras`)."""
 
     def record(self, result: "FitResult") -> dict:
         """The method's own keys of model.json (docs/formats.md), e.g. ``zscores``, ``selection``, ``discovery``."""

@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from cubedimer.atomic import atomic_write_text, write_json
+from cubedimer.config_checks import check_bounds, check_non_negative, check_positive, check_whole
 from cubedimer.dataset import write_run_csv
+from cubedimer.meta import DEFAULT_TRACKING_NOISE
 
 from .model import PolynomialModel
 
@@ -66,12 +68,22 @@ class SyntheticConfig:
     n_runs: int = 15
     duration: float = 3.0
     fps: float = 1500.0
-    noise_y: float = 1e-6
-    noise_theta: float = 0.005
+    noise_y: float = DEFAULT_TRACKING_NOISE["noise_y_m"]
+    noise_theta: float = DEFAULT_TRACKING_NOISE["noise_theta"]
     y_amplitude: tuple[float, float] = (60e-6, 150e-6)
     theta_amplitude: tuple[float, float] = (0.08, 0.4)
     missing_frames: int = 3
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_whole(self, "n_runs")
+        check_positive(self, "duration")
+        check_positive(self, "fps")
+        check_non_negative(self, "noise_y")
+        check_non_negative(self, "noise_theta")
+        check_bounds(self, "y_amplitude")
+        check_bounds(self, "theta_amplitude")
+        check_whole(self, "missing_frames", minimum=0)
 
 
 def _initial_state(rng: np.random.Generator, cfg: SyntheticConfig, model: PolynomialModel) -> np.ndarray:

@@ -144,24 +144,51 @@ def test_no_import_cycles_between_modules_of_a_package(package):
     assert not _cycles(graph), f"import cycles in {package}: {_cycles(graph)}"
 
 
-@pytest.mark.parametrize("package", PACKAGES)
-def test_no_import_cycles_between_subpackages(package):
-    """validation.diagnosis and validation.report, say: one of them is built on the other, not both ways."""
-    def group(m: str) -> str:
+def _packages_below(package: str) -> list[str]:
+    """Every package of the suite at or below ``package`` (a folder with an ``__init__.py``), dotted."""
+    return sorted(_module_name(init) for init in (ROOT / package).rglob("__init__.py"))
+
+
+def subpackage_graph(parent: str) -> dict[str, set[str]]:
+    """Import arrows between the direct subpackages of the package ``parent``: a module anywhere inside subpackage A
+    that imports a module inside subpackage B is an arrow A -> B.  The parent's own modules are left out: they are
+    built on the subpackages (``fitting.fit`` runs every step) and may import any of them."""
+    depth = len(parent.split(".")) + 1
+
+    def group(m: str) -> str | None:
         parts = m.split(".")
-        return ".".join(parts[:2]) if len(parts) > 2 or (ROOT / Path(*parts) / "__init__.py").exists() else parts[0]
+        if len(parts) < depth or parts[:depth - 1] != parent.split("."):
+            return None
+        head = ".".join(parts[:depth])
+        return head if (ROOT / Path(*parts[:depth]) / "__init__.py").exists() else None
 
     graph: dict[str, set[str]] = {}
     for m, f in MODULES.items():
-        if m.split(".")[0] == package:
-            graph.setdefault(group(m), set()).update(group(i) for i in imported_modules(m, f)
-                                                     if i.split(".")[0] == package and group(i) != group(m))
+        g = group(m)
+        if g is None:
+            continue
+        graph.setdefault(g, set()).update(h for i in imported_modules(m, f) if (h := group(i)) not in (None, g))
     for deps in list(graph.values()):
         for d in deps:
             graph.setdefault(d, set())
-    # the package's own top-level modules (group == package) import subpackages freely; only subpackage pairs count
-    sub = {k: {d for d in v if d != package} for k, v in graph.items() if k != package}
-    assert not _cycles(sub), f"import cycles between subpackages of {package}: {_cycles(sub)}"
+    return graph
+
+
+def test_subpackage_graph_groups_nested_modules():
+    """fitting.methods is built on fitting.selection (the methods select terms), never the other way."""
+    graph = subpackage_graph("fitting")
+    assert "fitting.selection" in graph["fitting.methods"]
+    assert "fitting.methods" not in graph["fitting.selection"]
+    assert all(k.count(".") == 1 for k in graph)
+
+
+@pytest.mark.parametrize("parent", [p for package in PACKAGES for p in _packages_below(package)])
+def test_no_import_cycles_between_subpackages(parent):
+    """At every level: validation.diagnosis and validation.report, say, or the steps inside validation.diagnosis
+    (calibrate, identify, ...) and the roles inside fitting (derivatives, selection, refinement, ...): one of them is
+    built on the other, not both ways."""
+    graph = subpackage_graph(parent)
+    assert not _cycles(graph), f"import cycles between subpackages of {parent}: {_cycles(graph)}"
 
 
 def test_parallel_work_goes_through_the_executor_seam():

@@ -5,14 +5,12 @@ import argparse
 import sys
 from pathlib import Path
 
-
-
 from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
-                           positive_float, positive_int, prepare_output_dir, run_cli)
-from fitting.final_checks import NoSaneModelError
-from fitting.fit_output import read_model_json
-from fitting.methods import DEFAULT_METHOD, METHODS, methods_help
+                           field_default, positive_float, positive_int, prepare_output_dir, run_cli)
+from fitting.options import add_fit_options, fit_config_from_args
+from fitting.output.model_file import read_model_json
+from fitting.uncertainty.final_checks import NoSaneModelError
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_compare_parser", "add_diagnose_parser", "add_blind_parser",
            "add_report_parser"]
@@ -58,7 +56,7 @@ def add_compare_parser(sub) -> None:
 
 
 def _read_model(path: Path) -> dict:
-    """The model.json document (:func:`fitting.fit_output.read_model_json`) of a levitated dimer."""
+    """The model.json document (:func:`fitting.output.model_file.read_model_json`) of a levitated dimer."""
     model_file = read_model_json(path)
     if model_file.system.generic:
         raise UserInputError(f"{path}: a model of a generic system ({', '.join(model_file.system.equation_names)}); "
@@ -191,7 +189,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
     from .diagnosis import DiagnoseConfig, diagnose_dataset
-    from .report.sections.diagnosis import write_diagnosis
+    from .report.sections.gap_diagnosis import write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     unknown = [c for c in cands if c not in _candidate_names()]
@@ -235,11 +233,16 @@ def add_blind_parser(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--cases", type=positive_int, default=50, help="number of data sets per case kind")
-    p.add_argument("--seed", type=int, default=0, help="seed of the hidden choices")
-    p.add_argument("--runs", type=positive_int, default=10, help="runs per data set (at least 3)")
-    p.add_argument("--duration", type=positive_float, default=3.0, help="duration of each run [s]")
-    p.add_argument("--kinds", default="candidates",
+    from .blind.config import BlindConfig
+
+    def default(name):
+        return field_default(BlindConfig, name)
+
+    p.add_argument("--cases", type=positive_int, default=default("cases"), help="number of data sets per case kind")
+    p.add_argument("--seed", type=int, default=default("seed"), help="seed of the hidden choices")
+    p.add_argument("--runs", type=positive_int, default=default("runs"), help="runs per data set (at least 3)")
+    p.add_argument("--duration", type=positive_float, default=default("duration"), help="duration of each run [s]")
+    p.add_argument("--kinds", default=",".join(default("kinds")),
                    help="comma-separated case kinds, each with --cases cases and its own rows in the table: candidates "
                    "(hidden candidate effects), out_of_candidate (a cubic hinge term or a y-dependent damping), drift "
                    "(a drifting pressure), glitches (outlier frames, scored against the clean twin), unit_slip (one "
@@ -294,17 +297,10 @@ def add_report_parser(sub) -> None:
     p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
                    "optional meta.json (docs/formats.md)")
     p.add_argument("--out", required=True, help="report directory")
-    p.add_argument("--max-evals", type=positive_int, default=None,
-                   help="evaluations of every long-time refinement: the fit's, and the re-optimisation of the "
-                        "model without cross-coupling terms it is compared with (default: 600 for the comparison, "
-                        "the fitting default for the fit)")
-    p.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD,
-                   help="the fit's model discovery: " + methods_help() + "; see python -m fitting fit --help")
-    p.add_argument("--heldout-tolerance", type=float, default=None, metavar="FRACTION",
-                   help="discovery only: keep the smallest support whose held-out error (5-fold over runs) is within "
-                        "FRACTION of the best "
-                        "(the Pareto knee; 0.002 for data whose truth is not sparse in the library, e.g. real dimers); "
-                        "see python -m fitting fit --help")
+    fit_options = p.add_argument_group("the fit", "the options of python -m fitting fit, with the same meaning; the "
+                                       "minimal model's variant without cross-coupling terms is re-optimised with the "
+                                       "fit's joint re-optimisation (--joint-max-evals)")
+    add_fit_options(fit_options)
     add_model_arguments(p)
     p.add_argument("--atlas", default=None, metavar="ATLAS_DIR",
                    help="also show an attractor atlas written by python -m acousim atlas (its atlas.json and figures)")
@@ -320,14 +316,9 @@ def run_report(args: argparse.Namespace) -> int:
     from acousim.models import ConditionError
     from cubedimer.dataset import DatasetError
 
-    from .report.pipeline import build_report
+    from .report.build import build_report
 
-    from fitting.config import FitConfig
-
-    try:  # before anything runs; build_report applies it
-        FitConfig(method=args.method).with_heldout_tolerance(args.heldout_tolerance)
-    except ValueError as exc:
-        raise UserInputError(f"--heldout-tolerance {exc}") from None
+    fit_config = fit_config_from_args(args)  # before anything runs
     if args.atlas is not None:  # before anything runs
         from .report.sections.atlas import AtlasSectionError, atlas_section
 
@@ -339,8 +330,7 @@ def run_report(args: argparse.Namespace) -> int:
     executor = executor_config(args)
     try:
         build_report(args.data, args.out, executor.workers, executor.scheduler, progress=not args.quiet,
-                     max_evals=args.max_evals, method=args.method, spec=model_spec_from_args(args),
-                     heldout_tolerance=args.heldout_tolerance, atlas=args.atlas)
+                     spec=model_spec_from_args(args), atlas=args.atlas, fit_config=fit_config)
     except (DatasetError, TableMismatch, ConditionError, FamilyRangeError, FamilyTableError) as exc:
         raise UserInputError(str(exc)) from None
     return 0

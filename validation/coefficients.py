@@ -16,7 +16,7 @@ yddot at theta = 0 and zero velocity, which sits at y_data = -delta).
 
 Two fitted estimates.  The ensemble statistics of the runs' refined models (mean and spread across
 runs) and, when model.json carries it (key ``integral_form``, written by ``fitting fit``), the pooled
-integral-form estimate with its standard error (:mod:`fitting.integral_form`: coefficients shared by
+integral-form estimate with its standard error (:mod:`fitting.derivatives.integral_form`: coefficients shared by
 all runs, fitted in position space where the tracking noise is white).  A term in the integral form's
 selected support is judged on that estimate (combined uncertainty sqrt(SE^2 + static std^2)); the
 others on the ensemble statistics.  The per-run fits are at an information limit for weak hinge terms

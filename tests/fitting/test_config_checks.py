@@ -4,12 +4,12 @@ from __future__ import annotations
 import pytest
 
 from cubedimer.dataset import LoadConfig
-from fitting.derivatives import SmoothingConfig
-from fitting.ensemble import EnsembleConfig
-from fitting.losses import LossWeights
-from fitting.refine import RefineConfig
-from fitting.regression import RegressionConfig
-from fitting.selection import SelectionConfig
+from fitting.derivatives.savitzky_golay import SmoothingConfig
+from fitting.selection.ensemble import EnsembleConfig
+from fitting.refinement.losses import LossWeights
+from fitting.refinement.long_time import RefineConfig
+from fitting.selection.sparse_regression import RegressionConfig
+from fitting.selection.backward_elimination import SelectionConfig
 
 BAD = [
     (SelectionConfig, {"rule": "lasso"}, "unknown selection rule"),

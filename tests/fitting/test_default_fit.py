@@ -11,8 +11,8 @@ from cubedimer.dataset import write_run_csv
 from fitting.cli import main
 from fitting.model import TERMS, PolynomialModel
 from fitting.config import FitConfig
-from fitting.pipeline import fit_dataset
-from fitting.refine import RefineConfig
+from fitting.fit import fit_dataset
+from fitting.refinement.long_time import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 # the truths, the oracle and the criterion of test_discovery.py (pytest's importlib mode: load it by path)
@@ -145,8 +145,8 @@ def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp
 
 def test_blown_up_discovery_is_never_written_with_exit_0(sparse, tmp_path, monkeypatch, capsys):
     """A discovery that lost the restoring y term (forced) blows up; every fallback lacks the term: exit 2."""
-    import fitting.discovery_fit as discovery_fit
-    from fitting.discovery import DiscoveryResult
+    import fitting.methods.discovery as discovery_fit
+    from fitting.selection.integral_discovery import DiscoveryResult
 
     data, _ = sparse
     # yddot = 1 + ydot + y^2 drifts away under its constant: every run leaves the blow-up bound

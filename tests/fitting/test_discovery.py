@@ -1,4 +1,4 @@
-"""Tests of the integral-form discovery with model-based states (fitting.discovery, fitting.model_states).
+"""Tests of the integral-form discovery with model-based states (fitting.selection.integral_discovery, fitting.refinement.model_states).
 
 The criterion of the slow tests, on data of sparse models of docs/conventions.md section 6's form at the paper's data
 size: every true term whose oracle z (|true coefficient| / standard error of integral-form least squares on the
@@ -14,14 +14,14 @@ import pytest
 
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
-from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model
-from fitting.integral_form import natural_windows
-from fitting.support_search import numerov_columns
-from fitting.integral_form import detrend_windows, integral_columns, window_starts
+from fitting.derivatives.savitzky_golay import run_derivatives
+from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+from fitting.derivatives.integral_form import natural_windows
+from fitting.selection.support_search import numerov_columns
+from fitting.derivatives.integral_form import detrend_windows, integral_columns, window_starts
 from fitting.model import TERMS, PolynomialModel
-from fitting.model_states import SegmentConfig, model_states, segment_layout
-from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
+from fitting.refinement.model_states import SegmentConfig, model_states, segment_layout
+from fitting.uncertainty.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 W_Y, W_9, W_35 = 2 * np.pi * 22.0, 2 * np.pi * 9.0, 2 * np.pi * 35.0
@@ -121,11 +121,11 @@ def test_config_validates_itself():
     with pytest.raises(ValueError):
         DiscoveryConfig(heldout_tolerance=1.5)
     with pytest.raises(ValueError):
-        SegmentConfig(bounds_s=(0.5, 0.1))
+        SegmentConfig(bounds_periods=(11.0, 2.2))
 
 
 def test_windows_are_capped_at_the_natural_period():
-    """The model passes' windows: at most 0.875 periods of each equation's natural frequency, also below the 25-ms
+    """The model passes' windows: at most 0.875 periods of each equation's natural frequency, also below the 0.55-y-period
     floor; unchanged where the dominant window is shorter or the equation has no restoring stiffness."""
     cfg = DiscoveryConfig()
     dt = 1 / 1500
@@ -133,10 +133,10 @@ def test_windows_are_capped_at_the_natural_period():
     coef[0, TERMS.index("y")] = -W_Y ** 2
     coef[1, TERMS.index("theta")] = -(2 * np.pi * 43.0) ** 2
     # y: 0.75 periods at 22 Hz (51 frames) is within 0.875 natural periods; theta moving at f_y (51 frames) gets
-    # 0.875 / 43 Hz = 30.5 frames, below the 25-ms floor (38 frames)
-    assert natural_windows(coef, [[51, 51], [51, 38]], [dt, dt], cfg.natural_periods, cfg.window_bounds_s[1]) == [[51, 51], [31, 31]]
+    # 0.875 / 43 Hz = 30.5 frames, below the 0.55-y-period floor (25 ms at 22 Hz, 38 frames)
+    assert natural_windows(coef, [[51, 51], [51, 38]], [dt, dt], cfg.natural_periods) == [[51, 51], [31, 31]]
     coef[1, TERMS.index("theta")] = 5.0  # no restoring stiffness: the dominant frequency alone
-    assert natural_windows(coef, [[51], [51]], [dt], cfg.natural_periods, cfg.window_bounds_s[1])[1] == [51]
+    assert natural_windows(coef, [[51], [51]], [dt], cfg.natural_periods)[1] == [51]
     with pytest.raises(ValueError):
         DiscoveryConfig(natural_periods=0.0)
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from fitting.compare import cross_coupling_mask, drop_terms, paired_wilcoxon
-from fitting.ensemble import Z_CAP, select_terms, term_statistics
+from fitting.selection.ensemble import Z_CAP, select_terms, term_statistics
 from fitting.model import TERMS, PolynomialModel
 
 

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from cubedimer.terms import coefficient_labels
-from fitting.ensemble import term_statistics
-from fitting.final_checks import fallback_candidates
+from fitting.selection.ensemble import term_statistics
+from fitting.uncertainty.final_checks import fallback_candidates
 from fitting.model import PolynomialModel, damping_mask
 
 #: a hinge-like model: both equations' stiffness and damping plus three couplings of the hinge
@@ -84,7 +84,7 @@ FALLBACK_RECORD = {
 
 
 def test_the_report_says_the_written_model_is_a_fallback():
-    from fitting.discovery_fit import discovery_description
+    from fitting.methods.discovery import discovery_description
 
     text = discovery_description(FALLBACK_RECORD).text
     # the blown-up model's size, why it was not written, what was written instead and how many candidates held

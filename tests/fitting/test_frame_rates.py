@@ -8,11 +8,11 @@ import pytest
 
 from cubedimer.dataset import DatasetError, Run
 from fitting.config import FitConfig
-from fitting.decimation import block_average, decimation_factor
-from fitting.derivatives import LONG_WINDOW, SmoothingConfig, differentiate, noise_gain, run_derivatives
+from fitting.derivatives.decimation import block_average, decimation_factor
+from fitting.derivatives.savitzky_golay import LONG_WINDOW, SmoothingConfig, differentiate, noise_gain, run_derivatives
 from fitting.model import TERMS
-from fitting.pipeline import fit_dataset, prepare_runs
-from fitting.refine import RefineConfig
+from fitting.fit import fit_dataset, prepare_runs
+from fitting.refinement.long_time import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 # the truth and CSV writer of test_default_fit.py (pytest's importlib mode: load it by path)
@@ -106,8 +106,8 @@ def test_the_same_model_at_500_to_50000_frames_per_second(fits_by_frame_rate):
 def test_recorded_noise_is_divided_by_sqrt_q_for_block_means():
     from types import SimpleNamespace
 
-    from fitting.oracle import NoiseLevels
-    from fitting.pipeline import _fitted_noise
+    from fitting.uncertainty.oracle import NoiseLevels
+    from fitting.fit import _fitted_noise
 
     noise = NoiseLevels(1e-6, 4e-3, source="recorded")
     one = [SimpleNamespace(frames_averaged=1)] * 2

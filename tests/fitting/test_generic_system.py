@@ -10,7 +10,7 @@ from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
 from cubedimer.meta import read_meta
 from cubedimer.system import LEVITATED_DIMER, read_system
 from fitting.cli import main
-from fitting.fit_output import read_model_json
+from fitting.output.model_file import read_model_json
 from fitting.model import PolynomialModel
 from fitting.synthetic import SyntheticConfig, generate_runs
 

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from fitting.integral_form import (detrend_windows, double_integral, fit_integral_form, integral_window,
-                                   select_integral_form, window_starts)
+from fitting.derivatives.integral_form import (detrend_windows, double_integral, fit_integral_form, integral_window,
+                                               select_integral_form, window_starts)
 from fitting.multiple_testing import holm_z_threshold
 
 DT = 1.0 / 2000.0  # the twin's camera rate [s]
@@ -140,7 +140,7 @@ def test_significance_threshold_is_holm_along_the_path():
 def test_long_window_savgol_is_exact_for_polynomials(window):
     """A Savitzky-Golay filter of order p reproduces polynomials of degree <= p exactly, edges included;
     scipy's unscaled fit loses that for long windows (0.64 of the amplitude at 979 frames on a sinusoid)."""
-    from fitting.derivatives import smooth_long_window
+    from fitting.derivatives.savitzky_golay import smooth_long_window
 
     dt = 5e-4
     t = np.arange(6000) * dt
@@ -153,7 +153,7 @@ def test_long_window_savgol_is_exact_for_polynomials(window):
 
 
 def test_long_window_savgol_matches_scipy_on_short_windows():
-    from fitting.derivatives import differentiate, smooth_long_window
+    from fitting.derivatives.savitzky_golay import differentiate, smooth_long_window
 
     rng = np.random.default_rng(3)
     x = np.cumsum(rng.normal(size=3000))
@@ -165,7 +165,7 @@ def test_long_window_savgol_matches_scipy_on_short_windows():
 
 
 def test_column_states_use_raw_y_and_a_hinge_period_window():
-    from fitting.integral_form import column_states
+    from fitting.derivatives.integral_form import column_states
 
     dt, n = 5e-4, 6000
     t = np.arange(n) * dt

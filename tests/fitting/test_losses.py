@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from fitting.losses import LossWeights, loss_terms, make_reference, rest_model_terms
+from fitting.refinement.losses import LossWeights, loss_terms, make_reference, rest_model_terms
 
 
 @pytest.fixture

@@ -11,8 +11,8 @@ from scipy.integrate import solve_ivp
 from cubedimer.dataset import Run
 from cubedimer.spectra import dominant_frequency
 from cubedimer.terms import EQUATION_NAMES
-from fitting.derivatives import run_derivatives
-from fitting.discovery import DiscoveryConfig, discover_model
+from fitting.derivatives.savitzky_golay import run_derivatives
+from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
 from fitting.model import EXPONENTS, TERMS, PolynomialModel
 
 W1, W2, MU, C2, K = 2 * np.pi * 1.0, 2 * np.pi * 1.6, 0.2, 0.15, 20.0
@@ -179,7 +179,7 @@ def test_model_error_that_spare_terms_absorb_is_detected_by_the_heldout_inflatio
     (("significance", "significance"), False),
 ])
 def test_the_report_says_which_equations_were_selected_under_model_error(rules, said):
-    from fitting.discovery_fit import discovery_description
+    from fitting.methods.discovery import discovery_description
 
     disc = {eq: {"selection": {"rule": rule, "residual_to_noise": 1.02, "heldout_inflation": 64.0}}
             for eq, rule in zip(("yddot", "thetaddot"), rules)}
@@ -229,7 +229,7 @@ def test_the_practical_threshold_reaches_the_output_error(monkeypatch, practical
     """``--heldout-tolerance`` is the output error's ``misfit_tolerance`` too (the default's is 0)."""
     from types import SimpleNamespace
 
-    from fitting import discovery
+    from fitting.selection import integral_discovery as discovery
 
     seen = []
     monkeypatch.setattr(discovery, "refine_output_error", lambda *args: seen.append(args[7]))

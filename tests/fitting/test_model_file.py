@@ -1,11 +1,11 @@
-"""The one model.json reader (fitting.fit_output.read_model_json): exact round trip, one-line errors on bad files."""
+"""The one model.json reader (fitting.output.model_file.read_model_json): exact round trip, one-line errors on bad files."""
 import json
 
 import numpy as np
 import pytest
 
 from cubedimer.errors import DatasetError
-from fitting.fit_output import read_model_json
+from fitting.output.model_file import read_model_json
 
 
 def test_reads_back_the_model_exactly(tmp_path, truth):

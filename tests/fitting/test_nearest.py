@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from fitting.nearest import PointGrid
+from fitting.refinement.nearest import PointGrid
 
 
 def _trajectory(n, phase=0.0, scale=1.0, noise=0.01, seed=0):

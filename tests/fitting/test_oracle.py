@@ -9,11 +9,13 @@ from cubedimer.dataset import load_dataset
 from cubedimer.spectra import dominant_frequency
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
 from fitting.cli import main
-from fitting.integral_form import detrend_windows, fit_integral_form, integral_columns, integral_window, window_starts
+from fitting.derivatives.integral_form import (detrend_windows, fit_integral_form, integral_columns, integral_window,
+                                               window_starts)
 from fitting.model import TERMS
-from fitting.oracle import NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise, oracle_standard_errors
-from fitting.run_planning import PlanConfig, plan_runs
-from fitting.pipeline import prepare_runs
+from fitting.uncertainty.oracle import (NoiseLevels, OracleRun, canonical_term, estimate_tracking_noise,
+                                        oracle_standard_errors)
+from fitting.uncertainty.run_planning import PlanConfig, plan_runs
+from fitting.fit import prepare_runs
 from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model, write_dataset
 
 NOISE = NoiseLevels(1.5e-6, 0.003)  # the paper-like tracking noise of the issue's table [m], [-]
@@ -54,7 +56,7 @@ def _lstsq(X, b):
 
 
 def test_oracle_standard_errors_match_a_monte_carlo_of_the_estimator(model, clean):
-    """300 noise draws on fixed noise-free trajectories, each fitted by fitting.integral_form.fit_integral_form
+    """300 noise draws on fixed noise-free trajectories, each fitted by fitting.derivatives.integral_form.fit_integral_form
     on the true support with its columns at the exact states: the spread of the estimates is the oracle SE.
 
     The oracle integrates the model itself from the initial states (fitting.integrate), so this also checks

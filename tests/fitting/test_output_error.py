@@ -1,4 +1,4 @@
-"""Output-error refinement (:mod:`fitting.output_error`): recovery of an exact model from perturbed coefficients at
+"""Output-error refinement (:mod:`fitting.refinement.output_error`): recovery of an exact model from perturbed coefficients at
 the tracking-noise floor, and on a non-polynomial truth the cubic that predicts it best."""
 import numpy as np
 import pytest
@@ -6,8 +6,8 @@ from scipy.integrate import solve_ivp
 
 from cubedimer.spectra import dominant_frequency
 from fitting.model import EXPONENTS, TERMS, PolynomialModel
-from fitting.model_states import segment_layout
-from fitting.output_error import OutputErrorConfig, refine_output_error
+from fitting.refinement.model_states import segment_layout
+from fitting.refinement.output_error import OutputErrorConfig, refine_output_error
 
 W1, W2 = 2 * np.pi * 1.0, 2 * np.pi * 1.6
 FPS = 200.0
@@ -187,27 +187,28 @@ def _taylor_refit(runs, y_unit=1.0):
     """The pendulums' Taylor cubic refined on noisy runs with y in units of ``y_unit`` m (internals of the support
     search: segments, refined fit, smoothed states' library)."""
     from cubedimer.terms import evaluate_library
-    from fitting.output_error import _fit_states, _Problem, _refine as refine, _segments
+    from fitting.refinement.output_error import _refine as refine
+    from fitting.refinement.segment_problem import TrajectoryProblem, build_segments, fit_segment_states
 
     rng = np.random.default_rng(6)
     config, sigma = OutputErrorConfig(), np.array([1e-3 / y_unit, 1e-3])
     states = [s * np.array([1 / y_unit, 1 / y_unit, 1.0, 1.0]) for _, s in runs]
     ys = [s[:, 0] + sigma[0] * rng.standard_normal(len(s)) for s in states]
     ths = [s[:, 2] + sigma[1] * rng.standard_normal(len(s)) for s in states]
-    segs = _segments([1 / FPS] * len(runs), ys, ths, states, [1.0] * len(runs), config)
+    segs = build_segments([1 / FPS] * len(runs), ys, ths, states, [1.0] * len(runs), config)
     # y in units of y_unit: a term's coefficient scales with y_unit to the power of its powers of y and ydot, less
     # 1 in yddot
     power = EXPONENTS[:, 0] + EXPONENTS[:, 1] - np.array([[1], [0]])
     coef = PolynomialModel.from_equations(PENDULUM_TAYLOR).coef * float(y_unit) ** power
-    start = _Problem(coef, segs, sigma, config.h_omega)
-    fit = refine(coef, segs, sigma, _fit_states(start, start.parameters(coef), segs.x0.copy())[0], config)
+    start = TrajectoryProblem(coef, segs, sigma, config.h_omega)
+    fit = refine(coef, segs, sigma, fit_segment_states(start, start.parameters(coef), segs.x0.copy())[0], config)
     return fit, segs, sigma, config, evaluate_library(np.vstack(states)), power
 
 
 def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(pendulum_runs):
     """The additions' score test (one Jacobian of all 70 coefficients, segment states eliminated) against the refit
     with the term: the first-order drop of the squared misfit and the coefficient it predicts."""
-    from fitting.output_error import _addition_gains, _refine as refine
+    from fitting.refinement.output_error import _addition_gains, _refine as refine
 
     fit, segs, sigma, config, library, _ = _taylor_refit(pendulum_runs[:6])
     gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, library, config)
@@ -231,7 +232,7 @@ def test_scores_and_standard_errors_do_not_depend_on_the_units(pendulum_runs):
     """y in micrometres instead of metres moves the coefficients over twelve decades (y^3 in yddot by 1e-12): the
     score test's gains and the standard errors' z must not move (an unequilibrated pseudo-inverse cuts the
     large-variance directions as round-off)."""
-    from fitting.output_error import _addition_gains, _standard_errors
+    from fitting.refinement.output_error import _addition_gains, _standard_errors
 
     out = []
     for unit in (1.0, 1e-6):
@@ -275,6 +276,6 @@ def test_config_validates_itself():
     ([np.inf, np.inf], [False, False]),
 ])
 def test_segments_the_model_does_not_follow_are_left_out(mean_square, followed):
-    from fitting.output_error import _followed
+    from fitting.refinement.output_error import _followed
 
     assert _followed(np.array(mean_square), 5.0).tolist() == followed

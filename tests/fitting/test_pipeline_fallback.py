@@ -4,9 +4,9 @@ import json
 import numpy as np
 import pytest
 
-import fitting.paper_fit as paper_fit
-import fitting.selection_rules as selection_rules
-from fitting.final_checks import MAX_SANE_LOSS
+import fitting.methods.paper as paper_fit
+import fitting.selection.rules as selection_rules
+from fitting.uncertainty.final_checks import MAX_SANE_LOSS
 from fitting.cli import main
 from fitting.model import TERMS
 
@@ -34,8 +34,8 @@ FAST = ["--method", "paper", "--no-plots", "--quiet", "--workers", "1", "--max-e
 @pytest.mark.slow
 def test_blown_up_minimal_model_falls_back_and_says_so(small_dataset, tmp_path, lost_restoring_term, capsys,
                                                        monkeypatch):
-    import fitting.fit_output as fit_output
-    from fitting.methods import get_method
+    import fitting.output.model_file as fit_output
+    from fitting.methods.registry import get_method
 
     written = []
     write = fit_output.write_fit

@@ -6,8 +6,9 @@ from types import SimpleNamespace
 import pytest
 
 from cubedimer.dataset import Dataset
-from fitting import final_checks, pipeline
-from fitting.oracle import NoiseLevels, OracleResult, recorded_tracking_noise
+from fitting import fit as pipeline
+from fitting.uncertainty import final_checks
+from fitting.uncertainty.oracle import NoiseLevels, OracleResult, recorded_tracking_noise
 
 TRACKED = {"frame_rate_hz": 2000.0, "tracking": {"noise_y_m": 1.2e-7, "noise_theta": 6.0e-4, "fraction_measured": 1.0}}
 

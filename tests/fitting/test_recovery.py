@@ -12,7 +12,7 @@ from fitting.compare import paired_wilcoxon
 from cubedimer.executor import ExecutorConfig
 from fitting.model import TERMS
 from fitting.config import FitConfig
-from fitting.pipeline import fit_dataset
+from fitting.fit import fit_dataset
 from fitting.synthetic import SyntheticConfig, write_dataset
 
 pytestmark = pytest.mark.slow

@@ -8,18 +8,19 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from fitting import methods, selection_rules
+from fitting.methods import registry as methods
+from fitting.selection import rules as selection_rules
 from fitting.cli import build_parser, main
 from fitting.config import FitConfig
 from fitting.description import DescriptionTable, MethodDescription, model_equation_text
-from fitting.ensemble import least_squares_on_support, select_terms, term_statistics
-from fitting.fit_output import model_json
+from fitting.selection.ensemble import least_squares_on_support, select_terms, term_statistics
+from fitting.output.model_file import model_json
 from fitting.model import TERMS, PolynomialModel, damping_mask
-from fitting.pipeline import fit_dataset
-from fitting.refine import RefineConfig, refine
-from fitting.regression import scaled_data
+from fitting.fit import fit_dataset
+from fitting.refinement.long_time import RefineConfig, refine
+from fitting.selection.sparse_regression import scaled_data
 from fitting.results import EnsembleExtras, FitResult, RunEstimate
-from fitting.selection import SelectionConfig
+from fitting.selection.backward_elimination import SelectionConfig
 
 #: yddot = y + ydot, thetaddot = theta + thetadot: the linear oscillator, the support of the dummy method
 LINEAR = np.zeros((2, len(TERMS)), bool)
@@ -139,7 +140,7 @@ def two_short_runs(tmp_path_factory, truth):
 
 
 def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_short_runs, monkeypatch):
-    import fitting.paper_fit as paper_fit
+    import fitting.methods.paper as paper_fit
 
     def no_cross_check(*a, **k):  # the pooled integral-form cross-check (9 s here) plays no part in the selection
         raise ValueError("skipped in this test")
@@ -157,7 +158,7 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_sho
 def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method, small_dataset, tmp_path):
     """Section 3 of the report is the method's own description: the dummy's sentence, table and (no) figures,
     with no word of the paper's method or of the discovery."""
-    from fitting.fit_output import write_fit
+    from fitting.output.model_file import write_fit
     from validation.report.context import ReportContext
     from validation.report.sections import fit as fit_section
 

@@ -2,10 +2,11 @@
 import numpy as np
 import pytest
 
-from fitting.derivatives import SmoothingConfig, run_derivatives
+from fitting.derivatives.savitzky_golay import SmoothingConfig, run_derivatives
 from fitting.model import TERMS, PolynomialModel
-from fitting.refine import RefineConfig, refine
-from fitting.regression import RegressionConfig, dataset_scales, fit_ensemble_regression, fit_regression
+from fitting.refinement.long_time import RefineConfig, refine
+from fitting.selection.sparse_regression import (RegressionConfig, dataset_scales, fit_ensemble_regression,
+                                                 fit_regression)
 
 
 @pytest.fixture(scope="module")
@@ -62,9 +63,9 @@ def test_relative_threshold_keeps_a_small_term_of_the_slow_equation():
     """A theta equation whose scaled coefficients are all ~100x smaller than the y equation's: the absolute STLSQ
     threshold cuts its 0.002 cross term, the per-equation relative threshold keeps it (exact data, so the
     recovered coefficients are exact up to the ridge shrinkage)."""
-    from fitting.derivatives import Derivatives
+    from fitting.derivatives.savitzky_golay import Derivatives
     from fitting.model import TERMS, Scales
-    from fitting.regression import RegressionConfig, fit_regression
+    from fitting.selection.sparse_regression import RegressionConfig, fit_regression
     from cubedimer.terms import evaluate_library
 
     rng = np.random.default_rng(0)

@@ -1,10 +1,10 @@
-"""Unit tests of the joint-loss term selection (fitting.selection) and its pipeline fallback."""
+"""Unit tests of the joint-loss term selection (fitting.selection.backward_elimination) and its pipeline fallback."""
 import numpy as np
 
 from fitting.model import DAMPING_TERMS, TERMS, damping_mask
 from fitting.config import FitConfig
-from fitting.fit_output import model_json
-from fitting.selection import SelectionConfig
+from fitting.output.model_file import model_json
+from fitting.selection.backward_elimination import SelectionConfig
 
 
 def test_damping_mask_has_the_two_viscous_terms():
@@ -22,8 +22,8 @@ def test_default_rule_is_significance_and_the_others_are_available():
 
 def test_too_few_runs_for_wilcoxon_fall_back_to_zscore_rule(small_dataset, tmp_path):
     """3 runs: the one-sided Wilcoxon test cannot reach p < 0.01 (min p = 1/8), so the paper's rule is used."""
-    from fitting.pipeline import fit_dataset
-    from fitting.refine import RefineConfig
+    from fitting.fit import fit_dataset
+    from fitting.refinement.long_time import RefineConfig
 
     cfg = FitConfig(refine=RefineConfig(max_evals=60), joint=RefineConfig(max_evals=40, rel_bound=0.3, abs_bound=0.005),
                     selection=SelectionConfig(rule="backward"), method="paper")
@@ -34,7 +34,7 @@ def test_too_few_runs_for_wilcoxon_fall_back_to_zscore_rule(small_dataset, tmp_p
 
 
 def _stats_from(coefs):
-    from fitting.ensemble import term_statistics
+    from fitting.selection.ensemble import term_statistics
     from fitting.model import PolynomialModel
 
     return term_statistics([PolynomialModel(c) for c in coefs])
@@ -43,7 +43,7 @@ def _stats_from(coefs):
 def test_mean_pvalues_equal_the_one_sample_t_test(rng):
     from scipy.stats import ttest_1samp
 
-    from fitting.ensemble import mean_pvalues
+    from fitting.selection.ensemble import mean_pvalues
 
     coefs = np.zeros((12, 2, len(TERMS)))
     coefs[:, 0, 1] = rng.normal(1.0, 2.0, 12)    # weak: mean 1, spread 2
@@ -57,7 +57,7 @@ def test_mean_pvalues_equal_the_one_sample_t_test(rng):
 def test_significance_rule_keeps_a_weak_consistent_term_that_the_z_rule_drops(rng):
     """A term with per-run z = mean/std ~ 1.5 is significant as a mean over 30 runs (t ~ 8); a pure-noise term
     is not, and the Holm correction keeps the family-wise error at alpha."""
-    from fitting.ensemble import EnsembleConfig, select_significant_terms, select_terms
+    from fitting.selection.ensemble import EnsembleConfig, select_significant_terms, select_terms
 
     coefs = np.zeros((30, 2, len(TERMS)))
     coefs[:, 1, 5] = rng.normal(1.5, 1.0, 30)   # weak but consistent
@@ -74,7 +74,7 @@ def test_significance_rule_keeps_a_weak_consistent_term_that_the_z_rule_drops(rn
 
 def test_holm_family_wise_error_on_pure_noise():
     """300 data sets of 34 noise terms over 20 runs: the fraction with any term selected stays <= alpha (+ MC error)."""
-    from fitting.ensemble import select_significant_terms
+    from fitting.selection.ensemble import select_significant_terms
 
     rng = np.random.default_rng(7)
     hits = 0

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from cubedimer.attractors import classify_signal
-from fitting.derivatives import SmoothingConfig, noise_gain, run_derivatives, savgol_window
+from fitting.derivatives.savitzky_golay import SmoothingConfig, noise_gain, run_derivatives, savgol_window
 from cubedimer.poincare import poincare_map, poincare_section
 from cubedimer.spectra import dominant_frequency, phase_difference
 
@@ -24,7 +24,7 @@ def test_savgol_derivatives_bias_and_noise():
     # noise: empirical std of the filtered second derivative of white noise equals noise_gain
     rng = np.random.default_rng(1)
     noise = rng.standard_normal(200_000) * 1e-6
-    from fitting.derivatives import differentiate
+    from fitting.derivatives.savitzky_golay import differentiate
     _, _, dd = differentiate(noise, 1 / fps, 51, 5)
     g = noise_gain(51, 5, 2, 1 / fps) * 1e-6
     np.testing.assert_allclose(np.std(dd[100:-100]), g, rtol=0.02)  # 2 %: sampling error of a std over 2e5 samples
@@ -82,7 +82,7 @@ def test_acceleration_kernel_matches_the_savgol_second_derivative(fps, window):
     filter itself (or nothing) leaves a large attenuation bias at 2.3 f_y."""
     from scipy.signal import savgol_filter
 
-    from fitting.derivatives import acceleration_kernel, apply_acceleration_kernel
+    from fitting.derivatives.savitzky_golay import acceleration_kernel, apply_acceleration_kernel
 
     dt = 1.0 / fps
     t = np.arange(6000) * dt

@@ -1,10 +1,10 @@
-"""The held-out selection under model error (fitting.support_search.select_heldout) on designs built directly as R
+"""The held-out selection under model error (fitting.selection.support_search.select_heldout) on designs built directly as R
 factors: its one-standard-error rule, and the tolerance below which a gain in held-out error counts as none."""
 import numpy as np
 import pytest
 
 from fitting.model import TERMS
-from fitting.support_search import ReducedDesign, select_heldout
+from fitting.selection.support_search import ReducedDesign, select_heldout
 
 N_LIB = len(TERMS)
 ROWS, RUNS = 2000, 10

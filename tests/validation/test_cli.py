@@ -126,6 +126,59 @@ def test_report_heldout_tolerance_is_checked_before_anything_runs(tmp_path, tiny
     assert not (tmp_path / "out").exists()
 
 
+def _option_strings(parser, command):
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction").choices[command]
+    return {o for a in sub._actions for o in a.option_strings}
+
+
+def test_the_report_offers_every_option_of_the_fit_with_the_same_help():
+    """One options path (fitting.options): the report's fit options are the fit command's, help text included."""
+    from fitting.cli import build_parser as fit_parser
+    from validation.cli import build_parser as validation_parser
+
+    fit_only = {"--out", "--strict", "--no-plots", "--quiet", "--workers", "--scheduler", "-h", "--help"}
+    fit_options = _option_strings(fit_parser(), "fit") - fit_only
+    assert {"--max-evals", "--joint-max-evals", "--output-error", "--selection", "--relative-threshold",
+            "--no-glitch-mask", "--min-periods", "--heldout-tolerance", "--method"} <= fit_options
+    assert fit_options <= _option_strings(validation_parser(), "report")
+
+    def helps(parser, command):
+        sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction").choices[command]
+        return {o: a.help for a in sub._actions for o in a.option_strings if o in fit_options}
+
+    assert helps(fit_parser(), "fit") == helps(validation_parser(), "report")
+
+
+def test_the_report_builds_its_fit_configuration_as_the_fit_command_does():
+    """--max-evals sets the method's own refinement (the discovery's polish), --joint-max-evals the joint
+    re-optimisation, and the loading options reach the loader, in both commands."""
+    from fitting.cli import build_parser as fit_parser
+    from fitting.options import fit_config_from_args
+    from validation.cli import build_parser as validation_parser
+
+    extra = ["--max-evals", "7", "--joint-max-evals", "9", "--output-error", "refine", "--no-glitch-mask",
+             "--min-periods", "3"]
+    fit_args = fit_parser().parse_args(["fit", "d", "--out", "o", *extra])
+    report_args = validation_parser().parse_args(["report", "d", "--out", "o", *extra])
+    cfg = fit_config_from_args(fit_args)
+    assert cfg == fit_config_from_args(report_args)
+    assert (cfg.polish.max_evals, cfg.joint.max_evals) == (7, 9)
+    assert cfg.refine == type(cfg)().refine  # the paper's per-run refinement is not the discovery's to change
+    assert cfg.discovery.output_error.support_tolerance is None
+    assert cfg.load.glitches is None and cfg.load.min_periods == 3.0
+
+
+@pytest.mark.parametrize("extra, option", [
+    (["--selection", "zscore"], "--selection"),  # the paper's rule, with the discovery
+    (["--method", "paper", "--output-error", "off"], "--output-error"),
+])
+def test_report_refuses_a_fit_option_its_method_does_not_take_before_anything_runs(tmp_path, tiny_data, capsys,
+                                                                                   extra, option):
+    assert main(["report", str(tiny_data), "--out", str(tmp_path / "out"), "--quiet", *extra]) == 2
+    assert _one_line_error(capsys).startswith(f"error: {option}")
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("command", ["diagnose", "report"])
 def test_a_single_run_is_refused_with_the_runs_needed(tmp_path, tiny_data, capsys, command):
     """One usable run: one line saying how many runs the diagnosis needs and why, exit 2, nothing written (the

@@ -1,4 +1,4 @@
-"""The integral-form discovery (fitting.discovery) on twin data, whose truth is not sparse in the cubic library
+"""The integral-form discovery (fitting.selection.integral_discovery) on twin data, whose truth is not sparse in the cubic library
 (pair scattering's cos^2, the theta-dependent inertia): the model stays small and reproduces the attractors."""
 import numpy as np
 import pytest
@@ -9,10 +9,10 @@ def test_discovery_on_pair_scattering_twin_is_small_and_reproduces_the_attractor
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, simulate_dataset
     from cubedimer.dataset import load_dataset
-    from fitting.discovery import discover_model
+    from fitting.selection.integral_discovery import discover_model
     from fitting.model import TERMS
-    from fitting.pipeline import prepare_runs
-    from fitting.refine import Objective, default_substeps, scaled_reference
+    from fitting.fit import prepare_runs
+    from fitting.refinement.long_time import Objective, default_substeps, scaled_reference
 
     effects = {"pair_scattering": {"kappa": 15000.0}, "linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}}
     # no air damping: the linear damping is the whole damping the fitted ydot and thetadot terms are checked against

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from cubedimer.atomic import write_json
+from cubedimer.meta import META_DEFAULTS
 
 from .config import BlindConfig
 
@@ -37,6 +38,9 @@ __all__ = ["STRENGTHS", "N_EFFECT_PROBABILITIES", "draw_parameters", "draw_from"
            "run_case", "score_case", "summarize", "candidates_table", "confusion_figure"]
 
 logger = logging.getLogger(__name__)
+
+#: The pressure amplitude a blind case's meta.json states, and its truth's centre [Pa] (docs/conventions.md).
+NOMINAL_PRESSURE_PA = META_DEFAULTS["pressure_amplitude_pa"]
 
 #: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.
 STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
@@ -79,7 +83,7 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
 
     A drawn start can drive a run out of the trap (the twin refuses such runs), and a drawn effect can fold the hinge
     (a mirror asymmetry beta0 beyond the hinge's largest restoring acceleration, 26 1/s^2 on the default dimer at
-    3 kPa): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.folded`), so a data set with
+    3 kPa): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
     fewer unfolded runs than an effect needs to be named at the diagnosis's alpha is no case to score.  Either way the
     twin's seed is redrawn (same effects and pressure) up to 5 times; a case that still folds is reported as not
     generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
@@ -94,7 +98,7 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
         # with the air's damping, truth.json lists it among the effects (module docstring)
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
                           pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]),
-                          pressure_amplitude_pa=3000.0 * (1 + case["pressure_error"]), air_damping=air_damping)
+                          pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]), air_damping=air_damping)
         try:
             simulate_dataset(twin, data, progress=False, force=True)
         except TwinError as exc:
@@ -108,14 +112,14 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
 
 def _too_many_folded(data: Path, runs: int) -> str | None:
     """Why the twin data set in ``data`` cannot be scored: fewer runs than an effect needs at the diagnosis's alpha
-    (:func:`validation.diagnosis.statistics.runs_needed`) are usable once those that ended folded are left out (a
+    (:func:`validation.diagnosis.identify.statistics.runs_needed`) are usable once those that ended folded are left out (a
     run the twin stopped at the fold may also be too short to load); None if enough are."""
     from cubedimer.dataset import load_dataset
     from cubedimer.errors import DatasetError
 
-    from ..diagnosis.folded import folded_angle
-    from ..diagnosis.pipeline import DiagnoseConfig
-    from ..diagnosis.statistics import runs_needed
+    from ..diagnosis.identify.folded import folded_angle
+    from ..diagnosis.identify.statistics import runs_needed
+    from ..diagnosis.steps import DiagnoseConfig
 
     try:
         usable = sum(folded_angle(run) is None for run in load_dataset(data, report=lambda message: None).runs)
@@ -146,7 +150,7 @@ def hide_truth(data: Path, truth_path: Path) -> dict:
     returns the truth."""
     os.replace(data / "truth.json", truth_path)
     meta = json.loads((data / "meta.json").read_text())
-    meta["pressure_amplitude_pa"] = 3000.0
+    meta["pressure_amplitude_pa"] = NOMINAL_PRESSURE_PA
     write_json(data / "meta.json", meta)
     return json.loads(truth_path.read_text())
 

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from cubedimer.config_checks import check_choices, check_fraction, check_positive, check_that, check_whole
+
 __all__ = ["KINDS", "BlindConfig"]
 
 #: The case kinds, in table order: hidden candidate effects; an effect no candidate describes (a cubic hinge term
@@ -47,14 +49,12 @@ class BlindConfig:
     kinds: tuple[str, ...] = ("candidates",)
     air_damping: bool = True
 
-    def __post_init__(self):
-        if self.cases < 1 or self.runs < 3 or not self.duration > 0:
-            raise ValueError("a blind study needs cases >= 1, runs >= 3 and duration > 0")
-        if not 0 <= self.pressure_error < 1:
-            raise ValueError(f"pressure_error must lie in [0, 1), got {self.pressure_error}")
+    def __post_init__(self) -> None:
+        check_whole(self, "cases")
+        check_whole(self, "runs", minimum=3)
+        check_positive(self, "duration")
+        check_fraction(self, "pressure_error", zero=True)
         object.__setattr__(self, "kinds", tuple(self.kinds))
-        unknown = [k for k in self.kinds if k not in KINDS]
-        if unknown or not self.kinds:
-            raise ValueError(f"unknown case kind(s) {', '.join(unknown) or '(none given)'}; kinds are {', '.join(KINDS)}")
-        if "unit_slip" in self.kinds and self.runs < 4:
-            raise ValueError("unit-slip cases need runs >= 4 (three runs must remain to compare)")
+        check_choices(self, "kinds", KINDS, what="case kind(s)", allow_empty=False)
+        check_that(self, "unit_slip" not in self.kinds or self.runs >= 4,
+                   "unit-slip cases need runs >= 4 (three runs must remain to compare)")

@@ -28,7 +28,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cubedimer.atomic import write_json
+from cubedimer.config_checks import check_bounds, check_fraction, check_positive, check_that, check_whole
 from cubedimer.dataset import write_run_csv
+from cubedimer.meta import DEFAULT_TRACKING_NOISE
 
 __all__ = ["TwinLikeConfig", "TwinLikeError", "write_twin_like_dataset"]
 
@@ -81,8 +83,18 @@ class TwinLikeConfig:
     cubic_hinge: float = 0.0
     y_damping: float = 0.0
     effects: dict | None = None
-    noise: tuple[float, float] = (1e-6, 0.005)
+    noise: tuple[float, float] = (DEFAULT_TRACKING_NOISE["noise_y_m"], DEFAULT_TRACKING_NOISE["noise_theta"])
     force_model: Any = None
+
+    def __post_init__(self) -> None:
+        check_whole(self, "runs")
+        check_positive(self, "duration")
+        check_positive(self, "fps")
+        check_fraction(self, "pressure_error", zero=True)
+        check_fraction(self, "drift", zero=True)
+        check_bounds(self, "drift_period")
+        check_that(self, len(self.noise) == 2 and all(n >= 0 for n in self.noise),
+                   f"noise must be two standard deviations >= 0 (y [m], theta), got {self.noise!r}")
 
 
 def write_twin_like_dataset(path: str | Path, config: TwinLikeConfig = TwinLikeConfig()) -> dict:

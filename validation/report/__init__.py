@@ -1,6 +1,6 @@
 """The model-vs-simulation report: its numbers, figures, HTML and the headless-browser check.
 
-* :mod:`validation.report.pipeline`: :func:`build_report` runs the fit, the variant comparison and the diagnosis
+* :mod:`validation.report.build`: :func:`build_report` runs the fit, the variant comparison and the diagnosis
   of a data set, fills the :class:`~validation.report.context.ReportContext` and writes the report from its sections;
 * :mod:`validation.report.context`: :class:`~validation.report.context.ReportContext`, everything the sections read
   (with the calibrated sweeps and coefficient comparisons);

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from fitting.description import anti_damping_text
 
-from ..diagnosis.statistics import format_p
+from ..diagnosis.identify.statistics import format_p
 
 __all__ = ["REPRODUCES_BELOW", "PHASE_LINE_FRACTION", "long_time_reading", "run_phase", "anti_damping_text",
            "smallest_wilcoxon_p", "not_significant_text"]

@@ -7,11 +7,14 @@ section needs is computed twice.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from fitting.refinement.long_time import RefineConfig
 
 __all__ = ["ReportContext", "variant_comparison", "report_context"]
 
@@ -26,7 +29,7 @@ class CalibratedSimulation:
     ----------
     name, label : str
         The registry name and the model's label in tables and prose.
-    calibration : validation.diagnosis.calibration.Calibration
+    calibration : validation.diagnosis.calibrate.calibration.Calibration
         Its calibration (pressure, origin): the diagnosis's final one for the diagnosis's model.
     static : acousim.static_model.StaticModel
         The model at its calibrated pressure (with the diagnosis's calibrated parameters for the diagnosis's model).
@@ -66,7 +69,7 @@ class ReportContext:
         The diagnosis (with its internals: the runs and fits for its figures).
     meta : dict
         The data set's meta.json.
-    models : validation.diagnosis.model_comparison.ModelComparison
+    models : validation.diagnosis.summarise.model_comparison.ModelComparison
         The gaps of every registered model side by side, and the reference model with fitted pair scattering.
     simulations : tuple of CalibratedSimulation
         Every compared model, the reference model (the registry's first) first, in registry order.
@@ -124,19 +127,19 @@ class ReportContext:
         return {n: r for n, r in self.models.unavailable.items() if r}
 
 
-def variant_comparison(res, fit_dir: Path, max_evals: int | None):
-    """The minimal model against its variant without cross-coupling terms, re-optimised (``max_evals`` evaluations;
-    default: the joint re-optimisation's), with its figure in ``fit_dir``; None when the model has no cross-coupling
-    terms."""
+def variant_comparison(res, fit_dir: Path, joint: "RefineConfig | None" = None):
+    """The minimal model against its variant without cross-coupling terms, re-optimised with the fit's joint
+    re-optimisation ``joint`` (default: :data:`fitting.refinement.long_time.JOINT_REFINE`), with its figure in
+    ``fit_dir``; None when the model has no cross-coupling terms."""
     from fitting.compare import compare_models, cross_coupling_mask
-    from fitting.plots import plot_comparison
-    from fitting.refine import JOINT_REFINE
+    from fitting.output.plots import plot_comparison
+    from fitting.refinement.long_time import JOINT_REFINE
 
     mask = cross_coupling_mask(res.model)
     if not mask.any():
         return None
     variant = res.model.with_mask(res.model.support & ~mask)
-    cmp_config = JOINT_REFINE if max_evals is None else replace(JOINT_REFINE, max_evals=max_evals)
+    cmp_config = JOINT_REFINE if joint is None else joint
     prepared = res.runs
     cmp = compare_models(res.model, variant, [p.derivs for p in prepared], res.scales,
                          [p.run.name for p in prepared], config=cmp_config)

@@ -9,8 +9,8 @@ import pytest
 from acousim.dynamics.effects import EFFECT_TYPES, Effect
 
 from validation.diagnosis import Calibration, DiagnosisProblem
-from validation.diagnosis.gap_model import predicted_accelerations
-from validation.diagnosis.preparation import RunAccelerations
+from validation.diagnosis.calibrate.gap_model import predicted_accelerations
+from validation.diagnosis.prepare.runs import RunAccelerations
 
 
 @pytest.fixture(scope="module")

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import DiagnoseConfig, DiagnosisProblem, Discovery, diagnose_dataset
-from validation.diagnosis.discovery import DiscoveredTerm, discover_terms, discovered_equations
-from validation.diagnosis.gap_model import fit_gap_model
-from validation.diagnosis.joint_model import judge_candidates
-from validation.diagnosis.preparation import prepare_diagnosis_runs
-from validation.diagnosis.discovery import _Normal
+from validation.diagnosis.discover.library_terms import DiscoveredTerm, discover_terms, discovered_equations
+from validation.diagnosis.calibrate.gap_model import fit_gap_model
+from validation.diagnosis.discover.joint_model import judge_candidates
+from validation.diagnosis.prepare.runs import prepare_diagnosis_runs
+from validation.diagnosis.discover.library_terms import _Normal
 
 FAST = DiagnoseConfig(long_time=False)
 
@@ -26,7 +26,7 @@ def test_discovered_equation_text():
 def test_normal_equation_selection_matches_the_fitting_rule():
     """The backward elimination on the normal equations keeps the terms select_integral_form keeps."""
     from cubedimer.terms import evaluate_library, library_terms
-    from fitting.integral_form import integral_columns, select_integral_form, window_starts
+    from fitting.derivatives.integral_form import integral_columns, select_integral_form, window_starts
 
     rng = np.random.default_rng(0)
     names = library_terms()
@@ -100,7 +100,7 @@ def test_nothing_discovered_on_clean_data(clean_dataset):
 def test_dissipative_terms_are_the_own_velocity_times_even_factors():
     """Each equation's energy-balance terms carry its own velocity once (or cubed) and nothing odd in the other
     velocity, so none of them does the same work as a term of the other equation."""
-    from validation.diagnosis.discovery import dissipative_terms
+    from validation.diagnosis.discover.library_terms import dissipative_terms
 
     terms = dissipative_terms()
     assert terms["yddot"] == ["ydot", "y*ydot", "ydot*theta", "y^2*ydot", "y*ydot*theta", "ydot*theta^2", "ydot^3"]
@@ -113,8 +113,8 @@ def test_dissipative_terms_are_the_own_velocity_times_even_factors():
 def test_energy_window_work_of_a_linear_damping_matches_the_energy_terms(clean_dataset):
     """The work per energy window of the library term ydot in yddot (unit coefficient) is the linear damping's
     work column with gamma_y = 1: two routes to M int ydot^2 dt over the same windows."""
-    from validation.diagnosis.discovery import _dissipation_work
-    from validation.diagnosis.simulation_model import SimulationTerms
+    from validation.diagnosis.discover.library_terms import _dissipation_work
+    from validation.diagnosis.prepare.simulation_terms import SimulationTerms
 
     data, _ = clean_dataset
     problem = _problem(data)
@@ -180,7 +180,7 @@ def test_library_equivalents_are_the_candidates_own_columns():
     """The library terms a candidate is not judged against are its own regressor columns (up to the sign)."""
     from cubedimer.terms import evaluate_library, library_terms
     from validation.diagnosis import effect_regressors
-    from validation.diagnosis.candidates import CANDIDATE_EFFECTS, LIBRARY_EQUIVALENTS
+    from validation.diagnosis.prepare.candidate_effects import CANDIDATE_EFFECTS, LIBRARY_EQUIVALENTS
 
     rng = np.random.default_rng(0)
     state = rng.normal(size=(50, 4)) * np.array([1e-4, 1e-2, 0.3, 3.0])

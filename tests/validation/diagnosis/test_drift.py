@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import EXPLAINED_GAP, DiagnoseConfig, DiagnosisProblem, PressureDrift, diagnose_dataset
-from validation.diagnosis.drift import DriftSettings, detect_pressure_drift, drift_basis
-from validation.diagnosis.preparation import prepare_diagnosis_runs
+from validation.diagnosis.calibrate.drift import DriftSettings, detect_pressure_drift, drift_basis
+from validation.diagnosis.prepare.runs import prepare_diagnosis_runs
 
 FAST = DiagnoseConfig(long_time=False)
 

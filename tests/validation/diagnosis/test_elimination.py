@@ -1,8 +1,8 @@
 """The backward check: an effect the greedy rounds chose that is not needed given the others is dropped, and two
 effects that only work as either one are one verdict naming both."""
 from validation.diagnosis import Calibration, DiagnosisProblem
-from validation.diagnosis.elimination import backward_check
-from validation.diagnosis.identification import held_out_gaps
+from validation.diagnosis.identify.elimination import backward_check
+from validation.diagnosis.identify.identification import held_out_gaps
 
 
 def test_an_effect_not_needed_given_the_others_is_dropped(fast_model, synthetic_runs):

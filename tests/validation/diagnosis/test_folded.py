@@ -1,10 +1,10 @@
-"""Runs whose hinge ended folded are left out of the diagnosis, named with their angle (validation.diagnosis.folded)."""
+"""Runs whose hinge ended folded are left out of the diagnosis, named with their angle (validation.diagnosis.identify.folded)."""
 import numpy as np
 import pytest
 
 from cubedimer.dataset import load_dataset
 from cubedimer.errors import DatasetError
-from validation.diagnosis.folded import FOLDED_THETA, folded_angle, leave_out_folded_runs
+from validation.diagnosis.identify.folded import FOLDED_THETA, folded_angle, leave_out_folded_runs
 
 
 def _levitated(t, rng, theta):
@@ -48,7 +48,7 @@ def test_a_set_whose_every_hinge_folded_is_refused_in_one_line(tmp_path, write_c
     """A strong mirror asymmetry (beta0 beyond the hinge's largest restoring acceleration) folds every run: the
     diagnosis refuses the set, counting the skipped files, instead of diagnosing noise about theta = -0.96."""
     from validation.diagnosis import diagnose
-    from validation.diagnosis.pipeline import load_for_diagnosis
+    from validation.diagnosis.steps import load_for_diagnosis
 
     rng = np.random.default_rng(4)
     t = np.arange(3000) / 1000.0

@@ -1,10 +1,10 @@
-"""Calibrating the full-wave hinge gap from data (validation.diagnosis.model_parameters and the pipeline)."""
+"""Calibrating the full-wave hinge gap from data (validation.diagnosis.calibrate.model_parameters and the pipeline)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from validation.diagnosis import model_parameters as mp
+from validation.diagnosis.calibrate import model_parameters as mp
 from acousim.models import ModelSpec
 
 
@@ -120,7 +120,7 @@ def test_diagnosis_calibrates_the_gap_and_names_only_the_true_effect(fullwave_tw
     assert d.identified == ("linear_damping",)
     assert d.model == "fullwave"
     # the report states the calibrated gap with its uncertainty
-    from validation.report.sections.diagnosis import diagnosis_section
+    from validation.report.sections.gap_diagnosis import diagnosis_section
 
     reading = diagnosis_section(d, []).reading
     assert f"g = {cal['gap_m'] * 1e6:.2f} +- {cal['gap_std_m'] * 1e6:.2g} um" in reading
@@ -139,6 +139,6 @@ def test_a_given_gap_is_used_not_calibrated(fullwave_twin, use_synthetic_family)
     cal = d.calibration
     assert cal["gap_m"] == 13e-6 and cal["gap_calibrated"] is False and cal["gap_std_m"] is None
     assert "gap_profile" not in cal
-    from validation.report.sections.diagnosis import diagnosis_section
+    from validation.report.sections.gap_diagnosis import diagnosis_section
 
     assert "Hinge gap g = 13.00 um: the gap given by the user" in diagnosis_section(d, []).reading

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import Calibration, DiagnosisProblem
-from validation.diagnosis.gap_model import fit_gap_model
-from validation.diagnosis.metrics import fit_gaps
+from validation.diagnosis.calibrate.gap_model import fit_gap_model
+from validation.diagnosis.calibrate.metrics import fit_gaps
 
 
 def _fit(model, runs, effects=()):
@@ -46,7 +46,7 @@ def test_energy_balance_finds_weak_damping(fast_model, synthetic_runs):
 def test_a_registered_effect_is_fitted_by_the_diagnosis(registered_push, fast_model, synthetic_runs):
     """A dummy effect registered in acousim.dynamics.effects.EFFECT_TYPES (a constant hinge push) is a candidate of the
     diagnosis's effect fit with no further code: runs whose hinge feels it give back its parameter."""
-    from validation.diagnosis.preparation import RunAccelerations
+    from validation.diagnosis.prepare.runs import RunAccelerations
 
     truth = Calibration.at(fast_model, 1.0, fast_model.equilibrium_height)
     runs = synthetic_runs(fast_model, truth, {}, n_runs=4, duration=0.8)

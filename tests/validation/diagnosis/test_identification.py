@@ -1,6 +1,6 @@
 """Held-out identification on synthetic accelerations: exactly the effects present, nothing without one."""
 from validation.diagnosis import Calibration, DiagnosisProblem
-from validation.diagnosis.identification import identify_effects
+from validation.diagnosis.identify.identification import identify_effects
 
 
 def test_identification_finds_exactly_the_effects(fast_model, synthetic_runs):

@@ -1,7 +1,7 @@
 """Localisation of the residual of the calibrated simulation."""
 from validation.diagnosis import Calibration, DiagnosisProblem
-from validation.diagnosis.gap_model import fit_gap_model
-from validation.diagnosis.localization import localize_residuals
+from validation.diagnosis.calibrate.gap_model import fit_gap_model
+from validation.diagnosis.summarise.localization import localize_residuals
 
 
 def test_localization_points_at_the_missing_term(fast_model, synthetic_runs):

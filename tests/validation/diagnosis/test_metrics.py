@@ -3,9 +3,10 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import Calibration, DiagnosisProblem, GapFit
-from validation.diagnosis.gap_model import EnergyResidual, IntegralResidual, fit_gap_model
-from validation.diagnosis.metrics import fit_components, fit_gaps, gap_components, gap_definition, short_time_gaps
-from validation.diagnosis.preparation import RunAccelerations
+from validation.diagnosis.calibrate.gap_model import EnergyResidual, IntegralResidual, fit_gap_model
+from validation.diagnosis.calibrate.metrics import (fit_components, fit_gaps, gap_components, gap_definition,
+                                                    short_time_gaps)
+from validation.diagnosis.prepare.runs import RunAccelerations
 
 
 def _runs_and_residuals(seed=0, n_runs=3, n=200):

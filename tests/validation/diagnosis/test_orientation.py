@@ -5,7 +5,7 @@ import shutil
 import numpy as np
 
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
-from validation.diagnosis.orientation import FAR_BETTER, judge_inverted
+from validation.diagnosis.calibrate.orientation import FAR_BETTER, judge_inverted
 
 
 def _write_upside_down(up, down):
@@ -30,7 +30,7 @@ def test_y_positive_down_is_named_and_not_reported_as_new_physics(tmp_path):
     """5 runs of 1.5 s with pair scattering (kappa 15,000 1/s^2), written with y positive down; alpha 0.05 so that
     5 runs can identify an effect (smallest sign-flip p 2^-5)."""
     from validation.blind.twin_like import TwinLikeConfig, write_twin_like_dataset
-    from validation.report.sections.diagnosis import diagnosis_section
+    from validation.report.sections.gap_diagnosis import diagnosis_section
 
     up, down = tmp_path / "up", tmp_path / "down"
     truth = write_twin_like_dataset(up, TwinLikeConfig(runs=5, duration=1.5, seed=3, pressure_error=0.05,

@@ -152,8 +152,8 @@ def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
     assert [e.name for e in diag.effects] == ["pair_scattering"]
     assert (out / "report.html").exists()
     assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
-    assert "[validation.diagnosis.pipeline] 3 runs; calibrating" in r.stderr
-    assert "[validation.diagnosis.identification] testing pair_scattering on top of calibration" in r.stderr
+    assert "[validation.diagnosis.steps] 3 runs; calibrating" in r.stderr
+    assert "[validation.diagnosis.identify.identification] testing pair_scattering on top of calibration" in r.stderr
     # three runs cannot make any held-out test significant (smallest one-sided p 2^-3 = 0.125 > alpha 0.01):
     # the command says so, and the file records it, instead of a bare "identified: none"
     assert diag.identified == ()

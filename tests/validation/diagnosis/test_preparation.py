@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from validation.diagnosis.preparation import RunAccelerations
+from validation.diagnosis.prepare.runs import RunAccelerations
 
 
 @pytest.mark.parametrize("step", [1, 2, 4])

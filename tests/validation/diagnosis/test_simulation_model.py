@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from validation.diagnosis import DiagnosisProblem
-from validation.diagnosis.preparation import prepare_diagnosis_runs
-from validation.diagnosis.calibration import calibrate, vertical_system
-from validation.diagnosis.drift import PressureDrift
-from validation.diagnosis.simulation_model import SimulationTerms
+from validation.diagnosis.prepare.runs import prepare_diagnosis_runs
+from validation.diagnosis.calibrate.calibration import calibrate, vertical_system
+from validation.diagnosis.calibrate.drift import PressureDrift
+from validation.diagnosis.prepare.simulation_terms import SimulationTerms
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,7 @@ def test_reduced_height_search_matches_the_plain_least_squares(problem, effects)
     terms = SimulationTerms(problem)
     cal = calibrate(terms, effects)
     z_eq = problem.model.equilibrium_height
-    from validation.diagnosis.candidates import parameter_slots
+    from validation.diagnosis.prepare.candidate_effects import parameter_slots
 
     y_effects = [n for n in effects if parameter_slots([n], 0)]
     cols = [0] + [c for _, _, c in parameter_slots(y_effects, 0)]
@@ -82,7 +82,7 @@ def test_energy_balance_closes_on_a_fullwave_path_with_damping():
     from acousim import DimerDynamics, EffectSet
     from acousim.models import ExperimentConditions, static_model
 
-    from validation.diagnosis.preparation import RunAccelerations
+    from validation.diagnosis.prepare.runs import RunAccelerations
 
     model = static_model("fullwave", ExperimentConditions())
     assert not model.conservative
@@ -112,8 +112,8 @@ def test_energy_balance_of_a_locked_hinge_closes_at_the_true_parameters(tmp_path
     from acousim.cli import main as acousim_main
     from acousim.models import ModelSpec, force_model_names
     from cubedimer.dataset import load_dataset
-    from validation.diagnosis.candidates import parameter_vector
-    from validation.diagnosis.preparation import prepare_diagnosis_runs
+    from validation.diagnosis.prepare.candidate_effects import parameter_vector
+    from validation.diagnosis.prepare.runs import prepare_diagnosis_runs
     from validation.simulation import conditions_from_meta
 
     out = tmp_path / "locked"

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from validation.diagnosis.statistics import sign_flip_pvalue
-from validation.diagnosis.statistics import runs_needed, smallest_sign_flip_pvalue
+from validation.diagnosis.identify.statistics import sign_flip_pvalue
+from validation.diagnosis.identify.statistics import runs_needed, smallest_sign_flip_pvalue
 
 
 def test_sign_flip_pvalue_exact_cases():

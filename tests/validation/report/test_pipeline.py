@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from validation.report.pipeline import effect_static_coefficients
+from validation.report.build import effect_static_coefficients
 
 SECTIONS = ["data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
 
@@ -29,14 +29,14 @@ def damping_report(tmp_path_factory):
     from validation.report import build_report
 
     import cubedimer.dataset
-    import fitting.pipeline
+    import fitting.fit
     import validation.diagnosis
 
     base = tmp_path_factory.mktemp("report")
     data = _twin(base / "data", {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
     # what the report's steps receive, recorded on the way (the real functions do the work)
     with pytest.MonkeyPatch.context() as mp:
-        for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.pipeline, "fit_dataset"),
+        for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.fit, "fit_dataset"),
                              (validation.diagnosis, "diagnose")):
             mp.setattr(module, name, _recorded(name, getattr(module, name)))
         return build_report(data, base / "report", workers=1, progress=False, max_evals=150)
@@ -92,7 +92,7 @@ def test_report_has_every_section_image_and_finite_number(damping_report):
 @pytest.mark.slow
 def test_theta_y2_agrees_with_simulation_without_theta_effects(damping_report):
     """Per-run acceleration fits are at an information limit for theta*y^2 on the soft Gor'kov hinge (their scatter
-    ~4e9 1/(m^2 s^2) against a static ~1.4e8); the pooled integral form (fitting.integral_form) is not, and the
+    ~4e9 1/(m^2 s^2) against a static ~1.4e8); the pooled integral form (fitting.derivatives.integral_form) is not, and the
     comparison's verdict uses it where it selects the term."""
     cmp = json.loads((damping_report.parent / "comparison.json").read_text())
     lead = cmp["terms"][0]
@@ -120,8 +120,8 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     from acousim import GorkovDimer, fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
     from fitting.config import FitConfig
-    from fitting.fit_output import write_fit
-    from fitting.pipeline import fit_dataset
+    from fitting.output.model_file import write_fit
+    from fitting.fit import fit_dataset
     from dataclasses import replace
     from validation.coefficients import compare_coefficients
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from cubedimer.spectra import peak_frequency
-from validation.diagnosis.statistics import format_p
-from validation.report.sections.diagnosis import diagnosis_section
+from validation.diagnosis.identify.statistics import format_p
+from validation.report.sections.gap_diagnosis import diagnosis_section
 
 
 def test_p_values_are_bounds_below_double_precision():
@@ -332,7 +332,7 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
 
 def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
     """The lab's hinge damping of +8 and +16 1/s in thetaddot (anti-damping), kept by the rule, is flagged."""
-    from fitting.discovery_fit import discovery_description
+    from fitting.methods.discovery import discovery_description
 
     model = {"equations": {"yddot": {"y": -1.9e4, "ydot": -0.2}, "thetaddot": {"theta": -110.0, "thetadot": 8.0}},
              "settings": {"discovery": {"keep_damping": True}}}

@@ -21,7 +21,8 @@ from typing import Callable
 
 from ..context import ReportContext
 from ..html import Section
-from . import atlas, data, diagnosis, fit, model_vs_simulation, phase_space, scattering, simulation, tracking
+from . import (atlas, data, fit, gap_diagnosis, model_vs_simulation, phase_space, scattering, simulated_forces,
+               tracking)
 
 __all__ = ["SECTIONS"]
 
@@ -31,9 +32,9 @@ SECTIONS: tuple[tuple[str, Callable[[ReportContext], Section | None]], ...] = (
     ("tracking", tracking.section),
     ("phase-space", phase_space.section),
     ("fit", fit.section),
-    ("simulation", simulation.section),
+    ("simulation", simulated_forces.section),
     ("model-vs-simulation", model_vs_simulation.section),
-    ("diagnosis", diagnosis.section),
+    ("diagnosis", gap_diagnosis.section),
     ("scattering", scattering.section),
     ("atlas", atlas.section),
 )

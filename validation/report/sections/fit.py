@@ -2,7 +2,7 @@
 model against its variant without cross-coupling terms."""
 from __future__ import annotations
 
-from fitting.methods import get_method
+from fitting.methods.registry import get_method
 
 from ..claims import not_significant_text
 from ..context import ReportContext

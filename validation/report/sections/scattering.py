@@ -13,7 +13,7 @@ def section(context: ReportContext) -> Section:
     """The gaps of the reference model, of it with fitted pair scattering and of the other models side by side."""
     from acousim.models import force_model_type
 
-    from ...diagnosis.model_comparison import row_label
+    from ...diagnosis.summarise.model_comparison import row_label
 
     models = context.models
     g0, gp = models.rows[0], models.rows[1]

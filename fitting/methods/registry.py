@@ -1,0 +1,106 @@
+"""The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
+
+A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
+lists it), the method-specific options it accepts, ``fit(prepared, scales, config, context)``, which turns prepared
+runs into one :class:`fitting.results.FitResult`, and ``describe(result)``, its own account of that result
+(:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is
+registered once with :func:`register_method`; the fit command, the report command and
+:func:`fitting.fit.fit_runs` read :data:`METHODS` (like scipy's ``solve_ivp`` ``METHODS``; the names live in
+:mod:`fitting.method_names`, which the configuration checks against), so a registered method is selectable
+everywhere without further changes.
+
+The built-in entries are ``"discovery"`` (:mod:`fitting.methods.discovery`, the default) and ``"paper"``
+(:mod:`fitting.methods.paper`); importing :mod:`fitting` registers both.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Protocol, Sequence, runtime_checkable
+
+from cubedimer.executor import ExecutorConfig
+from ..config import FitConfig
+from ..description import MethodDescription
+from ..method_names import (DEFAULT_METHOD, METHOD_OPTIONS, METHODS, get_method, method_names, methods_accepting,
+                            methods_help)
+from ..model import Scales
+from ..results import FitResult, PreparedRun
+from ..uncertainty.oracle import NoiseLevels
+
+__all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
+           "method_names", "get_method", "methods_accepting", "methods_help"]
+
+
+@dataclass(frozen=True)
+class FitContext:
+    """Where and how a method runs (everything but the data and the settings).
+
+    Parameters
+    ----------
+    executor : ExecutorConfig, optional
+        Where parallel work runs (:func:`cubedimer.executor.map_ordered`; default: local processes).
+    cache_dir : path-like, optional
+        Directory of per-run results that a rerun resumes from (methods that have per-run work; None: no cache).
+    progress : bool
+        Show progress bars of parallel work.
+    noise : NoiseLevels, optional
+        Tracking noise of the data for the oracle standard errors (default: estimated from the runs).
+    """
+
+    executor: ExecutorConfig | None = None
+    cache_dir: str | os.PathLike | None = None
+    progress: bool = True
+    noise: NoiseLevels | None = None
+
+
+@runtime_checkable
+class FittingMethod(Protocol):
+    """A model-discovery method.
+
+    Attributes
+    ----------
+    name : str
+        The registry key (``--method NAME``).
+    summary : str
+        One sentence for the command-line help.
+    private_settings : tuple of str
+        :class:`~fitting.config.FitConfig` fields only this method reads; the ``settings`` recorded in
+        another method's model.json leave them out.
+    options : tuple of str
+        The method-specific options (:data:`METHOD_OPTIONS`) this method accepts; the fit command and
+        :meth:`~fitting.config.FitConfig.with_heldout_tolerance` refuse one the method does not list.
+    max_evals_setting : str
+        The :class:`~fitting.config.FitConfig` field (a :class:`~fitting.refinement.long_time.RefineConfig`) whose ``max_evals``
+        the fit command's ``--max-evals`` sets: the method's main long-time refinement.
+    """
+
+    name: str
+    summary: str
+    private_settings: tuple[str, ...]
+    options: tuple[str, ...]
+    max_evals_setting: str
+
+    def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
+            context: FitContext) -> FitResult:
+        """Select and fit the model of the prepared runs; the result has every field the method produces."""
+        ...
+
+    def describe(self, result: FitResult) -> MethodDescription:
+        """The method's account of ``result`` (one of its own fits): how the model was found and what it is, in the
+        words and with the numbers of model.json."""
+        ...
+
+
+def register_method(method: FittingMethod) -> FittingMethod:
+    """Add ``method`` to :data:`METHODS` under ``method.name`` (replacing an entry of that name); returns it.
+
+    Raises
+    ------
+    TypeError
+        ``method`` does not satisfy :class:`FittingMethod`.
+    """
+    if not isinstance(method, FittingMethod) or not isinstance(method.name, str) or not method.name:
+        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, options, "
+                        "max_evals_setting, fit, describe)")
+    METHODS[method.name] = method
+    return method

@@ -1,0 +1,198 @@
+"""The accuracy/sparsity front of a discovery: model size against the held-out long-time error.
+
+For every cap ``n`` on the number of terms per equation, each equation takes the largest support on its elimination
+path with at most ``n`` terms (among supports of one size the one with the smallest integral-form held-out error):
+up to the size of the discovery's own selection (its larger equation's) the smaller supports of the pruning paths
+and the selection itself, above it the larger supports of the backward elimination from the full library.  That model is fitted on the training runs of each fold
+(K-fold over runs, :func:`cubedimer.folds.run_folds`) and integrated from the first state of every held-out run; its
+**long-time error** is the RMS of the trajectory's error over the RMS of the run's motion about its mean, averaged
+over the two coordinates (:func:`long_time_error`), a dimensionless number that does not depend on the units of time
+or of the coordinates.  The front records, per point, the mean over folds and its standard error (the spread of the
+fold means over sqrt(K)): under model error the error bars say which sizes the data can tell apart.
+
+The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
+standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
+significance and integral-form held-out pruning, :mod:`fitting.selection.integral_discovery`); ``fit --max-terms N``
+(``DiscoveryConfig.max_terms``) fits the point at cap N.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cubedimer.folds import run_folds
+from cubedimer.terms import EQUATION_NAMES
+from ..model import TERMS, PolynomialModel
+from .support_search import ReducedDesign, fit_on_runs
+
+__all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "capped_support", "long_time_front",
+           "BLOW_UP_FACTOR"]
+
+#: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
+BLOW_UP_FACTOR = 10.0
+
+
+@dataclass(frozen=True)
+class HeldOutRun:
+    """What a held-out run's long-time error needs: its frame interval [s], measured positions from the first state
+    on, and that first state [y, ydot, theta, thetadot] (SI)."""
+
+    dt: float
+    y: NDArray[np.float64]
+    theta: NDArray[np.float64]
+    x0: NDArray[np.float64]
+
+
+def long_time_error(model: PolynomialModel, run: HeldOutRun) -> float:
+    """RMS error of ``model``'s trajectory from ``run.x0`` over the RMS of the run's motion about its mean, averaged
+    over y and theta (dimensionless; inf when the trajectory blows up)."""
+    n = run.y.size
+    data = np.column_stack([run.y, run.theta])
+    reach = np.maximum(np.max(np.abs(data), axis=0), np.abs(run.x0[[0, 2]]))
+    bound = BLOW_UP_FACTOR * np.array([reach[0], np.inf, reach[1], np.inf])  # the rates: bounded through the positions
+    states, n_valid = model.simulate(run.x0, np.arange(n) * run.dt, bound=bound)
+    if n_valid < n:
+        return float("inf")
+    err = np.sqrt(np.mean((states[:, [0, 2]] - data) ** 2, axis=0))
+    signal = np.std(data, axis=0)
+    return float(np.mean(err / np.where(signal > 0, signal, 1.0)))
+
+
+@dataclass(frozen=True)
+class FrontPoint:
+    """One model on the front.
+
+    Attributes
+    ----------
+    max_terms : int
+        The cap on terms per equation that gives this model.
+    terms : dict
+        ``{equation: tuple of term names}``.
+    error, error_se : float
+        Held-out long-time error (fraction; mean over folds) and its standard error over folds (NaN with one fold).
+    fold_errors : tuple of float
+    selected : bool
+        The discovery's own selection.
+    """
+
+    max_terms: int
+    terms: dict[str, tuple[str, ...]]
+    error: float
+    error_se: float
+    fold_errors: tuple[float, ...]
+    selected: bool = False
+
+    @property
+    def n_terms(self) -> tuple[int, int]:
+        return tuple(len(self.terms[eq]) for eq in EQUATION_NAMES)
+
+    def to_json(self) -> dict:
+        return {"max_terms": self.max_terms, "n_terms": {eq: len(self.terms[eq]) for eq in EQUATION_NAMES},
+                "terms": {eq: list(self.terms[eq]) for eq in EQUATION_NAMES}, "error": _num(self.error),
+                "error_se": _num(self.error_se), "fold_errors": [_num(e) for e in self.fold_errors],
+                "selected": self.selected}
+
+
+def _num(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class Front:
+    """The front (module docstring): its points, smallest first, and the knee (one-standard-error rule)."""
+
+    points: tuple[FrontPoint, ...]
+    n_folds: int
+
+    @property
+    def knee(self) -> FrontPoint | None:
+        """The smallest point within one fold standard error of the best held-out long-time error (None: no point
+        has a finite error)."""
+        finite = [p for p in self.points if np.isfinite(p.error)]
+        if not finite:
+            return None
+        best = min(finite, key=lambda p: p.error)
+        limit = best.error + (best.error_se if np.isfinite(best.error_se) else 0.0)
+        return min((p for p in finite if p.error <= limit), key=lambda p: (sum(p.n_terms), p.error))
+
+    @property
+    def selected(self) -> FrontPoint | None:
+        return next((p for p in self.points if p.selected), None)
+
+    def to_json(self) -> dict:
+        knee = self.knee
+        return {"measure": "held-out long-time error: RMS trajectory error from each held-out run's first state over "
+                           "the run's RMS motion, mean of y and theta; mean and standard error over folds",
+                "n_folds": self.n_folds, "knee_rule": "smallest model within one fold standard error of the best",
+                "knee_max_terms": knee.max_terms if knee is not None else None,
+                "default": "the discovery's own selection (selected: true)",
+                "points": [p.to_json() for p in self.points]}
+
+
+def capped_support(path: Sequence[Sequence[int]], held: Sequence[float], selected: Sequence[int],
+                   cap: int, enlarge: bool = False) -> tuple[int, ...]:
+    """The support of one equation at a cap of ``cap`` terms: the selection when it fits, else the largest support
+    on the elimination ``path`` with at most ``cap`` terms (the smallest held-out error among equal sizes; the
+    smallest support on the path when none fits).  With ``enlarge``, a cap above the selection's size takes the
+    largest path support within it that is larger than the selection (the selection when there is none)."""
+    sel = tuple(sorted(selected))
+    cands = [(tuple(sorted(c)), h if np.isfinite(h) else np.inf) for c, h in zip(path, held)]
+    if len(sel) <= cap:
+        if not enlarge:
+            return sel
+        cands = [c for c in cands if len(sel) < len(c[0])]
+        if not any(len(c[0]) <= cap for c in cands):
+            return sel
+    fit = [c for c in cands if len(c[0]) <= cap]
+    if not fit:
+        return min(cands, key=lambda c: len(c[0]))[0]
+    size = max(len(c[0]) for c in fit)
+    return min((c for c in fit if len(c[0]) == size), key=lambda c: c[1])[0]
+
+
+def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], held_out: Sequence[HeldOutRun],
+                    n_folds: int, caps: Sequence[int] | None = None) -> Front | None:
+    """The front (module docstring) of one discovery.
+
+    Parameters
+    ----------
+    designs : per equation the reduced integral-form design (all runs)
+    fronts : per equation ``(path, held-out errors, selected support)`` of the last pass
+    held_out : per run (the designs' order) what its long-time error needs
+    n_folds : folds over runs
+    caps : caps to evaluate (default every size on the paths)
+
+    Returns
+    -------
+    Front, or None with fewer than two runs.
+    """
+    R = len(held_out)
+    if R < 2:
+        return None
+    folds = run_folds(R, n_folds)
+    if caps is None:
+        caps = sorted({len(c) for path, _, sel in fronts for c in [*path, sel]})
+    largest = max(len(sel) for _, _, sel in fronts)  # up to the selection's size caps shrink, above it they enlarge
+    seen, points = set(), []
+    for cap in caps:
+        supports = tuple(capped_support(path, held, sel, cap, enlarge=cap > largest) for path, held, sel in fronts)
+        if supports in seen:
+            continue
+        seen.add(supports)
+        fold_err = []
+        for train, test in folds:
+            coef = np.zeros((2, len(TERMS)))
+            for q, cols in enumerate(supports):
+                coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
+            model = PolynomialModel(coef)
+            fold_err.append(float(np.mean([long_time_error(model, held_out[r]) for r in test])))
+        err = np.asarray(fold_err)
+        mean = float(np.mean(err)) if np.all(np.isfinite(err)) else float("inf")
+        se = float(np.std(err, ddof=1) / np.sqrt(err.size)) if err.size > 1 and np.isfinite(mean) else float("nan")
+        points.append(FrontPoint(int(cap), {eq: tuple(TERMS[j] for j in s) for eq, s in zip(EQUATION_NAMES, supports)},
+                                 mean, se, tuple(fold_err),
+                                 selected=all(tuple(sorted(f[2])) == s for f, s in zip(fronts, supports))))
+    return Front(tuple(points), len(folds))

@@ -1,0 +1,211 @@
+"""The typed result of a diagnosis: :class:`Diagnosis` (diagnosis.json, docs/formats.md) and its
+:class:`EffectVerdict` per candidate effect.
+
+:meth:`Diagnosis.to_json` gives the diagnosis.json document, key for key in the documented order, and
+:meth:`Diagnosis.from_json` reads one back (a written diagnosis.json, or the blind study's records). The nested
+records that are documents of their own (the localisation, the long-time gaps, the identification rounds, the
+remaining gap, the calibration) stay JSON mappings: their layouts are documented in docs/formats.md and read by
+key in one place each.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+from ..calibrate.gap_model import GapFit
+from ..prepare.problem import DiagnosisProblem
+from ..prepare.runs import RunAccelerations
+
+__all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict"]
+
+
+def _reference_model() -> str:
+    """The registry's first model (a diagnosis.json written before the key ``model`` was diagnosed on it)."""
+    from acousim.models import force_model_names
+
+    return force_model_names()[0]
+
+
+@dataclass(frozen=True)
+class EffectVerdict:
+    """One candidate effect's verdict (diagnosis.json ``effects[i]``).
+
+    Attributes
+    ----------
+    name : the effect (a key of :data:`acousim.dynamics.effects.EFFECT_TYPES`)
+    params : its fitted parameters (SI), by parameter name
+    gap_after : the scalar gap with it fitted (with the effects before it, for one in the model; on top of the
+        model's effects otherwise)
+    shrink : ``1 - gap_after / gap_before``
+    significant : in the fitted model (a significant held-out improvement given the others)
+    p_value, wilcoxon_p : the held-out sign-flip and signed-rank p-values when it was tested (None: never tested)
+    held_out_improvement_fraction : its median held-out improvement as a fraction of the gap
+    added_in_round : the identification round that added it (model effects only)
+    named : named as a cause (False for a model effect that stands for an indistinguishable pair)
+    note : why it is not in the model (the other candidates)
+    p_value_given_others, median_improvement_given_others : the backward check given every other effect
+    indistinguishable_from : the effects the data cannot tell it from
+    params_without_discovered_terms : its parameters fitted without the discovered library terms, when they differ
+    """
+
+    name: str
+    params: Mapping[str, float]
+    gap_after: float
+    shrink: float
+    significant: bool
+    p_value: float | None
+    wilcoxon_p: float | None
+    held_out_improvement_fraction: float | None
+    added_in_round: int | None = None
+    named: bool = False
+    note: str | None = None
+    p_value_given_others: float | None = None
+    median_improvement_given_others: float | None = None
+    indistinguishable_from: tuple[str, ...] | None = None
+    params_without_discovered_terms: Mapping[str, float] | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The diagnosis.json form: a model effect carries its round, ``named`` and its backward check; another
+        candidate carries its ``note`` and, when it was checked, its backward check."""
+        out: dict[str, Any] = {"name": self.name, "params": dict(self.params), "gap_after": self.gap_after,
+                               "shrink": self.shrink, "significant": self.significant, "p_value": self.p_value,
+                               "wilcoxon_p": self.wilcoxon_p,
+                               "held_out_improvement_fraction": self.held_out_improvement_fraction}
+        given = {"p_value_given_others": self.p_value_given_others,
+                 "median_improvement_given_others": self.median_improvement_given_others}
+        if self.significant:
+            out.update({"added_in_round": self.added_in_round, "named": self.named, **given})
+            if self.indistinguishable_from is not None:
+                out["indistinguishable_from"] = list(self.indistinguishable_from)
+            if self.params_without_discovered_terms is not None:
+                out["params_without_discovered_terms"] = dict(self.params_without_discovered_terms)
+        else:
+            out["note"] = self.note
+            if self.p_value_given_others is not None:
+                out.update(given)
+        return out
+
+    @classmethod
+    def from_json(cls, doc: Mapping[str, Any]) -> "EffectVerdict":
+        """The verdict of a diagnosis.json ``effects`` entry."""
+        pair = doc.get("indistinguishable_from")
+        return cls(doc["name"], dict(doc["params"]), doc["gap_after"], doc["shrink"], bool(doc["significant"]),
+                   doc.get("p_value"), doc.get("wilcoxon_p"), doc.get("held_out_improvement_fraction"),
+                   doc.get("added_in_round"), bool(doc.get("named", False)), doc.get("note"),
+                   doc.get("p_value_given_others"), doc.get("median_improvement_given_others"),
+                   None if pair is None else tuple(pair), doc.get("params_without_discovered_terms"))
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisInternals:
+    """What the figures and the report need beyond diagnosis.json: the problem and the fits before and after."""
+
+    problem: DiagnosisProblem
+    base: GapFit  #: the calibrated simulation alone
+    final: GapFit  #: with the identified effects
+
+    @property
+    def runs(self) -> tuple[RunAccelerations, ...]:
+        return self.problem.runs
+
+    @property
+    def model(self):
+        return self.problem.model
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """A data set's diagnosis (diagnosis.json, docs/formats.md).
+
+    Attributes
+    ----------
+    model : the simulation model's registry name
+    simulation : the calibrated simulation's scalar record
+    identified : the effects named as causes, in the order added
+    indistinguishable : pairs of effects the data cannot tell apart (``validation.diagnosis.identify.elimination``)
+    model_effects : every effect the final model fits (the named ones and one of each indistinguishable pair)
+    dropped_by_backward_check, greedy_identified : the backward check's drops and the greedy rounds' choice
+    calibration : pressure, height origin, the model's calibrated parameters and a pressure drift
+    gap_before, gap_after : the scalar gap of the calibrated simulation alone and with the model's effects
+    gap_definition, gap_components, gap_component_forms : what the gap is made of
+    gap_per_run : ``{"before", "after", "runs"}``
+    noise_floor, noise_floor_note : the mean noise floor subtracted from every gap
+    effects : every candidate's :class:`EffectVerdict`, the model's effects first
+    localization, long_time, remaining_gap, identification_rounds : the documents of docs/formats.md
+    data_warnings : warnings about the data (code and message)
+    skipped_files : files the loader skipped, with reasons
+    glitch_frames_masked : tracking glitches masked by the loader
+    settings : the test settings (alpha, smallest attainable p, ...)
+    internals : the problem and the fits before and after, for the figures (None when read from JSON)
+    """
+
+    model: str
+    simulation: Mapping[str, Any]
+    identified: tuple[str, ...]
+    indistinguishable: tuple[Mapping[str, Any], ...]
+    model_effects: tuple[str, ...]
+    dropped_by_backward_check: tuple[str, ...]
+    greedy_identified: tuple[str, ...]
+    calibration: Mapping[str, Any]
+    gap_before: float
+    gap_after: float
+    gap_definition: str
+    gap_components: tuple[str, ...]
+    gap_component_forms: Mapping[str, str]
+    gap_per_run: Mapping[str, Sequence]
+    noise_floor: float
+    noise_floor_note: str
+    effects: tuple[EffectVerdict, ...]
+    localization: Mapping[str, Any]
+    long_time: Mapping[str, Any]
+    remaining_gap: Mapping[str, Any]
+    identification_rounds: tuple[Mapping[str, Any], ...]
+    data_warnings: tuple[Mapping[str, Any], ...] = ()
+    skipped_files: tuple = ()
+    glitch_frames_masked: int = 0
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    internals: DiagnosisInternals | None = field(default=None, compare=False, repr=False)
+
+    def effect(self, name: str) -> EffectVerdict:
+        """The verdict of the candidate ``name`` (KeyError if it was not a candidate)."""
+        for e in self.effects:
+            if e.name == name:
+                return e
+        raise KeyError(f"{name} was not a candidate of this diagnosis")
+
+    def to_json(self) -> dict[str, Any]:
+        """The diagnosis.json document, in its documented key order."""
+        return {"model": self.model, "simulation": dict(self.simulation), "identified": list(self.identified),
+                "indistinguishable": [dict(p) for p in self.indistinguishable],
+                "model_effects": list(self.model_effects),
+                "dropped_by_backward_check": list(self.dropped_by_backward_check),
+                "greedy_identified": list(self.greedy_identified), "calibration": dict(self.calibration),
+                "gap_before": self.gap_before, "gap_after": self.gap_after, "gap_definition": self.gap_definition,
+                "gap_components": list(self.gap_components), "gap_component_forms": dict(self.gap_component_forms),
+                "gap_per_run": dict(self.gap_per_run), "noise_floor": self.noise_floor,
+                "noise_floor_note": self.noise_floor_note, "effects": [e.to_json() for e in self.effects],
+                "localization": dict(self.localization), "long_time": dict(self.long_time),
+                "remaining_gap": dict(self.remaining_gap),
+                "identification_rounds": [dict(r) for r in self.identification_rounds],
+                "data_warnings": [dict(w) for w in self.data_warnings], "skipped_files": list(self.skipped_files),
+                "glitch_frames_masked": self.glitch_frames_masked, "settings": dict(self.settings)}
+
+    @classmethod
+    def from_json(cls, doc: Mapping[str, Any]) -> "Diagnosis":
+        """The diagnosis of a diagnosis.json document (the keys added since the first layout are optional)."""
+        return cls(
+            model=doc.get("model") or _reference_model(), simulation=dict(doc.get("simulation", {})),
+            identified=tuple(doc["identified"]), indistinguishable=tuple(doc.get("indistinguishable", ())),
+            model_effects=tuple(doc.get("model_effects", doc["identified"])),
+            dropped_by_backward_check=tuple(doc.get("dropped_by_backward_check", ())),
+            greedy_identified=tuple(doc.get("greedy_identified", doc["identified"])),
+            calibration=dict(doc["calibration"]), gap_before=doc["gap_before"], gap_after=doc["gap_after"],
+            gap_definition=doc.get("gap_definition", ""), gap_components=tuple(doc.get("gap_components", ())),
+            gap_component_forms=dict(doc.get("gap_component_forms", {})), gap_per_run=dict(doc.get("gap_per_run", {})),
+            noise_floor=doc.get("noise_floor", 0.0), noise_floor_note=doc.get("noise_floor_note", ""),
+            effects=tuple(EffectVerdict.from_json(e) for e in doc.get("effects", ())),
+            localization=dict(doc.get("localization", {})), long_time=dict(doc.get("long_time", {})),
+            remaining_gap=dict(doc.get("remaining_gap", {})),
+            identification_rounds=tuple(doc.get("identification_rounds", ())),
+            data_warnings=tuple(doc.get("data_warnings", ())), skipped_files=tuple(doc.get("skipped_files", ())),
+            glitch_frames_masked=int(doc.get("glitch_frames_masked", 0)), settings=dict(doc.get("settings", {})))

@@ -1,0 +1,86 @@
+"""Every candidate effect's verdict (:class:`~validation.diagnosis.summarise.result.EffectVerdict`), ranked: the model's effects
+first, in the order the identification added them, then the other candidates fitted on top of them, by gap."""
+from __future__ import annotations
+
+from typing import Sequence
+
+from ..calibrate.gap_model import GapFit, fit_gap_model
+from ..calibrate.metrics import fit_gaps, scalar_gap
+from ..identify.statistics import format_p
+from ..prepare.problem import DiagnosisProblem
+from .result import EffectVerdict
+
+__all__ = ["ranked_effects"]
+
+
+def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, elim, identified: list[str],
+                   named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
+                   gap_before: float) -> tuple[EffectVerdict, ...]:
+    """diagnosis.json's ``effects``.
+
+    Parameters
+    ----------
+    problem : the calibrated diagnosis problem
+    candidates : every candidate effect's name
+    ident, elim : the greedy identification and its backward check
+    identified : the effects of the final model, in the order added; ``named`` those named as causes
+    in_pair : the indistinguishable pair of each effect in one
+    replaced : the p-value of every candidate the discovered terms replaced, by name
+    joint_params : the model effects' parameters re-estimated with the discovered terms
+    final : the fit of the final model's effects
+    gap_before : the calibrated simulation's gap alone
+    """
+    runs = problem.runs
+    model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, final,
+                                   gap_before) for i in range(len(identified))]
+    last_tests = ident.last_tests()
+    others = []
+    for name in candidates:
+        if name in identified:
+            continue
+        fit = fit_gap_model(problem, identified + [name])
+        g = scalar_gap(fit_gaps(runs, fit))
+        test = last_tests.get(name)
+        given = elim.dropped_tests.get(name)
+        others.append(EffectVerdict(
+            name, fit.effects[name], g, 1 - g / gap_before, False, test.p_value if test else None,
+            test.wilcoxon_p if test else None, test.median_improvement_fraction if test else None,
+            note=_why_not_in_model(name, ident, elim, given, in_pair, replaced),
+            p_value_given_others=given.p_value if given else None,
+            median_improvement_given_others=given.median_improvement if given else None))
+    return tuple(model_effects + sorted(others, key=lambda e: e.gap_after))
+
+
+def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str], i: int, named: list[str],
+                  in_pair: dict, joint_params: dict, final: GapFit, gap_before: float) -> EffectVerdict:
+    """The verdict of the model's ``i``-th effect, with the gap after the cumulative fit of the first ``i + 1``."""
+    name = identified[i]
+    g = scalar_gap(fit_gaps(problem.runs, fit_gap_model(problem, identified[: i + 1])))
+    test = ident.rounds[ident.identified.index(name)].candidates[name]
+    given = elim.tests.get(name)
+    return EffectVerdict(
+        name, joint_params[name], g, 1 - g / gap_before, True, test.p_value, test.wilcoxon_p,
+        test.median_improvement_fraction, added_in_round=ident.identified.index(name) + 1, named=name in named,
+        p_value_given_others=given.p_value if given else None,
+        median_improvement_given_others=given.median_improvement if given else None,
+        indistinguishable_from=tuple(e for e in in_pair[name].effects if e != name) if name in in_pair else None,
+        # fitted beside discovered terms: the effects-only values too
+        params_without_discovered_terms=final.effects[name] if joint_params[name] != final.effects[name] else None)
+
+
+def _why_not_in_model(name: str, ident, elim, given, in_pair: dict, replaced: dict) -> str:
+    """The note of a candidate the final model does not fit."""
+    note = "fitted on top of the identified effects; not a significant held-out improvement"
+    if name in elim.dropped:
+        t = ident.rounds[ident.identified.index(name)].candidates[name]
+        note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
+                f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
+                "of the gap")
+    if name in in_pair:
+        other = [e for e in in_pair[name].effects if e != name][0]
+        note = (f"indistinguishable from {other}: the data cannot tell them apart (see indistinguishable); "
+                f"{other} stands for both in the fitted model")
+    if name in replaced:
+        note = (f"improved held-out runs, but not once the discovered terms are fitted ({format_p(replaced[name])}): "
+                "the discovered terms explain its share of the gap better")
+    return note

@@ -1,0 +1,120 @@
+"""``python -m validation report``: the model-vs-simulation report of a data set.
+
+:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.fit.fit_dataset``), the
+variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap diagnosis
+(:mod:`validation.diagnosis`, which also calibrates the simulation); then it fills the
+:class:`validation.report.context.ReportContext` (the simulations side by side, static sweeps of the calibrated
+simulations over the data's range and the coefficient comparison, :mod:`validation.coefficients`) and makes the
+sections of :data:`validation.report.sections.SECTIONS` from it; it writes ``report.html`` (self-contained),
+``figures/*.png``, ``numbers.json``, ``diagnosis.json`` and ``comparison.json``.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from fitting.description import model_equation_text
+from fitting.methods.registry import get_method
+
+from .sections.model_vs_simulation import effect_static_coefficients, lead_term_reading
+
+if TYPE_CHECKING:
+    from acousim.models import ModelSpec
+    from fitting.config import FitConfig
+
+__all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
+
+logger = logging.getLogger(__name__)
+
+
+def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
+                 progress: bool = True, max_evals: int | None = None, method: str = "discovery",
+                 spec: "ModelSpec | None" = None, heldout_tolerance: float | None = None,
+                 atlas: str | Path | None = None, fit_config: "FitConfig | None" = None) -> Path:
+    """Fit, compare, diagnose and sweep the data set ``data_dir`` and write the report into ``out_dir``.
+
+    Parameters
+    ----------
+    data_dir : path of the data set (CSV runs and meta.json)
+    out_dir : report directory: report.html, ``figures/*.png``, numbers.json, fit/, diagnosis.json, comparison.json
+    workers, scheduler : where the fit's refinements run (:class:`cubedimer.executor.ExecutorConfig`)
+    progress : progress bars, and the steps logged at INFO level (else DEBUG)
+    max_evals : evaluations of every long-time refinement: per run and joint for ``"paper"``, of the polish (and
+        of a fallback's joint re-optimisation) for ``"discovery"``, and of the re-optimisation of the variant
+        without cross-coupling terms (section 3); default: those of the fit's configuration
+    method : the fit's model-discovery method (:data:`fitting.methods.registry.METHODS`), when ``fit_config`` is
+        not given
+    spec : the simulation model the diagnosis (section 6) calibrates and its own options
+        (:class:`acousim.models.ModelSpec`; default: the registry's first, the Gor'kov model); every other registered
+        model stands beside it in sections 4, 5 and 7 whenever it applies to the experiment; a model parameter the
+        spec leaves unset that the data may determine (the full-wave hinge gap) is calibrated by the diagnosis
+    heldout_tolerance : the discovery's practical threshold (:class:`fitting.selection.discovery_config.DiscoveryConfig`;
+        default 0), when ``fit_config`` is not given
+    atlas : folder of an attractor atlas (``python -m acousim atlas``), shown as the last section
+    fit_config : the fit's settings (``python -m validation report`` makes them from the fit's options,
+        :func:`fitting.options.fit_config_from_args`; default: those of ``method`` and ``heldout_tolerance``); its
+        loading rules for glitches and short runs (``load.glitches``, ``load.min_periods``) are applied to the one
+        loaded data set, and its joint re-optimisation (``joint``) re-optimises the variant
+
+    Returns
+    -------
+    Path of report.html
+    """
+    from cubedimer.atomic import write_json
+    from cubedimer.dataset import LoadConfig
+    from cubedimer.executor import ExecutorConfig
+    from fitting.config import FitConfig
+    from acousim.models import ModelSpec
+    from fitting.output.model_file import model_json as fit_model_json, write_fit
+    from fitting.fit import fit_dataset
+
+    from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
+    from ..diagnosis.steps import check_enough_runs
+    from ..simulation import model_from_meta
+    from .context import report_context, variant_comparison
+    from .html import write_report
+    from .sections import SECTIONS
+
+    level = logging.INFO if progress else logging.DEBUG
+
+    def say(message: str) -> None:
+        logger.log(level, "%s", message)
+
+    spec = spec if spec is not None else ModelSpec()
+    config = fit_config if fit_config is not None else FitConfig(method=method).with_heldout_tolerance(heldout_tolerance)
+    if max_evals is not None:
+        config = replace(config, refine=replace(config.refine, max_evals=max_evals),
+                         polish=replace(config.polish, max_evals=max_evals),
+                         joint=replace(config.joint, max_evals=max_evals))
+    # the data set, loaded once with the diagnosis's checks (and the fit's rules for glitches and short runs): the fit
+    # and the diagnosis see the same runs
+    load = replace(LoadConfig(), glitches=config.load.glitches, min_periods=config.load.min_periods)
+    dataset = load_for_diagnosis(data_dir, progress=progress, load=load)
+    # refuse a model that does not fit the experiment (a dimer outside the full-wave family) before the long fit, and
+    # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
+    model_from_meta(dataset.meta, spec)
+    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
+    out = Path(out_dir)
+    fit_dir = out / "fit"
+    # ---- the fit, the variant comparison and the diagnosis: what the report reads --------------------------------
+    say(f"1/5 fitting the data ({get_method(config.method).summary})")
+    res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
+                      cache_dir=fit_dir / "runs")
+    write_fit(res, fit_dir)
+    model_json = fit_model_json(res)
+    say("2/5 comparing the minimal model with its variant without cross-coupling terms")
+    variant = variant_comparison(res, fit_dir, config.joint)
+    say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
+    diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
+    # ---- the calibrated simulations and their sweeps (steps 3-4), then the sections from the one context ---------
+    context = report_context(dataset, out, res, model_json, variant, diag, spec, atlas=atlas, say=say)
+    say("5/5 figures and the report")
+    sections = [s for _, make in SECTIONS if (s := make(context)) is not None]
+    write_json(out / "diagnosis.json", diag.to_json())
+    write_json(out / "comparison.json", next(s.numbers for s in sections if s.id == "model-vs-simulation"))
+    path = write_report(sections, out, "Cube dimer: model vs simulation",
+                        f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
+    say(f"written {path}")
+    return path

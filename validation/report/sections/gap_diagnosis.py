@@ -1,0 +1,272 @@
+"""The diagnosis as a report section: its figures (gap by candidate, residual maps before and after,
+residual by library term) and its reading paragraph and table, from diagnosis.json; and the diagnose command's
+files (:func:`write_diagnosis`)."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cubedimer.atomic import save_figure as _save
+
+from ...diagnosis.identify.statistics import format_p
+from ..claims import anti_damping_text
+from ..context import ReportContext
+from ..html import Figure, Section, Table
+
+if TYPE_CHECKING:
+    from ...diagnosis import Diagnosis, EffectVerdict
+
+__all__ = ["section", "diagnosis_figures", "diagnosis_section", "write_diagnosis"]
+
+
+def write_diagnosis(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Path]:
+    """Write diagnosis.json, the figures and report.html (the diagnosis as a report section) into ``out_dir``.
+
+    ``diagnosis`` is what :func:`validation.diagnosis.diagnose` returns; returns the paths of diagnosis.json and
+    report.html."""
+    from cubedimer.atomic import write_json
+
+    from ..html import write_report
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "diagnosis.json", diagnosis.to_json())
+    figs = diagnosis_figures(diagnosis, out / "figures")
+    write_report([diagnosis_section(diagnosis, figs)], out, "Sim-to-real gap diagnosis")
+    return [out / "diagnosis.json", out / "report.html"]
+
+
+def diagnosis_figures(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Figure]:
+    """The diagnosis's figures as PNG files in ``out_dir``: the gap by candidate, the residual maps before and after,
+    and the residual by library term."""
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    figs = []
+    # 1. gap by candidate
+    fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
+    names = ["calibrated\nsimulation"] + [e.name.replace("_", "\n") for e in diagnosis.effects]
+    vals = [diagnosis.gap_before] + [e.gap_after for e in diagnosis.effects]
+    colors = ["0.5"] + ["tab:green" if e.significant else "tab:gray" for e in diagnosis.effects]
+    ax.bar(range(len(vals)), np.maximum(vals, 1e-5), color=colors)
+    ax.axhline(0.01, color="k", ls="--", lw=0.8, label="'explained within noise' threshold")
+    ax.set_xticks(range(len(vals)), names, fontsize=7)
+    ax.set_ylabel("gap (unexplained fraction beyond noise)")
+    ax.set_yscale("log")
+    ax.set_title("Gap before and after adding each effect (green: identified)")
+    ax.legend(fontsize=7)
+    figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
+                       "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
+                       "others on top of the identified set); the gap is the unexplained fraction of acceleration variance and energy "
+                       "balance in excess of the derivative-noise floor; dashed: the threshold below which it counts as explained."))
+    # 2. residual maps over (theta, y), before and after, thetaddot and yddot
+    fig, axes = plt.subplots(2, 2, figsize=(8, 6), constrained_layout=True)
+    for col, key in enumerate(("before", "after")):
+        reg = diagnosis.localization[key]["regions"]["theta_y"]
+        xe, ye = np.array(reg["x_edges"]), np.array(reg["y_edges"]) * 1e6
+        for row, (eq, unit) in enumerate((("rms_yddot", "m/s$^2$"), ("rms_thetaddot", "1/s$^2$"))):
+            ax = axes[row, col]
+            m = ax.pcolormesh(xe, ye, np.array(reg[eq], float).T, shading="flat", cmap="magma")
+            fig.colorbar(m, ax=ax, label=f"RMS residual [{unit}]")
+            ax.set_xlabel(r"$\theta$")
+            ax.set_ylabel(r"$y$ [$\mu$m]")
+            ax.set_title(f"{eq.replace('rms_', '')} residual, {key}", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_maps.png"),
+                       "Where the gap lies in state space: RMS acceleration residual over (theta, y) bins (quantile bins), "
+                       "before and after the identified effects."))
+    # 3. residual explained by single library terms
+    fig, axes = plt.subplots(1, 2, figsize=(8, 3.4), constrained_layout=True)
+    for ax, eq in zip(axes, ("yddot", "thetaddot")):
+        rows = sorted(diagnosis.localization["before"]["terms"][eq], key=lambda d: -d["explained_fraction_alone"])[:8]
+        ax.barh([r["term"] for r in rows][::-1], [r["explained_fraction_alone"] for r in rows][::-1], color="tab:blue")
+        ax.set_xlabel("fraction of residual variance explained alone")
+        ax.set_title(f"{eq} residual of the calibrated simulation", fontsize=9)
+    figs.append(Figure(_save(fig, out / "residual_terms.png"),
+                       "Which library terms carry the gap: each term's share of the residual variance when fitted alone."))
+    return figs
+
+
+#: the candidate effects whose parameters are damping rates [1/s] (positive: energy taken out of the motion)
+DAMPING_RATES = {"linear_damping": ("gamma_y", "gamma_theta")}
+
+
+def _origin_text(cal: dict) -> str:
+    """Where the data's y origin lies, with the reference named: the simulation's Z_eq at the calibrated pressure (the
+    one the effects' y is measured from) and at the nominal one."""
+    nominal = cal["y_origin_above_nominal_Z_eq_m"] * 1e6
+    calibrated = cal.get("y_origin_above_calibrated_Z_eq_m")
+    if calibrated is None:
+        return f"the data's y origin lies {nominal:+.2f} um above the simulation's Z_eq at the nominal pressure. "
+    return (f"the data's y origin lies {calibrated * 1e6:+.2f} um above the simulation's Z_eq at the calibrated pressure "
+            f"(the effects' y origin) and {nominal:+.2f} um above its Z_eq at the nominal pressure. ")
+
+
+def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
+    if any(effect.name in pr["effects"] for pr in pairs):
+        return "indistinguishable"
+    return "yes" if effect.significant and effect.named else "no"
+
+
+def _params_text(params: dict) -> str:
+    return ", ".join(f"{k} = {v:.3g}" for k, v in params.items())
+
+
+def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
+    """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
+    verdict naming both, with the held-out evidence."""
+    named = [e for e in diagnosis.effects if e.significant and e.named]
+    parts = [f"{e.name} ({_params_text(e.params)})" for e in named]
+    text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
+    for pr in pairs:
+        a, b = pr["effects"]
+        kept = next((e for e in diagnosis.effects if e.name == pr["kept_in_model"]), None)
+        text += (f"{', and' if parts else ''} by {a} or {b}, which the data cannot tell apart: neither improves held-out "
+                 f"runs given the other ({a} {format_p(pr['p_given_other'][a])}, {b} {format_p(pr['p_given_other'][b])}), "
+                 f"together they do ({format_p(pr['p_together'])}), and the held-out gap with one instead of the other "
+                 f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
+                 f"fitted model uses {pr['kept_in_model']}"
+                 + (f" ({_params_text(kept.params)})" if kept else ""))
+    return text + "."
+
+
+def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
+    """The report section of a diagnosis: the reading (calibration, gap, cause) and the ranked candidates."""
+    cal = diagnosis.calibration
+    ident = diagnosis.identified
+    rem = diagnosis.remaining_gap
+    pairs = diagnosis.indistinguishable or []
+    drift = cal.get("drift") or {}
+    found = ""
+    replaced = rem.get("replaced_by_discovered_terms") or []
+    if replaced:
+        found += (" Not named, because the discovered terms explain its share better on held-out runs: "
+                  + ", ".join(r["name"] for r in replaced) + ".")
+    skipped = diagnosis.skipped_files or []
+    data_text = ""
+    if skipped or diagnosis.glitch_frames_masked:
+        data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.glitch_frames_masked} tracking-glitch "
+                     "frames masked. ")
+    # what the data suggest about how they were recorded comes first: it changes how everything after it reads
+    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or [])
+    reading = (
+        warnings_text + data_text + _drift_text(drift) + _hinge_gap_text(cal) +
+        f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
+        + _origin_text(cal) +
+        f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
+        "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
+        f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
+        # + 0.0 turns a rounded -0.0 (a gap just below the noise floor) into 0.0
+        + (f"With them the gap is {round(100 * diagnosis.gap_after, 1) + 0.0:.1f} %: {rem['statement']}"
+           if ident or pairs else
+           f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
+        + f".{found}"
+        + anti_damping_text({f"{k} of {e.name}": v for e in diagnosis.effects if e.significant
+                             and e.name in DAMPING_RATES for k, v in e.params.items() if k in DAMPING_RATES[e.name]})
+    )
+    terms = rem.get("discovered_terms") or {}
+    return Section("diagnosis", "Sim-to-real gap", reading, figures, _diagnosis_tables(diagnosis, pairs, drift, terms),
+                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after, "identified": ident,
+                    "noise_floor": diagnosis.noise_floor, "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
+                    "pressure_ratio": cal["pressure_ratio"],
+                    "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
+                    "effects": {e.name: e.params for e in diagnosis.effects if e.significant},
+                    "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
+                    "drift_detected": bool(drift.get("detected")),
+                    "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
+    """The cause (:func:`_cause_text`), or that no candidate improves held-out runs, and whether any could."""
+    if diagnosis.identified or pairs:
+        return _cause_text(diagnosis, pairs)
+    what = "No candidate effect improves held-out runs significantly."
+    settings = diagnosis.settings or {}
+    if settings.get("identification_possible") is False:
+        n_runs = len(diagnosis.gap_per_run["runs"])
+        what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
+                 f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
+                 f"at least {settings['runs_needed']} runs are needed.")
+    return what
+
+
+def _drift_text(drift: dict) -> str:
+    """A tested drift that was not detected: none, or one too small to count (a detected drift is part of the
+    remaining-gap statement, with its table)."""
+    if not drift.get("tested") or drift.get("detected"):
+        return ""
+    if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
+        return (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
+                f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
+                "the simulation keeps one pressure. ")
+    return f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
+
+
+def _hinge_gap_text(cal: dict) -> str:
+    """The model's hinge gap, when it has one: calibrated with its standard error (and the model's own stated error),
+    or why not."""
+    if "gap_m" not in cal:
+        return ""
+    if cal.get("gap_calibrated"):
+        model_error = cal.get("gap_model_error_m")
+        return (f"The hinge gap is calibrated from the hinge motion: g = {cal['gap_m'] * 1e6:.2f} +- "
+                f"{cal['gap_std_m'] * 1e6:.2g} um (standard error; an effective gap of the inviscid full-wave "
+                "model)"
+                + (f", and +- {model_error * 1e6:.2g} um more from the model's own stated accuracy of the hinge "
+                   "stiffness (mesh and interpolation of the table family), which more data do not reduce"
+                   if model_error else "") + ". ")
+    std = cal.get("gap_std_m")
+    return (f"Hinge gap g = {cal['gap_m'] * 1e6:.2f} um: {cal.get('gap_note', 'given')}"
+            + (f" (standard error of the profile {std * 1e6:.2g} um)" if std else "") + ". ")
+
+
+def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
+    """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
+    rows = [[e.name, _verdict(e, pairs),
+             ", ".join(f"{k}={v:.3g}" for k, v in e.params.items()), e.gap_after, e.shrink, e.p_value,
+             e.p_value_given_others]
+            for e in diagnosis.effects]
+    n_runs = len(diagnosis.gap_per_run["runs"])
+    smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
+    columns = {
+        "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
+                      "cannot tell apart (named together); no: not a significant held-out improvement",
+        "parameters (SI)": "fitted with the named effects (for the others: on top of them)",
+        "gap after": "the gap (mean unexplained fraction of the three components beyond the noise floor) with the named "
+                     "effects up to this one, or with the named effects plus this one",
+        "shrink": "1 - gap after / gap before",
+        "held-out p (sign-flip)": f"one-sided sign-flip test over the {n_runs} runs of the held-out improvement when "
+                                  f"the effect was added or last tested; the smallest p {n_runs} runs allow is "
+                                  f"{smallest:.3g}",
+        "p given the others": "the same test of the effect against the named set without it (the backward check)",
+    }
+    tables = [Table("Candidate effects (ranked)", ["effect", "identified", "parameters (SI)", "gap after", "shrink",
+                                                   "held-out p (sign-flip)", "p given the others"], rows, columns)]
+    term_rows = [[eq, t["term"], t.get("form", "integral"), t["coefficient"], t["std_error"], t["shrink"], t.get("p_value")]
+                 for eq, ts in terms.items() for t in ts]
+    if term_rows:
+        tables.append(Table("Discovered library terms (what no candidate explains; found in the equation's integral "
+                            "form, or in the energy balance for a dissipation)",
+                            ["equation", "term", "found in", "coefficient (SI)", "std error", "shrink",
+                             "held-out p (sign-flip)"], term_rows,
+                            {"found in": "integral: the equation's integral form; energy: the energy balance",
+                             "std error": "white-noise standard error of the coefficient",
+                             "shrink": "fraction of the equation's remaining gap beyond noise the term removes, added in "
+                                       "order", "held-out p (sign-flip)": "one-sided sign-flip test of the term's "
+                                                                         "per-run held-out improvement"}))
+    if drift.get("detected"):
+        tables.append(Table("Pressure drift", ["relative amplitude", "time scale [s]", "F-test p", "window [s]"],
+                            [[drift["relative_amplitude"], drift["time_scale_s"], drift["p_value"], drift["window_s"]]]))
+    skipped = diagnosis.skipped_files or []
+    if skipped:
+        tables.append(Table("Skipped files", ["file", "reason"],
+                            [[d["file"], d["reason"]] if isinstance(d, dict) else [str(d), ""] for d in skipped]))
+    return tables
+
+
+def section(context: ReportContext) -> Section:
+    """Section 6, the sim-to-real gap of the diagnosis's model: :func:`diagnosis_section` with its figures."""
+    sec = diagnosis_section(context.diagnosis, diagnosis_figures(context.diagnosis, context.figs_dir))
+    return Section("diagnosis", f"6. The sim-to-real gap ({context.spec.label} model)",
+                   sec.reading, sec.figures, sec.tables, sec.numbers)
