@@ -120,7 +120,12 @@ def add_diagnose_parser(sub) -> None:
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
             "effects of docs/conventions.md section 5 cause it, adding them greedily while their improvement of held-out runs "
             "(each run held out once, K-fold over runs) is significant (one-sided sign-flip test over runs, --alpha). "
-            "Tests whether y points down (data_warnings). Data format and conventions: docs/formats.md, "
+            "Tests whether y points down (data_warnings). Every named effect's parameters, the calibrated pressure, "
+            "the y origin and the model's calibrated parameters carry a standard error and a 95 % interval (the "
+            "final model refitted without each run in turn: a delete-one-run jackknife, Student t with runs - 1 "
+            "degrees of freedom), or 'not determined' with the reason; a candidate tried and rejected is marked so, "
+            "with its reasons (not significant, removed by the backward check, a negative damping), and its fit is "
+            "no result. Data format and conventions: docs/formats.md, "
             "docs/conventions.md. Writes diagnosis.json, figures and report.html into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -177,7 +182,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, args.out)
     if not args.quiet:
-        print(f"identified: {diagnosis.identified or 'none'}; gap {diagnosis.gap_before:.3g} -> "
+        named = "; ".join(str(diagnosis.effect(n)) for n in diagnosis.identified)
+        print(f"identified: {named or 'none'}; gap {diagnosis.gap_before:.3g} -> "
               f"{diagnosis.gap_after:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
     return 0
 

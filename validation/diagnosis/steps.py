@@ -43,6 +43,7 @@ from .prepare.runs import prepare_diagnosis_runs
 from .summarise.localization import localize_residuals
 from .summarise.long_time import long_time_gaps, mean_long_time_gap
 from .summarise.result import Diagnosis, DiagnosisInternals
+from .summarise.uncertainty import METHOD, CONFIDENCE, interval_from_error, jackknife_errors
 from .summarise.verdicts import ranked_effects
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
@@ -351,9 +352,13 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
     gap_before, gap_after = scalar_gap(per_before), scalar_gap(per_after)
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
+    found_terms = discovery
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
+    log("standard errors: the final model refitted without each of the %d runs", len(runs))
+    errors = jackknife_errors(problem, identified, joint_params, final.calibration,
+                              lambda sub, fit: joint_estimates(sub, fit, found_terms)[0])
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, gap_before)
+                             replaced, joint_params, final, gap_before, errors.effects)
     loc_after = localize_residuals(runs, final.residuals)
     components = fit_components(final)
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -363,7 +368,7 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
         identified=tuple(named), indistinguishable=tuple(pr.to_dict() for pr in pairs),
         model_effects=tuple(identified), dropped_by_backward_check=tuple(found.elim.dropped),
         greedy_identified=tuple(found.ident.identified),
-        calibration=_calibration_record(problem, final, cal, spec),
+        calibration=_calibration_record(problem, final, cal, spec, errors),
         gap_before=gap_before, gap_after=gap_after, gap_definition=gap_definition(components),
         gap_components=tuple(c.name for c in components),
         gap_component_forms={c.name: c.form for c in components},
@@ -436,9 +441,11 @@ def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: d
     return remaining
 
 
-def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, spec: ModelSpec) -> dict:
+def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, spec: ModelSpec, errors) -> dict:
     """diagnosis.json's ``calibration``: pressure, height origin (from the nominal and the calibrated Z_eq), the first
-    states, the model's calibrated parameters and the pressure drift."""
+    states, the model's calibrated parameters, the pressure drift, and ``uncertainty``: the standard error and 95 %
+    interval of the pressure, the origin and every calibrated model parameter
+    (:mod:`validation.diagnosis.summarise.uncertainty`)."""
     c, model = final.calibration, problem.model
     calibration = {
         "pressure_amplitude_pa": c.pressure_amplitude_pa,
@@ -455,4 +462,13 @@ def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrat
     }
     if cal.drift is not None:
         calibration["drift"] = cal.drift.to_dict()
+    uncertainty = {"method": METHOD, "confidence": CONFIDENCE, "runs": errors.runs,
+                   **{k: iv.to_dict() for k, iv in errors.calibration.items()}}
+    for name, pc in cal.parameters.items():  # the model's own parameters: their profile's jackknife error
+        if pc is not None and getattr(pc, "calibrated", False):
+            uncertainty[name] = interval_from_error(pc.value, pc.std_error, errors.runs - 1).to_dict()
+        elif pc is not None:
+            uncertainty[name] = {"value": pc.value, "std_error": None, "interval_95": None, "dof": None,
+                                 "determined": False, "reason": pc.note}
+    calibration["uncertainty"] = uncertainty
     return calibration
