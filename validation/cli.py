@@ -139,8 +139,10 @@ def add_diagnose_parser(sub) -> None:
                         "its smallest p is 2^-n, so the default 0.01 needs at least 7 runs")
     p.add_argument("--min-improvement", type=float, default=0.05,
                    help="smallest median improvement of held-out runs counted, as a fraction of the current gap")
-    p.add_argument("--candidates", default=",".join(_candidate_names()),
-                   help="comma-separated candidate effects")
+    p.add_argument("--candidates", default=",".join(_default_candidates()),
+                   help="comma-separated candidate effects; also accepted: "
+                        + ", ".join(sorted(set(_candidate_names()) - set(_default_candidates())))
+                        + " (the levitator's cavity responding with a lag: its gains give Q and the detuning)")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
     add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
@@ -149,6 +151,12 @@ def add_diagnose_parser(sub) -> None:
                            "errors) run one after another in this process, so these options do not change this "
                            "command; it accepts them so that every command takes the same options.")
     p.set_defaults(func=run_diagnose)
+
+
+def _default_candidates() -> list[str]:
+    from .diagnosis.prepare.candidate_effects import default_candidates
+
+    return list(default_candidates())
 
 
 def _candidate_names() -> list[str]:

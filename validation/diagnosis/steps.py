@@ -37,13 +37,14 @@ from .identify.elimination import backward_check
 from .identify.folded import leave_out_folded_runs
 from .identify.identification import PracticalThresholds, identify_effects
 from .identify.statistics import format_p, runs_needed, smallest_sign_flip_pvalue
-from .prepare.candidate_effects import CANDIDATE_EFFECTS
+from .prepare.candidate_effects import CANDIDATE_EFFECTS, default_candidates
 from .prepare.problem import DiagnosisProblem
 from .prepare.runs import prepare_diagnosis_runs
 from .summarise.localization import localize_residuals
 from .summarise.long_time import long_time_gaps, mean_long_time_gap
 from .summarise.result import Diagnosis, DiagnosisInternals
 from .summarise.uncertainty import METHOD, CONFIDENCE, interval_from_error, jackknife_errors
+from .prepare.cavity_lag import derived_quantities
 from .summarise.verdicts import ranked_effects
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
@@ -64,7 +65,8 @@ class DiagnoseConfig:
 
     Parameters
     ----------
-    candidates : names of the candidate effects (default: all of docs/conventions.md section 5)
+    candidates : names of the candidate effects (default: all of docs/conventions.md section 5; the cavity's lag,
+        ``cavity_lag``, only when named here)
     alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
@@ -81,7 +83,7 @@ class DiagnoseConfig:
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
-    candidates: tuple[str, ...] = field(default_factory=lambda: tuple(CANDIDATE_EFFECTS))
+    candidates: tuple[str, ...] = field(default_factory=default_candidates)
     alpha: float = 0.01
     min_relative_improvement: float = 0.05
     min_absolute_improvement: float = 5e-6
@@ -356,9 +358,9 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
     log("standard errors: the final model refitted without each of the %d runs", len(runs))
     errors = jackknife_errors(problem, identified, joint_params, final.calibration,
-                              lambda sub, fit: joint_estimates(sub, fit, found_terms)[0])
+                              lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, gap_before, errors.effects)
+                             replaced, joint_params, final, gap_before, errors.effects, errors.derived)
     loc_after = localize_residuals(runs, final.residuals)
     components = fit_components(final)
     p_floor = smallest_sign_flip_pvalue(len(runs))

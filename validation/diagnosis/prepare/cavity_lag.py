@@ -42,7 +42,8 @@ from numpy.typing import ArrayLike, NDArray
 from acousim.dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode, mode_energy, potential_series
 from acousim.medium import Medium
 
-__all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns"]
+__all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns",
+           "derived_quantities"]
 
 #: The candidate's parameters: the quasi-static gain A [s/rad] and the lag gain B [s^2/rad] (module docstring).
 CAVITY_LAG_PARAMETERS = ("static_gain", "lag_gain")
@@ -107,3 +108,19 @@ def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVI
     delta_rate = -shift * (f_z * yd + q_t * thd)
     accel = np.stack([f_z / force_model.mass, q_t / force_model.hinge_inertia(th)], axis=1)  # (n, 2)
     return np.stack([accel * delta[:, None], accel * delta_rate[:, None]], axis=2)
+
+
+def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:
+    """``{"cavity_lag": {"quality_factor", "detuning_half_widths"}}`` of a fit whose effects hold the cavity's lag (else
+    ``{}``): its gains, fitted on the columns at the nominal pressure (the acoustic accelerations scale with the
+    pressure scale s, the dimer's shift does not), are divided by s and turned into the mode (:func:`mode_from_gains`,
+    at the default area and air); nan when no mode has them."""
+    if "cavity_lag" not in params:
+        return {}
+    s = calibration.pressure_scale
+    gains = CavityGains(params["cavity_lag"]["static_gain"] / s, params["cavity_lag"]["lag_gain"] / s)
+    try:
+        mode = mode_from_gains(gains, Medium().frequency_hz)
+    except ValueError:
+        return {"cavity_lag": {"quality_factor": math.nan, "detuning_half_widths": math.nan}}
+    return {"cavity_lag": {"quality_factor": mode.quality_factor, "detuning_half_widths": mode.detuning}}

@@ -67,6 +67,8 @@ class EffectVerdict:
     rejected_because : ``({"code", "reason"}, ...)``, the codes of :data:`REJECTIONS` (empty unless rejected)
     uncertainty : per parameter, the standard error and 95 % interval
         (:class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval`; the model's effects only)
+    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor`` and
+        ``detuning_half_widths`` from its gains)
     """
 
     name: str
@@ -87,6 +89,7 @@ class EffectVerdict:
     status: str | None = None
     rejected_because: tuple[Mapping[str, str], ...] = ()
     uncertainty: Mapping[str, ParameterInterval] | None = None
+    derived: Mapping[str, ParameterInterval] | None = None
 
     def __post_init__(self) -> None:
         if self.status is None:  # from the verdict's flags: a model effect is named or stands for a pair
@@ -127,7 +130,8 @@ class EffectVerdict:
     def __str__(self) -> str:
         if self.rejected:
             return f"{self.name}: rejected ({self.rejection_text()})"
-        values = ", ".join(f"{p} = {self.estimate(p).format()}" for p in self.params)
+        values = ", ".join([f"{p} = {self.estimate(p).format()}" for p in self.params]
+                           + [f"{p} = {iv.format()}" for p, iv in (self.derived or {}).items()])
         return f"{self.name}: {self.status} ({values})"
 
     def to_json(self) -> dict[str, Any]:
@@ -153,13 +157,15 @@ class EffectVerdict:
         out["rejected_because"] = [dict(r) for r in self.rejected_because]
         if self.uncertainty is not None:
             out["uncertainty"] = {p: iv.to_dict() for p, iv in self.uncertainty.items()}
+        if self.derived is not None:
+            out["derived"] = {p: iv.to_dict() for p, iv in self.derived.items()}
         return out
 
     @classmethod
     def from_json(cls, doc: Mapping[str, Any]) -> "EffectVerdict":
         """The verdict of a diagnosis.json ``effects`` entry."""
         pair = doc.get("indistinguishable_from")
-        unc = doc.get("uncertainty")
+        unc, der = doc.get("uncertainty"), doc.get("derived")
         # a diagnosis.json written before the key: an "indistinguishable from" note marks a pair's other member
         status = doc.get("status") or ("indistinguishable" if (doc.get("note") or "").startswith("indistinguishable")
                                        else None)
@@ -169,7 +175,8 @@ class EffectVerdict:
                    doc.get("p_value_given_others"), doc.get("median_improvement_given_others"),
                    None if pair is None else tuple(pair), doc.get("params_without_discovered_terms"),
                    status=status, rejected_because=tuple(doc.get("rejected_because", ())),
-                   uncertainty=None if unc is None else {p: ParameterInterval.from_dict(v) for p, v in unc.items()})
+                   uncertainty=None if unc is None else {p: ParameterInterval.from_dict(v) for p, v in unc.items()},
+                   derived=None if der is None else {p: ParameterInterval.from_dict(v) for p, v in der.items()})
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,7 +23,7 @@ in tests/validation/diagnosis/test_uncertainty.py and measured in docs/diagnosis
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -138,6 +138,8 @@ class JackknifeErrors:
     effects: dict[str, dict[str, ParameterInterval]]  #: by effect, by parameter
     calibration: dict[str, ParameterInterval]  #: pressure_amplitude_pa, y_origin_height_m
     runs: int  #: R, the runs left out in turn
+    #: by effect, quantities derived from its parameters and the calibration (the cavity's Q and detuning)
+    derived: dict[str, dict[str, ParameterInterval]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"method": METHOD, "confidence": CONFIDENCE, "runs": self.runs,
@@ -146,7 +148,8 @@ class JackknifeErrors:
 
 
 def jackknife_errors(problem: DiagnosisProblem, effects: Sequence[str], params: Mapping[str, Mapping[str, float]],
-                     calibration, refit_params: Callable[[DiagnosisProblem, GapFit], Mapping] | None = None
+                     calibration, refit_params: Callable[[DiagnosisProblem, GapFit], Mapping] | None = None,
+                     derived: Callable[[Mapping, object], Mapping[str, Mapping[str, float]]] | None = None
                      ) -> JackknifeErrors:
     """The delete-one-run jackknife of the final model (module docstring).
 
@@ -158,11 +161,16 @@ def jackknife_errors(problem: DiagnosisProblem, effects: Sequence[str], params: 
     calibration : the reported :class:`~validation.diagnosis.calibrate.calibration.Calibration`
     refit_params : ``(subproblem, fit) -> {effect: {parameter: value}}``: how the reported parameters are made from a
         fit of the effects (the joint model with the discovered terms); default the fit's own
+    derived : ``(params, calibration) -> {effect: {quantity: value}}``: quantities computed from the parameters (nan
+        where they do not exist), jackknifed with them
     """
     n = len(problem)
     names = list(effects)
     slots = [(e, p) for e in names for p in CANDIDATE_EFFECTS[e]]
     loo = np.full((n, len(slots) + 2), np.nan)
+    centre = derived(params, calibration) if derived is not None else {}
+    dslots = [(e, k) for e, ks in centre.items() for k in ks]
+    dloo = np.full((n, len(dslots)), np.nan)
     for i in range(n):
         sub = problem.subset([j for j in range(n) if j != i])
         try:
@@ -172,9 +180,17 @@ def jackknife_errors(problem: DiagnosisProblem, effects: Sequence[str], params: 
             continue  # a refit that fails leaves nan: the parameter is not determined
         loo[i, :len(slots)] = [got[e][p] for e, p in slots]
         loo[i, -2:] = fit.calibration.pressure_amplitude_pa, fit.calibration.z_origin_m
+        if dslots:
+            d = derived(got, fit.calibration)
+            dloo[i] = [d.get(e, {}).get(k, np.nan) for e, k in dslots]
     out: dict[str, dict[str, ParameterInterval]] = {e: {} for e in names}
     for k, (e, p) in enumerate(slots):
         out[e][p] = _jackknife(float(params[e][p]), loo[:, k])
     cal = {"pressure_amplitude_pa": _jackknife(calibration.pressure_amplitude_pa, loo[:, -2]),
            "y_origin_height_m": _jackknife(calibration.z_origin_m, loo[:, -1])}
-    return JackknifeErrors(out, cal, n)
+    extra: dict[str, dict[str, ParameterInterval]] = {}
+    for k, (e, q) in enumerate(dslots):
+        value = float(centre[e][q])
+        extra.setdefault(e, {})[q] = (_jackknife(value, dloo[:, k]) if math.isfinite(value) else ParameterInterval(
+            value, None, None, None, f"the fitted parameters of {e} give no {q}"))
+    return JackknifeErrors(out, cal, n, extra)

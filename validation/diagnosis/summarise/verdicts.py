@@ -29,8 +29,8 @@ def _rejection(code: str, detail: str = "") -> dict:
 
 def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, elim, identified: list[str],
                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
-                   gap_before: float, uncertainty: Mapping[str, Mapping[str, ParameterInterval]] | None = None
-                   ) -> tuple[EffectVerdict, ...]:
+                   gap_before: float, uncertainty: Mapping[str, Mapping[str, ParameterInterval]] | None = None,
+                   derived: Mapping[str, Mapping[str, ParameterInterval]] | None = None) -> tuple[EffectVerdict, ...]:
     """diagnosis.json's ``effects``.
 
     Parameters
@@ -52,7 +52,8 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     """
     runs = problem.runs
     model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, final,
-                                   gap_before, (uncertainty or {}).get(identified[i])) for i in range(len(identified))]
+                                   gap_before, (uncertainty or {}).get(identified[i]), (derived or {}).get(identified[i]))
+                     for i in range(len(identified))]
     last_tests = ident.last_tests()
     others = []
     for name in candidates:
@@ -94,7 +95,8 @@ def _rejections(name: str, params: Mapping[str, float], ident, elim, test, repla
 
 def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str], i: int, named: list[str],
                   in_pair: dict, joint_params: dict, final: GapFit, gap_before: float,
-                  uncertainty: Mapping[str, ParameterInterval] | None) -> EffectVerdict:
+                  uncertainty: Mapping[str, ParameterInterval] | None,
+                  derived: Mapping[str, ParameterInterval] | None = None) -> EffectVerdict:
     """The verdict of the model's ``i``-th effect, with the gap after the cumulative fit of the first ``i + 1``."""
     name = identified[i]
     g = scalar_gap(fit_gaps(problem.runs, fit_gap_model(problem, identified[: i + 1])))
@@ -109,7 +111,7 @@ def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str],
         # fitted beside discovered terms: the effects-only values too
         params_without_discovered_terms=final.effects[name] if joint_params[name] != final.effects[name] else None,
         status="named" if name in named else "indistinguishable",
-        uncertainty=None if uncertainty is None else dict(uncertainty))
+        uncertainty=None if uncertainty is None else dict(uncertainty), derived=None if derived is None else dict(derived))
 
 
 def _why_not_in_model(name: str, ident, elim, given, in_pair: dict, replaced: dict) -> str:

@@ -112,7 +112,8 @@ def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
 def _params_text(effect: "EffectVerdict") -> str:
     """The effect's parameters, each with its standard error ("kappa = 1.95e4 +- 0.02e4") or "error not determined"
     and the reason."""
-    return ", ".join(f"{k} = {effect.estimate(k).format()}" for k in effect.params)
+    return ", ".join([f"{k} = {effect.estimate(k).format()}" for k in effect.params]
+                     + [f"{k} = {iv.format()}" for k, iv in (effect.derived or {}).items()])
 
 
 def _table_params_text(effect: "EffectVerdict") -> str:
