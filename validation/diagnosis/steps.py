@@ -43,7 +43,8 @@ from .prepare.runs import prepare_diagnosis_runs
 from .summarise.localization import localize_residuals
 from .summarise.long_time import long_time_gaps, mean_long_time_gap
 from .summarise.result import Diagnosis, DiagnosisInternals
-from .summarise.uncertainty import METHOD, CONFIDENCE, interval_from_error, jackknife_errors
+from .summarise.uncertainty import (CONFIDENCE, METHOD, PRESSURE_MODEL_ERROR, interval_from_error, jackknife_errors,
+                                    with_model_error)
 from .prepare.cavity_lag import derived_quantities
 from .summarise.verdicts import ranked_effects
 
@@ -466,6 +467,11 @@ def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrat
         calibration["drift"] = cal.drift.to_dict()
     uncertainty = {"method": METHOD, "confidence": CONFIDENCE, "runs": errors.runs,
                    **{k: iv.to_dict() for k, iv in errors.calibration.items()}}
+    # the pressure's interval also holds the calibration's systematic error (PRESSURE_MODEL_ERROR)
+    stat = errors.calibration["pressure_amplitude_pa"]
+    uncertainty["pressure_amplitude_pa"] = {
+        **with_model_error(stat, PRESSURE_MODEL_ERROR * abs(stat.value)).to_dict(),
+        "statistical_std_error": stat.std_error, "model_std_error": PRESSURE_MODEL_ERROR * abs(stat.value)}
     for name, pc in cal.parameters.items():  # the model's own parameters: their profile's jackknife error
         if pc is not None and getattr(pc, "calibrated", False):
             uncertainty[name] = interval_from_error(pc.value, pc.std_error, errors.runs - 1).to_dict()

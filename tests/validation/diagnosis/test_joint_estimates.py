@@ -32,7 +32,8 @@ def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_p
     assert kappa.determined and kappa.covers(truth["effects"]["pair_scattering"]["kappa"])
     assert kappa.std_error < 0.01 * kappa.value  # 8 runs of 2 s determine kappa to 0.1 % (measured)
     pressure = diag.calibration_estimate("pressure_amplitude_pa")
-    assert pressure.determined and pressure.std_error < 1.0  # measured 0.075 Pa
+    # measured: 0.075 Pa from the jackknife, 0.90 Pa with the systematic 0.03 % (PRESSURE_MODEL_ERROR); truth 3000.0
+    assert pressure.determined and pressure.std_error < 1.0 and pressure.covers(truth["pressure_amplitude_pa"])
     _check_rejected_candidates(diag)
 
 
