@@ -68,3 +68,16 @@ def test_gains_fitted_on_the_simulated_mode(surrogate, q, x, rtol_q, rtol_x):
     mode = mode_from_gains(CavityGains(*fitted), FREQUENCY)
     np.testing.assert_allclose(mode.quality_factor, q, rtol=rtol_q)
     np.testing.assert_allclose(mode.detuning, x, rtol=rtol_x)
+
+
+def test_the_detuning_is_measured_from_the_rest_height(surrogate):
+    """The static column vanishes with the dimer at rest at the given height (the calibrated equilibrium, where the
+    drive's detuning x is defined), and its y entry changes sign across it; the lag column does not depend on it."""
+    rest = 20e-6
+    at_rest = cavity_lag_columns(surrogate, [[rest, 0.0, 0.0, 0.0]], rest_y=rest)[0]
+    assert at_rest[0, 0] == 0.0 and at_rest[1, 0] == 0.0
+    above, below = (cavity_lag_columns(surrogate, [[rest + d, 0.0, 0.0, 0.0]], rest_y=rest)[0, 0, 0] for d in (5e-6, -5e-6))
+    assert above * below < 0
+    moving = [[rest + 5e-6, 1e-3, 0.1, 0.5]]
+    np.testing.assert_array_equal(cavity_lag_columns(surrogate, moving, rest_y=rest)[:, :, 1],
+                                  cavity_lag_columns(surrogate, moving)[:, :, 1])

@@ -127,8 +127,12 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
 
         fm = problem.surrogate()
         st = np.array(state, float, copy=True).reshape(-1, 4)
-        st[:, 0] = np.broadcast_to(np.asarray(z_com, float), st[:, 0].shape) - fm.z_eq
-        return cavity_lag_columns(fm, st)
+        z_com = np.broadcast_to(np.asarray(z_com, float), st[:, 0].shape)
+        # the cavity's detuning x is defined with the dimer at rest: at the calibrated equilibrium (the data's
+        # origin when none is given)
+        rest = (float(np.mean(z_com - st[:, 0])) if z_eq is None else float(z_eq)) - fm.z_eq
+        st[:, 0] = z_com - fm.z_eq
+        return cavity_lag_columns(fm, st, rest_y=rest)
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
     if z_eq is None:

@@ -84,7 +84,7 @@ def mode_from_gains(gains: CavityGains, frequency_hz: float, area: float = DEFAU
 
 
 def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVITY_AREA,
-                       medium: Medium | None = None) -> NDArray[np.float64]:
+                       medium: Medium | None = None, rest_y: float = 0.0) -> NDArray[np.float64]:
     """d(accelerations)/d(A, B) of the cavity's slow lag at the states: array (n, 2, 2), rows (yddot, thetaddot),
     columns (A, B), as :func:`~validation.diagnosis.prepare.candidate_effects.effect_regressors` gives them.
 
@@ -96,6 +96,9 @@ def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVI
         [y, ydot, theta, thetadot] (SI).
     area : the cavity's effective cross-section [m^2]
     medium : the air and the drive's frequency (default :class:`acousim.Medium`)
+    rest_y : the dimer's rest height, where the drive's detuning x is defined (delta = 0), as a y of the force
+        model [m]: 0 when the force model is at the data's pressure; in the diagnosis, the calibrated equilibrium
+        (the force model is the nominal pressure's)
     """
     medium = Medium() if medium is None else medium
     y, yd, th, thd = np.atleast_2d(np.asarray(state, float)).T
@@ -104,7 +107,7 @@ def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVI
     shift = w / mode_energy(force_model.pressure_amplitude_pa, area, medium)  # [rad/s per J]
     q_y, q_t = force_model.generalized_forces(th, y)
     f_z = q_y + force_model.mass * force_model.gravity  # the acoustic vertical force [N]
-    delta = shift * (pot(th, y) - pot(0.0, 0.0))
+    delta = shift * (pot(th, y) - pot(0.0, rest_y))
     delta_rate = -shift * (f_z * yd + q_t * thd)
     accel = np.stack([f_z / force_model.mass, q_t / force_model.hinge_inertia(th)], axis=1)  # (n, 2)
     return np.stack([accel * delta[:, None], accel * delta_rate[:, None]], axis=2)
