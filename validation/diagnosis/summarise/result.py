@@ -27,7 +27,8 @@ REJECTIONS = {
     "removed_by_backward_check": "improved held-out runs when added, but not given the other effects",
     "replaced_by_discovered_terms": "not needed once the discovered library terms are fitted",
     "withheld": "the calibration equation stays unexplained, so no cause is named",
-    "non_physical_sign": "a parameter fitted with a sign the physics excludes (a negative damping)",
+    "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
+                         "coefficient or scattering stiffness)",
 }
 
 
