@@ -130,7 +130,9 @@ def _pressure_text(diagnosis: "Diagnosis") -> str:
     iv = diagnosis.calibration_estimate("pressure_amplitude_pa")
     if iv.determined:
         value, error = iv.format().split(" +- ")
-        value = f"{value} Pa +- {error} Pa (standard error over runs)"
+        model = diagnosis.calibration.get("uncertainty", {}).get("pressure_amplitude_pa", {}).get("model_std_error")
+        value = f"{value} Pa +- {error} Pa (standard error over runs" + (
+            f", with the calibration's systematic {100 * model / iv.value:.2g} %)" if model else ")")
     else:
         value = f"{iv.value:.0f} Pa (error not determined: {iv.reason})"
     return f"Calibrated pressure {value}, {100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal; "
