@@ -1,7 +1,6 @@
 """Standard errors and 95 % intervals of the diagnosis (the delete-one-run jackknife): their size against the
 scatter of the estimates over seeds of synthetic data with known truth, their coverage on a small fixed study, and
 "not determined" where the data give no finite interval."""
-import math
 
 import numpy as np
 import pytest

@@ -14,6 +14,8 @@ from numpy.typing import NDArray
 
 from acousim.dynamics.effects import EFFECT_TYPES
 
+from .cavity_lag import CAVITY_LAG_PARAMETERS
+
 __all__ = ["CANDIDATE_EFFECTS", "MODEL_CANDIDATES", "default_candidates", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
@@ -27,7 +29,7 @@ def _is_candidate(cls: type) -> bool:
 #: ``cavity_lag``: the levitator's cavity responding to the dimer with a lag
 #: (:mod:`validation.diagnosis.prepare.cavity_lag`, from acousim's resonator equations).
 MODEL_CANDIDATES: dict[str, tuple[tuple[str, ...], tuple[int, ...]]] = {
-    "cavity_lag": (("static_gain", "lag_gain"), (0, 1)),
+    "cavity_lag": (CAVITY_LAG_PARAMETERS, (0, 1)),
 }
 
 
