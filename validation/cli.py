@@ -153,7 +153,12 @@ def add_diagnose_parser(sub) -> None:
             "errors), localise it (library terms, state-space regions, time scales), and identify which unmodelled "
             "effects of docs/conventions.md section 5 cause it, adding them greedily while their improvement of held-out runs "
             "(each run held out once, K-fold over runs) is significant (one-sided sign-flip test over runs, --alpha). "
-            "Tests whether y points down (data_warnings). Data format and conventions: docs/formats.md, "
+            "Tests whether y points down (data_warnings). Every named effect's parameters, the calibrated pressure, "
+            "the y origin and the model's calibrated parameters carry a standard error and a 95 % interval (the "
+            "final model refitted without each run in turn: a delete-one-run jackknife, Student t with runs - 1 "
+            "degrees of freedom), or 'not determined' with the reason; a candidate tried and rejected is marked so, "
+            "with its reasons (not significant, removed by the backward check, a negative damping), and its fit is "
+            "no result. Data format and conventions: docs/formats.md, "
             "docs/conventions.md. Writes diagnosis.json, figures and report.html into --out."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -167,8 +172,10 @@ def add_diagnose_parser(sub) -> None:
                         "its smallest p is 2^-n, so the default 0.01 needs at least 7 runs")
     p.add_argument("--min-improvement", type=float, default=0.05,
                    help="smallest median improvement of held-out runs counted, as a fraction of the current gap")
-    p.add_argument("--candidates", default=",".join(_candidate_names()),
-                   help="comma-separated candidate effects")
+    p.add_argument("--candidates", default=",".join(_default_candidates()),
+                   help="comma-separated candidate effects; also accepted: "
+                        + ", ".join(sorted(set(_candidate_names()) - set(_default_candidates())))
+                        + " (the levitator's cavity responding with a lag: its gains give Q and the detuning)")
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
     add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
@@ -177,6 +184,12 @@ def add_diagnose_parser(sub) -> None:
                            "errors) run one after another in this process, so these options do not change this "
                            "command; it accepts them so that every command takes the same options.")
     p.set_defaults(func=run_diagnose)
+
+
+def _default_candidates() -> list[str]:
+    from .diagnosis.prepare.candidate_effects import default_candidates
+
+    return list(default_candidates())
 
 
 def _candidate_names() -> list[str]:
@@ -210,7 +223,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, args.out)
     if not args.quiet:
-        print(f"identified: {diagnosis.identified or 'none'}; gap {diagnosis.gap_before:.3g} -> "
+        named = "; ".join(str(diagnosis.effect(n)) for n in diagnosis.identified)
+        print(f"identified: {named or 'none'}; gap {diagnosis.gap_before:.3g} -> "
               f"{diagnosis.gap_after:.3g}; written {', '.join(str(p) for p in paths)}", file=sys.stderr)
     return 0
 

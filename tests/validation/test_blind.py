@@ -98,3 +98,31 @@ def test_a_twin_case_whose_runs_all_stopped_at_the_fold_is_not_scored(tmp_path, 
     for i in range(10):
         write_csv(tmp_path / f"run{i + 1:02d}.csv", t, 1e-4 * np.cos(2 * np.pi * 22 * t), np.linspace(0.1, 0.99, t.size))
     assert "in 10 of 10 runs" in _too_many_folded(tmp_path, 10)
+
+
+def test_blind_scoring_counts_interval_coverage(make_diagnosis):
+    """Each named true parameter's 95 % interval is scored against the truth, a parameter without a finite interval
+    is counted apart (never as covered), and the summary pools them per effect with Clopper-Pearson bounds."""
+    from validation.diagnosis.summarise.uncertainty import ParameterInterval, interval_from_error
+
+    def diag(kappa, se):
+        made = make_diagnosis(["pair_scattering"], params={"pair_scattering": {"kappa": kappa}},
+                              calibration={"pressure_amplitude_pa": 3100.0, "uncertainty": {
+                                  "pressure_amplitude_pa": interval_from_error(3100.0, 10.0, 9).to_dict()}})
+        iv = interval_from_error(kappa, se, 9) if se else ParameterInterval(kappa, None, None, 9, "no spread")
+        verdict = replace(made.effects[0], uncertainty={"kappa": iv})
+        return replace(made, effects=(verdict,))
+
+    case = {"index": 0, "effects": {"pair_scattering": {"kappa": 1e4}}, "pressure_error": 0.05, "twin_seed": 1}
+    # t(0.975, 9) = 2.262: 1.02e4 +- 100 reaches 1.0426e4 down to 0.9974e4 (covers); 1.05e4 +- 100 does not
+    results = [score_case(case, {"pressure_amplitude_pa": 3110.0}, diag(k, se), None)
+               for k, se in ((1.02e4, 100.0), (1.05e4, 100.0), (1.0e4, None))]
+    assert [r["interval_covers"]["pair_scattering"]["kappa"] for r in results] == [True, False, None]
+    assert all(r["pressure_interval_covers"] for r in results)  # 3100 +- 22.6 holds 3110
+    cov = summarize(results)["interval_coverage"]
+    assert cov["pair_scattering"]["covered"] == 1 and cov["pair_scattering"]["determined"] == 2
+    assert cov["pair_scattering"]["not_determined"] == 1
+    # Clopper-Pearson for 1 of 2: 0.0126-0.987 (tables)
+    assert cov["pair_scattering"]["lower_95"] == pytest.approx(0.0126, abs=1e-4)
+    assert cov["pair_scattering"]["upper_95"] == pytest.approx(0.9874, abs=1e-4)
+    assert cov["pressure_amplitude_pa"]["coverage"] == 1.0

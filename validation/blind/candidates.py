@@ -198,12 +198,14 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
     """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
     found = [] if diag is None else list(diag.identified)
-    params_err = {}
+    params_err, covers = {}, {}
     if diag is not None:
         fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
             errs = {p: abs(fitted[name][p] - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
+            covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
+    pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
     return {
         "index": case["index"],
         "true_effects": case["effects"],
@@ -217,6 +219,10 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
         "shrink": None if diag is None else 1 - diag.gap_after / diag.gap_before,
         "pressure_true_pa": truth["pressure_amplitude_pa"],
         "pressure_calibrated_pa": None if diag is None else diag.calibration["pressure_amplitude_pa"],
+        # whether each named true parameter's 95 % interval holds the truth (None: no finite interval)
+        "interval_covers": covers,
+        "pressure_interval_covers": None if pressure is None or not pressure.determined else bool(
+            pressure.covers(truth["pressure_amplitude_pa"])),
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         # effects named alone that the truth does not hold, and pairs named as indistinguishable
         "false_effects": sorted(set(found) - set(true_set)),
@@ -230,6 +236,39 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
         "error": error,
         "scored": True,
     }
+
+
+def _interval_covers(verdict, truth: dict) -> dict:
+    """Per true parameter of a named effect: whether its 95 % interval holds the truth (None: not determined)."""
+    out = {}
+    for p, v in truth.items():
+        iv = verdict.estimate(p)
+        out[p] = bool(iv.covers(v)) if iv.determined else None
+    return out
+
+
+def interval_coverage(results: list[dict]) -> dict:
+    """The 95 % intervals' coverage over scored cases: per effect (its parameters pooled) and the pressure, each as
+    ``{"covered", "determined", "not_determined", "coverage", "upper_95"/"lower_95"}`` (Clopper-Pearson bounds of
+    the coverage)."""
+    from scipy import stats
+
+    def record(flags: list) -> dict:
+        det = [f for f in flags if f is not None]
+        k, n = sum(det), len(det)
+        return {"covered": k, "determined": n, "not_determined": len(flags) - n,
+                "coverage": k / n if n else None,
+                "lower_95": float(stats.beta.ppf(0.025, k, n - k + 1)) if 0 < k else (0.0 if n else None),
+                "upper_95": float(stats.beta.ppf(0.975, k + 1, n - k)) if k < n else (1.0 if n else None)}
+
+    per: dict[str, list] = {n: [] for n in STRENGTHS}
+    for r in results:
+        for name, flags in (r.get("interval_covers") or {}).items():
+            per.setdefault(name, []).extend(flags.values())
+    out = {n: record(f) for n, f in per.items() if f}
+    out["pressure_amplitude_pa"] = record([r.get("pressure_interval_covers") for r in results
+                                           if "pressure_interval_covers" in r])
+    return out
 
 
 def summarize(results: list[dict]) -> dict:
@@ -268,6 +307,7 @@ def summarize(results: list[dict]) -> dict:
     out["median_shrink_with_effect"] = float(np.median(shr)) if shr else None
     pe = [abs(r["pressure_calibrated_pa"] / r["pressure_true_pa"] - 1) for r in results if r["pressure_calibrated_pa"]]
     out["median_pressure_error"] = float(np.median(pe)) if pe else None
+    out["interval_coverage"] = interval_coverage(results)
     return out
 
 
@@ -296,6 +336,14 @@ def candidates_table(summary: dict) -> list[str]:
     for n, d in summary["per_effect"].items():
         lines.append(f"| {n} | {d['tp']} | {d['fp']} | {d['fn']} | {pct(d['precision'])} | {pct(d['recall'])} | "
                      f"{pct(d['median_max_parameter_error'])} | {pct(d['fraction_parameters_within_25pct'])} |")
+    coverage = summary.get("interval_coverage") or {}
+    if coverage:
+        lines += ["", "| named true parameters of | 95 % intervals holding the truth | its 95 % bounds | not determined |"
+                  " target |", "|---|---|---|---|---|"]
+        for n, c in coverage.items():
+            bounds = "-" if c["coverage"] is None else f"{pct(c['lower_95'])}-{pct(c['upper_95'])}"
+            lines.append(f"| {n} | {c['covered']} of {c['determined']} ({pct(c['coverage'])}) | {bounds} | "
+                         f"{c['not_determined']} | 90-98 % |")
     return lines
 
 

@@ -37,12 +37,15 @@ from .identify.elimination import backward_check
 from .identify.folded import leave_out_folded_runs
 from .identify.identification import PracticalThresholds, identify_effects
 from .identify.statistics import format_p, runs_needed, smallest_sign_flip_pvalue
-from .prepare.candidate_effects import CANDIDATE_EFFECTS
+from .prepare.candidate_effects import CANDIDATE_EFFECTS, default_candidates
 from .prepare.problem import DiagnosisProblem
 from .prepare.runs import prepare_diagnosis_runs
 from .summarise.localization import localize_residuals
 from .summarise.long_time import long_time_gaps, mean_long_time_gap
 from .summarise.result import Diagnosis, DiagnosisInternals
+from .summarise.uncertainty import (CONFIDENCE, METHOD, PRESSURE_MODEL_ERROR, interval_from_error, jackknife_errors,
+                                    with_model_error)
+from .prepare.cavity_lag import derived_quantities
 from .summarise.verdicts import ranked_effects
 
 __all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
@@ -63,7 +66,8 @@ class DiagnoseConfig:
 
     Parameters
     ----------
-    candidates : names of the candidate effects (default: all of docs/conventions.md section 5)
+    candidates : names of the candidate effects (default: all of docs/conventions.md section 5; the cavity's lag,
+        ``cavity_lag``, only when named here)
     alpha : significance level of the one-sided sign-flip permutation test of the held-out improvement
     min_relative_improvement : practical significance, as a fraction of the current gap
     min_absolute_improvement : practical significance, as a fraction of the variance (beyond noise)
@@ -80,7 +84,7 @@ class DiagnoseConfig:
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     """
 
-    candidates: tuple[str, ...] = field(default_factory=lambda: tuple(CANDIDATE_EFFECTS))
+    candidates: tuple[str, ...] = field(default_factory=default_candidates)
     alpha: float = 0.01
     min_relative_improvement: float = 0.05
     min_absolute_improvement: float = 5e-6
@@ -351,9 +355,13 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
     gap_before, gap_after = scalar_gap(per_before), scalar_gap(per_after)
     # the final model's parameters: the identified effects re-estimated together with the discovered terms
     # (a discovered copy of an effect's own column, the partner a discovered term needed, is folded into the effect)
+    found_terms = discovery
     joint_params, discovery, folded = joint_estimates(problem, final, discovery)
+    log("standard errors: the final model refitted without each of the %d runs", len(runs))
+    errors = jackknife_errors(problem, identified, joint_params, final.calibration,
+                              lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, gap_before)
+                             replaced, joint_params, final, gap_before, errors.effects, errors.derived)
     loc_after = localize_residuals(runs, final.residuals)
     components = fit_components(final)
     p_floor = smallest_sign_flip_pvalue(len(runs))
@@ -363,7 +371,7 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
         identified=tuple(named), indistinguishable=tuple(pr.to_dict() for pr in pairs),
         model_effects=tuple(identified), dropped_by_backward_check=tuple(found.elim.dropped),
         greedy_identified=tuple(found.ident.identified),
-        calibration=_calibration_record(problem, final, cal, spec),
+        calibration=_calibration_record(problem, final, cal, spec, errors),
         gap_before=gap_before, gap_after=gap_after, gap_definition=gap_definition(components),
         gap_components=tuple(c.name for c in components),
         gap_component_forms={c.name: c.form for c in components},
@@ -436,9 +444,11 @@ def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: d
     return remaining
 
 
-def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, spec: ModelSpec) -> dict:
+def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrated, spec: ModelSpec, errors) -> dict:
     """diagnosis.json's ``calibration``: pressure, height origin (from the nominal and the calibrated Z_eq), the first
-    states, the model's calibrated parameters and the pressure drift."""
+    states, the model's calibrated parameters, the pressure drift, and ``uncertainty``: the standard error and 95 %
+    interval of the pressure, the origin and every calibrated model parameter
+    (:mod:`validation.diagnosis.summarise.uncertainty`)."""
     c, model = final.calibration, problem.model
     calibration = {
         "pressure_amplitude_pa": c.pressure_amplitude_pa,
@@ -455,4 +465,18 @@ def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: _Calibrat
     }
     if cal.drift is not None:
         calibration["drift"] = cal.drift.to_dict()
+    uncertainty = {"method": METHOD, "confidence": CONFIDENCE, "runs": errors.runs,
+                   **{k: iv.to_dict() for k, iv in errors.calibration.items()}}
+    # the pressure's interval also holds the calibration's systematic error (PRESSURE_MODEL_ERROR)
+    stat = errors.calibration["pressure_amplitude_pa"]
+    uncertainty["pressure_amplitude_pa"] = {
+        **with_model_error(stat, PRESSURE_MODEL_ERROR * abs(stat.value)).to_dict(),
+        "statistical_std_error": stat.std_error, "model_std_error": PRESSURE_MODEL_ERROR * abs(stat.value)}
+    for name, pc in cal.parameters.items():  # the model's own parameters: their profile's jackknife error
+        if pc is not None and getattr(pc, "calibrated", False):
+            uncertainty[name] = interval_from_error(pc.value, pc.std_error, errors.runs - 1).to_dict()
+        elif pc is not None:
+            uncertainty[name] = {"value": pc.value, "std_error": None, "interval_95": None, "dof": None,
+                                 "determined": False, "reason": pc.note}
+    calibration["uncertainty"] = uncertainty
     return calibration

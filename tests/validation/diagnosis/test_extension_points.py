@@ -28,8 +28,12 @@ def test_the_diagnosis_candidates_are_the_registered_effects(registered_push):
     from validation.diagnosis import CANDIDATE_EFFECTS, DiagnoseConfig
 
     assert CANDIDATE_EFFECTS["constant_push"] == ("push",)
-    assert list(CANDIDATE_EFFECTS) == _candidates()
+    from validation.diagnosis.prepare.candidate_effects import MODEL_CANDIDATES
+
+    # the registered effects, then the candidates that need the force model (the cavity's lag, asked for by name)
+    assert list(CANDIDATE_EFFECTS) == _candidates() + list(MODEL_CANDIDATES)
     assert "constant_push" in DiagnoseConfig().candidates
+    assert not set(MODEL_CANDIDATES) & set(DiagnoseConfig().candidates)
 
 
 def test_a_registered_effect_runs_through_the_twin_and_the_diagnosis(registered_push, tmp_path):

@@ -235,8 +235,9 @@ def test_an_indistinguishable_pair_is_one_verdict_and_negative_damping_is_flagge
          "p_together": 0.002, "median_difference": 1e-6, "p_difference": 0.7}])
     section = diagnosis_section(diag, [])
     reading = section.reading
-    assert "caused by pair_scattering (kappa = 1.5e+04), and by linear_damping or quadratic_drag, which the data " \
-           "cannot tell apart" in reading
+    # a hand-made verdict carries no standard error: the sentence says so instead of giving a bare number
+    assert "caused by pair_scattering (kappa = 1.5e+04 (error not determined: no error was computed)), and by " \
+           "linear_damping or quadratic_drag, which the data cannot tell apart" in reading
     assert "linear_damping p = 0.3, quadratic_drag p = 0.6" in reading and "together they do (p = 0.002)" in reading
     assert "then linear_damping" not in reading  # never named alone
     assert "Anti-damping" in reading and "gamma_y of linear_damping -0.5 1/s" in reading

@@ -80,7 +80,7 @@ def vertical_system(terms: SimulationTerms, z0: float, effects: Sequence[str]) -
     cols_per_run, target_per_run = [], []
     for r, (fz, _) in zip(runs, forces):
         z = z0 + r.state[:, 0]
-        regs = [r.smooth(effect_regressors(n, r.state, z, terms.k)[:, 0, :]) for n in effects]
+        regs = [r.smooth(effect_regressors(n, r.state, z, terms.k, problem=terms.problem)[:, 0, :]) for n in effects]
         regs = np.concatenate(regs, axis=1) if regs else np.zeros((r.state.shape[0], 0))
         cols_per_run.append(np.column_stack([fz, regs]))
         target_per_run.append(r.accel[:, 0] + terms.g)

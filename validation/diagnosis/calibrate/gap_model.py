@@ -133,7 +133,7 @@ def _fit_effect_parameters(terms: SimulationTerms, cal: Calibration, effects: Se
         w_t = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(1) ** 2)) for r in runs), 1e-300))
     for i, (r, (fz, qt)) in enumerate(zip(runs, forces)):
         z = z0 + r.state[:, 0]
-        regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m) for n in effects], axis=2))
+        regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m, terms.problem) for n in effects], axis=2))
         rows.append(w_y * regs[:, 0, :])
         rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - terms.g)))
         if integral:
@@ -202,7 +202,7 @@ def _acceleration_residuals(terms: SimulationTerms, cal: Calibration, params: di
         a = np.column_stack([a_y, a_t])
         z = cal.z_origin_m + r.state[:, 0]
         for n, pv in params.items():
-            a = a + r.smooth(effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m)) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
+            a = a + r.smooth(effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m, terms.problem)) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
         pred.append(a)
         res.append(r.accel - a)
     return res, pred

@@ -34,7 +34,7 @@ from cubedimer.folds import run_folds
 
 from ..calibrate.gap_model import apply_gap_model, fit_gap_model
 from ..calibrate.metrics import fit_gaps
-from ..prepare.candidate_effects import CANDIDATE_EFFECTS, acting_components
+from ..prepare.candidate_effects import CANDIDATE_EFFECTS, acting_components, default_candidates
 from ..prepare.problem import DiagnosisProblem
 from .statistics import sign_flip_pvalue, wilcoxon_greater_pvalue
 
@@ -202,7 +202,7 @@ def identify_effects(problem: DiagnosisProblem, candidates: Sequence[str] | None
     rounds: list[IdentificationRound] = []
     current_c = gaps(chosen)
     current = current_c.mean(axis=1)
-    remaining = list(CANDIDATE_EFFECTS if candidates is None else candidates)
+    remaining = list(default_candidates() if candidates is None else candidates)
     while remaining:
         tests: dict[str, CandidateTest] = {}
         base, base_gap = list(chosen), float(np.mean(current))

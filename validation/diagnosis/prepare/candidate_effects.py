@@ -14,7 +14,9 @@ from numpy.typing import NDArray
 
 from acousim.dynamics.effects import EFFECT_TYPES
 
-__all__ = ["CANDIDATE_EFFECTS", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+from .cavity_lag import CAVITY_LAG_PARAMETERS
+
+__all__ = ["CANDIDATE_EFFECTS", "MODEL_CANDIDATES", "default_candidates", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
 
 def _is_candidate(cls: type) -> bool:
@@ -23,21 +25,31 @@ def _is_candidate(cls: type) -> bool:
     return bool(getattr(cls, "candidate", True))
 
 
+#: Candidates whose columns need the force model, not the state alone: name -> (parameters, equations it acts in).
+#: ``cavity_lag``: the levitator's cavity responding to the dimer with a lag
+#: (:mod:`validation.diagnosis.prepare.cavity_lag`, from acousim's resonator equations).
+MODEL_CANDIDATES: dict[str, tuple[tuple[str, ...], tuple[int, ...]]] = {
+    "cavity_lag": (CAVITY_LAG_PARAMETERS, (0, 1)),
+}
+
+
 class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
     """Effect name -> its parameter names, read from :data:`acousim.dynamics.effects.EFFECT_TYPES` on every access: the one
     registry of effects, so that an effect registered there is a candidate of the diagnosis without a copy here."""
 
     def __getitem__(self, name: str) -> tuple[str, ...]:
+        if name in MODEL_CANDIDATES:
+            return MODEL_CANDIDATES[name][0]
         cls = EFFECT_TYPES[name]
         if not _is_candidate(cls):
             raise KeyError(name)
         return cls.parameter_names()
 
     def __iter__(self) -> Iterator[str]:
-        return iter([n for n, cls in EFFECT_TYPES.items() if _is_candidate(cls)])
+        return iter([n for n, cls in EFFECT_TYPES.items() if _is_candidate(cls)] + list(MODEL_CANDIDATES))
 
     def __len__(self) -> int:
-        return sum(_is_candidate(cls) for cls in EFFECT_TYPES.values())
+        return sum(_is_candidate(cls) for cls in EFFECT_TYPES.values()) + len(MODEL_CANDIDATES)
 
     def __repr__(self) -> str:
         return repr(dict(self))
@@ -46,6 +58,13 @@ class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
 #: Candidate effects and their parameters (docs/conventions.md section 5): every effect registered in
 #: :data:`acousim.dynamics.effects.EFFECT_TYPES` that the diagnosis can fit (``candidate``, True unless the effect says not).
 CANDIDATE_EFFECTS: Mapping[str, tuple[str, ...]] = _RegisteredEffects()
+
+
+def default_candidates() -> tuple[str, ...]:
+    """The candidates a diagnosis tries unless told: every registered effect; the cavity's lag
+    (:data:`MODEL_CANDIDATES`) only when asked for, until the blind check has measured its false alarms."""
+    return tuple(n for n in CANDIDATE_EFFECTS if n not in MODEL_CANDIDATES)
+
 
 #: Library terms (per equation) whose columns are a candidate's own, up to the sign: linear damping's
 #: ``-gamma_y ydot`` and ``-gamma_theta thetadot``.  A candidate is not judged against its own copy.
@@ -78,7 +97,7 @@ def own_library_columns(effects: Sequence[str]) -> dict[str, list[str]]:
 
 
 def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: float,
-                      z_eq: float | None = None) -> NDArray[np.float64]:
+                      z_eq: float | None = None, problem=None) -> NDArray[np.float64]:
     """d(accelerations)/d(parameters) of one effect: array (n, 2, n_params).
 
     :meth:`acousim.dynamics.effects.Effect.regressors` of the effect at the effects' y = Z_com - Z_eq.  Columns follow ``CANDIDATE_EFFECTS[name]``; the two rows are the yddot [m/s^2 per unit
@@ -97,9 +116,25 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
     z_eq : float, optional
         Equilibrium height of the (calibrated) simulation [m]: the effects' y is ``Z_com - Z_eq`` as in
         docs/conventions.md (default: the state's own y, i.e. Z_eq = Z_com - y).
+    problem : DiagnosisProblem, optional
+        Needed by the candidates of :data:`MODEL_CANDIDATES`, whose columns come from the force model at nominal
+        pressure (:meth:`DiagnosisProblem.surrogate`) at the absolute height ``z_com``.
     """
     if name not in CANDIDATE_EFFECTS:
         raise ValueError(f"unknown effect {name!r}; candidates are {', '.join(CANDIDATE_EFFECTS)}")
+    if name in MODEL_CANDIDATES:
+        if problem is None:
+            raise ValueError(f"the candidate {name} needs the diagnosis problem's force model")
+        from .cavity_lag import cavity_lag_columns
+
+        fm = problem.surrogate()
+        st = np.array(state, float, copy=True).reshape(-1, 4)
+        z_com = np.broadcast_to(np.asarray(z_com, float), st[:, 0].shape)
+        # the cavity's detuning x is defined with the dimer at rest: at the calibrated equilibrium (the data's
+        # origin when none is given)
+        rest = (float(np.mean(z_com - st[:, 0])) if z_eq is None else float(z_eq)) - fm.z_eq
+        st[:, 0] = z_com - fm.z_eq
+        return cavity_lag_columns(fm, st, rest_y=rest)
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
     if z_eq is None:
@@ -114,7 +149,10 @@ def parameter_slots(effects: Sequence[str], eq: int) -> list[tuple[str, str, int
     1: thetaddot); columns count from 1 for the y equation, whose column 0 is the pressure term."""
     out, col = [], (1 if eq == 0 else 0)
     for n in effects:
-        probe = effect_regressors(n, np.ones((1, 4)), np.zeros(1), 1.0)[0, eq, :]
+        if n in MODEL_CANDIDATES:
+            probe = np.full(len(CANDIDATE_EFFECTS[n]), float(eq in MODEL_CANDIDATES[n][1]))
+        else:
+            probe = effect_regressors(n, np.ones((1, 4)), np.zeros(1), 1.0)[0, eq, :]
         for p_i, p in enumerate(CANDIDATE_EFFECTS[n]):
             if probe[p_i] != 0:
                 out.append((n, p, col))

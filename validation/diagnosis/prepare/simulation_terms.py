@@ -161,7 +161,7 @@ class SimulationTerms:
                 du = cum_u[b] - cum_u[a]
                 # oscillation energy at the window's pressure: E_rest(s f) ~ E_rest(s) + s (f - 1) U_ac(rest)
                 u0 = f[a] * pot[a] - (f[a] - 1.0) * rest_u
-            regs = [effect_regressors(n, state, z0 + y, self.k, z_eq) for n in effects]
+            regs = [effect_regressors(n, state, z0 + y, self.k, z_eq, self.problem) for n in effects]
             regs = np.concatenate(regs, axis=2) if regs else np.zeros((len(r.t), 2, 0))
             out.append({"dk": kin[b] - kin[a], "du": du, "work": self.window_work(r, regs), "k0": kin[a], "u0": u0})
         return out
@@ -252,7 +252,7 @@ class SimulationTerms:
                 if fixed and key in store:
                     blocks.append(store[key][1])
                     continue
-                cols = pi.columns(q, effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq)[:, q, :])
+                cols = pi.columns(q, effect_regressors(n, pi.state, z0 + pi.state[:, 0], self.k, z_eq, self.problem)[:, q, :])
                 if fixed:
                     store[key] = (pi, cols)  # the holder is kept so that its id stays unique
                 blocks.append(cols)

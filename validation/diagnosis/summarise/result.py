@@ -15,8 +15,25 @@ from typing import Any, Mapping, Sequence
 from ..calibrate.gap_model import GapFit
 from ..prepare.problem import DiagnosisProblem
 from ..prepare.runs import RunAccelerations
+from .uncertainty import ParameterInterval
 
-__all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict"]
+__all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict", "RejectedCandidateError", "STATUSES", "REJECTIONS"]
+
+#: An effect's status: named as a cause; one of a pair the data cannot tell apart (named together); rejected.
+STATUSES = ("named", "indistinguishable", "rejected")
+#: Why a candidate is rejected (``rejected_because[i]["code"]``).
+REJECTIONS = {
+    "not_significant": "not a significant held-out improvement on top of the model's effects",
+    "removed_by_backward_check": "improved held-out runs when added, but not given the other effects",
+    "replaced_by_discovered_terms": "not needed once the discovered library terms are fitted",
+    "withheld": "the calibration equation stays unexplained, so no cause is named",
+    "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
+                         "coefficient or scattering stiffness)",
+}
+
+
+class RejectedCandidateError(ValueError):
+    """A rejected candidate's parameters were asked for as a result."""
 
 
 def _reference_model() -> str:
@@ -46,6 +63,13 @@ class EffectVerdict:
     p_value_given_others, median_improvement_given_others : the backward check given every other effect
     indistinguishable_from : the effects the data cannot tell it from
     params_without_discovered_terms : its parameters fitted without the discovered library terms, when they differ
+    status : one of :data:`STATUSES`; a ``rejected`` candidate's ``params`` are its fit on top of the model, never a
+        result (:meth:`estimate` refuses them)
+    rejected_because : ``({"code", "reason"}, ...)``, the codes of :data:`REJECTIONS` (empty unless rejected)
+    uncertainty : per parameter, the standard error and 95 % interval
+        (:class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval`; the model's effects only)
+    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor`` and
+        ``detuning_half_widths`` from its gains)
     """
 
     name: str
@@ -63,6 +87,53 @@ class EffectVerdict:
     median_improvement_given_others: float | None = None
     indistinguishable_from: tuple[str, ...] | None = None
     params_without_discovered_terms: Mapping[str, float] | None = None
+    status: str | None = None
+    rejected_because: tuple[Mapping[str, str], ...] = ()
+    uncertainty: Mapping[str, ParameterInterval] | None = None
+    derived: Mapping[str, ParameterInterval] | None = None
+
+    def __post_init__(self) -> None:
+        if self.status is None:  # from the verdict's flags: a model effect is named or stands for a pair
+            status = ("named" if self.named else "indistinguishable") if self.significant else (
+                "indistinguishable" if self.indistinguishable_from else "rejected")
+            object.__setattr__(self, "status", status)
+        if self.status not in STATUSES:
+            raise ValueError(f"an effect's status is one of {', '.join(STATUSES)}, got {self.status!r}")
+
+    @property
+    def rejected(self) -> bool:
+        """Tried and rejected: its parameters are no result."""
+        return self.status == "rejected"
+
+    def estimate(self, parameter: str) -> ParameterInterval:
+        """The parameter's value with its standard error and 95 % interval.
+
+        Raises
+        ------
+        RejectedCandidateError
+            For a rejected candidate (with the reasons): its fitted values are no result.
+        KeyError
+            For a parameter the effect does not have.
+        """
+        if self.rejected:
+            raise RejectedCandidateError(f"{self.name} is a rejected candidate ({self.rejection_text()}); its fitted "
+                                         "parameters are not a result")
+        if parameter not in self.params:
+            raise KeyError(f"{self.name} has no parameter {parameter!r}; it has {', '.join(self.params)}")
+        if self.uncertainty is None or parameter not in self.uncertainty:
+            return ParameterInterval(float(self.params[parameter]), None, None, None, "no error was computed")
+        return self.uncertainty[parameter]
+
+    def rejection_text(self) -> str:
+        """The reasons of a rejection, joined (its note when written without them; "" unless rejected)."""
+        return "; ".join(r["reason"] for r in self.rejected_because) or (self.note or "" if self.rejected else "")
+
+    def __str__(self) -> str:
+        if self.rejected:
+            return f"{self.name}: rejected ({self.rejection_text()})"
+        values = ", ".join([f"{p} = {self.estimate(p).format()}" for p in self.params]
+                           + [f"{p} = {iv.format()}" for p, iv in (self.derived or {}).items()])
+        return f"{self.name}: {self.status} ({values})"
 
     def to_json(self) -> dict[str, Any]:
         """The diagnosis.json form: a model effect carries its round, ``named`` and its backward check; another
@@ -83,17 +154,30 @@ class EffectVerdict:
             out["note"] = self.note
             if self.p_value_given_others is not None:
                 out.update(given)
+        out["status"] = self.status
+        out["rejected_because"] = [dict(r) for r in self.rejected_because]
+        if self.uncertainty is not None:
+            out["uncertainty"] = {p: iv.to_dict() for p, iv in self.uncertainty.items()}
+        if self.derived is not None:
+            out["derived"] = {p: iv.to_dict() for p, iv in self.derived.items()}
         return out
 
     @classmethod
     def from_json(cls, doc: Mapping[str, Any]) -> "EffectVerdict":
         """The verdict of a diagnosis.json ``effects`` entry."""
         pair = doc.get("indistinguishable_from")
+        unc, der = doc.get("uncertainty"), doc.get("derived")
+        # a diagnosis.json written before the key: an "indistinguishable from" note marks a pair's other member
+        status = doc.get("status") or ("indistinguishable" if (doc.get("note") or "").startswith("indistinguishable")
+                                       else None)
         return cls(doc["name"], dict(doc["params"]), doc["gap_after"], doc["shrink"], bool(doc["significant"]),
                    doc.get("p_value"), doc.get("wilcoxon_p"), doc.get("held_out_improvement_fraction"),
                    doc.get("added_in_round"), bool(doc.get("named", False)), doc.get("note"),
                    doc.get("p_value_given_others"), doc.get("median_improvement_given_others"),
-                   None if pair is None else tuple(pair), doc.get("params_without_discovered_terms"))
+                   None if pair is None else tuple(pair), doc.get("params_without_discovered_terms"),
+                   status=status, rejected_because=tuple(doc.get("rejected_because", ())),
+                   uncertainty=None if unc is None else {p: ParameterInterval.from_dict(v) for p, v in unc.items()},
+                   derived=None if der is None else {p: ParameterInterval.from_dict(v) for p, v in der.items()})
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,11 +251,24 @@ class Diagnosis:
     internals: DiagnosisInternals | None = field(default=None, compare=False, repr=False)
 
     def effect(self, name: str) -> EffectVerdict:
-        """The verdict of the candidate ``name`` (KeyError if it was not a candidate)."""
+        """The verdict of the candidate ``name`` (KeyError if it was not a candidate).  Its ``status`` says whether it
+        is named, one of an indistinguishable pair or rejected (with ``rejected_because``); a rejected candidate's
+        :meth:`EffectVerdict.estimate` raises :class:`RejectedCandidateError`."""
         for e in self.effects:
             if e.name == name:
                 return e
         raise KeyError(f"{name} was not a candidate of this diagnosis")
+
+    def calibration_estimate(self, key: str) -> ParameterInterval:
+        """A calibrated number (``pressure_amplitude_pa``, ``y_origin_height_m`` or a model parameter such as
+        ``gap_m``) with its standard error and 95 % interval; "not determined" with the reason when the data give no
+        finite interval (or the diagnosis.json was written without errors)."""
+        doc = (self.calibration.get("uncertainty") or {}).get(key)
+        if doc is None:
+            if key not in self.calibration:
+                raise KeyError(f"the calibration has no {key!r}")
+            return ParameterInterval(float(self.calibration[key]), None, None, None, "no error was computed")
+        return ParameterInterval.from_dict(doc)
 
     def to_json(self) -> dict[str, Any]:
         """The diagnosis.json document, in its documented key order."""

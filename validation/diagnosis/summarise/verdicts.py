@@ -2,20 +2,35 @@
 first, in the order the identification added them, then the other candidates fitted on top of them, by gap."""
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Mapping, Sequence
+
+from acousim.dynamics.effects import EFFECT_TYPES
 
 from ..calibrate.gap_model import GapFit, fit_gap_model
 from ..calibrate.metrics import fit_gaps, scalar_gap
 from ..identify.statistics import format_p
 from ..prepare.problem import DiagnosisProblem
-from .result import EffectVerdict
+from .result import REJECTIONS, EffectVerdict
+from .uncertainty import ParameterInterval
 
-__all__ = ["ranked_effects"]
+__all__ = ["ranked_effects", "non_physical_parameters"]
+
+
+def non_physical_parameters(name: str, params: Mapping[str, float]) -> list[str]:
+    """The parameters of effect ``name`` fitted with a sign its physics excludes (a negative damping rate or drag
+    coefficient: the effect's own non-negative parameters, :mod:`acousim.dynamics.effects`)."""
+    allowed = getattr(EFFECT_TYPES.get(name), "_non_negative", ())
+    return [p for p in allowed if params.get(p, 0.0) < 0]
+
+
+def _rejection(code: str, detail: str = "") -> dict:
+    return {"code": code, "reason": REJECTIONS[code] + (f" ({detail})" if detail else "")}
 
 
 def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, elim, identified: list[str],
                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
-                   gap_before: float) -> tuple[EffectVerdict, ...]:
+                   gap_before: float, uncertainty: Mapping[str, Mapping[str, ParameterInterval]] | None = None,
+                   derived: Mapping[str, Mapping[str, ParameterInterval]] | None = None) -> tuple[EffectVerdict, ...]:
     """diagnosis.json's ``effects``.
 
     Parameters
@@ -29,10 +44,16 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     joint_params : the model effects' parameters re-estimated with the discovered terms
     final : the fit of the final model's effects
     gap_before : the calibrated simulation's gap alone
+    uncertainty : the model effects' parameter intervals (:func:`~validation.diagnosis.summarise.uncertainty.jackknife_errors`)
+
+    Every candidate the model does not fit is ``rejected`` (one of an indistinguishable pair excepted), with its
+    reasons: not significant, removed by the backward check, replaced by the discovered terms, withheld, and a
+    non-physical sign of its fit on top of the model.
     """
     runs = problem.runs
     model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, final,
-                                   gap_before) for i in range(len(identified))]
+                                   gap_before, (uncertainty or {}).get(identified[i]), (derived or {}).get(identified[i]))
+                     for i in range(len(identified))]
     last_tests = ident.last_tests()
     others = []
     for name in candidates:
@@ -42,17 +63,40 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
         g = scalar_gap(fit_gaps(runs, fit))
         test = last_tests.get(name)
         given = elim.dropped_tests.get(name)
+        status, reasons = ("indistinguishable", ()) if name in in_pair else (
+            "rejected", _rejections(name, fit.effects[name], ident, elim, test, replaced))
         others.append(EffectVerdict(
             name, fit.effects[name], g, 1 - g / gap_before, False, test.p_value if test else None,
             test.wilcoxon_p if test else None, test.median_improvement_fraction if test else None,
             note=_why_not_in_model(name, ident, elim, given, in_pair, replaced),
             p_value_given_others=given.p_value if given else None,
-            median_improvement_given_others=given.median_improvement if given else None))
+            median_improvement_given_others=given.median_improvement if given else None,
+            status=status, rejected_because=reasons))
     return tuple(model_effects + sorted(others, key=lambda e: e.gap_after))
 
 
+def _rejections(name: str, params: Mapping[str, float], ident, elim, test, replaced: dict) -> tuple[dict, ...]:
+    """Why a candidate the model does not fit is rejected (codes of :data:`~validation.diagnosis.summarise.result.REJECTIONS`)."""
+    out = []
+    if name in replaced:
+        out.append(_rejection("replaced_by_discovered_terms", format_p(replaced[name])))
+    elif name in elim.dropped:
+        given = elim.dropped_tests.get(name)
+        out.append(_rejection("removed_by_backward_check", format_p(given.p_value) if given else ""))
+    elif name in ident.withheld:
+        out.append(_rejection("withheld", f"vertical gap {ident.vertical_gap:.2g}"))
+    else:
+        out.append(_rejection("not_significant", format_p(test.p_value) if test else "never tested"))
+    bad = non_physical_parameters(name, params)
+    if bad:
+        out.append(_rejection("non_physical_sign", ", ".join(f"{p} = {params[p]:.3g} < 0" for p in bad)))
+    return tuple(out)
+
+
 def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str], i: int, named: list[str],
-                  in_pair: dict, joint_params: dict, final: GapFit, gap_before: float) -> EffectVerdict:
+                  in_pair: dict, joint_params: dict, final: GapFit, gap_before: float,
+                  uncertainty: Mapping[str, ParameterInterval] | None,
+                  derived: Mapping[str, ParameterInterval] | None = None) -> EffectVerdict:
     """The verdict of the model's ``i``-th effect, with the gap after the cumulative fit of the first ``i + 1``."""
     name = identified[i]
     g = scalar_gap(fit_gaps(problem.runs, fit_gap_model(problem, identified[: i + 1])))
@@ -65,7 +109,9 @@ def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str],
         median_improvement_given_others=given.median_improvement if given else None,
         indistinguishable_from=tuple(e for e in in_pair[name].effects if e != name) if name in in_pair else None,
         # fitted beside discovered terms: the effects-only values too
-        params_without_discovered_terms=final.effects[name] if joint_params[name] != final.effects[name] else None)
+        params_without_discovered_terms=final.effects[name] if joint_params[name] != final.effects[name] else None,
+        status="named" if name in named else "indistinguishable",
+        uncertainty=None if uncertainty is None else dict(uncertainty), derived=None if derived is None else dict(derived))
 
 
 def _why_not_in_model(name: str, ident, elim, given, in_pair: dict, replaced: dict) -> str:

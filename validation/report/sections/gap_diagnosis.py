@@ -109,15 +109,40 @@ def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
     return "yes" if effect.significant and effect.named else "no"
 
 
-def _params_text(params: dict) -> str:
-    return ", ".join(f"{k} = {v:.3g}" for k, v in params.items())
+def _params_text(effect: "EffectVerdict") -> str:
+    """The effect's parameters, each with its standard error ("kappa = 1.95e4 +- 0.02e4") or "error not determined"
+    and the reason."""
+    return ", ".join([f"{k} = {effect.estimate(k).format()}" for k in effect.params]
+                     + [f"{k} = {iv.format()}" for k, iv in (effect.derived or {}).items()])
+
+
+def _table_params_text(effect: "EffectVerdict") -> str:
+    """The table's parameter cell: the values with their errors, or, for a rejected candidate, why (its fit on top of
+    the model is no result)."""
+    if effect.rejected:
+        return "rejected: " + ", ".join(r["code"].replace("_", " ") for r in effect.rejected_because)
+    return _params_text(effect)
+
+
+def _pressure_text(diagnosis: "Diagnosis") -> str:
+    """The calibrated pressure with its standard error (or why there is none)."""
+    cal = diagnosis.calibration
+    iv = diagnosis.calibration_estimate("pressure_amplitude_pa")
+    if iv.determined:
+        value, error = iv.format().split(" +- ")
+        model = diagnosis.calibration.get("uncertainty", {}).get("pressure_amplitude_pa", {}).get("model_std_error")
+        value = f"{value} Pa +- {error} Pa (standard error over runs" + (
+            f", with the calibration's systematic {100 * model / iv.value:.2g} %)" if model else ")")
+    else:
+        value = f"{iv.value:.0f} Pa (error not determined: {iv.reason})"
+    return f"Calibrated pressure {value}, {100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal; "
 
 
 def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
     named = [e for e in diagnosis.effects if e.significant and e.named]
-    parts = [f"{e.name} ({_params_text(e.params)})" for e in named]
+    parts = [f"{e.name} ({_params_text(e)})" for e in named]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
@@ -127,7 +152,7 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
                  f"together they do ({format_p(pr['p_together'])}), and the held-out gap with one instead of the other "
                  f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
                  f"fitted model uses {pr['kept_in_model']}"
-                 + (f" ({_params_text(kept.params)})" if kept else ""))
+                 + (f" ({_params_text(kept)})" if kept else ""))
     return text + "."
 
 
@@ -152,8 +177,7 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
     warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or [])
     reading = (
         warnings_text + data_text + _drift_text(drift) + _hinge_gap_text(cal) +
-        f"Calibrated pressure {cal['pressure_amplitude_pa']:.0f} Pa ({100 * (cal['pressure_ratio'] - 1):+.1f} % from nominal); "
-        + _origin_text(cal) +
+        _pressure_text(diagnosis) + _origin_text(cal) +
         f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
         f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
@@ -224,7 +248,7 @@ def _hinge_gap_text(cal: dict) -> str:
 def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
     """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
     rows = [[e.name, _verdict(e, pairs),
-             ", ".join(f"{k}={v:.3g}" for k, v in e.params.items()), e.gap_after, e.shrink, e.p_value,
+             _table_params_text(e), e.gap_after, e.shrink, e.p_value,
              e.p_value_given_others]
             for e in diagnosis.effects]
     n_runs = len(diagnosis.gap_per_run["runs"])
@@ -232,7 +256,9 @@ def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, te
     columns = {
         "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
-        "parameters (SI)": "fitted with the named effects (for the others: on top of them)",
+        "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife; "
+                           "the 95 % interval is in diagnosis.json); a rejected candidate's fit is no result: the "
+                           "reasons of its rejection instead",
         "gap after": "the gap (mean unexplained fraction of the three components beyond the noise floor) with the named "
                      "effects up to this one, or with the named effects plus this one",
         "shrink": "1 - gap after / gap before",

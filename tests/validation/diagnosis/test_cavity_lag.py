@@ -1,0 +1,83 @@
+"""The cavity's slow lag as a candidate (validation.diagnosis.prepare.cavity_lag), against acousim's resonator: the
+linearised system's growth rate and stiffness, and the mode amplitude of the simulated six-state system."""
+import numpy as np
+import pytest
+
+from acousim import CavityMode, CoupledCavity, DimerDynamics, LinearCavityCoupling, Medium, cached_surrogate, integrate_coupled
+
+from validation.diagnosis.prepare.cavity_lag import CavityGains, cavity_lag_columns, gains_from_mode, mode_from_gains
+
+FREQUENCY = Medium().frequency_hz
+
+
+@pytest.fixture(scope="module")
+def surrogate():
+    return cached_surrogate()
+
+
+@pytest.mark.parametrize("q, x", [(100.0, 1.0), (250.0, -0.5), (400.0, 3.0)])
+def test_gains_give_back_the_mode(q, x):
+    """x = A^2 / B and Gamma = -2 A / (B (1 + x^2)) invert the gains exactly (round-off)."""
+    mode = mode_from_gains(gains_from_mode(CavityMode(q, x), FREQUENCY), FREQUENCY)
+    np.testing.assert_allclose([mode.quality_factor, mode.detuning], [q, x], rtol=1e-12)
+
+
+@pytest.mark.parametrize("gains", [CavityGains(1e-3, 0.0), CavityGains(1e-3, 1e-6), CavityGains(float("nan"), 1e-6)])
+def test_gains_no_mode_has_are_refused(gains):
+    with pytest.raises(ValueError, match="no cavity mode"):
+        mode_from_gains(gains, FREQUENCY)
+
+
+@pytest.mark.parametrize("q, x", [(100.0, 1.0), (250.0, -0.5)])
+def test_columns_at_rest_are_the_linearised_cavity(surrogate, q, x):
+    """At rest, the lag column's y-velocity entry times B is the damping of acousim's linearised (y, ydot, u, v)
+    system in the slow limit (w_y << Gamma: its first-order growth rate with w_y -> 0), and the static column's y entry
+    times A is the stiffness its characteristic polynomial adds, const / (Gamma^2 + Delta_0^2) - w_y^2.  Both to
+    round-off: one set of equations."""
+    cavity = CoupledCavity(DimerDynamics(surrogate), CavityMode(q, x))
+    gains = gains_from_mode(cavity.mode, FREQUENCY)
+    slow = LinearCavityCoupling.from_cavity(cavity, omega_y=1e-6)
+    per_ydot = cavity_lag_columns(surrogate, [[0.0, 1.0, 0.0, 0.0]])[0, 0, 1] * gains.lag_gain  # yddot per ydot
+    np.testing.assert_allclose(per_ydot / 2.0, slow.first_order_growth_rate(), rtol=1e-9)
+    h = 1e-9  # [m]: the static column is linear in y to (h w_y^2 / g) ~ 1e-5 relative
+    per_y = cavity_lag_columns(surrogate, [[h, 0.0, 0.0, 0.0]])[0, 0, 0] * gains.static_gain / h
+    lin = LinearCavityCoupling.from_cavity(cavity)
+    added = lin.characteristic_polynomial()[-1] / (lin.decay_rate**2 + lin.detuning**2) - lin.omega_y**2
+    np.testing.assert_allclose(-per_y, added, rtol=1e-4)
+
+
+@pytest.mark.parametrize("q, x, rtol_q, rtol_x", [(100.0, 1.0, 0.01, 0.02), (250.0, 1.0, 0.04, 0.07)])
+def test_gains_fitted_on_the_simulated_mode(surrogate, q, x, rtol_q, rtol_x):
+    """On acousim's six-state system (y 60 um and theta 0.15 from rest, 0.3 s), the cavity's true modulation of the
+    acoustic accelerations, (|a|^2 - 1) (F_Z/M, Q_theta/I), fitted by least squares on the two columns: the gains
+    give back Q and x.  The expansion is first order in the lag: its next term is of relative order (w_y / Gamma)^2
+    and the dimer's shift over Gamma (|s - 1| up to 0.4 % at Q = 100, 0.9 % at Q = 250), so the tolerance grows
+    with Q.  Measured: Q 99.5, x 0.991; Q 243.5, x 0.946."""
+    cavity = CoupledCavity(DimerDynamics(surrogate), CavityMode(q, x))
+    traj = integrate_coupled(cavity, [60e-6, 0.0, 0.15, 0.0], cavity.mode.steady_amplitude(), 0.3, 2e-4)
+    assert traj.ok
+    y, theta = traj.state[:, 0], traj.state[:, 2]
+    q_y, q_t = surrogate.generalized_forces(theta, y)
+    accel = np.stack([(q_y + surrogate.mass * surrogate.gravity) / surrogate.mass,
+                      q_t / surrogate.hinge_inertia(theta)], axis=1)
+    keep = traj.t > 0.05  # past the mode's start-up (the ring time is 0.8-2 ms)
+    cols = cavity_lag_columns(surrogate, traj.state)[keep].reshape(-1, 2)
+    target = (accel * (np.abs(traj.mode) ** 2 - 1.0)[:, None])[keep].reshape(-1)
+    scale = np.abs(cols).max(axis=0)
+    fitted = np.linalg.lstsq(cols / scale, target, rcond=None)[0] / scale
+    mode = mode_from_gains(CavityGains(*fitted), FREQUENCY)
+    np.testing.assert_allclose(mode.quality_factor, q, rtol=rtol_q)
+    np.testing.assert_allclose(mode.detuning, x, rtol=rtol_x)
+
+
+def test_the_detuning_is_measured_from_the_rest_height(surrogate):
+    """The static column vanishes with the dimer at rest at the given height (the calibrated equilibrium, where the
+    drive's detuning x is defined), and its y entry changes sign across it; the lag column does not depend on it."""
+    rest = 20e-6
+    at_rest = cavity_lag_columns(surrogate, [[rest, 0.0, 0.0, 0.0]], rest_y=rest)[0]
+    assert at_rest[0, 0] == 0.0 and at_rest[1, 0] == 0.0
+    above, below = (cavity_lag_columns(surrogate, [[rest + d, 0.0, 0.0, 0.0]], rest_y=rest)[0, 0, 0] for d in (5e-6, -5e-6))
+    assert above * below < 0
+    moving = [[rest + 5e-6, 1e-3, 0.1, 0.5]]
+    np.testing.assert_array_equal(cavity_lag_columns(surrogate, moving, rest_y=rest)[:, :, 1],
+                                  cavity_lag_columns(surrogate, moving)[:, :, 1])
