@@ -34,7 +34,7 @@ from .gorkov.surrogate import ForceSurrogate, build_surrogate, cached_surrogate
 from .dynamics.effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
 from .dynamics.integrator import DimerDynamics
 from .dynamics.air_damping import air_damping_rates
-from .dynamics.resonator import CavityMode, CoupledCavity, integrate_coupled, potential_series
+from .dynamics.resonator import CavityMode, CoupledCavity, integrate_coupled, potential_series, slow_response_gains
 from .dynamics.cavity_stability import LinearCavityCoupling, lag_couplings
 from .twin import PAPER, PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset, simulate_run
 from .static_model import StaticModel
@@ -47,7 +47,8 @@ __all__ = [
     "ForceModel", "ForceSurrogate", "build_surrogate", "cached_surrogate",
     "ExperimentConditions", "StaticModel", "ForceModelType", "register_force_model", "force_model_names",
     "static_model", "dynamic_model",
-    "CavityMode", "CoupledCavity", "integrate_coupled", "potential_series", "LinearCavityCoupling", "lag_couplings",
+    "CavityMode", "CoupledCavity", "integrate_coupled", "potential_series", "slow_response_gains", "LinearCavityCoupling",
+    "lag_couplings",
     "DimerDynamics", "EFFECT_TYPES", "EffectSet", "parse_effect", "register_effect", "air_damping_rates", "air_damping_for",
     "PAPER", "PAPER_LIKE", "Camera", "DropProtocol", "TwinConfig", "simulate_dataset", "simulate_run", "TwinError",
 ]

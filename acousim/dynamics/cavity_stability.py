@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from cubedimer.terms import term_name
 
-from .resonator import CoupledCavity
+from .resonator import CoupledCavity, slow_response_gains
 
 __all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "cycle_gain", "limit_cycle_amplitude"]
 
@@ -157,12 +157,10 @@ def _lag_gains(cavity: CoupledCavity, theta: NDArray, y: NDArray) -> tuple[NDArr
     fm = cavity.dynamics.force_model
     q_y, q_t = fm.generalized_forces(theta, y)
     f_z = q_y + fm.mass * fm.gravity
-    ga, d0 = cavity.decay_rate, cavity.decay_rate * cavity.mode.detuning
-    d = cavity.detuning_rad_s(theta, y)
-    ds_ddelta = -2.0 * d * (ga**2 + d0**2) / (ga**2 + d**2) ** 2
-    lag = 2.0 * ga / (ga**2 + d**2)
+    _, lag_gain = slow_response_gains(cavity.decay_rate, cavity.decay_rate * cavity.mode.detuning,
+                                      cavity.detuning_rad_s(theta, y))
     # s_vel = -T s' dDelta/dt = T s' chi (F_Z ydot + Q_theta thetadot)
-    k = lag * ds_ddelta * cavity.shift_per_joule
+    k = -lag_gain * cavity.shift_per_joule
     inertia = fm.hinge_inertia(theta)
     return (f_z / fm.mass * k * f_z, f_z / fm.mass * k * q_t, q_t / inertia * k * f_z, q_t / inertia * k * q_t)
 

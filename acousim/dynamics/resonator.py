@@ -61,7 +61,7 @@ from ..force_model import ForceModel
 from ..medium import Medium
 
 __all__ = ["DEFAULT_CAVITY_AREA", "CAVITY_AREA_RANGE", "MAX_DETUNING", "CavityMode", "mode_energy",
-           "PotentialSeries", "potential_series", "CoupledCavity", "ModeTrajectory", "integrate_coupled",
+           "slow_response_gains", "PotentialSeries", "potential_series", "CoupledCavity", "ModeTrajectory", "integrate_coupled",
            "coupled_field_drop"]
 
 #: The default effective cross-section of the cavity [m^2]: a transducer of 20 mm diameter.
@@ -72,6 +72,35 @@ CAVITY_AREA_RANGE = (1.0e-5, 1.0e-2)
 MAX_DETUNING = 20.0
 #: Longest RK4 step as a fraction of the ring time (h Gamma <= 0.1: RK4's amplitude error ~(h Gamma)^5 / 120).
 _STEP_PER_TAU = 0.1
+
+
+def slow_response_gains(decay_rate: float, drive_detuning: float,
+                        detuning: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The mode's response to a detuning that changes slowly against its ring time, to first order in the lag.
+
+    With the drive normalised so that |a| = 1 at the drive's own detuning Delta_0, the steady response is
+    s(Delta) = (Gamma^2 + Delta_0^2) / (Gamma^2 + Delta^2), and a detuning that moves answers after the lag
+    T(Delta) = 2 Gamma / (Gamma^2 + Delta^2): |a|^2 = s(Delta) - T s'(Delta) dDelta/dt + O(T^2).
+
+    Parameters
+    ----------
+    decay_rate : float
+        Gamma = pi f / Q [1/s].
+    drive_detuning : float
+        Delta_0 = Gamma x [rad/s], the drive's detuning from the cavity with the dimer at rest.
+    detuning : array_like, optional
+        Delta [rad/s] at which to evaluate (default: Delta_0).
+
+    Returns
+    -------
+    static_gain, lag_gain : ndarray
+        s'(Delta) [s/rad] and -T(Delta) s'(Delta) [s^2/rad]: |a|^2 - 1 = static_gain (Delta - Delta_0)
+        + lag_gain dDelta/dt to first order about Delta_0. Below the resonance (x < 0) the lag gain is negative.
+    """
+    ga, d0 = float(decay_rate), float(drive_detuning)
+    d = np.asarray(d0 if detuning is None else detuning, dtype=float)
+    static = -2.0 * d * (ga**2 + d0**2) / (ga**2 + d**2) ** 2
+    return static, -2.0 * ga / (ga**2 + d**2) * static
 
 
 def mode_energy(pressure_amplitude_pa: float, area_m2: float, medium: Medium) -> float:

@@ -39,7 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from acousim.dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode, mode_energy, potential_series
+from acousim.dynamics.resonator import (DEFAULT_CAVITY_AREA, CavityMode, mode_energy, potential_series,
+                                       slow_response_gains)
 from acousim.medium import Medium
 
 __all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns",
@@ -59,8 +60,9 @@ class CavityGains:
 
 def gains_from_mode(mode: CavityMode, frequency_hz: float) -> CavityGains:
     """(A, B) of a cavity mode at the drive's frequency [Hz] (Gamma from :meth:`CavityMode.decay_rate`)."""
-    gamma, x = mode.decay_rate(frequency_hz), mode.detuning
-    return CavityGains(-2.0 * x / (gamma * (1.0 + x * x)), 4.0 * x / (gamma**2 * (1.0 + x * x) ** 2))
+    gamma = mode.decay_rate(frequency_hz)
+    static, lag = slow_response_gains(gamma, gamma * mode.detuning)
+    return CavityGains(float(static), float(lag))
 
 
 def mode_from_gains(gains: CavityGains, frequency_hz: float, area: float = DEFAULT_CAVITY_AREA) -> CavityMode:
