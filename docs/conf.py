@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -40,11 +41,31 @@ templates_path = ["_templates"]
 exclude_patterns = ["_build", "scripts", "auto_examples/*.ipynb", "auto_examples/*.py", "**.zip",
                     "auto_examples/*.md5", "auto_examples/*.json"]
 
-# Docstrings write absolute values and norms as |theta| or |fitted - simulated|, which reStructuredText reads as
-# substitutions: each such one stands for itself.
-_BARS = ("theta", "y", "thetaddot", "direct", "surrogate - direct", "Delta U_ac", "U_ac - U_ac(0, 0)",
-         "estimate - simulated", "fitted - simulated")
-rst_prolog = "\n".join(f".. |{b}| replace:: \\|{b}\\|" for b in _BARS) + "\n"
+# Docstrings write absolute values and norms as |a|, |theta| or |fitted - simulated|, which reStructuredText would
+# read as substitutions: every bar in a docstring stands for itself (escaped before numpydoc and autodoc parse it),
+# except on the lines of a grid table.
+_BAR = re.compile(r"(?<!\\)\|")
+_LITERAL = re.compile(r"``.*?``|`[^`]*`")  # inline literals and roles keep their bars
+
+
+def _escape_bars(text: str) -> str:
+    out, last = [], 0
+    for m in _LITERAL.finditer(text):
+        out += [_BAR.sub(r"\\|", text[last:m.start()]), m.group(0)]
+        last = m.end()
+    return "".join(out + [_BAR.sub(r"\\|", text[last:])])
+
+
+def _literal_bars(app, what, name, obj, options, lines):
+    grid = any(line.lstrip().startswith(("+-", "+=")) for line in lines)
+    for i, line in enumerate(lines):
+        if not (grid and line.lstrip().startswith(("+", "|"))):
+            lines[i] = _escape_bars(line)
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _literal_bars, priority=100)  # before numpydoc's (500)
+
 
 # --- markdown (the guides in docs/ as they are)
 myst_enable_extensions = ["colon_fence"]

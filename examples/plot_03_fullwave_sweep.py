@@ -65,7 +65,7 @@ for label, sweep in sweeps.items():
 # Static coefficients
 # -------------------
 # A cubic least-squares fit of each sweep gives the equations' coefficients with their standard errors (from
-# the fit's residual over the box |theta| <= 0.3, |y| <= 150 um). The theta*y^2 coupling is the paper's key
+# the fit's residual over the box ``|theta| <= 0.3``, ``|y| <= 150 um``). The theta*y^2 coupling is the paper's key
 # term.
 for label, sweep in sweeps.items():
     coefficients = fit_static_coefficients(sweep, theta_max=0.3, y_max=150e-6)
