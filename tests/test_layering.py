@@ -226,3 +226,14 @@ def test_the_steps_are_built_in_their_documented_order(parent):
     assert set(graph) == set(order), f"{parent} has subpackages the order does not list: {set(graph) ^ set(order)}"
     upward = sorted(f"{a} -> {b}" for a in order for b in graph[a] if order.index(b) < order.index(a))
     assert not upward, f"imports against the documented order of {parent}: {upward}"
+
+
+@pytest.mark.parametrize("package", sorted({m for m, f in MODULES.items() if f.name == "__init__.py"}))
+def test_every_public_name_of_a_package_resolves(package):
+    """Every name of a package's ``__all__`` (the lazy ones included, cubedimer.lazy) is there: a module moved or
+    renamed cannot leave a public name pointing at nothing."""
+    import importlib
+
+    module = importlib.import_module(package)
+    missing = [name for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
+    assert not missing, f"{package}.__all__ names what it cannot give: {missing}"
