@@ -43,10 +43,10 @@ from .output.model_file import write_fit
 from .refinement.long_time import RefineConfig
 from .refinement.losses import LossWeights
 from .results import EnsembleExtras, FitResult
+from .selection.discovery_config import DiscoveryConfig
 from .selection.ensemble import EnsembleConfig
-from .selection.integral_discovery import DiscoveryConfig, DiscoveryResult, discover_model
-from .selection.rules import SelectionConfig
-from .selection.rules import SELECTION_RULES, SelectionRule, register_selection_rule
+from .selection.integral_discovery import DiscoveryResult, discover_model
+from .selection.rules import SELECTION_RULES, SelectionConfig, SelectionRule, register_selection_rule
 from .selection.sparse_regression import RegressionConfig
 from .synthetic import SyntheticConfig, generic_example_model, paper_reduced_model, write_dataset, write_generic_example
 from .uncertainty.final_checks import NoSaneModelError

@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import wilcoxon
 
-from .derivatives.savitzky_golay import Derivatives
 from cubedimer.terms import EQUATION_NAMES, parse_term
+from .derivatives.savitzky_golay import Derivatives
 from .model import EXPONENTS, TERMS, PolynomialModel, Scales
 from .refinement.long_time import JOINT_REFINE, Objective, RefineConfig, default_substeps, refine, scaled_reference
 from .refinement.losses import LossTerms, LossWeights

@@ -11,9 +11,9 @@ from .derivatives.savitzky_golay import SmoothingConfig
 from .method_names import DEFAULT_METHOD, METHODS, methods_accepting
 from .refinement.long_time import JOINT_REFINE, RefineConfig
 from .refinement.output_error import OutputErrorConfig
-from .selection.backward_elimination import SelectionConfig
+from .selection.discovery_config import DiscoveryConfig
 from .selection.ensemble import EnsembleConfig
-from .selection.integral_discovery import DiscoveryConfig
+from .selection.rules import SelectionConfig
 from .selection.sparse_regression import RegressionConfig
 
 __all__ = ["FitConfig", "OUTPUT_ERROR_MODES"]

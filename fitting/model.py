@@ -14,8 +14,8 @@ from typing import Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .integrate import integrate
 from cubedimer.terms import EQUATION_NAMES, STATE_NAMES, evaluate_library, library_exponents, library_terms, parse_term
+from .integrate import integrate
 
 __all__ = ["PolynomialModel", "Scales", "TERMS", "EXPONENTS", "DAMPING_TERMS", "damping_mask"]
 

@@ -114,6 +114,102 @@ def pytest_sessionfinish(session, exitstatus) -> None:
         config.cache.set(_CACHE_KEY, {u: round(s, 1) for u, s in sorted(_unit_seconds.items())})
 
 
+#: Results of the expensive pipeline steps (twin data sets, fits, diagnoses, reports) the end-to-end tests share,
+#: kept between test runs below the checkout's pytest cache (``make clean`` removes them), never in a user's home.
+PIPELINE_CACHE_ROOT = TEST_CACHE_ROOT / "pipeline"
+
+
+class PipelineCache:
+    """Fingerprinted, disk-cached results of the pipeline for the tests (:func:`pipeline_cache`).
+
+    An entry is a folder below the digest of the suite's sources (``cubedimer.compile_cache.source_fingerprint``:
+    any change to a module of the five packages makes every entry stale, and the session removes the stale ones)
+    named by a digest of the step's key (its settings, in a ``repr`` that names every one), made once by ``build(folder)`` into a temporary folder and renamed into place,
+    so that a parallel worker never sees half an entry (the first rename wins; the other's copy is dropped).  An
+    entry that cannot be read is made again: the cache can make a test run faster, never different.  The key must
+    name everything the build depends on outside the five packages (a test's own settings and data edits)."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self._fingerprint: str | None = None
+
+    @property
+    def fingerprint(self) -> str:
+        if self._fingerprint is None:
+            from cubedimer.compile_cache import source_fingerprint
+
+            self._fingerprint = source_fingerprint()
+        return self._fingerprint
+
+    def entry(self, name: str, key: str) -> Path:
+        import hashlib
+
+        digest = hashlib.sha1(f"{name}\0{key}".encode()).hexdigest()[:16]
+        return self.root / self.fingerprint / f"{name}-{digest}"
+
+    def prune(self) -> None:
+        """Remove the entries of other versions of the sources (best effort)."""
+        import shutil
+
+        for old in (self.root.iterdir() if self.root.is_dir() else ()):
+            if old.name != self.fingerprint:
+                shutil.rmtree(old, ignore_errors=True)
+
+    def folder(self, name: str, key: str, build) -> Path:
+        """The folder of entry (``name``, ``key``), made by ``build(folder)`` when missing or unreadable."""
+        import shutil
+        import tempfile
+
+        path = self.entry(name, key)
+        done = path / ".complete"
+        if done.is_file():
+            return path
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}-", dir=path.parent))
+        build(tmp)
+        (tmp / ".complete").write_text(key)
+        if path.exists() and not done.is_file():  # a broken entry: made again
+            shutil.rmtree(path, ignore_errors=True)
+        try:
+            tmp.rename(path)
+        except OSError:  # another worker's entry came first: use it
+            shutil.rmtree(tmp, ignore_errors=True)
+        return path
+
+    def value(self, name: str, key: str, build):
+        """The pickled value of entry (``name``, ``key``), computed by ``build()`` when missing or unreadable."""
+        import pickle
+
+        def make(folder: Path) -> None:
+            (folder / "value.pickle").write_bytes(pickle.dumps(build()))
+
+        path = self.folder(name, key, make)
+        try:
+            return pickle.loads((path / "value.pickle").read_bytes())
+        except Exception:  # noqa: BLE001 - an unreadable entry is recomputed, never fatal
+            (path / ".complete").unlink(missing_ok=True)
+            return pickle.loads((self.folder(name, key, make) / "value.pickle").read_bytes())
+
+    def twin_dataset(self, config, protocol_note: str = "") -> Path:
+        """The folder ``data/`` (the runs and meta.json) of the twin data set of ``config`` (an
+        ``acousim.twin.TwinConfig``), with its ``truth.json`` beside it, out of the data set's folder."""
+        from acousim.twin import simulate_dataset
+
+        def build(folder: Path) -> None:
+            simulate_dataset(config, folder / "data", progress=False)
+            (folder / "data" / "truth.json").rename(folder / "truth.json")
+
+        return self.folder("twin", repr(config) + protocol_note, build) / "data"
+
+
+@pytest.fixture(scope="session")
+def pipeline_cache() -> PipelineCache:
+    """The session's :class:`PipelineCache` (twin data sets, fits, diagnoses and reports the end-to-end tests share)."""
+    cache = PipelineCache(PIPELINE_CACHE_ROOT)
+    cache.prune()
+    return cache
+
+
 @pytest.fixture(scope="session")
 def default_wave():
     from acousim.field import StandingWave

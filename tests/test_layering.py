@@ -208,3 +208,32 @@ def test_parallel_work_goes_through_the_executor_seam():
         if hits:
             bad[str(f.relative_to(ROOT))] = hits
     assert not bad, f"parallel work outside cubedimer.executor.map_ordered: {bad}"
+
+
+#: The documented order of the steps (docs/architecture.md): a subpackage imports only the ones after it in its list.
+STEP_ORDER = {
+    "fitting": ("methods", "output", "uncertainty", "selection", "refinement", "derivatives"),
+    "validation.diagnosis": ("summarise", "discover", "identify", "calibrate", "prepare"),
+}
+
+
+@pytest.mark.parametrize("parent", list(STEP_ORDER))
+def test_the_steps_are_built_in_their_documented_order(parent):
+    """fitting: methods -> output -> uncertainty -> selection -> refinement -> derivatives; the diagnosis: each step
+    on the steps before it (prepare <- calibrate <- identify <- discover <- summarise)."""
+    order = [f"{parent}.{s}" for s in STEP_ORDER[parent]]
+    graph = subpackage_graph(parent)
+    assert set(graph) == set(order), f"{parent} has subpackages the order does not list: {set(graph) ^ set(order)}"
+    upward = sorted(f"{a} -> {b}" for a in order for b in graph[a] if order.index(b) < order.index(a))
+    assert not upward, f"imports against the documented order of {parent}: {upward}"
+
+
+@pytest.mark.parametrize("package", sorted({m for m, f in MODULES.items() if f.name == "__init__.py"}))
+def test_every_public_name_of_a_package_resolves(package):
+    """Every name of a package's ``__all__`` (the lazy ones included, cubedimer.lazy) is there: a module moved or
+    renamed cannot leave a public name pointing at nothing."""
+    import importlib
+
+    module = importlib.import_module(package)
+    missing = [name for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
+    assert not missing, f"{package}.__all__ names what it cannot give: {missing}"

@@ -23,11 +23,11 @@ from .coefficients import CoefficientComparison, TermComparison, compare_coeffic
 from .simulation import model_from_meta
 
 _LAZY = {
-    "diagnose_dataset": ".diagnosis", "write_diagnosis": ".report.sections.diagnosis", "DiagnoseConfig": ".diagnosis",
+    "diagnose_dataset": ".diagnosis", "write_diagnosis": ".report.sections.gap_diagnosis", "DiagnoseConfig": ".diagnosis",
     "CANDIDATE_EFFECTS": ".diagnosis", "DiagnosisInternals": ".diagnosis", "GapFit": ".diagnosis",
     "Calibration": ".diagnosis", "Identification": ".diagnosis",
     "BlindConfig": ".blind", "run_blind": ".blind", "blind_table": ".blind",
-    "build_report": ".report.pipeline",
+    "build_report": ".report.build",
 }
 
 __all__ = ["CoefficientComparison", "TermComparison", "compare_coefficients", "origin_sensitivity", "shift_origin",

@@ -24,15 +24,16 @@ from typing import Sequence
 
 import numpy as np
 
+from cubedimer.terms import EQUATION_NAMES
 from ..config import FitConfig
 from ..description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
                            model_found_text)
-from cubedimer.terms import EQUATION_NAMES
 from ..model import PolynomialModel, Scales
 from ..refinement.long_time import refine
 from ..results import EnsembleExtras, FitResult, PreparedRun, RunEstimate
 from ..selection.ensemble import least_squares_on_support, select_terms, term_statistics
-from ..selection.integral_discovery import FEW_RUNS_MODE, MODEL_ERROR_MODE, DiscoveryResult, discover_model
+from ..selection.discovery_config import FEW_RUNS_MODE, MODEL_ERROR_MODE
+from ..selection.integral_discovery import DiscoveryResult, discover_model
 from ..selection.rules import support_text
 from ..selection.sparse_regression import scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle

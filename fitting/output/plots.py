@@ -20,7 +20,8 @@ from ..compare import Comparison
 from ..method_names import get_method
 from ..model import TERMS
 from ..results import EnsembleExtras, FitResult, RunFit
-from ..selection.integral_discovery import KNEE_TOLERANCE, DiscoveryResult
+from ..selection.discovery_config import KNEE_TOLERANCE
+from ..selection.integral_discovery import DiscoveryResult
 
 __all__ = ["plot_fit", "plot_comparison"]
 

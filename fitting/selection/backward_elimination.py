@@ -34,10 +34,10 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..compare import paired_wilcoxon
-from ..derivatives.savitzky_golay import Derivatives
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.terms import EQUATION_NAMES, coefficient_label
+from ..compare import paired_wilcoxon
+from ..derivatives.savitzky_golay import Derivatives
 from ..model import TERMS, PolynomialModel, Scales, damping_mask
 from ..refinement.long_time import Objective, RefineConfig, default_substeps, refine, scaled_reference
 from .rules import SelectionConfig  # defined beside the rules it names

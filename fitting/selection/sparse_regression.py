@@ -14,9 +14,9 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..derivatives.savitzky_golay import Derivatives
 from cubedimer.config_checks import check_non_negative, check_positive, check_whole
 from cubedimer.terms import STATE_NAMES, parse_term
+from ..derivatives.savitzky_golay import Derivatives
 from ..model import EXPONENTS, TERMS, PolynomialModel, Scales
 
 __all__ = ["RegressionConfig", "dataset_scales", "fit_regression", "fit_ensemble_regression",

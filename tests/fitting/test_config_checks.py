@@ -9,7 +9,7 @@ from fitting.selection.ensemble import EnsembleConfig
 from fitting.refinement.losses import LossWeights
 from fitting.refinement.long_time import RefineConfig
 from fitting.selection.sparse_regression import RegressionConfig
-from fitting.selection.backward_elimination import SelectionConfig
+from fitting.selection.rules import SelectionConfig
 
 BAD = [
     (SelectionConfig, {"rule": "lasso"}, "unknown selection rule"),

@@ -15,7 +15,8 @@ import pytest
 from cubedimer.dataset import Run, fill_gaps
 from cubedimer.spectra import dominant_frequency
 from fitting.derivatives.savitzky_golay import run_derivatives
-from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+from fitting.selection.discovery_config import DiscoveryConfig
+from fitting.selection.integral_discovery import discover_model
 from fitting.derivatives.integral_form import natural_windows
 from fitting.selection.support_search import numerov_columns
 from fitting.derivatives.integral_form import detrend_windows, integral_columns, window_starts

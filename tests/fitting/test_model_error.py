@@ -12,7 +12,8 @@ from cubedimer.dataset import Run
 from cubedimer.spectra import dominant_frequency
 from cubedimer.terms import EQUATION_NAMES
 from fitting.derivatives.savitzky_golay import run_derivatives
-from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+from fitting.selection.discovery_config import DiscoveryConfig
+from fitting.selection.integral_discovery import discover_model
 from fitting.model import EXPONENTS, TERMS, PolynomialModel
 
 W1, W2, MU, C2, K = 2 * np.pi * 1.0, 2 * np.pi * 1.6, 0.2, 0.15, 20.0

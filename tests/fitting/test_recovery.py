@@ -19,12 +19,17 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def recovery(tmp_path_factory, truth):
-    data = tmp_path_factory.mktemp("recovery_data")
-    write_dataset(data, truth, SyntheticConfig(n_runs=20, seed=11))
-    out = tmp_path_factory.mktemp("recovery_out")
-    return fit_dataset(data, FitConfig(method="paper"), executor=ExecutorConfig(workers=1), progress=False,
-                       cache_dir=out / "runs")
+def recovery(tmp_path_factory, truth, pipeline_cache):
+    """The paper's fit of the 20 runs (made once per version of the sources, tests/conftest.py PipelineCache)."""
+    synthetic, config = SyntheticConfig(n_runs=20, seed=11), FitConfig(method="paper")
+
+    def fit():
+        data = tmp_path_factory.mktemp("recovery_data")
+        write_dataset(data, truth, synthetic)
+        out = tmp_path_factory.mktemp("recovery_out")
+        return fit_dataset(data, config, executor=ExecutorConfig(workers=1), progress=False, cache_dir=out / "runs")
+
+    return pipeline_cache.value("fit", f"{truth.to_json()!r} {synthetic!r} {config!r}", fit)
 
 
 def test_refined_beat_regression_only_on_shape(recovery):

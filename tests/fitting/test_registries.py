@@ -20,7 +20,7 @@ from fitting.fit import fit_dataset
 from fitting.refinement.long_time import RefineConfig, refine
 from fitting.selection.sparse_regression import scaled_data
 from fitting.results import EnsembleExtras, FitResult, RunEstimate
-from fitting.selection.backward_elimination import SelectionConfig
+from fitting.selection.rules import SelectionConfig
 
 #: yddot = y + ydot, thetaddot = theta + thetadot: the linear oscillator, the support of the dummy method
 LINEAR = np.zeros((2, len(TERMS)), bool)

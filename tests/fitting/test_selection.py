@@ -4,7 +4,7 @@ import numpy as np
 from fitting.model import DAMPING_TERMS, TERMS, damping_mask
 from fitting.config import FitConfig
 from fitting.output.model_file import model_json
-from fitting.selection.backward_elimination import SelectionConfig
+from fitting.selection.rules import SelectionConfig
 
 
 def test_damping_mask_has_the_two_viscous_terms():

@@ -20,5 +20,5 @@ __all__ = ["build_report", "write_report", "write_diagnosis", "Figure", "Section
            "check_report_in_browser"]
 
 
-__getattr__ = lazy_attributes(__name__, {"build_report": ".pipeline", "write_diagnosis": ".diagnosis_section",
+__getattr__ = lazy_attributes(__name__, {"build_report": ".build", "write_diagnosis": ".sections.gap_diagnosis",
                                          "check_report_in_browser": ".browser_check"})

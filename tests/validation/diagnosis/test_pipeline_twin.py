@@ -1,6 +1,8 @@
 """The diagnosis on digital-twin data sets: each single effect, none, and a partly corrupt data set (causes
 outside the candidates: test_drift.py and test_discovery.py)."""
 import json
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,21 +21,24 @@ SINGLE = {
 }
 
 
-def _twin(tmp_path, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
+def _twin(cache, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
+    """The twin data set (its folder in the pipeline cache: read it, never write into it) and its truth."""
     from acousim.dynamics.effects import EffectSet
-    from acousim.twin import TwinConfig, simulate_dataset
-
-    data = tmp_path / "data"
-    from acousim.twin import DropProtocol
+    from acousim.twin import DropProtocol, TwinConfig
 
     # drops of moderate angle and rate: the soft Gor'kov hinge plus an effect must not reach theta = +-1; no air
     # damping: the drawn effect is the only one, so the diagnosis must name it alone (and nothing on no effect)
     cfg = TwinConfig(runs=runs, duration=duration, seed=seed, pressure_error=pressure_error,
                      effects=EffectSet.from_dict(effects), air_damping=False,
                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
-    truth = simulate_dataset(cfg, data, progress=False)
-    (data / "truth.json").rename(tmp_path / "truth.json")  # the diagnosis is blind
-    return data, truth
+    data = cache.twin_dataset(cfg)  # truth.json beside the data set: the diagnosis is blind
+    return data, json.loads((data.parent / "truth.json").read_text())
+
+
+def _diagnosis(cache, data, config):
+    """The diagnosis of a cached twin data set (made once per version of the sources, tests/conftest.py)."""
+    return cache.value("diagnosis", f"{data.parent.name} {config!r}",
+                       lambda: diagnose_dataset(data, config, progress=False))
 
 
 FAST = DiagnoseConfig(long_time=False)
@@ -41,9 +46,9 @@ FAST = DiagnoseConfig(long_time=False)
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SINGLE))
-def test_single_effect_identified_with_parameters(tmp_path, name):
-    data, truth = _twin(tmp_path, {name: SINGLE[name]})
-    diag = diagnose_dataset(data, FAST, progress=False)
+def test_single_effect_identified_with_parameters(pipeline_cache, name):
+    data, truth = _twin(pipeline_cache, {name: SINGLE[name]})
+    diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == (name,)
     assert not diag.calibration["drift"]["detected"]  # no false alarm at a constant pressure with an effect
     fitted = next(e for e in diag.effects if e.name == name).params
@@ -61,9 +66,9 @@ def test_single_effect_identified_with_parameters(tmp_path, name):
 
 
 @pytest.mark.slow
-def test_no_effect_names_nothing(tmp_path):
-    data, truth = _twin(tmp_path, {}, seed=5)
-    diag = diagnose_dataset(data, FAST, progress=False)
+def test_no_effect_names_nothing(pipeline_cache):
+    data, truth = _twin(pipeline_cache, {}, seed=5)
+    diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == ()
     assert diag.remaining_gap["explained_within_noise"]
     assert not diag.calibration["drift"]["detected"]
@@ -74,8 +79,9 @@ def test_no_effect_names_nothing(tmp_path):
 
 
 @pytest.mark.slow
-def test_partly_corrupt_dataset(tmp_path):
-    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, seed=11)
+def test_partly_corrupt_dataset(tmp_path, pipeline_cache):
+    cached, _ = _twin(pipeline_cache, {"pair_scattering": {"kappa": 15000.0}}, seed=11)
+    data = Path(shutil.copytree(cached, tmp_path / "data"))  # corrupted below: a copy
     files = sorted(data.glob("run*.csv"))
     text = files[0].read_text().splitlines()
     files[0].write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
@@ -107,14 +113,14 @@ def test_diagnose_cli_bad_directory(tmp_path):
 
 
 @pytest.mark.slow
-def test_strong_velocity_coupling_identified(tmp_path):
+def test_strong_velocity_coupling_identified(pipeline_cache):
     """Strong coupling (c5 = 3e4, c6 = 6e6, six times the single-effect case): identified alone, measured
     c5 +13 %, c6 -11 % (asserted at the acceptance level of 25 %).  The bias grows with the strength (+3 % / -5 % at
     5e3 / 1e6): the hinge columns are evaluated at theta smoothed over half a hinge period, which
     leaves out the fast response the coupling itself drives (see the xfail below)."""
     effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
-    data, _ = _twin(tmp_path, effects)
-    diag = diagnose_dataset(data, FAST, progress=False)
+    data, _ = _twin(pipeline_cache, effects)
+    diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == ("velocity_coupling",)
     fitted = diag.effects[0].params
     for p, v in effects["velocity_coupling"].items():
@@ -127,20 +133,20 @@ def test_strong_velocity_coupling_identified(tmp_path):
     "but pair_scattering is named after it with kappa = 0.49 1/s^2 (p = 0.005; 0.35 % of the hinge acceleration), "
     "absorbing the bias of the smoothed hinge columns at strong coupling; at 5e3 / 1e6 and 3e4 / 6e6 the same seed "
     "names velocity_coupling alone"))
-def test_velocity_coupling_names_only_itself_at_1p5e4(tmp_path):
-    data, _ = _twin(tmp_path, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
-    diag = diagnose_dataset(data, FAST, progress=False)
+def test_velocity_coupling_names_only_itself_at_1p5e4(pipeline_cache):
+    data, _ = _twin(pipeline_cache, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
+    diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == ("velocity_coupling",)
 
 
 @pytest.mark.slow
-def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path):
+def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path, pipeline_cache):
     """The command end to end on a small twin data set: diagnosis.json with the docs/formats.md keys, the report
     section with its figures, and the progress logged on stderr."""
     import subprocess
     import sys
 
-    data, _ = _twin(tmp_path, {"pair_scattering": {"kappa": 15000.0}}, runs=3, duration=2.0)
+    data, _ = _twin(pipeline_cache, {"pair_scattering": {"kappa": 15000.0}}, runs=3, duration=2.0)
     out = tmp_path / "out"
     r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(data), "--out", str(out),
                         "--candidates", "pair_scattering", "--no-long-time"], capture_output=True, text=True)

@@ -12,55 +12,67 @@ SECTIONS = ["data", "phase-space", "fit", "simulation", "model-vs-simulation", "
 
 
 def _twin(path, effects, runs=8, duration=3.0, seed=4):
-    from acousim.dynamics.effects import EffectSet
-    from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
+    from acousim.twin import simulate_dataset
 
-    # no air damping: the effects given are the only ones (the numbers of docs/fitting.md come from these data)
-    cfg = TwinConfig(runs=runs, duration=duration, seed=seed, effects=EffectSet.from_dict(effects), air_damping=False,
-                     protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
-    simulate_dataset(cfg, path, progress=False)
+    simulate_dataset(_twin_config(effects, runs, duration, seed), path, progress=False)
     (path / "truth.json").rename(path.parent / f"{path.name}_truth.json")
     return path
 
 
+def _twin_config(effects, runs=8, duration=3.0, seed=4):
+    from acousim.dynamics.effects import EffectSet
+    from acousim.twin import DropProtocol, TwinConfig
+
+    # no air damping: the effects given are the only ones (the numbers of docs/fitting.md come from these data)
+    return TwinConfig(runs=runs, duration=duration, seed=seed, effects=EffectSet.from_dict(effects), air_damping=False,
+                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
+
+
 @pytest.fixture(scope="module")
-def damping_report(tmp_path_factory):
-    """Twin data whose only effect is viscous damping (nothing acts on theta beyond the Gor'kov model)."""
-    from validation.report import build_report
+def damping_report(pipeline_cache):
+    """Twin data whose only effect is viscous damping (nothing acts on theta beyond the Gor'kov model): its report,
+    made once per version of the sources (tests/conftest.py PipelineCache), with what the report's steps received
+    (``seen.json``)."""
+    config = _twin_config({"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
+    data = pipeline_cache.twin_dataset(config)
 
-    import cubedimer.dataset
-    import fitting.fit
-    import validation.diagnosis
+    def build(folder):
+        from validation.report import build_report
 
-    base = tmp_path_factory.mktemp("report")
-    data = _twin(base / "data", {"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
-    # what the report's steps receive, recorded on the way (the real functions do the work)
-    with pytest.MonkeyPatch.context() as mp:
-        for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.fit, "fit_dataset"),
-                             (validation.diagnosis, "diagnose")):
-            mp.setattr(module, name, _recorded(name, getattr(module, name)))
-        return build_report(data, base / "report", workers=1, progress=False, max_evals=150)
+        import cubedimer.dataset
+        import fitting.fit
+        import validation.diagnosis
 
+        seen: dict[str, list] = {}
 
-#: The first argument of every call of the recorded functions during the report's build, by function name.
-_SEEN: dict[str, list] = {}
+        def recorded(name, function):
+            def record(*args, **kwargs):
+                seen.setdefault(name, []).append(args[0])
+                return function(*args, **kwargs)
+            return record
 
+        # what the report's steps receive, recorded on the way (the real functions do the work)
+        with pytest.MonkeyPatch.context() as mp:
+            for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.fit, "fit_dataset"),
+                                 (validation.diagnosis, "diagnose")):
+                mp.setattr(module, name, recorded(name, getattr(module, name)))
+            build_report(data, folder / "report", workers=1, progress=False, max_evals=150)
+        (fitted,), (diagnosed,) = seen["fit_dataset"], seen["diagnose"]
+        (folder / "seen.json").write_text(json.dumps({
+            "loads": len(seen["load_dataset"]), "fitted_is_diagnosed": fitted is diagnosed,
+            "fitted_runs": [r.name for r in fitted.runs]}))
 
-def _recorded(name, function):
-    def record(*args, **kwargs):
-        _SEEN.setdefault(name, []).append(args[0])
-        return function(*args, **kwargs)
-    return record
+    return pipeline_cache.folder("report", f"{config!r} max_evals=150", build) / "report" / "report.html"
 
 
 @pytest.mark.slow
 def test_the_fit_and_the_diagnosis_of_a_report_see_one_loaded_data_set(damping_report):
     """The data set is loaded once, with the diagnosis's checks, and that one object is fitted and diagnosed: the
     two can never work on different sets of runs."""
-    assert len(_SEEN["load_dataset"]) == 1
-    (fitted,), (diagnosed,) = _SEEN["fit_dataset"], _SEEN["diagnose"]
-    assert fitted is diagnosed
-    assert [r.name for r in fitted.runs] == [f"run{i:02d}.csv" for i in range(1, 9)]
+    seen = json.loads((damping_report.parent.parent / "seen.json").read_text())  # recorded while it was made
+    assert seen["loads"] == 1
+    assert seen["fitted_is_diagnosed"]
+    assert seen["fitted_runs"] == [f"run{i:02d}.csv" for i in range(1, 9)]
 
 
 @pytest.mark.slow

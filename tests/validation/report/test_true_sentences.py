@@ -72,16 +72,13 @@ def test_a_significant_but_negligible_drift_is_not_called_no_drift():
 
 
 # ------------------------------------------------------------------------------- the report on small data sets
-def _twin(path, runs, duration, effects):
+def _twin_config(runs, duration, effects):
     from acousim.dynamics.effects import EffectSet
-    from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
+    from acousim.twin import DropProtocol, TwinConfig
 
     # no air damping: the cases' effects are the only ones ("damping-free" is the inviscid dimer)
-    cfg = TwinConfig(runs=runs, duration=duration, seed=4, effects=EffectSet.from_dict(effects), air_damping=False,
-                     protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
-    simulate_dataset(cfg, path, progress=False)
-    (path / "truth.json").rename(path.parent / "truth.json")
-    return path
+    return TwinConfig(runs=runs, duration=duration, seed=4, effects=EffectSet.from_dict(effects), air_damping=False,
+                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
 
 
 CASES = {
@@ -93,17 +90,19 @@ CASES = {
 
 
 @pytest.fixture(scope="module", params=list(CASES))
-def report(request, tmp_path_factory):
+def report(request, pipeline_cache):
+    """The case's report (made once per version of the sources, tests/conftest.py PipelineCache)."""
     from validation.report import build_report
 
     runs, duration, effects = CASES[request.param]
-    base = tmp_path_factory.mktemp("true_sentences")
-    data = _twin(base / "data", runs, duration, effects)
-    path = build_report(data, base / "report", workers=1, progress=False, max_evals=60)
-    text = path.read_text()
+    config = _twin_config(runs, duration, effects)
+    data = pipeline_cache.twin_dataset(config)
+    folder = pipeline_cache.folder("report", f"{config!r} max_evals=60", lambda f: build_report(
+        data, f / "report", workers=1, progress=False, max_evals=60)) / "report"
+    text = (folder / "report.html").read_text()
     readings = {sid: html.unescape(r) for sid, r in re.findall(
         r'<section id="([^"]+)">.*?<p class="reading">(.*?)</p>', text, re.S)}
-    numbers = json.loads((base / "report" / "numbers.json").read_text())
+    numbers = json.loads((folder / "numbers.json").read_text())
     # the second case must exercise the sentences about identified effects
     assert bool(numbers["diagnosis"]["identified"]) == bool(effects), numbers["diagnosis"]["identified"]
     return readings, numbers, text
@@ -279,20 +278,25 @@ DIAGNOSIS_CASES = {
 
 
 @pytest.fixture(scope="module", params=list(DIAGNOSIS_CASES))
-def diagnosed(request, tmp_path_factory):
+def diagnosed(request, tmp_path_factory, pipeline_cache):
+    """The case's diagnosis (made once per version of the sources, tests/conftest.py PipelineCache)."""
     from acousim.twin import PAPER_LIKE, TwinConfig, simulate_dataset
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
     case = DIAGNOSIS_CASES[request.param]
-    data = tmp_path_factory.mktemp("diagnosed") / "data"
     cfg = (TwinConfig.from_preset(PAPER_LIKE, runs=case["runs"], duration=case["duration"], seed=31)
            if case["preset"] else TwinConfig(runs=case["runs"], duration=case["duration"], seed=32))
-    simulate_dataset(cfg, data, progress=False)
-    (data / "truth.json").unlink()
-    if "offsets" in case:
-        _per_run_origin_error(data, case["offsets"])
-    diag = diagnose_dataset(data, DiagnoseConfig(long_time=False), progress=False)
-    return diag
+    config = DiagnoseConfig(long_time=False)
+
+    def diagnose():
+        data = tmp_path_factory.mktemp("diagnosed") / "data"
+        simulate_dataset(cfg, data, progress=False)
+        (data / "truth.json").unlink()
+        if "offsets" in case:
+            _per_run_origin_error(data, case["offsets"])
+        return diagnose_dataset(data, config, progress=False)
+
+    return pipeline_cache.value("diagnosis", f"{cfg!r} offsets={case.get('offsets')} {config!r}", diagnose)
 
 
 @pytest.mark.slow
