@@ -17,7 +17,7 @@ across to (theta, Z)::
 (A_F and B_F vanish at theta = 0 by the bend parity).  It is the potential when the forces have one.
 The torque is its exact theta-derivative, Q_theta = -dU/dtheta, so only the vertical force can differ from
 -dU/dZ; the diagnosis's energy balance takes U at the states plus the work of that remainder along the measured
-path (:class:`validation.diagnosis.simulation_model.SimulationTerms`).
+path (:class:`validation.diagnosis.prepare.simulation_terms.SimulationTerms`).
 """
 from __future__ import annotations
 
