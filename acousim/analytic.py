@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
 
 from .field import StandingWave
 from .medium import GRAVITY
@@ -65,7 +66,8 @@ def dimer_potential_energy(side: float, theta: ArrayLike, z_com: ArrayLike, wave
 
 
 def dimer_generalized_forces(
-    side: float, theta: ArrayLike, z_com: ArrayLike, wave: StandingWave, density: float = 2160.0, gravity: float = GRAVITY
+    side: float, theta: ArrayLike, z_com: ArrayLike, wave: StandingWave, density: float = DEFAULT_PARTICLE_DENSITY,
+    gravity: float = GRAVITY
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(F_Z [N], Q_y [N], Q_theta [N m]) of the symmetric dimer from the closed form.
 

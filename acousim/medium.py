@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY
 
 __all__ = ["Medium", "ParticleMaterial", "contrast_factors", "GRAVITY"]
 
@@ -29,7 +30,7 @@ class Medium:
         Fluid density rho0 [kg/m^3].
     """
 
-    frequency_hz: float = 45_650.0
+    frequency_hz: float = DEFAULT_FREQUENCY_HZ
     sound_speed_m_s: float = 343.0
     density_kg_m3: float = 1.204
 
@@ -66,7 +67,7 @@ class ParticleMaterial:
         Particle bulk modulus K_p [Pa] (NaCl: 24.9 GPa).
     """
 
-    density_kg_m3: float = 2160.0
+    density_kg_m3: float = DEFAULT_PARTICLE_DENSITY
     bulk_modulus_pa: float = 24.9e9
 
     def __post_init__(self) -> None:

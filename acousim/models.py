@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Callable, ClassVar, Mapping
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY
 
 from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial
@@ -53,9 +54,9 @@ class ExperimentConditions:
     """
 
     side_length_m: float = 500e-6
-    particle_density_kg_m3: float = 2160.0
+    particle_density_kg_m3: float = DEFAULT_PARTICLE_DENSITY
     bulk_modulus_pa: float = 24.9e9
-    frequency_hz: float = 45_650.0
+    frequency_hz: float = DEFAULT_FREQUENCY_HZ
     sound_speed_m_s: float = 343.0
     air_density_kg_m3: float = 1.204
     pressure_amplitude_pa: float = 3000.0

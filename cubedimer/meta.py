@@ -182,3 +182,8 @@ def read_meta(data_dir: str | os.PathLike) -> dict:
 DEFAULT_TRACKING_NOISE: dict[str, float] = {"noise_y_m": 1e-6, "noise_theta": 0.005}
 
 __all__ += ["DEFAULT_TRACKING_NOISE"]
+
+#: The defaults that code outside meta.json reads (the drive's frequency [Hz] and the cubes' density [kg/m^3]).
+DEFAULT_FREQUENCY_HZ: float = META_DEFAULTS["frequency_hz"]
+DEFAULT_PARTICLE_DENSITY: float = META_DEFAULTS["particle_density_kg_m3"]
+__all__ += ["DEFAULT_FREQUENCY_HZ", "DEFAULT_PARTICLE_DENSITY"]

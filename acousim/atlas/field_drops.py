@@ -35,6 +35,7 @@ from cubedimer.atomic import atomic_write_text, json_text, write_json
 from cubedimer.attractors import ATTRACTOR_CLASSES, LOCKED_AT_FY, classify_trajectory
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.spectra import line_amplitude
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 __all__ = ["AtlasError", "AtlasDimer", "AtlasConfig", "OUTCOMES", "AMPLITUDE_CLASSES", "LONG_LIVED_CYCLES",
            "atlas_dynamics", "drop_and_settle", "settled_outcome", "observations", "run_atlas", "CSV_COLUMNS"]
@@ -101,7 +102,7 @@ class AtlasConfig:
     t_off: tuple[float, ...]
     theta_drop: tuple[float, ...]
     pressure_amplitude_pa: float = 6000.0
-    frequency_hz: float = 45_650.0
+    frequency_hz: float = DEFAULT_FREQUENCY_HZ
     duration: float = 8.0
     sample_rate: float = 1000.0
     transducer_q: float = 0.0

@@ -35,6 +35,7 @@ from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.attractors import LOCKED_AT_FY
 from cubedimer.executor import ExecutorConfig
 from cubedimer.rk4 import rk4, rk4_batch
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from .field_drops import (AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells,
                     settled_outcome)
@@ -89,7 +90,7 @@ class HeldYConfig:
     amplitudes_m: tuple[float, ...]
     theta_starts: tuple[float, ...] = (-0.4, -0.2, 0.0, 0.2, 0.4)
     thetadot_starts: tuple[float, ...] = (-30.0, 0.0, 30.0)
-    frequency_hz: float = 45_650.0
+    frequency_hz: float = DEFAULT_FREQUENCY_HZ
     settle_periods: int = 200
     analysed_periods: int = 104
     samples_per_period: int = 40

@@ -31,6 +31,7 @@ import numpy as np
 
 from cubedimer.atomic import atomic_write_text, save_figure, write_json
 from cubedimer.executor import ExecutorConfig
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from .field_drops import AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
 
@@ -58,7 +59,7 @@ class ResonatorMapConfig:
     start_amplitude: float = 30.0e-6
     duration: float = 40.0
     window: float = 5.0
-    frequency_hz: float = 45_650.0
+    frequency_hz: float = DEFAULT_FREQUENCY_HZ
 
     def __post_init__(self) -> None:
         from ..dynamics.resonator import CavityMode

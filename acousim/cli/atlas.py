@@ -7,6 +7,7 @@ import sys
 import numpy as np
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 __all__ = ["add_parser", "parse_dimers", "parse_grid"]
 
@@ -60,7 +61,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--t-off", default="5e-3:20e-3:16", metavar="MIN:MAX:N", help="drop durations [s]")
     p.add_argument("--theta-drop", default="-0.2:0.2:9", metavar="MIN:MAX:N", help="hinge angles at the drop [-]")
     p.add_argument("--pressure", type=float, default=6000.0, help="pressure amplitude p0 [Pa]")
-    p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
+    p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, help="drive frequency [Hz]")
     p.add_argument("--duration", type=float, default=8.0, help="recorded time after the field is back on [s]; the second half is classified")
     p.add_argument("--sample-rate", type=float, default=1000.0, help="samples per second of the classified motion")
     p.add_argument("--transducer-q", type=float, default=0.0, metavar="Q",

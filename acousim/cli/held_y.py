@@ -5,6 +5,7 @@ import argparse
 import sys
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from .atlas import parse_dimers, parse_grid
 
@@ -34,7 +35,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--thetadot-starts", default="-30,0,30", metavar="LIST", help="hinge rates at the start [1/s]")
     p.add_argument("--settle-periods", type=int, default=200, help="periods of y before the classified part")
     p.add_argument("--analysed-periods", type=int, default=104, help="periods of y classified")
-    p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
+    p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, help="drive frequency [Hz]")
     p.add_argument("--no-figures", action="store_true", help="write the tables only")
     p.add_argument("--force", action="store_true", help="discard a map with other settings in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -5,6 +5,7 @@ import argparse
 import sys
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from .atlas import parse_grid
 
@@ -37,7 +38,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "resonance)")
     p.add_argument("--duration", type=float, default=40.0, metavar="SEC", help="span of the larger start's run [s]")
     p.add_argument("--start-amplitude", type=float, default=30e-6, metavar="M", help="the larger start's y [m]")
-    p.add_argument("--frequency", type=float, default=45_650.0, metavar="HZ", help="drive frequency [Hz]")
+    p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, metavar="HZ", help="drive frequency [Hz]")
     p.add_argument("--no-figures", action="store_true", help="write the tables only")
     p.add_argument("--force", action="store_true", help="discard a map with other settings in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -33,7 +33,7 @@ import sys
 
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, executor_config,
                            prepare_output_dir)
-from cubedimer.meta import check_meta_value
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, check_meta_value
 
 __all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES", "MAX_VIDEO_FRAMES"]
 
@@ -231,7 +231,7 @@ def build_config(args: argparse.Namespace):
     preset = PRESETS[args.preset] if args.preset else None
     dimer = preset.dimer_settings() if preset is not None else {}
     side = args.side if args.side is not None else dimer.get("side", 500e-6)
-    frequency = args.frequency if args.frequency is not None else dimer.get("frequency", 45_650.0)
+    frequency = args.frequency if args.frequency is not None else dimer.get("frequency", DEFAULT_FREQUENCY_HZ)
     model = args.model if args.model is not None else dimer.get("force_model", force_model_names()[0])
     gap = args.gap if args.gap is not None else dimer.get("gap")
     check_meta_value("side_length_m", side, "--side")

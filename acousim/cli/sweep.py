@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from cubedimer.cli import UserInputError, check_limit, prepare_output_dir, prepare_output_file
-from cubedimer.meta import check_meta_value
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, check_meta_value
 
 from ..models import force_model_type
 from .models import add_model_arguments, conditions_from_args, static_model_from_args
@@ -73,8 +73,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
     p.add_argument("--side-b", type=float, default=None, help="side of the second cube [m] (default: equal)")
     p.add_argument("--pressure", type=float, default=3000.0, help="pressure amplitude p0 [Pa]")
-    p.add_argument("--frequency", type=float, default=45_650.0, help="drive frequency [Hz]")
-    p.add_argument("--density", type=float, default=2160.0, help="particle density [kg/m^3]")
+    p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, help="drive frequency [Hz]")
+    p.add_argument("--density", type=float, default=DEFAULT_PARTICLE_DENSITY, help="particle density [kg/m^3]")
     p.add_argument("--mesh-size", type=float, default=None,
                    help="target tetrahedron edge length [m] (Gor'kov model; default: 0.2 x side)")
     p.add_argument("--quadrature-degree", type=int, default=2, help="quadrature degree per tetrahedron (>= 2)")

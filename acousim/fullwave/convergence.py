@@ -19,6 +19,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
@@ -33,7 +34,7 @@ __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "richardson_l
 
 
 def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_amplitude_pa: float = 3000.0,
-                     particle_density: float = 2160.0, gravity: float = GRAVITY, delta: float = 0.02,
+                     particle_density: float = DEFAULT_PARTICLE_DENSITY, gravity: float = GRAVITY, delta: float = 0.02,
                      forces: str = "flux") -> dict:
     """Z_eq, F_Z amplitude, hinge stiffness and thetaddot Taylor coefficients of one mesh (two solves).
 

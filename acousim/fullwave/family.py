@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
 
 from ..medium import GRAVITY, Medium
 from .family_grid import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
@@ -165,7 +166,8 @@ def dimensionless_coefficients(sur: FullwaveSurrogate) -> dict[str, NDArray[np.f
 
 
 def scaled_surrogate(coefficients: dict[str, NDArray], theta_max: float, side: float, gap: float,
-                     medium: Medium, particle_density: float = 2160.0, pressure_amplitude_pa: float = 3000.0,
+                     medium: Medium, particle_density: float = DEFAULT_PARTICLE_DENSITY,
+                     pressure_amplitude_pa: float = 3000.0,
                      gravity: float = GRAVITY, edge_radius: float = 0.0, settings: dict | None = None,
                      build_accuracy: dict | None = None) -> FullwaveSurrogate:
     """The physical surrogate of a dimer of side ``side`` [m] and gap ``gap`` [m] from dimensionless coefficients.
@@ -339,7 +341,8 @@ class FullwaveFamily:
         errors = [next((e for r, e in self.mesh_errors.items() if np.isclose(r, v, rtol=1e-4)), None) for v in around]
         return None if not errors or any(e is None for e in errors) else max(errors)
 
-    def surrogate(self, side: float, gap: float, medium: Medium = Medium(), particle_density: float = 2160.0,
+    def surrogate(self, side: float, gap: float, medium: Medium = Medium(),
+                  particle_density: float = DEFAULT_PARTICLE_DENSITY,
                   pressure_amplitude_pa: float = 3000.0, gravity: float = GRAVITY) -> FullwaveSurrogate:
         """The full-wave surrogate of a dimer of side ``side`` [m] with hinge gap ``gap`` [m] in ``medium``.
 
@@ -449,7 +452,7 @@ def interpolation_errors(family: FullwaveFamily, check: FullwaveSurrogate, n_the
     """
     st = check.settings
     side, gap = float(st["side_m"]), float(st["gap_m"])
-    fam = family.surrogate(side, gap, check.medium, float(st.get("particle_density_kg_m3", 2160.0)),
+    fam = family.surrogate(side, gap, check.medium, float(st.get("particle_density_kg_m3", DEFAULT_PARTICLE_DENSITY)),
                            check.pressure_amplitude_pa, check.gravity)
     y = np.linspace(-1.0e-3, 0.8e-3, 19) if y is None else np.asarray(y, float)
     tm = min(check.theta_max, family.theta_max)

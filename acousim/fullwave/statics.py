@@ -27,6 +27,7 @@ from functools import cached_property
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
 
 from ..field import StandingWave
 from ..force_model import SinusoidalInertia
@@ -84,7 +85,7 @@ class FullwaveDimer:
     def __init__(self, surrogate: FullwaveSurrogate):
         self.surrogate = surrogate
         st = surrogate.settings
-        material = ParticleMaterial(density_kg_m3=float(st.get("particle_density_kg_m3", 2160.0)))
+        material = ParticleMaterial(density_kg_m3=float(st.get("particle_density_kg_m3", DEFAULT_PARTICLE_DENSITY)))
         self.wave = StandingWave(surrogate.pressure_amplitude_pa, surrogate.medium, material)
         self.gravity = float(surrogate.gravity)
         self.dimer = FullwaveInertia(surrogate.inertia_const, surrogate.inertia_sin2, surrogate.mass)

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from cubedimer.atomic import write_json
 from cubedimer.cache_lock import cache_entry_lock
 from cubedimer.compile_cache import suite_cache_root
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
 
 from ..force_model import ChebyshevSurrogate, ForceCoefficients, levitation_height
 from ..medium import GRAVITY, Medium
@@ -374,7 +375,7 @@ def build_settings(spec: DimerMeshSpec, medium: Medium, density: float, n_half: 
 def build_fullwave_surrogate(
     spec: DimerMeshSpec = DEFAULT_SPEC,
     medium: Medium = Medium(),
-    particle_density: float = 2160.0,
+    particle_density: float = DEFAULT_PARTICLE_DENSITY,
     pressure_amplitude_pa: float = 3000.0,
     gravity: float = GRAVITY,
     n_half: int = 5,
@@ -483,7 +484,7 @@ def _key(settings: dict) -> str:
 def cached_fullwave_surrogate(
     spec: DimerMeshSpec = DEFAULT_SPEC,
     medium: Medium = Medium(),
-    particle_density: float = 2160.0,
+    particle_density: float = DEFAULT_PARTICLE_DENSITY,
     pressure_amplitude_pa: float = 3000.0,
     gravity: float = GRAVITY,
     n_half: int = 5,
@@ -541,7 +542,8 @@ def _stored_table(path: Path, key_settings: dict, gravity: float) -> FullwaveSur
 def build_settings_of(sur: FullwaveSurrogate) -> dict:
     """The keyed build settings stored in a table."""
     s = sur.settings
-    keys = list(build_settings(DEFAULT_SPEC, Medium(), 2160.0, 2, 0.5, flux_disc_points=UNKEYED_FLUX_DISC_POINTS))
+    keys = list(build_settings(DEFAULT_SPEC, Medium(), DEFAULT_PARTICLE_DENSITY, 2, 0.5,
+                               flux_disc_points=UNKEYED_FLUX_DISC_POINTS))
     out = {k: s.get(k) for k in keys}
     if s.get("h_edge") is not None:  # keyed only when set (meshes graded towards every edge)
         out["h_edge"] = s["h_edge"]

@@ -13,6 +13,7 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP
 from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
@@ -237,7 +238,7 @@ class TwinConfig:
     force_model: str = field(default_factory=lambda: force_model_names()[0])
     gap: float | None = None
     edge_radius: float | None = None
-    frequency: float = 45_650.0
+    frequency: float = DEFAULT_FREQUENCY_HZ
     air_damping: bool = True
     transducer_q: float = 0.0
     cavity_detuning: float | None = None
@@ -394,7 +395,7 @@ PAPER = TwinPreset(
     force_model=FULLWAVE,
     side=700e-6,
     gap=35e-6,
-    frequency=45_650.0,
+    frequency=DEFAULT_FREQUENCY_HZ,
     air_damping=True,
 )
 
@@ -414,7 +415,7 @@ WINDOW_RESONATOR = TwinPreset(
     force_model=FULLWAVE,
     side=500e-6,
     gap=10e-6,
-    frequency=45_650.0,
+    frequency=DEFAULT_FREQUENCY_HZ,
     air_damping=True,
     transducer_q=250.0,
     cavity_detuning=-2.2,
