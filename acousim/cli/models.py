@@ -6,10 +6,10 @@ import argparse
 from cubedimer.cli import UserInputError
 
 from ..models import (MODEL_OPTIONS, OPTION_NAMES, ExperimentConditions, ModelSpec, force_model_names, force_model_type,
-                      static_model, dynamic_model)
+                      static_model)
 
-__all__ = ["add_model_arguments", "conditions_from_args", "static_model_from_args", "dynamic_model_from_args",
-           "model_help", "model_spec_from_args"]
+__all__ = ["add_model_arguments", "conditions_from_args", "static_model_from_args", "model_help",
+           "model_spec_from_args"]
 
 
 def model_help() -> str:
@@ -53,11 +53,6 @@ def _checked(build, args: argparse.Namespace, conditions: ExperimentConditions):
 def static_model_from_args(args: argparse.Namespace, conditions: ExperimentConditions):
     """The static model of ``--model`` for ``conditions`` (one-line errors)."""
     return _checked(static_model, args, conditions)
-
-
-def dynamic_model_from_args(args: argparse.Namespace, conditions: ExperimentConditions):
-    """The force model of ``--model`` for the equations of motion (one-line errors)."""
-    return _checked(dynamic_model, args, conditions)
 
 
 def model_spec_from_args(args: argparse.Namespace) -> ModelSpec:
