@@ -345,3 +345,26 @@ def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
     assert "kept as physical damping whatever their significance" in text
     assert "Anti-damping" in text and "gamma_theta (thetadot in thetaddot) -8 1/s" in text
     assert "gamma_y (ydot in yddot)" not in text  # 0.2 1/s of damping: not flagged
+
+
+def test_an_effect_that_does_not_shrink_the_gap_is_not_called_identified():
+    """The lab's mirror_asymmetry, named by its held-out test while the gap grows 0.002293 -> 0.002329 when it is
+    added: neither "yes" in the table nor a cause in the reading, but what it is, with both gaps."""
+    from validation.diagnosis import EffectVerdict
+
+    scattering = EffectVerdict("pair_scattering", {"kappa": 15000.0}, 0.002293, 0.99, True, 0.004, None, None,
+                               added_in_round=1, named=True)
+    mirror = EffectVerdict("mirror_asymmetry", {"epsilon": 0.01}, 0.002329, 0.99, True, 0.004, None, None,
+                           added_in_round=2, named=True)
+    diag = _diagnosis(extra_effects=[scattering, mirror])
+    import dataclasses
+    diag = dataclasses.replace(diag, identified=("pair_scattering", "mirror_asymmetry"), gap_after=0.002329)
+    section = diagnosis_section(diag, [])
+    cause = section.reading.split("The gap is caused by", 1)[1].split(". ", 1)[0]
+    assert "pair_scattering" in cause and "then mirror_asymmetry" not in cause
+    assert ("mirror_asymmetry (epsilon = 0.01 (error not determined: no error was computed)) is named by its "
+            "held-out test, but adding it does not shrink the gap (0.002293 -> 0.002329)") in cause
+    verdicts = {r[0]: r[1] for r in section.tables[0].rows}
+    assert verdicts["pair_scattering"] == "yes"  # 0.3 -> 0.002293
+    assert verdicts["mirror_asymmetry"] == ("named by its held-out test, but adding it does not shrink the gap "
+                                            "(0.002293 -> 0.002329)")

@@ -103,10 +103,28 @@ def _origin_text(cal: dict) -> str:
             f"(the effects' y origin) and {nominal:+.2f} um above its Z_eq at the nominal pressure. ")
 
 
-def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
+def gap_without(diagnosis: "Diagnosis", effect: "EffectVerdict") -> float:
+    """The gap a model effect was added to: that of the model's effects added before it (``gap_after`` of the effect
+    of the previous round), or the calibrated simulation's gap for the first."""
+    rounds = {e.added_in_round: e.gap_after for e in diagnosis.effects if e.significant and e.added_in_round}
+    return rounds.get((effect.added_in_round or 1) - 1, diagnosis.gap_before)
+
+
+def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
+    """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``."""
+    before = gap_without(diagnosis, effect)
+    if not effect.significant or effect.gap_after < before:
+        return ""
+    return (f"named by its held-out test, but adding it does not shrink the gap ({before:.4g} -> "
+            f"{effect.gap_after:.4g})")
+
+
+def _verdict(diagnosis: "Diagnosis", effect: "EffectVerdict", pairs: list[dict]) -> str:
     if any(effect.name in pr["effects"] for pr in pairs):
         return "indistinguishable"
-    return "yes" if effect.significant and effect.named else "no"
+    if effect.significant and effect.named:
+        return not_shrinking(diagnosis, effect) or "yes"
+    return "no"
 
 
 def _params_text(effect: "EffectVerdict") -> str:
@@ -142,7 +160,7 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
     named = [e for e in diagnosis.effects if e.significant and e.named]
-    parts = [f"{e.name} ({_params_text(e)})" for e in named]
+    parts = [f"{e.name} ({_params_text(e)})" for e in named if not not_shrinking(diagnosis, e)]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
@@ -153,6 +171,11 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
                  f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
                  f"fitted model uses {pr['kept_in_model']}"
                  + (f" ({_params_text(kept)})" if kept else ""))
+    if not parts and not pairs:
+        text = "No candidate shrinks the gap"
+    for e in named:
+        if not_shrinking(diagnosis, e):
+            text += f"; {e.name} ({_params_text(e)}) is {not_shrinking(diagnosis, e)}"
     return text + "."
 
 
@@ -247,14 +270,16 @@ def _hinge_gap_text(cal: dict) -> str:
 
 def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
     """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
-    rows = [[e.name, _verdict(e, pairs),
+    rows = [[e.name, _verdict(diagnosis, e, pairs),
              _table_params_text(e), e.gap_after, e.shrink, e.p_value,
              e.p_value_given_others]
             for e in diagnosis.effects]
     n_runs = len(diagnosis.gap_per_run["runs"])
     smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
     columns = {
-        "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
+        "identified": "yes: named as a cause, needed given all the others, and shrinking the gap; named by its held-out "
+                      "test but not shrinking the gap: significant on held-out runs, yet the gap with it is not smaller "
+                      "than without it (both gaps given); indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
         "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife; "
                            "the 95 % interval is in diagnosis.json); a rejected candidate's fit is no result: the "
