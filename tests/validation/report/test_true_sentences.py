@@ -56,11 +56,25 @@ def test_no_sentence_about_identified_effects_when_there_are_none():
     assert "No candidate effect improves held-out runs significantly." in reading
     reading = diagnosis_section(_diagnosis(identified=["pair_scattering"]), []).reading
     assert "With them the gap is 1.0 %" in reading  # numbers.json gap_after 0.01
-    # a gap just below the noise floor rounds to 0.0, not to a signed -0.0; a clearly negative one keeps its sign
+    # a gap below zero (an unexplained fraction below the subtracted noise floor of 0.3 %) is never a negative number
     import dataclasses
-    for gap, said in ((-4e-4, "0.0"), (-4e-3, "-0.4")):
+    for gap in (-4e-4, -3.08e-6, -4e-3):
         diag = dataclasses.replace(_diagnosis(identified=["pair_scattering"]), gap_after=gap)
-        assert f"With them the gap is {said} %" in diagnosis_section(diag, []).reading
+        reading = diagnosis_section(diag, []).reading
+        assert "With them the gap is below the noise floor (< 0.3 %)" in reading and "-0" not in reading
+    diag = dataclasses.replace(_diagnosis(identified=["pair_scattering"]), gap_after=4e-4)
+    assert "With them the gap is 0.0 %" in diagnosis_section(diag, []).reading
+
+
+def test_no_negative_gap_in_the_candidates_table():
+    """The lab's table showed a gap after of -3.08e-06: below the noise floor of 0.003 it is said so."""
+    from validation.diagnosis import EffectVerdict
+
+    below = EffectVerdict("quadratic_drag", {"c": 1.0}, -3.08e-6, 1.00001, False, 0.4, None, None)
+    above = EffectVerdict("linear_damping", {"gamma_y": 0.1}, 0.0123, 0.96, False, 0.4, None, None)
+    table = diagnosis_section(_diagnosis(extra_effects=[below, above]), []).tables[0]
+    gaps = {r[0]: r[table.header.index("gap after")] for r in table.rows}
+    assert gaps == {"quadratic_drag": "below the noise floor (< 0.003)", "linear_damping": 0.0123}
 
 
 def test_a_significant_but_negligible_drift_is_not_called_no_drift():
@@ -130,7 +144,10 @@ def test_each_numeric_claim_is_the_number_in_numbers_json(report):
     assert _number(r"noise floor ([\d.]+) %", g) == pytest.approx(100 * diag["noise_floor"], abs=0.05)
     assert _number(r"Calibrated pressure ([\d.]+) Pa", g) == pytest.approx(diag["pressure_amplitude_pa"], abs=0.5)
     if diag["identified"]:
-        assert _number(r"With them the gap is (-?[\d.]+) %", g) == pytest.approx(100 * diag["gap_after"], abs=0.05)
+        if diag["gap_after"] < 0:
+            assert f"With them the gap is below the noise floor (< {100 * diag['noise_floor']:.2g} %)" in g
+        else:
+            assert _number(r"With them the gap is ([\d.]+) %", g) == pytest.approx(100 * diag["gap_after"], abs=0.05)
         for name, params in diag["effects"].items():
             for p, v in params.items():
                 assert float(re.search(rf"{name} \([^)]*{p} = ([-\d.e+]+)", g).group(1)) == pytest.approx(v, rel=5e-3)

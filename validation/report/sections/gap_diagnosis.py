@@ -11,7 +11,7 @@ import numpy as np
 from cubedimer.atomic import save_figure as _save
 
 from ...diagnosis.identify.statistics import format_p
-from ..claims import anti_damping_text
+from ..claims import anti_damping_text, gap_value
 from ..context import ReportContext
 from ..html import Figure, Section, Table
 
@@ -204,8 +204,8 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
         f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
         f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
-        # + 0.0 turns a rounded -0.0 (a gap just below the noise floor) into 0.0
-        + (f"With them the gap is {round(100 * diagnosis.gap_after, 1) + 0.0:.1f} %: {rem['statement']}"
+        + (f"With them the gap is {_percent(gap_value(diagnosis.gap_after, diagnosis.noise_floor, percent=True))}: "
+           f"{rem['statement']}"
            if ident or pairs else
            f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
         + f".{found}"
@@ -222,6 +222,11 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
                     "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def _percent(value: float | str) -> str:
+    """A gap in per cent from :func:`gap_value` (``percent=True``): "1.0 %", or its below-the-floor sentence."""
+    return value if isinstance(value, str) else f"{value:.1f} %"
 
 
 def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
@@ -271,7 +276,7 @@ def _hinge_gap_text(cal: dict) -> str:
 def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
     """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
     rows = [[e.name, _verdict(diagnosis, e, pairs),
-             _table_params_text(e), e.gap_after, e.shrink, e.p_value,
+             _table_params_text(e), gap_value(e.gap_after, diagnosis.noise_floor), e.shrink, e.p_value,
              e.p_value_given_others]
             for e in diagnosis.effects]
     n_runs = len(diagnosis.gap_per_run["runs"])
