@@ -385,3 +385,23 @@ def test_an_effect_that_does_not_shrink_the_gap_is_not_called_identified():
     assert verdicts["pair_scattering"] == "yes"  # 0.3 -> 0.002293
     assert verdicts["mirror_asymmetry"] == ("named by its held-out test, but adding it does not shrink the gap "
                                             "(0.002293 -> 0.002329)")
+
+
+@pytest.mark.parametrize("simulated, simulated_std, shown", [
+    (-1.2e-10, 3e-9, "not determined (denominator at noise level)"),  # the lab's -2.849e+13: a number over noise
+    (0.0, 0.0, "not determined (denominator at noise level)"),  # the lab's "-0": no denominator at all
+    (2.0e4, 5e3, 2.5),  # 4 standard errors from zero at n_sigma = 2: a ratio
+])
+def test_no_ratio_over_a_denominator_at_noise_level(simulated, simulated_std, shown):
+    from validation.coefficients import TermComparison
+    from validation.report.claims import ratio_value
+    from validation.report.sections.model_vs_simulation import lead_term_reading
+
+    ratio = 5e4 / simulated if simulated else float("nan")
+    assert ratio_value(ratio, simulated, simulated_std, 2.0) == shown
+    lead = TermComparison("thetaddot", "y^2*theta", "static", True, 5e4, 5e4, 1e3, 50.0, simulated, simulated_std,
+                          ratio, True, False, 0.0, integral=5e4, integral_std_error=1e3, verdict_from="integral form",
+                          deviation_sigma=10.0)
+    reading = lead_term_reading(lead, 2.0)
+    said = shown if isinstance(shown, str) else f"{shown:.4g}"
+    assert f"ratio {said}," in reading and "e+13" not in reading
