@@ -249,9 +249,10 @@ def _drift_text(drift: dict) -> str:
     if not drift.get("tested") or drift.get("detected"):
         return ""
     if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
-        return (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
-                f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
-                "the simulation keeps one pressure. ")
+        return (f"No pressure drift: the pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, a "
+                f"variation that is statistically detectable (F-test {format_p(drift['p_value'])}) but smaller than "
+                f"the {100 * drift['min_relative_amplitude']:.2g} % counted as a drift, so the simulation keeps one "
+                "pressure. ")
     return f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
 
 
