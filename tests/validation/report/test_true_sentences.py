@@ -410,3 +410,17 @@ def test_no_ratio_over_a_denominator_at_noise_level(simulated, simulated_std, sh
     reading = lead_term_reading(lead, 2.0)
     said = shown if isinstance(shown, str) else f"{shown:.4g}"
     assert f"ratio {said}," in reading and "e+13" not in reading
+
+
+def test_the_runs_classes_are_defined_with_their_tolerances():
+    """The lab's runs at -14.6 and -165 degrees labelled independent: the class column states the classifier's
+    tolerances (frequency, phase, coherence), those of the configuration used, and the coherence is a column."""
+    from cubedimer.attractors import ClassifyConfig
+    from validation.report.sections.data import RUN_COLUMNS, run_columns
+
+    text = RUN_COLUMNS["class"]
+    assert "within 5 % of f_y" in text and "coherence of at least 0.95" in text
+    assert "in phase within 60 deg of 0, anti-phase within 60 deg of 180" in text
+    assert "independent otherwise" in text and "coherence" in RUN_COLUMNS
+    strict = run_columns(ClassifyConfig(lock_tol=0.02, phase_tol=np.pi / 6, coherence_min=0.9))["class"]
+    assert "within 2 % of f_y" in strict and "within 30 deg of 0" in strict and "at least 0.9 " in strict
