@@ -424,3 +424,27 @@ def test_the_runs_classes_are_defined_with_their_tolerances():
     assert "independent otherwise" in text and "coherence" in RUN_COLUMNS
     strict = run_columns(ClassifyConfig(lock_tol=0.02, phase_tol=np.pi / 6, coherence_min=0.9))["class"]
     assert "within 2 % of f_y" in strict and "within 30 deg of 0" in strict and "at least 0.9 " in strict
+
+
+def test_section_seven_says_a_gap_below_the_noise_floor():
+    """Section 7's gaps of the calibrated simulations: one below the subtracted floor (the fitted pair scattering's
+    -3.08e-06 here) is said to be below it, in the reading and in the table, never as a negative number."""
+    from types import SimpleNamespace
+
+    from validation.report.sections.scattering import section
+
+    def row(model, gap, components, params):
+        return SimpleNamespace(model=model, gap=gap, components=components, params=params, pressure_amplitude_pa=3000.0,
+                               origin_offset_m=1e-6, long_time_total=0.05)
+
+    models = SimpleNamespace(rows=[row("gorkov", 0.292, (0.3, 0.5, 0.076), {}),
+                                   row("gorkov+pair_scattering", -3.08e-6, (-1e-5, 2e-6, -1e-6),
+                                       {"pair_scattering": {"kappa": 19500.0}}),
+                                   row("fullwave", 0.0115, (0.01, 0.02, 0.0045), {})], to_dict=lambda: {})
+    context = SimpleNamespace(models=models, unavailable=lambda: {}, diagnosis=SimpleNamespace(noise_floor=0.003))
+    sec = section(context)
+    assert "kappa = 1.95e+04 1/s^2 fitted, below the noise floor (< 0.003)." in sec.reading
+    assert "y equation below the noise floor" not in sec.reading  # the full-wave row's components are positive
+    assert not re.search(r"-\d", sec.reading)
+    cells = [c for r in sec.tables[0].rows for c in r if isinstance(c, float)]
+    assert min(cells) > 0 and "below the noise floor (< 0.003)" in sec.tables[0].rows[1]
