@@ -49,13 +49,14 @@ def diagnosis_figures(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Figur
     fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
     names = ["calibrated\nsimulation"] + [e.name.replace("_", "\n") for e in diagnosis.effects]
     vals = [diagnosis.gap_before] + [e.gap_after for e in diagnosis.effects]
-    colors = ["0.5"] + ["tab:green" if e.significant else "tab:gray" for e in diagnosis.effects]
+    colors = ["0.5"] + ["tab:green" if e.significant and not not_shrinking(diagnosis, e) else "tab:gray"
+                        for e in diagnosis.effects]
     ax.bar(range(len(vals)), np.maximum(vals, 1e-5), color=colors)
     ax.axhline(0.01, color="k", ls="--", lw=0.8, label="'explained within noise' threshold")
     ax.set_xticks(range(len(vals)), names, fontsize=7)
     ax.set_ylabel("gap (unexplained fraction beyond noise)")
     ax.set_yscale("log")
-    ax.set_title("Gap before and after adding each effect (green: identified)")
+    ax.set_title("Gap before and after adding each effect (green: identified, shrinking the gap)")
     ax.legend(fontsize=7)
     figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
                        "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
