@@ -8,6 +8,10 @@ supports.
 * :func:`anti_damping_text` (from :mod:`fitting.description`, where the fitting methods' descriptions use it too): a
   fitted velocity coefficient that feeds energy in (anti-damping) is flagged, with what may cause it.
 * :func:`not_significant_text`: beside a test that is not significant, the smallest p its number of runs allows.
+* :func:`gap_value`: a gap (an unexplained fraction with the noise floor subtracted) below zero is "below the noise
+  floor (< floor)", never a negative number.
+* :func:`ratio_value`: a ratio whose denominator is within its stated number of standard errors of zero is "not
+  determined (denominator at noise level)", never a number.
 """
 from __future__ import annotations
 
@@ -21,7 +25,11 @@ from fitting.description import anti_damping_text
 from ..diagnosis.identify.statistics import format_p
 
 __all__ = ["REPRODUCES_BELOW", "PHASE_LINE_FRACTION", "long_time_reading", "run_phase", "anti_damping_text",
-           "smallest_wilcoxon_p", "not_significant_text"]
+           "smallest_wilcoxon_p", "not_significant_text", "gap_value",
+           "RATIO_NOT_DETERMINED", "ratio_value"]
+
+#: what the report says in place of a ratio whose denominator is not significantly different from zero
+RATIO_NOT_DETERMINED = "not determined (denominator at noise level)"
 
 #: A long-time error (attractor shape, Poincare map, frequency: 0 for a perfect model, about 1 for one that predicts no
 #: motion) below this is called reproduced: a tenth of the error of predicting no motion.
@@ -96,3 +104,38 @@ def not_significant_text(p: float, n: int, alpha: float, test: str = "one-sided 
     if not floor < alpha:
         text += f", not below {alpha:g}: {n} runs cannot show a significant difference"
     return text + ")"
+
+
+def gap_value(gap: float, noise_floor: float | None, percent: bool = False) -> float | str:
+    """A gap as the report shows it: the number where it is not negative, else ``"below the noise floor (< X)"``
+    with X the noise floor that was subtracted from it (a negative gap is an unexplained fraction below the floor).
+
+    Parameters
+    ----------
+    gap : the unexplained fraction beyond the noise floor [-]
+    noise_floor : the floor subtracted from it [-] (None: not stated)
+    percent : return the gap in per cent, rounded to 0.1 %, and state the floor in per cent
+    """
+    if not gap < 0:
+        return round(100 * gap, 1) + 0.0 if percent else gap  # + 0.0: never a signed zero
+    if noise_floor is None or not np.isfinite(noise_floor):
+        return "below the noise floor"
+    return f"below the noise floor (< {100 * noise_floor:.2g} %)" if percent else \
+        f"below the noise floor (< {noise_floor:.3g})"
+
+
+def ratio_value(ratio: float, denominator: float, denominator_std: float, n_sigma: float) -> float | str:
+    """A ratio as the report shows it: :data:`RATIO_NOT_DETERMINED` where its denominator is zero or within
+    ``n_sigma`` of its standard error of zero (the ratio of a number to noise is no result), else the ratio (a signed
+    zero made 0).
+
+    Parameters
+    ----------
+    ratio : numerator / denominator
+    denominator, denominator_std : the denominator and its standard error (same units)
+    n_sigma : how many standard errors from zero make the denominator significant (the report's verdict threshold)
+    """
+    if denominator == 0 or not np.isfinite(ratio) or (
+            np.isfinite(denominator_std) and abs(denominator) <= n_sigma * denominator_std):
+        return RATIO_NOT_DETERMINED
+    return float(ratio) + 0.0

@@ -11,7 +11,7 @@ import numpy as np
 from cubedimer.atomic import save_figure as _save
 
 from ...diagnosis.identify.statistics import format_p
-from ..claims import anti_damping_text
+from ..claims import anti_damping_text, gap_value
 from ..context import ReportContext
 from ..html import Figure, Section, Table
 
@@ -49,13 +49,14 @@ def diagnosis_figures(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Figur
     fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
     names = ["calibrated\nsimulation"] + [e.name.replace("_", "\n") for e in diagnosis.effects]
     vals = [diagnosis.gap_before] + [e.gap_after for e in diagnosis.effects]
-    colors = ["0.5"] + ["tab:green" if e.significant else "tab:gray" for e in diagnosis.effects]
+    colors = ["0.5"] + ["tab:green" if e.significant and not not_shrinking(diagnosis, e) else "tab:gray"
+                        for e in diagnosis.effects]
     ax.bar(range(len(vals)), np.maximum(vals, 1e-5), color=colors)
     ax.axhline(0.01, color="k", ls="--", lw=0.8, label="'explained within noise' threshold")
     ax.set_xticks(range(len(vals)), names, fontsize=7)
     ax.set_ylabel("gap (unexplained fraction beyond noise)")
     ax.set_yscale("log")
-    ax.set_title("Gap before and after adding each effect (green: identified)")
+    ax.set_title("Gap before and after adding each effect (green: identified, shrinking the gap)")
     ax.legend(fontsize=7)
     figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
                        "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
@@ -103,10 +104,28 @@ def _origin_text(cal: dict) -> str:
             f"(the effects' y origin) and {nominal:+.2f} um above its Z_eq at the nominal pressure. ")
 
 
-def _verdict(effect: "EffectVerdict", pairs: list[dict]) -> str:
+def gap_without(diagnosis: "Diagnosis", effect: "EffectVerdict") -> float:
+    """The gap a model effect was added to: that of the model's effects added before it (``gap_after`` of the effect
+    of the previous round), or the calibrated simulation's gap for the first."""
+    rounds = {e.added_in_round: e.gap_after for e in diagnosis.effects if e.significant and e.added_in_round}
+    return rounds.get((effect.added_in_round or 1) - 1, diagnosis.gap_before)
+
+
+def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
+    """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``."""
+    before = gap_without(diagnosis, effect)
+    if not effect.significant or effect.gap_after < before:
+        return ""
+    return (f"named by its held-out test, but adding it does not shrink the gap ({before:.4g} -> "
+            f"{effect.gap_after:.4g})")
+
+
+def _verdict(diagnosis: "Diagnosis", effect: "EffectVerdict", pairs: list[dict]) -> str:
     if any(effect.name in pr["effects"] for pr in pairs):
         return "indistinguishable"
-    return "yes" if effect.significant and effect.named else "no"
+    if effect.significant and effect.named:
+        return not_shrinking(diagnosis, effect) or "yes"
+    return "no"
 
 
 def _params_text(effect: "EffectVerdict") -> str:
@@ -142,7 +161,7 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
     named = [e for e in diagnosis.effects if e.significant and e.named]
-    parts = [f"{e.name} ({_params_text(e)})" for e in named]
+    parts = [f"{e.name} ({_params_text(e)})" for e in named if not not_shrinking(diagnosis, e)]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
@@ -153,6 +172,11 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
                  f"differs by a median {pr['median_difference']:.2g} ({format_p(pr['p_difference'])}, two-sided); the "
                  f"fitted model uses {pr['kept_in_model']}"
                  + (f" ({_params_text(kept)})" if kept else ""))
+    if not parts and not pairs:
+        text = "No candidate shrinks the gap"
+    for e in named:
+        if not_shrinking(diagnosis, e):
+            text += f"; {e.name} ({_params_text(e)}) is {not_shrinking(diagnosis, e)}"
     return text + "."
 
 
@@ -181,8 +205,8 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
         f"The calibrated simulation leaves {100 * diagnosis.gap_before:.1f} % of the data unexplained beyond the noise "
         "floor (the gap: the mean of the unexplained fractions of the vertical accelerations, the hinge angle and the "
         f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
-        # + 0.0 turns a rounded -0.0 (a gap just below the noise floor) into 0.0
-        + (f"With them the gap is {round(100 * diagnosis.gap_after, 1) + 0.0:.1f} %: {rem['statement']}"
+        + (f"With them the gap is {_percent(gap_value(diagnosis.gap_after, diagnosis.noise_floor, percent=True))}: "
+           f"{rem['statement']}"
            if ident or pairs else
            f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
         + f".{found}"
@@ -199,6 +223,11 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
                     "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
+
+
+def _percent(value: float | str) -> str:
+    """A gap in per cent from :func:`gap_value` (``percent=True``): "1.0 %", or its below-the-floor sentence."""
+    return value if isinstance(value, str) else f"{value:.1f} %"
 
 
 def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
@@ -221,9 +250,10 @@ def _drift_text(drift: dict) -> str:
     if not drift.get("tested") or drift.get("detected"):
         return ""
     if drift["p_value"] < drift["alpha"]:  # significant, but too small to matter: say both
-        return (f"The pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, below the "
-                f"{100 * drift['min_relative_amplitude']:.2g} % counted as a drift (F-test {format_p(drift['p_value'])}); "
-                "the simulation keeps one pressure. ")
+        return (f"No pressure drift: the pressure varies within runs by {100 * drift['relative_amplitude']:.2g} %, a "
+                f"variation that is statistically detectable (F-test {format_p(drift['p_value'])}) but smaller than "
+                f"the {100 * drift['min_relative_amplitude']:.2g} % counted as a drift, so the simulation keeps one "
+                "pressure. ")
     return f"No drift of the pressure within runs (F-test {format_p(drift['p_value'])}). "
 
 
@@ -247,14 +277,16 @@ def _hinge_gap_text(cal: dict) -> str:
 
 def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
     """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
-    rows = [[e.name, _verdict(e, pairs),
-             _table_params_text(e), e.gap_after, e.shrink, e.p_value,
+    rows = [[e.name, _verdict(diagnosis, e, pairs),
+             _table_params_text(e), gap_value(e.gap_after, diagnosis.noise_floor), e.shrink, e.p_value,
              e.p_value_given_others]
             for e in diagnosis.effects]
     n_runs = len(diagnosis.gap_per_run["runs"])
     smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
     columns = {
-        "identified": "yes: named as a cause, needed given all the others; indistinguishable: one of a pair the data "
+        "identified": "yes: named as a cause, needed given all the others, and shrinking the gap; named by its held-out "
+                      "test but not shrinking the gap: significant on held-out runs, yet the gap with it is not smaller "
+                      "than without it (both gaps given); indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
         "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife; "
                            "the 95 % interval is in diagnosis.json); a rejected candidate's fit is no result: the "

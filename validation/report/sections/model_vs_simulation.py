@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..claims import RATIO_NOT_DETERMINED, ratio_value
 from ..context import ReportContext
 from ..html import Section, Table
 
@@ -53,9 +54,10 @@ def lead_term_reading(lead, n_sigma: float) -> str:
     sim = f"simulated {lead.simulated:.3g} +- {lead.simulated_std:.3g} 1/(m^2 s^2)"
     if lead.verdict_from == "integral form":
         z = lead.integral / lead.integral_std_error
+        ratio = ratio_value(lead.ratio, lead.simulated, lead.simulated_std, n_sigma)
         return (f"The theta*y^2 coupling: the pooled integral-form fit (position space, coefficients shared by all runs) "
                 f"selects it with {lead.integral:.3g} +- {lead.integral_std_error:.2g} (z = {z:.1f}), against the {sim}; "
-                f"they {verdict} ({n_sigma:g} sigma; ratio {lead.ratio:.4g}, {lead.deviation_sigma:.2g} combined standard "
+                f"they {verdict} ({n_sigma:g} sigma; ratio {ratio if isinstance(ratio, str) else f'{ratio:.4g}'}, {lead.deviation_sigma:.2g} combined standard "
                 f"deviations apart). The per-run acceleration fits ({ensemble}) "
                 "scatter from run to run far more than the pooled estimate's standard error, so the verdict uses the pooled estimate.")
     return (f"The theta*y^2 coupling: {ensemble}; the pooled integral-form fit does not select it; {sim}. "
@@ -91,6 +93,8 @@ def section(context: ReportContext) -> Section:
         f" The {o.label} model, with no fitted stiffness, gives {o.coefficients.rows[0].simulated:.3g} +- "
         f"{o.coefficients.rows[0].simulated_std:.2g} for theta*y^2, against the {ref.label} {lead.simulated:.3g}; its "
         "column below is its own calibrated sweep over the same box." for o in others)
+    ratio_note = {"ratio": f"the verdict's estimate / simulated; {RATIO_NOT_DETERMINED} where the "
+                           f"simulated value is within {coef_cmp.n_sigma:g} of its standard errors of zero"}
     header = ["equation", "term", "kind", "fitted", "ensemble mean", "ensemble std", "z", "integral form", "integral SE",
               "simulated", "simulated std", "verdict from", "ratio", "signs agree", "deviation [combined sigma]",
               f"within {coef_cmp.n_sigma:g} sigma"]
@@ -100,7 +104,8 @@ def section(context: ReportContext) -> Section:
     def table_row(r) -> list:
         row = [r.equation, r.term, "static" if r.kind == "static" else "dynamic only", r.fitted, r.fitted_mean, r.fitted_std,
                r.fitted_z, r.integral, r.integral_std_error, r.simulated, r.simulated_std,
-               r.verdict_from if r.kind == "static" else None, r.ratio, r.signs_agree, r.deviation_sigma,
+               r.verdict_from if r.kind == "static" else None,
+               ratio_value(r.ratio, r.simulated, r.simulated_std, coef_cmp.n_sigma), r.signs_agree, r.deviation_sigma,
                r.within_uncertainty]
         for rows in other_rows:
             f = rows.get((r.equation, r.term))
@@ -119,5 +124,5 @@ def section(context: ReportContext) -> Section:
         f"about the data's origin ({coef_cmp.origin}). Velocity terms have no static prediction.",
         [],
         [Table(f"Coefficients (SI), the theta*y^2 term first; 'simulated' is the {ref.label} model; the verdict columns "
-               "use the estimate named in 'verdict from'", header, [table_row(r) for r in shown])],
+               "use the estimate named in 'verdict from'", header, [table_row(r) for r in shown], ratio_note)],
         numbers5)

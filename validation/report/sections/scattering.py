@@ -3,6 +3,7 @@
 stiffness, each calibrated alone)."""
 from __future__ import annotations
 
+from ..claims import gap_value
 from ..context import ReportContext
 from ..html import Section, Table
 
@@ -19,21 +20,29 @@ def section(context: ReportContext) -> Section:
     g0, gp = models.rows[0], models.rows[1]
     ref_label = force_model_type(g0.model).label
     kappa = gp.params.get("pair_scattering", {}).get("kappa", float("nan"))
+    floor = context.diagnosis.noise_floor
+
+    def shown(gap: float, noise_floor: float | None = floor) -> str:
+        """A gap as said in the reading: 3 digits, or below the noise floor."""
+        value = gap_value(gap, noise_floor)
+        return value if isinstance(value, str) else f"{value:.3g}"
+
     text = (f"How far the gap shrinks once the scattering between the cubes is added. Each simulation is calibrated alone "
-            f"(pressure and origin) on the same runs. The {ref_label} model leaves a gap of {g0.gap:.3g}; with the "
-            f"phenomenological pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {gp.gap:.3g}.")
+            f"(pressure and origin) on the same runs. The {ref_label} model leaves a gap of {shown(g0.gap)}; with the "
+            f"phenomenological pair scattering, its stiffness kappa = {kappa:.3g} 1/s^2 fitted, {shown(gp.gap)}.")
     for r in models.rows[2:]:
         t = force_model_type(r.model)
         text += (f" The {t.label} model, whose hinge comes from its own physics with no fitted stiffness, "
-                 f"leaves {r.gap:.3g} (y equation {r.components[0]:.3g}, theta equation {r.components[1]:.3g}, energy "
-                 f"{r.components[2]:.3g}).")
+                 f"leaves {shown(r.gap)} (y equation {shown(r.components[0], None)}, theta equation "
+                 f"{shown(r.components[1], None)}, energy {shown(r.components[2], None)}).")
     text += "".join(f" The {force_model_type(n).label} model is not compared: {why}."
                     for n, why in context.unavailable().items())
     table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
                   "0 perfect, about 1 for no motion)",
                   ["simulation", "pressure [Pa]", "origin offset [um]", "y equation", "theta equation", "energy", "gap",
                    "long-time error", "fitted parameters"],
-                  [[row_label(r.model), r.pressure_amplitude_pa, r.origin_offset_m * 1e6, *r.components, r.gap,
+                  [[row_label(r.model), r.pressure_amplitude_pa, r.origin_offset_m * 1e6,
+                    *(gap_value(c, None) for c in r.components), gap_value(r.gap, floor),
                     r.long_time_total, ", ".join(f"{p} = {v:.4g}" for e in r.params.values() for p, v in e.items()) or None]
                    for r in models.rows],
                   {"pressure [Pa]": "the simulation's calibrated pressure amplitude",
