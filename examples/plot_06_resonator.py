@@ -46,8 +46,9 @@ print(f"ring time tau = {1e3 * Q / (np.pi * medium.frequency_hz):.2f} ms, "
 # The exact rate is the largest real part of the roots of the linearised system's quartic; the first-order formula
 # expands it in the coupling.
 detunings = np.linspace(-4.0, 4.0, 81)
-exact = np.array([LinearCavityCoupling.from_cavity(cavity(x)).growth_rate() for x in detunings])
-first_order = np.array([LinearCavityCoupling.from_cavity(cavity(x)).first_order_growth_rate() for x in detunings])
+linear = [LinearCavityCoupling.from_cavity(cavity(x)) for x in detunings]
+exact = np.array([lin.growth_rate() for lin in linear])
+first_order = np.array([lin.first_order_growth_rate() for lin in linear])
 
 # %%
 # The same rate measured on the integrated system, from 1 um of y, at three detunings.
@@ -63,8 +64,8 @@ def measured_rate(x: float, duration: float = 1.5) -> float:
 probe = [-2.0, -1.0, 1.0]
 measured = [measured_rate(x) for x in probe]
 for x, m in zip(probe, measured):
-    lin = LinearCavityCoupling.from_cavity(cavity(x)).growth_rate()
-    print(f"x = {x:+.1f}: linear theory {lin:+.3f} 1/s, simulation {m:+.3f} 1/s")
+    rate = LinearCavityCoupling.from_cavity(cavity(x)).growth_rate()
+    print(f"x = {x:+.1f}: linear theory {rate:+.3f} 1/s, simulation {m:+.3f} 1/s")
 
 fig, ax = plt.subplots(figsize=(6.0, 3.6), constrained_layout=True)
 ax.axhline(0.0, color="0.6", lw=0.8)
