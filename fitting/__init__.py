@@ -8,8 +8,10 @@ regression with pysindy (C0), long-time refinement per run, ensemble selection b
 (:data:`SELECTION_RULES`) and joint re-optimisation of the minimal model.  Public API:
 
 * fitting a data set: :func:`fit_dataset` (load and fit, no output files), :func:`fit_runs`, :func:`prepare_runs`,
-  :class:`FitConfig` and the stage configs, :class:`FitResult` (with the method's own ``extras``, e.g.
-  :class:`EnsembleExtras`), :func:`write_fit` (model.json and figures), :class:`NoSaneModelError`;
+  :class:`FitConfig` with each method's own settings (:class:`DiscoveryMethodConfig`, :class:`PaperMethodConfig`,
+  both :class:`MethodConfig`) and the stage configs, :class:`FitResult` (with the method's own ``extras``, e.g.
+  :class:`EnsembleExtras`), :func:`write_fit` (model.json and figures), :func:`recorded_settings` (a model.json's
+  settings in today's layout, whatever release wrote them), :class:`NoSaneModelError`;
 * the registries: :data:`METHODS`, :class:`FittingMethod` (with :class:`MethodDescription`, a method's account of its
   result), :class:`FitContext`, :func:`register_method`;
   :data:`SELECTION_RULES`, :class:`SelectionRule`, :func:`register_selection_rule`;
@@ -27,9 +29,6 @@ many periods) -> :mod:`fitting.uncertainty` (oracle standard errors, the fallbac
 :mod:`fitting.output` (model.json and figures).  The model (:mod:`fitting.model`, :mod:`fitting.integrate`), the
 settings (:mod:`fitting.config`), the results and Holm's rule (:mod:`fitting.multiple_testing`) are shared by all.
 """
-import importlib
-import sys
-
 import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.compile_cache)
 from cubedimer.distribution import __version__
 from .compare import compare_models
@@ -38,8 +37,9 @@ from .derivatives.savitzky_golay import SmoothingConfig
 from .description import MethodDescription
 from .fit import fit_dataset, fit_runs, prepare_runs
 from .methods.registry import METHODS, FitContext, FittingMethod, register_method
+from .methods.settings import DiscoveryMethodConfig, MethodConfig, PaperMethodConfig
 from .model import PolynomialModel, Scales
-from .output.model_file import write_fit
+from .output.model_file import recorded_settings, write_fit
 from .refinement.long_time import RefineConfig
 from .refinement.losses import LossWeights
 from .results import EnsembleExtras, FitResult
@@ -54,8 +54,8 @@ from .uncertainty.oracle import NoiseLevels, oracle_standard_errors
 from .uncertainty.run_planning import PlanConfig, plan_runs
 
 __all__ = [
-    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "FitResult", "EnsembleExtras", "write_fit",
-    "NoSaneModelError",
+    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "MethodConfig", "DiscoveryMethodConfig",
+    "PaperMethodConfig", "FitResult", "EnsembleExtras", "write_fit", "recorded_settings", "NoSaneModelError",
     "SmoothingConfig", "RegressionConfig", "RefineConfig", "LossWeights", "EnsembleConfig", "SelectionConfig",
     "DiscoveryConfig",
     "METHODS", "FittingMethod", "MethodDescription", "FitContext", "register_method",
@@ -65,8 +65,3 @@ __all__ = [
     "compare_models", "SyntheticConfig", "paper_reduced_model", "write_dataset", "generic_example_model",
     "write_generic_example",
 ]
-
-#: Module paths of earlier releases that scripts still import: the same module objects under their former names.
-_FORMER_MODULES = {"discovery": ".selection.integral_discovery", "oracle": ".uncertainty.oracle"}
-for _former, _current in _FORMER_MODULES.items():
-    sys.modules.setdefault(f"{__name__}.{_former}", importlib.import_module(_current, __name__))

@@ -1,8 +1,8 @@
 """The model-discovery pipeline: data -> prepared runs -> the registered method -> one :class:`FitResult`.
 
 :func:`fit_dataset` loads a data set (:func:`cubedimer.dataset.load_dataset`), smooths and differentiates every
-run and classifies its attractor (:func:`prepare_runs`), and hands the prepared runs to the method that
-``FitConfig.method`` names in :data:`fitting.methods.registry.METHODS` (:func:`fit_runs`): ``"discovery"``
+run and classifies its attractor (:func:`prepare_runs`), and hands the prepared runs to the method whose settings
+``FitConfig.method`` holds, in :data:`fitting.methods.registry.METHODS` (:func:`fit_runs`): ``"discovery"``
 (:mod:`fitting.methods.discovery`, the default) or ``"paper"`` (:mod:`fitting.methods.paper`).  It writes nothing but the
 method's resume cache (``cache_dir``); the fit command writes model.json and the figures
 (:func:`fitting.output.model_file.write_fit`).
@@ -64,7 +64,7 @@ def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[
 def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig = FitConfig(),
              executor: ExecutorConfig | None = None, cache_dir: str | os.PathLike | None = None,
              progress: bool = True, noise: NoiseLevels | None = None) -> FitResult:
-    """Fit prepared runs with the registered method ``config.method``.
+    """Fit prepared runs with the registered method whose settings ``config.method`` holds.
 
     Parameters
     ----------
@@ -79,7 +79,7 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     noise : NoiseLevels, optional
         The oracle's tracking noise (default: estimated from the runs).
     """
-    method = get_method(config.method)
+    method = get_method(config.method.name)
     return method.fit(prepared, scales, config, FitContext(executor, cache_dir, progress, noise))
 
 

@@ -15,9 +15,9 @@ __all__ = ["METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "method_names", "get_m
 #: The method a fit uses unless told otherwise.
 DEFAULT_METHOD = "discovery"
 
-#: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method lists those it
-#: accepts in ``FittingMethod.options``): the discovery's practical threshold and the paper regression's relative
-#: threshold.
+#: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method's settings list
+#: those they accept in ``MethodConfig.options`` and apply each with ``with_<option>``): the discovery's practical
+#: threshold, output error and term cap, and the paper regression's relative threshold.
 METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "output_error", "max_terms", "relative_threshold")
 
 #: name -> method, in registration order (the default first).
@@ -39,7 +39,7 @@ def get_method(name: str) -> Any:
 
 def methods_accepting(option: str) -> tuple[str, ...]:
     """The registered methods that accept the method-specific ``option`` (an entry of :data:`METHOD_OPTIONS`)."""
-    return tuple(name for name, m in METHODS.items() if option in m.options)
+    return tuple(name for name, m in METHODS.items() if option in m.config_type.options)
 
 
 def methods_help() -> str:

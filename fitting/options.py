@@ -2,8 +2,10 @@
 
 Every command that fits (``python -m fitting fit``, ``python -m validation report``) adds the same options with
 :func:`add_fit_options` and turns them into its configuration with :func:`fit_config_from_args`, so that an option
-means the same everywhere (``--max-evals``: the evaluations of the method's own refinement, ``FittingMethod.
-max_evals_setting``) and a method-specific option is refused, in one line, by a method that does not accept it.
+means the same everywhere (``--max-evals``: the evaluations of the method's own refinement,
+``MethodConfig.max_evals_setting``) and a method-specific option acts on the method's own settings
+(``FitConfig.method``) and is refused, in one line, by a method whose settings do not accept it
+(``MethodConfig.options``).
 The defaults the help names are read from the configs themselves.
 """
 from __future__ import annotations
@@ -14,7 +16,7 @@ from dataclasses import replace
 from cubedimer.cli import UserInputError, positive_float, positive_int
 from cubedimer.dataset import LoadConfig
 from .config import OUTPUT_ERROR_MODES, FitConfig
-from .method_names import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_accepting, methods_help
+from .method_names import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_help
 from .refinement.long_time import JOINT_REFINE
 from .selection.rules import SELECTION_RULES
 
@@ -67,37 +69,28 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
 
 
 def fit_config_from_args(args: argparse.Namespace) -> FitConfig:
-    """The :class:`FitConfig` of the options of :func:`add_fit_options`; :class:`cubedimer.cli.UserInputError` (one
-    line naming the option) for an option the method does not accept or a value out of range."""
-    method = METHODS[args.method]
+    """The :class:`FitConfig` of the options of :func:`add_fit_options`: the method's default settings
+    (``FittingMethod.config_type``) with the options applied to them and to the shared stages;
+    :class:`cubedimer.cli.UserInputError` (one line naming the option) for an option the method does not accept
+    (``MethodConfig.options``) or a value out of range."""
     if args.selection and args.method not in SELECTION_RULES[args.selection].methods:
         raise UserInputError(f"--selection {args.selection} applies to --method "
                              f"{', '.join(SELECTION_RULES[args.selection].methods)}")
-    try:
-        cfg = FitConfig(method=args.method).with_heldout_tolerance(args.heldout_tolerance)
-    except ValueError as exc:
-        raise UserInputError(f"--heldout-tolerance {exc}") from None
-    try:
-        cfg = cfg.with_output_error(args.output_error)
-    except ValueError as exc:
-        raise UserInputError(f"--output-error {exc}") from None
-    for option in METHOD_OPTIONS:  # the options only some methods accept: the method says which
-        if getattr(args, option) not in (None, False) and option not in method.options:
-            raise UserInputError(f"--{option.replace('_', '-')} applies to --method "
-                                 f"{', '.join(methods_accepting(option))}")
-    if args.max_evals:
-        main_refine = getattr(cfg, method.max_evals_setting)
-        cfg = replace(cfg, **{method.max_evals_setting: replace(main_refine, max_evals=args.max_evals)})
+    cfg = FitConfig.for_method(args.method)
+    for option in METHOD_OPTIONS:  # the options only some methods accept: the method's settings say which
+        value = getattr(args, option, None)
+        try:
+            cfg = cfg.with_method_option(option, None if value is False else value)
+        except ValueError as exc:
+            raise UserInputError(f"--{option.replace('_', '-')} {exc}") from None
+    settings = cfg.method.with_max_evals(args.max_evals) if args.max_evals else cfg.method
     if args.joint_max_evals:
-        cfg = replace(cfg, joint=replace(cfg.joint, max_evals=args.joint_max_evals))
-    if getattr(args, "max_terms", None) is not None:
-        cfg = replace(cfg, discovery=replace(cfg.discovery, max_terms=args.max_terms))
-    if args.relative_threshold:
-        cfg = replace(cfg, regression=replace(cfg.regression, relative_threshold=True))
+        settings = settings.with_joint_max_evals(args.joint_max_evals)
     if args.selection:
-        cfg = replace(cfg, selection=replace(cfg.selection, rule=args.selection))
+        settings = replace(settings, selection=replace(settings.selection, rule=args.selection))
+    load = cfg.load
     if args.no_glitch_mask:
-        cfg = replace(cfg, load=replace(cfg.load, glitches=None))
+        load = replace(load, glitches=None)
     if args.min_periods is not None:
-        cfg = replace(cfg, load=replace(cfg.load, min_periods=args.min_periods))
-    return cfg
+        load = replace(load, min_periods=args.min_periods)
+    return replace(cfg, load=load, method=settings)

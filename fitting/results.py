@@ -156,7 +156,7 @@ class EnsembleExtras:
         z-score rule gives."""
         return {"rule": rule if rule is not None else result.method,
                 "mean_pvalues": self.stats.as_dict(mean_pvalues(self.stats)),
-                "zscore_rule": {"z_threshold": result.config.ensemble.z_threshold,
+                "zscore_rule": {"z_threshold": result.config.method.ensemble.z_threshold,
                                 "selected_terms": support_terms(self.mask_zscore)}}
 
 
@@ -212,4 +212,4 @@ class FitResult:
     @property
     def method(self) -> str:
         """The method that produced the result."""
-        return self.config.method
+        return self.config.method.name

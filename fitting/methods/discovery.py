@@ -1,12 +1,13 @@
 """The default fit: integral-form discovery, long-time polish, attractor check, fallback.
 
-Steps of :meth:`DiscoveryMethod.fit` (``FitConfig(method="discovery")``, the default of ``python -m fitting fit``):
+Steps of :meth:`DiscoveryMethod.fit` (settings :class:`fitting.methods.settings.DiscoveryMethodConfig`, the default
+of :class:`fitting.config.FitConfig` and of ``python -m fitting fit``):
 
 1. :func:`fitting.selection.integral_discovery.discover_model` selects the terms and fits them by integral-form least
    squares on all runs pooled (with their standard errors).
 2. The long-time refinement (:func:`fitting.refinement.long_time.refine`: attractor shape, Poincare map, frequency)
-   polishes the discovered coefficients jointly on all runs inside a box of ``FitConfig.polish_se``
-   standard errors around them (``FitConfig.polish``), so the polish cannot undo what the data resolve.
+   polishes the discovered coefficients jointly on all runs inside a box of ``polish_se``
+   standard errors around them (``polish``), so the polish cannot undo what the data resolve.
    The per-run losses of the polished model are the attractor check.
 3. If the polished model blows up on any run, the fallbacks are tried: the discovered model as the
    regression gave it, then those of :func:`fitting.uncertainty.final_checks.fallback_candidates` (the terms dropped in
@@ -29,6 +30,7 @@ from ..config import FitConfig
 from ..description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
                            model_found_text)
 from ..model import PolynomialModel, Scales
+from ..output.model_file import fit_record, recorded_settings
 from ..refinement.long_time import refine
 from ..results import EnsembleExtras, FitResult, PreparedRun, RunEstimate
 from ..selection.ensemble import least_squares_on_support, select_terms, term_statistics
@@ -38,6 +40,7 @@ from ..selection.rules import support_text
 from ..selection.sparse_regression import scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
 from .registry import FitContext, register_method
+from .settings import DiscoveryMethodConfig
 
 __all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE", "FRONT_FIGURE"]
 
@@ -73,32 +76,29 @@ class DiscoveryMethod:
 
     name: str = "discovery"
     summary: str = ("integral-form discovery with model-based states, polished by the long-time refinement")
-    #: the discovery's own settings (a paper fit's model.json leaves them out)
-    private_settings: tuple[str, ...] = ("discovery", "polish", "polish_se")
-    #: ``--heldout-tolerance``: the practical threshold of the held-out selection
-    options: tuple[str, ...] = ("heldout_tolerance", "output_error", "max_terms")
-    #: ``--max-evals`` sets the evaluations of the long-time polish
-    max_evals_setting: str = "polish"
+    #: its settings (``FitConfig.method``), with the options it accepts
+    config_type: type = DiscoveryMethodConfig
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
         """Steps 1-5 of the module docstring on prepared runs; the result's ``extras`` (:class:`DiscoveryExtras`)
         hold the discovery's path."""
         derivs = [p.derivs for p in prepared]
-        disc = discover_model([p.run for p in prepared], derivs, config.discovery)
+        settings: DiscoveryMethodConfig = config.method
+        disc = discover_model([p.run for p in prepared], derivs, settings.selection)
         mask = disc.mask
         logger.info("discovery (%s after %d passes): %d terms: %s", "converged" if disc.converged else "not converged",
                     len(disc.iterations), int(mask.sum()), support_text(mask))
         # ---- long-time polish inside a box of a few standard errors ------------------------------------------------
         start = disc.model
         se_scaled = np.abs(scales.to_scaled(disc.std_errors))
-        half = np.where(mask, np.maximum(config.polish_se * se_scaled, 1e-12), 0.0)
+        half = np.where(mask, np.maximum(settings.polish_se * se_scaled, 1e-12), 0.0)
         logger.info("long-time polish of the discovered model on %d runs (box +-%g standard errors)", len(derivs),
-                    config.polish_se)
-        joint = refine(start, derivs, scales, config.polish, mask=mask, half_width=half)
+                    settings.polish_se)
+        joint = refine(start, derivs, scales, settings.polish, mask=mask, half_width=half)
         # ---- per run: least squares on the selected terms (per_run and zscores of model.json) ----------------------
         X, A = scaled_data(derivs, scales)
-        lib = scaled_library(derivs, scales, config.regression.matched_filter)
+        lib = scaled_library(derivs, scales, settings.regression.matched_filter)
         run_fits = [RunEstimate(name=p.run.name,
                                 model=PolynomialModel(scales.to_si(least_squares_on_support([X[k]], [A[k]], mask,
                                                                                             [lib[k]]))),
@@ -112,18 +112,16 @@ class DiscoveryMethod:
         if joint.loss_end.blown_up:
             first = [("discovered model without the polish (integral-form least squares)", start)]
             joint_start, joint, fallback = fall_back(joint, mask, stats, [f.model for f in run_fits], None, derivs,
-                                                     scales, config, first=first, z=disc.z)
+                                                     scales, settings.joint, first=first, z=disc.z)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
-        extras = DiscoveryExtras(stats=stats, mask_zscore=select_terms(stats, config.ensemble), discovery=disc)
+        extras = DiscoveryExtras(stats=stats, mask_zscore=select_terms(stats, settings.ensemble), discovery=disc)
         return FitResult(runs=list(prepared), scales=scales, pooled_regression=disc.model, run_fits=run_fits, mask=mask,
                          joint_start=joint_start, joint=joint, config=config, extras=extras, fallback=fallback,
                          oracle=oracle)
 
     def describe(self, result: FitResult) -> MethodDescription:
         """:func:`discovery_description` of the result's model.json record."""
-        from ..output.model_file import fit_record
-
         return discovery_description(fit_record(result))
 
 
@@ -167,12 +165,13 @@ def discovery_description(record: dict) -> MethodDescription:
             "Phi(-alias z / 2) of data sets).")
     damping = [f"{t} in {eq}" for eq, t in (("yddot", "ydot"), ("thetaddot", "thetadot")) if t in record["equations"][eq]]
     rates = damping_rates(record["equations"])
-    if damping and (record.get("settings") or {}).get("discovery", {}).get("keep_damping", True):
+    selection = recorded_settings(record)["discovery"].get("selection") or {}
+    if damping and selection.get("keep_damping", True):
         text += (f" The damping terms ({', '.join(damping)}) are kept as physical damping whatever their significance, as in "
                  "the source paper; Holm's rule selects the other terms.")
     # the rule keeps them as damping; a fitted rate of the wrong sign is said to be none
     text += anti_damping_text(rates)
-    text += model_error_text(disc, (record.get("settings") or {}).get("discovery") or {})
+    text += model_error_text(disc, selection)
     if close:
         text += " Terms close to an alias: " + "; ".join(close) + "."
     text += (" The Pareto front shows how much held-out error each further term buys: on a truth that is not sparse in "
@@ -221,7 +220,8 @@ def front_text(front: dict | None) -> str:
 
 def model_error_text(disc: dict, settings: dict) -> str:
     """The sentences on the equations selected by held-out prediction because their residual showed model error
-    (model.json's ``discovery[eq]["selection"]``, the rule's settings from ``settings["discovery"]``) and on the
+    (model.json's ``discovery[eq]["selection"]``, the rule's settings ``settings``: the discovery's selection
+    settings, :func:`fitting.output.model_file.recorded_settings` ``["discovery"]["selection"]``) and on the
     output-error refinement of the coefficients (``discovery["output_error"]``); empty when every equation was
     selected by significance."""
     parts = []

@@ -42,6 +42,7 @@ from ..selection.rules import SELECTION_RULES, SelectionEvidence, support_text
 from ..selection.sparse_regression import fit_regression, scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
 from .registry import FitContext, register_method
+from .settings import PaperMethodConfig
 
 __all__ = ["PaperMethod", "PaperExtras", "candidate_terms", "refine_run"]
 
@@ -74,7 +75,7 @@ class PaperExtras(EnsembleExtras):
         in ``integral_form``."""
         selection = self.selection_record(result, self.rule)
         if self.selection is not None:
-            selection["backward"] = {"alpha": result.config.selection.alpha,
+            selection["backward"] = {"alpha": result.config.method.selection.alpha,
                                      "selected_terms": support_terms(self.selection.mask),
                                      "steps": [s.to_dict() for s in self.selection.steps]}
         if self.candidate_fit is not None:
@@ -93,7 +94,7 @@ def candidate_terms(c0_joint: PolynomialModel) -> np.ndarray:
     return mask
 
 
-def refine_run(task: tuple[str, Derivatives, Scales, FitConfig, np.ndarray | None]) -> RunFit:
+def refine_run(task: tuple[str, Derivatives, Scales, PaperMethodConfig, np.ndarray | None]) -> RunFit:
     """Per-run regression (C0) and long-time refinement; module-level so it can be pickled."""
     name, d, scales, config, candidates = task
     c0 = fit_regression([d], scales, config.regression, candidates=candidates)
@@ -109,7 +110,7 @@ def _fingerprint(p: PreparedRun, scales: Scales, config: FitConfig, candidates: 
     h = hashlib.sha256()
     for a in (p.run.t, p.run.y, p.run.theta):
         h.update(np.ascontiguousarray(a).tobytes())
-    h.update(repr((scales, config.smoothing, config.regression, config.refine)).encode())
+    h.update(repr((scales, config.smoothing, config.method.regression, config.method.refine)).encode())
     h.update(np.packbits(candidates).tobytes())
     return h.hexdigest()[:32]
 
@@ -143,7 +144,7 @@ def _refine_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitCon
         if cache is not None:
             write_json(cache / f"{Path(rf.name).stem}.json", {**rf.to_json(), "fingerprint": fps[i]})
 
-    map_ordered(refine_run, [(prepared[i].run.name, derivs[i], scales, config, candidates) for i in todo],
+    map_ordered(refine_run, [(prepared[i].run.name, derivs[i], scales, config.method, candidates) for i in todo],
                 config=context.executor, desc="refining runs", progress=context.progress, on_result=save)
     return list(fits)  # type: ignore[arg-type]
 
@@ -155,35 +156,32 @@ class PaperMethod:
     name: str = "paper"
     summary: str = ("per-run SINDy and long-time refinement, ensemble selection (--selection), joint "
                     "re-optimisation of the minimal model")
-    #: none: a discovery fit records the whole configuration (model.json ``settings``)
-    private_settings: tuple[str, ...] = ()
-    #: ``--relative-threshold`` of the per-run regressions
-    options: tuple[str, ...] = ("relative_threshold",)
-    #: ``--max-evals`` sets the evaluations of each per-run refinement
-    max_evals_setting: str = "refine"
+    #: its settings (``FitConfig.method``), with the options it accepts
+    config_type: type = PaperMethodConfig
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
         """Steps 1-5 of the module docstring on prepared runs."""
         derivs = [p.derivs for p in prepared]
+        settings: PaperMethodConfig = config.method
         try:
-            integral = integral_form_selection([p.run for p in prepared], derivs, alpha=config.selection.alpha)
+            integral = integral_form_selection([p.run for p in prepared], derivs, alpha=settings.selection.alpha)
             logger.info("pooled integral form (cross-check): %s", "; ".join(
                 f"{eq}: " + ", ".join(f"{t} {c:.3g} +- {e:.2g}" for t, c, e in zip(s.terms, s.coefficients, s.std_errors))
                 for eq, s in integral.items()))
         except ValueError as err:  # runs shorter than one window
             logger.info("pooled integral form skipped: %s", err)
             integral = None
-        c0_joint = fit_regression(derivs, scales, config.regression)
+        c0_joint = fit_regression(derivs, scales, settings.regression)
         candidates = candidate_terms(c0_joint)
         run_fits = _refine_runs(prepared, scales, config, candidates, context)
         # ---- ensemble and selection ----------------------------------------------------
         stats = term_statistics([f.refined for f in run_fits])
-        mask_z = select_terms(stats, config.ensemble)
-        logger.info("z-score rule (z > %g plus damping): %d terms: %s", config.ensemble.z_threshold,
+        mask_z = select_terms(stats, settings.ensemble)
+        logger.info("z-score rule (z > %g plus damping): %d terms: %s", settings.ensemble.z_threshold,
                     int(mask_z.sum()), support_text(mask_z))
         X, A = scaled_data(derivs, scales)
-        lib = scaled_library(derivs, scales, config.regression.matched_filter)
+        lib = scaled_library(derivs, scales, settings.regression.matched_filter)
         refs = [scaled_reference(d, scales) for d in derivs]
         per_run_scaled = np.array([scales.to_scaled(f.refined.coef) for f in run_fits])
 
@@ -199,36 +197,36 @@ class PaperMethod:
             return best
 
         selection = cand_fit = None
-        rule = SELECTION_RULES[config.selection.rule]
-        eliminate = rule.eliminates(config.selection)
-        if eliminate and 0.5 ** len(derivs) >= config.selection.alpha:
+        rule = SELECTION_RULES[settings.selection.rule]
+        eliminate = rule.eliminates(settings.selection)
+        if eliminate and 0.5 ** len(derivs) >= settings.selection.alpha:
             # the one-sided paired Wilcoxon test on R runs cannot reach p < alpha (min p = 2^-R)
             logger.info("%d runs are too few for the Wilcoxon test at alpha = %g: using the z-score rule", len(derivs),
-                        config.selection.alpha)
+                        settings.selection.alpha)
             rule, eliminate = SELECTION_RULES["zscore"], False
-        mask = rule.support(SelectionEvidence(stats, mask_z, candidates, config.ensemble), config.selection)
+        mask = rule.support(SelectionEvidence(stats, mask_z, candidates, settings.ensemble), settings.selection)
         if eliminate:
-            val, c = best_start(mask, config.candidate_joint)
+            val, c = best_start(mask, settings.candidate_joint)
             logger.info("joint refinement of the %d candidate terms (start loss %.4g)", int(mask.sum()), val)
-            cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, config.candidate_joint, mask=mask)
+            cand_fit = refine(PolynomialModel(scales.to_si(c)), derivs, scales, settings.candidate_joint, mask=mask)
             logger.info("backward elimination on the joint loss (start loss %.4g)", cand_fit.loss_end.total)
-            selection = backward_elimination(cand_fit.model, mask, derivs, scales, config.selection, context.executor)
+            selection = backward_elimination(cand_fit.model, mask, derivs, scales, settings.selection, context.executor)
             mask = selection.mask
             c = scales.to_scaled(selection.model.coef)
             val = float(np.mean(selection.per_run))
         else:
-            val, c = best_start(mask, config.joint)
+            val, c = best_start(mask, settings.joint)
         logger.info("selected (%s) %d terms: %s", rule.name, int(mask.sum()), support_text(mask))
         # ---- joint re-optimisation of the minimal model -----------------------------------
         joint_start = PolynomialModel(scales.to_si(c))
         logger.info("joint re-optimisation of the minimal model on %d runs (start loss %.4g)", len(derivs), val)
-        joint = refine(joint_start, derivs, scales, config.joint, mask=mask)
+        joint = refine(joint_start, derivs, scales, settings.joint, mask=mask)
         logger.info("final mean loss %.4g (shape %.3g, Poincare %.3g, frequency %.3g)", joint.loss_end.total,
                     joint.loss_end.shape, joint.loss_end.poincare, joint.loss_end.frequency)
         fallback = None
         if joint.loss_end.blown_up:
             joint_start, joint, fallback = fall_back(joint, mask, stats, [f.c0 for f in run_fits], integral, derivs,
-                                                     scales, config)
+                                                     scales, settings.joint)
             mask = joint.model.support
         oracle = final_oracle(joint.model, prepared, context.noise)
         extras = PaperExtras(stats=stats, mask_zscore=mask_z, rule=rule.name, selection=selection,

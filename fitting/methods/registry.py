@@ -1,8 +1,10 @@
 """The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
 
 A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
-lists it), the method-specific options it accepts, ``fit(prepared, scales, config, context)``, which turns prepared
-runs into one :class:`fitting.results.FitResult`, and ``describe(result)``, its own account of that result
+lists it), the class of its own frozen settings (``config_type``, :mod:`fitting.methods.settings`: what
+:class:`fitting.config.FitConfig` ``method`` holds, with the method-specific options they accept),
+``fit(prepared, scales, config, context)``, which turns prepared runs into one :class:`fitting.results.FitResult`,
+and ``describe(result)``, its own account of that result
 (:class:`fitting.description.MethodDescription`: the report's paragraph, table and figures of the fit).  It is
 registered once with :func:`register_method`; the fit command, the report command and
 :func:`fitting.fit.fit_runs` read :data:`METHODS` (like scipy's ``solve_ivp`` ``METHODS``; the names live in
@@ -26,6 +28,7 @@ from ..method_names import (DEFAULT_METHOD, METHOD_OPTIONS, METHODS, get_method,
 from ..model import Scales
 from ..results import FitResult, PreparedRun
 from ..uncertainty.oracle import NoiseLevels
+from .settings import MethodConfig
 
 __all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
            "method_names", "get_method", "methods_accepting", "methods_help"]
@@ -63,22 +66,16 @@ class FittingMethod(Protocol):
         The registry key (``--method NAME``).
     summary : str
         One sentence for the command-line help.
-    private_settings : tuple of str
-        :class:`~fitting.config.FitConfig` fields only this method reads; the ``settings`` recorded in
-        another method's model.json leave them out.
-    options : tuple of str
-        The method-specific options (:data:`METHOD_OPTIONS`) this method accepts; the fit command and
-        :meth:`~fitting.config.FitConfig.with_heldout_tolerance` refuse one the method does not list.
-    max_evals_setting : str
-        The :class:`~fitting.config.FitConfig` field (a :class:`~fitting.refinement.long_time.RefineConfig`) whose ``max_evals``
-        the fit command's ``--max-evals`` sets: the method's main long-time refinement.
+    config_type : type
+        The class of the method's frozen settings (a :class:`~fitting.methods.settings.MethodConfig` whose
+        ``name`` is the method's): what :class:`~fitting.config.FitConfig` ``method`` holds, what model.json's
+        ``settings`` records under the method's name, which method-specific options (:data:`METHOD_OPTIONS`) the
+        method accepts (``options``) and which refinement ``--max-evals`` sets (``max_evals_setting``).
     """
 
     name: str
     summary: str
-    private_settings: tuple[str, ...]
-    options: tuple[str, ...]
-    max_evals_setting: str
+    config_type: type
 
     def fit(self, prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig,
             context: FitContext) -> FitResult:
@@ -97,10 +94,14 @@ def register_method(method: FittingMethod) -> FittingMethod:
     Raises
     ------
     TypeError
-        ``method`` does not satisfy :class:`FittingMethod`.
+        ``method`` does not satisfy :class:`FittingMethod`, or its ``config_type`` is not the settings of a method of
+        its name.
     """
     if not isinstance(method, FittingMethod) or not isinstance(method.name, str) or not method.name:
-        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, private_settings, options, "
-                        "max_evals_setting, fit, describe)")
+        raise TypeError(f"{method!r} is not a FittingMethod (name, summary, config_type, fit, describe)")
+    if not (isinstance(method.config_type, type) and issubclass(method.config_type, MethodConfig)
+            and method.config_type.name == method.name):
+        raise TypeError(f"{method.name}: config_type must be a MethodConfig whose name is {method.name!r}, got "
+                        f"{method.config_type!r}")
     METHODS[method.name] = method
     return method

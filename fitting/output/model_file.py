@@ -1,10 +1,10 @@
 """The files of a fit: ``model.json`` (docs/formats.md) and the figures, written by the command, not by the fit;
-and the one reader of ``model.json`` (:func:`read_model_json`)."""
+the one reader of ``model.json`` (:func:`read_model_json`) and of the settings it records (:func:`recorded_settings`)."""
 from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -13,11 +13,12 @@ from cubedimer.atomic import json_text, write_json
 from cubedimer.errors import DatasetError
 from cubedimer.system import SystemSpec, read_system
 from cubedimer.terms import STATE_NAMES, parse_term
-from ..method_names import METHODS
+from ..method_names import DEFAULT_METHOD, METHODS
 from ..model import PolynomialModel
 from ..results import FitResult, support_terms
 
-__all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json"]
+__all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json",
+           "recorded_settings", "SHARED_SETTINGS"]
 
 
 #: model.json's keys in the order they are written; a method's own keys (``FitResult.extras.record``) take their
@@ -28,14 +29,44 @@ MODEL_JSON_KEYS = ("state", "equations", "zscores", "per_run", "units", "inclusi
                    "data_range", "discovery")
 
 
-def _recorded_settings(res: FitResult) -> dict:
-    """The configuration, without the fields only the other methods read."""
-    settings = json.loads(json.dumps(asdict(res.config), default=float))
-    for name, method in METHODS.items():
-        if name != res.method:
-            for key in method.private_settings:
-                settings.pop(key, None)
-    return settings
+#: The settings every method shares (:class:`fitting.config.FitConfig`'s stages), at the top of model.json's
+#: ``settings``; the method's own settings follow under its name.
+SHARED_SETTINGS = ("load", "smoothing", "classify")
+
+#: Keys of the method's settings that model.json files before the per-method layout recorded under another
+#: top-level name: (method, field) -> former key (the discovery's selection was ``settings["discovery"]``).
+_FORMER_KEYS = {("discovery", "selection"): "discovery"}
+
+
+def _settings_record(res: FitResult) -> dict:
+    """model.json's ``settings``: the shared stages, ``method`` (the name) and the method's settings under its name."""
+    config = json.loads(json.dumps(asdict(res.config), default=float))
+    return {**{k: config[k] for k in SHARED_SETTINGS}, "method": res.method, res.method: config["method"]}
+
+
+def recorded_settings(doc: dict) -> dict:
+    """The settings a model.json records (``doc``: the document), in today's layout whatever release wrote them.
+
+    Today's layout (docs/formats.md) is ``{"load", "smoothing", "classify", "method": NAME, NAME: {...}}``: the
+    shared stages, the method's name and the method's own settings under its name (the fields of its
+    ``config_type``, :mod:`fitting.methods.settings`).  Files written before the per-method layout recorded one flat
+    dictionary (the shared stages, ``method`` and every method's fields side by side, the discovery's selection as
+    ``discovery``); their method's fields are gathered under its name here.  Keys a file leaves out stay out (a
+    reader takes the defaults it needs); a document without settings gives ``{"method": NAME, NAME: {}}`` with the
+    document's ``method`` (default: the default method).
+    """
+    settings = doc.get("settings") if isinstance(doc.get("settings"), dict) else {}
+    name = settings.get("method") if isinstance(settings.get("method"), str) else doc.get("method", DEFAULT_METHOD)
+    method = METHODS.get(name)
+    own = settings.get(name)
+    if method is None:  # a method not registered here: its settings as recorded
+        return {**settings, "method": name, name: own if isinstance(own, dict) else {}}
+    keys = tuple(f.name for f in fields(method.config_type))
+    if isinstance(own, dict) and all(k in keys for k in own):  # today's layout
+        return {**settings, "method": name}
+    shared = {k: settings[k] for k in SHARED_SETTINGS if k in settings}
+    former = {k: settings[_FORMER_KEYS.get((name, k), k)] for k in keys if _FORMER_KEYS.get((name, k), k) in settings}
+    return {**shared, "method": name, name: former}
 
 
 def model_json(res: FitResult) -> dict:
@@ -59,7 +90,7 @@ def model_json(res: FitResult) -> dict:
         "loss": {"joint_start": res.joint.loss_start.to_dict(), "final": res.joint.loss_end.to_dict(),
                  "n_evals": res.joint.n_evals, "nlopt_status": res.joint.status},
         "scales": res.scales.to_dict(),
-        "settings": _recorded_settings(res),
+        "settings": _settings_record(res),
         "skipped_files": list(res.skipped),
         "glitch_frames_masked": res.n_glitches,
         "fallback": res.fallback,

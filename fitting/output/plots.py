@@ -113,7 +113,7 @@ def _plot_zscores(res: FitResult, stats, path: Path) -> Path:
     """Every term's z-score across runs per equation, the selected terms in red, the paper's threshold dashed."""
     plt = _plt()
     fig, axes = plt.subplots(2, 1, figsize=(13, 6.5), sharex=True)
-    thr = res.config.ensemble.z_threshold
+    thr = res.config.method.ensemble.z_threshold
     for q, ax in enumerate(axes):
         z = np.minimum(stats.zscore[q], 1e3)
         ax.bar(range(len(TERMS)), z, color=np.where(res.mask[q], "tab:red", "tab:gray"))

@@ -16,11 +16,10 @@ from typing import Sequence
 import numpy as np
 
 from cubedimer.terms import coefficient_labels
-from ..config import FitConfig
 from ..derivatives.integral_form import IntegralSelection
 from ..derivatives.savitzky_golay import Derivatives
 from ..model import PolynomialModel, Scales, damping_mask
-from ..refinement.long_time import Objective, RefineResult, default_substeps, refine, scaled_reference
+from ..refinement.long_time import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from ..refinement.losses import LossTerms
 from ..selection.ensemble import TermStatistics, mean_pvalues
 from .oracle import NoiseLevels, OracleResult, estimate_tracking_noise, oracle_standard_errors, runs_from_data
@@ -84,7 +83,7 @@ def fallback_candidates(model: PolynomialModel, mask: np.ndarray, stats: TermSta
 
 def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
               per_run_regressions: Sequence[PolynomialModel], integral: dict[str, IntegralSelection] | None,
-              derivs: Sequence[Derivatives], scales: Scales, config: FitConfig,
+              derivs: Sequence[Derivatives], scales: Scales, config: RefineConfig,
               first: Sequence[tuple[str, PolynomialModel]] = (),
               z: np.ndarray | None = None) -> tuple[PolynomialModel, RefineResult, dict]:
     """Replace a blown-up final model by the best sane fallback (module docstring), re-optimised jointly.
@@ -102,8 +101,8 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     integral : dict or None
         The pooled integral-form selection per equation, a candidate if given.
     derivs, scales : the runs' derivatives and scales
-    config : FitConfig
-        ``config.joint`` scores and re-optimises the candidates.
+    config : RefineConfig
+        The joint re-optimisation (the method's ``joint`` settings), which scores and re-optimises the candidates.
     first : sequence of (name, PolynomialModel)
         Candidates tried before those of :func:`fallback_candidates`.
     z : ndarray (2, 35), optional
@@ -127,7 +126,7 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     for name, model in [*first, *fallback_candidates(joint.model, mask, stats, per_run_regressions, integral, z)]:
         c = scales.to_scaled(model.coef)
         m = model.support
-        obj = Objective(refs, m, default_substeps(c, refs[0].dt, config.joint.h_omega), config.joint.weights)
+        obj = Objective(refs, m, default_substeps(c, refs[0].dt, config.h_omega), config.weights)
         per = obj.per_run(np.where(m, c, 0.0))
         total = float(np.mean([t.total for t in per]))
         nb = _n_blown(per)
@@ -141,7 +140,7 @@ def fall_back(joint: RefineResult, mask: np.ndarray, stats: TermStatistics,
     _, name, model = best
     logger.info("fallback used: %s; re-optimising it jointly", name)
     # refine never ends worse than its start, and a blow-up scores above MAX_SANE_LOSS: res integrates everywhere
-    res = refine(model, derivs, scales, config.joint, mask=model.support)
+    res = refine(model, derivs, scales, config, mask=model.support)
     logger.info("fallback final mean loss %.4g (shape %.3g, Poincare %.3g, frequency %.3g)", res.loss_end.total,
                 res.loss_end.shape, res.loss_end.poincare, res.loss_end.frequency)
     record = {"reason": reason, "used": name, "order": "ensemble p-value" if z is None else "z", "candidates": tried,

@@ -24,7 +24,9 @@ def test_fit_writes_model_json_and_plots(fitted):
     assert [r["file"] for r in d["per_run"]] == ["run01.csv", "run02.csv", "run03.csv"]
     assert "ydot" in d["equations"]["yddot"] and "thetadot" in d["equations"]["thetaddot"]  # damping kept
     assert d["method"] == "paper" and d["selection"]["rule"] == "significance" and "discovery" not in d
-    assert "polish" not in d["settings"]  # a paper fit records only the settings it uses
+    # a paper fit records the shared stages and its own settings, under its name
+    assert set(d["settings"]) == {"load", "smoothing", "classify", "method", "paper"}
+    assert "polish" not in d["settings"]["paper"] and d["settings"]["paper"]["selection"]["rule"] == "significance"
     for p in ("zscores.png", "coefficients.png", "optimisation.png", "phase_portraits.png", "poincare.png"):
         assert (fitted / p).stat().st_size > 1000
 

@@ -10,7 +10,7 @@ import pytest
 from cubedimer.dataset import write_run_csv
 from fitting.cli import main
 from fitting.model import TERMS, PolynomialModel
-from fitting.config import FitConfig
+from fitting.config import DiscoveryMethodConfig, FitConfig, PaperMethodConfig
 from fitting.fit import fit_dataset
 from fitting.refinement.long_time import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
@@ -63,7 +63,7 @@ def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp
                  "--max-evals", "40"]) == 0
     d = json.loads((out / "model.json").read_text())
     assert d["method"] == "discovery" and d["settings"]["method"] == "discovery"
-    assert d["settings"]["polish"]["max_evals"] == 40
+    assert d["settings"]["discovery"]["polish"]["max_evals"] == 40
     assert d["selection"]["rule"] == "discovery" and d["discovery"]["converged"]
     assert d["integral_form"]["thetaddot"]["terms"] == d["discovery"]["thetaddot"]["terms"]
     assert d["fallback"] is None and not d["loss"]["final"]["blown_up"]
@@ -83,7 +83,7 @@ def test_default_fit_with_tracking_glitches_meets_the_criterion(tmp_path):
     # model keeps its restoring term (the glitch-free support), integrates over every run and meets the criterion
     raw = generate_runs(TRUTH, CFG)
     data = _write(tmp_path / "glitchy", raw, glitches_per_run=6, size=100 * CFG.noise_y, seed=3)
-    res = fit_dataset(data, FitConfig(polish=RefineConfig(max_evals=40)), progress=False)
+    res = fit_dataset(data, FitConfig(method=DiscoveryMethodConfig(polish=RefineConfig(max_evals=40))), progress=False)
     assert res.n_glitches >= 6 * CFG.n_runs
     assert res.fallback is None and not res.joint.loss_end.blown_up
     runs = [type("R", (), {"dt": float(r["t"][1] - r["t"][0])}) for r in raw]
@@ -92,11 +92,14 @@ def test_default_fit_with_tracking_glitches_meets_the_criterion(tmp_path):
 
 
 def test_method_is_validated():
-    assert FitConfig().method == "discovery" and FitConfig(method="paper").method == "paper"
-    with pytest.raises(ValueError):
-        FitConfig(method="sindy")
-    with pytest.raises(ValueError):
-        FitConfig(polish_se=0.0)
+    assert FitConfig().method_name == "discovery" and FitConfig.for_method("paper").method_name == "paper"
+    assert FitConfig.for_method("paper").method == PaperMethodConfig()
+    with pytest.raises(ValueError, match="unknown method 'sindy'"):
+        FitConfig.for_method("sindy")
+    with pytest.raises(ValueError, match="settings of a registered method"):
+        FitConfig(method="paper")  # a name is not the method's settings: FitConfig.for_method("paper")
+    with pytest.raises(ValueError, match="polish_se"):
+        DiscoveryMethodConfig(polish_se=0.0)
     assert main(["fit", "nowhere", "--out", "x", "--selection", "zscore"]) == 2  # a paper-only option
     assert main(["fit", "nowhere", "--out", "x", "--method", "paper", "--heldout-tolerance", "0.002"]) == 2
     assert main(["fit", "nowhere", "--out", "x", "--heldout-tolerance", "1.5"]) == 2  # a fraction in [0, 1)
@@ -114,10 +117,10 @@ def test_output_error_modes_set_the_discovery_config(mode, refined, selected):
     from fitting.config import FitConfig
 
     cfg = FitConfig().with_output_error(mode)
-    oe = cfg.discovery.output_error
+    oe = cfg.method.selection.output_error
     assert (oe is not None) == refined and (oe is not None and oe.support_tolerance is not None) == selected
-    assert (cfg.discovery.output_error == FitConfig().discovery.output_error) == (mode == "select")
-    recorded = json.loads(json.dumps(dataclasses.asdict(cfg), default=float))["discovery"]["output_error"]
+    assert (oe == FitConfig().method.selection.output_error) == (mode == "select")
+    recorded = json.loads(json.dumps(dataclasses.asdict(cfg), default=float))["method"]["selection"]["output_error"]
     assert (recorded is None) == (not refined)
     with pytest.raises(ValueError):
         FitConfig().with_output_error("polish")
@@ -133,7 +136,7 @@ def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp
     assert main(["fit", str(data), "--out", str(out), "--no-plots", "--quiet", "--workers", "1", "--max-evals", "20",
                  "--heldout-tolerance", "0.3"]) == 0
     d = json.loads((out / "model.json").read_text())
-    assert d["settings"]["discovery"]["heldout_tolerance"] == 0.3
+    assert d["settings"]["discovery"]["selection"]["heldout_tolerance"] == 0.3
     n_true = int(TRUTH.support.sum())
     assert sum(len(t) for t in d["equations"].values()) < n_true
     for eq in ("yddot", "thetaddot"):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from cubedimer.dataset import DatasetError, Run
-from fitting.config import FitConfig
+from fitting.config import DiscoveryMethodConfig, FitConfig
 from fitting.derivatives.decimation import block_average, decimation_factor
 from fitting.derivatives.savitzky_golay import LONG_WINDOW, SmoothingConfig, differentiate, noise_gain, run_derivatives
 from fitting.model import TERMS
@@ -81,7 +81,7 @@ def fits_by_frame_rate(tmp_path_factory):
         raw = generate_runs(TRUTH, SyntheticConfig(n_runs=4, duration=2.0, fps=fps, noise_y=1e-6, noise_theta=0.002,
                                                    missing_frames=0, seed=31))
         data = _write(tmp_path_factory.mktemp(f"fps{int(fps)}") / "data", raw)
-        out[fps] = fit_dataset(data, FitConfig(polish=RefineConfig(max_evals=20)), progress=False)
+        out[fps] = fit_dataset(data, FitConfig(method=DiscoveryMethodConfig(polish=RefineConfig(max_evals=20))), progress=False)
     return out
 
 

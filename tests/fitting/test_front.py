@@ -63,7 +63,7 @@ def test_max_terms_picks_the_point_at_that_size(front_dataset, default_fit, tmp_
     point = next(p for p in doc["discovery"]["front"]["points"] if p["max_terms"] == 3)
     assert all(len(t) <= 3 for t in capped["equations"].values())
     assert {eq: set(t) for eq, t in capped["equations"].items()} == {eq: set(t) for eq, t in point["terms"].items()}
-    assert capped["settings"]["discovery"]["max_terms"] == 3
+    assert capped["settings"]["discovery"]["selection"]["max_terms"] == 3
 
 
 def test_max_terms_is_refused_by_the_paper_method(front_dataset, tmp_path, capsys):

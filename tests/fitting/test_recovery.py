@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def recovery(tmp_path_factory, truth, pipeline_cache):
     """The paper's fit of the 20 runs (made once per version of the sources, tests/conftest.py PipelineCache)."""
-    synthetic, config = SyntheticConfig(n_runs=20, seed=11), FitConfig(method="paper")
+    synthetic, config = SyntheticConfig(n_runs=20, seed=11), FitConfig.for_method("paper")
 
     def fit():
         data = tmp_path_factory.mktemp("recovery_data")

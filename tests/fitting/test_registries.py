@@ -3,7 +3,8 @@ everywhere (FitConfig, fit_runs, the fit command's choices, model.json), and unk
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -11,9 +12,9 @@ import pytest
 from fitting.methods import registry as methods
 from fitting.selection import rules as selection_rules
 from fitting.cli import build_parser, main
-from fitting.config import FitConfig
+from fitting.config import FitConfig, MethodConfig, PaperMethodConfig
 from fitting.description import DescriptionTable, MethodDescription, model_equation_text
-from fitting.selection.ensemble import least_squares_on_support, select_terms, term_statistics
+from fitting.selection.ensemble import EnsembleConfig, least_squares_on_support, select_terms, term_statistics
 from fitting.output.model_file import model_json
 from fitting.model import TERMS, PolynomialModel, damping_mask
 from fitting.fit import fit_dataset
@@ -29,26 +30,33 @@ LINEAR[1, [TERMS.index("theta"), TERMS.index("thetadot")]] = True
 
 
 @dataclass(frozen=True)
+class LinearConfig(MethodConfig):
+    """The dummy method's own settings: the ensemble's z-score rule it reports and its joint refinement."""
+
+    name: ClassVar[str] = "dummy-linear"
+    ensemble: EnsembleConfig = field(default_factory=EnsembleConfig)
+    joint: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=4, horizons=(1.0,)))
+
+
+@dataclass(frozen=True)
 class LinearMethod:
     """A dummy method: least squares of the linear oscillator, pooled and per run, a 4-evaluation polish."""
 
     name: str = "dummy-linear"
     summary: str = "least squares of the linear oscillator (test)"
-    private_settings: tuple[str, ...] = ()
-    options: tuple[str, ...] = ()
-    max_evals_setting: str = "joint"
+    config_type: type = LinearConfig
 
     def fit(self, prepared, scales, config, context) -> FitResult:
         derivs = [p.derivs for p in prepared]
         X, A = scaled_data(derivs, scales)
         pooled = PolynomialModel(scales.to_si(least_squares_on_support(X, A, LINEAR)))
-        joint = refine(pooled, derivs, scales, RefineConfig(max_evals=4, horizons=(1.0,)), mask=LINEAR)
+        joint = refine(pooled, derivs, scales, config.method.joint, mask=LINEAR)
         runs = [RunEstimate(p.run.name, PolynomialModel(scales.to_si(least_squares_on_support([X[k]], [A[k]], LINEAR))),
                             joint.per_run_start[k]) for k, p in enumerate(prepared)]
         stats = term_statistics([r.model for r in runs])
         return FitResult(runs=list(prepared), scales=scales, pooled_regression=pooled, run_fits=runs,
                          mask=LINEAR.copy(), joint_start=pooled, joint=joint, config=config,
-                         extras=EnsembleExtras(stats, select_terms(stats, config.ensemble)))
+                         extras=EnsembleExtras(stats, select_terms(stats, config.method.ensemble)))
 
     def describe(self, result) -> MethodDescription:
         eqs = result.model.equations()
@@ -103,7 +111,7 @@ def test_the_builtin_entries_and_the_command_choices_come_from_the_registries():
 def test_unknown_names_fail_on_construction_before_any_work(bad):
     with pytest.raises(ValueError, match="unknown (method|selection rule)"):
         if "method" in bad:
-            FitConfig(method=bad["method"])
+            FitConfig.for_method(bad["method"])
         else:
             SelectionConfig(rule="lasso")
 
@@ -125,7 +133,8 @@ def test_a_registered_method_runs_end_to_end_through_the_command(dummy_method, s
     assert [r["file"] for r in d["per_run"]] == ["run01.csv", "run02.csv", "run03.csv"]
     # the truth's linear restoring coefficients are negative (a trap), and least squares finds that sign
     assert d["equations"]["yddot"]["y"] < 0 and d["equations"]["thetaddot"]["theta"] < 0
-    # the discovery's own settings are left out of another method's record
+    # the method's own settings under its name; the discovery's are left out of another method's record
+    assert d["settings"]["method"] == dummy_method.name and d["settings"][dummy_method.name]["joint"]["max_evals"] == 4
     assert "polish" not in d["settings"] and "discovery" not in d["settings"]
 
 
@@ -146,9 +155,10 @@ def test_a_registered_selection_rule_selects_the_paper_model(dummy_rule, two_sho
         raise ValueError("skipped in this test")
 
     monkeypatch.setattr(paper_fit, "integral_form_selection", no_cross_check)
-    cfg = FitConfig(method="paper", refine=RefineConfig(max_evals=8, horizons=(1.0,)),
-                    joint=RefineConfig(max_evals=8, rel_bound=0.3, abs_bound=0.005, horizons=(1.0,)),
-                    selection=SelectionConfig(rule=dummy_rule.name))
+    cfg = FitConfig(method=PaperMethodConfig(
+        refine=RefineConfig(max_evals=8, horizons=(1.0,)),
+        joint=RefineConfig(max_evals=8, rel_bound=0.3, abs_bound=0.005, horizons=(1.0,)),
+        selection=SelectionConfig(rule=dummy_rule.name)))
     res = fit_dataset(two_short_runs, cfg, progress=False)
     assert res.extras.rule == dummy_rule.name and model_json(res)["selection"]["rule"] == dummy_rule.name
     assert not (res.mask & ~(LINEAR | damping_mask())).any()  # nothing beyond what the rule allows
@@ -162,7 +172,7 @@ def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method,
     from validation.report.context import ReportContext
     from validation.report.sections import fit as fit_section
 
-    res = fit_dataset(small_dataset, FitConfig(method=dummy_method.name), progress=False)
+    res = fit_dataset(small_dataset, FitConfig.for_method(dummy_method.name), progress=False)
     out = tmp_path / "report"
     write_fit(res, out / "fit", plots=False)
     context = ReportContext(

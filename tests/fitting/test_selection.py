@@ -2,7 +2,7 @@
 import numpy as np
 
 from fitting.model import DAMPING_TERMS, TERMS, damping_mask
-from fitting.config import FitConfig
+from fitting.config import FitConfig, PaperMethodConfig
 from fitting.output.model_file import model_json
 from fitting.selection.rules import SelectionConfig
 
@@ -15,7 +15,7 @@ def test_damping_mask_has_the_two_viscous_terms():
 
 def test_default_rule_is_significance_and_the_others_are_available():
     # the significance of the ensemble mean is the default; the paper's z-rule and backward elimination are options
-    assert FitConfig().selection.rule == "significance"
+    assert FitConfig.for_method("paper").method.selection.rule == "significance"
     assert SelectionConfig(rule="backward").rule == "backward"
     assert SelectionConfig(rule="zscore").rule == "zscore"
 
@@ -25,8 +25,9 @@ def test_too_few_runs_for_wilcoxon_fall_back_to_zscore_rule(small_dataset, tmp_p
     from fitting.fit import fit_dataset
     from fitting.refinement.long_time import RefineConfig
 
-    cfg = FitConfig(refine=RefineConfig(max_evals=60), joint=RefineConfig(max_evals=40, rel_bound=0.3, abs_bound=0.005),
-                    selection=SelectionConfig(rule="backward"), method="paper")
+    cfg = FitConfig(method=PaperMethodConfig(
+        refine=RefineConfig(max_evals=60), joint=RefineConfig(max_evals=40, rel_bound=0.3, abs_bound=0.005),
+        selection=SelectionConfig(rule="backward")))
     res = fit_dataset(small_dataset, config=cfg, progress=False)
     assert res.extras.selection is None
     np.testing.assert_array_equal(res.mask, res.extras.mask_zscore)

@@ -117,12 +117,14 @@ def test_gap_with_the_gorkov_model_is_refused_in_one_line(tmp_path, tiny_data, c
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
-@pytest.mark.parametrize("extra", [["--heldout-tolerance", "1.5"], ["--heldout-tolerance", "0.002", "--method", "paper"]])
-def test_report_heldout_tolerance_is_checked_before_anything_runs(tmp_path, tiny_data, capsys, extra):
+@pytest.mark.parametrize("extra, says", [(["--heldout-tolerance", "1.5"], "needs a fraction in [0, 1)"),
+                                         (["--heldout-tolerance", "0.002", "--method", "paper"],
+                                          "applies to --method discovery")])
+def test_report_heldout_tolerance_is_checked_before_anything_runs(tmp_path, tiny_data, capsys, extra, says):
     """A tolerance outside [0, 1), or with the paper's method, is one line naming the option; nothing is written."""
     assert main(["report", str(tiny_data), "--out", str(tmp_path / "out"), "--quiet", *extra]) == 2
     line = _one_line_error(capsys)
-    assert line.startswith("error: --heldout-tolerance") and "[0, 1)" in line
+    assert line.startswith("error: --heldout-tolerance") and says in line
     assert not (tmp_path / "out").exists()
 
 
@@ -162,9 +164,9 @@ def test_the_report_builds_its_fit_configuration_as_the_fit_command_does():
     report_args = validation_parser().parse_args(["report", "d", "--out", "o", *extra])
     cfg = fit_config_from_args(fit_args)
     assert cfg == fit_config_from_args(report_args)
-    assert (cfg.polish.max_evals, cfg.joint.max_evals) == (7, 9)
-    assert cfg.refine == type(cfg)().refine  # the paper's per-run refinement is not the discovery's to change
-    assert cfg.discovery.output_error.support_tolerance is None
+    assert (cfg.method.polish.max_evals, cfg.method.joint.max_evals) == (7, 9)
+    assert not hasattr(cfg.method, "refine")  # the paper's per-run refinement is not the discovery's setting
+    assert cfg.method.selection.output_error.support_tolerance is None
     assert cfg.load.glitches is None and cfg.load.min_periods == 3.0
 
 

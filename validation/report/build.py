@@ -56,7 +56,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     fit_config : the fit's settings (``python -m validation report`` makes them from the fit's options,
         :func:`fitting.options.fit_config_from_args`; default: those of ``method`` and ``heldout_tolerance``); its
         loading rules for glitches and short runs (``load.glitches``, ``load.min_periods``) are applied to the one
-        loaded data set, and its joint re-optimisation (``joint``) re-optimises the variant
+        loaded data set, and its method's joint re-optimisation (``method.joint``) re-optimises the variant
 
     Returns
     -------
@@ -83,11 +83,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
         logger.log(level, "%s", message)
 
     spec = spec if spec is not None else ModelSpec()
-    config = fit_config if fit_config is not None else FitConfig(method=method).with_heldout_tolerance(heldout_tolerance)
-    if max_evals is not None:
-        config = replace(config, refine=replace(config.refine, max_evals=max_evals),
-                         polish=replace(config.polish, max_evals=max_evals),
-                         joint=replace(config.joint, max_evals=max_evals))
+    config = (fit_config if fit_config is not None else
+              FitConfig.for_method(method).with_heldout_tolerance(heldout_tolerance)).with_max_evals(max_evals, joint=True)
     # the data set, loaded once with the diagnosis's checks (and the fit's rules for glitches and short runs): the fit
     # and the diagnosis see the same runs
     load = replace(LoadConfig(), glitches=config.load.glitches, min_periods=config.load.min_periods)
@@ -99,13 +96,13 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     out = Path(out_dir)
     fit_dir = out / "fit"
     # ---- the fit, the variant comparison and the diagnosis: what the report reads --------------------------------
-    say(f"1/5 fitting the data ({get_method(config.method).summary})")
+    say(f"1/5 fitting the data ({get_method(config.method_name).summary})")
     res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
     model_json = fit_model_json(res)
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
-    variant = variant_comparison(res, fit_dir, config.joint)
+    variant = variant_comparison(res, fit_dir, config.method.joint)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
     diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
     # ---- the calibrated simulations and their sweeps (steps 3-4), then the sections from the one context ---------

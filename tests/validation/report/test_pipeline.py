@@ -140,7 +140,7 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     # seed 8: the first whose drops all stay within theta = +-1 with this coupling (6 and 7 do not)
     data = _twin(tmp_path / "data", {"pair_scattering": {"kappa": 12000.0}, "velocity_coupling": {"c5": 1.5e4, "c6": 3e6}}, seed=8)
     cfg = FitConfig()
-    cfg = replace(cfg, refine=replace(cfg.refine, max_evals=150), joint=replace(cfg.joint, max_evals=150))
+    cfg = replace(cfg, method=cfg.method.with_joint_max_evals(150))
     write_fit(fit_dataset(data, cfg, ExecutorConfig(workers=1), progress=False), tmp_path / "fit", plots=False)
     model = json.loads((tmp_path / "fit" / "model.json").read_text())
     sw = static_sweep(GorkovDimer(), np.linspace(-0.4, 0.4, 21), np.linspace(-2e-4, 2e-4, 21))
