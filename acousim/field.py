@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA
+
 from .medium import Medium, ParticleMaterial, contrast_factors
 
 __all__ = ["StandingWave", "gorkov_potential_density", "gorkov_potential_gradient"]
@@ -34,7 +36,7 @@ class StandingWave:
         The particle material (enters through the contrast factors).
     """
 
-    pressure_amplitude_pa: float = 3000.0
+    pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA
     medium: Medium = field(default_factory=Medium)
     material: ParticleMaterial = field(default_factory=ParticleMaterial)
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Callable, ClassVar, Mapping
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial
@@ -59,7 +59,7 @@ class ExperimentConditions:
     frequency_hz: float = DEFAULT_FREQUENCY_HZ
     sound_speed_m_s: float = 343.0
     air_density_kg_m3: float = 1.204
-    pressure_amplitude_pa: float = 3000.0
+    pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA
     gravity_m_s2: float = GRAVITY
     gap_m: float | None = None
     edge_radius_m: float | None = None

@@ -183,7 +183,9 @@ DEFAULT_TRACKING_NOISE: dict[str, float] = {"noise_y_m": 1e-6, "noise_theta": 0.
 
 __all__ += ["DEFAULT_TRACKING_NOISE"]
 
-#: The defaults that code outside meta.json reads (the drive's frequency [Hz] and the cubes' density [kg/m^3]).
+#: The defaults that code outside meta.json reads (the drive's frequency [Hz], the cubes' density [kg/m^3] and the
+#: pressure amplitude of the standing wave [Pa]).
 DEFAULT_FREQUENCY_HZ: float = META_DEFAULTS["frequency_hz"]
 DEFAULT_PARTICLE_DENSITY: float = META_DEFAULTS["particle_density_kg_m3"]
-__all__ += ["DEFAULT_FREQUENCY_HZ", "DEFAULT_PARTICLE_DENSITY"]
+DEFAULT_PRESSURE_AMPLITUDE_PA: float = META_DEFAULTS["pressure_amplitude_pa"]
+__all__ += ["DEFAULT_FREQUENCY_HZ", "DEFAULT_PARTICLE_DENSITY", "DEFAULT_PRESSURE_AMPLITUDE_PA"]

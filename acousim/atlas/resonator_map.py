@@ -110,10 +110,12 @@ def map_dynamics(spec: str, frequency_hz: float):
         dyn = atlas_dynamics(par[0], par[1], par[2], frequency_hz)
         theta, y = dyn.force_model.equilibrium()
         return dyn, np.array([y, 0.0, theta, 0.0])
+    from ..models import ExperimentConditions
     from ..twin import TwinConfig
     from ..twin.simulation import twin_dynamics
 
-    dyn, _ = twin_dynamics(TwinConfig(side=par[0], pressure_amplitude_pa=par[1], frequency=frequency_hz))
+    experiment = ExperimentConditions(side_length_m=par[0], pressure_amplitude_pa=par[1], frequency_hz=frequency_hz)
+    dyn, _ = twin_dynamics(TwinConfig(experiment=experiment))
     return dyn, np.zeros(4)
 
 

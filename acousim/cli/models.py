@@ -1,15 +1,30 @@
-"""Command-line options of the force-model registry (:mod:`acousim.models`), shared by every command with ``--model``."""
+"""Command-line options of the force-model registry (:mod:`acousim.models`), shared by every command with ``--model``.
+
+The one path from a command's options to what it simulates: :func:`model_spec_from_args` (the model and its own
+options, :data:`~acousim.models.MODEL_OPTIONS`) and :func:`experiment_from_args` (the experiment, the
+:class:`~acousim.models.ExperimentConditions` fields of meta.json), each read by the options' command-line names
+(:data:`~acousim.models.OPTION_NAMES`) over a default (a preset's, or a data set's meta.json), so that a command
+names no option of a model itself.
+"""
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from cubedimer.cli import UserInputError
+from cubedimer.meta import check_meta_value
 
 from ..models import (MODEL_OPTIONS, OPTION_NAMES, ExperimentConditions, ModelSpec, force_model_names, force_model_type,
                       static_model)
 
 __all__ = ["add_model_arguments", "conditions_from_args", "static_model_from_args", "model_help",
-           "model_spec_from_args"]
+           "model_spec_from_args", "experiment_from_args"]
+
+
+def _option(args: argparse.Namespace, name: str):
+    """The value of the command-line option of the condition ``name`` (:data:`OPTION_NAMES`), None when the command
+    does not offer it or it is not given."""
+    return getattr(args, OPTION_NAMES[name].lstrip("-").replace("-", "_"), None)
 
 
 def model_help() -> str:
@@ -33,10 +48,8 @@ def add_model_arguments(parser: argparse.ArgumentParser, unset_default: bool = F
 def conditions_from_args(args: argparse.Namespace, meta: dict | None = None, **extra) -> ExperimentConditions:
     """The experiment of ``meta`` (or the defaults) with the options that are set (side, frequency, pressure,
     density, gap, edge radius and ``extra``); one-line :class:`UserInputError` on a bad value."""
-    options = {"side_length_m": getattr(args, "side", None), "frequency_hz": getattr(args, "frequency", None),
-               "pressure_amplitude_pa": getattr(args, "pressure", None),
-               "particle_density_kg_m3": getattr(args, "density", None),
-               "gap_m": getattr(args, "gap", None), "edge_radius_m": getattr(args, "edge_radius", None), **extra}
+    options = {**{k: _option(args, k) for k in ("side_length_m", "frequency_hz", "pressure_amplitude_pa",
+                                                "particle_density_kg_m3", "gap_m", "edge_radius_m")}, **extra}
     try:
         return ExperimentConditions.from_meta(meta, **options)
     except ValueError as exc:
@@ -55,12 +68,29 @@ def static_model_from_args(args: argparse.Namespace, conditions: ExperimentCondi
     return _checked(static_model, args, conditions)
 
 
-def model_spec_from_args(args: argparse.Namespace) -> ModelSpec:
+def model_spec_from_args(args: argparse.Namespace, default: ModelSpec | None = None) -> ModelSpec:
     """The :class:`~acousim.models.ModelSpec` of ``--model`` with every model option the command offers that is set
     (``--gap``, ``--edge-radius``, ``--mesh-size``...: the :data:`~acousim.models.MODEL_OPTIONS` by their
-    command-line names); one-line :class:`UserInputError` when the model does not take one."""
-    options = {name: getattr(args, OPTION_NAMES[name].lstrip("-").replace("-", "_"), None) for name in MODEL_OPTIONS}
+    command-line names), over ``default`` (a preset's model and options; None: the registry's first model); one-line
+    :class:`UserInputError` when the model does not take one."""
+    name = args.model if getattr(args, "model", None) is not None else (default.name if default is not None else None)
+    options = {**(default.option_values if default is not None else {}),
+               **{k: v for k in MODEL_OPTIONS if (v := _option(args, k)) is not None}}
     try:
-        return ModelSpec(args.model, options)
+        return ModelSpec(name, options)
+    except ValueError as exc:
+        raise UserInputError(str(exc)) from None
+
+
+def experiment_from_args(args: argparse.Namespace, default: ExperimentConditions | None = None) -> ExperimentConditions:
+    """The experiment (:class:`~acousim.models.ExperimentConditions` without the model's own options) of ``default``
+    (a preset's; None: the defaults of docs/conventions.md) with the experiment's options the command offers that are
+    set (``--side``, ``--frequency``, ``--pressure``, ``--density``...: the meta.json fields by their command-line
+    names), each checked against the range meta.json allows; one-line :class:`UserInputError` on a bad value."""
+    given = {k: v for k in ExperimentConditions.META_FIELDS if k in OPTION_NAMES and (v := _option(args, k)) is not None}
+    for key, value in given.items():
+        check_meta_value(key, value, OPTION_NAMES[key])
+    try:
+        return replace(default if default is not None else ExperimentConditions(), **given)
     except ValueError as exc:
         raise UserInputError(str(exc)) from None

@@ -33,7 +33,7 @@ import sys
 
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, executor_config,
                            prepare_output_dir)
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, check_meta_value
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 __all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES", "MAX_VIDEO_FRAMES"]
 
@@ -154,10 +154,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="hinge rate range when the field drops [1/s] (default -3:3)")
     p.add_argument("--side", type=float, default=None, help="cube side [m] (default 500e-6 or the preset's)")
     p.add_argument("--frequency", type=float, default=None, metavar="HZ",
-                   help="drive frequency [Hz] (default 45650 or the preset's; with --side it sets ks, which the "
-                        "full-wave family covers from 0.3 to 0.65)")
+                   help=f"drive frequency [Hz] (default {DEFAULT_FREQUENCY_HZ:g} or the preset's; with --side it sets "
+                        "ks, which the full-wave family covers from 0.3 to 0.65)")
     p.add_argument("--pressure", type=float, default=None, metavar="PA",
-                   help="nominal pressure amplitude [Pa] written to meta.json (default 3000 or the preset's)")
+                   help=f"nominal pressure amplitude [Pa] written to meta.json (default "
+                        f"{DEFAULT_PRESSURE_AMPLITUDE_PA:g} or the preset's)")
     p.add_argument("--pressure-error", type=float, default=0.0, metavar="FRACTION",
                    help="draw the true pressure amplitude uniformly within +-FRACTION of the nominal one "
                    "(default 0; real data may be off by up to 0.1)")
@@ -216,10 +217,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def build_config(args: argparse.Namespace):
-    """The :class:`~acousim.twin.TwinConfig` of parsed arguments (raises UserInputError)."""
+    """The :class:`~acousim.twin.TwinConfig` of parsed arguments (raises UserInputError): the experiment and the model
+    through the shared path of every command (:func:`acousim.cli.models.experiment_from_args`,
+    :func:`acousim.cli.models.model_spec_from_args`) over the preset's, the twin's own settings here."""
     from ..dynamics.effects import EffectError, EffectSet
-    from ..models import force_model_names
     from ..twin import PRESETS, Camera, DropProtocol, TwinConfig, TwinError
+    from .models import experiment_from_args, model_spec_from_args
 
     check_limit("--runs", args.runs, MAX_RUNS)
     if args.duration > 0 and args.fps > 0:
@@ -230,14 +233,8 @@ def build_config(args: argparse.Namespace):
                         "simulate fewer or shorter runs, or several data sets")
     preset = PRESETS[args.preset] if args.preset else None
     dimer = preset.dimer_settings() if preset is not None else {}
-    side = args.side if args.side is not None else dimer.get("side", 500e-6)
-    frequency = args.frequency if args.frequency is not None else dimer.get("frequency", DEFAULT_FREQUENCY_HZ)
-    model = args.model if args.model is not None else dimer.get("force_model", force_model_names()[0])
-    gap = args.gap if args.gap is not None else dimer.get("gap")
-    check_meta_value("side_length_m", side, "--side")
-    check_meta_value("frequency_hz", frequency, "--frequency")
-    if args.pressure is not None:
-        check_meta_value("pressure_amplitude_pa", args.pressure, "--pressure")
+    experiment = experiment_from_args(args, dimer.get("experiment"))
+    spec = model_spec_from_args(args, dimer.get("model_spec"))
     try:
         effects = EffectSet.parse(args.effect)
         if preset is not None:
@@ -250,13 +247,10 @@ def build_config(args: argparse.Namespace):
         )
         camera = Camera(fps=args.fps, noise_y=args.noise_y, noise_theta=args.noise_theta,
                         missing_frames=args.missing_frames)
-        pressure = args.pressure if args.pressure is not None else (
-            preset.pressure_amplitude_pa if preset is not None else 3000.0)
         return TwinConfig(
-            runs=args.runs, duration=args.duration, seed=args.seed, side=side, pressure_amplitude_pa=pressure,
+            runs=args.runs, duration=args.duration, seed=args.seed, experiment=experiment, model_spec=spec,
             pressure_error=args.pressure_error, effects=effects, protocol=protocol, camera=camera,
-            mesh_size=args.mesh_size, max_step=args.max_step, preset=args.preset, force_model=model,
-            gap=gap, edge_radius=args.edge_radius, frequency=frequency,
+            max_step=args.max_step, preset=args.preset,
             air_damping=not args.no_air_damping and dimer.get("air_damping", True),
             transducer_q=_quality_factor(args, dimer), **_resonator_settings(args, dimer),
         )

@@ -5,6 +5,7 @@ import argparse
 import logging
 
 from cubedimer.cli import positive_float, positive_int, prepare_output_file
+from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from ..fullwave.surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, FORCE_METHODS, build_fullwave_surrogate
 
@@ -39,7 +40,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--side", type=positive_float, default=500e-6, help="cube side [m]")
     p.add_argument("--gap", type=positive_float, default=None, help="hinge gap [m] (default 0.01 side)")
     p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
-    p.add_argument("--pressure", type=positive_float, default=3000.0, help="pressure amplitude [Pa]")
+    p.add_argument("--pressure", type=positive_float, default=DEFAULT_PRESSURE_AMPLITUDE_PA,
+                   help="pressure amplitude [Pa]")
     p.add_argument("--forces", choices=FORCE_METHODS, default="flux",
                    help="force integration: momentum flux away from the cubes, or surface tractions (docs/fullwave.md)")
     lo, hi = FLUX_DISC_POINTS_RANGE

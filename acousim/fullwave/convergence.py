@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from ..medium import GRAVITY, Medium
 from .geometry import DimerMeshSpec, dimer_bodies, mesh_family, rounded_cube_volume
@@ -33,7 +33,8 @@ __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "richardson_l
            "flux_balance", "surrogate_errors", "CONVERGED_WITHIN", "EDGE_GRADED_H_EDGE"]
 
 
-def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_amplitude_pa: float = 3000.0,
+def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(),
+                     pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
                      particle_density: float = DEFAULT_PARTICLE_DENSITY, gravity: float = GRAVITY, delta: float = 0.02,
                      forces: str = "flux") -> dict:
     """Z_eq, F_Z amplitude, hinge stiffness and thetaddot Taylor coefficients of one mesh (two solves).
@@ -82,7 +83,7 @@ def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(), pressure_am
 
 
 def flux_balance(spec: DimerMeshSpec, theta: float = 0.3, heights=(-0.4e-3, 0.9e-3), radius: float = 1.2e-3,
-                 pressure_amplitude_pa: float = 3000.0, n_polar: int = 20) -> list[dict]:
+                 pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA, n_polar: int = 20) -> list[dict]:
     """Total force on the dimer from the per-cube surface tractions against the momentum flux through an
     enclosing sphere of ``radius`` [m] (:mod:`acousim.fullwave.flux`), at each height [m].
 
@@ -113,7 +114,7 @@ def flux_balance(spec: DimerMeshSpec, theta: float = 0.3, heights=(-0.4e-3, 0.9e
 
 
 def surrogate_errors(build: dict = COARSE_BUILD, thetas=(0.17, 0.71), y=np.linspace(-1.0e-3, 0.8e-3, 13),
-                     pressure_amplitude_pa: float = 3000.0, surrogate: FullwaveSurrogate | None = None,
+                     pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA, surrogate: FullwaveSurrogate | None = None,
                      progress: Callable[[dict], None] | None = None) -> dict:
     """Errors of a surrogate against direct solves at bends ``thetas`` that are not Chebyshev nodes, over
     heights ``y`` [m] above Z_eq (same mesh on both sides).

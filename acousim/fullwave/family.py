@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cubedimer.executor import ExecutorConfig, map_ordered
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from ..medium import GRAVITY, Medium
 from .family_grid import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIOS, FAMILY_KS,
@@ -167,7 +167,7 @@ def dimensionless_coefficients(sur: FullwaveSurrogate) -> dict[str, NDArray[np.f
 
 def scaled_surrogate(coefficients: dict[str, NDArray], theta_max: float, side: float, gap: float,
                      medium: Medium, particle_density: float = DEFAULT_PARTICLE_DENSITY,
-                     pressure_amplitude_pa: float = 3000.0,
+                     pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
                      gravity: float = GRAVITY, edge_radius: float = 0.0, settings: dict | None = None,
                      build_accuracy: dict | None = None) -> FullwaveSurrogate:
     """The physical surrogate of a dimer of side ``side`` [m] and gap ``gap`` [m] from dimensionless coefficients.
@@ -343,7 +343,7 @@ class FullwaveFamily:
 
     def surrogate(self, side: float, gap: float, medium: Medium = Medium(),
                   particle_density: float = DEFAULT_PARTICLE_DENSITY,
-                  pressure_amplitude_pa: float = 3000.0, gravity: float = GRAVITY) -> FullwaveSurrogate:
+                  pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA, gravity: float = GRAVITY) -> FullwaveSurrogate:
         """The full-wave surrogate of a dimer of side ``side`` [m] with hinge gap ``gap`` [m] in ``medium``.
 
         Raises :class:`FamilyRangeError` outside the family.  The result's ``build_accuracy`` states the family's

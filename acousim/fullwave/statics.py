@@ -27,7 +27,7 @@ from functools import cached_property
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from ..field import StandingWave
 from ..force_model import SinusoidalInertia
@@ -167,6 +167,6 @@ class FullwaveDimer:
                             thetaddot=q_theta / self.dimer.hinge_inertia(theta_b))
 
 
-def default_fullwave_dimer(pressure_amplitude_pa: float = 3000.0) -> FullwaveDimer:
+def default_fullwave_dimer(pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA) -> FullwaveDimer:
     """The shipped default dimer's table (:func:`default_fullwave_surrogate`) as a static model at p0 [Pa]."""
     return FullwaveDimer(default_fullwave_surrogate(pressure_amplitude_pa))

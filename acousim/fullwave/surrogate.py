@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from cubedimer.atomic import write_json
 from cubedimer.cache_lock import cache_entry_lock
 from cubedimer.compile_cache import suite_cache_root
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from ..force_model import ChebyshevSurrogate, ForceCoefficients, levitation_height
 from ..medium import GRAVITY, Medium
@@ -376,7 +376,7 @@ def build_fullwave_surrogate(
     spec: DimerMeshSpec = DEFAULT_SPEC,
     medium: Medium = Medium(),
     particle_density: float = DEFAULT_PARTICLE_DENSITY,
-    pressure_amplitude_pa: float = 3000.0,
+    pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
     gravity: float = GRAVITY,
     n_half: int = 5,
     theta_max: float = 0.9,
@@ -485,7 +485,7 @@ def cached_fullwave_surrogate(
     spec: DimerMeshSpec = DEFAULT_SPEC,
     medium: Medium = Medium(),
     particle_density: float = DEFAULT_PARTICLE_DENSITY,
-    pressure_amplitude_pa: float = 3000.0,
+    pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
     gravity: float = GRAVITY,
     n_half: int = 5,
     theta_max: float = 0.9,
@@ -552,7 +552,7 @@ def build_settings_of(sur: FullwaveSurrogate) -> dict:
     return out
 
 
-def default_fullwave_surrogate(pressure_amplitude_pa: float = 3000.0) -> FullwaveSurrogate:
+def default_fullwave_surrogate(pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA) -> FullwaveSurrogate:
     """The shipped default dimer's table (side 500 um, g = 0.01 s, r_e = 0, 45.65 kHz) at p0 [Pa]."""
     sur = FullwaveSurrogate.load(DEFAULT_TABLE)
     return sur if pressure_amplitude_pa == sur.pressure_amplitude_pa else sur.with_pressure(pressure_amplitude_pa)

@@ -42,6 +42,8 @@ import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
+from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA
+
 from ..dimer import CubeDimer
 from ..field import StandingWave
 from ..force_model import ChebyshevSurrogate, ForceCoefficients
@@ -323,7 +325,7 @@ def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetr
 @lru_cache(maxsize=16)
 def cached_surrogate(
     side: float = 500e-6,
-    pressure_amplitude_pa: float = 3000.0,
+    pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
     mesh_size: float | None = None,
     quadrature_degree: int = 2,
     box: SurrogateBox = DEFAULT_BOX,

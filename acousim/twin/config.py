@@ -8,18 +8,17 @@ can of the source paper's dynamics.  Every configuration object validates itself
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP
 from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
 from ..dynamics.effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..fullwave.statics import MODEL_NAME as FULLWAVE
-from ..models import ExperimentConditions, ModelSpec, force_model_names
+from ..models import MODEL_OPTIONS, ExperimentConditions, ModelSpec, force_model_names
 
 __all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PAPER", "WINDOW_RESONATOR",
            "PRESETS"]
@@ -132,9 +131,10 @@ class Camera:
 
 @dataclass(frozen=True)
 class TwinPreset:
-    """A named set of effects, pressure, protocol and dimer (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
+    """A named set of effects, protocol, experiment and model (e.g. :data:`PAPER_LIKE`, :data:`PAPER`).
 
-    ``force_model``, ``side``, ``gap`` and ``frequency`` are the dimer's (None: the :class:`TwinConfig` default).
+    ``experiment`` is the experiment's conditions (side, frequency, nominal pressure amplitude...) and ``model_spec``
+    the force model with its own options (the full-wave hinge gap), as :class:`TwinConfig` holds them.
     ``air_damping`` adds the air's computed drag (:func:`acousim.dynamics.effects.air_damping_for`), as every twin does by
     default; a preset whose ``effects`` hold a tuned *total* damping (a ``linear_damping`` standing for all of the
     air's drag) sets it False, so that the air is not counted twice.
@@ -142,26 +142,21 @@ class TwinPreset:
 
     name: str
     effects: EffectSet
-    pressure_amplitude_pa: float = 3000.0
+    experiment: ExperimentConditions = field(default_factory=ExperimentConditions)
     protocol: DropProtocol = field(default_factory=DropProtocol)
     description: str = ""
-    force_model: str | None = None
-    side: float | None = None
-    gap: float | None = None
-    frequency: float | None = None
+    model_spec: ModelSpec = field(default_factory=ModelSpec)
     air_damping: bool = True
     transducer_q: float | None = None
     cavity_detuning: float | None = None
     cavity_area: float | None = None
 
     def dimer_settings(self) -> dict:
-        """The preset's :class:`TwinConfig` fields beyond effects, pressure and protocol (those it sets, and
-        ``air_damping`` always)."""
-        out = {k: getattr(self, k) for k in ("force_model", "side", "gap", "frequency", "transducer_q",
-                                             "cavity_detuning", "cavity_area")
+        """The preset's :class:`TwinConfig` fields beyond effects and protocol: ``experiment``, ``model_spec``,
+        ``air_damping`` and the resonator's settings it sets."""
+        out = {k: getattr(self, k) for k in ("transducer_q", "cavity_detuning", "cavity_area")
                if getattr(self, k) is not None}
-        out["air_damping"] = bool(self.air_damping)
-        return out
+        return {"experiment": self.experiment, "model_spec": self.model_spec, **out, "air_damping": bool(self.air_damping)}
 
 
 @dataclass(frozen=True)
@@ -176,25 +171,21 @@ class TwinConfig:
         Recorded time per run [s] (from the moment the field is back on).
     seed : int
         Master seed: every random choice derives from it.
-    side : float
-        Cube side [m].
-    pressure_amplitude_pa : float
-        Nominal pressure amplitude p0 [Pa] (written to meta.json).
+    experiment : ExperimentConditions
+        The experiment (:class:`acousim.models.ExperimentConditions` without the model's own options): cube side
+        [m] (50 um to 2 mm), material, drive frequency [Hz] (with the side it sets ks), air and the nominal pressure
+        amplitude p0 [Pa] written to meta.json; default: docs/conventions.md's.
+    model_spec : ModelSpec
+        The acoustic force model and its own options (:class:`acousim.models.ModelSpec`: ``"gorkov"``, the Gor'kov
+        surrogate, with its ``mesh_size_m``; ``"fullwave"``, the full-wave table of the dimer from the table family,
+        with its hinge ``gap_m`` and ``edge_radius_m``, None: 0.01 side and sharp edges); default: the registry's
+        first model.
     pressure_error : float
         The true p0 is drawn uniformly in nominal x [1 - e, 1 + e] (0: true = nominal); docs/formats.md
         allows real data to be off by up to 10 %.
     effects : EffectSet
     protocol : DropProtocol
     camera : Camera
-    mesh_size : float, optional
-        Mesh edge [m] of the Gor'kov model behind the surrogate (default: the model's default).
-    force_model : str
-        The acoustic force model, a name of the registry :mod:`acousim.models` (``"gorkov"``: the Gor'kov
-        surrogate; ``"fullwave"``: the full-wave table of the dimer, from the table family).
-    gap, edge_radius : float, optional
-        Hinge gap and edge radius [m] of the full-wave model (None: 0.01 side and sharp edges).
-    frequency : float
-        Drive frequency [Hz] (the standing wave's; with the side it sets ks).
     max_step : float
         Longest internal RK4 step [s].
     preset : str, optional
@@ -226,19 +217,14 @@ class TwinConfig:
     runs: int = 10
     duration: float = 4.0
     seed: int = 0
-    side: float = 500e-6
-    pressure_amplitude_pa: float = 3000.0
+    experiment: ExperimentConditions = field(default_factory=ExperimentConditions)
+    model_spec: ModelSpec = field(default_factory=ModelSpec)
     pressure_error: float = 0.0
     effects: EffectSet = field(default_factory=EffectSet)
     protocol: DropProtocol = field(default_factory=DropProtocol)
     camera: Camera = field(default_factory=Camera)
-    mesh_size: float | None = None
     max_step: float = DEFAULT_MAX_STEP
     preset: str | None = None
-    force_model: str = field(default_factory=lambda: force_model_names()[0])
-    gap: float | None = None
-    edge_radius: float | None = None
-    frequency: float = DEFAULT_FREQUENCY_HZ
     air_damping: bool = True
     transducer_q: float = 0.0
     cavity_detuning: float | None = None
@@ -256,47 +242,58 @@ class TwinConfig:
             raise TwinError(f"duration must be positive, got {self.duration!r} s")
         if int(self.seed) != self.seed or self.seed < 0:
             raise TwinError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if not isinstance(self.experiment, ExperimentConditions) or not isinstance(self.model_spec, ModelSpec):
+            raise TwinError(f"experiment and model_spec must be an ExperimentConditions and a ModelSpec, got "
+                            f"{type(self.experiment).__name__} and {type(self.model_spec).__name__}")
+        own = [name for name in MODEL_OPTIONS if getattr(self.experiment, name) is not None]
+        if own:
+            raise TwinError(f"{', '.join(own)} is the model's own option: give it in model_spec, not in experiment")
         if not np.isfinite(self.side) or not 50e-6 <= self.side <= 2e-3:
             raise TwinError(f"side must lie in [50 um, 2 mm], got {self.side!r} m")
-        if not np.isfinite(self.pressure_amplitude_pa) or self.pressure_amplitude_pa <= 0:
-            raise TwinError(f"pressure amplitude must be positive, got {self.pressure_amplitude_pa!r} Pa")
         if not np.isfinite(self.pressure_error) or not 0 <= self.pressure_error < 0.5:
             raise TwinError(f"pressure error must lie in [0, 0.5), got {self.pressure_error!r}")
-        if self.mesh_size is not None and (not np.isfinite(self.mesh_size) or self.mesh_size <= 0):
-            raise TwinError(f"mesh size must be positive, got {self.mesh_size!r} m")
         if not np.isfinite(self.max_step) or self.max_step <= 0:
             raise TwinError(f"max_step must be positive, got {self.max_step!r} s")
-        try:
-            self.model_spec  # noqa: B018 (checks the model and its options)
-        except ValueError as exc:
-            raise TwinError(str(exc)) from None
+        self.conditions  # noqa: B018 (checks the model's options at this experiment)
         n = int(round(self.duration * self.camera.fps))
         if n < 16:
             raise TwinError(f"{self.duration:g} s at {self.camera.fps:g} fps gives only {n} frames")
 
     @classmethod
     def from_preset(cls, preset: TwinPreset, **overrides) -> "TwinConfig":
-        """Settings of a preset (effects, pressure, protocol), with any field overridden."""
-        base = dict(effects=preset.effects, pressure_amplitude_pa=preset.pressure_amplitude_pa,
-                    protocol=preset.protocol, preset=preset.name, **preset.dimer_settings())
+        """Settings of a preset (effects, experiment, model, protocol), with any field overridden."""
+        base = dict(effects=preset.effects, protocol=preset.protocol, preset=preset.name, **preset.dimer_settings())
         base.update(overrides)
         return cls(**base)
 
     @property
     def conditions(self) -> ExperimentConditions:
-        """The experiment the force model is built for, at the nominal pressure amplitude."""
+        """The experiment with the model's own options (:meth:`acousim.models.ModelSpec.conditions`): what the force
+        model is built for, at the nominal pressure amplitude."""
         try:
-            return ExperimentConditions(side_length_m=self.side, pressure_amplitude_pa=self.pressure_amplitude_pa,
-                                        mesh_size_m=self.mesh_size, gap_m=self.gap, edge_radius_m=self.edge_radius,
-                                        frequency_hz=self.frequency)
+            return replace(self.experiment, **self.model_spec.option_values)
         except ValueError as exc:
             raise TwinError(str(exc)) from None
 
     @property
-    def model_spec(self) -> ModelSpec:
-        """The force model and its own options (:class:`acousim.models.ModelSpec`)."""
-        return ModelSpec(self.force_model, {"gap_m": self.gap, "edge_radius_m": self.edge_radius,
-                                            "mesh_size_m": self.mesh_size})
+    def side(self) -> float:
+        """Cube side [m] (``experiment.side_length_m``)."""
+        return self.experiment.side_length_m
+
+    @property
+    def frequency(self) -> float:
+        """Drive frequency [Hz] (``experiment.frequency_hz``)."""
+        return self.experiment.frequency_hz
+
+    @property
+    def pressure_amplitude_pa(self) -> float:
+        """Nominal pressure amplitude p0 [Pa] (``experiment.pressure_amplitude_pa``)."""
+        return self.experiment.pressure_amplitude_pa
+
+    @property
+    def force_model(self) -> str:
+        """The force model's registered name (``model_spec.name``)."""
+        return self.model_spec.name
 
     @property
     def cavity_mode(self) -> CavityMode | None:
@@ -320,6 +317,7 @@ class TwinConfig:
     def to_dict(self) -> dict:
         """JSON-ready settings (SI units); ``force_model`` is listed when it is not the Gor'kov default, ``air_damping``
         always (true or false)."""
+        options = self.model_spec.option_values
         out = {
             "runs": int(self.runs),
             "duration_s": float(self.duration),
@@ -332,16 +330,15 @@ class TwinConfig:
             "camera": {"fps": float(self.camera.fps), "noise_y_m": float(self.camera.noise_y),
                        "noise_theta": float(self.camera.noise_theta),
                        "missing_frames": int(self.camera.missing_frames)},
-            "mesh_size_m": self.mesh_size,
+            "mesh_size_m": options.get("mesh_size_m"),  # listed always (null: the model's default)
             "max_step_s": float(self.max_step),
             "preset": self.preset,
         }
         if self.force_model != force_model_names()[0]:  # listed when it is not the default model
             out["force_model"] = self.force_model
-        if self.gap is not None:
-            out["gap_m"] = float(self.gap)
-        if self.edge_radius is not None:
-            out["edge_radius_m"] = float(self.edge_radius)
+        for name in MODEL_OPTIONS:  # every other option of the model that is set, under its field name
+            if name != "mesh_size_m" and name in options:
+                out[name] = float(options[name])
         if self.frequency != ExperimentConditions.frequency_hz:
             out["frequency_hz"] = float(self.frequency)
         out["air_damping"] = bool(self.air_damping)
@@ -369,7 +366,7 @@ PAPER_LIKE = TwinPreset(
         PairScattering(kappa=19500.0),
         MirrorAsymmetry(beta0=0.0, beta1=1.0e6),
     )),
-    pressure_amplitude_pa=3000.0,
+    experiment=ExperimentConditions(pressure_amplitude_pa=3000.0),
     protocol=DropProtocol(t_off=(2.0e-3, 4.0e-3), theta_drop=(-0.3, 0.3), thetadot_drop=(-3.0, 3.0)),
     description="tuned Gor'kov dynamics: hinge tuned just below the y frequency by pair scattering and driven at "
     "f_y by a mirror asymmetry; weak damping: bistable in-phase (large) and anti-phase (small) locking, see docs/twin.md; "
@@ -388,14 +385,11 @@ PAPER_LIKE = TwinPreset(
 PAPER = TwinPreset(
     name="paper",
     effects=EffectSet(),
-    pressure_amplitude_pa=6000.0,
+    experiment=ExperimentConditions(side_length_m=700e-6, pressure_amplitude_pa=6000.0),
     protocol=DropProtocol(t_off=(13.0e-3, 13.0e-3), theta_drop=(-0.003, 0.037), thetadot_drop=(0.0, 0.0)),
     description="the paper's 13 ms field drop on the full-wave model of a 700 um dimer (g = 0.05 s) with the air's "
     "computed damping and no tuned parameter, see docs/twin.md",
-    force_model=FULLWAVE,
-    side=700e-6,
-    gap=35e-6,
-    frequency=DEFAULT_FREQUENCY_HZ,
+    model_spec=ModelSpec(FULLWAVE, {"gap_m": 35e-6}),
     air_damping=True,
 )
 
@@ -408,14 +402,11 @@ PAPER = TwinPreset(
 WINDOW_RESONATOR = TwinPreset(
     name="window-resonator",
     effects=EffectSet(),
-    pressure_amplitude_pa=3000.0,
+    experiment=ExperimentConditions(side_length_m=500e-6, pressure_amplitude_pa=3000.0),
     protocol=DropProtocol(t_off=(3.0e-3, 5.0e-3), theta_drop=(-0.4, 0.4), thetadot_drop=(-30.0, 30.0)),
     description="the full-wave 500 um, g/s 0.02 dimer at 3 kPa with the air's computed damping and the levitator as a "
     "resonator (Q 250, drive 2.2 half-widths above the resonance, 20 mm transducer), 3-5 ms drops; see docs/twin.md",
-    force_model=FULLWAVE,
-    side=500e-6,
-    gap=10e-6,
-    frequency=DEFAULT_FREQUENCY_HZ,
+    model_spec=ModelSpec(FULLWAVE, {"gap_m": 10e-6}),
     air_damping=True,
     transducer_q=250.0,
     cavity_detuning=-2.2,

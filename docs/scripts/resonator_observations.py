@@ -15,6 +15,7 @@ import numpy as np
 
 from acousim.atlas.field_drops import observations, settled_outcome
 from acousim.dynamics.resonator import coupled_field_drop
+from acousim.models import ExperimentConditions, ModelSpec
 from acousim.twin import DropProtocol, TwinConfig, twin_dynamics
 from acousim.twin.simulation import run_seeds, twin_cavity
 
@@ -25,9 +26,9 @@ RUNS = 20
 protocol = DropProtocol(t_off=(t_lo, t_hi), theta_drop=(-0.4, 0.4), thetadot_drop=(-30.0, 30.0))
 rows = []
 for seed in seeds:
-    config = TwinConfig(runs=RUNS, seed=seed, duration=duration, force_model="fullwave", side=side,
-                        gap=gap_ratio * side, pressure_amplitude_pa=p0, protocol=protocol, transducer_q=q,
-                        cavity_detuning=detuning, cavity_area=area)
+    config = TwinConfig(runs=RUNS, seed=seed, duration=duration, model_spec=ModelSpec("fullwave", {"gap_m": gap_ratio * side}),
+                        experiment=ExperimentConditions(side_length_m=side, pressure_amplitude_pa=p0),
+                        protocol=protocol, transducer_q=q, cavity_detuning=detuning, cavity_area=area)
     dyn, _ = twin_dynamics(config)
     cavity = twin_cavity(config, dyn)
     cells, ratios, amps, by_class = [], [], [], {}

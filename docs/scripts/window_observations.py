@@ -15,6 +15,7 @@ import numpy as np
 
 from acousim.atlas.field_drops import drop_and_settle, observations
 from acousim.dynamics.switching import ring_time
+from acousim.models import ExperimentConditions, ModelSpec
 from acousim.twin import DropProtocol, TwinConfig, twin_dynamics
 from acousim.twin.simulation import run_seeds
 
@@ -25,8 +26,9 @@ RUNS = 20
 protocol = DropProtocol(t_off=(t_lo, t_hi), theta_drop=(-0.4, 0.4), thetadot_drop=(-30.0, 30.0))
 rows = []
 for seed in seeds:
-    config = TwinConfig(runs=RUNS, seed=seed, duration=duration, force_model="fullwave", side=side,
-                        gap=gap_ratio * side, pressure_amplitude_pa=p0, protocol=protocol, transducer_q=q)
+    config = TwinConfig(runs=RUNS, seed=seed, duration=duration, model_spec=ModelSpec("fullwave", {"gap_m": gap_ratio * side}),
+                        experiment=ExperimentConditions(side_length_m=side, pressure_amplitude_pa=p0),
+                        protocol=protocol, transducer_q=q)
     dyn, _ = twin_dynamics(config)
     tau = ring_time(q, config.frequency)
     cells = []

@@ -75,8 +75,8 @@ def test_a_new_model_runs_through_sweep_twin_and_diagnosis(dummy_model, tmp_path
     assert sw.settings["equilibrium_height_m"] == pytest.approx(ref.equilibrium_height, rel=1e-9)
 
     data = tmp_path / "twin"
-    truth = simulate_dataset(TwinConfig(runs=3, duration=1.5, seed=2, force_model="stiff_gorkov",
-                                        pressure_amplitude_pa=3000.0), data, progress=False)
+    truth = simulate_dataset(TwinConfig(runs=3, duration=1.5, seed=2, model_spec=ModelSpec("stiff_gorkov")), data,
+                             progress=False)
     assert truth["force_model"] == "stiff_gorkov"
     d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",)),
                          progress=False, spec=ModelSpec("stiff_gorkov"))

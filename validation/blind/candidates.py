@@ -89,6 +89,7 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
     generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
     the drawn effects are the whole truth."""
     from acousim.dynamics.effects import EffectSet
+    from acousim.models import ExperimentConditions
     from acousim.twin import TwinConfig, TwinError, simulate_dataset
 
     if data.exists():
@@ -96,9 +97,10 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
     generation_error, retries = None, 0
     for retries in range(5):
         # with the air's damping, truth.json lists it among the effects (module docstring)
+        experiment = ExperimentConditions(pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]))
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
-                          pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]),
-                          pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]), air_damping=air_damping)
+                          pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]), experiment=experiment,
+                          air_damping=air_damping)
         try:
             simulate_dataset(twin, data, progress=False, force=True)
         except TwinError as exc:

@@ -110,10 +110,13 @@ def test_simulate_fullwave_refusals_are_one_line(tmp_path, capsys, extra, fragme
 
 def test_gorkov_remains_the_default_and_is_not_recorded():
     """The Gor'kov model stays the twin's default force model, and truth.json names the model only when it is another."""
+    from acousim.models import ConditionError, ModelSpec
     from acousim.twin import TwinConfig, TwinError
 
-    assert TwinConfig().force_model == "gorkov"
+    assert TwinConfig().force_model == "gorkov" and TwinConfig().model_spec == ModelSpec()
     assert "force_model" not in TwinConfig().to_dict()
-    assert TwinConfig(force_model="fullwave").to_dict()["force_model"] == "fullwave"
-    with pytest.raises(TwinError):
-        TwinConfig(force_model="bem")
+    assert TwinConfig(model_spec=ModelSpec("fullwave")).to_dict()["force_model"] == "fullwave"
+    with pytest.raises(ConditionError):
+        ModelSpec("bem")
+    with pytest.raises(TwinError, match="model_spec"):
+        TwinConfig(model_spec="fullwave")  # a name is not a spec

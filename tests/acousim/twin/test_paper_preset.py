@@ -11,7 +11,7 @@ from cubedimer.executor import ExecutorConfig
 
 
 def test_the_preset_is_the_protocol_without_tuned_parameters():
-    assert PAPER.force_model == "fullwave" and PAPER.air_damping
+    assert PAPER.model_spec.name == "fullwave" and PAPER.air_damping
     assert PAPER.protocol.t_off == (13.0e-3, 13.0e-3)                 # the paper's drop
     assert PAPER.protocol.thetadot_drop == (0.0, 0.0)                 # at rest before the drop
     assert len(PAPER.effects) == 0                                     # nothing but the computed air damping
@@ -46,11 +46,11 @@ def test_the_command_takes_the_preset_dimer(tmp_path):
 
     args = build_parser().parse_args(["simulate", "--preset", "paper", "--out", str(tmp_path / "x")])
     cfg = build_config(args)
-    assert (cfg.force_model, cfg.side, cfg.gap, cfg.pressure_amplitude_pa, cfg.air_damping) == ("fullwave", 700e-6, 35e-6,
-                                                                                              6000.0, True)
+    assert (cfg.force_model, cfg.side, cfg.model_spec.option_values, cfg.pressure_amplitude_pa, cfg.air_damping) == (
+        "fullwave", 700e-6, {"gap_m": 35e-6}, 6000.0, True)
     args = build_parser().parse_args(["simulate", "--preset", "paper", "--side", "600e-6", "--gap", "18e-6",
                                       "--out", str(tmp_path / "x")])
-    assert (build_config(args).side, build_config(args).gap) == (600e-6, 18e-6)  # options override the preset
+    assert (build_config(args).side, build_config(args).model_spec.option_values) == (600e-6, {"gap_m": 18e-6})
     plain = build_config(build_parser().parse_args(["simulate", "--out", str(tmp_path / "y")]))
     assert (plain.force_model, plain.side, plain.air_damping) == ("gorkov", 500e-6, True)  # air damping by default
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from acousim.dynamics.effects import EffectSet
+from acousim.models import ExperimentConditions, ModelSpec
 from acousim.twin import (PAPER_LIKE, Camera, DropProtocol, TwinConfig, TwinError, simulate_dataset,
                           simulate_field_drop_runs, simulate_run, true_pressure, twin_dynamics)
 from cubedimer.attractors import classify_trajectory
@@ -63,13 +64,15 @@ def test_truth_reproduces_the_settings(dataset):
                                 "pair_scattering": {"kappa": 12000.0},
                                 "air_damping": dyn.effects["air_damping"].params()}
     rebuilt = TwinConfig(
-        runs=truth["runs"], duration=truth["duration_s"], seed=truth["seed"], side=truth["side_length_m"],
-        pressure_amplitude_pa=truth["nominal_pressure_amplitude_pa"], pressure_error=truth["pressure_error"],
+        runs=truth["runs"], duration=truth["duration_s"], seed=truth["seed"],
+        experiment=ExperimentConditions(side_length_m=truth["side_length_m"],
+                                        pressure_amplitude_pa=truth["nominal_pressure_amplitude_pa"]),
+        model_spec=ModelSpec(options={"mesh_size_m": truth["mesh_size_m"]}), pressure_error=truth["pressure_error"],
         effects=EffectSet.from_dict(truth["effects"]),
         protocol=DropProtocol(**truth["protocol"]),
         camera=Camera(fps=truth["camera"]["fps"], noise_y=truth["camera"]["noise_y_m"],
                       noise_theta=truth["camera"]["noise_theta"], missing_frames=truth["camera"]["missing_frames"]),
-        mesh_size=truth["mesh_size_m"], max_step=truth["max_step_s"], air_damping=truth["air_damping"],
+        max_step=truth["max_step_s"], air_damping=truth["air_damping"],
     )
     # the recorded effects hold the computed air damping, which the rebuilt twin keeps instead of computing it again
     assert rebuilt == replace(cfg, effects=EffectSet.from_dict(truth["effects"]))
@@ -190,7 +193,9 @@ def test_a_run_leaving_the_trap_writes_nothing(tmp_path):
         ({"runs": 0}, "runs"),
         ({"duration": -1.0}, "duration"),
         ({"pressure_error": 0.7}, "pressure error"),
-        ({"pressure_amplitude_pa": 200.0}, "cannot levitate"),
+        ({"experiment": ExperimentConditions(pressure_amplitude_pa=200.0)}, "cannot levitate"),
+        ({"experiment": ExperimentConditions(side_length_m=3e-3)}, "side must lie in"),
+        ({"experiment": ExperimentConditions(gap_m=1e-5)}, "model's own option"),
     ],
 )
 def test_bad_settings(tmp_path, kwargs, fragment):
@@ -209,7 +214,7 @@ def test_bad_protocol(kwargs):
 def test_paper_like_preset_is_documented_and_simulates():
     cfg = TwinConfig.from_preset(PAPER_LIKE, runs=2, duration=1.0, seed=1)
     runs, dyn, p = simulate_field_drop_runs(cfg, SERIAL, progress=False)
-    assert p == PAPER_LIKE.pressure_amplitude_pa and cfg.preset == "paper-like"
+    assert p == PAPER_LIKE.experiment.pressure_amplitude_pa and cfg.preset == "paper-like"
     assert "pair_scattering" in PAPER_LIKE.effects and PAPER_LIKE.description
     # its tuned linear damping is the total damping: the air's computed drag is not added on top
     assert not PAPER_LIKE.air_damping and not cfg.air_damping and "air_damping" not in dyn.effects

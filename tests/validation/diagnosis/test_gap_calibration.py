@@ -100,7 +100,7 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     mpatch.setenv(FAMILY_ENV, str(synthetic_family_dir))
     out = tmp_path_factory.mktemp("fw_twin")
     # no air damping: the linear damping is the only effect, the one the diagnosis must name alone
-    cfg = TwinConfig(runs=8, duration=2.0, seed=11, force_model="fullwave", gap=10e-6, pressure_error=0.05,
+    cfg = TwinConfig(runs=8, duration=2.0, seed=11, model_spec=ModelSpec("fullwave", {"gap_m": 10e-6}), pressure_error=0.05,
                      effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=2.0"]), air_damping=False)
     simulate_dataset(cfg, out, force=True, progress=False)
     yield out
