@@ -18,7 +18,7 @@ this one branches on a model's name.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Callable, ClassVar, Mapping
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
 
@@ -27,7 +27,8 @@ from .medium import GRAVITY, Medium, ParticleMaterial
 from .static_model import StaticModel
 
 __all__ = ["ExperimentConditions", "ForceModelType", "FORCE_MODEL_TYPES", "register_force_model",
-           "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError", "ModelSpec"]
+           "force_model_type", "force_model_names", "static_model", "dynamic_model", "ConditionError", "ModelSpec",
+           "ModelOption", "REGISTERED_MODEL_OPTIONS", "register_model_option", "model_options"]
 
 
 class ConditionError(ValueError):
@@ -40,8 +41,53 @@ OPTION_NAMES = {"side_length_m": "--side", "frequency_hz": "--frequency", "gap_m
                 "edge_radius_m": "--edge-radius", "mesh_size_m": "--mesh-size", "side_b_m": "--side-b",
                 "pressure_amplitude_pa": "--pressure", "particle_density_kg_m3": "--density",
                 "quadrature_degree": "--quadrature-degree"}
-#: The model-specific conditions (each model type takes some of them, :attr:`ForceModelType.options`).
+#: The built-in model-specific conditions, fields of :class:`ExperimentConditions` (each model type takes some of
+#: them, :attr:`ForceModelType.options`); :func:`model_options` adds the registered ones.
 MODEL_OPTIONS = ("gap_m", "edge_radius_m", "mesh_size_m", "side_b_m", "quadrature_degree")
+
+
+@dataclass(frozen=True)
+class ModelOption:
+    """A model option registered beyond the built-in fields (:func:`register_model_option`).
+
+    Parameters
+    ----------
+    name : str
+        The key (with its SI unit, e.g. ``"gap_m"``): in :class:`ModelSpec` options, in
+        :meth:`ExperimentConditions.option`, in a model type's ``options`` and in truth.json.
+    flag : str
+        Its command-line option (``"--gap"``), offered by every command with ``--model``
+        (:func:`acousim.cli.models.add_model_arguments`).
+    help : str
+        The option's help line (what it is, its unit, its default).
+    metavar : str
+        The value's name in the help.
+    """
+
+    name: str
+    flag: str
+    help: str
+    metavar: str = "VALUE"
+
+
+#: Registered model options by name, in registration order (:func:`register_model_option`).
+REGISTERED_MODEL_OPTIONS: dict[str, ModelOption] = {}
+
+
+def register_model_option(option: ModelOption) -> ModelOption:
+    """Add a model option: every command with ``--model`` offers ``option.flag``, every :class:`ModelSpec` carries it
+    to the conditions its model is built for (:meth:`ExperimentConditions.option`), a model type takes it by listing
+    ``option.name`` in its ``options``, and the twin records it in truth.json.  A finite value > 0."""
+    if option.name in MODEL_OPTIONS or option.name in {f.name for f in fields(ExperimentConditions)}:
+        raise ValueError(f"{option.name!r} is a field of ExperimentConditions already")
+    REGISTERED_MODEL_OPTIONS[option.name] = option
+    OPTION_NAMES[option.name] = option.flag
+    return option
+
+
+def model_options() -> tuple[str, ...]:
+    """Every model-specific condition: the built-in :data:`MODEL_OPTIONS` and the registered ones."""
+    return MODEL_OPTIONS + tuple(REGISTERED_MODEL_OPTIONS)
 
 
 @dataclass(frozen=True)
@@ -66,9 +112,17 @@ class ExperimentConditions:
     mesh_size_m: float | None = None
     side_b_m: float | None = None
     quadrature_degree: int | None = None
+    #: the registered model options that are set (:func:`register_model_option`), ``((name, value), ...)``
+    extra_options: tuple = ()
 
     def __post_init__(self) -> None:
-        for name, value in asdict(self).items():
+        extra = tuple(sorted((str(k), v) for k, v in dict(self.extra_options).items() if v is not None))
+        object.__setattr__(self, "extra_options", extra)
+        unknown = [name for name, _ in extra if name not in REGISTERED_MODEL_OPTIONS]
+        if unknown:
+            raise ConditionError(f"{', '.join(map(repr, unknown))} is not a condition or a registered model option "
+                                 "(acousim.models.register_model_option)")
+        for name, value in (*((k, v) for k, v in asdict(self).items() if k != "extra_options"), *extra):
             if value is None:
                 continue
             if not math.isfinite(float(value)):
@@ -91,10 +145,23 @@ class ExperimentConditions:
 
     @classmethod
     def from_meta(cls, meta: dict | None = None, **overrides) -> "ExperimentConditions":
-        """Conditions of a data set's meta.json (missing keys: defaults), with ``overrides`` (None values ignored)."""
+        """Conditions of a data set's meta.json (missing keys: defaults), with ``overrides`` (None values ignored;
+        registered model options among them go to :attr:`extra_options`)."""
         values = {k: float(v) for k, v in (meta or {}).items() if k in cls.META_FIELDS and v is not None}
         values.update({k: v for k, v in overrides.items() if v is not None})
-        return cls(**values)
+        return cls().with_options(**values)
+
+    def with_options(self, **values) -> "ExperimentConditions":
+        """These conditions with ``values`` set: fields by name, registered model options (:func:`register_model_option`)
+        into :attr:`extra_options` (None values ignored)."""
+        own = {f.name for f in fields(self)} - {"extra_options"}
+        extra = {k: v for k, v in values.items() if k not in own and v is not None}
+        return replace(self, **{k: v for k, v in values.items() if k in own and v is not None},
+                       extra_options=tuple({**dict(self.extra_options), **extra}.items()))
+
+    def option(self, name: str):
+        """The value of the model option ``name`` (a field, or a registered option; None when unset)."""
+        return getattr(self, name) if name in MODEL_OPTIONS else dict(self.extra_options).get(name)
 
     @property
     def medium(self) -> Medium:
@@ -161,8 +228,8 @@ class ForceModelType:
 
     def check(self, conditions: ExperimentConditions) -> None:
         """Refuse model-specific conditions this model does not take (one line naming the option)."""
-        for name in MODEL_OPTIONS:
-            if getattr(conditions, name) is not None and name not in self.options:
+        for name in model_options():
+            if conditions.option(name) is not None and name not in self.options:
                 takers = [t.name for t in FORCE_MODEL_TYPES.values() if name in t.options]
                 raise ConditionError(f"{OPTION_NAMES[name]} applies to --model {' / '.join(takers) or '(none)'} only, "
                                      f"not to --model {self.name}")
@@ -234,9 +301,9 @@ class ModelSpec:
         object.__setattr__(self, "options", options)
         t = force_model_type(name)
         for k, _ in options:
-            if k not in MODEL_OPTIONS:
-                raise ConditionError(f"{k!r} is not a model option (one of {', '.join(MODEL_OPTIONS)})")
-        t.check(ExperimentConditions(**dict(options)))
+            if k not in model_options():
+                raise ConditionError(f"{k!r} is not a model option (one of {', '.join(model_options())})")
+        t.check(ExperimentConditions().with_options(**dict(options)))
 
     @property
     def type(self) -> ForceModelType:

@@ -1,7 +1,7 @@
 """Command-line options of the force-model registry (:mod:`acousim.models`), shared by every command with ``--model``.
 
 The one path from a command's options to what it simulates: :func:`model_spec_from_args` (the model and its own
-options, :data:`~acousim.models.MODEL_OPTIONS`) and :func:`experiment_from_args` (the experiment, the
+options, :func:`~acousim.models.model_options`) and :func:`experiment_from_args` (the experiment, the
 :class:`~acousim.models.ExperimentConditions` fields of meta.json), each read by the options' command-line names
 (:data:`~acousim.models.OPTION_NAMES`) over a default (a preset's, or a data set's meta.json), so that a command
 names no option of a model itself.
@@ -14,8 +14,8 @@ from dataclasses import replace
 from cubedimer.cli import UserInputError
 from cubedimer.meta import check_meta_value
 
-from ..models import (MODEL_OPTIONS, OPTION_NAMES, ExperimentConditions, ModelSpec, force_model_names, force_model_type,
-                      static_model)
+from ..models import (OPTION_NAMES, REGISTERED_MODEL_OPTIONS, ExperimentConditions, ModelSpec, force_model_names,
+                      force_model_type, model_options, static_model)
 
 __all__ = ["add_model_arguments", "conditions_from_args", "static_model_from_args", "model_help",
            "model_spec_from_args", "experiment_from_args"]
@@ -34,7 +34,8 @@ def model_help() -> str:
 
 def add_model_arguments(parser: argparse.ArgumentParser, unset_default: bool = False) -> None:
     """``--model`` (the registry's choices; default the registry's first model, or None with ``unset_default``, for a
-    command whose preset may choose it) and the hinge options ``--gap`` / ``--edge-radius``."""
+    command whose preset may choose it), the hinge options ``--gap`` / ``--edge-radius`` and every registered model
+    option (:func:`acousim.models.register_model_option`)."""
     parser.add_argument("--model", choices=force_model_names(), default=None if unset_default else force_model_names()[0],
                         help=f"force model ({model_help()})")
     parser.add_argument("--gap", type=float, default=None, metavar="METRES",
@@ -43,6 +44,8 @@ def add_model_arguments(parser: argparse.ArgumentParser, unset_default: bool = F
                              "given")
     parser.add_argument("--edge-radius", type=float, default=None, metavar="METRES",
                         help="edge radius r_e [m] of the full-wave model (only sharp edges, 0, are tabulated)")
+    for option in REGISTERED_MODEL_OPTIONS.values():  # every registered model option (acousim.models)
+        parser.add_argument(option.flag, type=float, default=None, metavar=option.metavar, help=option.help)
 
 
 def conditions_from_args(args: argparse.Namespace, meta: dict | None = None, **extra) -> ExperimentConditions:
@@ -70,12 +73,12 @@ def static_model_from_args(args: argparse.Namespace, conditions: ExperimentCondi
 
 def model_spec_from_args(args: argparse.Namespace, default: ModelSpec | None = None) -> ModelSpec:
     """The :class:`~acousim.models.ModelSpec` of ``--model`` with every model option the command offers that is set
-    (``--gap``, ``--edge-radius``, ``--mesh-size``...: the :data:`~acousim.models.MODEL_OPTIONS` by their
+    (``--gap``, ``--edge-radius``, ``--mesh-size``...: the :func:`~acousim.models.model_options` by their
     command-line names), over ``default`` (a preset's model and options; None: the registry's first model); one-line
     :class:`UserInputError` when the model does not take one."""
     name = args.model if getattr(args, "model", None) is not None else (default.name if default is not None else None)
     options = {**(default.option_values if default is not None else {}),
-               **{k: v for k in MODEL_OPTIONS if (v := _option(args, k)) is not None}}
+               **{k: v for k in model_options() if (v := _option(args, k)) is not None}}
     try:
         return ModelSpec(name, options)
     except ValueError as exc:

@@ -8,7 +8,7 @@ can of the source paper's dynamics.  Every configuration object validates itself
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -18,7 +18,7 @@ from ..dynamics.integrator import DEFAULT_MAX_STEP
 from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
 from ..dynamics.effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
 from ..fullwave.statics import MODEL_NAME as FULLWAVE
-from ..models import MODEL_OPTIONS, ExperimentConditions, ModelSpec, force_model_names
+from ..models import ExperimentConditions, ModelSpec, force_model_names, model_options
 
 __all__ = ["TwinError", "DropProtocol", "Camera", "TwinConfig", "TwinPreset", "PAPER_LIKE", "PAPER", "WINDOW_RESONATOR",
            "PRESETS"]
@@ -245,7 +245,7 @@ class TwinConfig:
         if not isinstance(self.experiment, ExperimentConditions) or not isinstance(self.model_spec, ModelSpec):
             raise TwinError(f"experiment and model_spec must be an ExperimentConditions and a ModelSpec, got "
                             f"{type(self.experiment).__name__} and {type(self.model_spec).__name__}")
-        own = [name for name in MODEL_OPTIONS if getattr(self.experiment, name) is not None]
+        own = [name for name in model_options() if self.experiment.option(name) is not None]
         if own:
             raise TwinError(f"{', '.join(own)} is the model's own option: give it in model_spec, not in experiment")
         if not np.isfinite(self.side) or not 50e-6 <= self.side <= 2e-3:
@@ -271,7 +271,7 @@ class TwinConfig:
         """The experiment with the model's own options (:meth:`acousim.models.ModelSpec.conditions`): what the force
         model is built for, at the nominal pressure amplitude."""
         try:
-            return replace(self.experiment, **self.model_spec.option_values)
+            return self.experiment.with_options(**self.model_spec.option_values)
         except ValueError as exc:
             raise TwinError(str(exc)) from None
 
@@ -336,7 +336,7 @@ class TwinConfig:
         }
         if self.force_model != force_model_names()[0]:  # listed when it is not the default model
             out["force_model"] = self.force_model
-        for name in MODEL_OPTIONS:  # every other option of the model that is set, under its field name
+        for name in model_options():  # every other option of the model that is set, under its name
             if name != "mesh_size_m" and name in options:
                 out[name] = float(options[name])
         if self.frequency != ExperimentConditions.frequency_hz:

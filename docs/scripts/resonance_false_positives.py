@@ -49,9 +49,10 @@ CASES = {
 
 def measure(case: Case, seed: int, config=None) -> dict:
     """Selection on one data set: spurious terms (fit z, own oracle z and alias z), true terms lost, criterion."""
-    from fitting.discovery import DiscoveryConfig, discover_model
+    from fitting.selection.discovery_config import DiscoveryConfig
+    from fitting.selection.integral_discovery import discover_model
     from fitting.model import TERMS
-    from fitting.oracle import NoiseLevels, OracleRun, oracle_standard_errors
+    from fitting.uncertainty.oracle import NoiseLevels, OracleRun, oracle_standard_errors
 
     truth, runs, derivs, exact = make_data(case, seed)
     noise = (case.noise_y, case.noise_theta)
@@ -80,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-natural-window", action="store_true",
                     help="windows from the dominant frequency alone (DiscoveryConfig(natural_periods=None))")
     args = ap.parse_args(argv)
-    from fitting.discovery import DiscoveryConfig
+    from fitting.selection.discovery_config import DiscoveryConfig
 
     config = DiscoveryConfig(natural_periods=None) if args.no_natural_window else DiscoveryConfig()
     print("| case | seed | spurious terms (fit z; own oracle z; alias, alias z) | true terms lost | criterion | "

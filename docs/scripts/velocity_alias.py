@@ -7,7 +7,7 @@ columns y*thetadot^2 (b5) and y*ydot*thetadot (b6) that the columns y (b2), y^2*
 hinge terms (1, theta, y, y^2*theta, thetadot) plus y*theta^2.  R^2 near 1: a fit can trade the velocity coupling for
 position terms at almost no cost in the residual.
 
-Then the oracle alias z of b5 and b6 (fitting.oracle.oracle_aliases: sqrt of the noise-free residual sum of squares
+Then the oracle alias z of b5 and b6 (fitting.uncertainty.oracle.oracle_aliases: sqrt of the noise-free residual sum of squares
 left when the term is replaced by its best one-for-one rival in the cubic library, the other terms refitted, over
 the tracking noise), with what the default fit would use: the integral form's windows of 0.75 periods of theta's
 dominant frequency, and the tracking noise the twin's camera adds (sigma_y = 1 um, sigma_theta = 0.005 at 2000 fps;
@@ -25,7 +25,7 @@ import numpy as np
 from acousim.atlas.field_drops import atlas_dynamics, settled_outcome
 from acousim.atlas.held_y import HINGE_BOX, integrate_held, held_y_acceleration, held_y_arguments, held_y_orbits
 from fitting.model import PolynomialModel
-from fitting.oracle import NoiseLevels, OracleRun, oracle_aliases
+from fitting.uncertainty.oracle import NoiseLevels, OracleRun, oracle_aliases
 
 FPS, DURATION, NOISE = 2000.0, 4.0, NoiseLevels(1e-6, 0.005, source="the twin camera's defaults")
 SUPPORT = ("1", "theta", "y", "y^2*theta", "thetadot", "y*thetadot^2", "y*ydot*thetadot", "y*theta^2")

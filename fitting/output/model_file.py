@@ -13,12 +13,13 @@ from cubedimer.atomic import json_text, write_json
 from cubedimer.errors import DatasetError
 from cubedimer.system import SystemSpec, read_system
 from cubedimer.terms import STATE_NAMES, parse_term
+from ..config import FitConfig
 from ..method_names import DEFAULT_METHOD, METHODS
 from ..model import PolynomialModel
 from ..results import FitResult, support_terms
 
 __all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json",
-           "recorded_settings", "SHARED_SETTINGS"]
+           "recorded_settings", "settings_record", "SHARED_SETTINGS"]
 
 
 #: model.json's keys in the order they are written; a method's own keys (``FitResult.extras.record``) take their
@@ -38,10 +39,11 @@ SHARED_SETTINGS = ("load", "smoothing", "classify")
 _FORMER_KEYS = {("discovery", "selection"): "discovery"}
 
 
-def _settings_record(res: FitResult) -> dict:
-    """model.json's ``settings``: the shared stages, ``method`` (the name) and the method's settings under its name."""
-    config = json.loads(json.dumps(asdict(res.config), default=float))
-    return {**{k: config[k] for k in SHARED_SETTINGS}, "method": res.method, res.method: config["method"]}
+def settings_record(config: FitConfig) -> dict:
+    """model.json's ``settings`` of ``config``: the shared stages, ``method`` (the name) and the method's settings
+    under its name (docs/formats.md)."""
+    doc = json.loads(json.dumps(asdict(config), default=float))
+    return {**{k: doc[k] for k in SHARED_SETTINGS}, "method": config.method_name, config.method_name: doc["method"]}
 
 
 def recorded_settings(doc: dict) -> dict:
@@ -90,7 +92,7 @@ def model_json(res: FitResult) -> dict:
         "loss": {"joint_start": res.joint.loss_start.to_dict(), "final": res.joint.loss_end.to_dict(),
                  "n_evals": res.joint.n_evals, "nlopt_status": res.joint.status},
         "scales": res.scales.to_dict(),
-        "settings": _settings_record(res),
+        "settings": settings_record(res.config),
         "skipped_files": list(res.skipped),
         "glitch_frames_masked": res.n_glitches,
         "fallback": res.fallback,

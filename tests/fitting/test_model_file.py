@@ -1,11 +1,13 @@
 """The one model.json reader (fitting.output.model_file.read_model_json): exact round trip, one-line errors on bad files."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cubedimer.errors import DatasetError
-from fitting.output.model_file import read_model_json
+from fitting.config import FitConfig
+from fitting.output.model_file import read_model_json, recorded_settings, settings_record
 
 
 def test_reads_back_the_model_exactly(tmp_path, truth):
@@ -36,3 +38,35 @@ def test_bad_file_is_one_line_dataset_error(tmp_path, content, message):
 def test_missing_file(tmp_path):
     with pytest.raises(DatasetError, match="cannot read"):
         read_model_json(tmp_path / "model.json")
+
+
+#: model.json settings as the fit wrote them before each method owned its settings (one flat object): a default
+#: discovery fit, and a paper fit with ``--max-evals 20 --joint-max-evals 20``
+FLAT_SETTINGS = Path(__file__).parent / "data"
+
+
+@pytest.mark.parametrize("name, config", [
+    ("discovery", FitConfig()),
+    ("paper", FitConfig.for_method("paper").with_max_evals(20, joint=True)),
+])
+def test_settings_of_the_flat_layout_read_as_the_method_layout(name, config):
+    """The settings reader gives a file of the flat layout exactly the layout a fit of the same configuration writes
+    today (the method's own settings under its name, the discovery's selection as ``selection``), and leaves
+    today's layout as it is."""
+    old = json.loads((FLAT_SETTINGS / f"model_settings_flat_{name}.json").read_text())
+    today = settings_record(config)
+    assert set(today) == {"load", "smoothing", "classify", "method", name} and today["method"] == name
+    assert recorded_settings(old) == today
+    assert recorded_settings({"method": name, "settings": today}) == today
+    if name == "discovery":  # the discovery's own selection settings moved from settings["discovery"]
+        assert today["discovery"]["selection"] == old["settings"]["discovery"]
+        assert "refine" not in today["discovery"]  # the paper's per-run refinement is not the discovery's
+    else:
+        assert today["paper"]["refine"]["max_evals"] == today["paper"]["joint"]["max_evals"] == 20
+
+
+def test_settings_reader_takes_a_partial_or_missing_record():
+    """What older or hand-written files hold: part of the discovery's selection settings, or none."""
+    assert recorded_settings({"settings": {"discovery": {"keep_damping": False}}}) == {
+        "method": "discovery", "discovery": {"selection": {"keep_damping": False}}}
+    assert recorded_settings({"method": "paper"}) == {"method": "paper", "paper": {}}
