@@ -4,7 +4,7 @@ Two modes, both on the data sets of :mod:`benchmarks.bench_discovery` (same gene
 
 * ``--baselines``: on each data set, pysindy STLSQ on the Savitzky-Golay accelerations with the cubic
   library, pysindy's ``EnsembleOptimizer`` (bagged STLSQ), pysindy's weak form (``WeakPDELibrary`` on the
-  first-order state), the paper's pipeline (``FitConfig(method="paper")``, one worker process) and ours
+  first-order state), the paper's pipeline (``FitConfig.for_method("paper")``, one worker process) and ours
   (:func:`fitting.selection.integral_discovery.discover_model`).  Per method and data set: missing true terms, spurious
   terms, median and max relative coefficient error on the true terms found, wall time.
 * ``--detection-curve``: the ``paper``, ``weak8`` and ``weak20`` truths at 6, 8, 12, 20 and 30 runs (other
@@ -173,7 +173,7 @@ def run_baselines(case: Case, seed: int, paper: bool) -> list[MethodResult]:
     }
     if paper:
         def paper_fit() -> NDArray[np.float64]:
-            cfg = FitConfig(method="paper")
+            cfg = FitConfig.for_method("paper")
             prepared, sc = prepare_runs(runs, cfg)
             return fit_runs(prepared, sc, cfg, executor=ExecutorConfig(workers=1), cache_dir=None,
                             progress=False).model.coef

@@ -132,7 +132,7 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
     from fitting.selection.ensemble import mean_pvalues
     from cubedimer.executor import ExecutorConfig
     from fitting.model import TERMS
-    from fitting.config import FitConfig
+    from fitting.config import FitConfig, PaperMethodConfig
     from fitting.output.model_file import write_fit
     from fitting.fit import fit_dataset
     from fitting.selection.sparse_regression import RegressionConfig, fit_ensemble_regression, fit_regression
@@ -144,7 +144,7 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
         data, out = Path(tmp) / "data", Path(tmp) / "out"
         write_dataset(data, truth, SyntheticConfig(n_runs=n_runs, seed=seed))
         t0 = time.perf_counter()
-        paper = FitConfig(method="paper")
+        paper = FitConfig.for_method("paper")
         res = fit_dataset(data, paper, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
         write_fit(res, out)
         wall = time.perf_counter() - t0
@@ -152,7 +152,7 @@ def _pipeline_section(lines: list[str], n_runs: int, workers: int, seed: int) ->
         res2 = fit_dataset(data, paper, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
         wall_resume = time.perf_counter() - t0
         # the paper's z > 3 rule on the same (cached) per-run refinements, jointly re-optimised
-        zcfg = FitConfig(method="paper", selection=SelectionConfig(rule="zscore"))
+        zcfg = FitConfig(method=PaperMethodConfig(selection=SelectionConfig(rule="zscore")))
         res_z = fit_dataset(data, zcfg, executor=ExecutorConfig(workers=workers), progress=False, cache_dir=out / "runs")
         t0 = time.perf_counter()
         res_d = fit_dataset(data, FitConfig(), progress=False)

@@ -6,6 +6,7 @@ import json
 import os
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,10 +14,12 @@ from cubedimer.atomic import json_text, write_json
 from cubedimer.errors import DatasetError
 from cubedimer.system import SystemSpec, read_system
 from cubedimer.terms import STATE_NAMES, parse_term
-from ..config import FitConfig
 from ..method_names import DEFAULT_METHOD, METHODS
 from ..model import PolynomialModel
 from ..results import FitResult, support_terms
+
+if TYPE_CHECKING:
+    from ..config import FitConfig
 
 __all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json",
            "recorded_settings", "settings_record", "SHARED_SETTINGS"]
