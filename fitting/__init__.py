@@ -37,7 +37,7 @@ from .derivatives.savitzky_golay import SmoothingConfig
 from .description import MethodDescription
 from .fit import fit_dataset, fit_runs, prepare_runs
 from .methods.registry import METHODS, FitContext, FittingMethod, register_method
-from .methods.settings import DiscoveryMethodConfig, MethodConfig, PaperMethodConfig
+from .method_settings import DiscoveryMethodConfig, MethodConfig, PaperMethodConfig
 from .model import PolynomialModel, Scales
 from .output.model_file import recorded_settings, write_fit
 from .refinement.long_time import RefineConfig

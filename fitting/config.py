@@ -10,7 +10,7 @@ from cubedimer.dataset import LoadConfig
 from cubedimer.system import SYSTEM_KINDS
 from .derivatives.savitzky_golay import SmoothingConfig
 from .method_names import METHODS, get_method
-from .methods.settings import OUTPUT_ERROR_MODES, DiscoveryMethodConfig, MethodConfig, PaperMethodConfig
+from .method_settings import OUTPUT_ERROR_MODES, DiscoveryMethodConfig, MethodConfig, PaperMethodConfig
 
 __all__ = ["FitConfig", "OUTPUT_ERROR_MODES", "MethodConfig", "DiscoveryMethodConfig", "PaperMethodConfig"]
 
@@ -29,8 +29,8 @@ class FitConfig:
         The attractor classification of every run.
     method : MethodConfig
         The settings of the registered method that fits (:data:`fitting.methods.registry.METHODS`, its
-        ``config_type``): :class:`~fitting.methods.settings.DiscoveryMethodConfig` (the default, integral-form
-        discovery polished by the long-time refinement) or :class:`~fitting.methods.settings.PaperMethodConfig`
+        ``config_type``): :class:`~fitting.method_settings.DiscoveryMethodConfig` (the default, integral-form
+        discovery polished by the long-time refinement) or :class:`~fitting.method_settings.PaperMethodConfig`
         (per-run SINDy and long-time refinement, ensemble selection, joint re-optimisation of the minimal model).
         ``FitConfig.for_method(name)`` gives a method's default settings.
 

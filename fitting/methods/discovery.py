@@ -1,6 +1,6 @@
 """The default fit: integral-form discovery, long-time polish, attractor check, fallback.
 
-Steps of :meth:`DiscoveryMethod.fit` (settings :class:`fitting.methods.settings.DiscoveryMethodConfig`, the default
+Steps of :meth:`DiscoveryMethod.fit` (settings :class:`fitting.method_settings.DiscoveryMethodConfig`, the default
 of :class:`fitting.config.FitConfig` and of ``python -m fitting fit``):
 
 1. :func:`fitting.selection.integral_discovery.discover_model` selects the terms and fits them by integral-form least
@@ -29,6 +29,7 @@ from cubedimer.terms import EQUATION_NAMES
 from ..config import FitConfig
 from ..description import (FIT_FIGURES, DescriptionTable, MethodDescription, anti_damping_text, damping_rates,
                            model_found_text)
+from ..method_settings import DiscoveryMethodConfig
 from ..model import PolynomialModel, Scales
 from ..output.model_file import fit_record, recorded_settings
 from ..refinement.long_time import refine
@@ -40,7 +41,6 @@ from ..selection.rules import support_text
 from ..selection.sparse_regression import scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
 from .registry import FitContext, register_method
-from .settings import DiscoveryMethodConfig
 
 __all__ = ["DiscoveryMethod", "DiscoveryExtras", "discovery_description", "PARETO_FIGURE", "FRONT_FIGURE"]
 

@@ -33,6 +33,7 @@ from ..derivatives.integral_form import METHOD as INTEGRAL_METHOD
 from ..derivatives.integral_form import IntegralSelection, integral_form_selection
 from ..derivatives.savitzky_golay import Derivatives
 from ..description import DescriptionTable, MethodDescription, anti_damping_text, damping_rates, model_found_text
+from ..method_settings import PaperMethodConfig
 from ..model import DAMPING_TERMS, TERMS, PolynomialModel, Scales
 from ..refinement.long_time import Objective, RefineConfig, RefineResult, default_substeps, refine, scaled_reference
 from ..results import EnsembleExtras, FitResult, PreparedRun, RunFit, support_terms
@@ -42,7 +43,6 @@ from ..selection.rules import SELECTION_RULES, SelectionEvidence, support_text
 from ..selection.sparse_regression import fit_regression, scaled_data, scaled_library
 from ..uncertainty.final_checks import fall_back, final_oracle
 from .registry import FitContext, register_method
-from .settings import PaperMethodConfig
 
 __all__ = ["PaperMethod", "PaperExtras", "candidate_terms", "refine_run"]
 

@@ -1,7 +1,7 @@
 """The registry of model-discovery methods: what ``--method`` and :class:`fitting.config.FitConfig` ``method`` choose.
 
 A method is an object satisfying :class:`FittingMethod`: a name, a one-line summary (the command-line help
-lists it), the class of its own frozen settings (``config_type``, :mod:`fitting.methods.settings`: what
+lists it), the class of its own frozen settings (``config_type``, :mod:`fitting.method_settings`: what
 :class:`fitting.config.FitConfig` ``method`` holds, with the method-specific options they accept),
 ``fit(prepared, scales, config, context)``, which turns prepared runs into one :class:`fitting.results.FitResult`,
 and ``describe(result)``, its own account of that result
@@ -25,10 +25,10 @@ from ..config import FitConfig
 from ..description import MethodDescription
 from ..method_names import (DEFAULT_METHOD, METHOD_OPTIONS, METHODS, get_method, method_names, methods_accepting,
                             methods_help)
+from ..method_settings import MethodConfig
 from ..model import Scales
 from ..results import FitResult, PreparedRun
 from ..uncertainty.oracle import NoiseLevels
-from .settings import MethodConfig
 
 __all__ = ["FitContext", "FittingMethod", "METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "register_method",
            "method_names", "get_method", "methods_accepting", "methods_help"]
@@ -67,7 +67,7 @@ class FittingMethod(Protocol):
     summary : str
         One sentence for the command-line help.
     config_type : type
-        The class of the method's frozen settings (a :class:`~fitting.methods.settings.MethodConfig` whose
+        The class of the method's frozen settings (a :class:`~fitting.method_settings.MethodConfig` whose
         ``name`` is the method's): what :class:`~fitting.config.FitConfig` ``method`` holds, what model.json's
         ``settings`` records under the method's name, which method-specific options (:data:`METHOD_OPTIONS`) the
         method accepts (``options``) and which refinement ``--max-evals`` sets (``max_evals_setting``).

@@ -54,7 +54,7 @@ def recorded_settings(doc: dict) -> dict:
 
     Today's layout (docs/formats.md) is ``{"load", "smoothing", "classify", "method": NAME, NAME: {...}}``: the
     shared stages, the method's name and the method's own settings under its name (the fields of its
-    ``config_type``, :mod:`fitting.methods.settings`).  Files written before the per-method layout recorded one flat
+    ``config_type``, :mod:`fitting.method_settings`).  Files written before the per-method layout recorded one flat
     dictionary (the shared stages, ``method`` and every method's fields side by side, the discovery's selection as
     ``discovery``); their method's fields are gathered under its name here.  Keys a file leaves out stay out (a
     reader takes the defaults it needs); a document without settings gives ``{"method": NAME, NAME: {}}`` with the

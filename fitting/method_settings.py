@@ -15,13 +15,13 @@ from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 from cubedimer.config_checks import check_positive
-from ..method_names import methods_accepting
-from ..refinement.long_time import JOINT_REFINE, RefineConfig
-from ..refinement.output_error import OutputErrorConfig
-from ..selection.discovery_config import DiscoveryConfig
-from ..selection.ensemble import EnsembleConfig
-from ..selection.rules import SelectionConfig
-from ..selection.sparse_regression import RegressionConfig
+from .method_names import methods_accepting
+from .refinement.long_time import JOINT_REFINE, RefineConfig
+from .refinement.output_error import OutputErrorConfig
+from .selection.discovery_config import DiscoveryConfig
+from .selection.ensemble import EnsembleConfig
+from .selection.rules import SelectionConfig
+from .selection.sparse_regression import RegressionConfig
 
 __all__ = ["MethodConfig", "DiscoveryMethodConfig", "PaperMethodConfig", "OUTPUT_ERROR_MODES"]
 
