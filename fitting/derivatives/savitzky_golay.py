@@ -29,7 +29,7 @@ Comparing it with ``G`` applied to a model's accelerations (``Derivatives.matche
 with the raw model accelerations, removes the attenuation bias: measured on a 22 Hz + 51 Hz test
 signal at the default window (51 frames at 1500 fps), the maximum mismatch is 24 % against the raw
 model accelerations, 9.6 % against the same smoothing filter applied to them, and 0.1 % against ``G``
-(tests/fitting/test_signal_features.py).  The regression uses it (``RegressionConfig.matched_filter``).
+(tests/fitting/derivatives/test_signal_features.py).  The regression uses it (``RegressionConfig.matched_filter``).
 
 Edges are handled with ``mode="interp"`` (polynomial fit to the first/last window); their noise
 is larger, so regression drops ``w // 2`` frames at each end (:attr:`Derivatives.trim`).

@@ -11,7 +11,8 @@ from cubedimer.glitches import find_glitches
 from fitting.cli import main
 from fitting.synthetic import SyntheticConfig, generate_runs, paper_reduced_model
 
-_spec = importlib.util.spec_from_file_location("_fitting_test_default_fit", Path(__file__).with_name("test_default_fit.py"))
+_spec = importlib.util.spec_from_file_location(
+    "_fitting_test_default_fit", Path(__file__).parent / "methods" / "test_default_fit.py")
 _default = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_default)
 TRUTH, CFG, _write = _default.TRUTH, _default.CFG, _default._write

@@ -16,7 +16,8 @@ from fitting.refinement.long_time import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 # the truth and CSV writer of test_default_fit.py (pytest's importlib mode: load it by path)
-_spec = importlib.util.spec_from_file_location("_fitting_test_default_fit", Path(__file__).with_name("test_default_fit.py"))
+_spec = importlib.util.spec_from_file_location(
+    "_fitting_test_default_fit", Path(__file__).parents[1] / "methods" / "test_default_fit.py")
 _default = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_default)
 TRUTH, _write = _default.TRUTH, _default._write
@@ -81,7 +82,8 @@ def fits_by_frame_rate(tmp_path_factory):
         raw = generate_runs(TRUTH, SyntheticConfig(n_runs=4, duration=2.0, fps=fps, noise_y=1e-6, noise_theta=0.002,
                                                    missing_frames=0, seed=31))
         data = _write(tmp_path_factory.mktemp(f"fps{int(fps)}") / "data", raw)
-        out[fps] = fit_dataset(data, FitConfig(method=DiscoveryMethodConfig(polish=RefineConfig(max_evals=20))), progress=False)
+        config = FitConfig(method=DiscoveryMethodConfig(polish=RefineConfig(max_evals=20)))
+        out[fps] = fit_dataset(data, config, progress=False)
     return out
 
 

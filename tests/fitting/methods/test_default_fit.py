@@ -16,7 +16,8 @@ from fitting.refinement.long_time import RefineConfig
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 # the truths, the oracle and the criterion of test_discovery.py (pytest's importlib mode: load it by path)
-_spec = importlib.util.spec_from_file_location("_fitting_test_discovery", Path(__file__).with_name("test_discovery.py"))
+_spec = importlib.util.spec_from_file_location(
+    "_fitting_test_discovery", Path(__file__).parents[1] / "selection" / "test_discovery.py")
 _disc = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_disc)
 W_9, _check, _oracle_se, _truth = _disc.W_9, _disc._check, _disc._oracle_se, _disc._truth

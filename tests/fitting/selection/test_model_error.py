@@ -136,7 +136,8 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse):
 
 
 def test_a_sparse_truth_keeps_the_significance_rule():
-    spec = importlib.util.spec_from_file_location("_fitting_test_default_fit", Path(__file__).with_name("test_default_fit.py"))
+    spec = importlib.util.spec_from_file_location(
+        "_fitting_test_default_fit", Path(__file__).parents[1] / "methods" / "test_default_fit.py")
     default = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(default)
     from fitting.synthetic import generate_runs
