@@ -50,9 +50,10 @@ def add_model_arguments(parser: argparse.ArgumentParser, unset_default: bool = F
 
 def conditions_from_args(args: argparse.Namespace, meta: dict | None = None, **extra) -> ExperimentConditions:
     """The experiment of ``meta`` (or the defaults) with the options that are set (side, frequency, pressure,
-    density, gap, edge radius and ``extra``); one-line :class:`UserInputError` on a bad value."""
-    options = {**{k: _option(args, k) for k in ("side_length_m", "frequency_hz", "pressure_amplitude_pa",
-                                                "particle_density_kg_m3", "gap_m", "edge_radius_m")}, **extra}
+    density, every model option the command offers: :func:`~acousim.models.model_options`) and ``extra`` (which
+    wins, None included); one-line :class:`UserInputError` on a bad value."""
+    names = ("side_length_m", "frequency_hz", "pressure_amplitude_pa", "particle_density_kg_m3", *model_options())
+    options = {**{k: _option(args, k) for k in names}, **extra}
     try:
         return ExperimentConditions.from_meta(meta, **options)
     except ValueError as exc:

@@ -53,18 +53,23 @@ def pressure_factor_model():
 
 
 def test_a_new_model_option_runs_from_the_command_line_to_the_diagnosis(pressure_factor_model, tmp_path):
-    """A model option registered once (no other change) is offered by the twin's and the diagnosis's command lines,
-    reaches their specs, builds the twin's model (the data are simulated at 1.2 x 3000 Pa), is recorded in
+    """A model option registered once (no other change) is offered by the sweep's, the twin's and the diagnosis's
+    command lines, builds the sweep's model, reaches the specs, builds the twin's model (the data are simulated at 1.2 x 3000 Pa), is recorded in
     truth.json, and builds the diagnosis's model: with the same option the diagnosis's trap at the data's nominal
     pressure is the twin's, and its calibration finds the pressure ratio 1."""
     import json
 
     from acousim.cli import main as acousim_main
     from acousim.cli.models import model_spec_from_args
+    from acousim.statics.sweep import read_sweep_csv
     from validation.cli import build_parser as validation_parser
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
     model, option = pressure_factor_model
+    sweep = tmp_path / "s.csv"
+    assert acousim_main(["sweep", "--model", model.name, "--pressure-factor", "1.2", "--theta", "-0.3:0.3:3", "--y",
+                         "-1e-4:1e-4:3", "--out", str(sweep), "--quiet"]) == 0
+    assert read_sweep_csv(sweep).settings["pressure_amplitude_pa"] == pytest.approx(3600.0)  # the sweep's model too
     data = tmp_path / "twin"
     assert acousim_main(["simulate", "--model", model.name, "--pressure-factor", "1.2", "--runs", "3", "--duration",
                          "1.5", "--seed", "2", "--out", str(data), "--no-progress"]) == 0
