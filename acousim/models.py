@@ -96,7 +96,8 @@ class ExperimentConditions:
 
     ``gap_m`` and ``edge_radius_m`` describe the hinge of the full-wave model (None: its default, 0.01 s and
     sharp edges); ``mesh_size_m`` and ``side_b_m`` belong to the Gor'kov volume model (None: its defaults).
-    A model refuses conditions it does not take (:attr:`ForceModelType.options`).
+    ``extra_options`` holds the registered model options that are set (:func:`register_model_option`; read them with
+    :meth:`option`).  A model refuses conditions it does not take (:attr:`ForceModelType.options`).
     """
 
     side_length_m: float = 500e-6
@@ -278,7 +279,7 @@ class ModelSpec:
 
     The one object that carries a model choice through a command (instead of a name and loose keyword arguments):
     the experiment itself (side, material, frequency, pressure) comes from the data set's meta.json or the options
-    where the model is built, :meth:`conditions`; the model's own options (the :data:`MODEL_OPTIONS` fields it takes,
+    where the model is built, :meth:`conditions`; the model's own options (the :func:`model_options` it takes,
     e.g. the full-wave hinge gap) travel here.  A new model with a new option needs no change where a spec travels.
 
     Parameters
@@ -286,8 +287,8 @@ class ModelSpec:
     name : str, optional
         A registered model name (default: the first registered, the Gor'kov model).
     options : mapping, optional
-        ``{field: value}`` of :data:`MODEL_OPTIONS` fields (None values are left out); a field the model does not
-        take is refused with one line naming the option.
+        ``{name: value}`` of :func:`model_options` (None values are left out); an option the model does not take
+        is refused with one line naming the option.
     """
 
     name: str | None = None
