@@ -62,7 +62,7 @@ from ..medium import Medium
 
 __all__ = ["DEFAULT_CAVITY_AREA", "CAVITY_AREA_RANGE", "MAX_DETUNING", "CavityMode", "mode_energy",
            "slow_response_gains", "PotentialSeries", "potential_series", "CoupledCavity", "ModeTrajectory", "integrate_coupled",
-           "coupled_field_drop"]
+           "coupled_field_drop", "coupled_flow"]
 
 #: The default effective cross-section of the cavity [m^2]: a transducer of 20 mm diameter.
 DEFAULT_CAVITY_AREA = math.pi * 0.010**2
@@ -380,6 +380,23 @@ def integrate_coupled(cavity: CoupledCavity, x0: ArrayLike, a0: complex, duratio
     n, status = _rk4_coupled(cavity._kernel, x, drive, dt_out / substeps, substeps, n_out, *box, out)
     return ModeTrajectory(t=np.arange(n) * dt_out, state=out[:n, :4].copy(), mode=out[:n, 4] + 1j * out[:n, 5],
                           status=_STATUS[int(status)])
+
+
+def coupled_flow(cavity: CoupledCavity, steps: int, drive_on: bool = True):
+    """The flow ``phi(x, t)`` of the six-state system, x = [y, ydot, theta, thetadot, Re a, Im a], by ``steps`` RK4
+    steps of t / steps (:func:`integrate_coupled`'s integrator, a fixed number of steps so that phi is smooth in t:
+    :func:`acousim.dynamics.periodic_orbits.shoot_periodic_orbit`); NaN where the run leaves the box or folds."""
+    dyn = cavity.dynamics
+    box = dyn._box_on if drive_on else dyn._box_off
+    drive = cavity.mode.drive_amplitude() if drive_on else 0.0
+    n_steps = int(steps)
+
+    def flow(x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        out = np.empty((2, 6))
+        n, _ = _rk4_coupled(cavity._kernel, np.asarray(x, float), drive, float(t) / n_steps, n_steps, 2, *box, out)
+        return out[1].copy() if n == 2 else np.full(6, np.nan)
+
+    return flow
 
 
 def coupled_field_drop(cavity: CoupledCavity, x_drop: ArrayLike, t_off: float, duration: float, dt_out: float,
