@@ -184,6 +184,20 @@ class PotentialSeries:
         return val(self.p) + val(self.r) * np.cos(self.two_k * z) + val(self.s) * np.sin(self.two_k * z) \
             + val(self.l) * z
 
+    def derivatives(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """(U_y, U_theta, U_yy, U_ytheta, U_thetatheta) at (theta, y) [J/m, J, J/m^2, J/m, J], from the series."""
+        th, z = np.asarray(theta, float), np.asarray(y, float) + self.z_eq
+        c, s, tk = np.cos(self.two_k * z), np.sin(self.two_k * z), self.two_k
+        der = lambda coef, n: cheb.chebval(th, cheb.chebder(coef, n) if coef.size > n else np.zeros(1))  # noqa: E731
+        (r0, r1, r2), (s0, s1, s2) = ([der(v, n) for n in range(3)] for v in (self.r, self.s))
+        l0, l1, l2 = (der(self.l, n) for n in range(3))
+        u_y = tk * (-r0 * s + s0 * c) + l0
+        u_t = der(self.p, 1) + r1 * c + s1 * s + l1 * z
+        u_yy = -tk * tk * (r0 * c + s0 * s)
+        u_yt = tk * (-r1 * s + s1 * c) + l1
+        u_tt = der(self.p, 2) + r2 * c + s2 * s + l2 * z
+        return u_y, u_t, u_yy, u_yt, u_tt
+
     def as_tuple(self) -> tuple:
         """(P, R, S, L, [two_k, z_eq]) for the compiled kernel."""
         return (self.p, self.r, self.s, self.l, np.array([self.two_k, self.z_eq]))
