@@ -12,7 +12,7 @@ __all__ = ["CELL_KINDS", "cell_kind", "write_free_y_figure"]
 CELL_KINDS = {"stable in phase and anti-phase": ("o", "tab:purple"), "stable in phase": ("o", "tab:blue"),
               "stable anti-phase": ("o", "tab:red"), "stable, other class": ("o", "tab:green"),
               "unstable orbits only": ("o", "none"), "no orbit: escaped or folded": ("x", "black"),
-              "no orbit: rest": (".", "tab:gray"), "no orbit: drifting": ("^", "tab:orange")}
+              "no orbit: rest": (".", "tab:gray"), "no orbit found: still drifting": ("^", "tab:orange")}
 
 
 def cell_kind(row: dict) -> str:
@@ -29,7 +29,7 @@ def cell_kind(row: dict) -> str:
     lost = row["escaped"] + row["folded"]
     if lost >= max(row["rest"], row["not_converged"]):
         return "no orbit: escaped or folded"
-    return "no orbit: rest" if row["rest"] >= row["not_converged"] else "no orbit: drifting"
+    return "no orbit: rest" if row["rest"] >= row["not_converged"] else "no orbit found: still drifting"
 
 
 def write_free_y_figure(config, cells: list[dict], path: str | Path) -> Path:
