@@ -351,5 +351,5 @@ def run_free_y_map(config: FreeYConfig, out: str | os.PathLike, executor: Execut
     if figures:
         from .free_y_figures import write_free_y_figure
 
-        write_free_y_figure(config, cells, out / "free_y_map.png")
+        write_free_y_figure(config, rows, out / "free_y_map.png")
     return result

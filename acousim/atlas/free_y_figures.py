@@ -32,15 +32,13 @@ def cell_kind(row: dict) -> str:
     return "no orbit: rest" if row["rest"] >= row["not_converged"] else "no orbit found: still drifting"
 
 
-def write_free_y_figure(config, cells: list[dict], path: str | Path) -> Path:
-    """``free_y_map.png``: each cell's kind at (r, x), one panel per Q; the number beside a cell is its largest
-    non-trivial |mu| (the least stable orbit's), a shaded band the linear theory's unstable detunings."""
+def write_free_y_figure(config, rows: list[dict], path: str | Path) -> Path:
+    """``free_y_map.png`` from the cells' summaries (:func:`acousim.atlas.free_y.cell_summary`): each cell's kind at
+    (r, x), one panel per Q; the number beside a cell is its largest non-trivial |mu| (the least stable orbit's), a
+    shaded band the linear theory's unstable detunings."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    from .free_y import cell_summary
-
-    rows = [cell_summary(c) for c in cells]
     qs = list(config.quality_factors)
     fig, axes = plt.subplots(1, len(qs), figsize=(4.4 * len(qs) + 2.4, 4.0), squeeze=False, sharey=True)
     for ax, q in zip(axes[0], qs):
