@@ -41,8 +41,8 @@ from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
 from .field_drops import AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
 
-__all__ = ["FreeYConfig", "settle_and_guess", "orbit_record", "distinct_orbits", "free_y_cell", "cell_summary",
-           "run_free_y_map", "MAP_COLUMNS", "Y_REST", "PHASE_CLASSES"]
+__all__ = ["FreeYConfig", "settle_and_guess", "orbit_record", "same_orbit", "distinct_orbits", "free_y_cell",
+           "cell_summary", "run_free_y_map", "MAP_COLUMNS", "Y_REST", "PHASE_CLASSES"]
 
 #: A settled run whose y amplitude is below this [m] has come to rest (the rest point, not an orbit).
 Y_REST = 1e-6
@@ -210,20 +210,25 @@ def orbit_record(cavity, orbit, p: int, samples_per_period: int, max_step: float
             "e_fold_cycles": float(p * orbit.e_fold_periods)}
 
 
+def same_orbit(a: dict, b: dict, rel: float = 1e-4) -> bool:
+    """Two :func:`orbit_record` s of one orbit: period, y amplitude, theta amplitude and mean equal to ``rel`` of
+    their size (y amplitudes below 1 um and hinge values below 1e-3 / 1e-2 count as those sizes)."""
+    return (abs(a["period_s"] - b["period_s"]) <= rel * b["period_s"]
+            and abs(a["amp_y_m"] - b["amp_y_m"]) <= rel * max(b["amp_y_m"], 1e-6)
+            and abs(a["amp_theta"] - b["amp_theta"]) <= rel * max(b["amp_theta"], 1e-3)
+            and abs(a["theta_mean"] - b["theta_mean"]) <= rel * max(abs(b["theta_mean"]), 1e-2))
+
+
 def distinct_orbits(orbits: list[dict], rel: float = 1e-4) -> list[dict]:
-    """The orbits that differ (period, y amplitude, theta amplitude and mean, each to ``rel`` of its size), each
-    with ``starts``: how many of the given orbits it stands for."""
+    """The orbits that differ (:func:`same_orbit`), each with ``starts``: how many of the given orbits it stands
+    for."""
     out: list[dict] = []
     for o in orbits:
-        for d in out:
-            if (abs(o["period_s"] - d["period_s"]) <= rel * d["period_s"]
-                    and abs(o["amp_y_m"] - d["amp_y_m"]) <= rel * max(d["amp_y_m"], 1e-6)
-                    and abs(o["amp_theta"] - d["amp_theta"]) <= rel * max(d["amp_theta"], 1e-3)
-                    and abs(o["theta_mean"] - d["theta_mean"]) <= rel * max(abs(d["theta_mean"]), 1e-2)):
-                d["starts"] += 1
-                break
-        else:
+        match = next((d for d in out if same_orbit(o, d, rel)), None)
+        if match is None:
             out.append({**o, "starts": 1})
+        else:
+            match["starts"] += 1
     return out
 
 
@@ -278,7 +283,7 @@ def free_y_cell(dimer: AtlasDimer, quality_factor: float, detuning: float, confi
     for run in runs:  # the index of the distinct orbit each shot run reached
         if "orbit" in run:
             o = found[run["orbit"]]
-            run["orbit"] = next(i for i, d in enumerate(orbits) if distinct_orbits([d, o])[0]["starts"] == 2)
+            run["orbit"] = next(i for i, d in enumerate(orbits) if same_orbit(o, d))
     return {"dimer": dimer.label, "side_m": dimer.side, "gap_ratio": dimer.gap_ratio, "pressure_pa": config.pressure_pa,
             "quality_factor": quality_factor, "detuning": detuning, "cavity_area_m2": config.area_m2,
             "f_y_hz": f_y, "f_theta_hz": f_theta, "r": f_theta / f_y, "band": list(band),
