@@ -121,6 +121,8 @@ class FreeYConfig:
             raise AtlasError(f"--settle-time: {self.settle_time!r} s must lie in [1, 600]")
         if int(self.samples_per_period) != self.samples_per_period or not 16 <= self.samples_per_period <= 1000:
             raise AtlasError(f"--samples-per-period: {self.samples_per_period!r} must be an integer in [16, 1000]")
+        if not (math.isfinite(self.frequency_hz) and 1e3 <= self.frequency_hz <= 1e6):
+            raise AtlasError(f"--frequency: {self.frequency_hz!r} Hz must lie in [1e3, 1e6]")
         if not (math.isfinite(self.max_step) and 0 < self.max_step <= 1e-3):
             raise AtlasError(f"--max-step: {self.max_step!r} s must lie in (0, 1e-3]")
 
