@@ -194,7 +194,8 @@ def floquet_multipliers(integrate, args, x_orbit: ArrayLike, period: float, step
 
     The monodromy matrix M[i, j] = d(theta, thetadot)_i(T) / d(theta, thetadot)_j(0) by central differences of the
     flow over one period (``steps`` RK4 steps of ``integrate``, a compiled entry point with the signature of
-    :func:`cubedimer.rk4.rk4`'s drivers), y and ydot unperturbed; its eigenvalues are the multipliers.  With
+    :func:`cubedimer.rk4.rk4`'s drivers), y and ydot unperturbed (:func:`acousim.dynamics.periodic_orbits.monodromy_matrix`'s
+    block); its eigenvalues are the multipliers.  With
     relative steps ``eps`` the error is O(eps^2) of M's curvature plus the integrator's.
 
     Parameters
@@ -210,21 +211,17 @@ def floquet_multipliers(integrate, args, x_orbit: ArrayLike, period: float, step
     steps : int
         RK4 steps over the period.
     """
+    from ..dynamics.periodic_orbits import monodromy_matrix
+
     x = np.asarray(x_orbit, float)
-    scale = np.array([1.0, max(1.0, abs(x[3]))])
-    cols = []
-    for j, comp in enumerate((2, 3)):
-        ends = []
-        for sign in (1.0, -1.0):
-            x0 = x.copy()
-            x0[comp] += sign * eps * scale[j]
-            out = np.empty((2, 4))
-            n, status = integrate(args, x0, period / steps, steps, 2, *HINGE_BOX, out)
-            if n < 2:
-                return np.full(2, np.nan + 0j)
-            ends.append(out[1, 2:4])
-        cols.append((ends[0] - ends[1]) / (2 * eps * scale[j]))
-    return np.linalg.eigvals(np.column_stack(cols))
+
+    def flow(x0, t):
+        out = np.empty((2, 4))
+        n, _ = integrate(args, x0, t / steps, steps, 2, *HINGE_BOX, out)
+        return out[1] if n == 2 else np.full(4, np.nan)
+
+    m = monodromy_matrix(flow, x, period, np.array([1.0, 1.0, 1.0, max(1.0, abs(x[3]))]), eps, components=(2, 3))
+    return np.linalg.eigvals(m) if np.all(np.isfinite(m)) else np.full(2, np.nan + 0j)
 
 
 def held_y_orbits(dynamics, amplitude_m: float, starts, periods: int, samples_per_period: int = 40,

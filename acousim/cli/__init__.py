@@ -1,4 +1,4 @@
-"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas,held-y,resonator-map} ...``.
+"""Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas,held-y,resonator-map,free-y-map} ...``.
 
 Each subcommand lives in its own module of this package and registers itself through an ``add_parser(subparsers)``
 function; the runner is :func:`cubedimer.cli.run_cli`.
@@ -10,13 +10,14 @@ import argparse
 from cubedimer.cli import command_parser, run_cli
 
 from ..fullwave.solver import AssemblyBackendError
-from . import atlas, convergence, family, force, held_y, resonator_map, simulate, sweep, table
+from . import atlas, convergence, family, force, free_y, held_y, resonator_map, simulate, sweep, table
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: The commands of ``python -m acousim``, in the order of the help.
 COMMANDS = (sweep.add_parser, simulate.add_parser, force.add_parser, family.add_parser, table.add_parser,
-            convergence.add_parser, atlas.add_parser, held_y.add_parser, resonator_map.add_parser)
+            convergence.add_parser, atlas.add_parser, held_y.add_parser, resonator_map.add_parser,
+            free_y.add_parser)
 
 
 def build_parser() -> argparse.ArgumentParser:

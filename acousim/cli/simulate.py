@@ -310,6 +310,9 @@ def run(args: argparse.Namespace) -> int:
     if truth["folded_runs"]:
         print(f"{truth['folded_runs']} of {config.runs} runs folded (theta reached +-1): recorded up to the fold, "
               "the event in truth.json", file=sys.stderr)
+    if truth.get("escaped_runs"):
+        print(f"{truth['escaped_runs']} of {config.runs} runs left the trap: recorded up to the escape, the event in "
+              "truth.json", file=sys.stderr)
     if args.figures:
         from ..twin import write_twin_figures
 

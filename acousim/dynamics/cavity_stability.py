@@ -46,7 +46,8 @@ from cubedimer.terms import term_name
 
 from .resonator import CoupledCavity, slow_response_gains
 
-__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "cycle_gain", "limit_cycle_amplitude"]
+__all__ = ["LinearCavityCoupling", "lag_couplings", "LAG_TERMS", "second_order_gains", "second_order_lag_couplings",
+           "SECOND_ORDER_TERMS", "cycle_gain", "limit_cycle_amplitude"]
 
 
 @dataclass(frozen=True)
@@ -189,6 +190,80 @@ def lag_couplings(cavity: CoupledCavity, y_scale: float = 50e-6, theta_scale: fl
         coef = np.concatenate([fit(gy), fit(gt)])
         out[eq] = {name: float(c) for name, c in zip(LAG_TERMS, coef)}
     return out
+
+
+def second_order_gains(decay_rate: float, drive_detuning: float, detuning) -> tuple[NDArray, NDArray]:
+    """The mode's response to a slowly changing detuning at second order in the lag: (P, R) with
+    ``|a|^2 = s_qs - T s_qs' dDelta/dt + P (dDelta/dt)^2 + R d^2Delta/dt^2 + O(T^3)``.
+
+    The slow manifold of ``da/dt = -D a + g``, D = Gamma + i Delta, g = Gamma a_d: a = a0 + a1 + a2 + ... with
+    a0 = g / D and a_(n+1) = -(da_n/dt) / D, so a1 = i g Delta' / D^3 and a2 = -i g Delta'' / D^4 - 3 g Delta'^2 / D^5;
+    |a|^2 at second order is |a1|^2 + 2 Re(conj(a0) a2):
+
+        P = g^2 / |D|^6 - 6 g^2 Re(conj(D)^4) / |D|^10        [s^2/rad^2]
+        R = 2 g^2 Im(conj(D)^3) / |D|^8                        [s^2/rad]
+
+    (the first order, -2 g^2 Im(conj(D)^2) / |D|^6 Delta' = -T s_qs' Delta', is :func:`slow_response_gains`'s), with
+    g^2 = Gamma^2 + Delta_0^2 (the drive that holds |a| = 1 at rest).
+
+    Parameters
+    ----------
+    decay_rate : float
+        Gamma [1/s].
+    drive_detuning : float
+        Delta_0 [rad/s].
+    detuning : array_like
+        Delta [rad/s].
+    """
+    ga, d0 = float(decay_rate), float(drive_detuning)
+    dc = ga - 1j * np.asarray(detuning, dtype=float)  # conj(D)
+    mag2 = np.abs(dc) ** 2
+    g2 = ga**2 + d0**2
+    return g2 / mag2**3 - 6.0 * g2 * np.real(dc**4) / mag2**5, 2.0 * g2 * np.imag(dc**3) / mag2**4
+
+
+#: The velocity-quadratic terms of the second order in the lag (each equation), in the suite's names.
+SECOND_ORDER_TERMS = tuple(term_name(e) for e in
+                           [(0, 2, 0, 0), (1, 2, 0, 0), (0, 2, 1, 0), (0, 1, 0, 1), (1, 1, 0, 1), (0, 1, 1, 1),
+                            (0, 0, 0, 2), (1, 0, 0, 2), (0, 0, 1, 2)])
+
+
+def _second_order_gains_at(cavity: CoupledCavity, theta: NDArray, y: NDArray) -> dict[str, tuple[NDArray, NDArray]]:
+    """Per equation, the gains of ydot^2, ydot*thetadot and thetadot^2 at (theta, y): the force (xddot_on -
+    xddot_off) times P Delta'^2 + R Delta''_vel, with Delta' = chi (U_y ydot + U_theta thetadot) and Delta''_vel =
+    chi (U_yy ydot^2 + 2 U_ytheta ydot thetadot + U_thetatheta thetadot^2), U's derivatives those of the potential
+    series that detunes the simulated mode (:meth:`acousim.dynamics.resonator.PotentialSeries.derivatives`)."""
+    fm = cavity.dynamics.force_model
+    q_y, q_t = fm.generalized_forces(theta, y)
+    f_z = q_y + fm.mass * fm.gravity
+    chi = cavity.shift_per_joule
+    p, r = second_order_gains(cavity.decay_rate, cavity.decay_rate * cavity.mode.detuning,
+                              cavity.detuning_rad_s(theta, y))
+    u_y, u_t, u_yy, u_yt, u_tt = cavity.potential.derivatives(theta, y)
+    quad = (p * chi**2 * u_y**2 + r * chi * u_yy, 2 * p * chi**2 * u_y * u_t + 2 * r * chi * u_yt,
+            p * chi**2 * u_t**2 + r * chi * u_tt)
+    return {"yddot": tuple(f_z / fm.mass * c for c in quad), "thetaddot": tuple(q_t / fm.hinge_inertia(theta) * c
+                                                                                for c in quad)}
+
+
+def second_order_lag_couplings(cavity: CoupledCavity, y_scale: float = 50e-6,
+                               theta_scale: float = 0.2) -> dict[str, dict[str, float]]:
+    """The velocity-quadratic terms of the lagged force at second order in the lag, as coefficients of the suite's
+    term names (:data:`SECOND_ORDER_TERMS`: ydot^2, ydot*thetadot and thetadot^2, each times 1, y and theta; SI).
+
+    The gains (:func:`second_order_gains`, the velocity-quadratic part of d^2Delta/dt^2; its acceleration part,
+    chi (U_y yddot + U_theta thetaddot), becomes position terms and damping-linear ones through the equations of
+    motion and is left out) are fitted with the cubic monomials of (y, theta) on a 9 x 9 Chebyshev grid over
+    +-``y_scale`` [m] x +-``theta_scale``, and the constant and linear coefficients reported (the library's degree
+    3): the Taylor coefficients about rest up to the quartic remainder (a quadratic fit would alias y*theta^2 into y)."""
+    nodes = np.cos(np.pi * (np.arange(9) + 0.5) / 9)
+    th, yy = np.meshgrid(theta_scale * nodes, y_scale * nodes, indexing="ij")
+    th, yy = th.ravel(), yy.ravel()
+    basis = np.stack([yy**i * th**j for d in range(4) for i in range(d, -1, -1) for j in [d - i]], axis=1)
+    fit = lambda v: np.linalg.lstsq(basis, v, rcond=None)[0][:3]  # noqa: E731
+    gains = _second_order_gains_at(cavity, th, yy)
+    return {eq: {name: float(c) for name, c in zip(SECOND_ORDER_TERMS, np.concatenate([fit(g) for g in gains[eq]]))}
+            for eq in ("yddot", "thetaddot")}
 
 
 def cycle_gain(cavity: CoupledCavity, amplitudes, gamma_y: float = 0.0, omega_y: float | None = None,

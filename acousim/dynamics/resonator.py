@@ -62,7 +62,7 @@ from ..medium import Medium
 
 __all__ = ["DEFAULT_CAVITY_AREA", "CAVITY_AREA_RANGE", "MAX_DETUNING", "CavityMode", "mode_energy",
            "slow_response_gains", "PotentialSeries", "potential_series", "CoupledCavity", "ModeTrajectory", "integrate_coupled",
-           "coupled_field_drop"]
+           "coupled_field_drop", "coupled_flow"]
 
 #: The default effective cross-section of the cavity [m^2]: a transducer of 20 mm diameter.
 DEFAULT_CAVITY_AREA = math.pi * 0.010**2
@@ -183,6 +183,20 @@ class PotentialSeries:
         val = lambda c: cheb.chebval(th, c)  # noqa: E731
         return val(self.p) + val(self.r) * np.cos(self.two_k * z) + val(self.s) * np.sin(self.two_k * z) \
             + val(self.l) * z
+
+    def derivatives(self, theta: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """(U_y, U_theta, U_yy, U_ytheta, U_thetatheta) at (theta, y) [J/m, J, J/m^2, J/m, J], from the series."""
+        th, z = np.asarray(theta, float), np.asarray(y, float) + self.z_eq
+        c, s, tk = np.cos(self.two_k * z), np.sin(self.two_k * z), self.two_k
+        der = lambda coef, n: cheb.chebval(th, cheb.chebder(coef, n) if coef.size > n else np.zeros(1))  # noqa: E731
+        (r0, r1, r2), (s0, s1, s2) = ([der(v, n) for n in range(3)] for v in (self.r, self.s))
+        l0, l1, l2 = (der(self.l, n) for n in range(3))
+        u_y = tk * (-r0 * s + s0 * c) + l0
+        u_t = der(self.p, 1) + r1 * c + s1 * s + l1 * z
+        u_yy = -tk * tk * (r0 * c + s0 * s)
+        u_yt = tk * (-r1 * s + s1 * c) + l1
+        u_tt = der(self.p, 2) + r2 * c + s2 * s + l2 * z
+        return u_y, u_t, u_yy, u_yt, u_tt
 
     def as_tuple(self) -> tuple:
         """(P, R, S, L, [two_k, z_eq]) for the compiled kernel."""
@@ -380,6 +394,23 @@ def integrate_coupled(cavity: CoupledCavity, x0: ArrayLike, a0: complex, duratio
     n, status = _rk4_coupled(cavity._kernel, x, drive, dt_out / substeps, substeps, n_out, *box, out)
     return ModeTrajectory(t=np.arange(n) * dt_out, state=out[:n, :4].copy(), mode=out[:n, 4] + 1j * out[:n, 5],
                           status=_STATUS[int(status)])
+
+
+def coupled_flow(cavity: CoupledCavity, steps: int, drive_on: bool = True):
+    """The flow ``phi(x, t)`` of the six-state system, x = [y, ydot, theta, thetadot, Re a, Im a], by ``steps`` RK4
+    steps of t / steps (:func:`integrate_coupled`'s integrator, a fixed number of steps so that phi is smooth in t:
+    :func:`acousim.dynamics.periodic_orbits.shoot_periodic_orbit`); NaN where the run leaves the box or folds."""
+    dyn = cavity.dynamics
+    box = dyn._box_on if drive_on else dyn._box_off
+    drive = cavity.mode.drive_amplitude() if drive_on else 0.0
+    n_steps = int(steps)
+
+    def flow(x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        out = np.empty((2, 6))
+        n, _ = _rk4_coupled(cavity._kernel, np.asarray(x, float), drive, float(t) / n_steps, n_steps, 2, *box, out)
+        return out[1].copy() if n == 2 else np.full(6, np.nan)
+
+    return flow
 
 
 def coupled_field_drop(cavity: CoupledCavity, x_drop: ArrayLike, t_off: float, duration: float, dt_out: float,

@@ -17,7 +17,9 @@ p(t)^2 / p0^2 (:mod:`acousim.dynamics.switching`).  With a resonator (``TwinConf
 complex amplitude is a state of the run (:mod:`acousim.dynamics.resonator`): it starts at its steady value with the
 dimer at rest, rings down while the drive is off, and is detuned by the dimer's position all along
 (:func:`twin_cavity`).  A run whose hinge folds (theta reaches +-1: the faces touch) is an
-outcome, not an error: it is recorded up to the fold and its ``event`` says so.
+outcome, not an error: it is recorded up to the fold and its ``event`` says so.  With a resonator a run that leaves
+the trap is an outcome too (its motion is fed, and may grow until it escapes), recorded up to the escape; without
+one, an escape stops the data set (the drops are too deep).
 
 Randomness: one :class:`numpy.random.SeedSequence` from the seed is split into a stream for the
 pressure error and one child per run (``spawn``), so every run's draws depend on the seed and the
@@ -62,6 +64,8 @@ class SimulatedRun:
     event : dict, optional
         ``{"event": "folded", "t_s": time of the fold from the moment the field is back on (negative: during
         the drop)}`` for a run whose hinge folded; the frames stop before it (none for a fold during the drop).
+        With a resonator, ``{"event": "escaped", "t_s": ...}`` likewise for a run that left the trap (the
+        resonator's self-sustained motion can grow until it does).
         None for a run recorded over the whole duration.
     field_on_state : ndarray (4,), optional
         The state when the drive comes back (``state[0]``, or the state at the fold during the drop).
@@ -89,6 +93,10 @@ class SimulatedRun:
     @property
     def folded(self) -> bool:
         return self.event is not None and self.event.get("event") == "folded"
+
+    @property
+    def escaped(self) -> bool:
+        return self.event is not None and self.event.get("event") == "escaped"
 
 
 def run_seeds(seed: int, runs: int) -> tuple[np.random.SeedSequence, list[np.random.SeedSequence]]:
@@ -130,12 +138,13 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
     Returns
     -------
     SimulatedRun
-        A run whose hinge folds is recorded up to the fold (``event``).
+        A run whose hinge folds is recorded up to the fold (``event``); with a ``cavity``, a run that leaves the
+        trap likewise up to its escape.
 
     Raises
     ------
     TwinError
-        If the dimer leaves the trap or the state stops being finite.
+        If the dimer leaves the trap without a resonator, or the state stops being finite.
     """
     rng = np.random.default_rng(seed)
     drop = protocol.draw(rng)
@@ -149,12 +158,13 @@ def simulate_run(dynamics: DimerDynamics, protocol: DropProtocol, camera: Camera
             raise ValueError("a coupled cavity has its own ring time: give ring_time_s = 0")
         motion = coupled_field_drop(cavity, x_drop, drop["t_off_s"], (n - 1) / camera.fps, 1.0 / camera.fps,
                                     max_step=max_step)
-    if motion.status not in (0, 2):
+    escaped = cavity is not None and motion.status in (1, 4)  # a resonator's self-sustained motion may end so
+    if motion.status not in (0, 2) and not escaped:
         where = (f"during the drop (t_off = {drop['t_off_s'] * 1e3:.2f} ms)" if motion.trajectory is None else
                  f"at t = {motion.t_stop:.3f} s (t_off = {drop['t_off_s'] * 1e3:.2f} ms, theta_drop = "
                  f"{drop['theta_drop']:.3f}, thetadot_drop = {drop['thetadot_drop']:.3g} 1/s)")
         raise TwinError(f"{STATUS_MESSAGES[motion.status]} {where}; use shorter drops or a smaller hinge range")
-    event = None if motion.ok else {"event": "folded", "t_s": float(motion.t_stop)}
+    event = None if motion.ok else {"event": "escaped" if escaped else "folded", "t_s": float(motion.t_stop)}
     extra = {} if cavity is None else {"mode": motion.mode, "pressure_at_field_on": motion.pressure_at_field_on}
     if motion.trajectory is None:
         empty = np.zeros(0)

@@ -130,6 +130,8 @@ def truth_dict(config: TwinConfig, dynamics: DimerDynamics, p_true: float, runs:
         "folded_runs": sum(r.folded for r in runs),
         "units": "SI",
     })
+    if config.cavity_mode is not None:  # with a resonator an escape is an outcome (without one it stops the set)
+        out["escaped_runs"] = sum(r.escaped for r in runs)
     return out
 
 
@@ -187,7 +189,7 @@ def simulate_dataset(config: TwinConfig, out_dir: str | os.PathLike, executor=No
         write_json(tmp / "meta.json", meta_dict(config, dynamics))
         write_json(tmp / "truth.json", truth)
         n = config.n_frames
-        # folded runs: NaN after the fold, so that every run shares the frame times
+        # folded (and, with a resonator, escaped) runs: NaN after the end, so that every run shares the frame times
         states = {f"run{i:0{width}d}": np.concatenate([r.state, np.full((n - r.t.size, 4), np.nan)])
                   for i, r in enumerate(runs, 1)}
         modes = {f"run{i:0{width}d}": np.concatenate([r.mode, np.full(n - r.mode.size, np.nan + 0j)])

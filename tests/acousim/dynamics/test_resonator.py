@@ -276,3 +276,78 @@ def test_the_limit_cycle_of_y_has_the_describing_functions_amplitude():
     last, before = (0.5 * np.ptp(tr.state[i - 1000:i, 0]) for i in (6000, 5000))
     assert last == pytest.approx(before, rel=0.01)  # settled
     assert last == pytest.approx(predicted, rel=0.05)
+
+
+@pytest.mark.parametrize("x", [-2.2, 1.0])
+def test_the_second_order_slow_response_against_the_mode(x):
+    """A detuning that moves slowly, Delta = Delta_0 + 0.4 Gamma sin(eps t): the mode's |a|^2 (DOP853, rtol 1e-12)
+    against the slow-manifold expansion.  Its error falls as eps at zeroth order, eps^2 at first (the lag) and eps^3
+    at second (P Delta'^2 + R Delta''): halving eps from Gamma/20 to Gamma/40 divides the first order's error by
+    ~4 and the second's by ~8 (measured 8.1 at x = -2.2; checked to lie in 6.5-9.5, against 4 at first order)."""
+    from scipy.integrate import solve_ivp
+
+    from acousim.dynamics.cavity_stability import second_order_gains
+    from acousim.dynamics.resonator import slow_response_gains
+
+    ga = 574.0
+    d0, g = ga * x, ga * math.sqrt(1 + x * x)
+
+    def errors(eps, amp=0.4 * ga):
+        delta = lambda t: d0 + amp * np.sin(eps * t)  # noqa: E731
+
+        def rate(t, z):
+            da = -(ga + 1j * delta(t)) * (z[0] + 1j * z[1]) + g
+            return [da.real, da.imag]
+
+        a0 = g / (ga + 1j * d0)
+        t = np.linspace(40 / ga, 40 / ga + 2 * np.pi / eps, 400)  # after the transient, exp(-40)
+        sol = solve_ivp(rate, (0, t[-1]), [a0.real, a0.imag], method="DOP853", rtol=1e-12, atol=1e-13, t_eval=t)
+        s = sol.y[0] ** 2 + sol.y[1] ** 2
+        d1, d2 = amp * eps * np.cos(eps * t), -amp * eps**2 * np.sin(eps * t)
+        first = (ga**2 + d0**2) / (ga**2 + delta(t) ** 2) + slow_response_gains(ga, d0, delta(t))[1] * d1
+        p, r = second_order_gains(ga, d0, delta(t))
+        return np.max(np.abs(s - first)), np.max(np.abs(s - first - p * d1**2 - r * d2))
+
+    (e1, e2), (h1, h2) = errors(ga / 20), errors(ga / 40)
+    assert 3.5 < e1 / h1 < 4.5 and 6.5 < e2 / h2 < 9.5 and e2 < 0.2 * e1
+
+
+def test_second_order_couplings_vanish_by_symmetry_for_the_mirror_symmetric_dimer(gorkov):
+    """The mirror-symmetric Gor'kov dimer has no torque at theta = 0, so its hinge's second-order gains vanish there
+    at every y, and with them the b5- and b6-type terms (``y*thetadot^2``, ``y*ydot*thetadot``): the fitted ones are
+    the fit's quintic remainder, below 1e-5 of the full-wave 500 um dimer's (measured 6e-7).  Its y equation's
+    ``ydot^2`` coefficient is g (P chi^2 F_Z^2 + R chi U_yy) at rest, F_Z = M g."""
+    from acousim.atlas.field_drops import atlas_dynamics
+    from acousim.dynamics.cavity_stability import _second_order_gains_at, second_order_gains, second_order_lag_couplings
+
+    cav = CoupledCavity(gorkov, CavityMode(250.0, -1.0), AIR)
+    y = np.linspace(-1e-4, 1e-4, 5)
+    assert np.all(np.concatenate(_second_order_gains_at(cav, np.zeros(5), y)["thetaddot"]) == 0.0)
+    terms = second_order_lag_couplings(cav)
+    full = second_order_lag_couplings(CoupledCavity(atlas_dynamics(500e-6, 0.02, P0, AIR.frequency_hz),
+                                                    CavityMode(250.0, -1.0), AIR))
+    for name in ("y*thetadot^2", "y*ydot*thetadot"):
+        assert abs(terms["thetaddot"][name]) < 1e-5 * abs(full["thetaddot"][name])
+    fm = gorkov.force_model
+    p, r = second_order_gains(cav.decay_rate, cav.decay_rate * -1.0, cav.decay_rate * -1.0)
+    h = 1e-7  # U_yy = -dF_Z/dy by central differences of the force model (truncation ~1e-8 relative)
+    u_yy = -(fm.generalized_forces(0.0, h)[0] - fm.generalized_forces(0.0, -h)[0]) / (2 * h)
+    chi, f_z = cav.shift_per_joule, fm.mass * fm.gravity
+    expected = fm.gravity * (p * chi**2 * f_z**2 + r * chi * u_yy)
+    # the fit's quartic remainder aliases into the constant: 3e-6 over +-50 um, 100 times less over +-5 um
+    small_box = second_order_lag_couplings(cav, y_scale=5e-6, theta_scale=0.02)
+    assert small_box["yddot"]["ydot^2"] == pytest.approx(expected, rel=1e-6)
+
+
+def test_the_potential_series_derivatives_are_its_finite_differences(gorkov):
+    """PotentialSeries.derivatives against central differences of the series itself (h = 1e-6 m, 1e-3: truncation
+    ~1e-6 of the second derivatives)."""
+    pot = potential_series(gorkov.force_model)
+    th, y, hy, ht = 0.3, 4e-5, 1e-6, 1e-3
+    u = lambda a, b: float(pot(a, b))  # noqa: E731
+    fd = ((u(th, y + hy) - u(th, y - hy)) / (2 * hy), (u(th + ht, y) - u(th - ht, y)) / (2 * ht),
+          (u(th, y + hy) - 2 * u(th, y) + u(th, y - hy)) / hy**2,
+          (u(th + ht, y + hy) - u(th + ht, y - hy) - u(th - ht, y + hy) + u(th - ht, y - hy)) / (4 * hy * ht),
+          (u(th + ht, y) - 2 * u(th, y) + u(th - ht, y)) / ht**2)
+    for got, want in zip(pot.derivatives(th, y), fd):
+        assert float(got) == pytest.approx(want, rel=1e-5)
