@@ -37,7 +37,7 @@ import numpy as np
 from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.attractors import classify_trajectory
 from cubedimer.executor import ExecutorConfig
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from .field_drops import AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
 
@@ -89,7 +89,7 @@ class FreeYConfig:
     dimers: tuple[AtlasDimer, ...]
     quality_factors: tuple[float, ...] = (200.0, 250.0, 300.0)
     detunings: tuple[float, ...] = (-7.0, -6.0, -5.5, -5.0, -4.5, -4.0)
-    pressure_pa: float = 3000.0
+    pressure_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA
     area_m2: float = 3e-5
     amplitudes_m: tuple[float, ...] = (50e-6, 150e-6)
     theta_starts: tuple[float, ...] = (-0.3, 0.0, 0.3)

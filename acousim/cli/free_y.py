@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
 from .atlas import parse_dimers, parse_grid
 
@@ -37,7 +37,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "resonance)")
     p.add_argument("--area", type=float, default=3e-5, metavar="M2",
                    help="the cavity's effective cross-section A_cav [m^2], in [1e-5, 1e-2]")
-    p.add_argument("--pressure", type=float, default=3000.0, metavar="PA", help="pressure amplitude p0 [Pa]")
+    p.add_argument("--pressure", type=float, default=DEFAULT_PRESSURE_AMPLITUDE_PA, metavar="PA", help="pressure amplitude p0 [Pa]")
     p.add_argument("--amplitudes", default="50e-6,150e-6", metavar="M,...",
                    help="start depths of y below the equilibrium [m]")
     p.add_argument("--theta-starts", default="-0.3,0,0.3", metavar="LIST", help="hinge angles at the start")
