@@ -40,6 +40,7 @@ from .identify.statistics import format_p, runs_needed, smallest_sign_flip_pvalu
 from .prepare.candidate_effects import CANDIDATE_EFFECTS, default_candidates
 from .prepare.problem import DiagnosisProblem
 from .prepare.runs import prepare_diagnosis_runs
+from .summarise.constants import constants_used, data_set_warnings
 from .summarise.localization import localize_residuals
 from .summarise.long_time import long_time_gaps, mean_long_time_gap
 from .summarise.result import Diagnosis, DiagnosisInternals
@@ -362,16 +363,23 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
                               lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
                              replaced, joint_params, final, gap_before, errors.effects, errors.derived)
+    # an effect whose addition does not shrink the gap is not named (its verdict says why, with both gaps)
+    named = [e.name for e in effects if e.status == "named"]
     loc_after = localize_residuals(runs, final.residuals)
     components = fit_components(final)
     p_floor = smallest_sign_flip_pvalue(len(runs))
+    settings = {"alpha": config.alpha, "smallest_attainable_p": p_floor,
+                "identification_possible": bool(p_floor <= config.alpha), "runs_needed": runs_needed(config.alpha),
+                "min_relative_improvement": config.min_relative_improvement,
+                "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"}
+    calibration = _calibration_record(problem, final, cal, spec, errors)
     return Diagnosis(
         model=spec.name,
         simulation={k: v for k, v in problem.model.record().items() if not isinstance(v, (list, dict))},
         identified=tuple(named), indistinguishable=tuple(pr.to_dict() for pr in pairs),
         model_effects=tuple(identified), dropped_by_backward_check=tuple(found.elim.dropped),
         greedy_identified=tuple(found.ident.identified),
-        calibration=_calibration_record(problem, final, cal, spec, errors),
+        calibration=calibration,
         gap_before=gap_before, gap_after=gap_after, gap_definition=gap_definition(components),
         gap_components=tuple(c.name for c in components),
         gap_component_forms={c.name: c.form for c in components},
@@ -381,14 +389,13 @@ def _summarise(dataset, cal: _Calibrated, found: _Identified, discovery: Discove
         localization={"before": localize_residuals(runs, base.residuals), "after": loc_after},
         long_time=_long_time_record(problem, base, final, bool(identified), config, log),
         remaining_gap=_remaining_gap(found.ident, cal.drift, discovery, replaced, folded, identified, gap_after,
-                                     floor, loc_after),
+                                     floor, loc_after, settings, len(runs)),
         identification_rounds=tuple(r.to_dict() for r in found.ident.rounds),
-        data_warnings=tuple(cal.data_warnings), skipped_files=tuple(dataset.skipped_files()),
-        glitch_frames_masked=dataset.n_glitches,
-        settings={"alpha": config.alpha, "smallest_attainable_p": p_floor,
-                  "identification_possible": bool(p_floor <= config.alpha), "runs_needed": runs_needed(config.alpha),
-                  "min_relative_improvement": config.min_relative_improvement,
-                  "candidates": list(config.candidates), "penalty_for_parameters": "leave-one-run-out held-out gap"},
+        data_warnings=tuple(cal.data_warnings) + tuple(data_set_warnings(dataset, len(runs), settings)),
+        skipped_files=tuple(dataset.skipped_files()), glitch_frames_masked=dataset.n_glitches, settings=settings,
+        constants=tuple(constants_used(dataset.meta, spec, calibration)),
+        data_set={"path": str(Path(dataset.path).resolve()), "meta": dict(dataset.meta),
+                  "runs": [r.name for r in dataset.runs], "model_options": dict(spec.options)},
         internals=DiagnosisInternals(problem, base, final))
 
 
@@ -406,7 +413,7 @@ def _long_time_record(problem: DiagnosisProblem, base: GapFit, final: GapFit, an
 
 
 def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: dict, identified: list[str],
-                   gap_after: float, floor: float, loc_after: dict) -> dict:
+                   gap_after: float, floor: float, loc_after: dict, settings: dict, n_runs: int) -> dict:
     """diagnosis.json's ``remaining_gap``: what is left, whether it is within the noise, and what carries it."""
     # the gap is already in excess of the noise floor: "explained" when under 1 % of the variance
     explained = bool(gap_after <= EXPLAINED_GAP)
@@ -419,7 +426,11 @@ def _remaining_gap(ident, drift, discovery: Discovery, replaced: dict, folded: d
              if identified else "the calibrated simulation explains the data within its derivative noise")
             if explained else
             "a gap remains that no candidate effect explains; the localization lists the library terms, "
-            "state-space regions and time scales that carry it"),
+            "state-space regions and time scales that carry it"
+            if settings["identification_possible"] else
+            f"a gap remains, and with {n_runs} runs the held-out test "
+            f"cannot name any effect (record at least {settings['runs_needed']} runs); the localization lists the "
+            "library terms, state-space regions and time scales that carry it"),
         "dominant_terms": {eq: [d["term"] for d in loc_after["terms"][eq][:3]] for eq in ("yddot", "thetaddot")},
         "vertical_gap": ident.vertical_gap,
         "withheld": ident.withheld,

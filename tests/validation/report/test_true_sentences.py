@@ -74,7 +74,12 @@ def test_no_negative_gap_in_the_candidates_table():
     above = EffectVerdict("linear_damping", {"gamma_y": 0.1}, 0.0123, 0.96, False, 0.4, None, None)
     table = diagnosis_section(_diagnosis(extra_effects=[below, above]), []).tables[0]
     gaps = {r[0]: r[table.header.index("gap after")] for r in table.rows}
-    assert gaps == {"quadratic_drag": "below the noise floor (< 0.003)", "linear_damping": 0.0123}
+    # the first row: the gap before any effect (the calibrated simulation alone)
+    assert gaps == {"none (the calibrated simulation alone)": 0.3, "quadratic_drag": "below the noise floor (< 0.003)",
+                    "linear_damping": 0.0123}
+    # a shrink of 1.00001 (a gap taken below the floor) is no fraction of a gap: said as what it is
+    shrinks = {r[0]: r[table.header.index("shrink")] for r in table.rows}
+    assert shrinks["quadratic_drag"] == "all of it (to below the noise floor)" and shrinks["linear_damping"] == 0.96
 
 
 def test_a_significant_but_negligible_drift_is_not_called_no_drift():
@@ -346,6 +351,9 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
             assert f"by {a} or {b}, which the data cannot tell apart" in cause
         others = set(diag.settings["candidates"]) - set(named) - {e for p in pairs for e in p}
         assert not any(re.search(rf"\b{o}\b", cause) for o in others), (cause, others)
+    elif n < diag.settings["runs_needed"]:  # too few runs to name anything: said first, never "no candidate explains"
+        assert f"With {n} runs no effect can be named" in g and f"record at least {diag.settings['runs_needed']} runs" in g
+        assert "no candidate effect explains" not in g and "No candidate effect improves" not in g
     else:
         assert "No candidate effect improves held-out runs significantly." in g
     rates = [v for e in diag.effects if e.significant and e.name == "linear_damping" for v in e.params.values()]
@@ -353,8 +361,6 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
     n = len(diag.gap_per_run["runs"])
     assert f"the smallest p {n} runs allow is {0.5 ** n:.3g}" in section.tables[0].columns["held-out p (sign-flip)"]
     assert set(section.tables[0].header) - {"effect"} <= set(section.tables[0].columns)
-    if n < diag.settings["runs_needed"]:
-        assert f"at least {diag.settings['runs_needed']} runs are needed" in g
 
 
 def test_kept_damping_terms_of_the_wrong_sign_are_flagged():
@@ -381,15 +387,28 @@ def test_an_effect_that_does_not_shrink_the_gap_is_not_called_identified():
     diag = _diagnosis(extra_effects=[scattering, mirror])
     import dataclasses
     diag = dataclasses.replace(diag, identified=("pair_scattering", "mirror_asymmetry"), gap_after=0.002329)
-    section = diagnosis_section(diag, [])
-    cause = section.reading.split("The gap is caused by", 1)[1].split(". ", 1)[0]
-    assert "pair_scattering" in cause and "then mirror_asymmetry" not in cause
-    assert ("mirror_asymmetry (epsilon = 0.01 (error not determined: no error was computed)) is named by its "
-            "held-out test, but adding it does not shrink the gap (0.002293 -> 0.002329)") in cause
-    verdicts = {r[0]: r[1] for r in section.tables[0].rows}
-    assert verdicts["pair_scattering"] == "yes"  # 0.3 -> 0.002293
-    assert verdicts["mirror_asymmetry"] == ("named by its held-out test, but adding it does not shrink the gap "
-                                            "(0.002293 -> 0.002329)")
+    # as a diagnosis.json written before the rule read it (named), and as one written now (rejected with the code)
+    from validation.diagnosis.summarise.verdicts import _named_only_if_shrinking
+
+    rejected = _named_only_if_shrinking(mirror, 0.002293)
+    assert rejected.status == "rejected" and not rejected.named
+    assert rejected.rejected_because[0]["code"] == "not_shrinking_gap" and "0.002293 -> 0.002329" in \
+        rejected.rejected_because[0]["reason"]
+    assert _named_only_if_shrinking(scattering, 0.3) is scattering  # 0.3 -> 0.002293 shrinks: named
+    new = dataclasses.replace(diag, identified=("pair_scattering",), effects=(scattering, rejected))
+    for d in (diag, new):
+        section = diagnosis_section(d, [])
+        cause = section.reading.split("The gap is caused by", 1)[1].split(". ", 1)[0]
+        assert "pair_scattering" in cause and "then mirror_asymmetry" not in cause
+        assert ("mirror_asymmetry is not named: it improved held-out runs, but adding it does not shrink the gap "
+                "(0.002293 -> 0.002329)") in cause
+        verdicts = {r[0]: r[1] for r in section.tables[0].rows}
+        assert verdicts["pair_scattering"] == "yes"  # 0.3 -> 0.002293
+        assert verdicts["mirror_asymmetry"] == ("no: it improved held-out runs, but adding it does not shrink the gap "
+                                                "(0.002293 -> 0.002329)")
+        # numbers.json lists it neither as identified nor among the effects
+        assert section.numbers["identified"] == ["pair_scattering"]
+        assert set(section.numbers["effects"]) == {"pair_scattering"}
 
 
 @pytest.mark.parametrize("simulated, simulated_std, shown", [

@@ -12,7 +12,7 @@ def section(context: ReportContext) -> Section:
     """The phase-space figures of the data and the model, and the reading of its long-time errors."""
     from ..figures import phase_space_figures
 
-    pfig = phase_space_figures(context.prepared, context.fit.model, context.figs_dir)
+    pfig = phase_space_figures(context.prepared, context.fit_model, context.figs_dir)
     loss = context.model_json["loss"]["final"]
     fit_dir = context.fit_dir
     return Section(
