@@ -49,7 +49,8 @@ def test_the_causes_carry_their_uncertainty_and_how_far_the_gap_shrinks():
     assert rows[0][4] == pytest.approx(1 - 0.0016970 / 0.286)
     text = causes_text(diag)
     assert text.startswith("The calibrated simulation alone leaves a gap of 0.286")
-    assert "pair_scattering (the gap 0.286 -> 0.0017)" in text and "With them the gap is 1.1e-05." in text
+    assert f"pair_scattering (kappa = {effects[0].estimate('kappa').format()}; the gap 0.286 -> 0.0017)" in text
+    assert "With them the gap is 1.1e-05." in text
 
 
 def test_too_few_runs_is_said_first_and_no_candidate_is_said_to_fail():

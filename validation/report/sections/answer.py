@@ -29,6 +29,12 @@ def _estimate(effect, parameter: str) -> str:
     return effect.estimate(parameter).format()
 
 
+def _params(effect) -> str:
+    """The effect's parameters with their standard errors (or why there is none), and its derived quantities."""
+    return ", ".join([f"{k} = {_estimate(effect, k)}" for k in effect.params]
+                     + [f"{k} = {iv.format()}" for k, iv in (effect.derived or {}).items()])
+
+
 def cause_rows(diagnosis: "Diagnosis") -> list[list]:
     """One row per effect named as a cause (and each member of an indistinguishable pair the model fits): its
     parameters with their standard errors, the gap without and with it, and the shrink."""
@@ -38,9 +44,7 @@ def cause_rows(diagnosis: "Diagnosis") -> list[list]:
         if not e.significant or not_shrinking(diagnosis, e) or not (e.named or e.name in pairs):
             continue
         before = gap_without(diagnosis, e)
-        params = ", ".join([f"{k} = {_estimate(e, k)}" for k in e.params]
-                           + [f"{k} = {iv.format()}" for k, iv in (e.derived or {}).items()])
-        rows.append([e.name + (" (one of an indistinguishable pair)" if e.name in pairs else ""), params,
+        rows.append([e.name + (" (one of an indistinguishable pair)" if e.name in pairs else ""), _params(e),
                      gap_value(before, diagnosis.noise_floor), gap_value(e.gap_after, diagnosis.noise_floor),
                      shrink_value(1 - e.gap_after / before if before else float("nan"), e.gap_after)])
     return rows
@@ -62,7 +66,8 @@ def causes_text(diagnosis: "Diagnosis") -> str:
     pairs = diagnosis.indistinguishable or []
     if named:
         text += " The causes, in the order added: " + "; ".join(
-            f"{e.name} (the gap {shown(gap_without(diagnosis, e))} -> {shown(e.gap_after)})" for e in named) + "."
+            f"{e.name} ({_params(e)}; the gap {shown(gap_without(diagnosis, e))} -> {shown(e.gap_after)})"
+            for e in named) + "."
     for pr in pairs:
         a, b = pr["effects"]
         text += f" {a} or {b}: the data cannot tell them apart; the model fits {pr['kept_in_model']}."

@@ -116,8 +116,10 @@ def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
     """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``.  A
     diagnosis rejects such an effect (code ``not_shrinking_gap``); one written before that rule named it, and is read
     the same way."""
-    if not effect.significant:
-        return ""
+    from ...diagnosis.summarise.verdicts import not_shrinking as rejected_for_it
+
+    if not effect.significant or not (effect.named or rejected_for_it(effect)):
+        return ""  # only a named effect (or one rejected for it): a pair's kept member is judged as a pair
     before = gap_without(diagnosis, effect)
     if effect.gap_after < before:
         return ""
