@@ -339,18 +339,11 @@ def run_report(args: argparse.Namespace) -> int:
 
     from .report.build import build_report, render_report
 
-    if args.from_dir is not None:
-        if args.out is not None:
-            raise UserInputError("--from REPORT_DIR rebuilds the report in REPORT_DIR; leave out --out")
-        try:
-            render_report(args.from_dir, data_dir=args.data, atlas=args.atlas)
-        except DatasetError as exc:
-            raise UserInputError(str(exc)) from None
-        return 0
-    if args.data is None or args.out is None:
+    if args.from_dir is None and (args.data is None or args.out is None):
         raise UserInputError("give DATA_DIR and --out REPORT_DIR (or --from REPORT_DIR to make a finished report "
                              "again from its stored results)")
-    fit_config = fit_config_from_args(args)  # before anything runs
+    if args.from_dir is not None and args.out is not None:
+        raise UserInputError("--from REPORT_DIR makes the report again in REPORT_DIR; leave out --out")
     if args.atlas is not None:  # before anything runs
         from .report.sections.atlas import AtlasSectionError, atlas_section
 
@@ -358,6 +351,13 @@ def run_report(args: argparse.Namespace) -> int:
             atlas_section(args.atlas)
         except AtlasSectionError as exc:
             raise UserInputError(str(exc)) from None
+    if args.from_dir is not None:
+        try:
+            render_report(args.from_dir, data_dir=args.data, atlas=args.atlas)
+        except DatasetError as exc:
+            raise UserInputError(str(exc)) from None
+        return 0
+    fit_config = fit_config_from_args(args)  # before anything runs
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
     try:

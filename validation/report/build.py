@@ -1,12 +1,14 @@
 """``python -m validation report``: the model-vs-simulation report of a data set.
 
-:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.fit.fit_dataset``), the
-variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap diagnosis
-(:mod:`validation.diagnosis`, which also calibrates the simulation); then it fills the
-:class:`validation.report.context.ReportContext` (the simulations side by side, static sweeps of the calibrated
-simulations over the data's range and the coefficient comparison, :mod:`validation.coefficients`) and makes the
-sections of :data:`validation.report.sections.SECTIONS` from it; it writes ``report.html`` (self-contained),
-``figures/*.png``, ``numbers.json``, ``diagnosis.json`` and ``comparison.json``.
+:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.fit.fit_dataset``, written as
+``fit/model.json``), the variant comparison (the minimal model without its cross-coupling terms, re-optimised:
+``fit/variant.json``), the gap diagnosis (:mod:`validation.diagnosis`, which also calibrates the simulation) and the
+calibrated simulations side by side (:func:`with_simulations`: every registered model's gaps, static coefficients and
+restoring curves, and one run's time-series overlay, stored in ``diagnosis.json``).  The report is then a view of
+these stored results, :func:`render_report` (also ``python -m validation report --from REPORT_DIR``): it fills the
+:class:`validation.report.context.ReportContext` from the files and makes the sections of
+:data:`validation.report.sections.SECTIONS`; it writes ``report.html`` (self-contained), ``figures/*.png``,
+``numbers.json`` and ``comparison.json``.
 """
 from __future__ import annotations
 

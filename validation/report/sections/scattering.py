@@ -65,7 +65,10 @@ def section(context: ReportContext) -> Section:
         t = force_model_type(r.model)
         text += (f" The {t.label} model, whose hinge comes from its own physics with no fitted stiffness, "
                  f"leaves {shown(r.gap)} (y equation {shown(r.components[0], None)}, theta equation "
-                 f"{shown(r.components[1], None)}, energy {shown(r.components[2], None)}).")
+                 f"{shown(r.components[1], None)}, energy {shown(r.components[2], None)})"
+                 + (": its theta equation leaves more of the hinge accelerations' variance unexplained than predicting "
+                    "no hinge acceleration at all (1), so its own hinge stiffness does not hold these data's hinge "
+                    "(section 4)." if r.components[1] > 1 else "."))
     text += "".join(f" The {force_model_type(n).label} model is not compared: {why}."
                     for n, why in context.unavailable().items())
     table = Table("Gap of each calibrated simulation (fractions of the variance beyond the noise floor; long-time error: "
