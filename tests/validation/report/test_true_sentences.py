@@ -196,7 +196,7 @@ def test_the_first_screen_answers_with_the_stored_numbers(report):
             assert said and float(said.group(1)) == pytest.approx(v, rel=5e-3)
     for row in numbers["scattering"]["rows"]:  # one sentence per compared simulation
         assert f"{row['label']}: gap " in answer
-    assert "<th>constant</th>" in text and "the data set's meta.json" in text
+    assert "<th>constant</th>" in text and "the data set's meta.json" in html.unescape(text)
     assert 'alt="timeseries_overlay"' in text and "Run run01.csv: the data (black) against the fitted minimal model" in text
 
 
@@ -388,6 +388,7 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
         cal["calibrated_Z_eq_m"] - cal["nominal_Z_eq_m"], abs=1e-12)
     named = diag.identified
     pairs = [p["effects"] for p in diag.indistinguishable or []]
+    n = len(diag.gap_per_run["runs"])
     if named or pairs:
         cause = g.split("The gap is caused by", 1)[1].split(". ", 1)[0]
         for name in named:
@@ -403,7 +404,6 @@ def test_the_diagnosis_sentences_are_its_numbers(diagnosed):
         assert "No candidate effect improves held-out runs significantly." in g
     rates = [v for e in diag.effects if e.significant and e.name == "linear_damping" for v in e.params.values()]
     assert ("Anti-damping" in g) == any(v < 0 for v in rates)
-    n = len(diag.gap_per_run["runs"])
     assert f"the smallest p {n} runs allow is {0.5 ** n:.3g}" in section.tables[0].columns["held-out p (sign-flip)"]
     assert set(section.tables[0].header) - {"effect"} <= set(section.tables[0].columns)
 
