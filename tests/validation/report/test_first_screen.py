@@ -83,6 +83,19 @@ def test_too_few_runs_is_a_data_warning_of_the_diagnosis():
     assert data_set_warnings(SimpleNamespace(meta={}), 8, {"identification_possible": True}) == []
 
 
+def test_a_run_split_at_a_tracking_gap_is_a_data_warning():
+    from types import SimpleNamespace
+
+    from validation.diagnosis.summarise.constants import data_set_warnings
+
+    runs = [SimpleNamespace(name="run01.csv", source=None),
+            SimpleNamespace(name="run03_part1.csv", source="run03.csv", frames=(0, 500)),
+            SimpleNamespace(name="run03_part2.csv", source="run03.csv", frames=(700, 2000))]
+    (w,) = data_set_warnings(SimpleNamespace(meta={}, runs=runs), 3, {"identification_possible": True})
+    assert w == {"code": "run_split", "message": "run03.csv split at a tracking gap longer than the fill limit into "
+                                                 "run03_part1.csv (frames 0-499), run03_part2.csv (frames 700-1999)"}
+
+
 def test_a_misspelt_meta_key_is_a_data_warning_with_the_key_it_misspells():
     """The lab's side_lenght_m: a data warning naming side_length_m (in diagnosis.json and on the first screen), and
     the default side is stated as a default among the constants."""

@@ -70,8 +70,9 @@ def constants_used(meta: Mapping[str, Any], spec: "ModelSpec", calibration: Mapp
 def data_set_warnings(dataset, n_runs: int, settings: Mapping[str, Any]) -> list[dict]:
     """The data warnings a diagnosis reads from the data set (``{"code", "message"}``): meta.json keys this suite does
     not know, each with the known key it most likely misspells (``meta_unknown_keys``); too few runs for the held-out
-    test to name any effect (``too_few_runs``); and any warning the loader recorded on the data set
-    (``dataset.warnings``, when it has them)."""
+    test to name any effect (``too_few_runs``); runs split at a tracking gap into parts (``run_split``, from each
+    part's ``Run.source``); and any warning the loader recorded on the data set (``dataset.warnings``, when it has
+    them)."""
     from cubedimer.meta import META_BLOCK_KEYS, META_RANGES, META_TEXT_KEYS, unknown_keys_message
 
     out = []
@@ -85,6 +86,14 @@ def data_set_warnings(dataset, n_runs: int, settings: Mapping[str, Any]) -> list
             f"with {n_runs} runs no effect can be named: the held-out sign-flip test's smallest p is "
             f"{settings['smallest_attainable_p']:.3g} (2^-{n_runs}), above alpha = {settings['alpha']:g}; record at "
             f"least {settings['runs_needed']} runs")})
+    parts: dict[str, list] = {}
+    for r in getattr(dataset, "runs", ()):
+        if getattr(r, "source", None):
+            parts.setdefault(r.source, []).append(r)
+    for source, runs in parts.items():
+        out.append({"code": "run_split", "message": f"{source} split at a tracking gap longer than the fill limit into "
+                    + ", ".join(f"{r.name} (frames {r.frames[0]}-{r.frames[1] - 1})" if getattr(r, "frames", None)
+                                else r.name for r in runs)})
     for w in getattr(dataset, "warnings", ()) or ():
         out.append(dict(w) if isinstance(w, Mapping) else {"code": "loader", "message": str(w)})
     return out
