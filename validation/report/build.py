@@ -75,7 +75,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
     from ..diagnosis.steps import check_enough_runs
     from ..simulation import model_from_meta
-    from .context import variant_comparison
+    from fitting.output.model_file import model_json
+
+    from .context import fit_description, variant_comparison
 
     level = logging.INFO if progress else logging.DEBUG
 
@@ -116,7 +118,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     write_json(out / "diagnosis.json", diag.to_json())
     # ---- the report: a view of the stored results ---------------------------------------------------------------
     say("5/5 figures and the report")
-    path = render_report(out, atlas=atlas, prepared=res.runs, classify=config.classify)
+    path = render_report(out, atlas=atlas, prepared=res.runs, classify=config.classify,
+                         described=fit_description(model_json(res), res))
     say(f"written {path}")
     return path
 
@@ -146,7 +149,7 @@ def with_simulations(diag, meta: dict, spec, res, figs_dir: Path):
 
 
 def render_report(out_dir: str | Path, *, data_dir: str | Path | None = None, atlas: str | Path | None = None,
-                  prepared=None, classify=None) -> Path:
+                  prepared=None, classify=None, described=None) -> Path:
     """The report of a finished run's stored results in ``out_dir`` (:func:`validation.report.context.load_context`):
     report.html, ``figures/*.png``, numbers.json and comparison.json, made from diagnosis.json, fit/model.json and
     fit/variant.json (and the data set's runs for the figures of the data) without fitting or simulating again.
@@ -162,7 +165,8 @@ def render_report(out_dir: str | Path, *, data_dir: str | Path | None = None, at
     from .html import write_report
     from .sections import SECTIONS
 
-    context = load_context(out_dir, data_dir=data_dir, atlas=atlas, prepared=prepared, classify=classify)
+    context = load_context(out_dir, data_dir=data_dir, atlas=atlas, prepared=prepared, classify=classify,
+                           described=described)
     sections = [s for _, make in SECTIONS if (s := make(context)) is not None]
     write_json(context.out / "comparison.json", next(s.numbers for s in sections if s.id == "model-vs-simulation"))
     return write_report(sections, context.out, "Cube dimer: model vs simulation",

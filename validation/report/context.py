@@ -16,7 +16,8 @@ from typing import Any, Sequence
 
 from cubedimer.errors import DatasetError
 
-__all__ = ["ReportContext", "CalibratedSimulation", "variant_comparison", "load_context", "STORED_FILES"]
+__all__ = ["ReportContext", "CalibratedSimulation", "variant_comparison", "load_context", "fit_description",
+           "STORED_FILES"]
 
 logger = logging.getLogger(__name__)
 
@@ -150,6 +151,26 @@ def variant_comparison(res, fit_dir: Path, joint=None):
     return cmp
 
 
+def fit_description(model_json: dict, result=None):
+    """The fitting method's account of its model (:class:`fitting.description.MethodDescription`): its ``describe`` of
+    the fit's ``result`` when given (the report's pipeline), else its ``describe_record`` of the stored model.json
+    document; a method without one is described by its equations, with the method named."""
+    from fitting.description import DescriptionTable, MethodDescription, model_equation_text
+    from fitting.methods.registry import get_method
+
+    method = get_method(model_json.get("method", "discovery"))
+    if result is not None:
+        return method.describe(result)
+    if hasattr(method, "describe_record"):
+        return method.describe_record(json.loads(json.dumps(model_json)))
+    eqs = model_json["equations"]
+    return MethodDescription(
+        f"The {method.name} method's minimal model (its own account needs the fit in memory): "
+        + "; ".join(model_equation_text(eqs)),
+        DescriptionTable("Minimal model (SI)", ("equation", "term", "coefficient"),
+                         tuple((eq, t, c) for eq in ("yddot", "thetaddot") for t, c in eqs.get(eq, {}).items())))
+
+
 def _read_json(path: Path, what: str) -> dict:
     """A stored JSON document, or a one-line :class:`DatasetError` naming the file and what to do."""
     try:
@@ -198,7 +219,7 @@ def _prepared_runs(data_dir: Path, names: Sequence[str]):
 
 
 def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atlas: str | Path | None = None,
-                 prepared: list | None = None, classify=None) -> ReportContext:
+                 prepared: list | None = None, classify=None, described=None) -> ReportContext:
     """The :class:`ReportContext` of a finished report directory ``out_dir`` (:data:`STORED_FILES`).
 
     Parameters
@@ -208,6 +229,7 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     atlas : folder of an attractor atlas, shown as the last section
     prepared, classify : the fit's prepared runs and classifier settings, when the caller has them (the report's
         pipeline); otherwise the data set's runs are prepared again at the fit's defaults
+    described : the fitting method's account of its model, when the caller has it (:func:`fit_description`)
 
     Raises
     ------
@@ -216,7 +238,6 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     """
     from acousim.models import ModelSpec
     from cubedimer.attractors import ClassifyConfig
-    from fitting.methods.registry import get_method
     from fitting.output.model_file import read_model_json
 
     from ..coefficients import compare_coefficients
@@ -231,8 +252,7 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     model_json = model_file.document
     variant = _read_json(out / "fit" / "variant.json", "the variant comparison") \
         if (out / "fit" / "variant.json").exists() else None
-    method = get_method(model_json.get("method", "discovery"))
-    described = method.describe_record(json.loads(json.dumps(model_json)))
+    described = described if described is not None else fit_description(model_json)
     record = diag.model_comparison
     data = Path(data_dir) if data_dir is not None else Path(diag.data_set["path"])
     if prepared is None:
