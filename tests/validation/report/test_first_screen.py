@@ -150,6 +150,10 @@ def test_a_model_is_said_to_hold_the_hinge_only_when_its_theta_equation_does(the
     assert said in text and not_said not in text
     # why, beside it: the reference model alone and with the fitted pair scattering
     assert "the Gor'kov model leaves 0.853, and 0.00143 with the pair scattering fitted" in text
+    # a reference gap below the subtracted noise floor (the 4-run twin's -4.16e-05) is never a negative number
+    below = hinge_reading("full wave", theta_gap, "Gor'kov", -4.16e-5, -4.1e-5)
+    assert "the Gor'kov model leaves below the noise floor, and below the noise floor with the pair" in below
+    assert "-4" not in below
 
 
 def test_a_long_time_penalty_is_said_as_what_it_is():
@@ -163,6 +167,9 @@ def test_a_long_time_penalty_is_said_as_what_it_is():
     assert long_time_value(stopped) == ("1.71e+03: the simulation stops early in 7 of 8 runs (theta reached +-1 (the cube "
                                         "faces touch)); a penalty for the lost frames, worse than no motion")
     assert long_time_value(SimpleNamespace(long_time_total=0.343, long_time_stopped=None)) == 0.343
+    # the full wave's 201.8 on the 4-run twin, with every run simulated to its end: far from the data, said so
+    assert long_time_value(SimpleNamespace(long_time_total=201.8, long_time_stopped=None)) == (
+        "202: worse than no motion (the simulated motion lies far from the data's attractor)")
 
 
 def test_each_simulation_says_what_it_was_given_and_what_it_fits():

@@ -101,7 +101,8 @@ def constant_rows(diagnosis: "Diagnosis") -> list[list]:
 def data_warnings(diagnosis: "Diagnosis", model_json: dict) -> list[str]:
     """Every data warning, one line each: the diagnosis's (y's orientation, meta.json keys it does not read, too few
     runs, the loader's), the skipped files with their reasons, and the masked tracking glitches."""
-    out = [w["message"] for w in diagnosis.data_warnings or []]
+    # (too few runs is the answer's first sentence)
+    out = [w["message"] for w in diagnosis.data_warnings or [] if w.get("code") != "too_few_runs"]
     skipped = {(d["file"], d["reason"]) if isinstance(d, dict) else (str(d), "") for d in
                list(diagnosis.skipped_files or []) + list(model_json.get("skipped_files") or [])}
     out += [f"{f} skipped: {why}" if why else f"{f} skipped" for f, why in sorted(skipped)]

@@ -16,8 +16,10 @@ def long_time_value(row) -> float | str:
     "about 1 for no motion"."""
     value = row.long_time_total
     stopped = getattr(row, "long_time_stopped", None)
-    if value is None or not stopped:
+    if value is None or (not stopped and value <= 1):
         return value
+    if not stopped:
+        return f"{value:.3g}: worse than no motion (the simulated motion lies far from the data's attractor)"
     runs, of, why = stopped
     return (f"{value:.3g}: the simulation stops early in {runs} of {of} runs ({why}); a penalty for the lost frames, "
             "worse than no motion")
@@ -88,7 +90,8 @@ def section(context: ReportContext) -> Section:
                    "theta equation": "the same for the measured hinge angle (integral form)",
                    "energy": "the same for the energy balance over 0.4-s windows",
                    "gap": "the mean of the three", "long-time error": "mean of the attractor-shape, Poincare and frequency "
-                   "errors of the simulation started from each run's first state (0 perfect, about 1 for no motion); a "
+                   "errors of the simulation started from each run's first state (0 perfect, about 1 for no motion, "
+                   "above 1 worse than no motion: the simulated motion lies far from the data's attractor); a "
                    "simulation that stops before a run's end (the cube faces touch) scores a penalty for the frames it "
                    "lost, up to about 2000, which says that it leaves the data, not by how much",
                    "fitted parameters": "the parameters fitted with the simulation (SI)"})

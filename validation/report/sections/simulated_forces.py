@@ -2,6 +2,7 @@
 measured accelerations, and the posed dimer mesh."""
 from __future__ import annotations
 
+from ..claims import gap_value
 from ..context import ReportContext
 from ..html import Figure, Section
 
@@ -19,9 +20,13 @@ def hinge_reading(label: str, theta_gap: float, reference_label: str, reference_
     """What a model with no fitted stiffness does with the hinge, from its theta-equation gap (section 7): it holds
     the hinge (the gap is small), or it does not, and how badly (above 1: worse than predicting no hinge acceleration
     at all), beside the reference model alone and with fitted pair scattering."""
-    beside = (f"; the {reference_label} model leaves {reference_theta_gap:.3g}"
-              + (f", and {scattering_theta_gap:.3g} with the pair scattering fitted" if scattering_theta_gap is not None
-                 else ""))
+    def shown(gap: float) -> str:
+        value = gap_value(gap, None)  # a component below the subtracted noise floor is said so, never negative
+        return value if isinstance(value, str) else f"{value:.3g}"
+
+    beside = (f"; the {reference_label} model leaves {shown(reference_theta_gap)}"
+              + (f", and {shown(scattering_theta_gap)} with the pair scattering fitted"
+                 if scattering_theta_gap is not None else ""))
     if theta_gap > PREDICTS_NOTHING:
         return (f"its hinge torque, from its own physics with no fitted stiffness, does not hold these data's hinge: its "
                 f"theta equation leaves {theta_gap:.3g} of the hinge accelerations' variance unexplained, more than "
