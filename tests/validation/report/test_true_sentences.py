@@ -1,6 +1,7 @@
 """Every sentence of the report true: frequencies with their resolution, statistics stated as bounds where they are
 bounds, no JSON keys in prose, no sentence about effects or an origin that are not there, agreement verdicts with
 the uncertainty behind them, and each numeric claim equal to numbers.json."""
+import hashlib
 import html
 import json
 import re
@@ -120,17 +121,24 @@ STORED = Path(__file__).resolve().parent / "stored"
 
 
 @pytest.fixture(scope="module", params=list(CASES))
-def report(request, pipeline_cache, tmp_path_factory):
+def report(request, pipeline_cache):
     """The case's report, made from its stored results with the case's twin data set (regenerated from the
-    configuration, tests/conftest.py PipelineCache): a view of diagnosis.json and model.json, nothing fitted or
-    diagnosed again."""
+    configuration), once per version of the sources (tests/conftest.py PipelineCache): a view of diagnosis.json and
+    model.json, nothing fitted or diagnosed again."""
     from validation.report import render_report
 
     runs, duration, effects = CASES[request.param]
-    data = pipeline_cache.twin_dataset(_twin_config(runs, duration, effects))
-    folder = tmp_path_factory.mktemp("report")
-    shutil.copytree(STORED / request.param.replace(" ", "_"), folder, dirs_exist_ok=True)
-    render_report(folder, data_dir=data)
+    config = _twin_config(runs, duration, effects)
+    data = pipeline_cache.twin_dataset(config)
+    stored = STORED / request.param.replace(" ", "_")
+
+    def build(folder):
+        shutil.copytree(stored, folder / "report")
+        render_report(folder / "report", data_dir=data)
+
+    key = f"{config!r} " + " ".join(f"{p.name}={hashlib.sha1(p.read_bytes()).hexdigest()}"
+                                    for p in sorted(stored.rglob("*.json")))  # the stored files are part of the key
+    folder = pipeline_cache.folder("stored-report", key, build) / "report"
     text = (folder / "report.html").read_text()
     readings = {sid: html.unescape(r) for sid, r in re.findall(
         r'<section id="([^"]+)">.*?<p class="reading">(.*?)</p>', text, re.S)}
