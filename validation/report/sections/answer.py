@@ -146,9 +146,10 @@ def section(context: ReportContext) -> Section:
     figures = []
     if diag.overlay:
         figures.append(Figure(*timeseries_overlay_figure(diag.overlay, context.fit_model, context.figs_dir)))
+    causes = cause_rows(diag)
     tables = [Table("Causes: each named effect with its parameters and how far the gap shrinks with it",
                     ["effect", "parameters (SI, +- standard error)", "gap without it", "gap with it", "shrink"],
-                    cause_rows(diag),
+                    causes,
                     {"parameters (SI, +- standard error)": "fitted with the named effects; the standard error over runs "
                                                            "(delete-one-run jackknife; the 95 % interval in diagnosis.json)",
                      "gap without it": "the gap with the effects named before it (the calibrated simulation's for the "
@@ -157,9 +158,10 @@ def section(context: ReportContext) -> Section:
               Table("Constants used", ["constant", "value", "unit", "standard error", "from"], constant_rows(diag),
                     {"from": "where the value came from: the data set's meta.json, a default, a command-line option of "
                              "the model, or the calibration on the runs"})]
+    tables = tables if causes else tables[1:]  # no causes, no empty table: the reading says why
     if warnings:
         tables.append(Table("Data warnings", ["warning"], [[w] for w in warnings]))
     return Section("answer", "The answer", reading, figures, tables,
-                   {"causes": [r[0].split(" (")[0] for r in cause_rows(diag)], "too_few_runs": bool(too_few_runs_text(diag)),
+                   {"causes": [r[0].split(" (")[0] for r in causes], "too_few_runs": bool(too_few_runs_text(diag)),
                     "data_warnings": warnings, "constants": {c["key"]: c["value"] for c in diag.constants},
                     "models": model_sentences(context)})
