@@ -304,13 +304,20 @@ def add_report_parser(sub) -> None:
             "Fit the data (fitting pipeline), compare the minimal model with its variant without cross-coupling terms, "
             "diagnose the sim-to-real gap (calibrating the Gor'kov or the full-wave simulation), put the Gor'kov model, "
             "Gor'kov with fitted pair scattering and the full-wave model side by side, sweep the calibrated simulations, "
-            "compare coefficients, and write REPORT_DIR/report.html (self-contained), figures/*.png and numbers.json."
+            "compare coefficients, and write REPORT_DIR/report.html (self-contained), figures/*.png and numbers.json. "
+            "The report is a view of the stored results (diagnosis.json, fit/model.json, fit/variant.json): "
+            "--from REPORT_DIR makes it again from them in seconds, without fitting or simulating."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("data", metavar="DATA_DIR", help="data set directory: CSV runs (t [s], y [m], theta [-]) and an "
-                   "optional meta.json (docs/formats.md)")
-    p.add_argument("--out", required=True, help="report directory")
+    p.add_argument("data", metavar="DATA_DIR", nargs="?", default=None,
+                   help="data set directory: CSV runs (t [s], y [m], theta [-]) and an optional meta.json "
+                        "(docs/formats.md); with --from, where the data set now lies (default: the one diagnosis.json "
+                        "records)")
+    p.add_argument("--out", default=None, help="report directory (required unless --from)")
+    p.add_argument("--from", dest="from_dir", default=None, metavar="REPORT_DIR",
+                   help="make the report again from a finished report directory's stored results (diagnosis.json, "
+                        "fit/model.json, fit/variant.json), in place")
     fit_options = p.add_argument_group("the fit", "the options of python -m fitting fit, with the same meaning; the "
                                        "minimal model's variant without cross-coupling terms is re-optimised with the "
                                        "fit's joint re-optimisation (--joint-max-evals)")
@@ -330,9 +337,13 @@ def run_report(args: argparse.Namespace) -> int:
     from acousim.models import ConditionError
     from cubedimer.dataset import DatasetError
 
-    from .report.build import build_report
+    from .report.build import build_report, render_report
 
-    fit_config = fit_config_from_args(args)  # before anything runs
+    if args.from_dir is None and (args.data is None or args.out is None):
+        raise UserInputError("give DATA_DIR and --out REPORT_DIR (or --from REPORT_DIR to make a finished report "
+                             "again from its stored results)")
+    if args.from_dir is not None and args.out is not None:
+        raise UserInputError("--from REPORT_DIR makes the report again in REPORT_DIR; leave out --out")
     if args.atlas is not None:  # before anything runs
         from .report.sections.atlas import AtlasSectionError, atlas_section
 
@@ -340,6 +351,13 @@ def run_report(args: argparse.Namespace) -> int:
             atlas_section(args.atlas)
         except AtlasSectionError as exc:
             raise UserInputError(str(exc)) from None
+    if args.from_dir is not None:
+        try:
+            render_report(args.from_dir, data_dir=args.data, atlas=args.atlas)
+        except DatasetError as exc:
+            raise UserInputError(str(exc)) from None
+        return 0
+    fit_config = fit_config_from_args(args)  # before anything runs
     prepare_output_dir(args.out, "--out", create=False)
     executor = executor_config(args)
     try:

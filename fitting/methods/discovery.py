@@ -124,6 +124,10 @@ class DiscoveryMethod:
         """:func:`discovery_description` of the result's model.json record."""
         return discovery_description(fit_record(result))
 
+    def describe_record(self, record: dict) -> MethodDescription:
+        """:meth:`describe` from the fit's model.json document (a stored fit)."""
+        return discovery_description(record)
+
 
 #: The Pareto-front figure of a discovery fit (written by :func:`fitting.output.plots.plot_fit`) and its caption.
 PARETO_FIGURE = ("pareto.png", "Pareto front of the discovery: held-out error (5-fold over runs) against the number of "

@@ -240,7 +240,10 @@ class PaperMethod:
         minimal model, with each term's z-score and the p-value of its ensemble mean."""
         from ..output.model_file import fit_record
 
-        doc = fit_record(result)
+        return self.describe_record(fit_record(result))
+
+    def describe_record(self, doc: dict) -> MethodDescription:
+        """:meth:`describe` from the fit's model.json document (a stored fit)."""
         rule = SELECTION_RULES.get(doc.get("selection", {}).get("rule", "zscore"))
         rule_text = rule.description if rule is not None else doc.get("selection", {}).get("rule", "zscore")
         text = ("Regression on accelerations, refinement of every run against its long-time behaviour, and the ensemble "

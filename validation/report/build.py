@@ -1,12 +1,14 @@
 """``python -m validation report``: the model-vs-simulation report of a data set.
 
-:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.fit.fit_dataset``), the
-variant comparison (the minimal model without its cross-coupling terms, re-optimised), the gap diagnosis
-(:mod:`validation.diagnosis`, which also calibrates the simulation); then it fills the
-:class:`validation.report.context.ReportContext` (the simulations side by side, static sweeps of the calibrated
-simulations over the data's range and the coefficient comparison, :mod:`validation.coefficients`) and makes the
-sections of :data:`validation.report.sections.SECTIONS` from it; it writes ``report.html`` (self-contained),
-``figures/*.png``, ``numbers.json``, ``diagnosis.json`` and ``comparison.json``.
+:func:`build_report` runs, in order (each step logged): the fitting pipeline (``fitting.fit.fit_dataset``, written as
+``fit/model.json``), the variant comparison (the minimal model without its cross-coupling terms, re-optimised:
+``fit/variant.json``), the gap diagnosis (:mod:`validation.diagnosis`, which also calibrates the simulation) and the
+calibrated simulations side by side (:func:`with_simulations`: every registered model's gaps, static coefficients and
+restoring curves, and one run's time-series overlay, stored in ``diagnosis.json``).  The report is then a view of
+these stored results, :func:`render_report` (also ``python -m validation report --from REPORT_DIR``): it fills the
+:class:`validation.report.context.ReportContext` from the files and makes the sections of
+:data:`validation.report.sections.SECTIONS`; it writes ``report.html`` (self-contained), ``figures/*.png``,
+``numbers.json`` and ``comparison.json``.
 """
 from __future__ import annotations
 
@@ -24,7 +26,7 @@ if TYPE_CHECKING:
     from acousim.models import ModelSpec
     from fitting.config import FitConfig
 
-__all__ = ["build_report", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
+__all__ = ["build_report", "render_report", "with_simulations", "model_equation_text", "lead_term_reading", "effect_static_coefficients"]
 
 logger = logging.getLogger(__name__)
 
@@ -67,15 +69,15 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from cubedimer.executor import ExecutorConfig
     from fitting.config import FitConfig
     from acousim.models import ModelSpec
-    from fitting.output.model_file import model_json as fit_model_json, write_fit
+    from fitting.output.model_file import write_fit
     from fitting.fit import fit_dataset
 
     from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
     from ..diagnosis.steps import check_enough_runs
     from ..simulation import model_from_meta
-    from .context import report_context, variant_comparison
-    from .html import write_report
-    from .sections import SECTIONS
+    from fitting.output.model_file import model_json
+
+    from .context import fit_description, variant_comparison
 
     level = logging.INFO if progress else logging.DEBUG
 
@@ -95,23 +97,74 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
     out = Path(out_dir)
     fit_dir = out / "fit"
-    # ---- the fit, the variant comparison and the diagnosis: what the report reads --------------------------------
+    # ---- the fit, the variant comparison and the diagnosis: the stored results the report is a view of -----------
     say(f"1/5 fitting the data ({get_method(config.method_name).summary})")
     res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
-    model_json = fit_model_json(res)
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
     variant = variant_comparison(res, fit_dir, config.method.joint)
+    if variant is not None:
+        write_json(fit_dir / "variant.json", variant.to_json())
+    else:
+        (fit_dir / "variant.json").unlink(missing_ok=True)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
     diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
-    # ---- the calibrated simulations and their sweeps (steps 3-4), then the sections from the one context ---------
-    context = report_context(dataset, out, res, model_json, variant, diag, spec, atlas=atlas, say=say)
-    say("5/5 figures and the report")
-    sections = [s for _, make in SECTIONS if (s := make(context)) is not None]
+    say("4/5 the calibrated simulations side by side: their gaps, static sweeps and coefficients")
+    diag = with_simulations(diag, dataset.meta, spec, res, out / "figures")
     write_json(out / "diagnosis.json", diag.to_json())
-    write_json(out / "comparison.json", next(s.numbers for s in sections if s.id == "model-vs-simulation"))
-    path = write_report(sections, out, "Cube dimer: model vs simulation",
-                        f"data set {Path(data_dir).resolve()}; all quantities SI unless an axis says otherwise")
+    # ---- the report: a view of the stored results ---------------------------------------------------------------
+    say("5/5 figures and the report")
+    path = render_report(out, atlas=atlas, prepared=res.runs, classify=config.classify,
+                         described=fit_description(model_json(res), res))
     say(f"written {path}")
     return path
+
+
+def with_simulations(diag, meta: dict, spec, res, figs_dir: Path):
+    """The diagnosis with the records a report reads (docs/formats.md): every registered model calibrated on the runs
+    (``model_comparison``) and one run's time-series overlay (``overlay``); the reference model's posed mesh is
+    rendered into ``figs_dir`` when the model can render it."""
+    from dataclasses import replace as replaced
+
+    import numpy as np
+    from acousim.models import force_model_type
+
+    from ..diagnosis import compare_simulation_models
+    from ..diagnosis.summarise.calibrated_simulations import model_comparison_record, overlay_record
+
+    internals = diag.internals
+    models = compare_simulation_models(internals.problem, spec, meta, base=internals.base)
+    states = np.concatenate([p.derivs.state for p in res.runs])
+    record, statics = model_comparison_record(models, internals, spec, meta, diag.calibration, states)
+    reference = record["simulations"][0]["name"]
+    if "render" in force_model_type(reference).capabilities:
+        from acousim.gorkov.render import render_dimer
+
+        render_dimer(statics[reference], 0.3, 0.0, figs_dir / f"dimer_{reference}.png")
+    return replaced(diag, model_comparison=record, overlay=overlay_record(internals))
+
+
+def render_report(out_dir: str | Path, *, data_dir: str | Path | None = None, atlas: str | Path | None = None,
+                  prepared=None, classify=None, described=None) -> Path:
+    """The report of a finished run's stored results in ``out_dir`` (:func:`validation.report.context.load_context`):
+    report.html, ``figures/*.png``, numbers.json and comparison.json, made from diagnosis.json, fit/model.json and
+    fit/variant.json (and the data set's runs for the figures of the data) without fitting or simulating again.
+
+    Raises
+    ------
+    DatasetError
+        One line naming a missing or unreadable stored file.
+    """
+    from cubedimer.atomic import write_json
+
+    from .context import load_context
+    from .html import write_report
+    from .sections import SECTIONS
+
+    context = load_context(out_dir, data_dir=data_dir, atlas=atlas, prepared=prepared, classify=classify,
+                           described=described)
+    sections = [s for _, make in SECTIONS if (s := make(context)) is not None]
+    write_json(context.out / "comparison.json", next(s.numbers for s in sections if s.id == "model-vs-simulation"))
+    return write_report(sections, context.out, "Cube dimer: model vs simulation",
+                        f"data set {context.data_dir}; all quantities SI unless an axis says otherwise")

@@ -139,3 +139,15 @@ def ratio_value(ratio: float, denominator: float, denominator_std: float, n_sigm
             np.isfinite(denominator_std) and abs(denominator) <= n_sigma * denominator_std):
         return RATIO_NOT_DETERMINED
     return float(ratio) + 0.0
+
+
+#: The shrink column's entry for a gap taken below the noise floor (where 1 - after/before exceeds 1).
+SHRINK_TO_FLOOR = "all of it (to below the noise floor)"
+
+
+def shrink_value(shrink: float, gap_after: float) -> float | str:
+    """A shrink ``1 - gap_after / gap_before`` as the report shows it: the number, or :data:`SHRINK_TO_FLOOR` where the
+    gap after lies below the noise floor (a negative gap, so a shrink above 1, which no fraction of a gap can be)."""
+    if gap_after < 0 or shrink > 1:
+        return SHRINK_TO_FLOOR
+    return float(shrink) + 0.0

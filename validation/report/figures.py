@@ -6,7 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["data_figures", "phase_space_figures", "restoring_overlay_figure"]
+__all__ = ["data_figures", "phase_space_figures", "restoring_overlay_figure", "timeseries_overlay_figure"]
 
 UM = 1e6
 
@@ -128,8 +128,9 @@ def phase_space_figures(prepared: Sequence, model, out: Path) -> list[tuple[Path
 def restoring_overlay_figure(models: Sequence[tuple], prepared: Sequence, out: Path) -> tuple[Path, str]:
     """The paper's Fig. 2c-d: the simulations' restoring force and torque with the data's measured accelerations.
 
-    ``models``: (sweep, delta [m], label) per calibrated simulation, the first one the main model; the data's y
-    is each simulation's y minus its delta (calibrated origin).  The axes are the data's: y from the data's
+    ``models``: (curves, delta [m], label) per calibrated simulation, the first one the main model: its stored
+    restoring curves (diagnosis.json ``model_comparison.simulations[i].curves``: ``y_m``, ``yddot`` at theta = 0;
+    ``theta``, ``thetaddot`` at y = 0); the data's y is each simulation's y minus its delta (calibrated origin).  The axes are the data's: y from the data's
     origin, and the acceleration range of the data (a model curve may leave the plot; the caption says so).
     """
     plt = _plt()
@@ -145,13 +146,13 @@ def restoring_overlay_figure(models: Sequence[tuple], prepared: Sequence, out: P
     axes[1].plot(st[ymid, 2], ac[ymid, 1], ".", ms=1, color="0.6", label=r"data, $|y| < 30\,\mu$m")
     colors = ("tab:blue", "tab:red", "tab:green")
     clipped = []
-    for (sweep, delta, label), color in zip(models, colors):
-        i0 = int(np.argmin(np.abs(sweep.theta_grid)))
-        axes[0].plot((sweep.y_grid - delta) * UM, sweep["yddot"][i0], color=color, lw=2, label=rf"{label}, $\theta = 0$")
-        j0 = int(np.argmin(np.abs(sweep.y_grid)))
-        axes[1].plot(sweep.theta_grid, sweep["thetaddot"][:, j0], color=color, lw=2, label=f"{label}, y = 0")
+    for (curves, delta, label), color in zip(models, colors):
+        axes[0].plot((np.asarray(curves["y_m"]) - delta) * UM, curves["yddot"], color=color, lw=2,
+                     label=rf"{label}, $\theta = 0$")
+        torque = np.asarray(curves["thetaddot"])
+        axes[1].plot(curves["theta"], torque, color=color, lw=2, label=f"{label}, y = 0")
         lo, hi = np.quantile(ac[ymid, 1], [0.001, 0.999]) if ymid.any() else (-1.0, 1.0)
-        if np.any(np.abs(sweep["thetaddot"][:, j0]) > 3 * max(abs(lo), abs(hi))):
+        if np.any(np.abs(torque) > 3 * max(abs(lo), abs(hi))):
             clipped.append(label)
     if ymid.any():
         lo, hi = np.quantile(ac[ymid, 1], [0.001, 0.999])
@@ -172,3 +173,27 @@ def restoring_overlay_figure(models: Sequence[tuple], prepared: Sequence, out: P
     if clipped:
         caption += f" The torque axis shows the data's range: the {', '.join(clipped)} curve leaves it."
     return _save(fig, out / "restoring_overlay.png"), caption
+
+
+def timeseries_overlay_figure(overlay: dict, fit_model, out: Path) -> tuple[Path, str]:
+    """One run's y and theta against time: the data (smoothed), the fitted minimal model and the calibrated simulation
+    with the identified effects, both started from the run's first state (diagnosis.json ``overlay``)."""
+    plt = _plt()
+    t = np.asarray(overlay["t_s"])
+    data, sim = overlay["data"], overlay["simulation"]
+    fitted, n_fit = fit_model.simulate(np.asarray(overlay["first_state"]), np.linspace(t[0], t[-1], len(t)))
+    n_sim = int(sim.get("simulated_frames", len(t)))
+    fig, axes = plt.subplots(2, 1, figsize=(9, 4.6), sharex=True, constrained_layout=True)
+    for ax, key, col, scale, unit in ((axes[0], "y_m", 0, UM, r"$y$ [$\mu$m]"), (axes[1], "theta", 2, 1.0, r"$\theta$")):
+        ax.plot(t, np.asarray(data[key]) * scale, color="k", lw=1.2, label="data (smoothed)")
+        ax.plot(t[:n_fit], fitted[:n_fit, col] * scale, color="tab:red", lw=0.9, ls="--", label="fitted minimal model")
+        ax.plot(t[:n_sim], np.asarray(sim[key])[:n_sim] * scale, color="tab:blue", lw=0.9,
+                label="calibrated simulation with the identified effects")
+        ax.set_ylabel(unit)
+    axes[1].set_xlabel("t [s] from the run's first frame")
+    axes[0].legend(fontsize=7, loc="upper right")
+    effects = ", ".join(sim.get("effects") or {}) or "no effect"
+    caption = (f"Run {overlay['run']}: the data (black) against the fitted minimal model (red, dashed) and the "
+               f"calibrated simulation with {effects} (blue), both integrated from the run's first smoothed state; "
+               "where a curve ends early, that model left the trap.")
+    return _save(fig, out / "timeseries_overlay.png"), caption

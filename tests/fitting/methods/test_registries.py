@@ -169,16 +169,18 @@ def test_the_report_describes_a_registered_method_in_its_own_words(dummy_method,
     """Section 3 of the report is the method's own description: the dummy's sentence, table and (no) figures,
     with no word of the paper's method or of the discovery."""
     from fitting.output.model_file import write_fit
-    from validation.report.context import ReportContext
+    from validation.report.context import ReportContext, fit_description
     from validation.report.sections import fit as fit_section
 
     res = fit_dataset(small_dataset, FitConfig.for_method(dummy_method.name), progress=False)
     out = tmp_path / "report"
     write_fit(res, out / "fit", plots=False)
+    doc = json.loads((out / "fit" / "model.json").read_text())
+    # what the report's pipeline gives the view (the method's describe of its result)
     context = ReportContext(
-        data_dir=small_dataset, out=out, spec=None, atlas=None, fit=res,
-        model_json=json.loads((out / "fit" / "model.json").read_text()), variant=None, diagnosis=None, meta=None,
-        models=None, simulations=(), theta_max=0.3, y_max=1e-4)
+        data_dir=small_dataset, out=out, spec=None, atlas=None, model_json=doc, fit_model=res.model,
+        described=fit_description(doc, res), prepared=res.runs, classify=None, variant=None, diagnosis=None,
+        meta=None, models=None, simulations=(), theta_max=0.3, y_max=1e-4)
     section = fit_section.section(context)
     eqs = res.model.equations()
     assert section.reading == "Least squares of the linear oscillator gives " + "; ".join(model_equation_text(eqs))

@@ -8,7 +8,7 @@ import pytest
 
 from validation.report.build import effect_static_coefficients
 
-SECTIONS = ["data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
+SECTIONS = ["answer", "data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
 
 
 def _twin(path, effects, runs=8, duration=3.0, seed=4):
@@ -99,6 +99,26 @@ def test_report_has_every_section_image_and_finite_number(damping_report):
     assert "Pareto front of the discovery" in fit
     for col in ("oracle std error", "oracle z", "alias", "alias z"):
         assert f"<th>{col}</th>" in fit
+
+
+@pytest.mark.slow
+def test_the_report_is_a_view_of_its_stored_results(damping_report, tmp_path):
+    """``validation report --from`` makes the same report from diagnosis.json, fit/model.json and fit/variant.json
+    alone: every number of numbers.json and comparison.json equal to the pipeline's, nothing fitted or simulated."""
+    import shutil
+
+    from validation.cli import main
+
+    folder = tmp_path / "report"
+    shutil.copytree(damping_report.parent, folder)
+    for name in ("report.html", "numbers.json", "comparison.json"):
+        (folder / name).unlink()
+    assert main(["report", "--from", str(folder)]) == 0
+    for name in ("numbers.json", "comparison.json"):
+        assert json.loads((folder / name).read_text()) == json.loads((damping_report.parent / name).read_text()), name
+    stored = json.loads((folder / "diagnosis.json").read_text())
+    assert {"model_comparison", "overlay", "constants", "data_set"} <= set(stored)
+    assert stored["model_comparison"]["rows"] == json.loads((folder / "numbers.json").read_text())["scattering"]["rows"]
 
 
 @pytest.mark.slow

@@ -15,7 +15,7 @@ import numpy as np
 from ..calibrate.gap_model import GapFit
 from ..prepare.problem import DiagnosisProblem
 
-__all__ = ["LongTimeGap", "long_time_gaps", "mean_long_time_gap"]
+__all__ = ["LongTimeGap", "long_time_gaps", "mean_long_time_gap", "simulate_from_first_state"]
 
 
 @dataclass(frozen=True)
@@ -43,31 +43,46 @@ def long_time_gaps(problem: DiagnosisProblem, fit: GapFit, max_duration: float |
     rescaled to the calibrated pressure (its y is measured from the calibrated Z_eq, i.e. the data's y +
     ``calibration.origin_offset_m``), with the fitted effects.
     """
+    from fitting.refinement.losses import loss_terms, make_reference
+
+    out = []
+    for r in problem.recorded_runs:
+        t, sim, m, message = simulate_from_first_state(problem, fit, r, max_duration)
+        ref = make_reference(t, r.state[:len(t)])
+        lt = loss_terms(sim, int(m), ref)
+        out.append(LongTimeGap(lt.shape, lt.poincare, lt.frequency, lt.total, bool(m < len(t)), message))
+    return out
+
+
+def simulate_from_first_state(problem: DiagnosisProblem, fit: GapFit, run, max_duration: float | None = None
+                              ) -> tuple[np.ndarray, np.ndarray, int, str]:
+    """The calibrated simulation of ``fit`` started from the recorded ``run``'s first smoothed state: ``(t, state,
+    m, message)``, with ``t`` [s] from the run's start on its own frames (at most ``max_duration`` seconds),
+    ``state`` (n, 4) in the data's y origin (zeros after ``m`` frames when the simulation left the trap early) and
+    the integrator's message.
+
+    Integrated with the compiled RK4 of :class:`acousim.dynamics.integrator.DimerDynamics` on the problem's surrogate
+    rescaled to the calibrated pressure (its y is measured from the calibrated Z_eq, i.e. the data's y +
+    ``calibration.origin_offset_m``), with the fitted effects."""
     from acousim.dynamics.integrator import DimerDynamics
     from acousim.dynamics.effects import EffectSet
-    from fitting.refinement.losses import loss_terms, make_reference
 
     cal = fit.calibration
     surrogate = problem.surrogate().with_pressure(cal.pressure_amplitude_pa)
     dynamics = DimerDynamics(surrogate, EffectSet.from_dict(fit.effects))
     delta = cal.z_origin_m - surrogate.z_eq
-    out = []
-    for r in problem.recorded_runs:
-        n = len(r.t) if max_duration is None else int(np.searchsorted(r.t - r.t[0], max_duration))
-        t = r.t[:n] - r.t[0]
-        x0 = r.state[0].copy()
-        x0[0] += delta
-        x0[2] = float(np.clip(x0[2], -0.999, 0.999))
-        dt = float(np.median(np.diff(t)))
-        traj = dynamics.integrate(x0, duration=t[-1], dt_out=dt)
-        sim = np.zeros((n, 4))
-        m = min(n, len(traj.t))
-        sim[:m] = traj.state[:m]
-        sim[:m, 0] -= delta
-        ref = make_reference(t, r.state[:n])
-        lt = loss_terms(sim, int(m), ref)
-        out.append(LongTimeGap(lt.shape, lt.poincare, lt.frequency, lt.total, bool(m < n), traj.message))
-    return out
+    n = len(run.t) if max_duration is None else int(np.searchsorted(run.t - run.t[0], max_duration))
+    t = run.t[:n] - run.t[0]
+    x0 = run.state[0].copy()
+    x0[0] += delta
+    x0[2] = float(np.clip(x0[2], -0.999, 0.999))
+    dt = float(np.median(np.diff(t)))
+    traj = dynamics.integrate(x0, duration=t[-1], dt_out=dt)
+    sim = np.zeros((n, 4))
+    m = min(n, len(traj.t))
+    sim[:m] = traj.state[:m]
+    sim[:m, 0] -= delta
+    return t, sim, m, traj.message
 
 
 def mean_long_time_gap(per_run: Sequence[LongTimeGap]) -> dict[str, float]:

@@ -67,6 +67,9 @@ class ModelGap:
         Mean long-time error (0 perfect, ~1 no motion); None when not computed.
     params : dict
         Fitted effect parameters (kappa of pair scattering).
+    long_time_stopped : tuple of (int, int, str) or None
+        Runs whose simulation stopped before the run's end, out of how many, and why (e.g. the cube faces touch): such
+        a run's long-time error is a penalty for the lost frames (up to the refinement's penalty), not a distance.
     """
 
     model: str
@@ -76,12 +79,25 @@ class ModelGap:
     gap: float
     long_time_total: float | None
     params: dict = field(default_factory=dict)
+    long_time_stopped: tuple | None = None
 
     def to_dict(self) -> dict:
         return {"model": self.model, "label": row_label(self.model), "pressure_amplitude_pa": self.pressure_amplitude_pa,
                 "origin_offset_m": self.origin_offset_m, "gap_y": self.components[0], "gap_theta": self.components[1],
                 "gap_energy": self.components[2], "gap": self.gap, "long_time_total": self.long_time_total,
-                "params": self.params}
+                "params": self.params,
+                **({} if self.long_time_stopped is None else {"long_time_stopped": {
+                    "runs": self.long_time_stopped[0], "of": self.long_time_stopped[1],
+                    "why": self.long_time_stopped[2]}})}
+
+    @classmethod
+    def from_dict(cls, doc: dict) -> "ModelGap":
+        """The row of a stored comparison (:meth:`to_dict`)."""
+        return cls(doc["model"], doc["pressure_amplitude_pa"], doc["origin_offset_m"],
+                   (doc["gap_y"], doc["gap_theta"], doc["gap_energy"]), doc["gap"], doc.get("long_time_total"),
+                   dict(doc.get("params") or {}),
+                   None if doc.get("long_time_stopped") is None else tuple(doc["long_time_stopped"][k]
+                                                                            for k in ("runs", "of", "why")))
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,15 +124,27 @@ class ModelComparison:
         return {"rows": [r.to_dict() for r in self.rows],
                 **{f"{name}_unavailable": reason for name, reason in self.unavailable.items()}}
 
+    @classmethod
+    def from_dict(cls, doc: dict) -> "ModelComparison":
+        """The comparison of a stored record (diagnosis.json's ``model_comparison``): its rows and why a model is
+        missing, without the fits and problems (a view of the stored results)."""
+        suffix = "_unavailable"
+        return cls([ModelGap.from_dict(r) for r in doc["rows"]], {}, {},
+                   {k[:-len(suffix)]: v for k, v in doc.items() if k.endswith(suffix)})
+
 
 def _row(name: str, problem: DiagnosisProblem, fit: GapFit, long_time_duration: float | None) -> ModelGap:
     per = fit_gaps(problem.runs, fit)
-    lt = None
+    lt, stopped = None, None
     if long_time_duration is not None:
-        lt = mean_long_time_gap(long_time_gaps(problem, fit, long_time_duration))["total"]
+        gaps = long_time_gaps(problem, fit, long_time_duration)
+        lt = mean_long_time_gap(gaps)["total"]
+        why = sorted({g.status for g in gaps if g.diverged})
+        if why:
+            stopped = (sum(g.diverged for g in gaps), len(gaps), "; ".join(why))
     cal = fit.calibration
     return ModelGap(name, cal.pressure_amplitude_pa, cal.origin_offset_m, tuple(float(v) for v in per.mean(axis=0)),
-                    scalar_gap(per), lt, fit.effects)
+                    scalar_gap(per), lt, fit.effects, stopped)
 
 
 def compare_simulation_models(problem: DiagnosisProblem, spec: "ModelSpec", meta: dict, base: GapFit | None = None,

@@ -27,6 +27,8 @@ REJECTIONS = {
     "removed_by_backward_check": "improved held-out runs when added, but not given the other effects",
     "replaced_by_discovered_terms": "not needed once the discovered library terms are fitted",
     "withheld": "the calibration equation stays unexplained, so no cause is named",
+    "not_shrinking_gap": "improved held-out runs, but adding it does not shrink the gap (the gaps without and with "
+                         "it are given), so it is not named as a cause",
     "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
                          "coefficient or scattering stiffness)",
 }
@@ -220,6 +222,13 @@ class Diagnosis:
     skipped_files : files the loader skipped, with reasons
     glitch_frames_masked : tracking glitches masked by the loader
     settings : the test settings (alpha, smallest attainable p, ...)
+    constants : every constant the simulation was built from, with where it came from
+        (:func:`~validation.diagnosis.summarise.constants.constants_used`)
+    model_comparison : every registered force model calibrated on the runs, side by side, with its static
+        coefficients and restoring curves (:mod:`~validation.diagnosis.summarise.calibrated_simulations`; None unless
+        asked for: the report stores it)
+    overlay : one run's data against the calibrated simulation with the identified effects (None unless asked for)
+    data_set : the diagnosed data set: its ``path`` (absolute), its ``meta`` (meta.json as read) and its ``runs``
     internals : the problem and the fits before and after, for the figures (None when read from JSON)
     """
 
@@ -248,6 +257,10 @@ class Diagnosis:
     skipped_files: tuple = ()
     glitch_frames_masked: int = 0
     settings: Mapping[str, Any] = field(default_factory=dict)
+    constants: tuple[Mapping[str, Any], ...] = ()
+    model_comparison: Mapping[str, Any] | None = None
+    overlay: Mapping[str, Any] | None = None
+    data_set: Mapping[str, Any] | None = None
     internals: DiagnosisInternals | None = field(default=None, compare=False, repr=False)
 
     def effect(self, name: str) -> EffectVerdict:
@@ -285,7 +298,11 @@ class Diagnosis:
                 "remaining_gap": dict(self.remaining_gap),
                 "identification_rounds": [dict(r) for r in self.identification_rounds],
                 "data_warnings": [dict(w) for w in self.data_warnings], "skipped_files": list(self.skipped_files),
-                "glitch_frames_masked": self.glitch_frames_masked, "settings": dict(self.settings)}
+                "glitch_frames_masked": self.glitch_frames_masked, "settings": dict(self.settings),
+                "constants": [dict(c) for c in self.constants],
+                **({} if self.model_comparison is None else {"model_comparison": dict(self.model_comparison)}),
+                **({} if self.overlay is None else {"overlay": dict(self.overlay)}),
+                **({} if self.data_set is None else {"data_set": dict(self.data_set)})}
 
     @classmethod
     def from_json(cls, doc: Mapping[str, Any]) -> "Diagnosis":
@@ -305,4 +322,6 @@ class Diagnosis:
             remaining_gap=dict(doc.get("remaining_gap", {})),
             identification_rounds=tuple(doc.get("identification_rounds", ())),
             data_warnings=tuple(doc.get("data_warnings", ())), skipped_files=tuple(doc.get("skipped_files", ())),
-            glitch_frames_masked=int(doc.get("glitch_frames_masked", 0)), settings=dict(doc.get("settings", {})))
+            glitch_frames_masked=int(doc.get("glitch_frames_masked", 0)), settings=dict(doc.get("settings", {})),
+            constants=tuple(doc.get("constants", ())), model_comparison=doc.get("model_comparison"),
+            overlay=doc.get("overlay"), data_set=doc.get("data_set"))

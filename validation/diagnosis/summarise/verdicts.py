@@ -2,6 +2,7 @@
 first, in the order the identification added them, then the other candidates fitted on top of them, by gap."""
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Mapping, Sequence
 
 from acousim.dynamics.effects import EFFECT_TYPES
@@ -13,7 +14,7 @@ from ..prepare.problem import DiagnosisProblem
 from .result import REJECTIONS, EffectVerdict
 from .uncertainty import ParameterInterval
 
-__all__ = ["ranked_effects", "non_physical_parameters"]
+__all__ = ["ranked_effects", "non_physical_parameters", "gap_without", "not_shrinking"]
 
 
 def non_physical_parameters(name: str, params: Mapping[str, float]) -> list[str]:
@@ -54,6 +55,8 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, final,
                                    gap_before, (uncertainty or {}).get(identified[i]), (derived or {}).get(identified[i]))
                      for i in range(len(identified))]
+    model_effects = [_named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
+                     for i, e in enumerate(model_effects)]
     last_tests = ident.last_tests()
     others = []
     for name in candidates:
@@ -73,6 +76,29 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
             median_improvement_given_others=given.median_improvement if given else None,
             status=status, rejected_because=reasons))
     return tuple(model_effects + sorted(others, key=lambda e: e.gap_after))
+
+
+def gap_without(effects: Sequence[EffectVerdict], gap_before: float, effect: EffectVerdict) -> float:
+    """The gap a model effect was added to: the gap with the model's effects before it (``gap_after`` of the model
+    effect before it, in the order added), or the calibrated simulation's gap for the first."""
+    model = [e for e in effects if e.significant]
+    i = next(i for i, e in enumerate(model) if e.name == effect.name)
+    return model[i - 1].gap_after if i else gap_before
+
+
+def not_shrinking(effect: EffectVerdict) -> bool:
+    """A model effect that improved held-out runs but whose addition does not shrink the gap (rejected with the code
+    ``not_shrinking_gap``)."""
+    return any(r.get("code") == "not_shrinking_gap" for r in effect.rejected_because)
+
+
+def _named_only_if_shrinking(effect: EffectVerdict, before: float) -> EffectVerdict:
+    """A named model effect whose addition does not shrink the gap (``gap_after >= before``) is not named: it is
+    rejected with both gaps (it stays in the fitted model, whose gap it is part of)."""
+    if effect.status != "named" or effect.gap_after < before:
+        return effect
+    return replace(effect, named=False, status="rejected",
+                   rejected_because=(_rejection("not_shrinking_gap", f"{before:.4g} -> {effect.gap_after:.4g}"),))
 
 
 def _rejections(name: str, params: Mapping[str, float], ident, elim, test, replaced: dict) -> tuple[dict, ...]:

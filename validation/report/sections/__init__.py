@@ -4,6 +4,7 @@ Each module has ``section(context)``: a function of the shared :class:`validatio
 returns a :class:`validation.report.html.Section`, or None when the data set has nothing for it (the tracking of a
 data set not tracked from video, the atlas when none is given).
 
+* :mod:`.answer`: the first screen, the answer (causes, constants, data warnings, force models, one run's time series);
 * :mod:`.data`: 1, the runs, their spectra and attractor classes;
 * :mod:`.tracking`: the tracking, when the data set came from video;
 * :mod:`.phase_space`: 2, the data against the minimal model in phase space;
@@ -21,13 +22,14 @@ from typing import Callable
 
 from ..context import ReportContext
 from ..html import Section
-from . import (atlas, data, fit, gap_diagnosis, model_vs_simulation, phase_space, scattering, simulated_forces,
+from . import (answer, atlas, data, fit, gap_diagnosis, model_vs_simulation, phase_space, scattering, simulated_forces,
                tracking)
 
 __all__ = ["SECTIONS"]
 
 #: (name, section function) in the report's order.
 SECTIONS: tuple[tuple[str, Callable[[ReportContext], Section | None]], ...] = (
+    ("answer", answer.section),
     ("data", data.section),
     ("tracking", tracking.section),
     ("phase-space", phase_space.section),

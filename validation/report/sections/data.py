@@ -76,7 +76,7 @@ def section(context: ReportContext) -> Section:
                "too short to resolve the hinge frequency")
     return Section(
         "data", "1. The data",
-        f"{len(prepared)} runs ({len(context.fit.skipped)} files skipped as unreadable or invalid). The vertical motion's spectrum "
+        f"{len(prepared)} runs ({len(context.model_json.get('skipped_files') or [])} files skipped as unreadable or invalid). The vertical motion's spectrum "
         f"peaks at a median {fy:.2f} Hz and {ft_text} (peaks of the zero-padded spectra; runs of "
         f"{1 / resolution:.3g} s resolve {resolution:.2g} Hz); the spectra show whether theta carries the y frequency and "
         "its second harmonic (theta locked to y). The runs fall into the attractor classes "
@@ -87,6 +87,6 @@ def section(context: ReportContext) -> Section:
                 "phase [deg]"],
                [[p.run.name, p.attractor.label, p.attractor.coherence, py[0], pt[0], py[1], p.attractor.amp_y * 1e6,
                  p.attractor.amp_theta, _late_phase(p)] for p, (py, pt) in zip(prepared, peaks)],
-               run_columns(getattr(getattr(context.fit, "config", None), "classify", ClassifyConfig())))],
+               run_columns(context.classify))],
         {"n_runs": len(prepared), "classes": classes, "median_f_y_hz": fy, "median_f_theta_hz": ft,
          "frequency_resolution_hz": resolution})

@@ -11,7 +11,7 @@ import numpy as np
 from cubedimer.atomic import save_figure as _save
 
 from ...diagnosis.identify.statistics import format_p
-from ..claims import anti_damping_text, gap_value
+from ..claims import anti_damping_text, gap_value, shrink_value
 from ..context import ReportContext
 from ..html import Figure, Section, Table
 
@@ -105,26 +105,40 @@ def _origin_text(cal: dict) -> str:
 
 
 def gap_without(diagnosis: "Diagnosis", effect: "EffectVerdict") -> float:
-    """The gap a model effect was added to: that of the model's effects added before it (``gap_after`` of the effect
-    of the previous round), or the calibrated simulation's gap for the first."""
-    rounds = {e.added_in_round: e.gap_after for e in diagnosis.effects if e.significant and e.added_in_round}
-    return rounds.get((effect.added_in_round or 1) - 1, diagnosis.gap_before)
+    """The gap a model effect was added to: that of the model's effects added before it, or the calibrated
+    simulation's gap for the first (:func:`validation.diagnosis.summarise.verdicts.gap_without`)."""
+    from ...diagnosis.summarise.verdicts import gap_without as before
+
+    return before(diagnosis.effects, diagnosis.gap_before, effect)
 
 
 def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
-    """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``."""
+    """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``.  A
+    diagnosis rejects such an effect (code ``not_shrinking_gap``); one written before that rule named it, and is read
+    the same way."""
+    from ...diagnosis.summarise.verdicts import not_shrinking as rejected_for_it
+
+    if not effect.significant or not (effect.named or rejected_for_it(effect)):
+        return ""  # only a named effect (or one rejected for it): a pair's kept member is judged as a pair
     before = gap_without(diagnosis, effect)
-    if not effect.significant or effect.gap_after < before:
+    if effect.gap_after < before:
         return ""
-    return (f"named by its held-out test, but adding it does not shrink the gap ({before:.4g} -> "
+    return (f"not named: it improved held-out runs, but adding it does not shrink the gap ({before:.4g} -> "
             f"{effect.gap_after:.4g})")
+
+
+def named_effects(diagnosis: "Diagnosis") -> list:
+    """The effects named as causes: named, and shrinking the gap when added."""
+    return [e for e in diagnosis.effects if e.significant and e.named and not not_shrinking(diagnosis, e)]
 
 
 def _verdict(diagnosis: "Diagnosis", effect: "EffectVerdict", pairs: list[dict]) -> str:
     if any(effect.name in pr["effects"] for pr in pairs):
         return "indistinguishable"
+    if not_shrinking(diagnosis, effect):
+        return "no: " + not_shrinking(diagnosis, effect).removeprefix("not named: ")
     if effect.significant and effect.named:
-        return not_shrinking(diagnosis, effect) or "yes"
+        return "yes"
     return "no"
 
 
@@ -160,8 +174,7 @@ def _pressure_text(diagnosis: "Diagnosis") -> str:
 def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
-    named = [e for e in diagnosis.effects if e.significant and e.named]
-    parts = [f"{e.name} ({_params_text(e)})" for e in named if not not_shrinking(diagnosis, e)]
+    parts = [f"{e.name} ({_params_text(e)})" for e in named_effects(diagnosis)]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
@@ -174,9 +187,9 @@ def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
                  + (f" ({_params_text(kept)})" if kept else ""))
     if not parts and not pairs:
         text = "No candidate shrinks the gap"
-    for e in named:
+    for e in diagnosis.effects:
         if not_shrinking(diagnosis, e):
-            text += f"; {e.name} ({_params_text(e)}) is {not_shrinking(diagnosis, e)}"
+            text += f"; {e.name} is {not_shrinking(diagnosis, e)}"
     return text + "."
 
 
@@ -198,7 +211,10 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
         data_text = (f"{len(skipped)} file(s) skipped (table below); {diagnosis.glitch_frames_masked} tracking-glitch "
                      "frames masked. ")
     # what the data suggest about how they were recorded comes first: it changes how everything after it reads
-    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or [])
+    # (too few runs is said where the verdict stands)
+    warnings_text = "".join(f"Data warning: {w['message']}. " for w in diagnosis.data_warnings or []
+                            if w.get("code") != "too_few_runs")
+    named = named_effects(diagnosis)
     reading = (
         warnings_text + data_text + _drift_text(drift) + _hinge_gap_text(cal) +
         _pressure_text(diagnosis) + _origin_text(cal) +
@@ -207,19 +223,20 @@ def diagnosis_section(diagnosis: "Diagnosis", figures: list[Figure]) -> Section:
         f"energy balance; noise floor {100 * diagnosis.noise_floor:.1f} %). {_verdict_text(diagnosis, pairs)} "
         + (f"With them the gap is {_percent(gap_value(diagnosis.gap_after, diagnosis.noise_floor, percent=True))}: "
            f"{rem['statement']}"
-           if ident or pairs else
-           f"{rem['statement'][0].upper()}{rem['statement'][1:]}")
+           if named or pairs else _capitalised(remaining_statement(diagnosis)))
         + f".{found}"
         + anti_damping_text({f"{k} of {e.name}": v for e in diagnosis.effects if e.significant
                              and e.name in DAMPING_RATES for k, v in e.params.items() if k in DAMPING_RATES[e.name]})
     )
     terms = rem.get("discovered_terms") or {}
     return Section("diagnosis", "Sim-to-real gap", reading, figures, _diagnosis_tables(diagnosis, pairs, drift, terms),
-                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after, "identified": ident,
+                   {"gap_before": diagnosis.gap_before, "gap_after": diagnosis.gap_after,
+                    "identified": [n for n in ident if n in {e.name for e in named}],
                     "noise_floor": diagnosis.noise_floor, "pressure_amplitude_pa": cal["pressure_amplitude_pa"],
                     "pressure_ratio": cal["pressure_ratio"],
                     "y_origin_above_nominal_Z_eq_m": cal["y_origin_above_nominal_Z_eq_m"],
-                    "effects": {e.name: e.params for e in diagnosis.effects if e.significant},
+                    "effects": {e.name: e.params for e in diagnosis.effects
+                                if e.significant and not not_shrinking(diagnosis, e)},
                     "data_warnings": [w["code"] for w in diagnosis.data_warnings or []],
                     "drift_detected": bool(drift.get("detected")),
                     "discovered_terms": {eq: [t["term"] for t in ts] for eq, ts in terms.items()}})
@@ -230,18 +247,42 @@ def _percent(value: float | str) -> str:
     return value if isinstance(value, str) else f"{value:.1f} %"
 
 
-def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
-    """The cause (:func:`_cause_text`), or that no candidate improves held-out runs, and whether any could."""
-    if diagnosis.identified or pairs:
-        return _cause_text(diagnosis, pairs)
-    what = "No candidate effect improves held-out runs significantly."
+def _capitalised(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+def too_few_runs_text(diagnosis: "Diagnosis") -> str:
+    """With too few runs for the held-out test to name any effect: how many, why, and how many to record; else ``""``."""
     settings = diagnosis.settings or {}
-    if settings.get("identification_possible") is False:
-        n_runs = len(diagnosis.gap_per_run["runs"])
-        what += (f" With {n_runs} runs none could: the held-out test's smallest p is "
-                 f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; "
-                 f"at least {settings['runs_needed']} runs are needed.")
-    return what
+    if settings.get("identification_possible") is not False:
+        return ""
+    n_runs = len(diagnosis.gap_per_run["runs"])
+    return (f"With {n_runs} runs no effect can be named: the held-out test's smallest p is "
+            f"{settings['smallest_attainable_p']:.3g}, above alpha = {settings['alpha']:g}; record at least "
+            f"{settings['runs_needed']} runs.")
+
+
+def remaining_statement(diagnosis: "Diagnosis") -> str:
+    """What remains when no effect is named: the diagnosis's statement, without "no candidate effect explains" when
+    the runs are too few for any candidate to be named (nothing was tested that could have explained it)."""
+    statement = diagnosis.remaining_gap["statement"]
+    if too_few_runs_text(diagnosis):
+        statement = statement.replace("a gap remains that no candidate effect explains",
+                                      "a gap remains, which these runs are too few to attribute")
+    return statement
+
+
+def _verdict_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
+    """The cause (:func:`_cause_text`), or that no candidate improves held-out runs, or that none could (too few
+    runs)."""
+    if named_effects(diagnosis) or pairs:
+        return _cause_text(diagnosis, pairs)
+    if too_few_runs_text(diagnosis):
+        return too_few_runs_text(diagnosis)
+    shrinking = [f"{e.name} is {not_shrinking(diagnosis, e)}" for e in diagnosis.effects if not_shrinking(diagnosis, e)]
+    if shrinking:
+        return "No candidate shrinks the gap: " + "; ".join(shrinking) + "."
+    return "No candidate effect improves held-out runs significantly."
 
 
 def _drift_text(drift: dict) -> str:
@@ -277,10 +318,13 @@ def _hinge_gap_text(cal: dict) -> str:
 
 def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, terms: dict) -> list[Table]:
     """The ranked candidates, the discovered library terms, a detected pressure drift and the skipped files."""
-    rows = [[e.name, _verdict(diagnosis, e, pairs),
-             _table_params_text(e), gap_value(e.gap_after, diagnosis.noise_floor), e.shrink, e.p_value,
-             e.p_value_given_others]
-            for e in diagnosis.effects]
+    # the first row: the gap before any effect, the calibrated simulation alone
+    rows = [["none (the calibrated simulation alone)", None, None, gap_value(diagnosis.gap_before, diagnosis.noise_floor),
+             0.0, None, None]]
+    rows += [[e.name, _verdict(diagnosis, e, pairs),
+              _table_params_text(e), gap_value(e.gap_after, diagnosis.noise_floor), shrink_value(e.shrink, e.gap_after),
+              e.p_value, e.p_value_given_others]
+             for e in diagnosis.effects]
     n_runs = len(diagnosis.gap_per_run["runs"])
     smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
     columns = {
@@ -293,7 +337,8 @@ def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, te
                            "reasons of its rejection instead",
         "gap after": "the gap (mean unexplained fraction of the three components beyond the noise floor) with the named "
                      "effects up to this one, or with the named effects plus this one",
-        "shrink": "1 - gap after / gap before",
+        "shrink": "1 - gap after / gap before (the gap of the first row); 'all of it' where the gap after lies below "
+                  "the noise floor",
         "held-out p (sign-flip)": f"one-sided sign-flip test over the {n_runs} runs of the held-out improvement when "
                                   f"the effect was added or last tested; the smallest p {n_runs} runs allow is "
                                   f"{smallest:.3g}",

@@ -74,9 +74,9 @@ def section(context: ReportContext) -> Section:
     diag, theta_max, y_max = context.diagnosis, context.theta_max, context.y_max
     lead = coef_cmp.rows[0]
     main = context.diagnosed  # the diagnosis's model
-    main_lead, main_cal = main.coefficients.rows[0], main.calibration
+    main_lead = main.coefficients.rows[0]
     # what the identified effects add to the static theta*y^2 of the diagnosis's model (the diagnosis is section 6)
-    added = effect_static_coefficients(diag, ref.static.wave.wavenumber, main_cal.equilibrium_height_m,
+    added = effect_static_coefficients(diag, ref.record.wavenumber, main.record.equilibrium_height_m,
                                        theta_max, y_max)
     effects_reading = ""
     fitted_lead = main_lead.integral if main_lead.verdict_from == "integral form" else main_lead.fitted_mean
