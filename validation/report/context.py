@@ -201,10 +201,32 @@ def _diagnosis(path: Path):
                            "`python -m validation report`") from None
 
 
-def _prepared_runs(data_dir: Path, names: Sequence[str]):
-    """The fitted runs of the data set, prepared as the fit prepares them (smoothing and classification at the fit's
-    defaults), in model.json's order."""
+def _recorded_stage(settings: dict, key: str, config_type):
+    """The shared fit stage ``key`` (``smoothing``, ``classify``) as model.json's settings record it, at the stage's
+    defaults where the file leaves it out."""
+    from dataclasses import fields
+
+    recorded = settings.get(key) if isinstance(settings.get(key), dict) else {}
+    known = {f.name for f in fields(config_type)}
+    return config_type(**{k: tuple(v) if isinstance(v, list) else v for k, v in recorded.items() if k in known})
+
+
+def _fit_stages(model_json: dict):
+    """The fit's smoothing and classifier settings from its model.json (:func:`fitting.recorded_settings`, either
+    layout), so that a report made again prepares the runs as the fit did."""
+    from cubedimer.attractors import ClassifyConfig
+    from fitting import recorded_settings
     from fitting.config import FitConfig
+    from fitting.derivatives.savitzky_golay import SmoothingConfig
+
+    settings = recorded_settings(model_json)
+    return FitConfig(smoothing=_recorded_stage(settings, "smoothing", SmoothingConfig),
+                     classify=_recorded_stage(settings, "classify", ClassifyConfig))
+
+
+def _prepared_runs(data_dir: Path, names: Sequence[str], config):
+    """The fitted runs of the data set, prepared as the fit prepared them (``config``: its smoothing and
+    classification, :func:`_fit_stages`), in model.json's order."""
     from fitting.fit import prepare_runs
 
     from ..diagnosis import load_for_diagnosis
@@ -215,7 +237,7 @@ def _prepared_runs(data_dir: Path, names: Sequence[str]):
     if lost:
         raise DatasetError(f"{data_dir}: the fitted run(s) {', '.join(lost)} are missing; give the data set the report "
                            "was made from (--data)")
-    return prepare_runs([by_name[n] for n in names], FitConfig())[0]
+    return prepare_runs([by_name[n] for n in names], config)[0]
 
 
 def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atlas: str | Path | None = None,
@@ -228,7 +250,8 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     data_dir : the data set (default: the one diagnosis.json records)
     atlas : folder of an attractor atlas, shown as the last section
     prepared, classify : the fit's prepared runs and classifier settings, when the caller has them (the report's
-        pipeline); otherwise the data set's runs are prepared again at the fit's defaults
+        pipeline); otherwise the data set's runs are prepared again with the smoothing and classifier settings
+        model.json records
     described : the fitting method's account of its model, when the caller has it (:func:`fit_description`)
 
     Raises
@@ -256,8 +279,11 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     record = diag.model_comparison
     data = Path(data_dir) if data_dir is not None else Path(diag.data_set["path"])
     if prepared is None:
+        stages = _fit_stages(model_json)
         prepared = _prepared_runs(data, [r["file"] for r in model_json.get("per_run", [])]
-                                  if all("file" in r for r in model_json.get("per_run", [])) else diag.data_set["runs"])
+                                  if all("file" in r for r in model_json.get("per_run", [])) else diag.data_set["runs"],
+                                  stages)
+        classify = stages.classify if classify is None else classify
     simulations = []
     for doc in record["simulations"]:
         rec = SimulationRecord.from_dict(doc)
