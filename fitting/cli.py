@@ -65,9 +65,14 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     prepare_output_dir(a.out, "--out", create=False)
     model_file = read_model_json(a.model)
     data, ref = model_file.document, model_file.model
-    from .config import FitConfig
-    ds = load_dataset(a.data_dir, strict=a.strict, config=FitConfig().load)  # generic systems too
-    prepared, scales = prepare_runs(ds.runs)
+    from .output.model_file import recorded_stages
+    try:  # the runs loaded and prepared as the fit loaded and prepared them (generic systems too)
+        stages = recorded_stages(data)
+    except ValueError as exc:
+        raise UserInputError(f"{a.model}: its recorded settings are not valid ({exc}); write it again with "
+                             "`python -m fitting fit`") from None
+    ds = load_dataset(a.data_dir, strict=a.strict, config=stages.load)
+    prepared, scales = prepare_runs(ds.runs, stages)
     system = ds.system
     if "scales" in data:
         s = data["scales"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, is_dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from ..config import FitConfig
 
 __all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json",
-           "recorded_settings", "settings_record", "SHARED_SETTINGS"]
+           "recorded_settings", "recorded_stages", "settings_record", "SHARED_SETTINGS"]
 
 
 #: model.json's keys in the order they are written; a method's own keys (``FitResult.extras.record``) take their
@@ -72,6 +72,45 @@ def recorded_settings(doc: dict) -> dict:
     shared = {k: settings[k] for k in SHARED_SETTINGS if k in settings}
     former = {k: settings[_FORMER_KEYS.get((name, k), k)] for k in keys if _FORMER_KEYS.get((name, k), k) in settings}
     return {**shared, "method": name, name: former}
+
+
+def _config_from_record(default, record):
+    """``default`` (a frozen config) with the fields ``record`` (its JSON record) gives, nested configs included; a
+    nested config recorded as null is switched off; keys the config does not have, and callables, stay as they are."""
+    if not isinstance(record, dict):
+        return default
+    changes = {}
+    for f in fields(default):
+        if f.name not in record:
+            continue
+        value, current = record[f.name], getattr(default, f.name)
+        if is_dataclass(current):
+            changes[f.name] = None if value is None else _config_from_record(current, value)
+        elif current is None and isinstance(value, dict) or callable(current):
+            continue
+        else:
+            changes[f.name] = tuple(value) if isinstance(value, list) else value
+    return replace(default, **changes)
+
+
+def recorded_stages(doc: dict) -> FitConfig:
+    """The fit's shared stages (loading, smoothing, classification) as its model.json records them (either layout,
+    :func:`recorded_settings`), at their defaults where the file leaves them out, and the method's default settings:
+    what a later step needs to load and prepare the runs exactly as the fit did (``fitting compare``, a report made
+    again from its files).
+
+    Raises
+    ------
+    ValueError
+        A recorded value its config refuses (one line, from the config's checks).
+    """
+    from ..config import FitConfig
+
+    settings = recorded_settings(doc)
+    name = settings["method"]
+    base = FitConfig.for_method(name) if name in METHODS else FitConfig()
+    return replace(base, **{stage: _config_from_record(getattr(base, stage), settings.get(stage))
+                            for stage in SHARED_SETTINGS})
 
 
 def model_json(res: FitResult) -> dict:

@@ -201,32 +201,9 @@ def _diagnosis(path: Path):
                            "`python -m validation report`") from None
 
 
-def _recorded_stage(settings: dict, key: str, config_type):
-    """The shared fit stage ``key`` (``smoothing``, ``classify``) as model.json's settings record it, at the stage's
-    defaults where the file leaves it out."""
-    from dataclasses import fields
-
-    recorded = settings.get(key) if isinstance(settings.get(key), dict) else {}
-    known = {f.name for f in fields(config_type)}
-    return config_type(**{k: tuple(v) if isinstance(v, list) else v for k, v in recorded.items() if k in known})
-
-
-def _fit_stages(model_json: dict):
-    """The fit's smoothing and classifier settings from its model.json (:func:`fitting.recorded_settings`, either
-    layout), so that a report made again prepares the runs as the fit did."""
-    from cubedimer.attractors import ClassifyConfig
-    from fitting import recorded_settings
-    from fitting.config import FitConfig
-    from fitting.derivatives.savitzky_golay import SmoothingConfig
-
-    settings = recorded_settings(model_json)
-    return FitConfig(smoothing=_recorded_stage(settings, "smoothing", SmoothingConfig),
-                     classify=_recorded_stage(settings, "classify", ClassifyConfig))
-
-
 def _prepared_runs(data_dir: Path, names: Sequence[str], config):
     """The fitted runs of the data set, prepared as the fit prepared them (``config``: its smoothing and
-    classification, :func:`_fit_stages`), in model.json's order."""
+    classification, :func:`fitting.output.model_file.recorded_stages`), in model.json's order."""
     from fitting.fit import prepare_runs
 
     from ..diagnosis import load_for_diagnosis
@@ -279,7 +256,9 @@ def load_context(out_dir: str | Path, *, data_dir: str | Path | None = None, atl
     record = diag.model_comparison
     data = Path(data_dir) if data_dir is not None else Path(diag.data_set["path"])
     if prepared is None:
-        stages = _fit_stages(model_json)
+        from fitting.output.model_file import recorded_stages
+
+        stages = recorded_stages(model_json)
         prepared = _prepared_runs(data, [r["file"] for r in model_json.get("per_run", [])]
                                   if all("file" in r for r in model_json.get("per_run", [])) else diag.data_set["runs"],
                                   stages)

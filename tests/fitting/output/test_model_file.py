@@ -70,3 +70,30 @@ def test_settings_reader_takes_a_partial_or_missing_record():
     assert recorded_settings({"settings": {"discovery": {"keep_damping": False}}}) == {
         "method": "discovery", "discovery": {"selection": {"keep_damping": False}}}
     assert recorded_settings({"method": "paper"}) == {"method": "paper", "paper": {}}
+
+
+@pytest.mark.parametrize("layout", ["flat", "today"])
+def test_the_recorded_stages_are_the_fit_s_loading_smoothing_and_classification(layout):
+    """A later step (``fitting compare``, a report made again from its files) prepares the runs as the fit did:
+    every field of the shared stages a model.json records comes back, nested configs and tuples included, from
+    either layout; a stage switched off (the glitch mask) stays off."""
+    from dataclasses import replace
+
+    from cubedimer.glitches import GlitchConfig
+    from fitting.output.model_file import recorded_stages
+
+    base = FitConfig()
+    config = replace(base, load=replace(base.load, max_gap=25, min_periods=3.0, glitches=None),
+                     smoothing=replace(base.smoothing, window_periods=0.5),
+                     classify=replace(base.classify, coherence_min=0.9))
+    record = settings_record(config)
+    if layout == "flat":  # the shared stages sat at the same place before the per-method layout
+        record = {**{k: record[k] for k in ("load", "smoothing", "classify")}, "method": "discovery",
+                  "discovery": record["discovery"]["selection"]}
+    stages = recorded_stages({"settings": record})
+    assert (stages.load, stages.smoothing, stages.classify) == (config.load, config.smoothing, config.classify)
+    assert stages.method_name == "discovery"
+    # a file without settings, or with a nested stage on, gives the defaults
+    assert recorded_stages({}).load == base.load
+    on = recorded_stages({"settings": {"load": {"glitches": {"threshold": 9.0}}}}).load.glitches
+    assert on == replace(GlitchConfig(), threshold=9.0)
