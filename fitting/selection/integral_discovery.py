@@ -57,7 +57,7 @@ from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
-from .front import Front, HeldOutRun, capped_support, long_time_front
+from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front
 from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
                              select_heldout, select_support)
 
@@ -481,8 +481,9 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     t_start = time.perf_counter()
     setup = _setup(runs, derivs, config)
     result, windows, history, converged = _iterate(setup, config)
-    held_out = [HeldOutRun(dt, y[d.trim:], th[d.trim:], np.asarray(d.state[d.trim], float))
-                for dt, y, th, d in zip(setup.dts, setup.ys, setup.ths, derivs)]
+    held_out = [HeldOutRun(dt, y[d.trim:], th[d.trim:], np.asarray(d.state[d.trim], float),
+                           np.asarray(d.state[d.trim:], float), _horizon_frames(f, dt))
+                for dt, y, th, d, f in zip(setup.dts, setup.ys, setup.ths, derivs, setup.slow_freqs)]
     front = long_time_front(result.designs, result.fronts, held_out, config.n_folds)
     if config.max_terms is not None:
         result = _capped(result, config.max_terms)
@@ -503,6 +504,11 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined, front=front,
                            max_terms=config.max_terms)
+
+
+def _horizon_frames(slow_freq: float, dt: float) -> int:
+    """Frames of the front's horizon along a run (``ALONG_HORIZON_PERIODS`` slow periods; 0 without a frequency)."""
+    return int(round(ALONG_HORIZON_PERIODS / (slow_freq * dt))) if np.isfinite(slow_freq) and slow_freq > 0 else 0
 
 
 def _capped(result: _Pass, cap: int) -> _Pass:
