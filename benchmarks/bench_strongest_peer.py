@@ -20,9 +20,20 @@ accelerations over 0.25 periods of the faster coordinate, as in ``bench_model_er
 * the weak form (``WeakPDELibrary``, cubic with a constant, on the first-order state) with K test functions per
   run in ``WEAK_K`` and half-width H in ``WEAK_H_PERIODS`` slow periods, STLSQ over ``WEAK_THRESHOLDS``.
 
-MIOSR is left out (its solver, gurobipy, is not installed).  Ours: ``discover_model(DiscoveryConfig())``.
+MIOSR is left out (its solver, gurobipy, is not installed).  Ours: ``discover_model(DiscoveryConfig())``, and the
+same capped at the Taylor support's size per equation (``DiscoveryConfig(max_terms=...)``, the front's point there).
+Per case the rows are ours (both), pysindy's strongest, its best at most the Taylor size, and the cross-validated best
+of each family (``FAMILIES``); above the rows, the issue's first target per case: ours at most the Taylor size
+against the best of pysindy's reported configurations at any size, from the first state.
 
-Run ``python -m benchmarks.bench_strongest_peer [--truths ...] [--levels 0.05] [--seeds 7] [--runs 8]``.
+The grid (``GRID_LEVELS`` x ``GRID_RUNS`` x ``GRID_SEEDS``, both truths) is the default and costs hours on one core:
+every case's results are written, atomically, to a cache folder (``--cache-dir``; default the suite's user cache,
+``bench/strongest_peer``), so an interrupted run resumes where it stopped and the table is rebuilt from the cache in
+seconds.  pysindy's results are kept per case; ours are recomputed when ``OURS_VERSION`` changes.  An unreadable
+entry is recomputed.
+
+Run ``python -m benchmarks.bench_strongest_peer [--truths ...] [--levels 0.01 0.05 0.12] [--seeds 201] [--runs 4 8
+16] [--cache-dir DIR | --no-cache]``.
 """
 from __future__ import annotations
 
