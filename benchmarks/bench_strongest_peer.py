@@ -273,30 +273,36 @@ def table(rows: list[dict]) -> list[str]:
 
 
 def targets(rows: list[dict]) -> list[str]:
-    """The issue's first target per case: ours at most the Taylor size against pysindy's strongest at any size
-    (from the first state), the ratio, and the summary (share of cases met, worst ratio)."""
+    """The issue's first target per case: ours at most the Taylor size against pysindy's strongest (chosen by its
+    cross-validation) and against the best of pysindy's reported configurations at any size on the held-out runs
+    (the stricter reading), from the first state; the ratios and the summary (share of cases met, worst ratio)."""
     cases: dict[tuple, dict[str, dict]] = {}
     for r in rows:
         cases.setdefault((r["truth"], r["level"], r["seed"], r["fit_runs"]), {})[r["method"]] = r
-    out = ["| truth | level | seed | runs | ours <= Taylor size: terms | long-time | along | pysindy's best at any "
-           "size: terms | long-time | along | ratio |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    out = ["| truth | level | seed | runs | ours <= Taylor size: terms | long-time | along | pysindy strongest: terms "
+           "| long-time | along | ratio | pysindy's best reported: terms | long-time | ratio |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     ratios = []
     for (name, level, seed, n), m in cases.items():
-        ours = m["ours <= Taylor size"]
-        # the best of pysindy's reported configurations at any size, on the held-out runs
+        ours, cv = m["ours <= Taylor size"], m["pysindy strongest (LOO CV)"]
         best = min((r for k, r in m.items() if k.startswith("pysindy")), key=lambda r: r["long_time"])
-        ratio = ours["long_time"] / best["long_time"]
-        ratios.append(ratio)
-        out.append(f"| {name} | {100 * level:g} % | {seed} | {n} | {ours['terms_per_eq'][0]} / "
-                   f"{ours['terms_per_eq'][1]} | {100 * ours['long_time']:.2f} % | {100 * ours['long_time_along']:.2f} "
-                   f"% | {best['terms_per_eq'][0]} / {best['terms_per_eq'][1]} | {100 * best['long_time']:.2f} % | "
-                   f"{100 * best['long_time_along']:.2f} % | {ratio:.2f} |")
+        ratios.append((ours["long_time"] / cv["long_time"], ours["long_time"] / best["long_time"]))
+        out.append(f"| {name} | {100 * level:g} % | {seed} | {n} | {_terms(ours)} | {100 * ours['long_time']:.2f} % "
+                   f"| {100 * ours['long_time_along']:.2f} % | {_terms(cv)} | {100 * cv['long_time']:.2f} % | "
+                   f"{100 * cv['long_time_along']:.2f} % | {ratios[-1][0]:.2f} | {_terms(best)} | "
+                   f"{100 * best['long_time']:.2f} % | {ratios[-1][1]:.2f} |")
     if ratios:
         r = np.array(ratios)
-        out += ["", f"Ours at most the Taylor size at most pysindy's best at any size on {int((r <= 1).sum())} of "
-                    f"{r.size} cases ({100 * np.mean(r <= 1):.0f} %; target 80 %); ratio median {np.median(r):.2f}, "
-                    f"worst {r.max():.2f} (target 1.25)."]
+        for k, what in enumerate(("pysindy's strongest (chosen by its cross-validation)",
+                                  "the best of pysindy's reported configurations on the held-out runs")):
+            out += ["", f"Ours at most the Taylor size at most {what} on {int((r[:, k] <= 1).sum())} of "
+                        f"{len(r)} cases ({100 * np.mean(r[:, k] <= 1):.0f} %; target 80 %); ratio median "
+                        f"{np.median(r[:, k]):.2f}, worst {r[:, k].max():.2f} (target 1.25)."]
     return out
+
+
+def _terms(row: dict) -> str:
+    return f"{row['terms_per_eq'][0]} / {row['terms_per_eq'][1]}"
 
 
 def main(argv: list[str] | None = None) -> str:
@@ -312,7 +318,8 @@ def main(argv: list[str] | None = None) -> str:
     if min(args.runs) < 2:
         p.error(f"--runs must be at least 2 (leave-one-run-out needs runs to hold out), got {min(args.runs)}")
     cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
-    rows = [r for seed in args.seeds for name in args.truths for level in args.levels for n in args.runs
+    # the cheaper run counts first: an interrupted grid has every truth and level at them
+    rows = [r for seed in args.seeds for n in sorted(args.runs) for level in args.levels for name in args.truths
             for r in run_case(name, level, seed, n, cache)]
     cmd = (f"`python -m benchmarks.bench_strongest_peer --truths {' '.join(args.truths)} --levels "
            f"{' '.join(f'{v:g}' for v in args.levels)} --seeds {' '.join(map(str, args.seeds))} --runs "
