@@ -118,6 +118,9 @@ class OutputErrorConfig:
         Terms are added only while the misfit exceeds this many times the tracking noise (the discovery's
         ``model_error_factor``): below it the trajectories follow the runs to the noise, and an added term fits
         the noise's correlations between segments and the collinear leftovers of the others.
+    max_terms : int or None
+        Terms are added only to an equation with fewer terms than this (the discovery's ``max_terms``, ``fit
+        --max-terms``): a cap on the model's size holds after the refinement too.  None: no cap.
     """
 
     periods: float = 5.0
@@ -131,6 +134,7 @@ class OutputErrorConfig:
     support_rejections: int = 2
     additions: bool = True
     addition_misfit: float = 1.05
+    max_terms: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("periods", "rtol", "h_omega", "outlier_factor", "addition_misfit"):
@@ -141,6 +145,8 @@ class OutputErrorConfig:
         if self.support_tolerance is not None:
             check_non_negative(self, "support_tolerance")
         check_non_negative(self, "misfit_tolerance")
+        if self.max_terms is not None:
+            check_whole(self, "max_terms")
 
 
 @dataclass(frozen=True, eq=False)
@@ -399,6 +405,8 @@ def _add(coef: NDArray, x0: NDArray, misfit: float, segs: Segments, sigma: NDArr
                    misfit ** 2 * (1.0 - (1.0 + config.misfit_tolerance) ** -2))
         gain, delta = _addition_gains(coef, x0, segs, sigma, library, config)
         gain[tried] = -np.inf
+        if config.max_terms is not None:
+            gain[(coef != 0).sum(axis=1) >= config.max_terms] = -np.inf  # the cap holds
         q, j = np.unravel_index(np.argmax(gain), gain.shape)
         if not gain[q, j] > need:
             break
