@@ -37,7 +37,7 @@ Method
    the model's trajectories follow the runs over segments of several periods, what a long-time prediction needs;
    the terms a trajectory does not need are pruned and those it needs added (:mod:`fitting.refinement.output_error`).
    The segments start from the last pass's model-based states, not from the smoothed ones: on a double pendulum at
-   12 % truncation (4 runs) this lowers the held-out long-time error from the first state from 6.7 to 4.2 %.
+   12 % truncation (4 runs) this lowers the held-out long-time error from the first state from 6.7 to 4.3 %.
 
 Everything after the column evaluation works on the R factor of each run's design ``[X b]`` (35 + 1 columns),
 so a least squares on any support, a whole elimination path and the cross-validation cost microseconds each.
