@@ -314,7 +314,7 @@ def main(argv: list[str] | None = None) -> str:
     p.add_argument("--cache-dir", type=Path, default=None,
                    help="per-case results (default: the suite's user cache, bench/strongest_peer)")
     p.add_argument("--no-cache", action="store_true", help="compute every case afresh and write nothing")
-    args = p.parse_args(argv)
+    args = p.parse_args(argv if argv is not None else [])  # run by benchmarks.__main__: its own argv is not ours
     if min(args.runs) < 2:
         p.error(f"--runs must be at least 2 (leave-one-run-out needs runs to hold out), got {min(args.runs)}")
     cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
@@ -329,4 +329,4 @@ def main(argv: list[str] | None = None) -> str:
 
 
 if __name__ == "__main__":
-    print(main())
+    print(main(sys.argv[1:]))
