@@ -20,16 +20,29 @@ accelerations over 0.25 periods of the faster coordinate, as in ``bench_model_er
 * the weak form (``WeakPDELibrary``, cubic with a constant, on the first-order state) with K test functions per
   run in ``WEAK_K`` and half-width H in ``WEAK_H_PERIODS`` slow periods, STLSQ over ``WEAK_THRESHOLDS``.
 
-MIOSR is left out (its solver, gurobipy, is not installed).  Ours: ``discover_model(DiscoveryConfig())``.
+MIOSR is left out (its solver, gurobipy, is not installed).  Ours: ``discover_model(DiscoveryConfig())``, and the
+same capped at the Taylor support's size per equation (``DiscoveryConfig(max_terms=...)``, the front's point there).
+Per case the rows are ours (both), pysindy's strongest, its best at most the Taylor size, and the cross-validated best
+of each family (``FAMILIES``); above the rows, the issue's first target per case: ours at most the Taylor size
+against the best of pysindy's reported configurations at any size, from the first state.
 
-Run ``python -m benchmarks.bench_strongest_peer [--truths ...] [--levels 0.05] [--seeds 7] [--runs 8]``.
+The grid (``GRID_LEVELS`` x ``GRID_RUNS`` x ``GRID_SEEDS``, both truths) is the default and costs hours on one core:
+every case's results are written, atomically, to a cache folder (``--cache-dir``; default the suite's user cache,
+``bench/strongest_peer``), so an interrupted run resumes where it stopped and the table is rebuilt from the cache in
+seconds.  pysindy's results are kept per case; ours are recomputed when ``OURS_VERSION`` changes.  An unreadable
+entry is recomputed.
+
+Run ``python -m benchmarks.bench_strongest_peer [--truths ...] [--levels 0.01 0.05 0.12] [--seeds 201] [--runs 4 8
+16] [--cache-dir DIR | --no-cache]``.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 import warnings
+from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
@@ -44,6 +57,10 @@ WEAK_K = (100, 300)
 WEAK_H_PERIODS = (0.25, 0.75)
 WEAK_THRESHOLDS = (1e-3, 1e-2)
 ENSEMBLE_MODELS = 20
+#: the grid of ``make bench``: truncation levels, run counts, fresh seeds
+GRID_LEVELS = (0.01, 0.05, 0.12)
+GRID_RUNS = (4, 8, 16)
+GRID_SEEDS = (201,)
 
 
 def _sindy_coef(optimizer, derivs, scales) -> NDArray:
@@ -131,47 +148,115 @@ def loo_error(fit: Callable, derivs: Sequence, f_y: Sequence[float], f_slow: flo
     return float(np.mean(errs))
 
 
-def run_case(name: str, level: float, seed: int, fit_runs: int) -> list[dict]:
+#: bump when ours changes: cached rows of ours from another version are recomputed (the peers' stay)
+OURS_VERSION = 3
+#: the peer families whose cross-validated best is reported per case, by the prefix of their configurations' names
+FAMILIES = ("STLSQ", "SR3-L0", "SR3-L1", "E-STLSQ", "weak")
+
+
+def default_cache_dir() -> Path:
+    """Per-case results: ``<suite cache>/bench/strongest_peer`` (:func:`cubedimer.compile_cache.suite_cache_root`)."""
+    from cubedimer.compile_cache import suite_cache_root
+
+    return suite_cache_root() / "bench" / "strongest_peer"
+
+
+def _cached(path: Path | None, compute: Callable[[], dict]) -> dict:
+    """``compute()``'s result, read from ``path`` when a readable entry is there, else computed and written there
+    atomically; an unreadable entry is recomputed, never fatal."""
+    from cubedimer.atomic import write_json
+
+    if path is not None and path.exists():
+        try:
+            return json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            print(f"[strongest-peer] cache entry {path} unreadable ({exc}); recomputed", file=sys.stderr)
+    out = compute()
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_json(path, out)
+    return out
+
+
+def _case_key(name: str, level: float, seed: int, fit_runs: int) -> str:
+    return f"{name}_{level:g}_{seed}_{fit_runs}"
+
+
+def peer_case(data, name: str, fit_runs: int) -> dict:
+    """Every configuration's leave-one-run-out error on the fitted runs and, for those that integrated, its
+    coefficients refitted on all fitted runs: ``{"cv": {cfg: err}, "coef": {cfg: (2, 35) list}, "wall": s}``."""
     from cubedimer.spectra import dominant_frequency
-    from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
     from fitting.selection.sparse_regression import dataset_scales
 
     truth = bme.TRUTHS[name]
-    taylor = bme.compiled(name)[1]
-    data = bme.make_data(name, level, seed, fit_runs)
     derivs = data.sindy_derivs
     f_y = [dominant_frequency(r.y, r.dt) for r in data.runs]
     scales = dataset_scales(derivs, f_y)
     t0 = time.perf_counter()
     cv = {cfg: loo_error(fit, derivs, f_y, truth.f_slow) for cfg, fit in peer_configurations(truth.f_slow).items()}
     best_stlsq = min((c for c in cv if c.startswith("STLSQ")), key=cv.get)
-    thr = float(best_stlsq.split()[1])
-    ens = peer_configurations(truth.f_slow, thr)
+    ens = peer_configurations(truth.f_slow, float(best_stlsq.split()[1]))
     cv.update({cfg: loo_error(fit, derivs, f_y, truth.f_slow) for cfg, fit in ens.items()})
     fits = {**peer_configurations(truth.f_slow), **ens}
-    coefs = {cfg: fits[cfg](derivs, scales) for cfg in cv if np.isfinite(cv[cfg])}  # every one that integrated
+    coefs = {cfg: fits[cfg](derivs, scales).tolist() for cfg in cv if np.isfinite(cv[cfg])}  # every one integrated
+    return {"cv": {k: (v if np.isfinite(v) else None) for k, v in cv.items()}, "coef": coefs,
+            "wall": time.perf_counter() - t0}
+
+
+def ours_case(data, cap: int) -> dict:
+    """Ours with ``DiscoveryConfig()`` and capped at ``cap`` terms per equation (``max_terms``): coefficients,
+    selection modes and wall times."""
+    from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
+
+    out = {}
+    for label, cfg in (("ours", DiscoveryConfig()), ("ours <= Taylor size", DiscoveryConfig(max_terms=cap))):
+        t0 = time.perf_counter()
+        res = discover_model(data.runs, data.derivs, cfg)
+        out[label] = {"coef": res.coef.tolist(), "note": "; ".join(res.selection_modes),
+                      "wall": time.perf_counter() - t0}
+    return out
+
+
+def _row(name: str, level: float, seed: int, fit_runs: int, data, method: str, coef: NDArray, note: str,
+         wall: float) -> dict:
+    truth = bme.TRUTHS[name]
+    taylor = bme.compiled(name)[1]
+    return {"truth": name, "level": level, "seed": seed, "fit_runs": fit_runs, "residual": data.residual,
+            "method": method, "taylor_terms": int((taylor != 0).sum()),
+            "taylor_per_eq": tuple(int(v) for v in (taylor != 0).sum(axis=1)), **bme.score(coef, taylor),
+            "long_time": float(np.median(bme.long_time_errors(coef, data, truth.f_slow))),
+            "long_time_along": float(np.median(bme.long_time_errors(coef, data, truth.f_slow, along=True))),
+            "terms_per_eq": tuple(int(v) for v in (coef != 0).sum(axis=1)), "wall": wall, "note": note}
+
+
+def run_case(name: str, level: float, seed: int, fit_runs: int, cache: Path | None = None) -> list[dict]:
+    """The rows of one case: ours (default and capped at the Taylor size), pysindy's strongest, its best at most
+    the Taylor size, and each family's cross-validated best; per-case results read from / written to ``cache``."""
+    taylor = bme.compiled(name)[1]
     cap = int((taylor != 0).sum(axis=1).max())
+    data = bme.make_data(name, level, seed, fit_runs)
+    key = _case_key(name, level, seed, fit_runs)
+    peer = _cached(cache / f"{key}_peer.json" if cache else None, lambda: peer_case(data, name, fit_runs))
+    ours = _cached(cache / f"{key}_ours_v{OURS_VERSION}.json" if cache else None, lambda: ours_case(data, cap))
+    cv = {k: (np.inf if v is None else v) for k, v in peer["cv"].items()}
+    coefs = {k: np.array(v) for k, v in peer["coef"].items()}
+    picks = [("pysindy strongest (LOO CV)", min(coefs, key=cv.get))]
     small = [c for c in coefs if ((coefs[c] != 0).sum(axis=1) <= cap).all()]
-    peer_wall = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    ours = discover_model(data.runs, data.derivs, DiscoveryConfig())
-    rows = []
-    for method, coef, note, wall in (
-            ("ours", ours.coef, "; ".join(ours.selection_modes), time.perf_counter() - t0),
-            ("pysindy strongest (LOO CV)", coefs[min(coefs, key=cv.get)], min(coefs, key=cv.get), peer_wall),
-            *((("pysindy best <= Taylor size", coefs[min(small, key=cv.get)], min(small, key=cv.get), peer_wall),)
-              if small else ())):
-        row = {"truth": name, "level": level, "seed": seed, "fit_runs": fit_runs, "residual": data.residual,
-               "method": method, "taylor_terms": int((taylor != 0).sum()), **bme.score(coef, taylor),
-               "long_time": float(np.median(bme.long_time_errors(coef, data, truth.f_slow))),
-               "long_time_along": float(np.median(bme.long_time_errors(coef, data, truth.f_slow, along=True))),
-               "terms_per_eq": tuple(int(v) for v in (coef != 0).sum(axis=1)), "wall": wall,
-               "note": note + (f"; LOO error {100 * cv[note]:.2f} %" if note in cv else "")}
-        print(f"[strongest-peer] {name} {level:g} seed {seed} runs {fit_runs} {method}: {row['terms_per_eq']} terms, "
-              f"{row['outside']} outside, {row['missed']} missed, coef err {100 * row['median_error']:.1f} %, "
-              f"long-time {100 * row['long_time']:.2f} %, along {100 * row['long_time_along']:.2f} %; {row['note']}",
+    if small:
+        picks.append(("pysindy best <= Taylor size", min(small, key=cv.get)))
+    for fam in FAMILIES:
+        members = [c for c in coefs if c.split()[0] == fam]
+        if members:
+            picks.append((f"pysindy {fam} (LOO CV)", min(members, key=cv.get)))
+    rows = [_row(name, level, seed, fit_runs, data, m, np.array(o["coef"]), o["note"], o["wall"])
+            for m, o in ours.items()]
+    rows += [_row(name, level, seed, fit_runs, data, m, coefs[c], f"{c}; LOO error {100 * cv[c]:.2f} %",
+                  peer["wall"]) for m, c in picks]
+    for row in rows:
+        print(f"[strongest-peer] {key} {row['method']}: {row['terms_per_eq']} terms, {row['outside']} outside, "
+              f"{row['missed']} missed, coef err {100 * row['median_error']:.1f} %, long-time "
+              f"{100 * row['long_time']:.2f} %, along {100 * row['long_time_along']:.2f} %; {row['note']}",
               file=sys.stderr, flush=True)
-        rows.append(row)
     return rows
 
 
@@ -187,19 +272,61 @@ def table(rows: list[dict]) -> list[str]:
     return out
 
 
+def targets(rows: list[dict]) -> list[str]:
+    """The issue's first target per case: ours at most the Taylor size against pysindy's strongest (chosen by its
+    cross-validation) and against the best of pysindy's reported configurations at any size on the held-out runs
+    (the stricter reading), from the first state; the ratios and the summary (share of cases met, worst ratio)."""
+    cases: dict[tuple, dict[str, dict]] = {}
+    for r in rows:
+        cases.setdefault((r["truth"], r["level"], r["seed"], r["fit_runs"]), {})[r["method"]] = r
+    out = ["| truth | level | seed | runs | ours <= Taylor size: terms | long-time | along | pysindy strongest: terms "
+           "| long-time | along | ratio | pysindy's best reported: terms | long-time | ratio |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    ratios = []
+    for (name, level, seed, n), m in cases.items():
+        ours, cv = m["ours <= Taylor size"], m["pysindy strongest (LOO CV)"]
+        best = min((r for k, r in m.items() if k.startswith("pysindy")), key=lambda r: r["long_time"])
+        ratios.append((ours["long_time"] / cv["long_time"], ours["long_time"] / best["long_time"]))
+        out.append(f"| {name} | {100 * level:g} % | {seed} | {n} | {_terms(ours)} | {100 * ours['long_time']:.2f} % "
+                   f"| {100 * ours['long_time_along']:.2f} % | {_terms(cv)} | {100 * cv['long_time']:.2f} % | "
+                   f"{100 * cv['long_time_along']:.2f} % | {ratios[-1][0]:.2f} | {_terms(best)} | "
+                   f"{100 * best['long_time']:.2f} % | {ratios[-1][1]:.2f} |")
+    if ratios:
+        r = np.array(ratios)
+        for k, what in enumerate(("pysindy's strongest (chosen by its cross-validation)",
+                                  "the best of pysindy's reported configurations on the held-out runs")):
+            out += ["", f"Ours at most the Taylor size at most {what} on {int((r[:, k] <= 1).sum())} of "
+                        f"{len(r)} cases ({100 * np.mean(r[:, k] <= 1):.0f} %; target 80 %); ratio median "
+                        f"{np.median(r[:, k]):.2f}, worst {r[:, k].max():.2f} (target 1.25)."]
+    return out
+
+
+def _terms(row: dict) -> str:
+    return f"{row['terms_per_eq'][0]} / {row['terms_per_eq'][1]}"
+
+
 def main(argv: list[str] | None = None) -> str:
     p = argparse.ArgumentParser(prog="python -m benchmarks.bench_strongest_peer", description=__doc__)
     p.add_argument("--truths", nargs="+", default=list(bme.TRUTHS), choices=list(bme.TRUTHS))
-    p.add_argument("--levels", nargs="+", type=float, default=[0.05])
-    p.add_argument("--seeds", nargs="+", type=int, default=[7])
-    p.add_argument("--runs", nargs="+", type=int, default=[8])
-    args = p.parse_args(argv)
-    rows = [r for name in args.truths for level in args.levels for seed in args.seeds for n in args.runs
-            for r in run_case(name, level, seed, n)]
-    text = "\n".join(["## The discovery against pysindy's strongest configuration (leave-one-run-out CV)", "",
-                      *table(rows), ""])
-    return text
+    p.add_argument("--levels", nargs="+", type=float, default=list(GRID_LEVELS))
+    p.add_argument("--seeds", nargs="+", type=int, default=list(GRID_SEEDS))
+    p.add_argument("--runs", nargs="+", type=int, default=list(GRID_RUNS))
+    p.add_argument("--cache-dir", type=Path, default=None,
+                   help="per-case results (default: the suite's user cache, bench/strongest_peer)")
+    p.add_argument("--no-cache", action="store_true", help="compute every case afresh and write nothing")
+    args = p.parse_args(argv if argv is not None else [])  # run by benchmarks.__main__: its own argv is not ours
+    if min(args.runs) < 2:
+        p.error(f"--runs must be at least 2 (leave-one-run-out needs runs to hold out), got {min(args.runs)}")
+    cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
+    # the cheaper run counts first: an interrupted grid has every truth and level at them
+    rows = [r for seed in args.seeds for n in sorted(args.runs) for level in args.levels for name in args.truths
+            for r in run_case(name, level, seed, n, cache)]
+    cmd = (f"`python -m benchmarks.bench_strongest_peer --truths {' '.join(args.truths)} --levels "
+           f"{' '.join(f'{v:g}' for v in args.levels)} --seeds {' '.join(map(str, args.seeds))} --runs "
+           f"{' '.join(map(str, args.runs))}`")
+    return "\n".join(["## The discovery against pysindy's strongest configuration (leave-one-run-out CV)", "", cmd, "",
+                      *targets(rows), "", *table(rows), ""])
 
 
 if __name__ == "__main__":
-    print(main())
+    print(main(sys.argv[1:]))

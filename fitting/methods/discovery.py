@@ -201,6 +201,8 @@ def discovery_description(record: dict) -> MethodDescription:
 def front_text(front: dict | None) -> str:
     """The sentence on the front (model.json's ``discovery["front"]``): the selected model's held-out long-time error
     and the knee's; empty without a front."""
+    from ..selection.front import ALONG_HORIZON_PERIODS
+
     if not front:
         return ""
     points = front["points"]
@@ -210,10 +212,13 @@ def front_text(front: dict | None) -> str:
     def said(p: dict) -> str:
         n = sum(p["n_terms"].values())
         se = f" +- {100 * p['error_se']:.2g}" if p.get("error_se") is not None else ""
-        return f"{n} terms at {100 * p['error']:.3g}{se} %" if p.get("error") is not None else f"{n} terms (blown up)"
+        along = (f" ({100 * p['error_along']:.3g} % along the runs)" if p.get("error_along") is not None else "")
+        return (f"{n} terms at {100 * p['error']:.3g}{se} %{along}" if p.get("error") is not None
+                else f"{n} terms (blown up)")
 
     text = (f" On the front of model size against the held-out long-time error ({front['n_folds']}-fold over runs, "
-            "from each held-out run's first state)")
+            f"from each held-out run's first state, and along the runs restarted from the data every "
+            f"{ALONG_HORIZON_PERIODS:g} slow periods)")
     if sel is not None:
         text += f", the selected model has {said(sel)}"
     if knee is not None and knee is not sel:

@@ -3,7 +3,8 @@
 * ``zscores.png``: bar chart of every term's z-score per equation, threshold line, selected terms highlighted (methods
   with across-run statistics, :class:`fitting.results.EnsembleExtras`);
 * ``pareto.png``: the discovery's Pareto front;
-* ``front.png``: the discovery's front of model size against the held-out long-time error, with error bars over folds;
+* ``front.png``: the discovery's front of model size against the held-out long-time error from the first state and
+  along the runs, with error bars over folds;
 * ``coefficients.png``: per-run refined coefficients (SI, normalised by the final value) of the selected terms;
 * ``optimisation.png``: loss against evaluation for every per-run refinement and the joint one;
 * ``phase_portraits.png`` / ``poincare.png``: data vs minimal model for up to four runs.
@@ -158,8 +159,10 @@ def _plot_pareto(disc, path: Path) -> Path:
 
 
 def _plot_front(disc, path: Path) -> Path:
-    """Held-out long-time error (mean and standard error over folds) against the terms of both equations; the
-    discovery's selection, the knee (one-standard-error rule) and the ``--max-terms`` pick marked."""
+    """Held-out long-time error from the first state and along the runs (mean and standard error over folds) against
+    the terms of both equations; the discovery's selection, the knee (one-standard-error rule) and the ``--max-terms`` pick marked."""
+    from ..selection.front import ALONG_HORIZON_PERIODS
+
     plt = _plt()
     front = disc.front
     pts = [p for p in front.points if np.isfinite(p.error)]
@@ -168,7 +171,13 @@ def _plot_front(disc, path: Path) -> Path:
     err = np.array([100.0 * p.error for p in pts])
     se = np.array([100.0 * p.error_se if np.isfinite(p.error_se) else 0.0 for p in pts])
     ax.errorbar(n, err, yerr=se, fmt="o-", color="tab:gray", ms=4, capsize=2,
-                label=f"held-out long-time error ({front.n_folds}-fold over runs, +- 1 standard error)")
+                label=f"from the first state ({front.n_folds}-fold over runs, +- 1 standard error)")
+    along = [p for p in pts if np.isfinite(p.error_along)]
+    if along:
+        ax.errorbar([sum(p.n_terms) for p in along], [100.0 * p.error_along for p in along],
+                    yerr=[100.0 * p.error_along_se if np.isfinite(p.error_along_se) else 0.0 for p in along],
+                    fmt="^--", color="tab:orange", ms=4, capsize=2,
+                    label=f"along the runs (restarted from the data every {ALONG_HORIZON_PERIODS:g} slow periods)")
     marks = [(front.selected, "o", "tab:red", "selected (the default)"),
              (front.knee, "s", "tab:blue", "knee: smallest within 1 standard error of the best")]
     if disc.max_terms is not None:
@@ -182,7 +191,7 @@ def _plot_front(disc, path: Path) -> Path:
                     label=label)
     ax.set_yscale("log")
     ax.set_xlabel("terms (both equations)")
-    ax.set_ylabel("long-time error from the first state [% of the RMS motion]")
+    ax.set_ylabel("held-out long-time error [% of the RMS motion]")
     ax.set_title("front: model size against held-out long-time error")
     ax.legend(fontsize=7)
     _save(fig, path)

@@ -34,7 +34,7 @@ der Pol oscillator) decides the amplitude after a few periods.  So after the ref
 the output error itself, in three steps.
 
 1. Pruning: terms are tried for removal one at a time, the weakest first (smallest RMS contribution to its
-   equation's acceleration over the smoothed states); a term goes when the support without it, refined again over
+   equation's acceleration over the state estimates given); a term goes when the support without it, refined again over
    the same segments, has a squared misfit within ``support_tolerance`` (3 %) of the model-error part of the full
    support's, ``misfit**2 - 1`` in noise units: the tolerance of the held-out selection
    (:func:`fitting.selection.support_search.select_heldout`), on the quantity a long-time prediction needs.  Pruning stops at
@@ -118,6 +118,9 @@ class OutputErrorConfig:
         Terms are added only while the misfit exceeds this many times the tracking noise (the discovery's
         ``model_error_factor``): below it the trajectories follow the runs to the noise, and an added term fits
         the noise's correlations between segments and the collinear leftovers of the others.
+    max_terms : int or None
+        Terms are added only to an equation with fewer terms than this (the discovery's ``max_terms``, ``fit
+        --max-terms``): a cap on the model's size holds after the refinement too.  None: no cap.
     """
 
     periods: float = 5.0
@@ -131,6 +134,7 @@ class OutputErrorConfig:
     support_rejections: int = 2
     additions: bool = True
     addition_misfit: float = 1.05
+    max_terms: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("periods", "rtol", "h_omega", "outlier_factor", "addition_misfit"):
@@ -141,6 +145,8 @@ class OutputErrorConfig:
         if self.support_tolerance is not None:
             check_non_negative(self, "support_tolerance")
         check_non_negative(self, "misfit_tolerance")
+        if self.max_terms is not None:
+            check_whole(self, "max_terms")
 
 
 @dataclass(frozen=True, eq=False)
@@ -362,7 +368,7 @@ def _addition_gains(coef: NDArray, x0: NDArray, segs: Segments, sigma: NDArray, 
     problem = TrajectoryProblem(coef, segs, sigma, config.h_omega, mask=np.ones_like(support))
     p = problem.parameters(coef)
     on = support[:, problem.cols][problem.mask[:, problem.cols]]
-    # an absent term's step moves its equation's acceleration by 1e-6 of its RMS over the smoothed states
+    # an absent term's step moves its equation's acceleration by 1e-6 of its RMS over the state estimates
     acc_rms = np.sqrt(np.mean((library @ coef.T) ** 2, axis=0))
     column_rms = np.sqrt(np.mean(library ** 2, axis=0))
     q_of, j_of = problem.where[:, 0], problem.cols[problem.where[:, 1]]
@@ -399,6 +405,8 @@ def _add(coef: NDArray, x0: NDArray, misfit: float, segs: Segments, sigma: NDArr
                    misfit ** 2 * (1.0 - (1.0 + config.misfit_tolerance) ** -2))
         gain, delta = _addition_gains(coef, x0, segs, sigma, library, config)
         gain[tried] = -np.inf
+        if config.max_terms is not None:
+            gain[(coef != 0).sum(axis=1) >= config.max_terms] = -np.inf  # the cap holds
         q, j = np.unravel_index(np.argmax(gain), gain.shape)
         if not gain[q, j] > need:
             break
@@ -421,7 +429,7 @@ def _select(fit: OutputErrorFit, x0: NDArray, segs: Segments, sigma: NDArray, st
             config: OutputErrorConfig, forced: NDArray | None) -> OutputErrorFit:
     """Prune, add the terms the trajectories need, and prune again after an addition (module docstring)."""
     frozen = np.zeros(fit.coef.shape, bool) if forced is None else np.asarray(forced, bool)
-    library = evaluate_library(np.vstack(states))  # the smoothed states' columns, once for every candidate
+    library = evaluate_library(np.vstack(states))  # the state estimates' columns, once for every candidate
     coef, x0, misfit, pruned = _prune(fit.coef, x0, fit.misfit, segs, sigma, library, config, frozen)
     coef, x0, misfit, added = _add(coef, x0, misfit, segs, sigma, library, config) if config.additions else (
         coef, x0, misfit, [])

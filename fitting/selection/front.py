@@ -7,8 +7,12 @@ and the selection itself, above it the larger supports of the backward eliminati
 (K-fold over runs, :func:`cubedimer.folds.run_folds`) and integrated from the first state of every held-out run; its
 **long-time error** is the RMS of the trajectory's error over the RMS of the run's motion about its mean, averaged
 over the two coordinates (:func:`long_time_error`), a dimensionless number that does not depend on the units of time
-or of the coordinates.  The front records, per point, the mean over folds and its standard error (the spread of the
-fold means over sqrt(K)): under model error the error bars say which sizes the data can tell apart.
+or of the coordinates.  Beside it, the **error along the runs** (:func:`long_time_error_along`): the same error over
+horizons of ``ALONG_HORIZON_PERIODS`` (5) periods of the run's slower dominant frequency, restarting from the run's
+state estimate at the start of every horizon, averaged over the horizons: the first state's error is decided by the
+largest amplitudes of a decaying run, this one by the motion's whole range.  The front records, per point, the mean
+over folds of each and its standard error (the spread of the fold means over sqrt(K)): under model error the error
+bars say which sizes the data can tell apart.
 
 The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
 standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
@@ -28,37 +32,66 @@ from cubedimer.terms import EQUATION_NAMES
 from ..model import TERMS, PolynomialModel
 from .support_search import ReducedDesign, fit_on_runs
 
-__all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "capped_support", "long_time_front",
-           "BLOW_UP_FACTOR"]
+__all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "long_time_error_along", "capped_support",
+           "long_time_front", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
 
 #: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
 BLOW_UP_FACTOR = 10.0
+#: The horizon of the error along the runs, in periods of the run's slower dominant frequency.
+ALONG_HORIZON_PERIODS = 5.0
 
 
 @dataclass(frozen=True)
 class HeldOutRun:
     """What a held-out run's long-time error needs: its frame interval [s], measured positions from the first state
-    on, and that first state [y, ydot, theta, thetadot] (SI)."""
+    on, and that first state [y, ydot, theta, thetadot] (SI); for the error along the run, the state estimates
+    (n, 4) from the first state on and the horizon [frames] (0: no error along the run)."""
 
     dt: float
     y: NDArray[np.float64]
     theta: NDArray[np.float64]
     x0: NDArray[np.float64]
+    states: NDArray[np.float64] | None = None
+    horizon: int = 0
 
 
 def long_time_error(model: PolynomialModel, run: HeldOutRun) -> float:
     """RMS error of ``model``'s trajectory from ``run.x0`` over the RMS of the run's motion about its mean, averaged
     over y and theta (dimensionless; inf when the trajectory blows up)."""
-    n = run.y.size
     data = np.column_stack([run.y, run.theta])
-    reach = np.maximum(np.max(np.abs(data), axis=0), np.abs(run.x0[[0, 2]]))
-    bound = BLOW_UP_FACTOR * np.array([reach[0], np.inf, reach[1], np.inf])  # the rates: bounded through the positions
-    states, n_valid = model.simulate(run.x0, np.arange(n) * run.dt, bound=bound)
-    if n_valid < n:
-        return float("inf")
-    err = np.sqrt(np.mean((states[:, [0, 2]] - data) ** 2, axis=0))
+    err = _trajectory_error(model, run.x0, data, run.dt, np.max(np.abs(data), axis=0))
     signal = np.std(data, axis=0)
     return float(np.mean(err / np.where(signal > 0, signal, 1.0)))
+
+
+def long_time_error_along(model: PolynomialModel, run: HeldOutRun) -> float:
+    """The error of :func:`long_time_error` over horizons of ``run.horizon`` frames, restarting from the state
+    estimate ``run.states`` at the start of every horizon (the last one ending at the run's end), RMS over the
+    horizons and over the run's RMS motion about its mean, averaged over y and theta (dimensionless; inf when a
+    trajectory blows up, NaN without states or horizon)."""
+    if run.states is None or run.horizon < 2:
+        return float("nan")
+    data = np.column_stack([run.y, run.theta])
+    n, h = data.shape[0], min(int(run.horizon), data.shape[0])
+    starts = list(range(0, n - h + 1, h))
+    if starts[-1] + h < n:
+        starts.append(n - h)
+    reach = np.max(np.abs(data), axis=0)
+    sq = np.array([_trajectory_error(model, run.states[i], data[i:i + h], run.dt, reach) ** 2 for i in starts])
+    signal = np.std(data, axis=0)
+    return float(np.mean(np.sqrt(np.mean(sq, axis=0)) / np.where(signal > 0, signal, 1.0)))
+
+
+def _trajectory_error(model: PolynomialModel, x0: NDArray, data: NDArray, dt: float, reach: NDArray) -> NDArray:
+    """RMS error (y, theta) of ``model``'s trajectory from ``x0`` against ``data`` (n, 2); inf on a blow-up beyond
+    ``BLOW_UP_FACTOR`` times ``reach`` (or the start's positions)."""
+    n = data.shape[0]
+    reach = np.maximum(reach, np.abs(np.asarray(x0)[[0, 2]]))
+    bound = BLOW_UP_FACTOR * np.array([reach[0], np.inf, reach[1], np.inf])  # the rates: bounded through the positions
+    states, n_valid = model.simulate(x0, np.arange(n) * dt, bound=bound)
+    if n_valid < n:
+        return np.full(2, np.inf)
+    return np.sqrt(np.mean((states[:, [0, 2]] - data) ** 2, axis=0))
 
 
 @dataclass(frozen=True)
@@ -72,10 +105,15 @@ class FrontPoint:
     terms : dict
         ``{equation: tuple of term names}``.
     error, error_se : float
-        Held-out long-time error (fraction; mean over folds) and its standard error over folds (NaN with one fold).
+        Held-out long-time error from the first state (fraction; mean over folds) and its standard error over folds
+        (NaN with one fold).
     fold_errors : tuple of float
     selected : bool
         The discovery's own selection.
+    error_along, error_along_se : float
+        Held-out error along the runs (:func:`long_time_error_along`; mean over folds) and its standard error (NaN
+        where the held-out runs carry no state estimates).
+    fold_errors_along : tuple of float
     """
 
     max_terms: int
@@ -84,6 +122,9 @@ class FrontPoint:
     error_se: float
     fold_errors: tuple[float, ...]
     selected: bool = False
+    error_along: float = float("nan")
+    error_along_se: float = float("nan")
+    fold_errors_along: tuple[float, ...] = ()
 
     @property
     def n_terms(self) -> tuple[int, int]:
@@ -93,7 +134,8 @@ class FrontPoint:
         return {"max_terms": self.max_terms, "n_terms": {eq: len(self.terms[eq]) for eq in EQUATION_NAMES},
                 "terms": {eq: list(self.terms[eq]) for eq in EQUATION_NAMES}, "error": _num(self.error),
                 "error_se": _num(self.error_se), "fold_errors": [_num(e) for e in self.fold_errors],
-                "selected": self.selected}
+                "error_along": _num(self.error_along), "error_along_se": _num(self.error_along_se),
+                "fold_errors_along": [_num(e) for e in self.fold_errors_along], "selected": self.selected}
 
 
 def _num(x: float) -> float | None:
@@ -126,6 +168,9 @@ class Front:
         knee = self.knee
         return {"measure": "held-out long-time error: RMS trajectory error from each held-out run's first state over "
                            "the run's RMS motion, mean of y and theta; mean and standard error over folds",
+                "measure_along": f"held-out error along the runs: the same over horizons of {ALONG_HORIZON_PERIODS:g} "
+                                 "periods of the run's slower frequency, restarted from the run's state estimate at "
+                                 "each horizon's start, RMS over the horizons",
                 "n_folds": self.n_folds, "knee_rule": "smallest model within one fold standard error of the best",
                 "knee_max_terms": knee.max_terms if knee is not None else None,
                 "default": "the discovery's own selection (selected: true)",
@@ -182,17 +227,27 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
         if supports in seen:
             continue
         seen.add(supports)
-        fold_err = []
+        fold_err, fold_along = [], []
         for train, test in folds:
             coef = np.zeros((2, len(TERMS)))
             for q, cols in enumerate(supports):
                 coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
             model = PolynomialModel(coef)
             fold_err.append(float(np.mean([long_time_error(model, held_out[r]) for r in test])))
-        err = np.asarray(fold_err)
-        mean = float(np.mean(err)) if np.all(np.isfinite(err)) else float("inf")
-        se = float(np.std(err, ddof=1) / np.sqrt(err.size)) if err.size > 1 and np.isfinite(mean) else float("nan")
+            fold_along.append(float(np.mean([long_time_error_along(model, held_out[r]) for r in test])))
+        (mean, se), (along, along_se) = _fold_mean(fold_err), _fold_mean(fold_along)
         points.append(FrontPoint(int(cap), {eq: tuple(TERMS[j] for j in s) for eq, s in zip(EQUATION_NAMES, supports)},
                                  mean, se, tuple(fold_err),
-                                 selected=all(tuple(sorted(f[2])) == s for f, s in zip(fronts, supports))))
+                                 selected=all(tuple(sorted(f[2])) == s for f, s in zip(fronts, supports)),
+                                 error_along=along, error_along_se=along_se, fold_errors_along=tuple(fold_along)))
     return Front(tuple(points), len(folds))
+
+
+def _fold_mean(fold_err: Sequence[float]) -> tuple[float, float]:
+    """Mean over folds (inf when a fold blew up, NaN when undefined) and its standard error (NaN with one fold)."""
+    err = np.asarray(fold_err, float)
+    if np.isnan(err).any():
+        return float("nan"), float("nan")
+    mean = float(np.mean(err)) if np.all(np.isfinite(err)) else float("inf")
+    se = float(np.std(err, ddof=1) / np.sqrt(err.size)) if err.size > 1 and np.isfinite(mean) else float("nan")
+    return mean, se

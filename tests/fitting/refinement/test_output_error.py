@@ -178,6 +178,11 @@ def test_a_damping_the_trajectories_need_is_added(pendulum_runs):
     pruning_alone = _refine(PolynomialModel.from_equations(eqs), pendulum_runs[:6], 1e-3, seed=6,
                             config=OutputErrorConfig(additions=False))
     assert pruning_alone.added == () and pruning_alone.coef[0, TERMS.index("ydot")] == 0
+    # a cap on the terms per equation (the discovery's --max-terms) holds through the additions: at the size yddot
+    # has without its damping (3 terms; thetaddot has 4) neither equation may grow, so the damping is not added
+    capped = _refine(PolynomialModel.from_equations(eqs), pendulum_runs[:6], 1e-3, seed=6,
+                     config=OutputErrorConfig(max_terms=len(eqs["yddot"])))
+    assert capped.added == () and capped.coef[0, TERMS.index("ydot")] == 0
     before = _long_time(PolynomialModel(without.coef), pendulum_runs[6:])
     after = _long_time(PolynomialModel(fit.coef), pendulum_runs[6:])
     assert after < 0.05 * before, (before, after)  # 15 % -> 0.7 %
@@ -266,7 +271,8 @@ def test_forced_terms_are_never_pruned(pendulum_runs):
 
 def test_config_validates_itself():
     for bad in ({"periods": 0.0}, {"max_segments": 0}, {"iterations": 1.5}, {"rtol": -1.0}, {"support_tolerance": -0.1},
-                {"support_rejections": 0}, {"addition_misfit": 0.0}, {"misfit_tolerance": -0.01}):
+                {"support_rejections": 0}, {"addition_misfit": 0.0}, {"misfit_tolerance": -0.01},
+                {"max_terms": 0}, {"max_terms": 2.5}):
         with pytest.raises(ValueError):
             OutputErrorConfig(**bad)
 

@@ -9,7 +9,8 @@ import pytest
 
 from fitting.cli import main
 from fitting.model import PolynomialModel
-from fitting.selection.front import Front, FrontPoint, HeldOutRun, capped_support, long_time_error
+from fitting.selection.front import (Front, FrontPoint, HeldOutRun, capped_support, long_time_error,
+                                     long_time_error_along)
 from fitting.synthetic import SyntheticConfig, generate_runs, write_dataset
 
 FAST = ["--max-evals", "20", "--workers", "1", "--quiet"]
@@ -43,6 +44,10 @@ def test_model_json_records_the_front(default_fit, truth):
     finite = [p for p in points if p["error"] is not None]
     assert all(p["error"] > 0 and len(p["fold_errors"]) == 5 for p in finite)
     assert all(p["error_se"] is None or p["error_se"] >= 0 for p in finite)
+    # the error along the runs (restarted from the state estimates every 5 slow periods) on every finite point
+    assert all(p["error_along"] is not None and p["error_along"] > 0 and len(p["fold_errors_along"]) == 5
+               for p in finite)
+    assert "measure_along" in front
     # on a sparse truth the selection (the true support here) predicts the held-out runs better than the
     # damped oscillators alone (2 terms per equation) by far: measured 4-6 % against > 100 %
     smallest = next(p for p in finite if sum(p["n_terms"].values()) <= 4)
@@ -108,3 +113,24 @@ def test_long_time_error_is_zero_for_the_truth_and_dimensionless(truth):
     coef = slower.coef.copy()
     from fitting.model import Scales
     assert long_time_error(PolynomialModel(Scales(1e-3, 1.0, 1.0).to_scaled(coef)), scaled) == pytest.approx(e, rel=1e-6)
+
+
+def test_error_along_the_runs_restarts_from_the_states(truth):
+    r = generate_runs(truth, SyntheticConfig(n_runs=1, duration=2.0, noise_y=0.0, noise_theta=0.0, missing_frames=0,
+                                             seed=2))[0]
+    dt = float(r["t"][1] - r["t"][0])
+    horizon = r["t"].size // 6
+    run = HeldOutRun(dt, r["y"], r["theta"], r["x0"], r["state"], horizon)
+    # the generating model from exact states: only RK4's step differs (as in the test above)
+    assert long_time_error_along(truth, run) < 1e-4
+    # a 2 % slower model: its phase error grows along a trajectory, so restarting every sixth of the run bounds it
+    # below the error from the first state alone (a phase error growing linearly in time: the RMS over a horizon
+    # scales with its length, so about 6 times smaller while the error stays below the amplitude)
+    slower = PolynomialModel(truth.coef * np.where(truth.support, 0.98, 0.0))
+    along, first = long_time_error_along(slower, run), long_time_error(slower, run)
+    assert 0.0 < along < first / 3
+    # one horizon over the whole run is the error from the first state
+    whole = HeldOutRun(dt, r["y"], r["theta"], r["x0"], r["state"], r["t"].size)
+    assert long_time_error_along(slower, whole) == pytest.approx(first, rel=1e-12)
+    # without states there is no error along the run
+    assert np.isnan(long_time_error_along(slower, HeldOutRun(dt, r["y"], r["theta"], r["x0"])))

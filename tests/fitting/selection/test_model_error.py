@@ -241,3 +241,19 @@ def test_the_practical_threshold_reaches_the_output_error(monkeypatch, practical
     result = SimpleNamespace(modes=(discovery.MODEL_ERROR_MODE, "significance"), coef=np.zeros((2, len(TERMS))))
     discovery._refine_output_error(setup, [], result, DiscoveryConfig(heldout_tolerance=practical))
     assert seen[0].misfit_tolerance == expected and seen[0].support_tolerance == 0.03
+
+
+@pytest.mark.parametrize("cap", [None, 7])
+def test_a_term_cap_reaches_the_output_errors_additions(monkeypatch, cap):
+    """``--max-terms`` (``DiscoveryConfig.max_terms``) bounds the output error's additions too, so that the capped
+    model stays within the cap after the refinement."""
+    from types import SimpleNamespace
+
+    from fitting.selection import integral_discovery as discovery
+
+    seen = []
+    monkeypatch.setattr(discovery, "refine_output_error", lambda *args: seen.append(args[7]))
+    setup = SimpleNamespace(dts=[], ys=[], ths=[], slow_freqs=[], noise=(1.0, 1.0), forced=None)
+    result = SimpleNamespace(modes=(discovery.MODEL_ERROR_MODE, "significance"), coef=np.zeros((2, len(TERMS))))
+    discovery._refine_output_error(setup, [], result, DiscoveryConfig(max_terms=cap))
+    assert seen[0].max_terms == cap
