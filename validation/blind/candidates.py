@@ -288,11 +288,10 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
     if diag is not None:
         fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
-            errs = {p: abs(fitted[name][p] - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
-            if name == RESONATOR:  # scored on its mode (the derived Q and detuning)
-                derived = diag.effect(name).derived or {}
-                errs = {p: abs(derived[p].value - v) / abs(v) if p in derived else float("nan")
-                        for p, v in case["effects"][name].items()}
+            values = fitted[name]
+            if name == RESONATOR:  # scored on its mode (the derived Q and detuning; nan where no mode has the gains)
+                values = {p: iv.value for p, iv in (diag.effect(name).derived or {}).items()}
+            errs = {p: abs(values.get(p, float("nan")) - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
             covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
     pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
