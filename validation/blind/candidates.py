@@ -3,7 +3,11 @@
 Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilities
 ``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
-within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
+within +-``pressure_error``).  A strength that can close the dimer (the mirror asymmetry's constant torque) is drawn
+as a fraction of what the drawn dimer's hinge holds at the case's pressure (``HINGE_FRACTIONS``), so that the hinge
+stays open.  With ``BlindConfig(resonator=True)`` (the default) the levitator's resonator is one of the effects a case
+can draw (Q and detuning within ``RESONATOR_STRENGTHS``; the twin's ``transducer_q`` and ``cavity_detuning``), scored
+as the ``cavity_lag`` candidate on its derived Q and detuning, and the diagnosis tries ``cavity_lag``.  The twin writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 
 By default the twin runs with its default physics, the air's computed damping (``BlindConfig(air_damping=True)``),
@@ -154,8 +158,8 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
     """Write the twin data set of a drawn case into ``data`` with its truth.json; (error or None, redraws).
 
     A drawn start can drive a run out of the trap (the twin refuses such runs), and a drawn effect can fold the hinge
-    (a mirror asymmetry beta0 beyond the hinge's largest restoring acceleration, 26 1/s^2 on the default dimer at
-    3 kPa): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
+    (a drop that throws it over the top of its restoring acceleration, 26 1/s^2 on the default dimer at 3 kPa, with a
+    constant torque helping; the torque itself is drawn below it, :data:`HINGE_FRACTIONS`): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
     fewer unfolded runs than an effect needs to be named at the diagnosis's alpha is no case to score.  Either way the
     twin's seed is redrawn (same effects and pressure) up to 5 times; a case that still folds is reported as not
     generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
