@@ -7,7 +7,8 @@ within +-``pressure_error``).  A strength that can close the dimer (the mirror a
 as a fraction of what the drawn dimer's hinge holds at the case's pressure (``HINGE_FRACTIONS``), so that the hinge
 stays open.  With ``BlindConfig(resonator=True)`` (the default) the levitator's resonator is one of the effects a case
 can draw (Q and detuning within ``RESONATOR_STRENGTHS``; the twin's ``transducer_q`` and ``cavity_detuning``), scored
-as the ``cavity_lag`` candidate on its derived Q and detuning, and the diagnosis tries ``cavity_lag``.  The twin writes the data set; ``truth.json`` is moved out of the data
+as the ``cavity_lag`` candidate on its derived Q and detuning, and the diagnosis tries ``cavity_lag``.  The twin
+writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 
 By default the twin runs with its default physics, the air's computed damping (``BlindConfig(air_damping=True)``),
@@ -159,7 +160,8 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
 
     A drawn start can drive a run out of the trap (the twin refuses such runs), and a drawn effect can fold the hinge
     (a drop that throws it over the top of its restoring acceleration, 26 1/s^2 on the default dimer at 3 kPa, with a
-    constant torque helping; the torque itself is drawn below it, :data:`HINGE_FRACTIONS`): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
+    constant torque helping; the torque itself is drawn below it, :data:`HINGE_FRACTIONS`): the diagnosis leaves runs
+    that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
     fewer unfolded runs than an effect needs to be named at the diagnosis's alpha is no case to score.  Either way the
     twin's seed is redrawn (same effects and pressure) up to 5 times; a case that still folds is reported as not
     generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
@@ -175,7 +177,8 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
         effects = {k: v for k, v in case["effects"].items() if k != RESONATOR}
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
                           pressure_error=0.0, effects=EffectSet.from_dict(effects),
-                          pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]), air_damping=air_damping,
+                          pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]),
+                          air_damping=air_damping,
                           **_resonator_settings(case["effects"].get(RESONATOR)))
         try:
             simulate_dataset(twin, data, progress=False, force=True)
@@ -295,7 +298,8 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
             values = fitted[name]
             if name == RESONATOR:  # scored on its mode (the derived Q and detuning; nan where no mode has the gains)
                 values = {p: iv.value for p, iv in (diag.effect(name).derived or {}).items()}
-            errs = {p: abs(values.get(p, float("nan")) - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
+            errs = {p: abs(values.get(p, float("nan")) - v) / abs(v)
+                    for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
             covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
     pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
