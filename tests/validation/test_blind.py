@@ -183,3 +183,31 @@ def test_blind_resonator_is_drawn_and_scored_on_its_mode(make_diagnosis):
     truth = candidate_truth({"air_damping": {"gamma_y": 0.5, "gamma_theta": 1.2}},
                             {"quality_factor": 250.0, "detuning_half_widths": 1.0, "ring_time_s": 1.7e-3})
     assert truth[RESONATOR] == {"quality_factor": 250.0, "detuning_half_widths": 1.0}
+
+
+def test_a_named_resonator_is_scored_on_its_derived_mode(make_diagnosis):
+    """The cavity's truth is its mode: the named cavity_lag is scored on the derived Q and detuning and their 95 %
+    intervals (a derived quantity without a finite interval counts as not determined), not on its gains."""
+    from validation.diagnosis import EffectVerdict
+    from validation.diagnosis.summarise.uncertainty import ParameterInterval
+
+    derived = {"quality_factor": ParameterInterval(240.0, 5.0, (229.0, 251.0), 7),
+               "detuning_half_widths": ParameterInterval(1.3, None, None, None, "not finite")}
+    cavity = EffectVerdict("cavity_lag", {"static_gain": -1.8e-3, "lag_gain": 3e-6}, 0.01, 0.9, True, 0.004, None,
+                           None, named=True, derived=derived)
+    diag = make_diagnosis(["linear_damping"], params={"linear_damping": {"gamma_y": 0.6, "gamma_theta": 1.2}},
+                          extra_effects=(cavity,))
+    diag = replace(diag, identified=("linear_damping", "cavity_lag"))
+    truth = {"linear_damping": {"gamma_y": 0.6, "gamma_theta": 1.2},
+             "cavity_lag": {"quality_factor": 250.0, "detuning_half_widths": 1.0}}
+    case = {"index": 0, "effects": truth, "pressure_error": 0.0, "twin_seed": 1}
+    r = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
+    assert r["exact"]
+    assert r["parameter_relative_error"]["cavity_lag"] == pytest.approx({"quality_factor": 0.04,
+                                                                          "detuning_half_widths": 0.3})
+    assert r["interval_covers"]["cavity_lag"] == {"quality_factor": True, "detuning_half_widths": None}
+    s = summarize([r])
+    assert s["per_effect"]["cavity_lag"]["recall"] == 1.0
+    assert s["per_effect"]["cavity_lag"]["median_parameter_error"] == pytest.approx(
+        {"detuning_half_widths": 0.3, "quality_factor": 0.04})
+    assert s["false_effect_sets"] == 0 and 0.0 < s["false_effect_rate_upper_95"] < 1.0
