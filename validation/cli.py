@@ -266,6 +266,10 @@ def add_blind_parser(sub) -> None:
                    help="candidate cases without the air's computed damping (the drawn effects are the whole truth; the "
                         "study of docs/diagnosis.md's blind-check table); default: the twin's default physics, whose "
                         "air damping the truth holds as linear_damping at the air's rates")
+    p.add_argument("--no-resonator", action="store_true",
+                   help="candidate cases never draw the levitator's resonator and the diagnosis does not try the cavity's "
+                        "lag (cavity_lag); default: the resonator (Q 150-400, 0.5-3 half-widths above the drive) is one "
+                        "of the effects a case can draw, and cavity_lag one of the candidates")
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
     add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "
@@ -289,7 +293,7 @@ def run_blind_cli(args: argparse.Namespace) -> int:
                 MAX_BLIND_FRAMES_PER_CASE)
     prepare_output_dir(args.out, "--out", create=False)
     config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration, kinds=kinds,
-                         air_damping=not args.inviscid)
+                         air_damping=not args.inviscid, resonator=not args.no_resonator)
     summary = run_blind(config, args.out, executor_config(args))
     print(blind_table(summary, config))
     return 0

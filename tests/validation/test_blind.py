@@ -4,6 +4,7 @@ from dataclasses import replace
 import pytest
 
 from validation.blind import STRENGTHS, draw_case, score_case, summarize
+from validation.blind.candidates import HINGE_FRACTIONS
 
 
 def test_blind_draws_are_seeded_and_scored(make_diagnosis):
@@ -11,8 +12,8 @@ def test_blind_draws_are_seeded_and_scored(make_diagnosis):
     assert a == b and draw_case(8, 3) != a  # same seed, same hidden truth
     for name, params in a["effects"].items():
         for p, v in params.items():
-            lo, hi, signed = STRENGTHS[name][p]
-            assert lo <= abs(v) <= hi
+            lo, hi, signed = (HINGE_FRACTIONS if name in HINGE_FRACTIONS else STRENGTHS)[name][p]
+            assert lo <= abs(a.get("hinge_fractions", {}).get(name, params)[p]) <= hi
     case = {"index": 0, "effects": {"pair_scattering": {"kappa": 1e4}}, "pressure_error": 0.05, "twin_seed": 1}
     diag = make_diagnosis(["pair_scattering", "linear_damping"],
                           params={"pair_scattering": {"kappa": 1.1e4}, "linear_damping": {"gamma_y": 0.1, "gamma_theta": 0.1}},
@@ -126,3 +127,87 @@ def test_blind_scoring_counts_interval_coverage(make_diagnosis):
     assert cov["pair_scattering"]["lower_95"] == pytest.approx(0.0126, abs=1e-4)
     assert cov["pair_scattering"]["upper_95"] == pytest.approx(0.9874, abs=1e-4)
     assert cov["pressure_amplitude_pa"]["coverage"] == 1.0
+
+
+def _open_angle(hinge: float, surrogate, pressure_pa: float):
+    """The smallest theta > 0 where the hinge's restoring acceleration -Q_theta / I balances a constant hinge
+    acceleration ``hinge`` [1/s^2] (the open dimer's equilibrium), or None when none does (the dimer closes)."""
+    import numpy as np
+
+    sur = surrogate.with_pressure(pressure_pa)
+    theta = np.linspace(0.001, 0.999, 999)
+    _, q_t = sur.generalized_forces(theta, np.zeros_like(theta))
+    above = np.nonzero(-q_t / sur.hinge_inertia(theta) >= hinge)[0]
+    return float(theta[above[0]]) if above.size else None
+
+
+def test_blind_mirror_asymmetry_is_drawn_within_what_the_hinge_holds():
+    """beta0 and beta1 are drawn as fractions of the drawn dimer's hinge hold H at the case's true pressure
+    (validation.blind.candidates.hinge_holding_acceleration): every draw's beta0 + beta1 (100 um) stays within 0.8 H,
+    so a constant torque leaves an open equilibrium, which a torque of 1.05 H does not (the dimer closes).  H is the
+    maximum of -Q_theta / I over theta (26.2 1/s^2 at 3 kPa, docs/diagnosis.md), so the balance is searched on the
+    same surrogate: exact up to the 0.001-rad grid."""
+    from validation.blind.candidates import (HINGE_FRACTION_Y, NOMINAL_PRESSURE_PA, _twin_surrogate,
+                                             hinge_holding_acceleration)
+
+    assert hinge_holding_acceleration(NOMINAL_PRESSURE_PA) == pytest.approx(26.2, abs=0.1)
+    drawn = [c for c in (draw_case(4242, i, 0.1, True) for i in range(60)) if "mirror_asymmetry" in c["effects"]]
+    assert len(drawn) >= 5
+    sur = _twin_surrogate()
+    for case in drawn:
+        p = NOMINAL_PRESSURE_PA * (1 + case["pressure_error"])
+        hold = hinge_holding_acceleration(p)
+        beta = case["effects"]["mirror_asymmetry"]
+        frac = case["hinge_fractions"]["mirror_asymmetry"]
+        assert beta["beta0"] == pytest.approx(frac["beta0"] * hold, rel=1e-12)
+        torque = abs(beta["beta0"]) + abs(beta["beta1"]) * HINGE_FRACTION_Y
+        assert torque <= 0.8 * hold
+        theta = _open_angle(torque, sur, p)
+        assert theta is not None and theta < 0.4  # open: below the angle of the hinge's largest hold
+    assert _open_angle(1.05 * hinge_holding_acceleration(NOMINAL_PRESSURE_PA), sur, NOMINAL_PRESSURE_PA) is None
+
+
+def test_blind_resonator_is_drawn_and_scored_on_its_mode(make_diagnosis):
+    """With the resonator on, a case can draw it (Q, detuning within RESONATOR_STRENGTHS), the twin gets its
+    settings, and the truth scores it as cavity_lag on the mode's Q and detuning."""
+    from validation.blind.candidates import RESONATOR, RESONATOR_STRENGTHS, _resonator_settings, candidate_truth
+
+    cases = [draw_case(4242, i, 0.1, True) for i in range(60)]
+    drawn = [c["effects"][RESONATOR] for c in cases if RESONATOR in c["effects"]]
+    assert drawn and not any(RESONATOR in draw_case(4242, i)["effects"] for i in range(60))
+    for mode in drawn:
+        for p, (lo, hi, _) in RESONATOR_STRENGTHS.items():
+            assert lo <= mode[p] <= hi
+    assert _resonator_settings(drawn[0]) == {"transducer_q": drawn[0]["quality_factor"],
+                                             "cavity_detuning": drawn[0]["detuning_half_widths"]}
+    truth = candidate_truth({"air_damping": {"gamma_y": 0.5, "gamma_theta": 1.2}},
+                            {"quality_factor": 250.0, "detuning_half_widths": 1.0, "ring_time_s": 1.7e-3})
+    assert truth[RESONATOR] == {"quality_factor": 250.0, "detuning_half_widths": 1.0}
+
+
+def test_a_named_resonator_is_scored_on_its_derived_mode(make_diagnosis):
+    """The cavity's truth is its mode: the named cavity_lag is scored on the derived Q and detuning and their 95 %
+    intervals (a derived quantity without a finite interval counts as not determined), not on its gains."""
+    from validation.diagnosis import EffectVerdict
+    from validation.diagnosis.summarise.uncertainty import ParameterInterval
+
+    derived = {"quality_factor": ParameterInterval(240.0, 5.0, (229.0, 251.0), 7),
+               "detuning_half_widths": ParameterInterval(1.3, None, None, None, "not finite")}
+    cavity = EffectVerdict("cavity_lag", {"static_gain": -1.8e-3, "lag_gain": 3e-6}, 0.01, 0.9, True, 0.004, None,
+                           None, named=True, derived=derived)
+    diag = make_diagnosis(["linear_damping"], params={"linear_damping": {"gamma_y": 0.6, "gamma_theta": 1.2}},
+                          extra_effects=(cavity,))
+    diag = replace(diag, identified=("linear_damping", "cavity_lag"))
+    truth = {"linear_damping": {"gamma_y": 0.6, "gamma_theta": 1.2},
+             "cavity_lag": {"quality_factor": 250.0, "detuning_half_widths": 1.0}}
+    case = {"index": 0, "effects": truth, "pressure_error": 0.0, "twin_seed": 1}
+    r = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
+    assert r["exact"]
+    assert r["parameter_relative_error"]["cavity_lag"] == pytest.approx({"quality_factor": 0.04,
+                                                                          "detuning_half_widths": 0.3})
+    assert r["interval_covers"]["cavity_lag"] == {"quality_factor": True, "detuning_half_widths": None}
+    s = summarize([r])
+    assert s["per_effect"]["cavity_lag"]["recall"] == 1.0
+    assert s["per_effect"]["cavity_lag"]["median_parameter_error"] == pytest.approx(
+        {"detuning_half_widths": 0.3, "quality_factor": 0.04})
+    assert s["false_effect_sets"] == 0 and 0.0 < s["false_effect_rate_upper_95"] < 1.0

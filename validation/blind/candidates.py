@@ -3,7 +3,12 @@
 Each case draws, from its own seed: the number of effects (0, 1 or 2, probabilities
 ``N_EFFECT_PROBABILITIES``), which effects, their strengths (log-uniform between the weak and strong
 ends of ``STRENGTHS``, random signs where the physics allows both) and a pressure error (uniform
-within +-``pressure_error``).  The twin writes the data set; ``truth.json`` is moved out of the data
+within +-``pressure_error``).  A strength that can close the dimer (the mirror asymmetry's constant torque) is drawn
+as a fraction of what the drawn dimer's hinge holds at the case's pressure (``HINGE_FRACTIONS``), so that the hinge
+stays open.  With ``BlindConfig(resonator=True)`` (the default) the levitator's resonator is one of the effects a case
+can draw (Q and detuning within ``RESONATOR_STRENGTHS``; the twin's ``transducer_q`` and ``cavity_detuning``), scored
+as the ``cavity_lag`` candidate on its derived Q and detuning, and the diagnosis tries ``cavity_lag``.  The twin
+writes the data set; ``truth.json`` is moved out of the data
 directory before :func:`validation.diagnosis.diagnose_dataset` runs, so the diagnosis never sees it.
 
 By default the twin runs with its default physics, the air's computed damping (``BlindConfig(air_damping=True)``),
@@ -42,48 +47,121 @@ logger = logging.getLogger(__name__)
 #: The pressure amplitude a blind case's meta.json states, and its truth's centre [Pa] (docs/conventions.md).
 NOMINAL_PRESSURE_PA = META_DEFAULTS["pressure_amplitude_pa"]
 
-#: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.
+#: Weak and strong ends of each parameter's range (SI); "signed" parameters get a random sign.  The mirror asymmetry's
+#: entries are its range on the default dimer at the nominal 3 kPa, for reference: its draws are fractions of the drawn
+#: dimer's hinge (:data:`HINGE_FRACTIONS`).
 STRENGTHS: dict[str, dict[str, tuple[float, float, bool]]] = {
     "linear_damping": {"gamma_y": (0.2, 3.0, False), "gamma_theta": (0.2, 3.0, False)},
     "quadratic_drag": {"c_y": (20.0, 300.0, False), "c_theta": (0.02, 0.5, False)},
     "pair_scattering": {"kappa": (2.0e3, 3.0e4, False)},
-    "mirror_asymmetry": {"beta0": (5.0, 80.0, True), "beta1": (1.0e4, 1.0e5, True)},
+    "mirror_asymmetry": {"beta0": (3.9, 13.1, True), "beta1": (1.0e4, 7.9e4, True)},
     "velocity_coupling": {"c5": (5.0e2, 1.0e4, True), "c6": (1.0e5, 2.0e6, True)},
 }
+#: Strengths drawn relative to what the drawn dimer's hinge can hold (:func:`hinge_holding_acceleration`, H [1/s^2]
+#: at the case's true pressure): a constant torque beta0 beyond H closes the dimer (its hinge folds), so beta0 is
+#: ``f H`` with f log-uniform in the range below, and beta1 is ``f H / (100 um)`` (the torque beta1 y at a drop's
+#: 100 um of y); the two together stay below 0.8 H, so the hinge is open.  (lo, hi, signed) as in STRENGTHS.
+HINGE_FRACTIONS: dict[str, dict[str, tuple[float, float, bool]]] = {
+    "mirror_asymmetry": {"beta0": (0.15, 0.5, True), "beta1": (0.04, 0.3, True)},
+}
+#: The y over which a hinge-relative strength that multiplies y is measured [m] (beta1 y).
+HINGE_FRACTION_Y = 100e-6
+#: The levitator as a resonator (the twin's ``transducer_q`` and ``cavity_detuning``), scored as ``cavity_lag`` with
+#: its derived mode: Q and the drive's detuning above the resonance in half-widths, log-uniform.  Only the damping
+#: side (x > 0): on the driving side a cavity that drives the motion by more than the air damps it makes every run
+#: grow out of the trap.
+RESONATOR_STRENGTHS: dict[str, tuple[float, float, bool]] = {
+    "quality_factor": (150.0, 400.0, False), "detuning_half_widths": (0.5, 3.0, False)}
+#: The drawn name of the resonator (the diagnosis's candidate for it).
+RESONATOR = "cavity_lag"
 N_EFFECT_PROBABILITIES = (0.2, 0.4, 0.4)
 
 
+def _log_uniform(rng: np.random.Generator, lo: float, hi: float, signed: bool) -> float:
+    v = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    return -v if signed and rng.random() < 0.5 else v
+
+
 def draw_parameters(rng: np.random.Generator, name: str) -> dict[str, float]:
-    """Parameters of effect ``name``: log-uniform within ``STRENGTHS[name]``, a random sign where allowed."""
-    params = {}
-    for p, (lo, hi, signed) in STRENGTHS[name].items():
-        v = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-        if signed and rng.random() < 0.5:
-            v = -v
-        params[p] = v
-    return params
+    """Parameters of effect ``name``: log-uniform within ``STRENGTHS[name]``, a random sign where allowed; for an
+    effect of :data:`HINGE_FRACTIONS`, the fractions of the hinge's hold (turned into strengths by
+    :func:`hinge_strengths` once the pressure is known); for the resonator, its Q and detuning."""
+    if name == RESONATOR:
+        return {p: _log_uniform(rng, *r) for p, r in RESONATOR_STRENGTHS.items()}
+    ranges = HINGE_FRACTIONS.get(name, STRENGTHS[name])
+    return {p: _log_uniform(rng, *r) for p, r in ranges.items()}
 
 
-def draw_from(rng: np.random.Generator, index: int, pressure_error: float = 0.10) -> dict:
-    """A hidden candidate case drawn from ``rng`` (see :func:`draw_case`)."""
+def hinge_holding_acceleration(pressure_pa: float) -> float:
+    """H [1/s^2]: the largest restoring acceleration of the twin's default dimer's hinge, ``max -Q_theta / I`` over
+    0 < theta < 1 at its equilibrium height, at the pressure amplitude ``pressure_pa`` [Pa] (26.2 1/s^2 at
+    theta = 0.40 at 3 kPa, 35.4 at 3.3 kPa: the equilibrium moves with the pressure, so H is not p^2 alone).
+    A constant hinge acceleration beyond H closes the dimer."""
+    theta = np.linspace(0.005, 0.995, 199)
+    sur = _twin_surrogate()
+    if pressure_pa != sur.pressure_amplitude_pa:
+        sur = sur.with_pressure(float(pressure_pa))
+    _, q_t = sur.generalized_forces(theta, np.zeros_like(theta))
+    return float(np.max(-q_t / sur.hinge_inertia(theta)))
+
+
+def _twin_surrogate():
+    """The twin's default dynamic force model (cached per process)."""
+    global _SURROGATE
+    if _SURROGATE is None:
+        from acousim.twin import TwinConfig
+
+        twin = TwinConfig()
+        _SURROGATE = twin.model_spec.dynamic(twin.conditions)
+    return _SURROGATE
+
+
+_SURROGATE = None
+
+
+def hinge_strengths(effects: dict, pressure_pa: float) -> dict:
+    """``effects`` with the fractions of :data:`HINGE_FRACTIONS` turned into strengths at ``pressure_pa`` [Pa]
+    (:func:`hinge_holding_acceleration`); the others unchanged."""
+    if not set(effects) & set(HINGE_FRACTIONS):
+        return effects
+    hold = hinge_holding_acceleration(pressure_pa)
+    out = {}
+    for name, params in effects.items():
+        if name in HINGE_FRACTIONS:
+            params = {p: v * hold / (HINGE_FRACTION_Y if p == "beta1" else 1.0) for p, v in params.items()}
+        out[name] = params
+    return out
+
+
+def draw_from(rng: np.random.Generator, index: int, pressure_error: float = 0.10, resonator: bool = False) -> dict:
+    """A hidden candidate case drawn from ``rng`` (see :func:`draw_case`); ``resonator``: the levitator's resonator
+    (:data:`RESONATOR`) is one of the effects drawn.  Strengths of :data:`HINGE_FRACTIONS` are set at the case's
+    true pressure; the case keeps their fractions under ``hinge_fractions``."""
     n = int(rng.choice(3, p=N_EFFECT_PROBABILITIES))
-    names = [str(x) for x in rng.choice(list(STRENGTHS), size=n, replace=False)] if n else []
-    effects = {name: draw_parameters(rng, name) for name in sorted(names, key=list(STRENGTHS).index)}
-    return {"index": index, "effects": effects, "pressure_error": float(rng.uniform(-pressure_error, pressure_error)),
-            "twin_seed": int(rng.integers(2**31))}
+    pool = list(STRENGTHS) + ([RESONATOR] if resonator else [])
+    names = [str(x) for x in rng.choice(pool, size=n, replace=False)] if n else []
+    drawn = {name: draw_parameters(rng, name) for name in sorted(names, key=pool.index)}
+    error = float(rng.uniform(-pressure_error, pressure_error))
+    case = {"index": index, "effects": hinge_strengths(drawn, NOMINAL_PRESSURE_PA * (1 + error)),
+            "pressure_error": error, "twin_seed": int(rng.integers(2**31))}
+    fractions = {k: v for k, v in drawn.items() if k in HINGE_FRACTIONS}
+    if fractions:
+        case["hinge_fractions"] = fractions
+    return case
 
 
-def draw_case(seed: int, index: int, pressure_error: float = 0.10) -> dict:
+def draw_case(seed: int, index: int, pressure_error: float = 0.10, resonator: bool = False) -> dict:
     """The hidden truth of case ``index``: effects with parameters, pressure error, twin seed."""
-    return draw_from(np.random.default_rng(np.random.SeedSequence([seed, index])), index, pressure_error)
+    return draw_from(np.random.default_rng(np.random.SeedSequence([seed, index])), index, pressure_error, resonator)
 
 
 def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping: bool = False) -> tuple[str | None, int]:
     """Write the twin data set of a drawn case into ``data`` with its truth.json; (error or None, redraws).
 
     A drawn start can drive a run out of the trap (the twin refuses such runs), and a drawn effect can fold the hinge
-    (a mirror asymmetry beta0 beyond the hinge's largest restoring acceleration, 26 1/s^2 on the default dimer at
-    3 kPa): the diagnosis leaves runs that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
+    (a drop that throws it over the top of its restoring acceleration, 26 1/s^2 on the default dimer at 3 kPa, with a
+    constant torque helping; the torque itself is drawn below it, :data:`HINGE_FRACTIONS`): the diagnosis leaves runs
+    that ended folded out (:mod:`validation.diagnosis.identify.folded`), so a data set with
     fewer unfolded runs than an effect needs to be named at the diagnosis's alpha is no case to score.  Either way the
     twin's seed is redrawn (same effects and pressure) up to 5 times; a case that still folds is reported as not
     generated, with the reason.  ``air_damping``: the twin adds the air's computed drag (its default physics); off,
@@ -97,10 +175,11 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
     generation_error, retries = None, 0
     for retries in range(5):
         # with the air's damping, truth.json lists it among the effects (module docstring)
+        effects = {k: v for k, v in case["effects"].items() if k != RESONATOR}
         experiment = ExperimentConditions(pressure_amplitude_pa=NOMINAL_PRESSURE_PA * (1 + case["pressure_error"]))
         twin = TwinConfig(runs=config.runs, duration=config.duration, seed=case["twin_seed"] + retries,
-                          pressure_error=0.0, effects=EffectSet.from_dict(case["effects"]), experiment=experiment,
-                          air_damping=air_damping)
+                          pressure_error=0.0, effects=EffectSet.from_dict(effects), experiment=experiment,
+                          air_damping=air_damping, **_resonator_settings(case["effects"].get(RESONATOR)))
         try:
             simulate_dataset(twin, data, progress=False, force=True)
         except TwinError as exc:
@@ -110,6 +189,13 @@ def generate_twin_case(case: dict, config: BlindConfig, data: Path, air_damping:
         if generation_error is None:
             return None, retries
     return generation_error, retries
+
+
+def _resonator_settings(mode: dict | None) -> dict:
+    """The twin's settings of a drawn resonator (none without one)."""
+    if not mode:
+        return {}
+    return {"transducer_q": float(mode["quality_factor"]), "cavity_detuning": float(mode["detuning_half_widths"])}
 
 
 def _too_many_folded(data: Path, runs: int) -> str | None:
@@ -134,11 +220,13 @@ def _too_many_folded(data: Path, runs: int) -> str | None:
             f"than the {needed} unfolded runs an effect needs to be named")
 
 
-def candidate_truth(effects: dict) -> dict:
+def candidate_truth(effects: dict, resonator: dict | None = None) -> dict:
     """The true effects as the candidates describe them: the twin's ``air_damping`` (its computed drag,
     ``-gamma_y ydot`` and ``-gamma_theta S(theta) thetadot`` with S(0) = 1) is ``linear_damping`` at its rates, added
-    to a drawn linear damping's."""
+    to a drawn linear damping's; the twin's ``resonator`` (truth.json) is ``cavity_lag`` with its Q and detuning."""
     out = {k: dict(v) for k, v in effects.items() if k != "air_damping"}
+    if resonator:  # the twin's resonator (truth.json ``resonator``), as the candidate names its mode
+        out[RESONATOR] = {p: float(resonator[p]) for p in RESONATOR_STRENGTHS}
     air = effects.get("air_damping")
     if air:
         lin = out.setdefault("linear_damping", {"gamma_y": 0.0, "gamma_theta": 0.0})
@@ -160,9 +248,11 @@ def hide_truth(data: Path, truth_path: Path) -> dict:
 def diagnose_blind(data: Path, config: BlindConfig) -> tuple["Diagnosis | None", str | None]:
     """The diagnosis of ``data`` (long-time errors as configured), or (None, error) if it failed."""
     from ..diagnosis import DiagnoseConfig, diagnose_dataset
+    from ..diagnosis.prepare.candidate_effects import default_candidates
 
+    candidates = tuple(dict.fromkeys(default_candidates() + ((RESONATOR,) if config.resonator else ())))
     try:
-        diag = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time), progress=False)
+        diag = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time, candidates=candidates), progress=False)
         return diag, None
     except Exception as exc:  # a failed diagnosis is a result of the study, not a crash of it
         return None, f"{type(exc).__name__}: {exc}"
@@ -188,7 +278,8 @@ def run_case(case: dict, config: BlindConfig, out_dir: Path) -> dict:
     truth = hide_truth(data, out_dir / "truth.json")  # hidden from the diagnosis
     diag, error = diagnose_blind(data, config)
     # scored against what the twin simulated (with the air's damping as the linear damping it is)
-    result = score_case({**case, "effects": candidate_truth(truth.get("effects", case["effects"]))}, truth, diag, error)
+    true_effects = candidate_truth(truth.get("effects", case["effects"]), truth.get("resonator"))
+    result = score_case({**case, "effects": true_effects}, truth, diag, error)
     result["air_damping"] = bool(config.air_damping)
     result["twin_redraws"] = retries
     write_json(out_dir / "result.json", result)
@@ -204,7 +295,11 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
     if diag is not None:
         fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
-            errs = {p: abs(fitted[name][p] - v) / abs(v) for p, v in case["effects"][name].items() if v != 0}
+            values = fitted[name]
+            if name == RESONATOR:  # scored on its mode (the derived Q and detuning; nan where no mode has the gains)
+                values = {p: iv.value for p, iv in (diag.effect(name).derived or {}).items()}
+            errs = {p: abs(values.get(p, float("nan")) - v) / abs(v)
+                    for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
             covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
     pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
@@ -244,7 +339,10 @@ def _interval_covers(verdict, truth: dict) -> dict:
     """Per true parameter of a named effect: whether its 95 % interval holds the truth (None: not determined)."""
     out = {}
     for p, v in truth.items():
-        iv = verdict.estimate(p)
+        iv = (verdict.derived or {}).get(p) if p not in verdict.params else verdict.estimate(p)
+        if iv is None:
+            out[p] = None
+            continue
         out[p] = bool(iv.covers(v)) if iv.determined else None
     return out
 
@@ -263,7 +361,7 @@ def interval_coverage(results: list[dict]) -> dict:
                 "lower_95": float(stats.beta.ppf(0.025, k, n - k + 1)) if 0 < k else (0.0 if n else None),
                 "upper_95": float(stats.beta.ppf(0.975, k + 1, n - k)) if k < n else (1.0 if n else None)}
 
-    per: dict[str, list] = {n: [] for n in STRENGTHS}
+    per: dict[str, list] = {n: [] for n in [*STRENGTHS, RESONATOR]}
     for r in results:
         for name, flags in (r.get("interval_covers") or {}).items():
             per.setdefault(name, []).extend(flags.values())
@@ -273,9 +371,26 @@ def interval_coverage(results: list[dict]) -> dict:
     return out
 
 
+def _upper_95(k: int, n: int) -> float:
+    """The Clopper-Pearson 95 % upper bound of a rate of k in n (the two-sided interval's upper end)."""
+    from scipy import stats
+
+    return 1.0 if k >= n else float(stats.beta.ppf(0.975, k + 1, n - k))
+
+
+def _median_per_parameter(records: list[dict]) -> dict | None:
+    """Per parameter, the median of the relative errors in ``records`` (nan entries left out)."""
+    keys = sorted({p for r in records for p in r})
+    out = {}
+    for p in keys:
+        v = [r[p] for r in records if p in r and np.isfinite(r[p])]
+        out[p] = float(np.median(v)) if v else None
+    return out or None
+
+
 def summarize(results: list[dict]) -> dict:
     """Identification rates, per-effect precision/recall, parameter errors, shrink, false positives."""
-    names = list(STRENGTHS)
+    names = list(STRENGTHS) + [RESONATOR]
     out: dict = {"n_cases": len(results), "failed": sum(r["error"] is not None for r in results),
                  "not_generated": sum(not r.get("scored", True) for r in results)}
     results = [r for r in results if r.get("scored", True)]
@@ -283,8 +398,10 @@ def summarize(results: list[dict]) -> dict:
         sub = [r for r in results if r["n_true"] == k]
         out[f"exact_rate_{k}_effects"] = float(np.mean([r["exact"] for r in sub])) if sub else None
         out[f"n_{k}_effects"] = len(sub)
-    out["false_effect_rate"] = float(np.mean([bool(set(r["identified"]) - set(r["true_set"])) for r in results])) \
-        if results else None
+    false_sets = [bool(set(r["identified"]) - set(r["true_set"])) for r in results]
+    out["false_effect_rate"] = float(np.mean(false_sets)) if results else None
+    out["false_effect_sets"] = int(sum(false_sets))
+    out["false_effect_rate_upper_95"] = _upper_95(sum(false_sets), len(false_sets)) if results else None
     greedy = [bool(r["false_effects_greedy"]) for r in results if r.get("false_effects_greedy") is not None]
     out["false_effect_rate_greedy_rounds_alone"] = float(np.mean(greedy)) if greedy else None
     out["cases_with_indistinguishable_pairs"] = int(sum(bool(r.get("indistinguishable")) for r in results))
@@ -303,6 +420,8 @@ def summarize(results: list[dict]) -> dict:
         per[n] = {"tp": tp, "fp": fp, "fn": fn,
                   "precision": tp / (tp + fp) if tp + fp else None, "recall": tp / (tp + fn) if tp + fn else None,
                   "median_max_parameter_error": float(np.median(errs)) if errs else None,
+                  "median_parameter_error": _median_per_parameter(
+                      [r["parameter_relative_error"][n] for r in results if n in r["parameter_relative_error"]]),
                   "fraction_parameters_within_25pct": float(np.mean([e <= 0.25 for e in errs])) if errs else None}
     out["per_effect"] = per
     shr = [r["shrink"] for r in results if r["n_true"] > 0 and r["shrink"] is not None]
@@ -325,7 +444,9 @@ def candidates_table(summary: dict) -> list[str]:
              *([f"| exact identification, three effects ({summary['n_3_effects']} sets: two drawn beside the air's damping) "
                 f"| {pct(summary['exact_rate_3_effects'])} | |"] if summary.get("n_3_effects") else []),
              f"| no-effect sets with an effect named | {summary['false_positive_sets_on_no_effect']} | 0 |",
-             f"| sets with a false effect named (alone) | {pct(summary.get('false_effect_rate'))} | <= 5 % |",
+             f"| sets with a false effect named (alone) | {pct(summary.get('false_effect_rate'))} "
+             f"({summary.get('false_effect_sets', '-')}; 95 % upper bound {pct(summary.get('false_effect_rate_upper_95'))}) "
+             "| <= 5 % |",
              f"| sets with an indistinguishable pair named | {summary.get('cases_with_indistinguishable_pairs', '-')} | |",
              f"| parameters within 5 %, single effect named exactly | "
              f"{pct(summary.get('single_effect_parameters_within_5pct'))} | 100 % |",
@@ -338,6 +459,11 @@ def candidates_table(summary: dict) -> list[str]:
     for n, d in summary["per_effect"].items():
         lines.append(f"| {n} | {d['tp']} | {d['fp']} | {d['fn']} | {pct(d['precision'])} | {pct(d['recall'])} | "
                      f"{pct(d['median_max_parameter_error'])} | {pct(d['fraction_parameters_within_25pct'])} |")
+    lines += ["", "| effect | median error per parameter (named true effects) |", "|---|---|"]
+    for n, d in summary["per_effect"].items():
+        med = d.get("median_parameter_error") or {}
+        if med:
+            lines.append(f"| {n} | " + ", ".join(f"{p} {pct(v)}" for p, v in med.items()) + " |")
     coverage = summary.get("interval_coverage") or {}
     if coverage:
         lines += ["", "| named true parameters of | 95 % intervals holding the truth | its 95 % bounds | not determined |"
@@ -354,8 +480,8 @@ def confusion_figure(results: list[dict], path: Path) -> Path:
     effects (or 'none').  Cases the twin could not generate are left out."""
     import matplotlib.pyplot as plt
 
-    rows = list(STRENGTHS) + ["none"]
-    cols = list(STRENGTHS) + ["missed", "nothing named"]
+    rows = list(STRENGTHS) + [RESONATOR, "none"]
+    cols = list(STRENGTHS) + [RESONATOR, "missed", "nothing named"]
     m = np.zeros((len(rows), len(cols)), int)
     for r in results:
         if not r.get("scored", True):

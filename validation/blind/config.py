@@ -38,6 +38,10 @@ class BlindConfig:
     kinds : tuple of str
         The case kinds to run (a subset of :data:`KINDS`; default the candidate cases alone, whose study is
         the reference of the identification targets; each further kind costs one or two diagnoses per case).
+    resonator : bool
+        The levitator's resonator is one of the effects a candidate case can draw (its Q and detuning,
+        :data:`validation.blind.candidates.RESONATOR_STRENGTHS`), and the diagnosis tries the cavity's lag
+        (``cavity_lag``) among its candidates; False: neither (the study without the cavity).
     """
 
     cases: int = 50
@@ -48,6 +52,7 @@ class BlindConfig:
     long_time: bool = False
     kinds: tuple[str, ...] = ("candidates",)
     air_damping: bool = True
+    resonator: bool = True
 
     def __post_init__(self) -> None:
         check_whole(self, "cases")

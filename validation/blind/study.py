@@ -30,7 +30,7 @@ def case_dir(out: Path, kind: str, index: int) -> Path:
 
 def _draw(kind: str, config: BlindConfig, index: int) -> dict:
     if kind == "candidates":
-        return draw_case(config.seed, index, config.pressure_error)
+        return draw_case(config.seed, index, config.pressure_error, config.resonator)
     return draw_extended_case(kind, config.seed, index, config.pressure_error)
 
 

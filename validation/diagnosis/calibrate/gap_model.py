@@ -23,13 +23,18 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from acousim.dynamics.resonator import CavityMode
+from acousim.medium import Medium
+
 from ..prepare.candidate_effects import CANDIDATE_EFFECTS, effect_regressors, parameter_vector
+from ..prepare.cavity_lag import CavityGains, mode_from_gains
 from ..prepare.problem import DiagnosisProblem
 from ..prepare.runs import uses_integral_form
 from ..prepare.simulation_terms import SimulationTerms
 from .calibration import Calibration, calibrate
 
-__all__ = ["EnergyResidual", "IntegralResidual", "GapFit", "fit_gap_model", "apply_gap_model", "predicted_accelerations"]
+__all__ = ["EnergyResidual", "IntegralResidual", "GapFit", "fit_gap_model", "apply_gap_model", "predicted_accelerations",
+           "fit_cavity_reference"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +91,8 @@ def fit_gap_model(problem: DiagnosisProblem, effects: Sequence[str] = (), z0_win
     fixed : Calibration, optional
         Use this calibration instead of fitting one (effects are still fitted).
     """
+    if "cavity_lag" in effects and "cavity_reference" not in problem._shared:
+        fit_cavity_reference(problem)
     terms = SimulationTerms(problem)
     runs = terms.runs
     integral = uses_integral_form(runs)
@@ -213,3 +220,41 @@ def predicted_accelerations(problem: DiagnosisProblem, calibration: Calibration,
     """Per run (n, 2): the accelerations [yddot, thetaddot] of the calibrated simulation plus ``effects``
     (name -> parameters, SI) at the run's states, filtered as the data's (:meth:`RunAccelerations.smooth`)."""
     return apply_gap_model(problem, calibration, effects).predicted
+
+
+#: Iterations of the reference mode's fit (:func:`fit_cavity_reference`): measured on acousim's simulated mode
+#: (Q 150-300, x 1-2.5), the second iteration changes Q and x by under 0.3 %.
+REFERENCE_ITERATIONS = 3
+#: The reference mode's accepted range: the slow expansion holds for w_y / Gamma below about 0.35 (Q up to ~300 at the
+#: default dimer's 25 Hz); beyond it, or without a mode, the columns stay first order.
+REFERENCE_QUALITY_RANGE = (20.0, 600.0)
+REFERENCE_DETUNING_RANGE = (0.2, 10.0)
+
+
+def fit_cavity_reference(problem) -> CavityMode | None:
+    """The cavity mode whose second-order terms complete the candidate's columns on ``problem``'s data set
+    (:func:`~validation.diagnosis.prepare.cavity_lag.second_order_ratios`): the mode of the candidate fitted alone on
+    every run of the data set (the problem's shared runs, so that every fold and jackknife refit uses the same
+    columns), refitted with its own terms
+    (:data:`REFERENCE_ITERATIONS`); None (first-order columns) when the fit has no mode (A and B of one sign: no
+    cavity in the data) or one outside the accepted range.  Computed once per data set."""
+    shared = problem._shared
+    if "cavity_reference" in shared:
+        return shared["cavity_reference"]
+    shared["cavity_reference"] = None  # first-order columns while the reference is fitted
+    whole = DiagnosisProblem(problem.model, shared.get("runs", problem.runs), drift=problem.drift, _shared=shared)
+    frequency = Medium().frequency_hz
+    for _ in range(REFERENCE_ITERATIONS):
+        fit = fit_gap_model(whole, ["cavity_lag"])
+        s = fit.calibration.pressure_scale
+        try:
+            mode = mode_from_gains(CavityGains(fit.effects["cavity_lag"]["static_gain"] / s,
+                                               fit.effects["cavity_lag"]["lag_gain"] / s), frequency)
+        except ValueError:
+            mode = None
+        if mode is None or not (REFERENCE_QUALITY_RANGE[0] <= mode.quality_factor <= REFERENCE_QUALITY_RANGE[1]
+                                and REFERENCE_DETUNING_RANGE[0] <= mode.detuning <= REFERENCE_DETUNING_RANGE[1]):
+            shared["cavity_reference"] = None
+            break
+        shared["cavity_reference"] = mode
+    return shared["cavity_reference"]

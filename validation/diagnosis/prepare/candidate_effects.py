@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from acousim.dynamics.effects import EFFECT_TYPES
 
-from .cavity_lag import CAVITY_LAG_PARAMETERS
+from .cavity_lag import CAVITY_LAG_PARAMETERS, cavity_reference
 
 __all__ = ["CANDIDATE_EFFECTS", "MODEL_CANDIDATES", "default_candidates", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
 
@@ -134,7 +134,7 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
         # origin when none is given)
         rest = (float(np.mean(z_com - st[:, 0])) if z_eq is None else float(z_eq)) - fm.z_eq
         st[:, 0] = z_com - fm.z_eq
-        return cavity_lag_columns(fm, st, rest_y=rest)
+        return cavity_lag_columns(fm, st, rest_y=rest, reference=cavity_reference(problem))
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
     if z_eq is None:

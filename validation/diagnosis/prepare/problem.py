@@ -40,7 +40,8 @@ class DiagnosisProblem:
         self.runs: tuple[RunAccelerations, ...] = tuple(runs)
         self.recorded_runs: tuple[RunAccelerations, ...] = tuple(self.runs if recorded_runs is None else recorded_runs)
         # id(holder) -> (holder, orientation sums); the holder is kept so that its id stays unique
-        self._shared = _shared if _shared is not None else {"sums": {}, "surrogate": None}
+        # the data set's runs are kept for what is computed once per data set (the cavity's reference mode)
+        self._shared = _shared if _shared is not None else {"sums": {}, "surrogate": None, "runs": self.runs}
 
     @classmethod
     def from_recorded(cls, model, recorded_runs: Sequence[RunAccelerations], max_frames_per_run: int) -> "DiagnosisProblem":
