@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
+from cubedimer.dataset import DEFAULT_MAX_GAP, DatasetError, LoadConfig, load_dataset, load_run
 
 
 def test_good_file_with_comments_extra_columns_and_gaps(tmp_path, sine_run):
@@ -276,3 +276,15 @@ def test_a_tracked_set_s_recorded_fill_limit_is_the_loader_s(tmp_path, write_csv
     (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
     (run,) = load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs
     assert run.name == "run01.csv" and run.n_filled == 40
+
+
+def test_a_fill_limit_the_caller_gives_overrides_the_recorded_one(tmp_path, write_csv):
+    # meta.json records 50 frames; the caller's 10 (--max-gap 10, the default's value) is used all the same
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y = y.copy()
+    y[3000:3040] = np.nan
+    write_csv(tmp_path / "run01.csv", t, y, th)
+    (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
+    assert LoadConfig().max_gap is None and LoadConfig().fill_limit == DEFAULT_MAX_GAP == 10
+    runs = load_dataset(tmp_path, config=LoadConfig(consistency=None, max_gap=10)).runs
+    assert [r.name for r in runs] == ["run01_part1.csv", "run01_part2.csv"]
