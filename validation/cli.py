@@ -39,7 +39,8 @@ def add_compare_parser(sub) -> None:
     p.add_argument("--model", required=True, help="model.json written by `python -m fitting fit`")
     p.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
     p.add_argument("--data", help="the fitted data set's directory: without --sweep the sweep is computed from its "
-                   "meta.json (nominal pressure); with --sweep the sweep's dimer is checked against it")
+                   "meta.json (nominal pressure); with --sweep the sweep's dimer is checked against it (default: "
+                   "the data's dimer model.json records, key 'dimer')")
     p.add_argument("--other-dimer", action="store_true",
                    help="compare with a sweep of another dimer (side, frequency, ks, gap) than the data's anyway")
     p.add_argument("--fit-theta-max", type=float, default=None,
@@ -66,7 +67,8 @@ def _read_model(path: Path) -> dict:
 
 def _check_same_dimer(sweep: str, settings: dict, meta: dict, data: str) -> None:
     """A sweep of another dimer than the data's (side, frequency, ks = 2 pi f s / c, the gap when both state it) is
-    refused in one line (0.5 % apart: beyond a record's rounding), naming --other-dimer."""
+    refused in one line (0.5 % apart: beyond a record's rounding), naming --other-dimer.  ``meta``: the data's
+    meta.json, or model.json's ``dimer`` record; ``data``: where it was read (named in the message)."""
     import math
 
     from cubedimer.meta import META_DEFAULTS
@@ -86,9 +88,17 @@ def _check_same_dimer(sweep: str, settings: dict, meta: dict, data: str) -> None
     if off:
         said = ", ".join(f"{k} {swept[k] * units[k][1]:.4g}{(' ' + units[k][0]) if units[k][0] else ''} against "
                          f"{wanted[k] * units[k][1]:.4g}" for k in off)
-        raise UserInputError(f"--sweep {sweep}: a sweep of another dimer than the data's ({data}/meta.json): {said}; "
+        raise UserInputError(f"--sweep {sweep}: a sweep of another dimer than the data's ({data}): {said}; "
                              "sweep the data's dimer (python -m acousim sweep with its side and frequency), or give "
                              "--other-dimer to compare anyway")
+
+
+def _recorded_dimer(dimer: dict) -> dict:
+    """model.json's ``dimer`` record (:func:`fitting.output.model_file.dimer_record`) as meta.json keys: its numbers."""
+    from cubedimer.meta import META_DEFAULTS
+
+    return {k: float(v) for k, v in dimer.items()
+            if k in META_DEFAULTS and isinstance(v, (int, float)) and not isinstance(v, bool)}
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -106,6 +116,7 @@ def run_compare(args: argparse.Namespace) -> int:
         raise UserInputError("give --sweep (a sweep CSV) or --data (the fitted data set: its meta.json's dimer)")
     prepare_output_dir(args.out, "--out", create=False)
     model = _read_model(Path(args.model))
+    dimer = model.get("dimer")
     rng = model.get("data_range", {})
     theta_max = args.fit_theta_max or min(rng.get("theta_abs_max") or 0.3, 0.9)
     y_max = args.fit_y_max or rng.get("y_abs_max_m") or 150e-6
@@ -123,8 +134,10 @@ def run_compare(args: argparse.Namespace) -> int:
             simulation = read_sweep_csv(args.sweep)
         except ValueError as exc:
             raise UserInputError(str(exc)) from None
-        if args.data and not args.other_dimer:
-            _check_same_dimer(args.sweep, simulation.settings, read_meta(args.data), args.data)
+        if not args.other_dimer and (args.data or isinstance(dimer, dict)):
+            meta, where = ((read_meta(args.data), f"{args.data}/meta.json") if args.data else
+                           (_recorded_dimer(dimer), f"{args.model}'s dimer"))
+            _check_same_dimer(args.sweep, simulation.settings, meta, where)
     else:
         try:
             simulation = model_from_meta(read_meta(args.data))
