@@ -107,3 +107,15 @@ def test_a_drop_with_a_ring_time_is_found(ringing_drops, seed, noise):
         # fall starts where a free fall would have, tau / 2 after the drive stopped (measured 1.40-1.56 frames)
         assert ph.ring_frames == 0.0 or ph.ring_frames == pytest.approx(tau, rel=0.5)
         assert abs(ph.drop_frame - (stop + (0.5 * tau if ph.ring_frames == 0.0 else 0.0))) <= 0.5
+
+
+def test_rest_is_recognised_whatever_the_noise_draws(drop_heights):
+    # 300 draws of 0.2 um noise on the same drop: the rest's trend and curvature are judged by their standard errors
+    # (the curvature's is 3.4 noise over 16 frames), so none is taken for a motion (at a bound of 6 noise on the
+    # curvature, 7 % were, and their rest and fall were then fitted as field-on motion; at a spread bound of 2 noise,
+    # 1 in 300)
+    t, y, _ = drop_heights(600, FPS, 60.3, 3e-3)
+    noise = 0.2e-6 * np.random.default_rng(5).standard_normal((300, t.size))
+    assert all(starts_at_rest(y + n) is not None for n in noise)
+    # while a smooth motion is never at rest: the run without its rest and fall, from any of 40 phases
+    assert not any(starts_at_rest(y[k:] + n[k:]) for k, n in zip(range(80, 480, 10), noise))
