@@ -19,7 +19,8 @@ from .config_checks import check_fraction, check_non_negative, check_that, check
 from .errors import DatasetError
 from .meta import read_meta
 from .drop_phases import field_on_start
-from .gaps import fill_gaps, gap_segments
+from .gaps import fill_gaps, fill_lost_frames, gap_segments
+from .noise import recorded_run_noise
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
@@ -117,6 +118,10 @@ class Run:
         For a part of a run split at a long gap (:func:`load_run_parts`): the file it came from.
     frames : (int, int), optional
         For such a part: its frames ``[start, stop)`` in the file.
+    noise : (float, float) or None
+        The run's own white tracking noise of y [m] and theta [-] as meta.json's ``tracking.runs[]`` records it
+        (``noise_y_m``, ``noise_theta``; a part of a split run has its file's), or None when the set records none.
+        The fit weights each run by it (:mod:`fitting.selection.support_search`).
     """
 
     name: str
@@ -128,6 +133,7 @@ class Run:
     velocities: NDArray[np.float64] | None = None
     source: str | None = None
     frames: tuple[int, int] | None = None
+    noise: tuple[float, float] | None = None
 
     @property
     def n_glitches(self) -> int:
@@ -173,33 +179,6 @@ class SkippedFile:
 
     def __str__(self) -> str:
         return f"{self.file}: {self.reason}"
-
-
-def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
-                      ) -> tuple[NDArray, list[NDArray], list[int | None], int]:
-    """Insert missing rows where a time step is an integer multiple (2 or more) of the median frame interval
-    within ``tol`` of it: the rows of lost frames that a tracker left out.  Their values are missing
-    (NaN; filled later like any missing frame) and their times lie on the uniform grid."""
-    dt = np.diff(t)
-    med = float(np.median(dt))
-    n = np.rint(dt / med)
-    lost = (n >= 2) & (np.abs(dt - n * med) <= tol * med)
-    if not lost.any():
-        return t, cols, line_no, 0
-    steps = np.where(lost, n, 1).astype(np.int64)
-    index = np.r_[0, np.cumsum(steps)]
-    size = int(index[-1]) + 1
-    grid = np.arange(size, dtype=float)
-    t_full = np.interp(grid, index, t)
-    out = []
-    for c in cols:
-        full = np.full(size, np.nan)
-        full[index] = c
-        out.append(full)
-    lines: list[int | None] = [None] * size
-    for i, k in zip(index, line_no):
-        lines[int(i)] = k
-    return t_full, out, lines, size - t.size
 
 
 def _data_lines(path: Path) -> list[tuple[int, str]]:
@@ -398,7 +377,7 @@ def _read_columns(path: Path, config: LoadConfig, frame_rate_hz: float | None, s
     a = np.asarray(rows, dtype=float) * np.asarray(factors)
     t, y, th, vel = a[:, 0], a[:, 1], a[:, 2], list(a[:, 3:].T)
     t = _frame_times(path, t, time_col, frame_rate_hz, line_no)
-    t, (y, th, *vel), line_no, n_lost = _fill_lost_frames(path, t, [y, th, *vel], line_no, config.uniform_tol)
+    t, (y, th, *vel), line_no, n_lost = fill_lost_frames(t, [y, th, *vel], line_no, config.uniform_tol)
     if n_lost:
         logger.info("%s: %d omitted frame(s) taken as missing", path.name, n_lost)
     _check_uniform(path, t, line_no, config.uniform_tol)
@@ -450,6 +429,15 @@ def _with_recorded_max_gap(config: LoadConfig, meta: dict) -> LoadConfig:
     if isinstance(block, dict) and "max_gap_frames" in block and config.max_gap is None:
         return replace(config, max_gap=int(block["max_gap_frames"]))
     return config
+
+
+def _with_run_noise(runs: list[Run], meta: dict) -> list[Run]:
+    """Each run with its recorded noise (:func:`cubedimer.noise.recorded_run_noise`, by its file: ``Run.source`` for
+    a part)."""
+    recorded = recorded_run_noise(meta)
+    if not recorded:
+        return runs
+    return [replace(r, noise=recorded.get(r.source or r.name)) for r in runs]
 
 
 def _log_skip(message: str) -> None:
@@ -541,6 +529,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     for message in pending:
         report(message)
     skipped.sort(key=lambda s: s.file)
+    runs = _with_run_noise(runs, meta)
     return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped), system=system)
 
 
