@@ -19,7 +19,8 @@ from .config_checks import check_fraction, check_non_negative, check_that, check
 from .errors import DatasetError
 from .meta import read_meta
 from .drop_phases import field_on_start
-from .gaps import fill_gaps, gap_segments
+from .gaps import fill_gaps, fill_lost_frames, gap_segments
+from .noise import recorded_run_noise
 from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
 from .glitches import GlitchConfig, find_glitches
 from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
@@ -27,9 +28,13 @@ from .spectra import dominant_frequency
 from .system import LEVITATED_DIMER, SystemSpec, check_velocity, coordinate_unit_factor, read_system
 
 __all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_run_parts", "load_dataset",
-           "fill_gaps", "gap_segments"]
+           "fill_gaps", "gap_segments", "DEFAULT_MAX_GAP"]
 
 logger = logging.getLogger(__name__)
+
+#: The longest gap of missing frames [frames] the loader fills when neither the caller nor the data set (meta.json
+#: ``tracking.max_gap_frames``) says another: 5 ms at 2,000 fps, a tenth of a 20 Hz period.
+DEFAULT_MAX_GAP = 10
 
 
 @dataclass(frozen=True)
@@ -38,9 +43,11 @@ class LoadConfig:
 
     Parameters
     ----------
-    max_gap : int
-        Longest run of consecutive missing frames that is filled (PCHIP through the neighbours);
-        longer gaps are an error.
+    max_gap : int or None
+        Longest run of consecutive missing frames that is filled (PCHIP through the neighbours); a run is split at
+        a longer gap (:func:`load_run_parts`).  None: the limit the data set records (meta.json
+        ``tracking.max_gap_frames``, written by ``tracking track --max-gap``), else :data:`DEFAULT_MAX_GAP`; a
+        number given here is used whatever the set records.
     max_missing_fraction : float
         Largest allowed fraction of missing frames per run.
     uniform_tol : float
@@ -63,7 +70,7 @@ class LoadConfig:
         ``fitting fit`` needs.
     """
 
-    max_gap: int = 10
+    max_gap: int | None = None
     max_missing_fraction: float = 0.05
     uniform_tol: float = 0.01
     min_periods: float = 5.0
@@ -73,12 +80,17 @@ class LoadConfig:
     systems: tuple[str, ...] = ("levitated_dimer",)
 
     def __post_init__(self) -> None:
-        check_whole(self, "max_gap", minimum=0)
+        check_whole(self, "max_gap", minimum=0, optional=True)
         check_fraction(self, "max_missing_fraction", closed=True)
         check_fraction(self, "uniform_tol")
         check_non_negative(self, "min_periods")
         check_that(self, self.trap_frequency is None or callable(self.trap_frequency),
                    f"trap_frequency must be callable or None, got {self.trap_frequency!r}")
+
+    @property
+    def fill_limit(self) -> int:
+        """The longest gap filled [frames]: ``max_gap``, or :data:`DEFAULT_MAX_GAP` when it is None."""
+        return DEFAULT_MAX_GAP if self.max_gap is None else int(self.max_gap)
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,6 +118,10 @@ class Run:
         For a part of a run split at a long gap (:func:`load_run_parts`): the file it came from.
     frames : (int, int), optional
         For such a part: its frames ``[start, stop)`` in the file.
+    noise : (float, float) or None
+        The run's own white tracking noise of y [m] and theta [-] as meta.json's ``tracking.runs[]`` records it
+        (``noise_y_m``, ``noise_theta``; a part of a split run has its file's), or None when the set records none.
+        The fit weights each run by it (:mod:`fitting.selection.support_search`).
     """
 
     name: str
@@ -117,6 +133,7 @@ class Run:
     velocities: NDArray[np.float64] | None = None
     source: str | None = None
     frames: tuple[int, int] | None = None
+    noise: tuple[float, float] | None = None
 
     @property
     def n_glitches(self) -> int:
@@ -162,33 +179,6 @@ class SkippedFile:
 
     def __str__(self) -> str:
         return f"{self.file}: {self.reason}"
-
-
-def _fill_lost_frames(path: Path, t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
-                      ) -> tuple[NDArray, list[NDArray], list[int | None], int]:
-    """Insert missing rows where a time step is an integer multiple (2 or more) of the median frame interval
-    within ``tol`` of it: the rows of lost frames that a tracker left out.  Their values are missing
-    (NaN; filled later like any missing frame) and their times lie on the uniform grid."""
-    dt = np.diff(t)
-    med = float(np.median(dt))
-    n = np.rint(dt / med)
-    lost = (n >= 2) & (np.abs(dt - n * med) <= tol * med)
-    if not lost.any():
-        return t, cols, line_no, 0
-    steps = np.where(lost, n, 1).astype(np.int64)
-    index = np.r_[0, np.cumsum(steps)]
-    size = int(index[-1]) + 1
-    grid = np.arange(size, dtype=float)
-    t_full = np.interp(grid, index, t)
-    out = []
-    for c in cols:
-        full = np.full(size, np.nan)
-        full[index] = c
-        out.append(full)
-    lines: list[int | None] = [None] * size
-    for i, k in zip(index, line_no):
-        lines[int(i)] = k
-    return t_full, out, lines, size - t.size
 
 
 def _data_lines(path: Path) -> list[tuple[int, str]]:
@@ -300,8 +290,8 @@ def _mask_glitches(path: Path, t: NDArray, y_raw: NDArray, th_raw: NDArray, peri
     if not (gy.any() or gt.any()):
         return None
     glitch_frames = tuple(int(i) for i in np.flatnonzero(gy | gt))
-    y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.max_gap, "y", str(path))
-    th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.max_gap, "theta", str(path))
+    y, ny = fill_gaps(t, np.where(gy, np.nan, y_raw), config.fill_limit, "y", str(path))
+    th, nt = fill_gaps(t, np.where(gt, np.nan, th_raw), config.fill_limit, "theta", str(path))
     logger.info("%s: %d tracking glitch frame(s) masked", path.name, len(glitch_frames))
     return glitch_frames, y, th, max(ny, nt)
 
@@ -338,7 +328,7 @@ def load_run(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_r
 
 def load_run_parts(path: str | os.PathLike, config: LoadConfig = LoadConfig(), frame_rate_hz: float | None = None,
                    system: SystemSpec = LEVITATED_DIMER) -> tuple[list[Run], list[SkippedFile]]:
-    """:func:`load_run`, with a run split at every gap longer than ``config.max_gap`` frames (a lost stretch of a
+    """:func:`load_run`, with a run split at every gap longer than ``config.fill_limit`` frames (a lost stretch of a
     tracking) into parts named ``RUN_part1.csv``, ``RUN_part2.csv``, ... (each ``Run.source`` the file, ``Run.frames``
     its frames in it): every part is checked like a run, and a part too short to hold the oscillation periods (or
     otherwise bad) is skipped with its reason, the others kept.
@@ -351,7 +341,7 @@ def load_run_parts(path: str | os.PathLike, config: LoadConfig = LoadConfig(), f
     path = Path(path)
     t, y, th, vel = _read_columns(path, config, frame_rate_hz, system)
     bad = ~np.isfinite(y) | ~np.isfinite(th)
-    parts = gap_segments(bad, config.max_gap)
+    parts = gap_segments(bad, config.fill_limit)
     if len(parts) <= 1 and not (len(parts) == 1 and parts[0] != (0, t.size)):
         return [_prepared_run(path, path.name, t, y, th, vel, config, system)], []
     runs, skipped = [], []
@@ -365,10 +355,10 @@ def load_run_parts(path: str | os.PathLike, config: LoadConfig = LoadConfig(), f
             skipped.append(SkippedFile(name, str(exc).split(": ", 1)[-1] + f" (frames {a}-{b - 1} of {path.name})"))
     gaps = len(parts) - 1
     if not runs:
-        raise DatasetError(f"{path}: split at {gaps} gap(s) longer than {config.max_gap} frames, and no part is "
+        raise DatasetError(f"{path}: split at {gaps} gap(s) longer than {config.fill_limit} frames, and no part is "
                            f"usable: {skipped[0].file}: {skipped[0].reason}")
     logger.warning("%s: split at %d gap(s) longer than %d missing frames into %s%s", path.name, gaps,
-                   config.max_gap, ", ".join(f"{r.name} (frames {r.frames[0]}-{r.frames[1] - 1})" for r in runs),
+                   config.fill_limit, ", ".join(f"{r.name} (frames {r.frames[0]}-{r.frames[1] - 1})" for r in runs),
                    f"; {len(skipped)} part(s) too short or bad, skipped" if skipped else "")
     return runs, skipped
 
@@ -387,7 +377,7 @@ def _read_columns(path: Path, config: LoadConfig, frame_rate_hz: float | None, s
     a = np.asarray(rows, dtype=float) * np.asarray(factors)
     t, y, th, vel = a[:, 0], a[:, 1], a[:, 2], list(a[:, 3:].T)
     t = _frame_times(path, t, time_col, frame_rate_hz, line_no)
-    t, (y, th, *vel), line_no, n_lost = _fill_lost_frames(path, t, [y, th, *vel], line_no, config.uniform_tol)
+    t, (y, th, *vel), line_no, n_lost = fill_lost_frames(t, [y, th, *vel], line_no, config.uniform_tol)
     if n_lost:
         logger.info("%s: %d omitted frame(s) taken as missing", path.name, n_lost)
     _check_uniform(path, t, line_no, config.uniform_tol)
@@ -405,10 +395,10 @@ def _prepared_run(path: Path, name: str, t: NDArray, y: NDArray, th: NDArray, ve
     if nmiss > config.max_missing_fraction * t.size:
         raise DatasetError(f"{path}: {nmiss} of {t.size} frames missing (more than {config.max_missing_fraction:.0%})")
     y_raw, th_raw = y, th
-    y, ny = fill_gaps(t, y, config.max_gap, "y", str(path))
-    th, nt = fill_gaps(t, th, config.max_gap, "theta", str(path))
+    y, ny = fill_gaps(t, y, config.fill_limit, "y", str(path))
+    th, nt = fill_gaps(t, th, config.fill_limit, "theta", str(path))
     periods = (t[-1] - t[0]) * _oscillation_frequency(path, t, y, config, system)
-    velocities = _velocities(path, t, (y, th), vel, system, config.max_gap, periods) if vel else None
+    velocities = _velocities(path, t, (y, th), vel, system, config.fill_limit, periods) if vel else None
     glitches = _mask_glitches(path, t, y_raw, th_raw, periods, config) if config.glitches is not None else None
     glitch_frames: tuple[int, ...] = ()
     n_filled = max(ny, nt)
@@ -434,11 +424,20 @@ def _velocities(path: Path, t: NDArray, x: tuple[NDArray, NDArray], vel: list[ND
 
 def _with_recorded_max_gap(config: LoadConfig, meta: dict) -> LoadConfig:
     """The fill limit a tracked data set records (meta.json ``tracking.max_gap_frames``, ``tracking track --max-gap``)
-    in place of the default one (a limit the caller chose stays)."""
+    where the caller left ``max_gap`` None (a limit the caller chose, ``--max-gap``, stays)."""
     block = meta.get("tracking")
-    if isinstance(block, dict) and "max_gap_frames" in block and config.max_gap == LoadConfig.max_gap:
+    if isinstance(block, dict) and "max_gap_frames" in block and config.max_gap is None:
         return replace(config, max_gap=int(block["max_gap_frames"]))
     return config
+
+
+def _with_run_noise(runs: list[Run], meta: dict) -> list[Run]:
+    """Each run with its recorded noise (:func:`cubedimer.noise.recorded_run_noise`, by its file: ``Run.source`` for
+    a part)."""
+    recorded = recorded_run_noise(meta)
+    if not recorded:
+        return runs
+    return [replace(r, noise=recorded.get(r.source or r.name)) for r in runs]
 
 
 def _log_skip(message: str) -> None:
@@ -530,6 +529,7 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     for message in pending:
         report(message)
     skipped.sort(key=lambda s: s.file)
+    runs = _with_run_noise(runs, meta)
     return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped), system=system)
 
 

@@ -3,7 +3,8 @@
 A tracking leaves frames empty where the dimer could not be measured.  A gap of at most ``max_gap`` frames is
 filled by :func:`fill_gaps`; a longer one (the dimer out of view, a lost stretch of the recording) cannot be
 bridged, and :func:`gap_segments` gives the stretches between such gaps, each a run of its own
-(:func:`cubedimer.dataset.load_run_parts`).
+(:func:`cubedimer.dataset.load_run_parts`).  A tracker that leaves the rows of lost frames out makes gaps in time
+instead; :func:`fill_lost_frames` puts them back as missing frames.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from scipy.interpolate import PchipInterpolator
 
 from .errors import DatasetError
 
-__all__ = ["fill_gaps", "gap_segments"]
+__all__ = ["fill_lost_frames", "fill_gaps", "gap_segments"]
 
 
 def fill_gaps(t: NDArray, x: NDArray, max_gap: int, what: str, name: str) -> tuple[NDArray, int]:
@@ -55,3 +56,30 @@ def gap_segments(missing: NDArray, max_gap: int) -> list[tuple[int, int]]:
     if pos < bad.size:
         edges.append((pos, int(bad.size)))
     return edges
+
+
+def fill_lost_frames(t: NDArray, cols: list[NDArray], line_no: list[int | None], tol: float
+                     ) -> tuple[NDArray, list[NDArray], list[int | None], int]:
+    """Insert missing rows where a time step is an integer multiple (2 or more) of the median frame interval
+    within ``tol`` of it: the rows of lost frames that a tracker left out.  Their values are missing
+    (NaN; filled later like any missing frame) and their times lie on the uniform grid."""
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    n = np.rint(dt / med)
+    lost = (n >= 2) & (np.abs(dt - n * med) <= tol * med)
+    if not lost.any():
+        return t, cols, line_no, 0
+    steps = np.where(lost, n, 1).astype(np.int64)
+    index = np.r_[0, np.cumsum(steps)]
+    size = int(index[-1]) + 1
+    grid = np.arange(size, dtype=float)
+    t_full = np.interp(grid, index, t)
+    out = []
+    for c in cols:
+        full = np.full(size, np.nan)
+        full[index] = c
+        out.append(full)
+    lines: list[int | None] = [None] * size
+    for i, k in zip(index, line_no):
+        lines[int(i)] = k
+    return t_full, out, lines, size - t.size

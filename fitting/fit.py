@@ -110,7 +110,7 @@ def fit_dataset(data: Dataset | str | os.PathLike, config: FitConfig = FitConfig
         logger.info("oracle noise from meta.json's tracking block: %s",
                     ds.system.describe((noise.sigma_y, noise.sigma_theta)))
     res = fit_runs(prepared, scales, config, executor, cache_dir=cache_dir, progress=progress, noise=noise)
-    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches, system=ds.system)
+    return replace(res, skipped=tuple(ds.skipped_files()), n_glitches=ds.n_glitches, system=ds.system, meta=dict(ds.meta))
 
 
 def _fitted_noise(noise: NoiseLevels | None, prepared: Sequence[PreparedRun]) -> NoiseLevels | None:

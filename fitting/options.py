@@ -14,18 +14,19 @@ import argparse
 from dataclasses import replace
 
 from cubedimer.cli import UserInputError, positive_float, positive_int
-from cubedimer.dataset import LoadConfig
+from cubedimer.dataset import DEFAULT_MAX_GAP, LoadConfig
 from .config import OUTPUT_ERROR_MODES, FitConfig
 from .method_names import DEFAULT_METHOD, METHOD_OPTIONS, METHODS, methods_help
 from .refinement.long_time import JOINT_REFINE
 from .selection.rules import SELECTION_RULES
 
-__all__ = ["add_fit_options", "fit_config_from_args"]
+__all__ = ["add_fit_options", "fit_config_from_args", "add_max_gap_option"]
 
 
 def add_fit_options(parser: argparse.ArgumentParser) -> None:
     """The fit's options: ``--method``, ``--max-evals``, ``--joint-max-evals``, ``--selection``,
-    ``--heldout-tolerance``, ``--output-error``, ``--max-terms``, ``--relative-threshold``, ``--no-glitch-mask``, ``--min-periods``."""
+    ``--heldout-tolerance``, ``--output-error``, ``--max-terms``, ``--relative-threshold``, ``--no-glitch-mask``, ``--min-periods``,
+    ``--max-gap``."""
     parser.add_argument("--method", choices=tuple(METHODS), default=DEFAULT_METHOD, help=methods_help())
     parser.add_argument("--max-evals", type=positive_int, default=None,
                         help="objective evaluations per run refinement (paper) or of the polish (discovery)")
@@ -66,6 +67,18 @@ def add_fit_options(parser: argparse.ArgumentParser) -> None:
                         help="oscillation periods (of the dominant frequency of y, or of the first declared "
                              "coordinate) a run must hold to be fitted "
                              f"(default {LoadConfig.__dataclass_fields__['min_periods'].default:g})")
+    add_max_gap_option(parser)
+
+
+def add_max_gap_option(parser: argparse.ArgumentParser) -> None:
+    """``--max-gap FRAMES``: the loader's fill limit (:attr:`cubedimer.dataset.LoadConfig.max_gap`), for every command
+    that loads a data set; ``args.max_gap`` is None when not given."""
+    parser.add_argument("--max-gap", type=positive_int, default=None,
+                        metavar="FRAMES",
+                        help="longest gap of missing frames (not measured, or masked as tracking glitches) filled by "
+                             "interpolation; a run is split into two at a longer gap, and a part too short to fit is "
+                             "skipped (default: the data set's meta.json tracking.max_gap_frames, written by tracking "
+                             f"track --max-gap, else {DEFAULT_MAX_GAP}); given, it overrides meta.json")
 
 
 def fit_config_from_args(args: argparse.Namespace) -> FitConfig:
@@ -93,4 +106,6 @@ def fit_config_from_args(args: argparse.Namespace) -> FitConfig:
         load = replace(load, glitches=None)
     if args.min_periods is not None:
         load = replace(load, min_periods=args.min_periods)
+    if getattr(args, "max_gap", None) is not None:
+        load = replace(load, max_gap=args.max_gap)
     return replace(cfg, load=load, method=settings)

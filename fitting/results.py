@@ -1,7 +1,7 @@
 """What a fit produces: prepared runs, per-run results of each method and the one :class:`FitResult`."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol, Sequence, Union, runtime_checkable
 
 import numpy as np
@@ -187,6 +187,8 @@ class FitResult:
         Oracle standard errors of the final model's terms at the data's tracking noise.
     skipped, n_glitches :
         Files the loader skipped (with reasons) and glitch frames it masked (set by :func:`fitting.fit_dataset`).
+    meta : dict
+        The data set's validated meta.json (set by :func:`fitting.fit_dataset`; model.json records its dimer).
     """
 
     runs: list[PreparedRun]
@@ -203,6 +205,7 @@ class FitResult:
     skipped: tuple[dict, ...] = ()
     n_glitches: int = 0
     system: SystemSpec = LEVITATED_DIMER
+    meta: dict = field(default_factory=dict)
 
     @property
     def model(self) -> PolynomialModel:

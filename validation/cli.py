@@ -8,7 +8,7 @@ from pathlib import Path
 from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            field_default, positive_float, positive_int, prepare_output_dir, run_cli)
-from fitting.options import add_fit_options, fit_config_from_args
+from fitting.options import add_fit_options, add_max_gap_option, fit_config_from_args
 from fitting.output.model_file import read_model_json
 from fitting.uncertainty.final_checks import NoSaneModelError
 
@@ -39,7 +39,8 @@ def add_compare_parser(sub) -> None:
     p.add_argument("--model", required=True, help="model.json written by `python -m fitting fit`")
     p.add_argument("--sweep", help="sweep CSV written by `python -m acousim sweep`")
     p.add_argument("--data", help="the fitted data set's directory: without --sweep the sweep is computed from its "
-                   "meta.json (nominal pressure); with --sweep the sweep's dimer is checked against it")
+                   "meta.json (nominal pressure); with --sweep the sweep's dimer is checked against it (default: "
+                   "the data's dimer model.json records, key 'dimer')")
     p.add_argument("--other-dimer", action="store_true",
                    help="compare with a sweep of another dimer (side, frequency, ks, gap) than the data's anyway")
     p.add_argument("--fit-theta-max", type=float, default=None,
@@ -66,7 +67,8 @@ def _read_model(path: Path) -> dict:
 
 def _check_same_dimer(sweep: str, settings: dict, meta: dict, data: str) -> None:
     """A sweep of another dimer than the data's (side, frequency, ks = 2 pi f s / c, the gap when both state it) is
-    refused in one line (0.5 % apart: beyond a record's rounding), naming --other-dimer."""
+    refused in one line (0.5 % apart: beyond a record's rounding), naming --other-dimer.  ``meta``: the data's
+    meta.json, or model.json's ``dimer`` record; ``data``: where it was read (named in the message)."""
     import math
 
     from cubedimer.meta import META_DEFAULTS
@@ -86,9 +88,17 @@ def _check_same_dimer(sweep: str, settings: dict, meta: dict, data: str) -> None
     if off:
         said = ", ".join(f"{k} {swept[k] * units[k][1]:.4g}{(' ' + units[k][0]) if units[k][0] else ''} against "
                          f"{wanted[k] * units[k][1]:.4g}" for k in off)
-        raise UserInputError(f"--sweep {sweep}: a sweep of another dimer than the data's ({data}/meta.json): {said}; "
+        raise UserInputError(f"--sweep {sweep}: a sweep of another dimer than the data's ({data}): {said}; "
                              "sweep the data's dimer (python -m acousim sweep with its side and frequency), or give "
                              "--other-dimer to compare anyway")
+
+
+def _recorded_dimer(dimer: dict) -> dict:
+    """model.json's ``dimer`` record (:func:`fitting.output.model_file.dimer_record`) as meta.json keys: its numbers."""
+    from cubedimer.meta import META_DEFAULTS
+
+    return {k: float(v) for k, v in dimer.items()
+            if k in META_DEFAULTS and isinstance(v, (int, float)) and not isinstance(v, bool)}
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -106,6 +116,7 @@ def run_compare(args: argparse.Namespace) -> int:
         raise UserInputError("give --sweep (a sweep CSV) or --data (the fitted data set: its meta.json's dimer)")
     prepare_output_dir(args.out, "--out", create=False)
     model = _read_model(Path(args.model))
+    dimer = model.get("dimer")
     rng = model.get("data_range", {})
     theta_max = args.fit_theta_max or min(rng.get("theta_abs_max") or 0.3, 0.9)
     y_max = args.fit_y_max or rng.get("y_abs_max_m") or 150e-6
@@ -123,8 +134,10 @@ def run_compare(args: argparse.Namespace) -> int:
             simulation = read_sweep_csv(args.sweep)
         except ValueError as exc:
             raise UserInputError(str(exc)) from None
-        if args.data and not args.other_dimer:
-            _check_same_dimer(args.sweep, simulation.settings, read_meta(args.data), args.data)
+        if not args.other_dimer and (args.data or isinstance(dimer, dict)):
+            meta, where = ((read_meta(args.data), f"{args.data}/meta.json") if args.data else
+                           (_recorded_dimer(dimer), f"{args.model}'s dimer"))
+            _check_same_dimer(args.sweep, simulation.settings, meta, where)
     else:
         try:
             simulation = model_from_meta(read_meta(args.data))
@@ -179,6 +192,7 @@ def add_diagnose_parser(sub) -> None:
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
     add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
+    add_max_gap_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
                            "errors) run one after another in this process, so these options do not change this "
@@ -201,7 +215,9 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from .diagnosis import DiagnoseConfig, diagnose_dataset
+    from cubedimer.dataset import LoadConfig
+
+    from .diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
     from .report.sections.gap_diagnosis import write_diagnosis
 
     cands = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
@@ -217,8 +233,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
-        diagnosis = diagnose_dataset(args.data, config, strict=args.strict, progress=not args.quiet,
-                                     spec=model_spec_from_args(args))
+        dataset = load_for_diagnosis(args.data, strict=args.strict, progress=not args.quiet,
+                                     load=LoadConfig(max_gap=args.max_gap))
+        diagnosis = diagnose(dataset, config, progress=not args.quiet, spec=model_spec_from_args(args))
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     paths = write_diagnosis(diagnosis, args.out)

@@ -45,11 +45,14 @@ def decimation_factor(dt: float, frequency: float, max_frames_per_period: float 
 def block_average(run: Run, q: int) -> Run:
     """``run`` with every ``q`` consecutive frames replaced by their mean (times included); ``q = 1`` returns it.
 
-    The counts of filled and glitch frames (``n_filled``, ``glitch_frames``) are those of the recorded frames.
+    The counts of filled and glitch frames (``n_filled``, ``glitch_frames``) are those of the recorded frames; the
+    recorded white noise (``noise``) of a mean of q frames is 1/sqrt(q) of the frames'.
     """
     if q == 1:
         return run
     n = run.t.size // q * q
     mean = lambda x: np.asarray(x[:n], float).reshape(-1, q).mean(axis=1)  # noqa: E731
     v = None if run.velocities is None else np.column_stack([mean(run.velocities[:, k]) for k in range(2)])
-    return replace(run, t=mean(run.t), y=mean(run.y), theta=mean(run.theta), velocities=v)
+    noise = getattr(run, "noise", None)
+    noise = None if noise is None else (noise[0] / math.sqrt(q), noise[1] / math.sqrt(q))
+    return replace(run, t=mean(run.t), y=mean(run.y), theta=mean(run.theta), velocities=v, noise=noise)

@@ -12,6 +12,7 @@ import numpy as np
 
 from cubedimer.atomic import json_text, write_json
 from cubedimer.errors import DatasetError
+from cubedimer.meta import META_DEFAULTS
 from cubedimer.system import SystemSpec, read_system
 from cubedimer.terms import STATE_NAMES, parse_term
 from ..method_names import DEFAULT_METHOD, METHODS
@@ -21,8 +22,8 @@ from ..results import FitResult, support_terms
 if TYPE_CHECKING:
     from ..config import FitConfig
 
-__all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KEYS", "ModelFile", "read_model_json",
-           "recorded_settings", "recorded_stages", "settings_record", "SHARED_SETTINGS"]
+__all__ = ["model_json", "fit_record", "write_fit", "data_range", "dimer_record", "MODEL_JSON_KEYS", "ModelFile",
+           "read_model_json", "recorded_settings", "recorded_stages", "settings_record", "SHARED_SETTINGS"]
 
 
 #: model.json's keys in the order they are written; a method's own keys (``FitResult.extras.record``) take their
@@ -30,7 +31,7 @@ __all__ = ["model_json", "fit_record", "write_fit", "data_range", "MODEL_JSON_KE
 MODEL_JSON_KEYS = ("state", "equations", "zscores", "per_run", "units", "inclusion_frequency", "coefficient_mean",
                    "coefficient_std", "selected_terms", "regression_c0", "joint_start", "loss", "scales", "settings",
                    "skipped_files", "glitch_frames_masked", "selection", "integral_form", "fallback", "oracle", "method",
-                   "data_range", "discovery")
+                   "data_range", "dimer", "discovery")
 
 
 #: The settings every method shares (:class:`fitting.config.FitConfig`'s stages), at the top of model.json's
@@ -142,6 +143,8 @@ def model_json(res: FitResult) -> dict:
         "method": res.method,
         "data_range": data_range(res),
     }
+    if not res.system.generic:
+        out["dimer"] = dimer_record(res.meta)
     if res.extras is not None:
         out.update(res.extras.record(res))
     place = {k: i for i, k in enumerate(MODEL_JSON_KEYS)}
@@ -161,6 +164,15 @@ def data_range(res: FitResult) -> dict:
     theta = max(float(np.max(np.abs(p.run.theta))) for p in res.runs)
     y = max(float(np.max(np.abs(p.run.y))) for p in res.runs)
     return {"theta_abs_max": theta, "y_abs_max_m": y}
+
+
+def dimer_record(meta: dict) -> dict:
+    """The fitted data's dimer and experiment, ``{key: value, ..., "from_meta_json": [keys]}``: every physical
+    constant of meta.json (:data:`cubedimer.meta.META_DEFAULTS`'s keys, SI: side, density, bulk modulus, frequency,
+    sound speed, air density, nominal pressure), the default of docs/conventions.md where meta.json states none, and
+    which ones meta.json stated.  ``validation compare`` checks a sweep's dimer against it."""
+    return {**{k: float(meta.get(k, v)) for k, v in META_DEFAULTS.items()},
+            "from_meta_json": [k for k in META_DEFAULTS if k in meta]}
 
 
 def write_fit(res: FitResult, out_dir: str | os.PathLike, plots: bool = True) -> Path:

@@ -61,7 +61,7 @@ from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
 from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front
 from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
-                             select_heldout, select_support)
+                             run_weights, select_heldout, select_support)
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run
@@ -251,6 +251,7 @@ class _Setup:
     forced: NDArray
     noise: tuple[float, float]
     slow_freqs: list[float]
+    weights: tuple[NDArray | None, NDArray | None] = (None, None)
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,8 +288,14 @@ def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Disco
                                 reference_hz=_reference_frequency(f)) for f, dt in zip(freqs, dts)] for q in range(2)]
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
     forced = damping_mask() if config.keep_damping else np.zeros((2, len(TERMS)), bool)
-    return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, (white_noise_std(ys), white_noise_std(ths)),
-                  [min((v for v in f if v > 0), default=float("nan")) for f in freqs])
+    # each run weighted by its own recorded tracking noise (Run.noise, meta.json's tracking.runs); the noise the
+    # residual is compared with is then that of the weighted positions
+    recorded = [getattr(r, "noise", None) for r in runs]
+    weights = tuple(run_weights([None if n is None else n[q] for n in recorded]) for q in range(2))
+    noise = tuple(white_noise_std(x if w is None else [wi * xi for wi, xi in zip(w, x)])
+                  for x, w in zip((ys, ths), weights))
+    return _Setup(dts, ys, ths, first, edges, windows, seg_len, forced, noise,
+                  [min((v for v in f if v > 0), default=float("nan")) for f in freqs], weights)
 
 
 def _reference_frequency(freqs: tuple[float, float]) -> float:
@@ -359,8 +366,8 @@ def _one_pass(setup: _Setup, windows, states: Sequence[NDArray], trims: Sequence
     """Step 2: select (unless ``frozen``) and fit both equations with the columns at ``states``."""
     lib = [evaluate_library(s) for s in states]
     positions = (setup.ys, setup.ths)
-    designs = [reduced_design(positions[q], lib, setup.dts, windows[q], trims, caches[q] if caches else None)
-               for q in range(2)]
+    designs = [reduced_design(positions[q], lib, setup.dts, windows[q], trims, caches[q] if caches else None,
+                              setup.weights[q]) for q in range(2)]
     coef, se, res_std, fronts = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS))), np.zeros(2), []
     modes, ratio, inflation = [], [], []
     for q in range(2):

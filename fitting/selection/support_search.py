@@ -28,7 +28,7 @@ from ..derivatives.integral_form import detrend_windows, integral_columns, windo
 from ..model import TERMS
 from ..multiple_testing import holm_all_significant, holm_backward_elimination, holm_z_threshold
 
-__all__ = ["ReducedDesign", "reduced_design", "numerov_columns", "fit_support", "fit_on_runs", "heldout_rms", "heldout_inflation",
+__all__ = ["ReducedDesign", "reduced_design", "run_weights", "numerov_columns", "fit_support", "fit_on_runs", "heldout_rms", "heldout_inflation",
            "select_support", "prune_heldout"]
 
 @dataclass(frozen=True)
@@ -72,9 +72,12 @@ _VELOCITY_FREE = np.array([is_velocity_free(t) for t in TERMS])
 
 
 def reduced_design(positions: Sequence[NDArray], library: Sequence[NDArray], dts: Sequence[float],
-                   windows: Sequence[int], trims: Sequence[int], cache: dict | None = None) -> ReducedDesign:
+                   windows: Sequence[int], trims: Sequence[int], cache: dict | None = None,
+                   weights: Sequence[float] | None = None) -> ReducedDesign:
     """R factors of the integral-form design of one equation.  ``cache`` (run index -> ((trim, window), columns))
-    keeps the integrated velocity-free columns between passes whose position states are the same (raw) data."""
+    keeps the integrated velocity-free columns between passes whose position states are the same (raw) data.
+    ``weights`` (one per run, :func:`run_weights`) multiply each run's rows: weighted least squares for runs of
+    different tracking noise."""
     rs, rows, wins = [], [], []
     for i, (x, f, dt, w, tr) in enumerate(zip(positions, library, dts, windows, trims)):
         starts = window_starts(len(x), int(w), int(tr))
@@ -89,12 +92,24 @@ def reduced_design(positions: Sequence[NDArray], library: Sequence[NDArray], dts
         elif cache is not None:
             cache[i] = ((tr, int(w)), X[:, _VELOCITY_FREE].copy())
         b = detrend_windows(x, starts, int(w))
-        rs.append(_r_factor([np.column_stack([X, b])]))
+        rs.append(_r_factor([np.column_stack([X, b])]) * (1.0 if weights is None else float(weights[i])))
         rows.append(X.shape[0])
         wins.append(starts.size)
     if not rs:
         raise ValueError("no run is long enough for one integral-form window")
     return ReducedDesign(rs, np.array(rows), np.array(wins), _r_factor(rs))
+
+
+def run_weights(noise: Sequence[float | None]) -> NDArray[np.float64] | None:
+    """Per run, the weight of its rows in the pooled least squares: ``sigma_ref / sigma_run`` with ``sigma_ref`` the
+    RMS of the runs' noises, so that every run's weighted residual has the one standard deviation sigma_ref (white
+    noise of different levels: weighted least squares is then the efficient estimator and its standard errors are
+    honest).  None (every run weighs alike) unless every run states a positive finite noise, or when all state the
+    same."""
+    s = np.array([np.nan if v is None else float(v) for v in noise])
+    if s.size == 0 or not np.all(np.isfinite(s) & (s > 0)) or np.all(s == s[0]):
+        return None
+    return np.sqrt(np.mean(s ** 2)) / s
 
 
 def _lstsq(R: NDArray, cols: Sequence[int], covariance: bool = True) -> tuple[NDArray, NDArray | None, float]:

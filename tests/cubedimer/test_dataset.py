@@ -1,7 +1,9 @@
+import json
+
 import numpy as np
 import pytest
 
-from cubedimer.dataset import DatasetError, LoadConfig, load_dataset, load_run
+from cubedimer.dataset import DEFAULT_MAX_GAP, DatasetError, LoadConfig, load_dataset, load_run
 
 
 def test_good_file_with_comments_extra_columns_and_gaps(tmp_path, sine_run):
@@ -276,3 +278,34 @@ def test_a_tracked_set_s_recorded_fill_limit_is_the_loader_s(tmp_path, write_csv
     (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
     (run,) = load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs
     assert run.name == "run01.csv" and run.n_filled == 40
+
+
+def test_a_fill_limit_the_caller_gives_overrides_the_recorded_one(tmp_path, write_csv):
+    # meta.json records 50 frames; the caller's 10 (--max-gap 10, the default's value) is used all the same
+    (t, y, th), = _noisy_runs(1, 21, duration=4.0)
+    y = y.copy()
+    y[3000:3040] = np.nan
+    write_csv(tmp_path / "run01.csv", t, y, th)
+    (tmp_path / "meta.json").write_text('{"tracking": {"max_gap_frames": 50}}')
+    assert LoadConfig().max_gap is None and LoadConfig().fill_limit == DEFAULT_MAX_GAP == 10
+    runs = load_dataset(tmp_path, config=LoadConfig(consistency=None, max_gap=10)).runs
+    assert [r.name for r in runs] == ["run01_part1.csv", "run01_part2.csv"]
+
+
+def test_each_run_carries_the_noise_the_tracking_recorded_for_it(tmp_path, write_csv):
+    # meta.json's tracking.runs[] (tracking track writes each run's own noise): read per file; a part of a run split
+    # at a long gap has its file's; a file without a usable record has none
+    runs = _noisy_runs(3, 21, duration=4.0)
+    y = runs[1][1].copy()
+    y[3000:3040] = np.nan
+    for i, (t, yy, th) in enumerate(runs, 1):
+        write_csv(tmp_path / f"run{i:02d}.csv", t, y if i == 2 else yy, th)
+    (tmp_path / "meta.json").write_text(json.dumps({"tracking": {"noise_y_m": 2e-7, "noise_theta": 1e-3, "runs": [
+        {"file": "run01.csv", "noise_y_m": 1e-7, "noise_theta": 5e-4},
+        {"file": "run02.csv", "noise_y_m": 3e-7, "noise_theta": 2e-3},
+        {"file": "run03.csv", "noise_y_m": 0.0, "noise_theta": 2e-3}]}}))
+    ds = load_dataset(tmp_path, config=LoadConfig(consistency=None))
+    assert {r.name: r.noise for r in ds.runs} == {"run01.csv": (1e-7, 5e-4), "run02_part1.csv": (3e-7, 2e-3),
+                                                  "run02_part2.csv": (3e-7, 2e-3), "run03.csv": None}
+    (tmp_path / "meta.json").write_text("{}")
+    assert all(r.noise is None for r in load_dataset(tmp_path, config=LoadConfig(consistency=None)).runs)

@@ -41,6 +41,9 @@ def test_model_json_records_the_box_the_data_span(small_dataset, fitted):
     assert rng == {"theta_abs_max": max(float(abs(r.theta).max()) for r in runs),
                    "y_abs_max_m": max(float(abs(r.y).max()) for r in runs)}
     assert 0.05 < rng["theta_abs_max"] < 0.9 and 1e-5 < rng["y_abs_max_m"] < 1e-3  # a dimer's range, in SI units
+    # and the dimer the data are of: no meta.json, so every constant is docs/conventions.md's default
+    dimer = json.loads((fitted / "model.json").read_text())["dimer"]
+    assert dimer["side_length_m"] == 500e-6 and dimer["frequency_hz"] == 45650.0 and dimer["from_meta_json"] == []
 
 
 def test_fit_resumes_from_cached_runs(small_dataset, fitted, capsys):

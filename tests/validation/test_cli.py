@@ -159,7 +159,7 @@ def test_the_report_builds_its_fit_configuration_as_the_fit_command_does():
     from validation.cli import build_parser as validation_parser
 
     extra = ["--max-evals", "7", "--joint-max-evals", "9", "--output-error", "refine", "--no-glitch-mask",
-             "--min-periods", "3"]
+             "--min-periods", "3", "--max-gap", "40"]
     fit_args = fit_parser().parse_args(["fit", "d", "--out", "o", *extra])
     report_args = validation_parser().parse_args(["report", "d", "--out", "o", *extra])
     cfg = fit_config_from_args(fit_args)
@@ -167,7 +167,9 @@ def test_the_report_builds_its_fit_configuration_as_the_fit_command_does():
     assert (cfg.method.polish.max_evals, cfg.method.joint.max_evals) == (7, 9)
     assert not hasattr(cfg.method, "refine")  # the paper's per-run refinement is not the discovery's setting
     assert cfg.method.selection.output_error.support_tolerance is None
-    assert cfg.load.glitches is None and cfg.load.min_periods == 3.0
+    assert cfg.load.glitches is None and cfg.load.min_periods == 3.0 and cfg.load.max_gap == 40
+    # not given: None, the data set's recorded fill limit or the loader's default
+    assert fit_config_from_args(fit_parser().parse_args(["fit", "d", "--out", "o"])).load.max_gap is None
 
 
 @pytest.mark.parametrize("extra, option", [
@@ -192,3 +194,20 @@ def test_a_single_run_is_refused_with_the_runs_needed(tmp_path, tiny_data, capsy
     assert "needs at least 3, because it scores every fit on runs held out of it" in line
     assert "at least 7 to name an effect at alpha 0.01" in line and "record more runs" in line
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["diagnose", "report"])
+@pytest.mark.parametrize("max_gap, runs", [([], "2 usable runs"), (["--max-gap", "50"], "1 usable run;")])
+def test_max_gap_reaches_the_loader(tmp_path, sine_run, write_csv, capsys, command, max_gap, runs):
+    """A 40-frame gap splits the run in two at the default fill limit (10 frames) and is filled under --max-gap 50:
+    the runs the command counts (here refused as too few, before anything long runs) say which limit it loaded with."""
+    data = tmp_path / "data"
+    data.mkdir()
+    t, y, th = sine_run
+    y = y.copy()
+    y[1000:1040] = float("nan")  # 40 frames: 2 % of the run, under the loader's 5 % of missing frames
+    write_csv(data / "run01.csv", t, y, th)
+    assert main([command, str(data), "--out", str(tmp_path / "out"), "--quiet", *max_gap]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("error: ") and runs in err[-1]
+    assert ("split at 1 gap(s) longer than 10 missing frames" in err[0]) == (not max_gap)  # the split is said

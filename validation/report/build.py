@@ -57,8 +57,9 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     atlas : folder of an attractor atlas (``python -m acousim atlas``), shown as the last section
     fit_config : the fit's settings (``python -m validation report`` makes them from the fit's options,
         :func:`fitting.options.fit_config_from_args`; default: those of ``method`` and ``heldout_tolerance``); its
-        loading rules for glitches and short runs (``load.glitches``, ``load.min_periods``) are applied to the one
-        loaded data set, and its method's joint re-optimisation (``method.joint``) re-optimises the variant
+        loading rules for glitches, short runs and gaps (``load.glitches``, ``load.min_periods``, ``load.max_gap``) are
+        applied to the one loaded data set, and its method's joint re-optimisation (``method.joint``) re-optimises the
+        variant
 
     Returns
     -------
@@ -87,9 +88,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     spec = spec if spec is not None else ModelSpec()
     config = (fit_config if fit_config is not None else
               FitConfig.for_method(method).with_heldout_tolerance(heldout_tolerance)).with_max_evals(max_evals, joint=True)
-    # the data set, loaded once with the diagnosis's checks (and the fit's rules for glitches and short runs): the fit
-    # and the diagnosis see the same runs
-    load = replace(LoadConfig(), glitches=config.load.glitches, min_periods=config.load.min_periods)
+    # the data set, loaded once with the diagnosis's checks (and the fit's rules for glitches, short runs and gaps):
+    # the fit and the diagnosis see the same runs
+    load = replace(LoadConfig(), glitches=config.load.glitches, min_periods=config.load.min_periods,
+                   max_gap=config.load.max_gap)
     dataset = load_for_diagnosis(data_dir, progress=progress, load=load)
     # refuse a model that does not fit the experiment (a dimer outside the full-wave family) before the long fit, and
     # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
