@@ -10,7 +10,7 @@ Method (``y`` up, or down: a fall is then a rise at ``+g``).
 
 1. **Rest.**  The first frames are at rest when their spread is within 3 noise (``noise``, else the robust
    scale of their successive differences) and below 2 % of the run's half range, and the trend and curvature of a
-   parabola through the first :data:`MIN_REST_FRAMES` are below 6 of their standard errors at the scatter about it
+   parabola through the first :data:`MIN_REST_FRAMES` (at least :data:`MIN_REST_S`) are below 6 of their standard errors at the scatter about it
    (a smooth motion has them, noise-free or not, at a turning point too).  The rest ends at the first of
    three frames in a row that lie more than :data:`DEPARTURE_SIGMA` noise on the same side of the rest level
    (the fall has then lasted about ``sqrt(12 noise / g)``: one frame at 2000 frames/s and 0.2 um of noise).
@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import DatasetError
 
 __all__ = ["DropPhases", "find_drop_phases", "starts_at_rest", "field_on_start", "STANDARD_GRAVITY", "DEPARTURE_SIGMA", "MAX_FALL_S",
-           "AFTER_S", "FALL_TOLERANCE", "MIN_REST_FRAMES", "MAX_RING_S", "fall_depth", "return_depth"]
+           "AFTER_S", "FALL_TOLERANCE", "MIN_REST_FRAMES", "MIN_REST_S", "rest_head_frames", "MAX_RING_S", "fall_depth", "return_depth"]
 
 #: Standard gravity [m/s^2] (docs/conventions.md).
 STANDARD_GRAVITY = 9.80665
@@ -65,6 +65,10 @@ AFTER_S = 0.002
 FALL_TOLERANCE = 0.25
 #: Frames at rest a recording must begin with for its drop to be found.
 MIN_REST_FRAMES = 16
+#: ... and the time they must span [s] (16 frames at 2000 frames/s): a trap oscillation (about 22 Hz) curves by the
+#: square of the time a head of frames spans, so over a shorter head its turning point cannot be told from rest
+#: however many frames the head holds (at 50,000 frames/s 16 frames span 0.32 ms).
+MIN_REST_S = 0.008
 #: Longest ring time of the transducer searched [s]: the field's amplitude decays as exp(-t / tau) when the drive
 #: stops and rises as 1 - exp(-t / tau) when it is back (tau = Q / (pi f): 1.74 ms at Q = 250 and 45.65 kHz).
 MAX_RING_S = 0.004
@@ -176,16 +180,26 @@ def _robust_noise(y: NDArray) -> float:
     return 1.4826 * float(np.median(np.abs(d))) / math.sqrt(2.0) if d.size >= 4 else 0.0
 
 
-def starts_at_rest(y: ArrayLike, noise: float | None = None) -> tuple[int, float, float] | None:
+def rest_head_frames(dt: float | None = None) -> int:
+    """The frames a rest is judged on at frame interval ``dt`` [s]: :data:`MIN_REST_FRAMES`, or more where they span
+    less than :data:`MIN_REST_S` (None: the frames alone)."""
+    if dt is None or not dt > 0:
+        return MIN_REST_FRAMES
+    return max(MIN_REST_FRAMES, int(math.ceil(MIN_REST_S / dt - 1e-9)))
+
+
+def starts_at_rest(y: ArrayLike, noise: float | None = None, dt: float | None = None) -> tuple[int, float, float] | None:
     """``(departure frame, rest level, noise)`` of a series that begins at rest (step 1 of the module docstring),
-    or None.  The departure frame is the first of the three frames in a row beyond the rest."""
+    or None.  The departure frame is the first of the three frames in a row beyond the rest.  ``dt``: the frame
+    interval [s], so that the rest is judged over at least :data:`MIN_REST_S` (:func:`rest_head_frames`)."""
     y = np.asarray(y, float)
     fin = np.flatnonzero(np.isfinite(y))
-    if fin.size < 4 * MIN_REST_FRAMES:
+    n_head = rest_head_frames(dt)
+    if fin.size < 4 * n_head:
         return None
-    head_at = fin[:MIN_REST_FRAMES]
+    head_at = fin[:n_head]
     head = y[head_at]
-    sigma = max(float(noise or 0.0), _robust_noise(y[: fin[2 * MIN_REST_FRAMES]]))
+    sigma = max(float(noise or 0.0), _robust_noise(y[: fin[2 * n_head]]))
     half_range = 0.5 * float(np.subtract(*np.percentile(y[fin], [99, 1])))
     x = (head_at - head_at.mean()) / max(float(np.ptp(head_at)), 1.0)
     V = np.vander(x, 3)
@@ -208,7 +222,7 @@ def starts_at_rest(y: ArrayLike, noise: float | None = None) -> tuple[int, float
         if not run.any():
             return None
         k = int(np.argmax(run))
-        if k < MIN_REST_FRAMES:
+        if k < n_head:
             return None
         rest = y[:k][np.isfinite(y[:k])]
         level = float(np.median(rest))
@@ -346,7 +360,7 @@ def find_drop_phases(t: ArrayLike, y: ArrayLike, noise: float | None = None,
     if t.size < 4 * MIN_REST_FRAMES:
         return None
     dt = float((t[-1] - t[0]) / (t.size - 1))
-    rest = starts_at_rest(y, noise)
+    rest = starts_at_rest(y, noise, dt)
     if rest is None:
         return None
     k, level, sigma = rest
@@ -371,7 +385,7 @@ def field_on_start(path, t: NDArray, y: NDArray) -> int:
     """The first frame of the field-on motion of a run that still holds its field drop (at rest, then the free fall
     with the field off; :mod:`cubedimer.drop_phases`): the run is cut there, with a warning; 0 for a run that does not
     start at rest.  A run that starts at rest and then moves without a free fall is refused in one line."""
-    rest = starts_at_rest(y)
+    rest = starts_at_rest(y, dt=float((t[-1] - t[0]) / (t.size - 1)) if t.size > 1 else None)
     if rest is None:
         return 0
     ph = find_drop_phases(t, y)

@@ -119,3 +119,19 @@ def test_rest_is_recognised_whatever_the_noise_draws(drop_heights):
     assert all(starts_at_rest(y + n) is not None for n in noise)
     # while a smooth motion is never at rest: the run without its rest and fall, from any of 40 phases
     assert not any(starts_at_rest(y[k:] + n[k:]) for k, n in zip(range(80, 480, 10), noise))
+
+
+@pytest.mark.parametrize("fps", [2000.0, 20000.0, 50000.0])
+def test_a_turning_point_is_not_rest_at_any_frame_rate(fps):
+    # a 100 um oscillation at 22 Hz from its turning point, 1 um of noise: over 16 frames at 50,000 frames/s (0.32 ms)
+    # it moves by 9.6 nm, far inside the noise, so frames alone cannot tell it from rest; over MIN_REST_S (8 ms) it
+    # moves by 55 um, 55 noise, so it is a motion at every rate
+    from cubedimer.drop_phases import MIN_REST_S, rest_head_frames
+
+    dt = 1.0 / fps
+    t = np.arange(int(0.5 * fps)) * dt
+    y = 1e-4 * np.cos(2 * np.pi * 22.0 * t) + 1e-6 * np.random.default_rng(3).standard_normal(t.size)
+    assert rest_head_frames(dt) * dt >= MIN_REST_S - 1e-12
+    assert starts_at_rest(y, dt=dt) is None
+    if fps == 50000.0:  # the defect the time span mends: 16 frames of this motion read as rest
+        assert starts_at_rest(y) is not None
