@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
-from cubedimer.config_checks import check_positive
+from cubedimer.config_checks import check_positive, check_that
 from .method_names import methods_accepting
 from .refinement.long_time import JOINT_REFINE, RefineConfig
 from .refinement.output_error import OutputErrorConfig
@@ -167,6 +167,14 @@ class PaperMethodConfig(MethodConfig):
     selection: SelectionConfig = field(default_factory=SelectionConfig)
     candidate_joint: RefineConfig = field(default_factory=lambda: RefineConfig(
         max_evals=300, rel_bound=0.3, abs_bound=0.005, horizons=(0.5, 1.0)))
+
+    def __post_init__(self) -> None:
+        # each stage checks its own values; here, that each is the stage's settings (a dict or a name passed by
+        # mistake would fail only deep inside the fit)
+        for name, kind in (("regression", RegressionConfig), ("refine", RefineConfig), ("joint", RefineConfig),
+                           ("ensemble", EnsembleConfig), ("selection", SelectionConfig),
+                           ("candidate_joint", RefineConfig)):
+            check_that(self, isinstance(getattr(self, name), kind), f"{name} must be a {kind.__name__}")
 
     def with_relative_threshold(self, relative: bool) -> "PaperMethodConfig":
         """These settings with the regression threshold relative to each equation's signal size (or not)."""

@@ -107,7 +107,7 @@ def test_the_discovery_weighs_each_run_by_its_recorded_noise(mixed_noise_runs, t
     ratios = {}
     for label, runs in zip(("plain", "recorded"), mixed_noise_runs):
         prepared, _ = prepare_runs(runs)
-        disc = discover_model([p.run for p in prepared], [p.derivs for p in prepared], FitConfig().discovery)
+        disc = discover_model([p.run for p in prepared], [p.derivs for p in prepared], FitConfig().method.selection)
         ratios[label] = disc.residual_to_noise
         if label == "recorded":
             assert disc.selection_modes == ("significance", "significance")
