@@ -28,6 +28,7 @@ import shutil
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -303,6 +304,30 @@ def check_pinned_settings(pinned: Path, settings: dict, what: str, force: bool =
         raise AtlasError(f"--out {pinned.parent} holds {what} with other settings; choose another --out (or --force)")
 
 
+def check_dimers_buildable(dimers, pressures_pa, frequency_hz: float) -> None:
+    """Refuse (:class:`AtlasError`, one line naming the dimer and pressure) a study one of whose dimers cannot be
+    built at one of its pressures, before anything is written."""
+    for dimer in dimers:
+        for p in pressures_pa:
+            try:
+                atlas_dynamics(dimer.side, dimer.gap_ratio, p, frequency_hz)
+            except ValueError as exc:
+                raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g} at {p:g} Pa: {exc}") from None
+
+
+def open_study(out: Path, settings: dict, pinned_name: str, what: str, force: bool,
+               check_buildable: Callable[[], None]) -> None:
+    """Open the folder ``out`` of a resumable study (an atlas, a map) with ``settings``: refuse another study's
+    folder, or with ``force`` discard it (:func:`check_pinned_settings`, ``what`` names the study), run
+    ``check_buildable`` (it raises :class:`AtlasError`) before anything is written, then create the folder and pin
+    the settings in ``out/pinned_name``."""
+    pinned = out / pinned_name
+    check_pinned_settings(pinned, settings, what, force)
+    check_buildable()
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(pinned, settings)
+
+
 def run_resumable_cells(out: Path, cells: list, cell_path, task, item, executor: ExecutorConfig | None,
                         progress: bool, desc: str) -> list[dict]:
     """Run the cells of a study whose result file ``cell_path(cell)`` does not exist yet, each ``task(item(cell))``
@@ -332,15 +357,8 @@ def run_atlas(config: AtlasConfig, out: str | os.PathLike, executor: ExecutorCon
     """
     out = Path(out)
     settings = config.to_dict()
-    pinned = out / "atlas_settings.json"
-    check_pinned_settings(pinned, settings, "an atlas", force)
-    for dimer in config.dimers:  # every dimer must be buildable before anything is written
-        try:
-            atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_amplitude_pa, config.frequency_hz)
-        except ValueError as exc:
-            raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g}: {exc}") from None
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(pinned, settings)
+    open_study(out, settings, "atlas_settings.json", "an atlas", force,
+               lambda: check_dimers_buildable(config.dimers, (config.pressure_amplitude_pa,), config.frequency_hz))
     rows = run_resumable_cells(out, config.cells(), lambda c: _cell_path(out, config, *c), _cell_task,
                                lambda c: (config, c), executor, progress, "atlas")
     atomic_write_text(out / "atlas.csv", cells_csv_text(CSV_COLUMNS, rows))

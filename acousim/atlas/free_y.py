@@ -39,7 +39,7 @@ from cubedimer.attractors import classify_trajectory
 from cubedimer.executor import ExecutorConfig
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
-from .field_drops import AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
+from .field_drops import AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_dimers_buildable, open_study, run_resumable_cells
 
 __all__ = ["FreeYConfig", "settle_and_guess", "orbit_record", "same_orbit", "distinct_orbits", "free_y_cell",
            "cell_summary", "run_free_y_map", "MAP_COLUMNS", "Y_REST", "PHASE_CLASSES"]
@@ -339,15 +339,8 @@ def run_free_y_map(config: FreeYConfig, out: str | os.PathLike, executor: Execut
     """
     out = Path(out)
     settings = config.to_dict()
-    pinned = out / "free_y_settings.json"
-    check_pinned_settings(pinned, settings, "a free-y map", force)
-    for dimer in config.dimers:  # every dimer must be buildable before anything is written
-        try:
-            atlas_dynamics(dimer.side, dimer.gap_ratio, config.pressure_pa, config.frequency_hz)
-        except ValueError as exc:
-            raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g} at {config.pressure_pa:g} Pa: {exc}") from None
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(pinned, settings)
+    open_study(out, settings, "free_y_settings.json", "a free-y map", force,
+               lambda: check_dimers_buildable(config.dimers, (config.pressure_pa,), config.frequency_hz))
     cells = run_resumable_cells(out, config.cells(), lambda c: _cell_path(out, config, *c), _cell_task,
                                 lambda c: (config, c), executor, progress, "free-y map")
     rows = [cell_summary(c) for c in cells]

@@ -37,7 +37,7 @@ from cubedimer.executor import ExecutorConfig
 from cubedimer.rk4 import rk4, rk4_batch
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
-from .field_drops import (AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells,
+from .field_drops import (AtlasDimer, AtlasError, atlas_dynamics, cells_csv_text, check_dimers_buildable, open_study, run_resumable_cells,
                     settled_outcome)
 from ..dynamics.equations import _P_MASS, _P_MG, _P_TWO_K, _P_ZEQ, _chebval, field_on_acceleration
 
@@ -365,16 +365,8 @@ def run_held_y_map(config: HeldYConfig, out: str | os.PathLike, executor: Execut
     """
     out = Path(out)
     settings = config.to_dict()
-    pinned = out / "held_y_settings.json"
-    check_pinned_settings(pinned, settings, "a held-y map", force)
-    for dimer in config.dimers:  # every dimer and pressure must be buildable before anything is written
-        for p in config.pressures_pa:
-            try:
-                atlas_dynamics(dimer.side, dimer.gap_ratio, p, config.frequency_hz)
-            except ValueError as exc:
-                raise AtlasError(f"--dimers {dimer.side:g}:{dimer.gap_ratio:g} at {p:g} Pa: {exc}") from None
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(pinned, settings)
+    open_study(out, settings, "held_y_settings.json", "a held-y map", force,
+               lambda: check_dimers_buildable(config.dimers, config.pressures_pa, config.frequency_hz))
     cells = run_resumable_cells(out, config.cells(), lambda c: _cell_path(out, config, *c), _cell_task,
                                 lambda c: (config, c), executor, progress, "held-y map")
     rows = [cell_summary(c) for c in cells]

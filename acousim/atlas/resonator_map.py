@@ -33,7 +33,7 @@ from cubedimer.atomic import atomic_write_text, save_figure, write_json
 from cubedimer.executor import ExecutorConfig
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
-from .field_drops import AtlasError, atlas_dynamics, cells_csv_text, check_pinned_settings, run_resumable_cells
+from .field_drops import AtlasError, atlas_dynamics, cells_csv_text, open_study, run_resumable_cells
 
 __all__ = ["ResonatorMapConfig", "map_dynamics", "growth_from_peaks", "fate", "detuning_row", "run_resonator_map",
            "MAP_COLUMNS", "DEFAULT_DIMERS"]
@@ -202,6 +202,15 @@ def _cell_task(item: tuple) -> dict:
     return {"dimer": spec, "rows": rows}
 
 
+def _check_map_dimers(config: ResonatorMapConfig) -> None:
+    """Refuse a map one of whose dimers cannot be built (:class:`AtlasError`), before anything is written."""
+    for spec in config.dimers:
+        try:
+            map_dynamics(spec, config.frequency_hz)
+        except ValueError as exc:
+            raise AtlasError(f"--dimers {spec}: {exc}") from None
+
+
 def run_resonator_map(config: ResonatorMapConfig, out: str | os.PathLike, executor: ExecutorConfig | None = None,
                       progress: bool = True, figures: bool = True, force: bool = False) -> dict:
     """Run (or resume) the resonator map into ``out``; returns the ``resonator_map.json`` content.
@@ -211,15 +220,8 @@ def run_resonator_map(config: ResonatorMapConfig, out: str | os.PathLike, execut
     """
     out = Path(out)
     settings = config.to_dict()
-    pinned = out / "resonator_map_settings.json"
-    check_pinned_settings(pinned, settings, "a resonator map", force)
-    for spec in config.dimers:  # every dimer must be buildable before anything is written
-        try:
-            map_dynamics(spec, config.frequency_hz)
-        except ValueError as exc:
-            raise AtlasError(f"--dimers {spec}: {exc}") from None
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(pinned, settings)
+    open_study(out, settings, "resonator_map_settings.json", "a resonator map", force,
+               lambda: _check_map_dimers(config))
     cells = run_resumable_cells(out, config.cells(), lambda c: out / "cells" / f"d{c[0]}_q{c[1]}_a{c[2]}.json",
                                 _cell_task, lambda c: (config, c), executor, progress, "resonator map")
     rows = [dict(r, outcome=fate(r["outcome"], r["growth_exact"], config.window)) for c in cells for r in c["rows"]]
