@@ -127,7 +127,6 @@ def with_simulations(diag, meta: dict, spec, res, figs_dir: Path):
     """The diagnosis with the records a report reads (docs/formats.md): every registered model calibrated on the runs
     (``model_comparison``) and one run's time-series overlay (``overlay``); the reference model's posed mesh is
     rendered into ``figs_dir`` when the model can render it."""
-    from dataclasses import replace as replaced
 
     import numpy as np
     from acousim.models import force_model_type
@@ -144,7 +143,7 @@ def with_simulations(diag, meta: dict, spec, res, figs_dir: Path):
         from acousim.gorkov.render import render_dimer
 
         render_dimer(statics[reference], 0.3, 0.0, figs_dir / f"dimer_{reference}.png")
-    return replaced(diag, model_comparison=record, overlay=overlay_record(internals))
+    return replace(diag, model_comparison=record, overlay=overlay_record(internals))
 
 
 def render_report(out_dir: str | Path, *, data_dir: str | Path | None = None, atlas: str | Path | None = None,
