@@ -28,6 +28,7 @@ from typing import Callable, Sequence
 from .dataset import DatasetError
 from .distribution import DISTRIBUTION, __version__
 from .executor import ExecutorConfig, ExecutorError, single_blas_thread
+from .setting_options import positive_float, positive_int
 
 __all__ = ["UserInputError", "OneLineParser", "command_parser", "run_cli", "configure_logging", "join_negative_values",
            "add_executor_arguments", "executor_config", "prepare_output_dir", "prepare_output_file", "check_limit",
@@ -80,28 +81,6 @@ def field_default(config_class: type, name: str):
     the default its help names) from the config it fills, never a copy."""
     f = config_class.__dataclass_fields__[name]
     return f.default_factory() if callable(f.default_factory) else f.default
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {v}")
-    return v
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (v > 0 and v < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
-    return v
 
 
 def float_list(text: str, option: str) -> list[float]:

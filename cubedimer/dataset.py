@@ -15,83 +15,23 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from .config_checks import check_fraction, check_non_negative, check_that, check_whole
 from .errors import DatasetError
 from .meta import read_meta
 from .drop_phases import field_on_start
 from .gaps import fill_gaps, fill_lost_frames, gap_segments
 from .noise import recorded_run_noise
-from .consistency import SLOW_PEAK_FRACTION, ConsistencyConfig, check_consistency, run_features
-from .glitches import GlitchConfig, find_glitches
+from .consistency import SLOW_PEAK_FRACTION, check_consistency, run_features
+from .glitches import find_glitches
+from .load_config import DEFAULT_MAX_GAP, LoadConfig
 from .lab_csv import cut_text, echo, missing_columns_message, parse_header, read_rows, separator, unit_factor
 from .spectra import dominant_frequency
+from .run_csv import format_run_csv, write_run_csv
 from .system import LEVITATED_DIMER, SystemSpec, check_velocity, coordinate_unit_factor, read_system
 
 __all__ = ["DatasetError", "Run", "Dataset", "SkippedFile", "LoadConfig", "load_run", "load_run_parts", "load_dataset",
-           "fill_gaps", "gap_segments", "DEFAULT_MAX_GAP"]
+           "fill_gaps", "gap_segments", "DEFAULT_MAX_GAP", "format_run_csv", "write_run_csv"]
 
 logger = logging.getLogger(__name__)
-
-#: The longest gap of missing frames [frames] the loader fills when neither the caller nor the data set (meta.json
-#: ``tracking.max_gap_frames``) says another: 5 ms at 2,000 fps, a tenth of a 20 Hz period.
-DEFAULT_MAX_GAP = 10
-
-
-@dataclass(frozen=True)
-class LoadConfig:
-    """Rules for loading.
-
-    Parameters
-    ----------
-    max_gap : int or None
-        Longest run of consecutive missing frames that is filled (PCHIP through the neighbours); a run is split at
-        a longer gap (:func:`load_run_parts`).  None: the limit the data set records (meta.json
-        ``tracking.max_gap_frames``, written by ``tracking track --max-gap``), else :data:`DEFAULT_MAX_GAP`; a
-        number given here is used whatever the set records.
-    max_missing_fraction : float
-        Largest allowed fraction of missing frames per run.
-    uniform_tol : float
-        Allowed relative deviation of any time step from the median step (docs/formats.md: 1 %).
-    min_periods : float
-        Minimum number of oscillation periods (of the dominant y frequency) a run must hold.
-    glitches : GlitchConfig or None
-        Isolated tracking glitches are found (:mod:`cubedimer.glitches`) and masked like missing
-        frames; None keeps every frame.
-    consistency : ConsistencyConfig or None
-        Runs that do not fit the rest of the set or the physics of levitation (:mod:`cubedimer.consistency`;
-        meta.json's constants or their defaults) are reported and skipped; None loads every readable run.
-    trap_frequency : callable or None
-        ``trap_frequency(meta) -> Hz``, a physics estimate of the vertical trap frequency at meta.json's
-        nominal pressure (e.g. :func:`acousim.analytic.nominal_trap_frequency`), checked when the data set
-        has a meta.json; None keeps the physics-free bound of 5-200 Hz only.
-    systems : tuple of str
-        The kinds of system (:data:`cubedimer.system.SYSTEM_KINDS`) accepted from meta.json; a data set declaring
-        another kind is refused in one line.  The default, a levitated dimer only, is what every command but
-        ``fitting fit`` needs.
-    """
-
-    max_gap: int | None = None
-    max_missing_fraction: float = 0.05
-    uniform_tol: float = 0.01
-    min_periods: float = 5.0
-    glitches: GlitchConfig | None = field(default_factory=GlitchConfig)
-    consistency: ConsistencyConfig | None = field(default_factory=ConsistencyConfig)
-    trap_frequency: Callable[[dict], float] | None = None
-    systems: tuple[str, ...] = ("levitated_dimer",)
-
-    def __post_init__(self) -> None:
-        check_whole(self, "max_gap", minimum=0, optional=True)
-        check_fraction(self, "max_missing_fraction", closed=True)
-        check_fraction(self, "uniform_tol")
-        check_non_negative(self, "min_periods")
-        check_that(self, self.trap_frequency is None or callable(self.trap_frequency),
-                   f"trap_frequency must be callable or None, got {self.trap_frequency!r}")
-
-    @property
-    def fill_limit(self) -> int:
-        """The longest gap filled [frames]: ``max_gap``, or :data:`DEFAULT_MAX_GAP` when it is None."""
-        return DEFAULT_MAX_GAP if self.max_gap is None else int(self.max_gap)
-
 
 @dataclass(frozen=True, eq=False)
 class Run:
@@ -531,45 +471,3 @@ def load_dataset(path: str | os.PathLike, strict: bool = False, config: LoadConf
     skipped.sort(key=lambda s: s.file)
     runs = _with_run_noise(runs, meta)
     return Dataset(path=str(p), runs=tuple(runs), meta=meta, skipped=tuple(skipped), system=system)
-
-
-# ---------------------------------------------------------------------- writing
-__all__ += ["format_run_csv", "write_run_csv"]
-
-
-def _csv_number(v: float, spec: str, missing: str) -> str:
-    return missing if not np.isfinite(v) else format(v, spec)
-
-
-def format_run_csv(t: NDArray, y: NDArray, theta: NDArray, comments: tuple[str, ...] | list[str] = (),
-                   t_decimals: int = 9, y_digits: int = 10, theta_decimals: int = 10, missing: str = "nan") -> str:
-    """The text of one run's CSV (docs/formats.md): ``# comment`` lines, header ``t,y,theta``, one row per frame.
-
-    Parameters
-    ----------
-    t, y, theta : ndarray (n,)
-        Times [s], heights [m], bends [-]; non-finite y or theta (missing frames) are written as ``missing``.
-    comments : sequence of str
-        Comment lines, written after ``# ``.
-    t_decimals, theta_decimals : int
-        Decimals of t and theta (fixed point).
-    y_digits : int
-        Decimals of y's mantissa (scientific notation).
-    missing : str
-        Text of a missing value (``"nan"`` or ``""``; the loader reads both).
-    """
-    ts, ys, ths = f".{int(t_decimals)}f", f".{int(y_digits)}e", f".{int(theta_decimals)}f"
-    lines = [f"# {c}" for c in comments] + ["t,y,theta"]
-    lines += [f"{format(a, ts)},{_csv_number(b, ys, missing)},{_csv_number(c, ths, missing)}"
-              for a, b, c in zip(np.asarray(t, float), np.asarray(y, float), np.asarray(theta, float))]
-    return "\n".join(lines) + "\n"
-
-
-def write_run_csv(path: str | os.PathLike, t: NDArray, y: NDArray, theta: NDArray,
-                  comments: tuple[str, ...] | list[str] = (), **number_format) -> Path:
-    """Write one run's CSV atomically (:func:`format_run_csv`; ``number_format`` are its format
-    keywords); returns the path."""
-    from .atomic import atomic_write_text
-
-    atomic_write_text(path, format_run_csv(t, y, theta, comments, **number_format))
-    return Path(path)

@@ -63,9 +63,10 @@ class FitConfig:
         return self.method.name
 
     def with_method_option(self, option: str, value: Any) -> "FitConfig":
-        """This configuration with the method-specific ``option`` (:data:`fitting.method_names.METHOD_OPTIONS`) set
-        on the method's settings (None: unchanged); ValueError (one line, to follow the option's name) for a method
-        that does not accept the option or a value out of range."""
+        """This configuration with the command-line option ``option`` of the method's settings (an argparse
+        destination, ``"heldout_tolerance"``: ``MethodConfig.command_options``) set to ``value`` (None: unchanged);
+        ValueError (one line, to follow the option's flag) for a method that does not accept the option or a value
+        out of range."""
         if value is None:
             return self
         return replace(self, method=self.method.with_option(option, value))

@@ -9,16 +9,11 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["METHODS", "METHOD_OPTIONS", "DEFAULT_METHOD", "method_names", "get_method", "methods_accepting",
+__all__ = ["METHODS", "DEFAULT_METHOD", "method_names", "get_method", "method_options", "methods_accepting",
            "methods_help"]
 
 #: The method a fit uses unless told otherwise.
 DEFAULT_METHOD = "discovery"
-
-#: The options of ``python -m fitting fit`` that only some methods accept (argument names; a method's settings list
-#: those they accept in ``MethodConfig.options`` and apply each with ``with_<option>``): the discovery's practical
-#: threshold, output error and term cap, and the paper regression's relative threshold.
-METHOD_OPTIONS: tuple[str, ...] = ("heldout_tolerance", "output_error", "max_terms", "relative_threshold")
 
 #: name -> method, in registration order (the default first).
 METHODS: dict[str, Any] = {}  # values: fitting.methods.registry.FittingMethod
@@ -37,9 +32,16 @@ def get_method(name: str) -> Any:
         raise ValueError(f"unknown method {name!r} (use one of {', '.join(METHODS)})") from None
 
 
+def method_options() -> tuple[str, ...]:
+    """The command-line options of the registered methods' settings (argparse destinations, ``"max_evals"``, in the
+    order of the methods and of their declarations: ``MethodConfig.command_options``)."""
+    return tuple(dict.fromkeys(o.dest for m in METHODS.values() for o in m.config_type.command_options()))
+
+
 def methods_accepting(option: str) -> tuple[str, ...]:
-    """The registered methods that accept the method-specific ``option`` (an entry of :data:`METHOD_OPTIONS`)."""
-    return tuple(name for name, m in METHODS.items() if option in m.config_type.options)
+    """The registered methods whose settings declare the option ``option`` (an argparse destination,
+    :func:`method_options`)."""
+    return tuple(name for name, m in METHODS.items() if m.config_type.command_option(option) is not None)
 
 
 def methods_help() -> str:

@@ -3,24 +3,26 @@
 A fit's :class:`fitting.config.FitConfig` holds the stages every method shares (loading, smoothing, attractor
 classification) and, as its ``method``, the frozen settings of one registered method
 (:class:`fitting.methods.registry.FittingMethod` ``config_type``).  A method's settings say, next to the fields
-themselves, which method they belong to (``name``), which of the method-specific command-line options
-(:data:`fitting.method_names.METHOD_OPTIONS`) they accept (``options``, each applied by the method
-``with_<option>``) and which of their refinements ``--max-evals`` sets (``max_evals_setting``); the fit command,
-the report command and :meth:`fitting.config.FitConfig.with_method_option` read these, so an option means the same
-everywhere and is refused, in one line, by a method that does not accept it.
+themselves, which method they belong to (``name``), the command-line options that set them (``options``:
+:class:`cubedimer.setting_options.SettingOption` declarations, each naming its flag, the field it sets, its type or
+choices and its help; the default is read from the field) and which of their refinements ``--max-evals`` sets
+(``max_evals_setting``, :meth:`MethodConfig.command_options`).  The fit's parser is generated from the declarations
+of the registered methods (:mod:`fitting.options`), so the fit command and the report command offer every method's
+options, an option means the same everywhere, and a method whose settings do not declare it refuses it in one line.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from cubedimer.config_checks import check_positive, check_that
+from cubedimer.setting_options import SettingOption, positive_int
 from .method_names import methods_accepting
 from .refinement.long_time import JOINT_REFINE, RefineConfig
 from .refinement.output_error import OutputErrorConfig
 from .selection.discovery_config import DiscoveryConfig
 from .selection.ensemble import EnsembleConfig
-from .selection.rules import SelectionConfig
+from .selection.rules import SELECTION_RULES, SelectionConfig, selection_rule_names
 from .selection.sparse_regression import RegressionConfig
 
 __all__ = ["MethodConfig", "DiscoveryMethodConfig", "PaperMethodConfig", "OUTPUT_ERROR_MODES"]
@@ -39,36 +41,55 @@ class MethodConfig:
     ----------
     name : str (class attribute)
         The registered method these settings belong to (:data:`fitting.methods.registry.METHODS`).
-    options : tuple of str (class attribute)
-        The method-specific options (:data:`fitting.method_names.METHOD_OPTIONS`) the settings accept; each is
-        applied by the method ``with_<option>(value)``.
+    options : tuple of SettingOption (class attribute)
+        The method's own command-line options, each setting one field of these settings
+        (:class:`cubedimer.setting_options.SettingOption`); :meth:`command_options` adds the refinement's.
     max_evals_setting : str (class attribute)
         The field (a :class:`~fitting.refinement.long_time.RefineConfig`) whose ``max_evals`` ``--max-evals`` sets:
         the method's main long-time refinement.
+    max_evals_meaning : str (class attribute)
+        That refinement in words, for the help of ``--max-evals``.
     joint : RefineConfig
         The joint re-optimisation on all runs (of the minimal model, or of a fallback), ``--joint-max-evals``.
     """
 
     name: ClassVar[str]
-    options: ClassVar[tuple[str, ...]] = ()
+    options: ClassVar[tuple[SettingOption, ...]] = ()
     max_evals_setting: ClassVar[str] = "joint"
+    max_evals_meaning: ClassVar[str] = "the joint re-optimisation"
     joint: RefineConfig
 
+    @classmethod
+    def command_options(cls) -> tuple[SettingOption, ...]:
+        """Every command-line option of these settings: the refinement's ``--max-evals`` (of the main refinement,
+        ``max_evals_setting``) and ``--joint-max-evals``, then the method's own ``options``."""
+        return (SettingOption("--max-evals", f"{cls.max_evals_setting}.max_evals", type=positive_int, metavar="N",
+                              help=f"objective evaluations of {cls.max_evals_meaning} (default {{default}})"),
+                SettingOption("--joint-max-evals", "joint.max_evals", type=positive_int, metavar="N",
+                              help="evaluations of the joint re-optimisation (default {default})"),
+                *cls.options)
+
+    @classmethod
+    def command_option(cls, dest: str) -> SettingOption | None:
+        """The command-line option of these settings whose argparse destination is ``dest`` (None: none)."""
+        return next((o for o in cls.command_options() if o.dest == dest), None)
+
     def with_option(self, option: str, value: Any) -> Any:
-        """These settings with the method-specific ``option`` set to ``value``; ValueError (one line, to follow the
-        option's name) when the method does not accept the option or the value is out of range."""
-        if option not in self.options:
+        """These settings with the option ``option`` (a flag's destination, ``"heldout_tolerance"``) set to
+        ``value``; ValueError (one line, to follow the option's flag) when the method does not accept the option or
+        the value is out of range."""
+        declared = self.command_option(option)
+        if declared is None:
             raise ValueError(f"applies to --method {', '.join(methods_accepting(option)) or '(none)'}")
-        return getattr(self, f"with_{option}")(value)
+        return declared.applied(self, value)
 
     def with_max_evals(self, max_evals: int) -> Any:
         """These settings with ``max_evals`` evaluations of the method's main refinement (``max_evals_setting``)."""
-        main = getattr(self, self.max_evals_setting)
-        return replace(self, **{self.max_evals_setting: replace(main, max_evals=max_evals)})
+        return self.with_option("max_evals", max_evals)
 
     def with_joint_max_evals(self, max_evals: int) -> Any:
         """These settings with ``max_evals`` evaluations of the joint re-optimisation (``joint``)."""
-        return replace(self, joint=replace(self.joint, max_evals=max_evals))
+        return self.with_option("joint_max_evals", max_evals)
 
 
 @dataclass(frozen=True)
@@ -100,9 +121,36 @@ class DiscoveryMethodConfig(MethodConfig):
 
     name: ClassVar[str] = "discovery"
     #: ``--heldout-tolerance``, ``--output-error`` and ``--max-terms`` set the discovery's selection
-    options: ClassVar[tuple[str, ...]] = ("heldout_tolerance", "output_error", "max_terms")
+    options: ClassVar[tuple[SettingOption, ...]] = (
+        SettingOption(
+            "--heldout-tolerance", "selection.heldout_tolerance", type=float, metavar="FRACTION",
+            valid=lambda v: 0.0 <= v < 1.0,
+            requirement="needs a fraction in [0, 1) (0.002 keeps the smallest support within 0.2 % of the best "
+                        "held-out error)",
+            help="keep the smallest support whose held-out error (5-fold over runs) is within FRACTION of the best "
+                 "on the elimination path (default {default}: the best itself, every term the data resolve). A "
+                 "practical threshold for data whose truth is not sparse in the library (real dimers): 0.002 gives "
+                 "the 11-term Gor'kov form on the paper-like twin, but also drops weak true terms near the "
+                 "information limit; model.json's Pareto front shows the trade-off. In equations under model error "
+                 "it widens the held-out rule's allowance, and the output error drops a term that raises the "
+                 "trajectories' RMS misfit by at most FRACTION and adds none that lowers it by less (0.02-0.05 "
+                 "there: one to three terms fewer per model at long-time errors 0-14 %% higher on average, up to 2.3 "
+                 "times on single 4-run data sets; docs/fitting.md)"),
+        SettingOption(
+            "--output-error", "selection.output_error", choices=OUTPUT_ERROR_MODES,
+            help="for equations whose residual is model error (a truth not sparse in the library; default "
+                 "{default}): 'select' refines the coefficients so that the model's trajectories follow the runs "
+                 "over 5-period segments, then drops the terms those trajectories do not need and adds those they "
+                 "need (a slow nonlinear damping, say); 'refine' only refines; 'off' keeps the integral form's "
+                 "coefficients and support"),
+        SettingOption(
+            "--max-terms", "selection.max_terms", type=positive_int, metavar="N",
+            help="at most N terms per equation, the front's point at that size (model.json's discovery.front; "
+                 "default: the discovery's own selection)"),
+    )
     #: ``--max-evals`` sets the evaluations of the long-time polish
     max_evals_setting: ClassVar[str] = "polish"
+    max_evals_meaning: ClassVar[str] = "the long-time polish of the discovered model"
 
     selection: DiscoveryConfig = field(default_factory=DiscoveryConfig)
     polish: RefineConfig = field(default_factory=lambda: RefineConfig(max_evals=150))
@@ -113,25 +161,6 @@ class DiscoveryMethodConfig(MethodConfig):
 
     def __post_init__(self) -> None:
         check_positive(self, "polish_se")
-
-    def with_heldout_tolerance(self, tolerance: float) -> "DiscoveryMethodConfig":
-        """These settings with the discovery's practical threshold ``DiscoveryConfig.heldout_tolerance``;
-        ValueError for a tolerance outside [0, 1)."""
-        if not 0.0 <= tolerance < 1.0:
-            raise ValueError(f"{tolerance:g}: needs a fraction in [0, 1) (0.002 keeps the smallest support within "
-                             "0.2 % of the best held-out error)")
-        return replace(self, selection=replace(self.selection, heldout_tolerance=float(tolerance)))
-
-    def with_output_error(self, mode: str) -> "DiscoveryMethodConfig":
-        """These settings with the discovery's coefficients under model error (``DiscoveryConfig.output_error``) set
-        by ``mode`` (:data:`OUTPUT_ERROR_MODES`); ValueError for another mode."""
-        if mode not in OUTPUT_ERROR_MODES:
-            raise ValueError(f"{mode}: needs one of {', '.join(OUTPUT_ERROR_MODES)}")
-        return replace(self, selection=replace(self.selection, output_error=OUTPUT_ERROR_MODES[mode]))
-
-    def with_max_terms(self, max_terms: int) -> "DiscoveryMethodConfig":
-        """These settings with at most ``max_terms`` terms per equation (``DiscoveryConfig.max_terms``)."""
-        return replace(self, selection=replace(self.selection, max_terms=max_terms))
 
 
 @dataclass(frozen=True)
@@ -155,10 +184,19 @@ class PaperMethodConfig(MethodConfig):
     """
 
     name: ClassVar[str] = "paper"
-    #: ``--relative-threshold`` of the per-run regressions
-    options: ClassVar[tuple[str, ...]] = ("relative_threshold",)
+    #: ``--selection``, the ensemble's rule, and ``--relative-threshold`` of the per-run regressions
+    options: ClassVar[tuple[SettingOption, ...]] = (
+        SettingOption("--selection", "selection.rule", choices=lambda: selection_rule_names("paper"),
+                      help=lambda: "term selection of the per-run ensemble (default {default}): " + "; ".join(
+                          f"'{r.name}': {r.summary}" for r in SELECTION_RULES.values() if "paper" in r.methods)),
+        SettingOption("--relative-threshold", "regression.relative_threshold", switch=True,
+                      help="apply the regression threshold to each equation relative to its signal size (for a "
+                           "hinge much slower than the vertical oscillation, whose scaled theta coefficients are "
+                           "all small)"),
+    )
     #: ``--max-evals`` sets the evaluations of each per-run refinement
     max_evals_setting: ClassVar[str] = "refine"
+    max_evals_meaning: ClassVar[str] = "each run's long-time refinement"
 
     regression: RegressionConfig = field(default_factory=RegressionConfig)
     refine: RefineConfig = field(default_factory=RefineConfig)
@@ -175,7 +213,3 @@ class PaperMethodConfig(MethodConfig):
                            ("ensemble", EnsembleConfig), ("selection", SelectionConfig),
                            ("candidate_joint", RefineConfig)):
             check_that(self, isinstance(getattr(self, name), kind), f"{name} must be a {kind.__name__}")
-
-    def with_relative_threshold(self, relative: bool) -> "PaperMethodConfig":
-        """These settings with the regression threshold relative to each equation's signal size (or not)."""
-        return replace(self, regression=replace(self.regression, relative_threshold=bool(relative)))

@@ -8,7 +8,8 @@ from pathlib import Path
 from acousim.cli.models import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            field_default, positive_float, positive_int, prepare_output_dir, run_cli)
-from fitting.options import add_fit_options, add_max_gap_option, fit_config_from_args
+from cubedimer.load_config import LoadConfig
+from fitting.options import add_fit_options, add_load_options, fit_config_from_args, load_config_from_args
 from fitting.output.model_file import read_model_json
 from fitting.uncertainty.final_checks import NoSaneModelError
 
@@ -192,7 +193,7 @@ def add_diagnose_parser(sub) -> None:
     p.add_argument("--no-long-time", action="store_true", help="skip the long-time (attractor) gaps")
     add_model_arguments(p)
     p.add_argument("--strict", action="store_true", help="stop at the first bad file instead of skipping it")
-    add_max_gap_option(p)
+    add_load_options(p, LoadConfig())
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     add_executor_arguments(p, note="The diagnosis's own steps (calibration, greedy identification, long-time "
                            "errors) run one after another in this process, so these options do not change this "
@@ -215,8 +216,6 @@ def _candidate_names() -> list[str]:
 def run_diagnose(args: argparse.Namespace) -> int:
     from cubedimer.dataset import DatasetError
 
-    from cubedimer.dataset import LoadConfig
-
     from .diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
     from .report.sections.gap_diagnosis import write_diagnosis
 
@@ -234,7 +233,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         raise UserInputError(f"{exc} (see --help)") from None
     try:
         dataset = load_for_diagnosis(args.data, strict=args.strict, progress=not args.quiet,
-                                     load=LoadConfig(max_gap=args.max_gap))
+                                     load=load_config_from_args(args, LoadConfig()))
         diagnosis = diagnose(dataset, config, progress=not args.quiet, spec=model_spec_from_args(args))
     except (DatasetError, ValueError) as exc:
         raise UserInputError(str(exc)) from None

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from fitting.config import DiscoveryMethodConfig, FitConfig, PaperMethodConfig
-from fitting.method_names import METHOD_OPTIONS, methods_accepting
+from fitting.method_names import method_options, methods_accepting
 from fitting.refinement.long_time import JOINT_REFINE
 
 
@@ -25,13 +25,14 @@ def test_max_evals_set_the_method_s_own_refinement_and_joint_only_when_asked(nam
 def test_each_method_option_is_accepted_by_the_methods_that_list_it_and_refused_by_the_others():
     """Every method-specific option belongs to at least one method's settings, and a method whose settings do not
     list it refuses it in one line naming the methods that take it."""
-    values = {"heldout_tolerance": 0.002, "output_error": "refine", "max_terms": 3, "relative_threshold": True}
-    assert set(values) == set(METHOD_OPTIONS)
+    values = {"max_evals": 7, "joint_max_evals": 9, "heldout_tolerance": 0.002, "output_error": "refine",
+              "max_terms": 3, "selection": "zscore", "relative_threshold": True}
+    assert set(values) == set(method_options())
     for option, value in values.items():
         assert methods_accepting(option)
         for name in ("discovery", "paper"):
             cfg = FitConfig.for_method(name)
-            if option in cfg.method.options:
+            if cfg.method.command_option(option) is not None:
                 assert cfg.with_method_option(option, value) != cfg
             else:
                 with pytest.raises(ValueError, match=f"^applies to --method {', '.join(methods_accepting(option))}$"):
