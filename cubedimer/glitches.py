@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .config_checks import check_above, check_positive, check_that
+
 __all__ = ["GlitchConfig", "find_glitches"]
 
 
@@ -56,12 +58,11 @@ class GlitchConfig:
     max_rounds: int = 8
 
     def __post_init__(self) -> None:
-        if not self.threshold > 3:
-            raise ValueError(f"threshold must exceed 3 robust standard deviations, got {self.threshold!r}")
-        if not 0 < self.period_fraction <= 0.5:
-            raise ValueError(f"period_fraction must lie in (0, 0.5], got {self.period_fraction!r}")
-        if not 0 < self.max_fraction < 0.5:
-            raise ValueError(f"max_fraction must lie in (0, 0.5), got {self.max_fraction!r}")
+        check_above(self, "threshold", 3.0)  # robust standard deviations
+        check_positive(self, "period_fraction")
+        check_that(self, self.period_fraction <= 0.5, f"period_fraction must lie in (0, 0.5], got {self.period_fraction!r}")
+        check_positive(self, "max_fraction")
+        check_that(self, self.max_fraction < 0.5, f"max_fraction must lie in (0, 0.5), got {self.max_fraction!r}")
 
 
 def _window(frames_per_period: float, fraction: float) -> int:

@@ -191,21 +191,37 @@ def test_no_import_cycles_between_subpackages(parent):
     assert not _cycles(graph), f"import cycles between subpackages of {parent}: {_cycles(graph)}"
 
 
+#: What opens a pool of workers (processes, threads or a cluster): modules, and names imported or used as attributes.
+POOL_MODULES = {"multiprocessing", "concurrent", "dask", "joblib"}
+POOL_NAMES = {"ProcessPoolExecutor", "ThreadPoolExecutor", "ThreadPool", "Pool", "Thread"}
+
+
+def pools_opened(source: str) -> list[str]:
+    """The pool modules ``source`` imports and the pool classes it imports or uses (``threading.Thread``,
+    ``concurrent.futures.ThreadPoolExecutor``), sorted."""
+    tree = ast.parse(source)
+    modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+    modules |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    names = {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
+    names |= {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
+    return sorted({m.split(".")[0] for m in modules} & POOL_MODULES | names & POOL_NAMES)
+
+
+def test_the_pool_scanner_sees_thread_pools_too():
+    assert pools_opened("from concurrent.futures import ThreadPoolExecutor\n") == ["ThreadPoolExecutor", "concurrent"]
+    assert pools_opened("import threading\nt = threading.Thread(target=print)\n") == ["Thread"]
+    assert pools_opened("from multiprocessing.pool import ThreadPool\n") == ["ThreadPool", "multiprocessing"]
+    assert pools_opened("import threading\nlock = threading.Lock()\n") == []  # a lock opens no pool
+
+
 def test_parallel_work_goes_through_the_executor_seam():
-    """Processes and clusters are opened by cubedimer.executor only (map_ordered); the tracking's compiled
-    per-frame work shares a batch between threads of one process, which is not a pool of processes."""
+    """Processes, threads and clusters are opened by cubedimer.executor only (map_ordered), so work inside a task
+    never opens a pool of its own; the tracking's compiled per-frame work runs on the compiled kernel's own threads
+    (numba prange, one to a task), which is not a pool the suite opens."""
     seam = ROOT / "cubedimer" / "executor.py"
     bad = {}
     for f in sorted(f for p in PACKAGES for f in (ROOT / p).rglob("*.py")):
-        if f == seam:
-            continue
-        tree = ast.parse(f.read_text(encoding="utf-8"))
-        names = {a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names}
-        modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-        modules |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-        hits = sorted(({"multiprocessing", "dask.distributed", "joblib"} & {m.split(".")[0] if m.startswith(
-            ("multiprocessing", "joblib")) else m for m in modules}) | ({"ProcessPoolExecutor"} & names))
-        if hits:
+        if f != seam and (hits := pools_opened(f.read_text(encoding="utf-8"))):
             bad[str(f.relative_to(ROOT))] = hits
     assert not bad, f"parallel work outside cubedimer.executor.map_ordered: {bad}"
 

@@ -53,70 +53,16 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from .face_fit import fit_square, wrap_angle
+from .frame_row import (COLUMNS, NCOL, STATUS, STATUS_NAMES, STATUS_TEXT, _MAX_PARTICLES, _I_ALPHA, _I_AREA,
+                        _I_BACKGROUND, _I_BETA, _I_EDGE_RMS, _I_EDGE_WIDTH, _I_GAMMA_A, _I_GAMMA_B, _I_HALF_SIDE,
+                        _I_N_FACES, _I_PIXEL_NOISE, _I_SIDE_A, _I_SIDE_B, _I_SIGMA_THETA, _I_SIGMA_V, _I_THETA,
+                        _I_TILT, _I_U_A, _I_U_B, _I_U_COM, _I_V_A, _I_V_B, _I_V_COM)
+from .hinge_corners import hinge_geometry
 from .moments import half_direction, window_moments
 from .segmentation import BORDER_RING, background, coverage_runs, fill_holes, particles
 
 __all__ = ["COLUMNS", "STATUS", "STATUS_NAMES", "STATUS_TEXT", "measure_frames", "MeasureSettings", "numba_threads",
            "reciprocal_background"]
-
-#: Columns of a frame's measurement row (pixel units unless stated).
-COLUMNS = ("status", "v_com", "u_com", "theta", "alpha", "beta", "alpha_free", "beta_free", "edge_rms",
-           "edge_width", "area", "tilt", "hinge_gap", "sigma_v", "sigma_theta", "side_a", "side_b", "pixel_noise",
-           "u_a", "v_a", "gamma_a", "u_b", "v_b", "gamma_b", "half_side", "n_faces", "background", "squareness_sigma")
-# column indices as module constants (the compiled kernel reads them as literals)
-_I_ALPHA = COLUMNS.index('alpha')
-_I_ALPHA_FREE = COLUMNS.index('alpha_free')
-_I_AREA = COLUMNS.index('area')
-_I_BACKGROUND = COLUMNS.index('background')
-_I_BETA = COLUMNS.index('beta')
-_I_BETA_FREE = COLUMNS.index('beta_free')
-_I_EDGE_RMS = COLUMNS.index('edge_rms')
-_I_EDGE_WIDTH = COLUMNS.index('edge_width')
-_I_GAMMA_A = COLUMNS.index('gamma_a')
-_I_GAMMA_B = COLUMNS.index('gamma_b')
-_I_HALF_SIDE = COLUMNS.index('half_side')
-_I_HINGE_GAP = COLUMNS.index('hinge_gap')
-_I_N_FACES = COLUMNS.index('n_faces')
-_I_PIXEL_NOISE = COLUMNS.index('pixel_noise')
-_I_SIDE_A = COLUMNS.index('side_a')
-_I_SIDE_B = COLUMNS.index('side_b')
-_I_SIGMA_THETA = COLUMNS.index('sigma_theta')
-_I_SIGMA_V = COLUMNS.index('sigma_v')
-_I_SQUARENESS_SIGMA = COLUMNS.index('squareness_sigma')
-_I_THETA = COLUMNS.index('theta')
-_I_TILT = COLUMNS.index('tilt')
-_I_U_A = COLUMNS.index('u_a')
-_I_U_B = COLUMNS.index('u_b')
-_I_U_COM = COLUMNS.index('u_com')
-_I_V_A = COLUMNS.index('v_a')
-_I_V_B = COLUMNS.index('v_b')
-_I_V_COM = COLUMNS.index('v_com')
-NCOL = len(COLUMNS)
-#: Particles a frame's segmentation keeps track of (the largest); a frame with more is not measured.
-_MAX_PARTICLES = 8
-
-#: Frame status codes; 0 is a measured frame.
-STATUS = {"measured": 0, "corrupt": 1, "no_dimer": 2, "out_of_view": 3, "third_particle": 4, "occlusion": 5,
-          "fit_failed": 6, "faces_cross": 7, "motion_blur": 8, "poor_fit": 9,
-          "touching": 10}
-#: The name of each status code.
-STATUS_NAMES = {code: name for name, code in STATUS.items()}
-#: What each status means (RUN.json).
-STATUS_TEXT = {
-    "measured": "measured",
-    "corrupt": "blank or corrupt frame (background far from the recording's, or non-finite pixels)",
-    "no_dimer": "no particle in view",
-    "out_of_view": "the dimer touches the frame's border (partly out of view)",
-    "third_particle": "another particle within the dimer's window too close to be masked (its blurred edge within "
-                      "reach of the dimer's), or the two cubes apart",
-    "occlusion": "the silhouette's area differs from the dimer's (occlusion or a particle touching it)",
-    "fit_failed": "too few edge samples on a cube's faces",
-    "faces_cross": "fitted faces cross (alpha <= 0 or beta <= 0): no physical bend",
-    "motion_blur": "edges wider than the recording's by more than the motion-blur bound",
-    "poor_fit": "edges not straight, hinge corners not square or not touching (beyond the bounds)",
-    "touching": "the silhouette's centre of mass off the fitted squares' centre (a particle stuck to the dimer)",
-}
-
 
 @dataclass(frozen=True)
 class MeasureSettings:
@@ -267,70 +213,6 @@ def numba_threads() -> int:
 
 
 # ---------------------------------------------------------------------------------------------- compiled kernel
-@njit(cache=True)
-def _hinge_corner(g, left):  # pragma: no cover - compiled
-    """Index k of the face whose corner with face k + 1 is the hinge corner: the rightmost corner of cube A
-    (``left``) or the leftmost of cube B, for a square with faces along ``g``."""
-    best = 0
-    bestx = 0.0
-    for k in range(4):
-        n1 = g - 0.5 * math.pi + 0.5 * math.pi * k
-        x = math.cos(n1) + math.cos(n1 + 0.5 * math.pi)
-        if k == 0 or (left and x > bestx) or ((not left) and x < bestx):
-            best = k
-            bestx = x
-    return best
-
-
-@njit(cache=True)
-def _hinge_geometry(gam, cen, a_half, resA, resB, row):  # pragma: no cover - compiled
-    """alpha_free, beta_free from the faces that meet at each hinge corner, fitted alone, and the distance
-    between the two squares' hinge corners (written into ``row``), the squares as the image shows them (faces along
-    ``res[24]``: the cubes' own directions unless the hinge line is tilted)."""
-    free_ok = True
-    var = 0.0
-    dirs = np.zeros(4)  # A upper, A lower, B upper, B lower: directions pointing away from the hinge
-    hx = np.zeros(2)
-    hz = np.zeros(2)
-    for sq in range(2):
-        g = gam[sq]
-        k1 = _hinge_corner(g, sq == 0)
-        k2 = (k1 + 1) % 4
-        nu1 = g - 0.5 * math.pi + 0.5 * math.pi * k1
-        nu2 = nu1 + 0.5 * math.pi
-        gi = resA[24] if sq == 0 else resB[24]
-        ni = gi - 0.5 * math.pi + 0.5 * math.pi * _hinge_corner(gi, sq == 0)
-        hx[sq] = cen[sq, 0] + a_half * (math.cos(ni) + math.cos(ni + 0.5 * math.pi))
-        hz[sq] = -cen[sq, 1] + a_half * (math.sin(ni) + math.sin(ni + 0.5 * math.pi))
-        if math.sin(nu1) >= math.sin(nu2):
-            ku = k1
-            kl = k2
-            nuu = nu1
-            nul = nu2
-        else:
-            ku = k2
-            kl = k1
-            nuu = nu2
-            nul = nu1
-        # the upper face points away from the hinge at its normal turned by -pi/2 on cube B, +pi/2 on cube A
-        turn = 0.5 * math.pi if sq == 0 else -0.5 * math.pi
-        du_nom = nuu + turn
-        dl_nom = nul - turn
-        fu = resA[8 + ku] if sq == 0 else resB[8 + ku]
-        fl = resA[8 + kl] if sq == 0 else resB[8 + kl]
-        if math.isnan(fu) or math.isnan(fl):
-            free_ok = False
-            continue
-        dirs[2 * sq] = du_nom + wrap_angle(fu - du_nom, math.pi)
-        dirs[2 * sq + 1] = dl_nom + wrap_angle(fl - dl_nom, math.pi)
-        var += (resA[20 + ku] + resA[20 + kl]) if sq == 0 else (resB[20 + ku] + resB[20 + kl])
-    if free_ok:
-        row[_I_ALPHA_FREE] = wrap_angle(dirs[0] - dirs[2], 2.0 * math.pi)
-        row[_I_BETA_FREE] = wrap_angle(dirs[3] - dirs[1], 2.0 * math.pi)
-        row[_I_SQUARENESS_SIGMA] = math.sqrt(var)
-    row[_I_HINGE_GAP] = math.sqrt((hx[0] - hx[1]) ** 2 + (hz[0] - hz[1]) ** 2)
-
-
 @njit(cache=True)
 def _light_level(img, pinv, prm, row):  # pragma: no cover - compiled
     """Step 1: the frame's light level relative to the recording's, from the border ring (the background image is
@@ -505,7 +387,7 @@ def _angles(phiA, phiB, gam, cen, a_half, resA, resB, row):  # pragma: no cover 
     rb = resB[3]
     row[_I_EDGE_RMS] = math.sqrt(0.5 * (ra * ra + rb * rb))
     row[_I_SIGMA_THETA] = (2.0 / math.pi) * math.sqrt(ra * ra / resA[4] + rb * rb / resB[4])
-    _hinge_geometry(gam, cen, a_half, resA, resB, row)
+    hinge_geometry(gam, cen, a_half, resA, resB, row)
     return alpha, beta
 
 

@@ -23,6 +23,11 @@
 5. **Noise.**  Each measured frame's standard errors of y (the image noise of the border ring propagated
    through the centroid) and theta (the edge residuals propagated through the face fits); the
    recording's noise estimates are their RMS.
+6. **Per-recording steps.**  Every step registered in :mod:`tracking.recording_steps` reads the tracked recording
+   and adds its result to RUN.json under its name.
+
+The settings are :class:`~tracking.track_config.TrackConfig`; the run's record is written by
+:mod:`tracking.run_record`.
 """
 from __future__ import annotations
 
@@ -36,114 +41,22 @@ from numpy.typing import NDArray
 from cubedimer.drop_phases import DropPhases, find_drop_phases
 
 from .calibration import Calibration, faces_tilt, calibrate
-from .measure import COLUMNS, STATUS, STATUS_NAMES, STATUS_TEXT, measure_frames
+from .measure import COLUMNS, STATUS, measure_frames
 from .noise_estimate import noise_estimate
 from .origin import find_origin
 from .recording import Recording, TrackingError
+from .recording_steps import TrackedRecording, run_recording_steps
+from .run_record import example_frame, not_measured_hint, phases_record, run_record, status_counts
 from .tilt import MAX_TILT_DEG, area_factor, overlap_shift, tilt_from_gap
+from .track_config import POLARITIES, UP, TrackConfig
 
 __all__ = ["TrackConfig", "TrackResult", "Calibration", "calibrate", "track_recording", "POLARITIES", "UP"]
 
 logger = logging.getLogger(__name__)
 
-#: ``TrackConfig.polarity`` choices.
-POLARITIES = ("auto", "dark", "bright")
-#: ``TrackConfig.up`` choices: which edge of the image is up in the lab.
-UP = ("top", "bottom")
-
 _C = {name: i for i, name in enumerate(COLUMNS)}
 #: Estimated tilt of the hinge line [degrees] above which the tracking warns (the estimate's noise is ~0.3).
 TILT_WARNING_DEG = 3.0
-
-
-@dataclass(frozen=True)
-class TrackConfig:
-    """Settings of the tracking.
-
-    Parameters
-    ----------
-    fps : float, optional
-        Frame rate [1/s]; required unless the file records it.
-    pixel_size : float, optional
-        Pixel size in the object plane [m]; required unless the file records it.
-    origin_frames : int
-        y = 0 is the median centre-of-mass height of the measured frames among the first ``origin_frames``
-        (the levitation before a field drop), unless an origin row is given or recorded.
-    origin_row : float, optional
-        Image row of the levitation height [px] (pixel centres at integer rows, counted from 0 at the top).
-    polarity : {"auto", "dark", "bright"}
-        Dark cubes on a bright background (shadowgraph), bright on dark, or detected.
-    up : {"top", "bottom"}
-        The image edge that is up in the lab: ``"top"`` (default) for images whose rows count down, as
-        cameras and image files store them; ``"bottom"`` for an image stored upside down.
-    edge_window : int, optional
-        Half-length of the window across an edge [px] (default: from the measured edge blur).
-    area_tolerance : float
-        Largest relative deviation of a frame's silhouette area from the recording's median.
-    max_motion_blur : float
-        Largest motion-blur length beyond the recording's typical edge blur [px].
-    max_edge_rms_factor : float
-        Largest edge residual as a multiple of the recording's median (plus 0.05 px).
-    max_squareness : float
-        Largest ``|alpha_free + beta_free - pi|`` of the faces meeting at the hinge [rad].
-    max_hinge_gap : float
-        Largest distance between the two cubes' hinge corners, as a fraction of the side.
-    calibration_frames : int
-        Frames (spread over the recording) used to calibrate.
-    batch : int
-        Frames measured per batch.
-    roi : (x0, x1, y0, y1), optional
-        Region of interest: columns ``x0 <= u < x1`` and rows ``y0 <= v < y1`` of the frames [px]; only it is
-        measured (a dimer that reaches its border is out of view).
-    keep_drop : bool
-        A recording of a field drop (rest, free fall, field back on; :mod:`cubedimer.drop_phases`) is written whole,
-        with t from its first frame, instead of as the field-on motion with t = 0 at the field's return.
-    """
-
-    fps: float | None = None
-    pixel_size: float | None = None
-    origin_frames: int = 50
-    origin_row: float | None = None
-    polarity: str = "auto"
-    up: str = "top"
-    edge_window: int | None = None
-    area_tolerance: float = 0.06
-    max_motion_blur: float = 3.0
-    max_edge_rms_factor: float = 4.0
-    max_squareness: float = 0.05
-    max_hinge_gap: float = 0.1
-    calibration_frames: int = 100
-    batch: int = 1024
-    roi: tuple[int, int, int, int] | None = None
-    keep_drop: bool = False
-
-    def __post_init__(self) -> None:
-        for name in ("fps", "pixel_size"):
-            v = getattr(self, name)
-            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise TrackingError(f"{name.replace('_', ' ')} must be a positive number, got {v!r}")
-        if self.pixel_size is not None and not 1e-9 < self.pixel_size < 1e-2:
-            raise TrackingError(f"pixel size {self.pixel_size!r} m is implausible: give metres per pixel in the object "
-                                "plane, e.g. 1e-5 for 10 um")
-        if int(self.origin_frames) != self.origin_frames or self.origin_frames < 1:
-            raise TrackingError(f"origin frames must be a whole number >= 1, got {self.origin_frames!r}")
-        if self.origin_row is not None and not math.isfinite(self.origin_row):
-            raise TrackingError(f"origin row must be finite, got {self.origin_row!r}")
-        if self.polarity not in POLARITIES:
-            raise TrackingError(f"polarity must be one of {', '.join(POLARITIES)}, got {self.polarity!r}")
-        if self.up not in UP:
-            raise TrackingError(f"up must be one of {', '.join(UP)}, got {self.up!r}")
-        if self.edge_window is not None and not 2 <= int(self.edge_window) <= 50:
-            raise TrackingError(f"edge window must lie in [2, 50] px, got {self.edge_window!r}")
-        if self.roi is not None:
-            x0, x1, y0, y1 = self.roi
-            if any(int(v) != v for v in self.roi) or min(self.roi) < 0 or x1 <= x0 or y1 <= y0:
-                raise TrackingError(f"region of interest {x0}:{x1},{y0}:{y1} is empty or inverted: give "
-                                    "--roi x0:x1,y0:y1 with 0 <= x0 < x1 (columns) and 0 <= y0 < y1 (rows)")
-        for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise TrackingError(f"{name.replace('_', ' ')} must be positive, got {v!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -226,35 +139,16 @@ def _flag(status: NDArray, rows: NDArray, config: TrackConfig, tau: float = 0.0)
     return {"edge_width_px": w_ref, "edge_rms_px": rms_ref}
 
 
-def _status_counts(status: NDArray) -> dict[str, int]:
-    """Frames per reason they were not measured, by status name, in the order of the codes."""
-    return {STATUS_NAMES[c]: int(np.sum(status == c)) for c in sorted(set(status.tolist())) if c != 0}
-
-
-def _hint(status: NDArray) -> str:
-    """What to try for the commonest reason frames were not measured (the option that bounds that check)."""
-    bad = status[status != 0]
-    if bad.size == 0:
-        return ""
-    top = STATUS_NAMES[int(np.bincount(bad).argmax())]
-    return {"poor_fit": "; see RUN.json checks, and --max-hinge-gap (hinge corners apart: a hinge line tilted out of "
-                        "the camera axis) or --max-squareness",
-            "third_particle": "; python -m tracking inspect shows the background: try --roi",
-            "occlusion": "; try --area-tolerance or --roi",
-            "touching": "; python -m tracking inspect shows the background: try --roi",
-            "motion_blur": "; try --max-motion-blur",
-            "out_of_view": "; the dimer reaches the border of the frame (or of --roi)"}.get(top, "")
-
-
 def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> TrackResult:
     """Track one recording (module docstring): the frame rate and pixel size, the frames (in the region of
     interest), the calibration, every frame measured, the hinge line's tilt, the origin, y and theta, their
-    noise, and the run's record (RUN.json).
+    noise, and the run's record (RUN.json) with the result of every registered per-recording step
+    (:mod:`tracking.recording_steps`) under its name.
 
     Raises
     ------
     TrackingError
-        Unknown frame rate or pixel size, no dimer in any frame, no origin.
+        Unknown frame rate or pixel size, no dimer in any frame, no origin, a step named as an entry of RUN.json.
     """
     fps, pixel = _frame_rate_and_pixel_size(rec, config)
     frames = _frames_in_region(rec, config)
@@ -284,11 +178,12 @@ def track_recording(rec: Recording, config: TrackConfig = TrackConfig()) -> Trac
     t = np.arange(n) / float(fps)
     noise_y, noise_theta = _noise(rows, ok, y, theta, pixel)
     correction = _tilt_correction(cal, rows, ok, pixel, noise_y, noise_theta) if tau else None
-    ex = _example_frame(ok, theta)
-    info = _run_info(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
+    ex = example_frame(ok, theta)
+    info = run_record(rec, config, fps, pixel, cal, rows, status, refs, origin, tilt_deg, noise_y, noise_theta, ex,
                      theta)
     info["tilt_correction"] = correction
-    info["phases"] = _phases_record(phases, config, rec.name) if phases is not None else None
+    info["phases"] = phases_record(phases, config, rec.name) if phases is not None else None
+    info = run_recording_steps(TrackedRecording(rec, config, fps, pixel, t, y, theta, status, rows), info)
     logger.info("%s: %d of %d frames measured (%s); noise y %.3g m, theta %.3g", rec.name, int(ok.sum()), n,
                 ", ".join(f"{k} {v}" for k, v in info["not_measured"].items()) or "all", noise_y["value"],
                 noise_theta["value"])
@@ -306,25 +201,6 @@ def _drop_phases(rows: np.ndarray, status: np.ndarray, fps: float, pixel: float,
     height = np.where(ok, up * rows[:, _C["v_com"]] * pixel, np.nan)
     noise = float(np.sqrt(np.median(rows[ok, _C["sigma_v"]] ** 2))) * pixel
     return find_drop_phases(np.arange(len(status)) / fps, height, noise)
-
-
-def _phases_record(phases: DropPhases, config: TrackConfig, name: str) -> dict:
-    """RUN.json's ``phases``: the frames and times of the rest, the fall and the field's return, and what the run
-    keeps (a fall whose acceleration is not g is kept whole, with a warning)."""
-    out = phases.to_dict()
-    cut = phases.free_fall and not config.keep_drop
-    out["kept"] = "field-on motion" if cut else "whole recording"
-    if not phases.free_fall:
-        logger.warning("%s: the recording starts at rest for %d frames and then moves, but not in a free fall "
-                       "(acceleration %.3g m/s^2 against g = 9.81, residual RMS %.2g m against a noise of %.2g m): kept "
-                       "whole; cut it to the field-on motion before fitting", name, phases.rest_frames,
-                       phases.fall_acceleration, phases.fit_scatter, phases.noise)
-    else:
-        logger.info("%s: at rest for %d frames, the field off for %.2f ms (fall %.3g +- %.2g m/s^2), back at t = "
-                    "%.5f s: %s", name, phases.rest_frames, 1e3 * phases.field_off_s, phases.fall_acceleration,
-                    phases.fall_acceleration_error, out["field_on_time_s"],
-                    "the run is the field-on motion, t = 0 at the field's return" if cut else "kept whole (--keep-drop)")
-    return out
 
 
 def _frame_rate_and_pixel_size(rec: Recording, config: TrackConfig) -> tuple[float, float]:
@@ -384,10 +260,10 @@ def _hinge_line_tilt(rec: Recording, rows: np.ndarray, status: np.ndarray, confi
                        "of the side from where the tilt puts them are not measured", rec.name, tilt_deg,
                        config.max_hinge_gap)
     if not ok.any():
-        why = ", ".join(f"{k} in {v}" for k, v in _status_counts(status).items())
+        why = ", ".join(f"{k} in {v}" for k, v in status_counts(status).items())
         tilted = (f"; the hinge line looks tilted about {tilt_deg:.0f} degrees out of the camera axis: "
                   "--max-hinge-gap 0.5 measures it" if tilt_deg is not None and tilt_deg > TILT_WARNING_DEG else "")
-        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{_hint(status)}{tilted})")
+        raise TrackingError(f"{rec.path}: no dimer in any frame could be measured ({why}{not_measured_hint(status)}{tilted})")
     return tilt_deg
 
 
@@ -440,9 +316,9 @@ def _origin(rec: Recording, rows: np.ndarray, status: np.ndarray, config: TrackC
                   "method": "file"}
     else:
         head = status[: config.origin_frames]
-        why = ", ".join(f"{k} in {v}" for k, v in _status_counts(head).items())
+        why = ", ".join(f"{k} in {v}" for k, v in status_counts(head).items())
         origin = find_origin(rows[:, _C["v_com"]] + y0, rows[:, _C["sigma_v"]], ok, config.origin_frames, rec.path,
-                             why + _hint(head))
+                             why + not_measured_hint(head))
         if not origin["at_rest"]:
             logger.warning("%s: the recording does not start at rest: y = 0 is the centre of the late oscillation "
                            "(%s); give --origin-row if the levitation row is known", rec.name, origin["from"])
@@ -460,88 +336,3 @@ def _noise(rows: np.ndarray, ok: np.ndarray, y: np.ndarray, theta: np.ndarray, p
     return noise_y, noise_theta
 
 
-def _example_frame(ok: np.ndarray, theta: np.ndarray) -> int:
-    """The example frame: a measured frame with a clear bend (90th percentile of |theta|)."""
-    meas = np.flatnonzero(ok)
-    target = np.quantile(np.abs(theta[meas]), 0.9)
-    return int(meas[np.argmin(np.abs(np.abs(theta[meas]) - target))])
-
-
-def _run_info(rec: Recording, config: TrackConfig, fps: float, pixel: float, cal, rows: np.ndarray,
-              status: np.ndarray, refs: dict, origin: dict, tilt_deg: float | None, noise_y: dict, noise_theta: dict,
-              ex: int, theta: np.ndarray) -> dict:
-    """The run's record, RUN.json (docs/formats.md)."""
-    ok = status == 0
-    n = len(status)
-    sign = 1.0 if config.up == "top" else -1.0
-    sigma_y, sigma_theta = noise_y["value"], noise_theta["value"]
-    counts = _status_counts(status)
-    r = rows[ex]
-    alpha, beta = (r[_C["alpha"]], r[_C["beta"]]) if sign > 0 else (r[_C["beta"]], r[_C["alpha"]])
-    square = rows[ok, _C["alpha_free"]] + rows[ok, _C["beta_free"]] - math.pi
-    info = {
-        "source": rec.path,
-        "format": rec.format,
-        "frames": int(n),
-        "frame_size_px": [int(rec.frames.shape[2]), int(rec.frames.shape[1])],
-        "roi_px": list(config.roi) if config.roi else None,
-        "frame_rate_hz": float(fps),
-        "frame_rate_from": "option --fps" if config.fps else "recorded in the file",
-        "pixel_size_m": float(pixel),
-        "pixel_size_from": "option --pixel-size" if config.pixel_size else "recorded in the file",
-        "y_origin": {**origin,
-                     "convention": "y = (origin row - centre-of-mass row) x pixel size: positive up, image rows "
-                                   "counting down" if sign > 0 else
-                                   "y = (centre-of-mass row - origin row) x pixel size: the image is upside down "
-                                   "(--up bottom), theta's sign flipped with it"},
-        "orientation": {"up": config.up, "polarity": cal.polarity, "polarity_from": cal.polarity_from},
-        "frames_measured": int(ok.sum()),
-        "frames_not_measured": int(n - ok.sum()),
-        "fraction_measured": float(ok.mean()),
-        "not_measured": counts,
-        "noise_estimate": {"y_m": sigma_y, "theta": sigma_theta, "estimator_y": noise_y["estimator"],
-                           "estimator_theta": noise_theta["estimator"], "y_details": noise_y,
-                           "theta_details": noise_theta,
-                           "method": "white: RMS over the measured frames of each frame's standard error (the image "
-                                     "noise of the border ring through the centre of mass for y, the edge residuals "
-                                     "through the face fits for theta); correlated, when the frames' errors are "
-                                     "correlated (lag-1 correlation of the cross-check above 0.3): the fourth "
-                                     "differences corrected for that correlation, if larger (docs/tracking.md)"},
-        "calibration": {"background_level": cal.background, "contrast": cal.contrast,
-                        "background_slope_per_px": [cal.slope_u, cal.slope_v], "edge_blur_px": cal.edge_blur_px,
-                        "edge_window_px": cal.edge_window_px, "silhouette_area_px2": cal.area_px2,
-                        "side_length_m": math.sqrt(cal.area_px2 / 2.0) * pixel, "frames_used": cal.frames_used,
-                        "illumination_change": cal.scene.gradient, "static_structure_px": int(cal.scene.static.sum()),
-                        "light_level_range": [float(np.min(rows[ok, _C["background"]]) / cal.background),
-                                              float(np.max(rows[ok, _C["background"]]) / cal.background)]
-                        if cal.background > 0 else None,
-                        "holes_filled": cal.fill_holes, "dark_offset": cal.dark_offset},
-        "checks": {"alpha_plus_beta_minus_pi_rad": {"median": float(np.nanmedian(square))
-                                                    if np.isfinite(square).any() else None,
-                                                    "p95_abs": float(np.nanpercentile(np.abs(square), 95))
-                                                    if np.isfinite(square).any() else None,
-                                                    "bound": config.max_squareness},
-                   "tilt_rad_median": float(np.median(rows[ok, _C["tilt"]])),
-                   "hinge_line_tilt_deg": tilt_deg,
-                   "side_length_m_tilt_corrected": math.sqrt(cal.area_px2 / 2.0 / area_factor(math.radians(tilt_deg)))
-                   * pixel if tilt_deg is not None else None,
-                   "edge_rms_px_median": refs.get("edge_rms_px"), "edge_width_px_median": refs.get("edge_width_px")},
-        "quality": {"measure": "edge_rms_px: RMS distance [px] of the sub-pixel edge crossings from the fitted faces "
-                               "(about the image noise times the window's square root; larger for occlusions, "
-                               "bent or blurred edges); null where the frame was not measured",
-                    "edge_rms_px": [round(float(v), 4) if s == 0 else None
-                                    for v, s in zip(rows[:, _C["edge_rms"]], status)],
-                    "status": status.tolist(), "status_codes": dict(STATUS_NAMES),
-                    "status_text": STATUS_TEXT},
-        "example_frame": {"index": ex, "theta": float(theta[ex]), "alpha_rad": float(alpha), "beta_rad": float(beta),
-                          "centre_of_mass_px": [float(r[_C["u_com"]]), float(r[_C["v_com"]])],
-                          "half_side_px": float(r[_C["half_side"]]),
-                          "squares": [{"cube": "A", "centre_px": [float(r[_C["u_a"]]), float(r[_C["v_a"]])],
-                                       "face_direction_rad": float(r[_C["gamma_a"]])},
-                                      {"cube": "B", "centre_px": [float(r[_C["u_b"]]), float(r[_C["v_b"]])],
-                                       "face_direction_rad": float(r[_C["gamma_b"]])}],
-                          "convention": "pixel centres at integer (column, row), rows counting down; face directions "
-                                        "counter-clockwise from the +column axis with up = -row"},
-        "units": "SI (lengths in pixels where named _px, angles in radians)",
-    }
-    return info
