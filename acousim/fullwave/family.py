@@ -52,7 +52,8 @@ from .family_grid import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIO
                           MESH_CONVERGENCE_FILE, REFERENCE, FamilyNode, FamilyRangeError, FamilyTableError,
                           family_mesh_spec, family_nodes, node_path)
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
-from .surrogate import _COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup, build_fullwave_surrogate, build_settings_of
+from .surrogate import build_fullwave_surrogate, build_settings_of
+from .table import _COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE",
