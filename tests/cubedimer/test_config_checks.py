@@ -23,7 +23,7 @@ SETTINGS_CLASSES = {"LossWeights", "NoiseLevels", "PracticalThresholds"}
 HAND_CHECKED = {"acousim/atlas/field_drops.py": {"AtlasConfig"}, "acousim/atlas/free_y.py": {"FreeYConfig"},
                 "acousim/atlas/held_y.py": {"HeldYConfig"}, "acousim/atlas/resonator_map.py": {"ResonatorMapConfig"},
                 "acousim/twin/config.py": {"TwinConfig"}, "tracking/measure.py": {"MeasureSettings"},
-                "tracking/track.py": {"TrackConfig"}}
+                "tracking/track_config.py": {"TrackConfig"}}
 
 
 @dataclass(frozen=True)
