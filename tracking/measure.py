@@ -52,6 +52,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from cubedimer.config_checks import check_non_negative, check_positive, check_that, check_whole
 from .face_fit import fit_square, wrap_angle
 from .frame_row import (COLUMNS, NCOL, STATUS, STATUS_NAMES, STATUS_TEXT, _MAX_PARTICLES, _I_ALPHA, _I_AREA,
                         _I_BACKGROUND, _I_BETA, _I_EDGE_RMS, _I_EDGE_WIDTH, _I_GAMMA_A, _I_GAMMA_B, _I_HALF_SIDE,
@@ -115,14 +116,12 @@ class MeasureSettings:
     hinge_tilt: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.polarity not in (-1.0, 1.0):
-            raise ValueError(f"polarity must be -1 (dark cubes) or +1 (bright cubes), got {self.polarity!r}")
-        if not (math.isfinite(self.contrast) and self.contrast > 0):
-            raise ValueError(f"contrast must be positive, got {self.contrast!r}")
-        if int(self.edge_window) != self.edge_window or self.edge_window < 2:
-            raise ValueError(f"edge window must be a whole number >= 2, got {self.edge_window!r}")
-        if not (math.isfinite(self.hinge_tilt) and 0.0 <= self.hinge_tilt < 0.5 * math.pi):
-            raise ValueError(f"hinge tilt must lie in [0, pi/2) rad, got {self.hinge_tilt!r}")
+        check_that(self, self.polarity in (-1.0, 1.0),
+                   f"polarity must be -1 (dark cubes) or +1 (bright cubes), got {self.polarity!r}")
+        check_positive(self, "contrast")
+        check_whole(self, "edge_window", minimum=2)
+        check_non_negative(self, "hinge_tilt")
+        check_that(self, self.hinge_tilt < 0.5 * math.pi, f"hinge_tilt must lie in [0, pi/2) rad, got {self.hinge_tilt!r}")
 
     def pack(self) -> NDArray[np.float64]:
         """The settings in the order the kernel reads them (the hinge tilt as its cosine, sine and the silhouette's

@@ -22,8 +22,7 @@ SETTINGS_CLASSES = {"LossWeights", "NoiseLevels", "PracticalThresholds"}
 #: of them starts using the checks, or is gone).
 HAND_CHECKED = {"acousim/atlas/field_drops.py": {"AtlasConfig"}, "acousim/atlas/free_y.py": {"FreeYConfig"},
                 "acousim/atlas/held_y.py": {"HeldYConfig"}, "acousim/atlas/resonator_map.py": {"ResonatorMapConfig"},
-                "acousim/twin/config.py": {"TwinConfig"}, "tracking/measure.py": {"MeasureSettings"},
-                "tracking/track_config.py": {"TrackConfig"}}
+                "acousim/twin/config.py": {"TwinConfig"}, "tracking/track_config.py": {"TrackConfig"}}
 
 
 @dataclass(frozen=True)
