@@ -152,12 +152,13 @@ class SettingOption:
         """
         if self.is_switch:
             return _with_field(settings, self.field, self.switch)
+        shown = f"{value:g}" if isinstance(value, float) else str(value)
         choices = self.choice_values()
-        if choices is not None:
-            if value not in choices:
-                raise ValueError(f"{value}: needs one of {', '.join(map(str, choices))}")
-            value = choices[value]
-        elif self.valid is not None and not self.valid(value):
-            raise ValueError(f"{value:g}: {self.requirement}" if isinstance(value, float) else
-                             f"{value}: {self.requirement}")
-        return _with_field(settings, self.field, value)
+        if choices is not None and value not in choices:
+            raise ValueError(f"{shown}: needs one of {', '.join(map(str, choices))}")
+        if choices is None and self.valid is not None and not self.valid(value):
+            raise ValueError(f"{shown}: {self.requirement}")
+        try:
+            return _with_field(settings, self.field, choices[value] if choices is not None else value)
+        except ValueError as exc:  # the settings' own checks (cubedimer.config_checks)
+            raise ValueError(f"{shown}: {exc}") from None
