@@ -126,14 +126,15 @@ class SettingOption:
 
     def add_to(self, parser: argparse.ArgumentParser | argparse._ArgumentGroup, defaults: object,
                help: str | None = None) -> None:
-        """Add the option to ``parser`` (a value not given is None, a switch not given False); ``help`` replaces
-        the declared line (e.g. the lines of several methods that declare the same flag)."""
+        """Add the option to ``parser``; ``help`` replaces the declared line (e.g. the lines of several methods that
+        declare the same flag).  An option not given leaves no attribute (:meth:`given` reads None), so the help
+        names the field's default and no argparse default beside it."""
         text = self.help_text(defaults) if help is None else help
         if self.is_switch:
-            parser.add_argument(self.flag, dest=self.dest, action="store_true", help=text)
+            parser.add_argument(self.flag, dest=self.dest, action="store_true", default=argparse.SUPPRESS, help=text)
             return
         choices = self.choice_values()
-        parser.add_argument(self.flag, dest=self.dest, type=self.type, default=None, metavar=self.metavar,
+        parser.add_argument(self.flag, dest=self.dest, type=self.type, default=argparse.SUPPRESS, metavar=self.metavar,
                             choices=tuple(choices) if choices is not None else None, help=text)
 
     def given(self, args: argparse.Namespace) -> Any:
