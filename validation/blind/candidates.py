@@ -291,7 +291,7 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
     """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
     found = [] if diag is None else list(diag.identified)
-    params_err, covers = {}, {}
+    params_err, covers, intervals = {}, {}, {}
     if diag is not None:
         fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
@@ -302,6 +302,7 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
                     for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
             covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
+            intervals[name] = _interval_records(diag.effect(name), case["effects"][name])
     pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
     return {
         "index": case["index"],
@@ -320,6 +321,10 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
         "interval_covers": covers,
         "pressure_interval_covers": None if pressure is None or not pressure.determined else bool(
             pressure.covers(truth["pressure_amplitude_pa"])),
+        # each named true parameter's estimate, standard error, degrees of freedom and truth (the z-scores and
+        # interval widths of docs/diagnosis.md's coverage tables are computed from these)
+        "intervals": intervals,
+        "pressure_interval": None if pressure is None else _interval_record(pressure, truth["pressure_amplitude_pa"]),
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         # effects named alone that the truth does not hold, and pairs named as indistinguishable
         "false_effects": sorted(set(found) - set(true_set)),
@@ -344,6 +349,23 @@ def _interval_covers(verdict, truth: dict) -> dict:
             out[p] = None
             continue
         out[p] = bool(iv.covers(v)) if iv.determined else None
+    return out
+
+
+def _interval_record(iv, truth: float) -> dict:
+    """``{"value", "std_error", "dof", "truth", "statistical_std_error"}`` of one interval (std_error None: not
+    determined; statistical_std_error: the jackknife's part of std_error)."""
+    return {"value": float(iv.value), "std_error": iv.std_error, "dof": iv.dof, "truth": float(truth),
+            "statistical_std_error": iv.std_error if iv.model_std_error is None else iv.statistical_std_error}
+
+
+def _interval_records(verdict, truth: dict) -> dict:
+    """Per true parameter of a named effect: :func:`_interval_record` (absent where the effect gives no interval)."""
+    out = {}
+    for p, v in truth.items():
+        iv = (verdict.derived or {}).get(p) if p not in verdict.params else verdict.estimate(p)
+        if iv is not None:
+            out[p] = _interval_record(iv, v)
     return out
 
 
