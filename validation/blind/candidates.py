@@ -384,13 +384,30 @@ def interval_coverage(results: list[dict]) -> dict:
                 "upper_95": float(stats.beta.ppf(0.975, k + 1, n - k)) if k < n else (1.0 if n else None)}
 
     per: dict[str, list] = {n: [] for n in [*STRENGTHS, RESONATOR]}
+    widths: dict[str, list] = {}
     for r in results:
         for name, flags in (r.get("interval_covers") or {}).items():
             per.setdefault(name, []).extend(flags.values())
+        for name, ivs in (r.get("intervals") or {}).items():
+            widths.setdefault(name, []).extend(_relative_half_width(d) for d in ivs.values())
+        if r.get("pressure_interval"):
+            widths.setdefault("pressure_amplitude_pa", []).append(_relative_half_width(r["pressure_interval"]))
     out = {n: record(f) for n, f in per.items() if f}
     out["pressure_amplitude_pa"] = record([r.get("pressure_interval_covers") for r in results
                                            if "pressure_interval_covers" in r])
+    for n, c in out.items():  # the median 95 % half-width relative to the estimate (None: no interval recorded)
+        w = [x for x in widths.get(n, []) if x is not None]
+        c["median_relative_half_width"] = float(np.median(w)) if w else None
     return out
+
+
+def _relative_half_width(record: dict) -> float | None:
+    """A recorded interval's 95 % half-width over |estimate| (None when not determined or at a zero estimate)."""
+    from scipy import stats
+
+    if record.get("std_error") is None or not record.get("dof") or record["value"] == 0:
+        return None
+    return float(stats.t.ppf(0.975, record["dof"]) * record["std_error"] / abs(record["value"]))
 
 
 def _upper_95(k: int, n: int) -> float:
@@ -489,11 +506,12 @@ def candidates_table(summary: dict) -> list[str]:
     coverage = summary.get("interval_coverage") or {}
     if coverage:
         lines += ["", "| named true parameters of | 95 % intervals holding the truth | its 95 % bounds | not determined |"
-                  " target |", "|---|---|---|---|---|"]
+                  " median half-width / estimate | target |", "|---|---|---|---|---|---|"]
         for n, c in coverage.items():
             bounds = "-" if c["coverage"] is None else f"{pct(c['lower_95'])}-{pct(c['upper_95'])}"
+            w = c.get("median_relative_half_width")
             lines.append(f"| {n} | {c['covered']} of {c['determined']} ({pct(c['coverage'])}) | {bounds} | "
-                         f"{c['not_determined']} | 90-98 % |")
+                         f"{c['not_determined']} | {'-' if w is None else f'{100 * w:.2g} %'} | 90-98 % |")
     return lines
 
 
