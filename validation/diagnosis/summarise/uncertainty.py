@@ -51,7 +51,7 @@ PRESSURE_MODEL_ERROR = 3.0e-4
 #: Relative systematic standard errors of the named effects' parameters (and the cavity's derived mode), by effect and
 #: parameter: the model errors the jackknife does not see, added to its error in quadrature
 #: (:func:`with_effect_model_errors`).  Each is the smallest d for which at least 92 % of the named true parameters'
-#: intervals in the tuning blind studies (realistic seeds 9162 and 7301, inviscid 7302: 87 scored cases) hold the
+#: intervals in the tuning blind studies (realistic seeds 9162 and 7301, inviscid 7302: 78 scored cases) hold the
 #: truth with the systematic part alone, |estimate - truth| <= t(0.975, 9) d |estimate| (the jackknife part widens
 #: them further).  Their causes: linear damping scored against the air's rates, whose hinge damping is not linear
 #: (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval missed); the stiffnesses' and
