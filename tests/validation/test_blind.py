@@ -127,6 +127,12 @@ def test_blind_scoring_counts_interval_coverage(make_diagnosis):
     assert cov["pair_scattering"]["lower_95"] == pytest.approx(0.0126, abs=1e-4)
     assert cov["pair_scattering"]["upper_95"] == pytest.approx(0.9874, abs=1e-4)
     assert cov["pressure_amplitude_pa"]["coverage"] == 1.0
+    # each named true parameter's estimate, errors and truth are kept; the widths are t * SE / |estimate|:
+    # 2.262 * 100 / 1.02e4 and / 1.05e4, median 2.186 %; the pressure's 2.262 * 10 / 3100 = 0.730 %
+    assert results[0]["intervals"]["pair_scattering"]["kappa"] == pytest.approx(
+        {"value": 1.02e4, "std_error": 100.0, "dof": 9, "truth": 1e4, "statistical_std_error": 100.0})
+    assert cov["pair_scattering"]["median_relative_half_width"] == pytest.approx(0.02186, abs=1e-5)
+    assert cov["pressure_amplitude_pa"]["median_relative_half_width"] == pytest.approx(0.00730, abs=1e-5)
 
 
 def _open_angle(hinge: float, surrogate, pressure_pa: float):

@@ -291,7 +291,7 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
     """Score one case: the diagnosis ``diag`` (None if it failed with ``error``) against the hidden truth."""
     true_set = sorted(case["effects"])
     found = [] if diag is None else list(diag.identified)
-    params_err, covers = {}, {}
+    params_err, covers, intervals = {}, {}, {}
     if diag is not None:
         fitted = {e.name: e.params for e in diag.effects}
         for name in set(true_set) & set(found):
@@ -302,6 +302,7 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
                     for p, v in case["effects"][name].items() if v != 0}
             params_err[name] = errs
             covers[name] = _interval_covers(diag.effect(name), case["effects"][name])
+            intervals[name] = _interval_records(diag.effect(name), case["effects"][name])
     pressure = None if diag is None else diag.calibration_estimate("pressure_amplitude_pa")
     return {
         "index": case["index"],
@@ -320,6 +321,10 @@ def score_case(case: dict, truth: dict, diag: "Diagnosis | None", error: str | N
         "interval_covers": covers,
         "pressure_interval_covers": None if pressure is None or not pressure.determined else bool(
             pressure.covers(truth["pressure_amplitude_pa"])),
+        # each named true parameter's estimate, standard error, degrees of freedom and truth (the z-scores and
+        # interval widths of docs/diagnosis.md's coverage tables are computed from these)
+        "intervals": intervals,
+        "pressure_interval": None if pressure is None else _interval_record(pressure, truth["pressure_amplitude_pa"]),
         # every effect of these sets is a candidate: a discovered library term is a false alarm of the discovery
         # effects named alone that the truth does not hold, and pairs named as indistinguishable
         "false_effects": sorted(set(found) - set(true_set)),
@@ -347,6 +352,23 @@ def _interval_covers(verdict, truth: dict) -> dict:
     return out
 
 
+def _interval_record(iv, truth: float) -> dict:
+    """``{"value", "std_error", "dof", "truth", "statistical_std_error"}`` of one interval (std_error None: not
+    determined; statistical_std_error: the jackknife's part of std_error)."""
+    return {"value": float(iv.value), "std_error": iv.std_error, "dof": iv.dof, "truth": float(truth),
+            "statistical_std_error": iv.std_error if iv.model_std_error is None else iv.statistical_std_error}
+
+
+def _interval_records(verdict, truth: dict) -> dict:
+    """Per true parameter of a named effect: :func:`_interval_record` (absent where the effect gives no interval)."""
+    out = {}
+    for p, v in truth.items():
+        iv = (verdict.derived or {}).get(p) if p not in verdict.params else verdict.estimate(p)
+        if iv is not None:
+            out[p] = _interval_record(iv, v)
+    return out
+
+
 def interval_coverage(results: list[dict]) -> dict:
     """The 95 % intervals' coverage over scored cases: per effect (its parameters pooled) and the pressure, each as
     ``{"covered", "determined", "not_determined", "coverage", "upper_95"/"lower_95"}`` (Clopper-Pearson bounds of
@@ -362,13 +384,30 @@ def interval_coverage(results: list[dict]) -> dict:
                 "upper_95": float(stats.beta.ppf(0.975, k + 1, n - k)) if k < n else (1.0 if n else None)}
 
     per: dict[str, list] = {n: [] for n in [*STRENGTHS, RESONATOR]}
+    widths: dict[str, list] = {}
     for r in results:
         for name, flags in (r.get("interval_covers") or {}).items():
             per.setdefault(name, []).extend(flags.values())
+        for name, ivs in (r.get("intervals") or {}).items():
+            widths.setdefault(name, []).extend(_relative_half_width(d) for d in ivs.values())
+        if r.get("pressure_interval"):
+            widths.setdefault("pressure_amplitude_pa", []).append(_relative_half_width(r["pressure_interval"]))
     out = {n: record(f) for n, f in per.items() if f}
     out["pressure_amplitude_pa"] = record([r.get("pressure_interval_covers") for r in results
                                            if "pressure_interval_covers" in r])
+    for n, c in out.items():  # the median 95 % half-width relative to the estimate (None: no interval recorded)
+        w = [x for x in widths.get(n, []) if x is not None]
+        c["median_relative_half_width"] = float(np.median(w)) if w else None
     return out
+
+
+def _relative_half_width(record: dict) -> float | None:
+    """A recorded interval's 95 % half-width over |estimate| (None when not determined or at a zero estimate)."""
+    from scipy import stats
+
+    if record.get("std_error") is None or not record.get("dof") or record["value"] == 0:
+        return None
+    return float(stats.t.ppf(0.975, record["dof"]) * record["std_error"] / abs(record["value"]))
 
 
 def _upper_95(k: int, n: int) -> float:
@@ -467,11 +506,12 @@ def candidates_table(summary: dict) -> list[str]:
     coverage = summary.get("interval_coverage") or {}
     if coverage:
         lines += ["", "| named true parameters of | 95 % intervals holding the truth | its 95 % bounds | not determined |"
-                  " target |", "|---|---|---|---|---|"]
+                  " median half-width / estimate | target |", "|---|---|---|---|---|---|"]
         for n, c in coverage.items():
             bounds = "-" if c["coverage"] is None else f"{pct(c['lower_95'])}-{pct(c['upper_95'])}"
+            w = c.get("median_relative_half_width")
             lines.append(f"| {n} | {c['covered']} of {c['determined']} ({pct(c['coverage'])}) | {bounds} | "
-                         f"{c['not_determined']} | 90-98 % |")
+                         f"{c['not_determined']} | {'-' if w is None else f'{100 * w:.2g} %'} | 90-98 % |")
     return lines
 
 

@@ -26,11 +26,17 @@ def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_p
     found = {t["term"]: t for t in diag.remaining_gap["discovered_terms"]["thetaddot"]}
     assert "theta" not in found and diag.remaining_gap["folded_into_effects"] == {"thetaddot": ["theta"]}
     np.testing.assert_allclose(found["theta^3"]["coefficient"], -truth["cubic_hinge"], rtol=0.03)
-    # the named effect's interval (the jackknife of the joint model over the 8 runs) covers the truth; measured
-    # kappa = 15,006 +- 16
+    # the named effect's interval (the jackknife of the joint model over the 8 runs, with kappa's systematic part)
+    # covers the truth; measured kappa = 15,006 +- 16 from the jackknife
+    from validation.diagnosis.summarise.uncertainty import EFFECT_MODEL_ERROR
+
     kappa = diag.effect("pair_scattering").estimate("kappa")
     assert kappa.determined and kappa.covers(truth["effects"]["pair_scattering"]["kappa"])
     assert kappa.std_error < 0.01 * kappa.value  # 8 runs of 2 s determine kappa to 0.1 % (measured)
+    assert kappa.model_std_error == pytest.approx(EFFECT_MODEL_ERROR["pair_scattering"]["kappa"] * abs(kappa.value))
+    assert kappa.std_error == pytest.approx(np.hypot(kappa.statistical_std_error, kappa.model_std_error))
+    unc = next(e for e in diag.to_json()["effects"] if e["name"] == "pair_scattering")["uncertainty"]["kappa"]
+    assert unc["statistical_std_error"] == kappa.statistical_std_error and unc["model_std_error"] > 0
     pressure = diag.calibration_estimate("pressure_amplitude_pa")
     # measured: 0.075 Pa from the jackknife, 0.90 Pa with the systematic 0.03 % (PRESSURE_MODEL_ERROR); truth 3000.0
     assert pressure.determined and pressure.std_error < 1.0 and pressure.covers(truth["pressure_amplitude_pa"])

@@ -98,3 +98,121 @@ def test_value_with_error_text(value, error, text):
 def test_interval_round_trips_through_json():
     iv = interval_from_error(2.0, 0.5, 9)
     assert ParameterInterval.from_dict(iv.to_dict()) == iv
+
+
+# --- the statistics layer alone: many cheap least-squares problems of known truth --------------------------------
+
+#: the regression problems: slope and offset of 10 runs whose rows carry AR(1) noise (rho = 0.9), as the integral
+#: form's overlapping windows and the coloured Savitzky-Golay accelerations do, at unequal lengths and amplitudes
+REGRESSION_TRUTH = np.array([1.0, -0.5])
+REGRESSION_PROBLEMS = 400
+#: the shared systematic slope error of the third study: about 4 times the slope's statistical error (3.9 %, median)
+SYSTEMATIC = 0.15
+
+
+def _regression_runs(rng, n_runs=10, rho=0.9, systematic=0.0):
+    """Runs of ``y = a x + b`` with AR(1) noise; ``systematic``: every run's slope off by that fraction (a model
+    error shared by all runs, which the scatter over runs cannot see)."""
+    from scipy.signal import lfilter
+
+    xs, ys = [], []
+    for _ in range(n_runs):
+        n = int(rng.integers(80, 240))
+        t = np.arange(n) * 0.01
+        x = np.column_stack([rng.uniform(0.3, 2.0) * np.sin(2 * np.pi * rng.uniform(1, 3) * t + rng.uniform(0, 6.3)),
+                             np.ones(n)])
+        noise = lfilter([np.sqrt(1 - rho**2)], [1, -rho], rng.normal(size=n))
+        xs.append(x)
+        ys.append(x @ (REGRESSION_TRUTH * [1 + systematic, 1]) + 0.5 * noise)
+    return xs, ys
+
+
+def _least_squares(xs, ys):
+    a, y = np.vstack(xs), np.concatenate(ys)
+    return np.linalg.lstsq(a, y, rcond=None)[0], a, y
+
+
+@pytest.fixture(scope="module")
+def regression_study():
+    """Per problem (seeded): the slope's jackknife interval and whether the rows' least-squares covariance
+    ``s^2 (A^T A)^-1`` (rows taken as independent) gives an interval holding the truth; exact and with a shared
+    systematic slope error (:data:`SYSTEMATIC`)."""
+    from scipy import stats
+
+    from validation.diagnosis.summarise.uncertainty import jackknife_interval
+
+    out = {}
+    for systematic in (0.0, SYSTEMATIC):
+        rng = np.random.default_rng(62)
+        rows = []
+        for _ in range(REGRESSION_PROBLEMS):
+            xs, ys = _regression_runs(rng, systematic=systematic)
+            coef, a, y = _least_squares(xs, ys)
+            r = len(xs)
+            loo = np.array([_least_squares(xs[:i] + xs[i + 1:], ys[:i] + ys[i + 1:])[0][0] for i in range(r)])
+            resid = y - a @ coef
+            naive_se = np.sqrt(resid @ resid / (len(y) - 2) * np.linalg.inv(a.T @ a)[0, 0])
+            rows.append((jackknife_interval(coef[0], loo),
+                         abs(coef[0] - REGRESSION_TRUTH[0]) <= stats.norm.ppf(0.975) * naive_se))
+        out[systematic] = rows
+    return out
+
+
+def test_jackknife_intervals_cover_95_percent_with_correlated_rows(regression_study):
+    """400 problems: at a true coverage of 95 % the count of intervals holding the truth lies within 369-390 with
+    probability 0.99 (binomial 0.5 % and 99.5 % quantiles: 368 and 390); at 90 % it reaches 369 with probability
+    0.07.  Measured: 388 (0.97; the jackknife of a least-squares slope is slightly conservative)."""
+    rows = regression_study[0.0]
+    covered = sum(iv.covers(REGRESSION_TRUTH[0]) for iv, _ in rows)
+    assert all(iv.determined and iv.dof == 9 for iv, _ in rows)
+    assert 369 <= covered <= 390, covered
+
+
+def test_row_covariance_undercovers_correlated_rows(regression_study):
+    """The same problems with the rows' least-squares covariance: correlated rows make it far too narrow
+    (measured 208 of 400, 52 %), the reason the diagnosis takes the scatter over runs instead."""
+    covered = sum(naive for _, naive in regression_study[0.0])
+    assert covered < 0.7 * REGRESSION_PROBLEMS, covered
+
+
+def test_a_shared_systematic_error_needs_its_own_term(regression_study):
+    """A slope 15 % off in every run: the jackknife's intervals (the scatter over runs) do not see it and miss the
+    truth in most problems (measured: 67 of 400 hold it); with the systematic error added in quadrature at its size
+    (15 % of the estimate, as EFFECT_MODEL_ERROR adds a tuned one) they hold it in all 400 (half-widths of at least
+    t(0.975, 9) * 15 % = 34 % against the offset of 15 %)."""
+    from validation.diagnosis.summarise.uncertainty import with_model_error
+
+    rows = regression_study[SYSTEMATIC]
+    assert sum(iv.covers(REGRESSION_TRUTH[0]) for iv, _ in rows) < 0.5 * REGRESSION_PROBLEMS
+    widened = [with_model_error(iv, SYSTEMATIC * abs(iv.value)) for iv, _ in rows]
+    assert sum(iv.covers(REGRESSION_TRUTH[0]) for iv in widened) >= 0.95 * REGRESSION_PROBLEMS
+    iv = widened[0]
+    assert iv.statistical_std_error == rows[0][0].std_error and iv.model_std_error == pytest.approx(SYSTEMATIC * abs(iv.value))
+    assert iv.std_error == pytest.approx(np.hypot(iv.statistical_std_error, iv.model_std_error))
+
+
+def test_effect_model_errors_are_added_per_parameter_and_kept_apart():
+    """Each parameter gets its own relative systematic error; a parameter without one keeps the jackknife's
+    interval, a not-determined one stays not determined, and both parts survive diagnosis.json's round trip."""
+    from validation.diagnosis.summarise.uncertainty import EFFECT_MODEL_ERROR, with_effect_model_errors
+
+    stat = interval_from_error(2.0, 0.01, 9)
+    none = ParameterInterval(5.0, None, None, 9, "no spread over the runs")
+    got = with_effect_model_errors({"linear_damping": {"gamma_theta": stat, "gamma_y": none},
+                                    "velocity_coupling": {"c5": stat}})
+    gt = got["linear_damping"]["gamma_theta"]
+    rel = EFFECT_MODEL_ERROR["linear_damping"]["gamma_theta"]
+    assert gt.std_error == pytest.approx(np.hypot(0.01, rel * 2.0)) and gt.model_std_error == pytest.approx(rel * 2.0)
+    assert got["linear_damping"]["gamma_y"] is none and got["velocity_coupling"]["c5"] is stat
+    assert ParameterInterval.from_dict(gt.to_dict()) == gt
+    assert set(stat.to_dict()) == {"value", "std_error", "interval_95", "dof", "determined", "reason"}
+
+
+def test_a_parameter_one_run_carries_is_not_determined():
+    """A leave-one-run-out refit without a finite value (the cavity's mode when the only run with a large enough
+    amplitude is left out) gives "not determined" with that reason, never a number without an error."""
+    from validation.diagnosis.summarise.uncertainty import jackknife_interval
+
+    iv = jackknife_interval(250.0, np.array([240.0, 255.0, np.nan, 251.0, 248.0]))
+    assert not iv.determined and "that run alone carries the parameter" in iv.reason
+    assert "not determined" in iv.format()

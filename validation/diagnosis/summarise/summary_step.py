@@ -22,7 +22,7 @@ from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .result import Diagnosis, DiagnosisInternals
 from .uncertainty import (CONFIDENCE, METHOD, PRESSURE_MODEL_ERROR, interval_from_error, jackknife_errors,
-                          with_model_error)
+                          with_effect_model_errors, with_model_error)
 from .verdicts import ranked_effects
 
 if TYPE_CHECKING:
@@ -54,8 +54,10 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
     log("standard errors: the final model refitted without each of the %d runs", len(runs))
     errors = jackknife_errors(problem, identified, joint_params, final.calibration,
                               lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
+    # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, gap_before, errors.effects, errors.derived)
+                             replaced, joint_params, final, gap_before, with_effect_model_errors(errors.effects),
+                             with_effect_model_errors(errors.derived))
     # an effect whose addition does not shrink the gap is not named (its verdict says why, with both gaps)
     named = [e.name for e in effects if e.status == "named"]
     loc_after = localize_residuals(runs, final.residuals)

@@ -23,7 +23,7 @@ in tests/validation/diagnosis/test_uncertainty.py and measured in docs/diagnosis
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -34,8 +34,9 @@ from ..calibrate.gap_model import GapFit, fit_gap_model
 from ..prepare.candidate_effects import CANDIDATE_EFFECTS
 from ..prepare.problem import DiagnosisProblem
 
-__all__ = ["PRESSURE_MODEL_ERROR", "with_model_error", "ParameterInterval", "JackknifeErrors", "jackknife_errors", "interval_from_error", "format_with_error",
-           "MIN_JACKKNIFE_RUNS", "CONFIDENCE"]
+__all__ = ["PRESSURE_MODEL_ERROR", "EFFECT_MODEL_ERROR", "with_model_error", "with_effect_model_errors",
+           "ParameterInterval", "JackknifeErrors", "jackknife_errors", "jackknife_interval", "interval_from_error",
+           "format_with_error", "MIN_JACKKNIFE_RUNS", "CONFIDENCE"]
 
 #: The fewest runs a jackknife interval is made from (two leave-one-out fits give one degree of freedom: t = 12.7).
 MIN_JACKKNIFE_RUNS = 3
@@ -47,6 +48,26 @@ CONFIDENCE = 0.95
 #: differentiation; combined with the jackknife error in quadrature (:func:`with_model_error`).  Set from those data
 #: sets, so their coverage does not check it.
 PRESSURE_MODEL_ERROR = 3.0e-4
+#: Relative systematic standard errors of the named effects' parameters (and the cavity's derived mode), by effect and
+#: parameter: the model errors the jackknife does not see, added to its error in quadrature
+#: (:func:`with_effect_model_errors`).  Each is the smallest d for which at least 92 % of the named true parameters'
+#: intervals in the tuning blind studies (realistic seeds 9162 and 7301, inviscid 7302: 78 scored cases) hold the
+#: truth, a jackknife interval that missed counted as held once |estimate - truth| <= t(0.975, 9) d |truth| (the
+#: systematic part alone: a sufficient condition, the jackknife part widens it further).  Their causes: linear damping scored against the air's rates, whose hinge damping is not linear
+#: (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval missed); the stiffnesses' and
+#: asymmetries' small offsets of the calibrated simulation from the twin (kappa 0.15-0.21 %, as the pressure's
+#: PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling or sharing pair scattering's y-theta
+#: coupling (3-29 %); the cavity's expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping:
+#: 7 cases only).  Velocity coupling has one named case in the tuning studies: no systematic part (its column
+#: bias, docs/diagnosis.md Known limitations, is not in its intervals).  Checked on fresh seeds in
+#: docs/diagnosis.md "Coverage of the 95 % intervals".
+EFFECT_MODEL_ERROR: dict[str, dict[str, float]] = {
+    "linear_damping": {"gamma_y": 2.2e-3, "gamma_theta": 1.4e-2},
+    "quadratic_drag": {"c_y": 3.2e-3},
+    "pair_scattering": {"kappa": 7.2e-4},
+    "mirror_asymmetry": {"beta0": 1.4e-3, "beta1": 9.0e-2},
+    "cavity_lag": {"quality_factor": 0.14, "detuning_half_widths": 0.38},
+}
 #: The method's name, as diagnosis.json records it.
 METHOD = "delete-one-run jackknife, Student t with R - 1 degrees of freedom"
 
@@ -62,6 +83,9 @@ class ParameterInterval:
     interval_95 : (low, high) of the 95 % interval (None: not determined)
     dof : the degrees of freedom of the interval's t quantile
     reason : why the data give no finite interval (None when determined)
+    statistical_std_error : the jackknife's part of ``std_error`` when a systematic error is added in quadrature
+        (:func:`with_model_error`; None: ``std_error`` is the jackknife's alone)
+    model_std_error : that systematic part (SI; None when none is added)
     """
 
     value: float
@@ -69,6 +93,8 @@ class ParameterInterval:
     interval_95: tuple[float, float] | None
     dof: int | None = None
     reason: str | None = None
+    statistical_std_error: float | None = None
+    model_std_error: float | None = None
 
     @property
     def determined(self) -> bool:
@@ -80,16 +106,20 @@ class ParameterInterval:
         return self.determined and self.interval_95[0] <= truth <= self.interval_95[1]
 
     def to_dict(self) -> dict:
-        """diagnosis.json's form: ``{"value", "std_error", "interval_95", "dof", "determined", "reason"}``."""
-        return {"value": self.value, "std_error": self.std_error,
-                "interval_95": None if self.interval_95 is None else list(self.interval_95), "dof": self.dof,
-                "determined": self.determined, "reason": self.reason}
+        """diagnosis.json's form: ``{"value", "std_error", "interval_95", "dof", "determined", "reason"}``, plus
+        ``statistical_std_error`` and ``model_std_error`` where a systematic error is part of ``std_error``."""
+        out = {"value": self.value, "std_error": self.std_error,
+               "interval_95": None if self.interval_95 is None else list(self.interval_95), "dof": self.dof,
+               "determined": self.determined, "reason": self.reason}
+        if self.model_std_error is not None:
+            out.update(statistical_std_error=self.statistical_std_error, model_std_error=self.model_std_error)
+        return out
 
     @classmethod
     def from_dict(cls, doc: Mapping) -> "ParameterInterval":
         iv = doc.get("interval_95")
         return cls(doc["value"], doc.get("std_error"), None if iv is None else (iv[0], iv[1]), doc.get("dof"),
-                   doc.get("reason"))
+                   doc.get("reason"), doc.get("statistical_std_error"), doc.get("model_std_error"))
 
     def format(self) -> str:
         """``"1.95e4 +- 0.02e4"`` (:func:`format_with_error`), or the value with "not determined" and the reason."""
@@ -125,7 +155,11 @@ def interval_from_error(value: float, std_error: float, dof: int) -> ParameterIn
     return ParameterInterval(value, float(std_error), (value - half, value + half), dof)
 
 
-def _jackknife(estimate: float, leave_one_out: NDArray[np.float64]) -> ParameterInterval:
+def jackknife_interval(estimate: float, leave_one_out: NDArray[np.float64]) -> ParameterInterval:
+    """The delete-one-run jackknife interval of ``estimate`` from its ``R`` leave-one-run-out refits (module
+    docstring); "not determined" with the reason below :data:`MIN_JACKKNIFE_RUNS` runs, with a non-finite refit or
+    without spread."""
+    leave_one_out = np.asarray(leave_one_out, dtype=float)
     r = leave_one_out.size
     if r < MIN_JACKKNIFE_RUNS:
         return ParameterInterval(estimate, None, None, None,
@@ -191,20 +225,36 @@ def jackknife_errors(problem: DiagnosisProblem, effects: Sequence[str], params: 
             dloo[i] = [d.get(e, {}).get(k, np.nan) for e, k in dslots]
     out: dict[str, dict[str, ParameterInterval]] = {e: {} for e in names}
     for k, (e, p) in enumerate(slots):
-        out[e][p] = _jackknife(float(params[e][p]), loo[:, k])
-    cal = {"pressure_amplitude_pa": _jackknife(calibration.pressure_amplitude_pa, loo[:, -2]),
-           "y_origin_height_m": _jackknife(calibration.z_origin_m, loo[:, -1])}
+        out[e][p] = jackknife_interval(float(params[e][p]), loo[:, k])
+    cal = {"pressure_amplitude_pa": jackknife_interval(calibration.pressure_amplitude_pa, loo[:, -2]),
+           "y_origin_height_m": jackknife_interval(calibration.z_origin_m, loo[:, -1])}
     extra: dict[str, dict[str, ParameterInterval]] = {}
     for k, (e, q) in enumerate(dslots):
         value = float(centre[e][q])
-        extra.setdefault(e, {})[q] = (_jackknife(value, dloo[:, k]) if math.isfinite(value) else ParameterInterval(
+        extra.setdefault(e, {})[q] = (jackknife_interval(value, dloo[:, k]) if math.isfinite(value) else ParameterInterval(
             value, None, None, None, f"the fitted parameters of {e} give no {q}"))
     return JackknifeErrors(out, cal, n, extra)
 
 
 def with_model_error(interval: ParameterInterval, model_error: float) -> ParameterInterval:
     """``interval`` with a systematic standard error ``model_error`` (same unit) added in quadrature (the same
-    degrees of freedom); a not-determined interval stays so."""
+    degrees of freedom), both parts kept (``statistical_std_error``, ``model_std_error``); a not-determined interval
+    stays so."""
     if not interval.determined:
         return interval
-    return interval_from_error(interval.value, math.hypot(interval.std_error, model_error), interval.dof)
+    out = interval_from_error(interval.value, math.hypot(interval.std_error, model_error), interval.dof)
+    return replace(out, statistical_std_error=float(interval.std_error), model_std_error=float(model_error))
+
+
+def with_effect_model_errors(intervals: Mapping[str, Mapping[str, ParameterInterval]],
+                             model_errors: Mapping[str, Mapping[str, float]] | None = None
+                             ) -> dict[str, dict[str, ParameterInterval]]:
+    """Every effect's parameter intervals with its relative systematic error (:data:`EFFECT_MODEL_ERROR` by
+    default) times ``|value|`` added in quadrature; parameters without one keep the jackknife's interval."""
+    table = EFFECT_MODEL_ERROR if model_errors is None else model_errors
+    out: dict[str, dict[str, ParameterInterval]] = {}
+    for effect, params in intervals.items():
+        rel = table.get(effect, {})
+        out[effect] = {p: with_model_error(iv, rel[p] * abs(iv.value)) if rel.get(p) else iv
+                       for p, iv in params.items()}
+    return out

@@ -151,7 +151,9 @@ def section(context: ReportContext) -> Section:
                     ["effect", "parameters (SI, +- standard error)", "gap without it", "gap with it", "shrink"],
                     causes,
                     {"parameters (SI, +- standard error)": "fitted with the named effects; the standard error over runs "
-                                                           "(delete-one-run jackknife; the 95 % interval in diagnosis.json)",
+                                                           "(delete-one-run jackknife) with the parameter's systematic "
+                                                           "part added (docs/diagnosis.md; both, and the 95 % interval, "
+                                                           "in diagnosis.json)",
                      "gap without it": "the gap with the effects named before it (the calibrated simulation's for the "
                                        "first)", "gap with it": "the gap once it is added",
                      "shrink": "1 - gap with it / gap without it"}),

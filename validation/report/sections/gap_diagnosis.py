@@ -332,8 +332,9 @@ def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, te
                       "test but not shrinking the gap: significant on held-out runs, yet the gap with it is not smaller "
                       "than without it (both gaps given); indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
-        "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife; "
-                           "the 95 % interval is in diagnosis.json); a rejected candidate's fit is no result: the "
+        "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife) "
+                           "with the parameter's systematic part added (docs/diagnosis.md; both, and the 95 % interval, "
+                           "are in diagnosis.json); a rejected candidate's fit is no result: the "
                            "reasons of its rejection instead",
         "gap after": "the gap (mean unexplained fraction of the three components beyond the noise floor) with the named "
                      "effects up to this one, or with the named effects plus this one",
