@@ -408,7 +408,7 @@ def column_states(dt: float, y: NDArray, theta: NDArray, ydot: NDArray, f_y: flo
 
 
 def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives"], alpha: float = 0.01,
-                            periods: float = 0.75) -> dict[str, IntegralSelection]:
+                            periods: float = 0.75, prepared: Sequence | None = None) -> dict[str, IntegralSelection]:
     """:func:`select_integral_form` of both equations on a data set's runs.
 
     Parameters
@@ -420,23 +420,21 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
         Family-wise significance level of the selection.
     periods : float
         Window in periods of the coordinate's dominant frequency (:func:`integral_window`).
+    prepared : per run :class:`fitting.derivatives.preparation.RunPreparation`, optional: the frequencies and column
+        states prepared once (otherwise made here by the same rules,
+        :func:`fitting.derivatives.preparation.integral_form_states`)
 
     Returns
     -------
-    dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the dominant y
-    frequency, theta windows from the dominant theta frequency of each run).
+    dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the oscillation frequency
+    of y, theta windows from that of theta, of each run: :func:`fitting.derivatives.preparation.oscillation_frequencies`).
     """
     from cubedimer.terms import EQUATION_NAMES, evaluate_library, library_terms
-    from cubedimer.spectra import dominant_frequency
+    from .preparation import integral_form_states
 
     dts = [float(r.dt) for r in runs]
-    freqs = [(dominant_frequency(np.asarray(r.y, float), dt), dominant_frequency(np.asarray(r.theta, float), dt))
-             for r, dt in zip(runs, dts)]
-    columns, trims = [], []
-    for r, d, dt, (f_y, f_theta) in zip(runs, derivs, dts, freqs):
-        states, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
-        columns.append(evaluate_library(states))
-        trims.append(edge)
+    freqs, states, trims = integral_form_states(runs, derivs, prepared)
+    columns = [evaluate_library(st) for st in states]
     out = {}
     for q, (eq, coord) in enumerate(zip(EQUATION_NAMES, ("y", "theta"))):
         pos = [np.asarray(getattr(r, coord), float) for r in runs]
