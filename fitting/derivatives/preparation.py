@@ -13,51 +13,19 @@ on the same arrays; ``python -m validation report`` prepares the data set once a
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
-from cubedimer.consistency import SLOW_PEAK_FRACTION
 from cubedimer.dataset import Dataset, DatasetError, Run
 from cubedimer.noise import white_noise_std
-from cubedimer.spectra import dominant_frequency
 from .decimation import block_average, decimation_factor
-from .integral_form import column_states, integral_window
+from .frequencies import THETA_MIN_CYCLES, Y_MIN_CYCLES, oscillation_frequencies
+from .integral_form import column_states, integral_form_states, integral_window
 from .savitzky_golay import Derivatives, SmoothingConfig, SmoothingFailure, run_derivatives
 
 __all__ = ["RunPreparation", "PreparedDataset", "prepare_dataset", "prepare_run", "oscillation_frequencies", "flipped_y",
            "integral_form_states", "Y_MIN_CYCLES", "THETA_MIN_CYCLES"]
-
-#: The fewest cycles per run of the y oscillation: a slower peak is a drift of the levitation height (as the
-#: loader's and the consistency check's f_y, :func:`cubedimer.consistency.run_features`).
-Y_MIN_CYCLES = 5.0
-#: The fewest cycles per run of the hinge's oscillation (a hinge may swing at a tenth of f_y: 2 cycles of a 1.7-Hz
-#: hinge fit in 1.2 s).
-THETA_MIN_CYCLES = 2.0
-
-
-def oscillation_frequencies(run: Run) -> tuple[float, float]:
-    """The run's oscillation frequencies (f_y, f_theta) [Hz]: the one rule of the fit and the diagnosis.
-
-    Each is the largest peak of the coordinate's Hann-windowed amplitude spectrum
-    (:func:`cubedimer.spectra.dominant_frequency`, its mean removed there, refined by parabolic interpolation) at
-    :data:`Y_MIN_CYCLES` (y) or :data:`THETA_MIN_CYCLES` (theta) or more cycles per run, unless nothing there reaches
-    :data:`cubedimer.consistency.SLOW_PEAK_FRACTION` of a slower peak (then the slower one: a run that only drifts
-    keeps its slow frequency).  Why this rule:
-
-    * the frequencies set the smoothing window (0.75 of the y period) and the integral form's windows, so they must
-      be those of the oscillation.  A drifting mean (the levitation height following a slowly drifting pressure)
-      puts its power in the lowest bins, where the largest peak of the whole spectrum would take it for the
-      oscillation; removing the mean does not help (a linear drift has no mean to remove), a lower bound of a
-      few cycles per run does, and the fraction keeps a run whose only motion is slow from being read as noise;
-    * it is the loader's and the consistency check's rule for f_y (:func:`cubedimer.consistency.run_features`), so
-      a data set is judged and prepared at the same frequency;
-    * both are read from the whole run (as recorded, raw): the longest record, the finest bins.
-    """
-    duration = max(run.duration, 1e-9)
-    return tuple(dominant_frequency(x, run.dt, fmin=cycles / duration, prefer_above=SLOW_PEAK_FRACTION)
-                 for x, cycles in ((run.y, Y_MIN_CYCLES), (run.theta, THETA_MIN_CYCLES)))
-
 
 def flipped_y(run: Run) -> Run:
     """``run`` with y -> -y (and its measured y rate, if any)."""
@@ -169,26 +137,3 @@ def prepare_dataset(dataset: Dataset, smoothing: SmoothingConfig = SmoothingConf
         A run whose smoothing does not follow its signal, naming the run.
     """
     return PreparedDataset(dataset, smoothing, tuple(prepare_run(r, smoothing) for r in dataset.runs))
-
-
-def integral_form_states(runs: Sequence[Run], derivs: Sequence[Derivatives],
-                         prepared: Sequence[RunPreparation | None] | None = None
-                         ) -> tuple[list[tuple[float, float]], list[NDArray[np.float64]], list[int]]:
-    """Per run, the frequencies (f_y, f_theta) [Hz], the integral form's column states and their edge [frames]:
-    those of the runs' preparations when given (``prepared``, in the runs' order), else made from ``runs`` and their
-    ``derivs`` by the same rules (:func:`oscillation_frequencies`, :func:`~.integral_form.column_states`).
-
-    Raises
-    ------
-    ValueError
-        A run shorter than the hinge's smoothing window.
-    """
-    if prepared is not None and all(p is not None for p in prepared):
-        short = [p.run.name for p in prepared if p.columns is None]
-        if short:
-            raise ValueError(f"{', '.join(short)}: shorter than the hinge smoothing window")
-        return [(p.f_y, p.f_theta) for p in prepared], [p.columns for p in prepared], [p.column_edge for p in prepared]
-    freqs = [oscillation_frequencies(r) for r in runs]
-    made = [column_states(float(r.dt), r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim), d.polyorder)
-            for r, d, (f_y, f_theta) in zip(runs, derivs, freqs)]
-    return freqs, [m[0] for m in made], [m[1] for m in made]

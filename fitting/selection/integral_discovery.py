@@ -54,8 +54,7 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import single_blas_thread
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
-from ..derivatives.integral_form import integral_window, natural_windows
-from ..derivatives.preparation import integral_form_states
+from ..derivatives.integral_form import integral_form_states, integral_window, natural_windows
 from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
@@ -277,7 +276,7 @@ class _Pass:
 def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig,
            prepared: Sequence["RunPreparation | None"] | None = None) -> _Setup:
     """Step 1: the first pass's column states (smoothed) and each run's oscillation frequencies (those of the runs'
-    preparations, :func:`fitting.derivatives.preparation.integral_form_states`), the windows from them and the noise
+    preparations, :func:`fitting.derivatives.integral_form.integral_form_states`), the windows from them and the noise
     of the positions."""
     from cubedimer.noise import white_noise_std
 
