@@ -193,13 +193,11 @@ def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: Diagnos
     """
     from cubedimer.executor import single_blas_thread
 
-    if isinstance(data, DiagnosisStart):
-        if spec is not None and spec != data.spec:
-            raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
-        start = data
-    else:
-        start = start_diagnosis(data, spec if spec is not None else ModelSpec(), config.alpha)
+    if isinstance(data, DiagnosisStart) and spec is not None and spec != data.spec:
+        raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
     with single_blas_thread():
+        start = data if isinstance(data, DiagnosisStart) else start_diagnosis(
+            data, spec if spec is not None else ModelSpec(), config.alpha)
         return _diagnose(start, config, progress)
 
 
