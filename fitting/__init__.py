@@ -7,7 +7,8 @@ map, frequency; nlopt) and checks the attractors; ``"paper"`` is the source pape
 regression with pysindy (C0), long-time refinement per run, ensemble selection by a registered rule
 (:data:`SELECTION_RULES`) and joint re-optimisation of the minimal model.  Public API:
 
-* fitting a data set: :func:`fit_dataset` (load and fit, no output files), :func:`fit_runs`, :func:`prepare_runs`,
+* fitting a data set: :func:`fit_dataset` (load and fit, no output files), :func:`fit_runs`, :func:`prepare_runs`
+  (the fit's view of the data set's one preparation, :func:`prepare_dataset` and its :class:`PreparedDataset`),
   :class:`FitConfig` with each method's own settings (:class:`DiscoveryMethodConfig`, :class:`PaperMethodConfig`,
   both :class:`MethodConfig`) and the stage configs, :class:`FitResult` (with the method's own ``extras``, e.g.
   :class:`EnsembleExtras`), :func:`write_fit` (model.json and figures), :func:`recorded_settings` (a model.json's
@@ -33,6 +34,7 @@ import cubedimer  # noqa: F401  (first: sets up the compile cache, cubedimer.com
 from cubedimer.distribution import __version__
 from .compare import compare_models
 from .config import FitConfig
+from .derivatives.preparation import PreparedDataset, prepare_dataset
 from .derivatives.savitzky_golay import SmoothingConfig
 from .description import MethodDescription
 from .fit import fit_dataset, fit_runs, prepare_runs
@@ -54,7 +56,7 @@ from .uncertainty.oracle import NoiseLevels, oracle_standard_errors
 from .uncertainty.run_planning import PlanConfig, plan_runs
 
 __all__ = [
-    "fit_dataset", "fit_runs", "prepare_runs", "FitConfig", "MethodConfig", "DiscoveryMethodConfig",
+    "fit_dataset", "fit_runs", "prepare_runs", "prepare_dataset", "PreparedDataset", "FitConfig", "MethodConfig", "DiscoveryMethodConfig",
     "PaperMethodConfig", "FitResult", "EnsembleExtras", "write_fit", "recorded_settings", "NoSaneModelError",
     "SmoothingConfig", "RegressionConfig", "RefineConfig", "LossWeights", "EnsembleConfig", "SelectionConfig",
     "DiscoveryConfig",

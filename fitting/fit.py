@@ -1,7 +1,9 @@
 """The model-discovery pipeline: data -> prepared runs -> the registered method -> one :class:`FitResult`.
 
-:func:`fit_dataset` loads a data set (:func:`cubedimer.dataset.load_dataset`), smooths and differentiates every
-run and classifies its attractor (:func:`prepare_runs`), and hands the prepared runs to the method whose settings
+:func:`fit_dataset` loads a data set (:func:`cubedimer.dataset.load_dataset`), prepares every run once
+(:func:`fitting.derivatives.preparation.prepare_dataset`: block averaging, frequencies, smoothing and derivatives, the
+integral form's column states and windows, the noise) and classifies its attractor (:func:`prepare_runs`, the fit's
+view of the preparation), and hands the prepared runs to the method whose settings
 ``FitConfig.method`` holds, in :data:`fitting.methods.registry.METHODS` (:func:`fit_runs`): ``"discovery"``
 (:mod:`fitting.methods.discovery`, the default) or ``"paper"`` (:mod:`fitting.methods.paper`).  It writes nothing but the
 method's resume cache (``cache_dir``); the fit command writes model.json and the figures
@@ -24,10 +26,8 @@ import numpy as np
 from cubedimer.attractors import classify_trajectory
 from cubedimer.dataset import Dataset, DatasetError, Run, load_dataset
 from cubedimer.executor import ExecutorConfig
-from cubedimer.spectra import dominant_frequency
 from .config import FitConfig
-from .derivatives.decimation import block_average, decimation_factor
-from .derivatives.savitzky_golay import SmoothingFailure, run_derivatives
+from .derivatives.preparation import PreparedDataset, prepare_run
 from .methods import discovery, paper  # noqa: F401 - registers the built-in methods
 from .methods.registry import FitContext, get_method
 from .model import Scales
@@ -40,20 +40,24 @@ __all__ = ["prepare_runs", "fit_runs", "fit_dataset"]
 logger = logging.getLogger(__name__)
 
 
-def prepare_runs(runs: Sequence[Run], config: FitConfig = FitConfig()) -> tuple[list[PreparedRun], Scales]:
-    """Smooth/differentiate and classify every run; common scales of the data set."""
-    out = []
-    for r in runs:
-        q = decimation_factor(r.dt, max(dominant_frequency(r.y, r.dt), dominant_frequency(r.theta, r.dt)),
-                              config.smoothing.max_frames_per_period)
-        r = block_average(r, q)
-        fy = dominant_frequency(r.y, r.dt)
-        try:
-            d = run_derivatives(r.t, r.y, r.theta, fy, config.smoothing, velocities=r.velocities)
-        except SmoothingFailure as exc:
-            raise DatasetError(f"{r.name}: {exc}") from None
-        att = classify_trajectory(d.t, d.state, config.classify)
-        out.append(PreparedRun(run=r, derivs=d, f_y=fy, attractor=att, frames_averaged=q))
+def prepare_runs(runs: Sequence[Run] | PreparedDataset, config: FitConfig = FitConfig()
+                 ) -> tuple[list[PreparedRun], Scales]:
+    """The fit's view of prepared runs: each :class:`~fitting.derivatives.preparation.RunPreparation` with its
+    attractor class (``config.classify``), and the common scales of the data set.
+
+    ``runs`` is a :class:`~fitting.derivatives.preparation.PreparedDataset` (prepared once, e.g. by
+    ``python -m validation report`` for the fit and the diagnosis; its smoothing must be ``config.smoothing``), or
+    loaded runs, prepared here (:func:`fitting.derivatives.preparation.prepare_run`).
+    """
+    if isinstance(runs, PreparedDataset):
+        if runs.smoothing != config.smoothing:
+            raise ValueError(f"the runs were prepared with {runs.smoothing}, the fit asks for {config.smoothing}")
+        preparations = runs.runs
+    else:
+        preparations = tuple(prepare_run(r, config.smoothing) for r in runs)
+    out = [PreparedRun(run=p.run, derivs=p.derivs, f_y=p.f_y,
+                       attractor=classify_trajectory(p.derivs.t, p.derivs.state, config.classify),
+                       frames_averaged=p.frames_averaged, preparation=p) for p in preparations]
     if any(p.frames_averaged > 1 for p in out):
         logger.info("high frame rate: %s recorded frames averaged per fitted frame (fitting.derivatives.decimation)",
                     "/".join(str(q) for q in sorted({p.frames_averaged for p in out})))
@@ -83,14 +87,15 @@ def fit_runs(prepared: Sequence[PreparedRun], scales: Scales, config: FitConfig 
     return method.fit(prepared, scales, config, FitContext(executor, cache_dir, progress, noise))
 
 
-def fit_dataset(data: Dataset | str | os.PathLike, config: FitConfig = FitConfig(),
+def fit_dataset(data: PreparedDataset | Dataset | str | os.PathLike, config: FitConfig = FitConfig(),
                 executor: ExecutorConfig | None = None, strict: bool = False, progress: bool = True,
                 cache_dir: str | os.PathLike | None = None) -> FitResult:
     """Fit a data set (module docstring); writes nothing but the method's resume cache in ``cache_dir``.
 
-    ``data`` is a loaded :class:`~cubedimer.dataset.Dataset` (fitted as it is: pass the one object to every step
-    that reads the data set, so that all see the same runs), or the path of one, loaded with ``config.load``
-    (``strict``: stop at the first bad file).
+    ``data`` is a prepared data set (:func:`fitting.derivatives.preparation.prepare_dataset` with
+    ``config.smoothing``: pass the one object to every step that reads the data set, so that all see the same runs
+    and derivatives), a loaded :class:`~cubedimer.dataset.Dataset` (fitted as it is, prepared here), or the path of
+    one, loaded with ``config.load`` (``strict``: stop at the first bad file).
 
     Raises
     ------
@@ -99,10 +104,13 @@ def fit_dataset(data: Dataset | str | os.PathLike, config: FitConfig = FitConfig
     fitting.uncertainty.final_checks.NoSaneModelError
         The final model blows up and no fallback integrates over every run.
     """
-    ds = data if isinstance(data, Dataset) else load_dataset(data, strict=strict, config=config.load)
+    if isinstance(data, PreparedDataset):
+        ds = data.dataset
+    else:
+        ds = data if isinstance(data, Dataset) else load_dataset(data, strict=strict, config=config.load)
     if len(ds.runs) < 2:
         raise DatasetError(f"{ds.path}: the ensemble step needs at least 2 usable runs, found {len(ds.runs)}")
-    prepared, scales = prepare_runs(ds.runs, config)
+    prepared, scales = prepare_runs(data if isinstance(data, PreparedDataset) else ds.runs, config)
     logger.info("%d runs loaded (%d skipped, %d glitch frames masked); scales: %s, time %.3g s", len(prepared),
                 len(ds.skipped), ds.n_glitches, ds.system.describe((scales.length_y, scales.length_theta)), scales.time)
     noise = _fitted_noise(recorded_tracking_noise(ds.meta), prepared)

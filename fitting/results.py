@@ -11,6 +11,7 @@ from cubedimer.dataset import Run
 from cubedimer.system import LEVITATED_DIMER, SystemSpec
 from cubedimer.terms import EQUATION_NAMES
 from .config import FitConfig
+from .derivatives.preparation import RunPreparation
 from .derivatives.savitzky_golay import Derivatives
 from .model import TERMS, PolynomialModel, Scales
 from .refinement.long_time import RefineResult
@@ -32,13 +33,16 @@ class PreparedRun:
     """A loaded run with its derivatives and attractor class.
 
     ``run`` is the run as fitted: block-averaged by ``frames_averaged`` recorded frames per fitted frame at high
-    frame rates (:mod:`fitting.derivatives.decimation`; 1: every recorded frame)."""
+    frame rates (:mod:`fitting.derivatives.decimation`; 1: every recorded frame).  ``preparation``: the run's one
+    preparation (:class:`fitting.derivatives.preparation.RunPreparation`) that ``run``, ``derivs`` and ``f_y`` are read
+    from (None: made without one)."""
 
     run: Run
     derivs: Derivatives
     f_y: float
     attractor: AttractorClass
     frames_averaged: int = 1
+    preparation: RunPreparation | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .savitzky_golay import Derivatives
 
-__all__ = ["column_states", "double_integral", "integral_window", "natural_windows", "window_starts", "detrend_windows",
+__all__ = ["column_states", "integral_form_states", "double_integral", "integral_window", "natural_windows", "window_starts", "detrend_windows",
            "integral_columns",
            "IntegralFit", "fit_integral_form", "IntegralSelection",
            "select_integral_form", "integral_form_selection", "METHOD"]
@@ -407,8 +407,35 @@ def column_states(dt: float, y: NDArray, theta: NDArray, ydot: NDArray, f_y: flo
     return np.column_stack([y, np.asarray(ydot, float), ts, td]), edge
 
 
+def integral_form_states(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
+                         prepared: Sequence | None = None
+                         ) -> tuple[list[tuple[float, float]], list[NDArray[np.float64]], list[int]]:
+    """Per run, the frequencies (f_y, f_theta) [Hz], the integral form's column states and their edge [frames]:
+    those of the runs' preparations when given (``prepared``: per run a
+    :class:`fitting.derivatives.preparation.RunPreparation`, in the runs' order), else made from ``runs`` and their
+    ``derivs`` by the same rules (:func:`fitting.derivatives.frequencies.oscillation_frequencies`,
+    :func:`column_states`).
+
+    Raises
+    ------
+    ValueError
+        A run shorter than the hinge's smoothing window.
+    """
+    if prepared is not None and all(p is not None for p in prepared):
+        short = [p.run.name for p in prepared if p.columns is None]
+        if short:
+            raise ValueError(f"{', '.join(short)}: shorter than the hinge smoothing window")
+        return [(p.f_y, p.f_theta) for p in prepared], [p.columns for p in prepared], [p.column_edge for p in prepared]
+    from .frequencies import oscillation_frequencies
+
+    freqs = [oscillation_frequencies(r) for r in runs]
+    made = [column_states(float(r.dt), r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim), d.polyorder)
+            for r, d, (f_y, f_theta) in zip(runs, derivs, freqs)]
+    return freqs, [m[0] for m in made], [m[1] for m in made]
+
+
 def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives"], alpha: float = 0.01,
-                            periods: float = 0.75) -> dict[str, IntegralSelection]:
+                            periods: float = 0.75, prepared: Sequence | None = None) -> dict[str, IntegralSelection]:
     """:func:`select_integral_form` of both equations on a data set's runs.
 
     Parameters
@@ -420,23 +447,20 @@ def integral_form_selection(runs: Sequence["Run"], derivs: Sequence["Derivatives
         Family-wise significance level of the selection.
     periods : float
         Window in periods of the coordinate's dominant frequency (:func:`integral_window`).
+    prepared : per run :class:`fitting.derivatives.preparation.RunPreparation`, optional: the frequencies and column
+        states prepared once (otherwise made here by the same rules,
+        :func:`integral_form_states`)
 
     Returns
     -------
-    dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the dominant y
-    frequency, theta windows from the dominant theta frequency of each run).
+    dict ``{"yddot": IntegralSelection, "thetaddot": IntegralSelection}`` (y windows from the oscillation frequency
+    of y, theta windows from that of theta, of each run: :func:`fitting.derivatives.frequencies.oscillation_frequencies`).
     """
     from cubedimer.terms import EQUATION_NAMES, evaluate_library, library_terms
-    from cubedimer.spectra import dominant_frequency
 
     dts = [float(r.dt) for r in runs]
-    freqs = [(dominant_frequency(np.asarray(r.y, float), dt), dominant_frequency(np.asarray(r.theta, float), dt))
-             for r, dt in zip(runs, dts)]
-    columns, trims = [], []
-    for r, d, dt, (f_y, f_theta) in zip(runs, derivs, dts, freqs):
-        states, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
-        columns.append(evaluate_library(states))
-        trims.append(edge)
+    freqs, states, trims = integral_form_states(runs, derivs, prepared)
+    columns = [evaluate_library(st) for st in states]
     out = {}
     for q, (eq, coord) in enumerate(zip(EQUATION_NAMES, ("y", "theta"))):
         pos = [np.asarray(getattr(r, coord), float) for r in runs]

@@ -85,7 +85,8 @@ class DiscoveryMethod:
         hold the discovery's path."""
         derivs = [p.derivs for p in prepared]
         settings: DiscoveryMethodConfig = config.method
-        disc = discover_model([p.run for p in prepared], derivs, settings.selection)
+        disc = discover_model([p.run for p in prepared], derivs, settings.selection,
+                              prepared=[p.preparation for p in prepared])
         mask = disc.mask
         logger.info("discovery (%s after %d passes): %d terms: %s", "converged" if disc.converged else "not converged",
                     len(disc.iterations), int(mask.sum()), support_text(mask))

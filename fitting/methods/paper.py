@@ -165,7 +165,8 @@ class PaperMethod:
         derivs = [p.derivs for p in prepared]
         settings: PaperMethodConfig = config.method
         try:
-            integral = integral_form_selection([p.run for p in prepared], derivs, alpha=settings.selection.alpha)
+            integral = integral_form_selection([p.run for p in prepared], derivs, alpha=settings.selection.alpha,
+                                               prepared=[p.preparation for p in prepared])
             logger.info("pooled integral form (cross-check): %s", "; ".join(
                 f"{eq}: " + ", ".join(f"{t} {c:.3g} +- {e:.2g}" for t, c, e in zip(s.terms, s.coefficients, s.std_errors))
                 for eq, s in integral.items()))

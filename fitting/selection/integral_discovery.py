@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 
 from cubedimer.executor import single_blas_thread
 from cubedimer.terms import EQUATION_NAMES, evaluate_library
-from ..derivatives.integral_form import column_states, integral_window, natural_windows
+from ..derivatives.integral_form import integral_form_states, integral_window, natural_windows
 from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
@@ -65,6 +65,7 @@ from .support_search import (fit_support, heldout_inflation, heldout_per_run, he
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Run
+    from ..derivatives.preparation import RunPreparation
     from ..derivatives.savitzky_golay import Derivatives
 
 __all__ = ["DiscoveryConfig", "PathPoint", "IterationLog", "DiscoveryResult", "discover_model",
@@ -220,7 +221,8 @@ class DiscoveryResult:
 
 # ---- the discovery loop ----------------------------------------------------------------------------------------
 def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
-                   config: DiscoveryConfig = DiscoveryConfig()) -> DiscoveryResult:
+                   config: DiscoveryConfig = DiscoveryConfig(),
+                   prepared: Sequence["RunPreparation | None"] | None = None) -> DiscoveryResult:
     """Select and fit both equations on the integral form with model-based column states (module docstring).
 
     Parameters
@@ -228,13 +230,15 @@ def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
     runs : per run :class:`cubedimer.dataset.Run` (raw, gap-filled y [m] and theta [-] at every frame)
     derivs : per run :class:`fitting.derivatives.savitzky_golay.Derivatives` (the smoothed ydot of the first pass, its edges)
     config : DiscoveryConfig
+    prepared : per run its :class:`fitting.derivatives.preparation.RunPreparation` (the frequencies and column states
+        prepared once), optional: otherwise made from ``runs`` and ``derivs`` by the same rules
 
     Returns
     -------
     DiscoveryResult
     """
     with single_blas_thread():
-        return _discover(runs, derivs, config)
+        return _discover(runs, derivs, config, prepared)
 
 
 @dataclass(frozen=True, eq=False)
@@ -269,21 +273,17 @@ class _Pass:
     heldout: tuple[float, float] = (float("nan"), float("nan"))
 
 
-def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> _Setup:
-    """Step 1: the first pass's column states (smoothed), the windows from each run's dominant frequencies and
-    the noise of the positions."""
+def _setup(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig,
+           prepared: Sequence["RunPreparation | None"] | None = None) -> _Setup:
+    """Step 1: the first pass's column states (smoothed) and each run's oscillation frequencies (those of the runs'
+    preparations, :func:`fitting.derivatives.integral_form.integral_form_states`), the windows from them and the noise
+    of the positions."""
     from cubedimer.noise import white_noise_std
-    from cubedimer.spectra import dominant_frequency
 
     dts = [float(r.dt) for r in runs]
     ys = [np.asarray(r.y, float) for r in runs]
     ths = [np.asarray(r.theta, float) for r in runs]
-    freqs = [(dominant_frequency(y, dt), dominant_frequency(th, dt)) for y, th, dt in zip(ys, ths, dts)]
-    first, edges = [], []
-    for r, d, dt, (f_y, f_theta) in zip(runs, derivs, dts, freqs):
-        st, edge = column_states(dt, r.y, r.theta, d.state[:, 1], f_y, f_theta, int(d.trim))
-        first.append(st)
-        edges.append(edge)
+    freqs, first, edges = integral_form_states(runs, derivs, prepared)
     windows = [[integral_window(dt, f[q], config.window_periods, bounds_periods=config.window_bounds_periods,
                                 reference_hz=_reference_frequency(f)) for f, dt in zip(freqs, dts)] for q in range(2)]
     seg_len = [segment_length(dt, f[0], f[1], config.segments) for f, dt in zip(freqs, dts)]
@@ -487,10 +487,11 @@ def _pareto_fronts(result: _Pass, config: DiscoveryConfig) -> dict[str, tuple[Pa
     return pareto
 
 
-def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig) -> DiscoveryResult:
+def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig,
+              prepared: Sequence["RunPreparation | None"] | None = None) -> DiscoveryResult:
     """Steps 1-5: set up, iterate the passes, the output error under model error, the Pareto fronts, the result."""
     t_start = time.perf_counter()
-    setup = _setup(runs, derivs, config)
+    setup = _setup(runs, derivs, config, prepared)
     result, windows, history, converged, model_based = _iterate(setup, config)
     held_out = [HeldOutRun(dt, y[d.trim:], th[d.trim:], np.asarray(d.state[d.trim], float),
                            np.asarray(d.state[d.trim:], float), _horizon_frames(f, dt))

@@ -24,3 +24,24 @@ def make_diagnosis():
         return Diagnosis(**{**base, **fields})
 
     return make
+
+
+@pytest.fixture
+def small_oscillating_dataset(tmp_path, write_csv):
+    """A data set of 3 runs of 1.5 s at 2000 frames/s, the fewest a diagnosis takes: a 21.5-Hz y oscillation (the
+    Gor'kov trap frequency of the default dimer at the nominal 3000 Pa, which the loading checks) and a 9-Hz hinge,
+    with white tracking noise (1 um, 0.001)."""
+    import json
+
+    import numpy as np
+
+    rng = np.random.default_rng(5)
+    t = np.arange(3000) / 2000.0
+    path = tmp_path / "data"
+    path.mkdir()
+    for k in range(3):
+        y = 1e-4 * np.sin(2 * np.pi * 21.5 * t + k) + rng.normal(0, 1e-6, t.size)
+        theta = 0.2 * np.sin(2 * np.pi * 9.0 * t + 2 * k) + rng.normal(0, 1e-3, t.size)
+        write_csv(path / f"run{k + 1:02d}.csv", t, y, theta)
+    (path / "meta.json").write_text(json.dumps({"pressure_amplitude_pa": 3000.0}))
+    return path

@@ -6,7 +6,8 @@ every fit here is a linear least-squares problem at the measured states.  One su
 order by :func:`~validation.diagnosis.steps.diagnose` (:mod:`~validation.diagnosis.steps`, with
 :func:`diagnose_dataset` of a path; its files: :func:`validation.report.write_diagnosis`):
 
-* :mod:`~validation.diagnosis.prepare`: the runs' states and accelerations, the problem, the simulation's terms at
+* :mod:`~validation.diagnosis.prepare`: the runs' states and accelerations (the diagnosis's view of the data set's
+  one preparation, :func:`fitting.derivatives.preparation.prepare_dataset`, which the fit reads too), the problem, the simulation's terms at
   the measured states and the candidate effects as linear regressors, computed once;
 * :mod:`~validation.diagnosis.calibrate`: pressure, origin, orientation, the model's own parameters and the pressure
   drift; the calibrated simulation plus effects (:func:`fit_gap_model`) and the gap metrics;
@@ -28,13 +29,14 @@ from .discover.library_terms import Discovery
 from .identify.identification import Identification
 from .prepare.candidate_effects import CANDIDATE_EFFECTS, effect_regressors
 from .prepare.problem import DiagnosisProblem
-from .steps import DiagnoseConfig, EXPLAINED_GAP, diagnose, diagnose_dataset, load_for_diagnosis
+from .steps import (DiagnoseConfig, DiagnosisStart, EXPLAINED_GAP, diagnose, diagnose_dataset, load_for_diagnosis,
+                    start_diagnosis)
 from .summarise.long_time import LongTimeGap
 from .summarise.model_comparison import ModelComparison, ModelGap, compare_simulation_models
 from .summarise.result import Diagnosis, DiagnosisInternals, EffectVerdict
 
 __all__ = [
-    "diagnose", "diagnose_dataset", "load_for_diagnosis", "Diagnosis", "EffectVerdict", "DiagnoseConfig",
+    "diagnose", "diagnose_dataset", "start_diagnosis", "DiagnosisStart", "load_for_diagnosis", "Diagnosis", "EffectVerdict", "DiagnoseConfig",
     "DiagnosisInternals", "EXPLAINED_GAP", "CANDIDATE_EFFECTS", "effect_regressors",
     "compare_simulation_models", "ModelComparison", "ModelGap", "DiagnosisProblem", "GapFit", "Calibration",
     "Identification", "Discovery", "PressureDrift", "LongTimeGap",

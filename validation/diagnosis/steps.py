@@ -24,6 +24,8 @@ from cubedimer.config_checks import check_choices, check_fraction, check_positiv
 
 if TYPE_CHECKING:
     from cubedimer.dataset import Dataset, LoadConfig
+    from fitting.derivatives.preparation import PreparedDataset
+    from fitting.derivatives.savitzky_golay import SmoothingConfig
 
 from .calibrate.calibration_step import calibration_step
 from .calibrate.drift import DriftSettings
@@ -36,8 +38,8 @@ from .prepare.candidate_effects import CANDIDATE_EFFECTS, default_candidates
 from .summarise.result import Diagnosis, DiagnosisInternals
 from .summarise.summary_step import EXPLAINED_GAP, summary_step
 
-__all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "diagnose", "diagnose_dataset", "load_for_diagnosis",
-           "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
+__all__ = ["DiagnoseConfig", "DiagnosisInternals", "Diagnosis", "DiagnosisStart", "diagnose", "diagnose_dataset",
+           "start_diagnosis", "load_for_diagnosis", "EXPLAINED_GAP", "MIN_RUNS", "check_enough_runs"]
 
 logger = logging.getLogger(__name__)
 
@@ -125,19 +127,60 @@ def diagnose_dataset(data_dir: str | Path, config: DiagnoseConfig = DiagnoseConf
     return diagnose(dataset, config, progress=progress, spec=spec)
 
 
-def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), progress: bool = True,
-             spec: ModelSpec = ModelSpec()) -> Diagnosis:
+@dataclass(frozen=True, eq=False)
+class DiagnosisStart:
+    """A data set ready to be diagnosed (:func:`start_diagnosis`): checked, prepared once, and the simulation model at
+    its starting parameters."""
+
+    prepared: "PreparedDataset"  #: the runs' one preparation (fitting.derivatives.preparation), folded runs left out
+    spec: ModelSpec
+    conditions: object  #: the experiment conditions of meta.json with the spec's options
+    model: object  #: the spec's static model, parameters to be calibrated at their starting values
+
+
+def start_diagnosis(data: "Dataset | PreparedDataset", spec: ModelSpec = ModelSpec(), alpha: float = 0.01,
+                    smoothing: "SmoothingConfig | None" = None) -> DiagnosisStart:
+    """Check a data set for a diagnosis, once, before anything long: refuse a model that does not fit the experiment
+    (a generic two-coordinate set, a dimer outside the full-wave family) and too few runs (:func:`check_enough_runs`
+    at ``alpha``); then the runs are prepared once (:func:`fitting.derivatives.preparation.prepare_dataset` with
+    ``smoothing``, default :class:`~fitting.derivatives.savitzky_golay.SmoothingConfig`'s), unless ``data`` is
+    prepared already.  Runs whose hinge ended folded are left out."""
+    from cubedimer.system import require_levitated_dimer
+    from fitting.derivatives.preparation import PreparedDataset, prepare_dataset
+    from fitting.derivatives.savitzky_golay import SmoothingConfig
+
+    from ..simulation import conditions_from_meta
+
+    prepared = data if isinstance(data, PreparedDataset) else None
+    dataset = leave_out_folded_runs(data.dataset if prepared is not None else data)  # a no-op after load_for_diagnosis
+    require_levitated_dimer(dataset.meta, "validation")
+    conditions = conditions_from_meta(dataset.meta, spec)
+    # a parameter to be calibrated starts at the value the model takes by default
+    start = {n: d for n, (_, _, d) in spec.type.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
+    model = spec.static(replace(conditions, **start))
+    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), alpha)
+    if prepared is None:
+        prepared = prepare_dataset(dataset, smoothing if smoothing is not None else SmoothingConfig())
+    elif dataset is not prepared.dataset:
+        prepared = prepared.restricted_to(dataset)
+    return DiagnosisStart(prepared, spec, conditions, model)
+
+
+def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: DiagnoseConfig = DiagnoseConfig(),
+             progress: bool = True, spec: ModelSpec | None = None) -> Diagnosis:
     """Diagnose a loaded data set.
 
     Parameters
     ----------
-    dataset : the data set (:func:`load_for_diagnosis` loads it with the checks a diagnosis needs)
+    data : the data set (:func:`load_for_diagnosis` loads it with the checks a diagnosis needs), its one preparation
+        (:func:`fitting.derivatives.preparation.prepare_dataset`, the one the fit reads), or a
+        :class:`DiagnosisStart` (:func:`start_diagnosis`: checked and prepared already, with its spec)
     config : DiagnoseConfig
     progress : log the steps at INFO level (else DEBUG)
     spec : the simulation model and its own options (:class:`acousim.models.ModelSpec`; default: the Gor'kov
-        model); every model is calibrated the same way (pressure amplitude and height origin), and a model's own
-        parameters that the data may determine (the full-wave hinge gap) are profiled unless the spec sets them
-        (:mod:`validation.diagnosis.calibrate.model_parameters`)
+        model, or the start's); every model is calibrated the same way (pressure amplitude and height origin), and a
+        model's own parameters that the data may determine (the full-wave hinge gap) are profiled unless the spec
+        sets them (:mod:`validation.diagnosis.calibrate.model_parameters`)
 
     Returns
     -------
@@ -150,8 +193,12 @@ def diagnose(dataset: "Dataset", config: DiagnoseConfig = DiagnoseConfig(), prog
     """
     from cubedimer.executor import single_blas_thread
 
+    if isinstance(data, DiagnosisStart) and spec is not None and spec != data.spec:
+        raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
     with single_blas_thread():
-        return _diagnose(dataset, config, progress, spec)
+        start = data if isinstance(data, DiagnosisStart) else start_diagnosis(
+            data, spec if spec is not None else ModelSpec(), config.alpha)
+        return _diagnose(start, config, progress)
 
 
 #: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the
@@ -178,21 +225,11 @@ def check_enough_runs(data_dir, n_runs: int, n_skipped: int, alpha: float) -> No
         f"alpha {alpha:g} (the held-out sign-flip test's smallest p with n runs is 2^-n); record more runs")
 
 
-def _diagnose(dataset, config: DiagnoseConfig, progress: bool, spec: ModelSpec) -> Diagnosis:
+def _diagnose(start: DiagnosisStart, config: DiagnoseConfig, progress: bool) -> Diagnosis:
     """The diagnosis as its named steps: calibrate, identify, discover, the joint model, summarise."""
-    from ..simulation import conditions_from_meta
-
     log = logger.info if progress else logger.debug
-    dataset = leave_out_folded_runs(dataset)  # a no-op on a data set that load_for_diagnosis loaded
-    conditions = conditions_from_meta(dataset.meta, spec)
-    # refuses a model that does not fit the experiment first (a dimer outside the full-wave family): a parameter to
-    # be calibrated starts at the value the model takes by default
-    start = {n: d for n, (_, _, d) in spec.type.calibration_ranges(conditions).items() if getattr(conditions, n) is None}
-    model = spec.static(replace(conditions, **start))
-    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), config.alpha)
-    cal = calibration_step(dataset, conditions, model, spec, config, log)
+    spec = start.spec
+    cal = calibration_step(start.prepared, start.conditions, start.model, spec, config, log)
     found = identification_step(cal.problem, config, progress, log)
     discovery, replaced, identified, final = discovery_step(cal.problem, found, config, log)
-    return summary_step(dataset, cal, found, discovery, replaced, identified, final, spec, config, log)
-
-
+    return summary_step(start.prepared.dataset, cal, found, discovery, replaced, identified, final, spec, config, log)

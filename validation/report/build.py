@@ -70,13 +70,10 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     from cubedimer.executor import ExecutorConfig
     from fitting.config import FitConfig
     from acousim.models import ModelSpec
-    from fitting.output.model_file import write_fit
+    from fitting.output.model_file import model_json, write_fit
     from fitting.fit import fit_dataset
 
-    from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis
-    from ..diagnosis.steps import check_enough_runs
-    from ..simulation import model_from_meta
-    from fitting.output.model_file import model_json
+    from ..diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis, start_diagnosis
 
     from .context import fit_description, variant_comparison
 
@@ -93,15 +90,17 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     load = replace(LoadConfig(), glitches=config.load.glitches, min_periods=config.load.min_periods,
                    max_gap=config.load.max_gap)
     dataset = load_for_diagnosis(data_dir, progress=progress, load=load)
+    diagnosis_config = DiagnoseConfig()
     # refuse a model that does not fit the experiment (a dimer outside the full-wave family) before the long fit, and
-    # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs
-    model_from_meta(dataset.meta, spec)
-    check_enough_runs(dataset.path, len(dataset.runs), len(dataset.skipped_files()), DiagnoseConfig().alpha)
+    # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs; then the runs are
+    # prepared once (smoothing, derivatives, frequencies, column states, noise), and the fit and the diagnosis read
+    # the one preparation
+    start = start_diagnosis(dataset, spec, diagnosis_config.alpha, smoothing=config.smoothing)
     out = Path(out_dir)
     fit_dir = out / "fit"
     # ---- the fit, the variant comparison and the diagnosis: the stored results the report is a view of -----------
     say(f"1/5 fitting the data ({get_method(config.method_name).summary})")
-    res = fit_dataset(dataset, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
+    res = fit_dataset(start.prepared, config, ExecutorConfig(workers=workers, scheduler=scheduler), progress=progress,
                       cache_dir=fit_dir / "runs")
     write_fit(res, fit_dir)
     say("2/5 comparing the minimal model with its variant without cross-coupling terms")
@@ -111,7 +110,7 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     else:
         (fit_dir / "variant.json").unlink(missing_ok=True)
     say("3/5 diagnosing the sim-to-real gap (calibrating the simulation)")
-    diag = diagnose(dataset, DiagnoseConfig(), progress=progress, spec=spec)
+    diag = diagnose(start, diagnosis_config, progress=progress)
     say("4/5 the calibrated simulations side by side: their gaps, static sweeps and coefficients")
     diag = with_simulations(diag, dataset.meta, spec, res, out / "figures")
     write_json(out / "diagnosis.json", diag.to_json())

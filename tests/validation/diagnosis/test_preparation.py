@@ -22,3 +22,22 @@ def test_model_filter_matches_the_data_filter_on_thinned_frames(step):
     inner = slice(100 // step, -100 // step)
     err = np.max(np.abs(thin.smooth(xdd[::step]) - data[::step])[inner]) / np.max(np.abs(data))
     assert err < 1e-3  # measured 2.6e-4 (step 1) to 3.8e-4 (step 4); a plain smoothing filter instead of the matched kernel: 19 %
+
+
+def test_the_calibration_reads_the_one_preparation_with_y_flipped_from_it(small_oscillating_dataset, monkeypatch):
+    """The diagnosis's first step (with the check of y's orientation, which compares the data with y -> -y) prepares
+    no run again: the flipped runs are the prepared ones with their y columns' signs changed."""
+    import fitting.derivatives.preparation as preparation
+    from validation.diagnosis import DiagnoseConfig, load_for_diagnosis, start_diagnosis
+    from validation.diagnosis.calibrate.calibration_step import calibration_step
+
+    start = start_diagnosis(load_for_diagnosis(small_oscillating_dataset, progress=False))
+    calls = []
+    real = preparation.prepare_run
+    monkeypatch.setattr(preparation, "prepare_run", lambda *a, **k: calls.append(a) or real(*a, **k))
+    config = DiagnoseConfig(drift=None, check_orientation=True)
+    cal = calibration_step(start.prepared, start.conditions, start.model, start.spec, config, lambda *a: None)
+    assert calls == [] and not cal.data_warnings  # y points up in these data
+    for run, p in zip(cal.problem.recorded_runs, start.prepared.runs):
+        d = p.derivs
+        np.testing.assert_array_equal(run.state, d.state[d.trim:len(d.t) - d.trim])

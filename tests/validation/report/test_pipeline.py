@@ -59,16 +59,16 @@ def damping_report(pipeline_cache):
             build_report(data, folder / "report", workers=1, progress=False, max_evals=150)
         (fitted,), (diagnosed,) = seen["fit_dataset"], seen["diagnose"]
         (folder / "seen.json").write_text(json.dumps({
-            "loads": len(seen["load_dataset"]), "fitted_is_diagnosed": fitted is diagnosed,
-            "fitted_runs": [r.name for r in fitted.runs]}))
+            "loads": len(seen["load_dataset"]), "fitted_is_diagnosed": fitted is diagnosed.prepared,
+            "fitted_runs": fitted.names}))
 
     return pipeline_cache.folder("report", f"{config!r} max_evals=150", build) / "report" / "report.html"
 
 
 @pytest.mark.slow
 def test_the_fit_and_the_diagnosis_of_a_report_see_one_loaded_data_set(damping_report):
-    """The data set is loaded once, with the diagnosis's checks, and that one object is fitted and diagnosed: the
-    two can never work on different sets of runs."""
+    """The data set is loaded once, with the diagnosis's checks, and prepared once: that one preparation is fitted and
+    diagnosed, so the two can never work on different sets of runs (or derivatives: test_prepared_once.py)."""
     seen = json.loads((damping_report.parent.parent / "seen.json").read_text())  # recorded while it was made
     assert seen["loads"] == 1
     assert seen["fitted_is_diagnosed"]

@@ -33,16 +33,16 @@ class Calibrated:
     drift: object  #: DriftTest or None
 
 
-def calibration_step(dataset, conditions, model, spec: "ModelSpec", config: "DiagnoseConfig", log) -> Calibrated:
-    """The calibrated problem: from the starting ``model`` (the spec's at its default parameters), y's orientation,
-    the model's own parameters the data may determine, and a pressure drift within runs (followed by the
-    simulation)."""
+def calibration_step(prepared, conditions, model, spec: "ModelSpec", config: "DiagnoseConfig", log) -> Calibrated:
+    """The calibrated problem of the prepared data set (:class:`fitting.derivatives.preparation.PreparedDataset`):
+    from the starting ``model`` (the spec's at its default parameters), y's orientation, the model's own parameters
+    the data may determine, and a pressure drift within runs (followed by the simulation)."""
     mtype = spec.type
-    problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
+    problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(prepared),
                                              config.max_frames_per_run)
     data_warnings = []
     if config.check_orientation:
-        orientation, flipped = check_y_orientation(problem, dataset, config.max_frames_per_run)
+        orientation, flipped = check_y_orientation(problem, prepared, config.max_frames_per_run)
         if orientation.inverted:  # a flipped axis is never reported as new physics: the diagnosis uses -y
             warning = orientation.warning()
             logger.warning("%s", warning["message"])

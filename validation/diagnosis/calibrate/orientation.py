@@ -64,23 +64,28 @@ class OrientationTest:
                 "vertical_gap_flipped": float(np.mean(self.vertical_gap_flipped))}
 
 def flip_y(dataset):
-    """The data set with y -> -y in every run (a :class:`cubedimer.dataset.Dataset`)."""
-    return replace(dataset, runs=tuple(replace(r, y=-r.y) for r in dataset.runs))
+    """The data set with y -> -y in every run (a :class:`cubedimer.dataset.Dataset`; a measured y rate changes sign
+    too)."""
+    from fitting.derivatives.preparation import flipped_y
+
+    return replace(dataset, runs=tuple(flipped_y(r) for r in dataset.runs))
 
 def _vertical_gaps(problem: DiagnosisProblem) -> NDArray[np.float64]:
     return fit_gaps(problem.runs, fit_gap_model(problem, []))[:, 0]
 
-def check_y_orientation(problem: DiagnosisProblem, dataset, max_frames_per_run: int) -> tuple[OrientationTest,
-                                                                                              DiagnosisProblem]:
-    """Compare the calibrated vertical equation on ``problem`` (the data set as recorded) and on the data set
-    with y inverted (module docstring).
+def check_y_orientation(problem: DiagnosisProblem, prepared, max_frames_per_run: int) -> tuple[OrientationTest,
+                                                                                               DiagnosisProblem]:
+    """Compare the calibrated vertical equation on ``problem`` (the data set as recorded, prepared as ``prepared``, a
+    :class:`fitting.derivatives.preparation.PreparedDataset`) and on the data set with y inverted (module docstring;
+    its preparation is that of the recorded one with the y columns' signs changed,
+    :meth:`~fitting.derivatives.preparation.PreparedDataset.flipped_y`, not a second preparation).
 
     Returns
     -------
     (OrientationTest, DiagnosisProblem)
         The test and the problem of the flipped data (to diagnose instead when ``inverted``).
     """
-    flipped = DiagnosisProblem.from_recorded(problem.model, prepare_diagnosis_runs(flip_y(dataset)),
+    flipped = DiagnosisProblem.from_recorded(problem.model, prepare_diagnosis_runs(prepared.flipped_y()),
                                              max_frames_per_run)
     g, gf = _vertical_gaps(problem), _vertical_gaps(flipped)
     return OrientationTest(judge_inverted(g, gf), g, gf), flipped

@@ -162,47 +162,49 @@ class RunAccelerations:
         return apply_acceleration_kernel(x, kernel)
 
 
-def prepare_diagnosis_runs(dataset) -> list[RunAccelerations]:
-    """Smoothed states and accelerations of every run of ``dataset`` (interior frames), with their
-    derivative-noise variances [yddot, thetaddot, ydot, thetadot] (:attr:`RunAccelerations.noise`) and
-    the integral-form data of both coordinates (None for a run too short for the hinge window: its theta
-    component then uses the accelerations).
+def prepare_diagnosis_runs(prepared) -> list[RunAccelerations]:
+    """The diagnosis's view of a prepared data set: per run, the smoothed states and accelerations (interior frames),
+    their derivative-noise variances [yddot, thetaddot, ydot, thetadot] (:attr:`RunAccelerations.noise`) and the
+    integral-form data of both coordinates (None for a run too short for the hinge window: its theta component then
+    uses the accelerations).
 
-    The integral form's windows are 0.75 of each coordinate's dominant period; its columns are evaluated
-    at the raw y and at theta smoothed over half a hinge period (:func:`fitting.derivatives.integral_form.column_states`).
+    Every array is read from the one preparation of the data set
+    (:func:`fitting.derivatives.preparation.prepare_dataset`), which the fit reads too: the same block-averaged run,
+    oscillation frequencies (:func:`fitting.derivatives.preparation.oscillation_frequencies`), Savitzky-Golay states
+    and derivatives, column states (raw y, theta smoothed over half a hinge period,
+    :func:`fitting.derivatives.integral_form.column_states`), integral windows (0.75 of each coordinate's period) and
+    tracking noise.
 
     Parameters
     ----------
-    dataset : cubedimer.dataset.Dataset
+    prepared : fitting.derivatives.preparation.PreparedDataset, or a cubedimer.dataset.Dataset (prepared here with the
+        default smoothing)
 
     Returns
     -------
     list of RunAccelerations, in the data set's order
     """
-    from cubedimer.spectra import dominant_frequency
-    from fitting.derivatives.savitzky_golay import SmoothingConfig, run_derivatives
-    from fitting.derivatives.integral_form import column_states, integral_window
+    from fitting.derivatives.preparation import PreparedDataset, prepare_dataset
 
-    smoothing = SmoothingConfig()
-    runs = []
-    for run in dataset.runs:
-        f_y = dominant_frequency(run.y - run.y.mean(), run.dt, fmin=5.0 / max(run.duration, 1e-9))
-        d = run_derivatives(run.t, run.y, run.theta, f_y, smoothing)
-        sl = slice(d.trim, len(d.t) - d.trim)
-        nv, sigma2 = derivative_noise(run, d, smoothing.polyorder)
-        f_theta = dominant_frequency(run.theta[sl] - run.theta[sl].mean(), run.dt, fmin=2.0 / max(run.duration, 1e-9))
-        try:
-            cols_state, edge = column_states(run.dt, run.y, run.theta, d.state[:, 1], f_y, f_theta, d.trim, smoothing.polyorder)
-            si = slice(edge, len(run.t) - edge)
-            integral = PositionIntegrals(float(run.dt), np.column_stack([run.y[si], run.theta[si]]).astype(float), cols_state[si],
-                                         (integral_window(run.dt, f_y), integral_window(run.dt, f_theta)),
-                                         (float(sigma2[0]), float(sigma2[1])), float(run.t[edge]))
-        except ValueError:  # too short for the hinge window: the theta component uses the accelerations
-            integral = None
-        runs.append(RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv,
-                                     (d.window * run.dt, smoothing.polyorder), float(run.dt), integral,
-                                     _balance_states(run, d.window, sigma2, sl)))
-    return runs
+    if not isinstance(prepared, PreparedDataset):
+        prepared = prepare_dataset(prepared)
+    return [_run_accelerations(p) for p in prepared.runs]
+
+
+def _run_accelerations(p) -> RunAccelerations:
+    """:class:`RunAccelerations` of one :class:`fitting.derivatives.preparation.RunPreparation`."""
+    run, d = p.run, p.derivs
+    sl = slice(d.trim, len(d.t) - d.trim)
+    sigma2 = np.asarray(p.noise_var, float)
+    nv = derivative_noise(d, sigma2, run.dt)
+    integral = None
+    if p.columns is not None:
+        si = slice(p.column_edge, len(run.t) - p.column_edge)
+        integral = PositionIntegrals(float(run.dt), np.column_stack([run.y[si], run.theta[si]]).astype(float),
+                                     p.columns[si], p.windows, (float(sigma2[0]), float(sigma2[1])),
+                                     float(run.t[p.column_edge]))
+    return RunAccelerations(run.name, d.t[sl], d.state[sl], d.accel[sl], nv, (d.window * run.dt, d.polyorder),
+                            float(run.dt), integral, _balance_states(run, d.window, sigma2, sl))
 
 
 def _balance_states(run, window: int, sigma2: NDArray, interior: slice) -> BalanceStates | None:
@@ -217,30 +219,27 @@ def _balance_states(run, window: int, sigma2: NDArray, interior: slice) -> Balan
     return BalanceStates(np.column_stack(columns)[interior], noise)
 
 
-def derivative_noise(run, d, polyorder: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def derivative_noise(d, sigma2: NDArray, dt: float) -> NDArray[np.float64]:
     """Variances of the Savitzky-Golay accelerations and velocities due to tracking noise,
-    [yddot, thetaddot, ydot, thetadot] (SI^2), and of the tracking noise itself, [y, theta] ([m^2], [-]).
+    [yddot, thetaddot, ydot, thetadot] (SI^2).
 
-    The tracking noise sigma of each coordinate is the run's white-noise estimate
-    (:func:`cubedimer.noise.white_noise_std`, the suite's one estimator: the robust scale of the fourth
-    differences, blind to the motion); the k-th derivative's noise is then sigma * ||c_k||
-    (:func:`fitting.derivatives.savitzky_golay.noise_gain`).  (The residual of the smoothing itself, raw minus smoothed, would
-    also hold the part of the motion the filter does not follow: on the paper-like twin it overstates the y noise
-    by 15-40 %.)
+    The tracking noise variances ``sigma2`` of [y, theta] are the run's white-noise estimate
+    (:attr:`fitting.derivatives.preparation.RunPreparation.noise_var`: :func:`cubedimer.noise.white_noise_std`, the
+    suite's one estimator: the robust scale of the fourth differences, blind to the motion); the k-th derivative's
+    noise is then sigma * ||c_k|| (:func:`fitting.derivatives.savitzky_golay.noise_gain`).  (The residual of the
+    smoothing itself, raw minus smoothed, would also hold the part of the motion the filter does not follow: on the
+    paper-like twin it overstates the y noise by 15-40 %.)
 
     Parameters
     ----------
-    run : cubedimer.dataset.Run
-    d : fitting.derivatives.savitzky_golay.Derivatives of ``run``
-    polyorder : int
-        Order of the Savitzky-Golay polynomial.
+    d : fitting.derivatives.savitzky_golay.Derivatives of the run
+    sigma2 : (2,) tracking-noise variances of y [m^2] and theta [-]
+    dt : frame interval [s]
     """
-    from cubedimer.noise import white_noise_std
     from fitting.derivatives.savitzky_golay import noise_gain
 
-    sig2 = [white_noise_std([raw]) ** 2 for raw in (run.y, run.theta)]
-    g2, g1 = noise_gain(d.window, polyorder, 2, run.dt) ** 2, noise_gain(d.window, polyorder, 1, run.dt) ** 2
-    return np.array([sig2[0] * g2, sig2[1] * g2, sig2[0] * g1, sig2[1] * g1]), np.array(sig2)
+    g2, g1 = noise_gain(d.window, d.polyorder, 2, dt) ** 2, noise_gain(d.window, d.polyorder, 1, dt) ** 2
+    return np.array([sigma2[0] * g2, sigma2[1] * g2, sigma2[0] * g1, sigma2[1] * g1])
 
 
 def thin_runs(runs: Sequence[RunAccelerations], max_frames: int) -> list[RunAccelerations]:
