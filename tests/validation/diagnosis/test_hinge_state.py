@@ -46,10 +46,11 @@ def test_complementary_rate_is_exact_with_the_exact_model(noiseless_run):
     rms = np.sqrt(np.mean(state[inner, 3] ** 2))
     missed = np.sqrt(np.mean((cols[inner, 3] - state[inner, 3]) ** 2)) / rms
     completed = np.sqrt(np.mean((cols[inner, 3] + fast[inner] - state[inner, 3]) ** 2)) / rms
-    # the trapezoid rule's error at the y frequency, (omega_y dt)^2 / 12 of the fast part (itself ~1 % of the rate),
-    # plus the smoother's own fit of the slow rate: 1e-4 of the rate leaves a margin of 10
+    # the trapezoid rule's error at the y frequency, (omega_y dt)^2 / 12 = 5e-4 of the fast part (itself ~1 % of the
+    # rate): 5e-6; measured 6e-6, so 1e-4 is a margin of 16 that an inexact complement (3e-3 when the rate was
+    # completed on the smoothed rate instead of the smoothed angle) does not pass
     assert completed < 1e-4, completed
-    # the fast response the smoothing removes: measured 4e-3 of the rate on this run
+    # the fast response the smoothing removes: measured 1.0e-2 of the rate on this run (completed: 6e-6)
     assert missed > 30 * completed, (missed, completed)
 
 
