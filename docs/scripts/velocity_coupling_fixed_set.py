@@ -9,7 +9,8 @@ without the long-time errors.  ``none`` draws no effect.  Each case's result is 
 so a rerun resumes and two versions of the code can be compared on the same data sets (``--tag``).
 
     python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set --effects velocity_coupling --cases 8
-    python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set --effects none,mirror_asymmetry,linear_damping --cases 3
+    python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set \
+        --effects none,mirror_asymmetry,linear_damping --cases 3
 
 Prints one line per case and a summary per effect.  docs/diagnosis.md (Known limitations) quotes its output
 (seed 4242 for the fixed set, 9090 for the fresh one).
@@ -31,8 +32,8 @@ def draw(effect: str, index: int, seed: int) -> dict:
     rng = np.random.default_rng(np.random.SeedSequence([seed, sum(map(ord, effect)), index]))
     error = float(rng.uniform(-0.1, 0.1))
     drawn = {} if effect == "none" else {effect: draw_parameters(rng, effect)}
-    return {"index": index, "effects": hinge_strengths(drawn, NOMINAL_PRESSURE_PA * (1 + error)), "pressure_error": error,
-            "twin_seed": int(rng.integers(2**31))}
+    return {"index": index, "effects": hinge_strengths(drawn, NOMINAL_PRESSURE_PA * (1 + error)),
+            "pressure_error": error, "twin_seed": int(rng.integers(2**31))}
 
 
 def run_case(folder: Path, case: dict, tag: str) -> dict | None:

@@ -16,13 +16,15 @@ thetadot alone (y and ydot as measured) by 2.4 % (slope 1.008).  The c5 column `
 Method (a complementary filter)
 -------------------------------
 ``thetadot = D S[theta_data] + u - D S[int u dt]``, ``u(t) = int thetaddot_sim dt``: ``D S`` is the derivative of the
-same half-hinge-period smoother the column states use, so the data give the rate below its cut-off and the simulation's hinge acceleration
-at the column states (no effects; it holds the trap's y-theta coupling) gives the rate above it.  On exact data with
-an exact model this is the exact rate (``D S`` keeps the straight line ``theta(0) + thetadot(0) t`` that
-``int u`` lacks; tested), whatever the cut-off.  The simulation is the
-diagnosis's force model at the pressure whose small-oscillation y frequency is the run's dominant y frequency (the
-calibration comes later; a pressure off by a few per cent changes a 1 % correction by a few per cent), with y
-measured from the levitation height as docs/formats.md writes it.
+same half-hinge-period smoother the column states use, so the data give the rate below its cut-off and the
+simulation's hinge acceleration at the column states (no effects; it holds the trap's y-theta coupling) the rate
+above it.  On exact data with an exact model this is the exact rate, whatever the cut-off (``D S`` keeps the straight
+line ``theta(0) + thetadot(0) t`` that ``int u`` lacks; tested).  The simulation is the diagnosis's force model at the
+pressure whose small-oscillation y frequency is the run's dominant y frequency (the calibration comes later; a
+pressure off by a few per cent changes a 1 % correction by a few per cent), with y measured from the levitation
+height as docs/formats.md writes it.  What it changes: the c6 column is 16 % off instead of 80 % (slope 0.98) on
+the data set of ``docs/scripts/velocity_coupling_columns.py``; docs/diagnosis.md (Known limitations) gives the
+diagnosis's verdicts before and after.
 """
 from __future__ import annotations
 
@@ -37,7 +39,8 @@ from .runs import RunAccelerations
 __all__ = ["fast_hinge_rate", "pressure_for_frequency", "with_fast_hinge_response"]
 
 
-def pressure_for_frequency(force_model, f_y: float, iterations: int = 8, bounds: tuple[float, float] = (0.5, 2.0)) -> float:
+def pressure_for_frequency(force_model, f_y: float, iterations: int = 8,
+                           bounds: tuple[float, float] = (0.5, 2.0)) -> float:
     """Pressure amplitude [Pa] at which ``force_model``'s small-oscillation y frequency is ``f_y`` [Hz]: secant steps
     on ``ln f(ln p)`` (the trap's stiffness scales as p^2 at fixed height, its equilibrium sags with p), within
     ``bounds`` times the model's pressure; the model's own pressure when ``f_y`` is not a frequency or the search
