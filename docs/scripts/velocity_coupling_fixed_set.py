@@ -7,6 +7,8 @@ the hinge's hold), a pressure error within +-10 % and the twin's seed; the twin 
 with the air's damping) writes the data set, whose truth is hidden, and the diagnosis runs without the cavity and
 without the long-time errors.  ``none`` draws no effect.  Each case's result is kept in ``OUT/E_i/result_TAG.json``,
 so a rerun resumes and two versions of the code can be compared on the same data sets (``--tag``).
+``--complete-hinge-rate`` diagnoses with the integral form's hinge rate completed by the simulation's fast response
+(validation.diagnosis.prepare.hinge_state, not the diagnosis's default).
 
     python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set --effects velocity_coupling --cases 8
     python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set \
@@ -59,6 +61,18 @@ def run_case(folder: Path, case: dict, tag: str) -> dict | None:
     return out
 
 
+def complete_hinge_rate() -> None:
+    """Make the calibration step prepare its runs with the completed hinge rate (the default dimer's force model)."""
+    import validation.diagnosis.calibrate.calibration_step as step
+    from acousim import GorkovDimer
+    from validation.diagnosis.prepare.hinge_state import with_fast_hinge_response
+    from validation.diagnosis.prepare.problem import DiagnosisProblem
+
+    force_model = DiagnosisProblem(GorkovDimer().interpolated(), []).surrogate()
+    plain = step.prepare_diagnosis_runs
+    step.prepare_diagnosis_runs = lambda dataset: with_fast_hinge_response(plain(dataset), force_model)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -66,7 +80,10 @@ def main() -> None:
     ap.add_argument("--cases", type=int, default=8)
     ap.add_argument("--seed", type=int, default=4242)
     ap.add_argument("--tag", default="current")
+    ap.add_argument("--complete-hinge-rate", action="store_true")
     args = ap.parse_args()
+    if args.complete_hinge_rate:
+        complete_hinge_rate()
     for effect in args.effects.split(","):
         exact, c6_errors, scored = 0, [], 0
         for i in range(args.cases):

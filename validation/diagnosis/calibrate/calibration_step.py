@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..prepare.problem import DiagnosisProblem
-from ..prepare.hinge_state import prepared_problem
+from ..prepare.runs import prepare_diagnosis_runs
 from .drift import detect_pressure_drift
 from .model_parameters import calibrate_model_parameters
 from .orientation import check_y_orientation
@@ -38,7 +38,8 @@ def calibration_step(dataset, conditions, model, spec: "ModelSpec", config: "Dia
     the model's own parameters the data may determine, and a pressure drift within runs (followed by the
     simulation)."""
     mtype = spec.type
-    problem = prepared_problem(model.interpolated(), dataset, config.max_frames_per_run)
+    problem = DiagnosisProblem.from_recorded(model.interpolated(), prepare_diagnosis_runs(dataset),
+                                             config.max_frames_per_run)
     data_warnings = []
     if config.check_orientation:
         orientation, flipped = check_y_orientation(problem, dataset, config.max_frames_per_run)

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..prepare.problem import DiagnosisProblem
-from ..prepare.hinge_state import prepared_problem
+from ..prepare.runs import prepare_diagnosis_runs
 from .gap_model import fit_gap_model
 from .metrics import fit_gaps
 
@@ -80,7 +80,8 @@ def check_y_orientation(problem: DiagnosisProblem, dataset, max_frames_per_run: 
     (OrientationTest, DiagnosisProblem)
         The test and the problem of the flipped data (to diagnose instead when ``inverted``).
     """
-    flipped = prepared_problem(problem.model, flip_y(dataset), max_frames_per_run)
+    flipped = DiagnosisProblem.from_recorded(problem.model, prepare_diagnosis_runs(flip_y(dataset)),
+                                             max_frames_per_run)
     g, gf = _vertical_gaps(problem), _vertical_gaps(flipped)
     return OrientationTest(judge_inverted(g, gf), g, gf), flipped
 

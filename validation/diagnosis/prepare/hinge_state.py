@@ -24,7 +24,9 @@ pressure whose small-oscillation y frequency is the run's dominant y frequency (
 pressure off by a few per cent changes a 1 % correction by a few per cent), with y measured from the levitation
 height as docs/formats.md writes it.  What it changes: the c6 column is 16 % off instead of 80 % (slope 0.98) on
 the data set of ``docs/scripts/velocity_coupling_columns.py``; docs/diagnosis.md (Known limitations) gives the
-diagnosis's verdicts before and after.
+diagnosis's verdicts before and after.  The diagnosis does not use it by default: the simulation without the
+velocity coupling leaves out the coupling's own fast response, which grows with c5, and strong couplings on the
+inviscid twin then got c6 wrong by up to +110 % (-11 % without the completion).
 """
 from __future__ import annotations
 
