@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     from cubedimer.dataset import Run
     from .savitzky_golay import Derivatives
 
-__all__ = ["column_states", "integral_form_states", "double_integral", "integral_window", "natural_windows", "window_starts", "detrend_windows",
+__all__ = ["column_states", "integral_form_states", "hinge_smoothing_window", "double_integral", "integral_window", "natural_windows", "window_starts", "detrend_windows",
            "integral_columns",
            "IntegralFit", "fit_integral_form", "IntegralSelection",
            "select_integral_form", "integral_form_selection", "METHOD"]
@@ -367,6 +367,15 @@ METHOD = ("pooled integral form: measured position minus each window's straight 
           "(velocity terms dropped first while one is not significant at alpha/35)")
 
 
+def hinge_smoothing_window(dt: float, f_y: float, f_theta: float, polyorder: int = 5) -> int:
+    """Frames of the window over which :func:`column_states` smooths theta: half a period of the dominant theta
+    frequency ``f_theta`` (at most 20 periods of ``f_y``) [Hz], odd."""
+    from . import SmoothingConfig, savgol_window
+
+    f_hinge = max(float(f_theta), float(f_y) / 20.0) if np.isfinite(f_theta) else float(f_y)
+    return savgol_window(dt, 1.0 / f_hinge, SmoothingConfig(window_periods=0.5, polyorder=polyorder))
+
+
 def column_states(dt: float, y: NDArray, theta: NDArray, ydot: NDArray, f_y: float, f_theta: float,
                   trim: int = 0, polyorder: int = 5) -> tuple[NDArray[np.float64], int]:
     """The states at which the integral form evaluates its library or model columns, and the frames to
@@ -394,12 +403,11 @@ def column_states(dt: float, y: NDArray, theta: NDArray, ydot: NDArray, f_y: flo
     """
     # looked up on the package at every call, so that a study can substitute the smoother there
     # (docs/scripts/gap_bias_states.py)
-    from . import SmoothingConfig, savgol_window, smooth_long_window
+    from . import smooth_long_window
 
     y, theta = np.asarray(y, float), np.asarray(theta, float)
     n = y.size
-    f_hinge = max(float(f_theta), float(f_y) / 20.0) if np.isfinite(f_theta) else float(f_y)
-    w = savgol_window(dt, 1.0 / f_hinge, SmoothingConfig(window_periods=0.5, polyorder=polyorder))
+    w = hinge_smoothing_window(dt, f_y, f_theta, polyorder)
     edge = max(int(trim), w // 2)
     if w >= n or n - 2 * edge <= 0:
         raise ValueError(f"a run of {n} frames is shorter than the hinge smoothing window ({w} frames)")
