@@ -501,7 +501,8 @@ def test_a_rise_of_the_gap_within_its_error_stays_named_and_is_said_so():
     said = "leaves the gap unchanged within its error (0.002293 -> 0.002329, +1.6 +- 2.0 %)"
     section = diagnosis_section(diag, [])
     cause = _cause(section)
-    assert f"then mirror_asymmetry (epsilon = 0.01 (error not determined: no error was computed)), which {said}" in cause
+    assert f"then mirror_asymmetry (epsilon = 0.01 (error not determined: no error was computed)), which {said}" \
+        in cause
     assert "not named" not in section.reading
     verdicts = {r[0]: r[1] for r in section.tables[0].rows}
     assert verdicts["mirror_asymmetry"] == f"yes: it {said}" and verdicts["pair_scattering"] == "yes"
@@ -528,9 +529,11 @@ def test_a_significant_rise_of_the_gap_is_rejected_with_its_error():
     rejected = _named_only_if_shrinking(mirror, 0.002293)
     detail = "0.002293 -> 0.002329, +1.57 +- 0.50 %"
     assert rejected.status == "rejected" and not rejected.named
-    assert rejected.rejected_because[0]["code"] == "not_shrinking_gap" and detail in rejected.rejected_because[0]["reason"]
+    reason = rejected.rejected_because[0]
+    assert reason["code"] == "not_shrinking_gap" and detail in reason["reason"]
     diag = _diagnosis_of([scattering, rejected], ("pair_scattering",))
-    said = f"mirror_asymmetry is not named: it improved held-out runs, but adding it raises the gap beyond its error ({detail})"
+    said = ("mirror_asymmetry is not named: it improved held-out runs, but adding it raises the gap beyond its error "
+            f"({detail})")
     section = diagnosis_section(diag, [])
     assert said in _cause(section) and "unchanged" not in section.reading
     assert {r[0]: r[1] for r in section.tables[0].rows}["mirror_asymmetry"].startswith("no: it improved held-out runs")

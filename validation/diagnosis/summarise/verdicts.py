@@ -105,8 +105,8 @@ def gap_without(effects: Sequence[EffectVerdict], gap_before: float, effect: Eff
 
 
 def not_shrinking(effect: EffectVerdict) -> bool:
-    """A model effect that improved held-out runs but whose addition does not shrink the gap (rejected with the code
-    ``not_shrinking_gap``)."""
+    """A model effect that improved held-out runs but whose addition raises the gap beyond its error (rejected with
+    the code ``not_shrinking_gap``)."""
     return any(r.get("code") == "not_shrinking_gap" for r in effect.rejected_because)
 
 

@@ -54,7 +54,7 @@ def cause_rows(diagnosis: "Diagnosis") -> list[list]:
 
 def causes_text(diagnosis: "Diagnosis") -> str:
     """The answer's first sentences: too few runs (first, when so), the gap before, the named causes and the gap
-    after, and an effect that improved held-out runs without shrinking the gap."""
+    after, and an effect that improved held-out runs but raised the gap beyond its error."""
     floor = diagnosis.noise_floor
 
     def shown(g: float) -> str:
