@@ -27,8 +27,9 @@ REJECTIONS = {
     "removed_by_backward_check": "improved held-out runs when added, but not given the other effects",
     "replaced_by_discovered_terms": "not needed once the discovered library terms are fitted",
     "withheld": "the calibration equation stays unexplained, so no cause is named",
-    "not_shrinking_gap": "improved held-out runs, but adding it does not shrink the gap (the gaps without and with "
-                         "it are given), so it is not named as a cause",
+    "not_shrinking_gap": "improved held-out runs, but adding it raises the gap beyond its error (the gaps without "
+                         "and with it are given, and the change with its standard error over runs), so it is not "
+                         "named as a cause",
     "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
                          "coefficient or scattering stiffness)",
 }
@@ -72,6 +73,9 @@ class EffectVerdict:
         (:class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval`; the model's effects only)
     derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor`` and
         ``detuning_half_widths`` from its gains)
+    gap_change, gap_change_std_error : the change of the scalar gap its addition causes (``gap_after`` minus the gap
+        with the model's effects before it; the model's effects only) and its standard error over runs, from the
+        runs' paired changes (None with fewer than 3 runs, or in a diagnosis.json written before the key)
     """
 
     name: str
@@ -93,6 +97,8 @@ class EffectVerdict:
     rejected_because: tuple[Mapping[str, str], ...] = ()
     uncertainty: Mapping[str, ParameterInterval] | None = None
     derived: Mapping[str, ParameterInterval] | None = None
+    gap_change: float | None = None
+    gap_change_std_error: float | None = None
 
     def __post_init__(self) -> None:
         if self.status is None:  # from the verdict's flags: a model effect is named or stands for a pair
@@ -152,6 +158,8 @@ class EffectVerdict:
                 out["indistinguishable_from"] = list(self.indistinguishable_from)
             if self.params_without_discovered_terms is not None:
                 out["params_without_discovered_terms"] = dict(self.params_without_discovered_terms)
+            if self.gap_change is not None:
+                out.update({"gap_change": self.gap_change, "gap_change_std_error": self.gap_change_std_error})
         else:
             out["note"] = self.note
             if self.p_value_given_others is not None:
@@ -179,7 +187,8 @@ class EffectVerdict:
                    None if pair is None else tuple(pair), doc.get("params_without_discovered_terms"),
                    status=status, rejected_because=tuple(doc.get("rejected_because", ())),
                    uncertainty=None if unc is None else {p: ParameterInterval.from_dict(v) for p, v in unc.items()},
-                   derived=None if der is None else {p: ParameterInterval.from_dict(v) for p, v in der.items()})
+                   derived=None if der is None else {p: ParameterInterval.from_dict(v) for p, v in der.items()},
+                   gap_change=doc.get("gap_change"), gap_change_std_error=doc.get("gap_change_std_error"))
 
 
 @dataclass(frozen=True, eq=False)

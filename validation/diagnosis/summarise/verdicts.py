@@ -5,6 +5,9 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Mapping, Sequence
 
+import numpy as np
+from numpy.typing import NDArray
+
 from acousim.dynamics.effects import EFFECT_TYPES
 
 from ..calibrate.gap_model import GapFit, fit_gap_model
@@ -14,7 +17,17 @@ from ..prepare.problem import DiagnosisProblem
 from .result import REJECTIONS, EffectVerdict
 from .uncertainty import ParameterInterval
 
-__all__ = ["ranked_effects", "non_physical_parameters", "gap_without", "not_shrinking"]
+__all__ = ["ranked_effects", "non_physical_parameters", "gap_without", "not_shrinking", "gap_change",
+           "gap_rises", "gap_change_detail", "GAP_RISE_SIGMAS", "MIN_RUNS_FOR_GAP_ERROR"]
+
+#: A named effect whose addition raises the gap by more than this many standard errors of the rise is rejected
+#: (``not_shrinking_gap``): one-sided, about the 2.5 % level of a normal rise (3.5 % with Student's t on 11 degrees of
+#: freedom, 12 runs), the report's own threshold for "within its uncertainty". The effect has already passed the
+#: held-out test at alpha 0.01; this rule only refuses one that makes the fitted gap measurably worse.
+GAP_RISE_SIGMAS = 2.0
+#: The fewest runs whose paired differences give the rise a standard error (two degrees of freedom); with fewer, any
+#: rise at all rejects the effect.
+MIN_RUNS_FOR_GAP_ERROR = 3
 
 
 def non_physical_parameters(name: str, params: Mapping[str, float]) -> list[str]:
@@ -52,8 +65,13 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     non-physical sign of its fit on top of the model.
     """
     runs = problem.runs
-    model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, final,
-                                   gap_before, (uncertainty or {}).get(identified[i]), (derived or {}).get(identified[i]))
+    # the per-run gaps of the calibrated simulation and of each cumulative fit: the rise of the gap an effect causes
+    # is paired run by run (the same runs without and with it)
+    per_run = [fit_gaps(runs, fit_gap_model(problem, identified[:i])) for i in range(len(identified) + 1)] \
+        if identified else []
+    model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, gap_before,
+                                   per_run[i], per_run[i + 1], final, (uncertainty or {}).get(identified[i]),
+                                   (derived or {}).get(identified[i]))
                      for i in range(len(identified))]
     model_effects = [_named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
                      for i, e in enumerate(model_effects)]
@@ -87,18 +105,63 @@ def gap_without(effects: Sequence[EffectVerdict], gap_before: float, effect: Eff
 
 
 def not_shrinking(effect: EffectVerdict) -> bool:
-    """A model effect that improved held-out runs but whose addition does not shrink the gap (rejected with the code
-    ``not_shrinking_gap``)."""
+    """A model effect that improved held-out runs but whose addition raises the gap beyond its error (rejected with
+    the code ``not_shrinking_gap``)."""
     return any(r.get("code") == "not_shrinking_gap" for r in effect.rejected_because)
 
 
+def gap_change(per_before: NDArray, per_after: NDArray) -> tuple[float, float | None]:
+    """The change of the scalar gap an effect causes, with its standard error over runs.
+
+    Parameters
+    ----------
+    per_before, per_after : the per-run gap components (n_runs, 3) without and with the effect
+        (:func:`~validation.diagnosis.calibrate.metrics.fit_gaps`, the same runs)
+
+    Returns
+    -------
+    change : the mean over runs of ``d_r``, each run's change of its mean-over-components gap (equal to the change of
+        the scalar gap)
+    std_error : ``std(d, ddof=1) / sqrt(R)`` over the R runs; None with fewer than :data:`MIN_RUNS_FOR_GAP_ERROR`
+    """
+    d = np.mean(np.asarray(per_after, float), axis=1) - np.mean(np.asarray(per_before, float), axis=1)
+    std_error = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size >= MIN_RUNS_FOR_GAP_ERROR else None
+    return float(np.mean(d)), std_error
+
+
+def gap_rises(effect: EffectVerdict, before: float) -> bool:
+    """Whether adding ``effect`` to a model whose gap was ``before`` raises the gap: by more than
+    :data:`GAP_RISE_SIGMAS` standard errors of the rise where the verdict carries one, by anything at all where it
+    does not (too few runs, or a diagnosis.json written before the rise carried its error)."""
+    if effect.gap_after < before:
+        return False
+    if effect.gap_change_std_error is None:
+        return True
+    change = effect.gap_change if effect.gap_change is not None else effect.gap_after - before
+    return change > GAP_RISE_SIGMAS * effect.gap_change_std_error
+
+
+def gap_change_detail(effect: EffectVerdict, before: float) -> str:
+    """Both gaps and, where the verdict carries its error, the relative change with it:
+    ``"0.002293 -> 0.002329, +1.6 +- 2.0 %"``."""
+    text = f"{before:.4g} -> {effect.gap_after:.4g}"
+    if effect.gap_change_std_error is None or not before > 0:
+        return text
+    change = effect.gap_change if effect.gap_change is not None else effect.gap_after - before
+    change, error = 100 * change / before, 100 * effect.gap_change_std_error / before
+    # the error to two significant digits (at least one decimal), the change to the same decimals
+    decimals = int(min(4, max(1, 1 - np.floor(np.log10(error))))) if error > 0 else 1
+    return text + f", {change:+.{decimals}f} +- {error:.{decimals}f} %"
+
+
 def _named_only_if_shrinking(effect: EffectVerdict, before: float) -> EffectVerdict:
-    """A named model effect whose addition does not shrink the gap (``gap_after >= before``) is not named: it is
-    rejected with both gaps (it stays in the fitted model, whose gap it is part of)."""
-    if effect.status != "named" or effect.gap_after < before:
+    """A named model effect whose addition raises the gap significantly (:func:`gap_rises`) is not named: it is
+    rejected with both gaps and the change with its error (it stays in the fitted model, whose gap it is part of). One
+    whose change is within its error stays named."""
+    if effect.status != "named" or not gap_rises(effect, before):
         return effect
     return replace(effect, named=False, status="rejected",
-                   rejected_because=(_rejection("not_shrinking_gap", f"{before:.4g} -> {effect.gap_after:.4g}"),))
+                   rejected_because=(_rejection("not_shrinking_gap", gap_change_detail(effect, before)),))
 
 
 def _rejections(name: str, params: Mapping[str, float], ident, elim, test, replaced: dict) -> tuple[dict, ...]:
@@ -120,12 +183,14 @@ def _rejections(name: str, params: Mapping[str, float], ident, elim, test, repla
 
 
 def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str], i: int, named: list[str],
-                  in_pair: dict, joint_params: dict, final: GapFit, gap_before: float,
-                  uncertainty: Mapping[str, ParameterInterval] | None,
+                  in_pair: dict, joint_params: dict, gap_before: float, per_without: NDArray, per_with: NDArray,
+                  final: GapFit, uncertainty: Mapping[str, ParameterInterval] | None,
                   derived: Mapping[str, ParameterInterval] | None = None) -> EffectVerdict:
-    """The verdict of the model's ``i``-th effect, with the gap after the cumulative fit of the first ``i + 1``."""
+    """The verdict of the model's ``i``-th effect, with the gap after the cumulative fit of the first ``i + 1``
+    (per run ``per_with``; ``per_without`` that of the first ``i``) and the change with its standard error."""
     name = identified[i]
-    g = scalar_gap(fit_gaps(problem.runs, fit_gap_model(problem, identified[: i + 1])))
+    g = scalar_gap(per_with)
+    change, change_error = gap_change(per_without, per_with)
     test = ident.rounds[ident.identified.index(name)].candidates[name]
     given = elim.tests.get(name)
     return EffectVerdict(
@@ -136,7 +201,7 @@ def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str],
         indistinguishable_from=tuple(e for e in in_pair[name].effects if e != name) if name in in_pair else None,
         # fitted beside discovered terms: the effects-only values too
         params_without_discovered_terms=final.effects[name] if joint_params[name] != final.effects[name] else None,
-        status="named" if name in named else "indistinguishable",
+        status="named" if name in named else "indistinguishable", gap_change=change, gap_change_std_error=change_error,
         uncertainty=None if uncertainty is None else dict(uncertainty), derived=None if derived is None else dict(derived))
 
 

@@ -1,7 +1,8 @@
 """The report's first screen: the answer on one screen, before the sections that show how it was reached.
 
 * too few runs to name any effect, first, with how many to record;
-* the causes: each named effect with its parameters, their standard errors, and how far the gap shrinks with it;
+* the causes: each named effect with its parameters, their standard errors, and how far the gap shrinks with it
+  (or that it leaves the gap unchanged within its error);
 * the constants the simulation was built from, and where each came from (meta.json, an option, the calibration, a
   default);
 * every data warning (meta.json keys not read, skipped files, masked glitches, the diagnosis's own warnings);
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 from ..claims import gap_value, shrink_value
 from ..context import ReportContext
 from ..html import Figure, Section, Table
-from .gap_diagnosis import gap_without, named_effects, not_shrinking, too_few_runs_text
+from .gap_diagnosis import gap_without, named_effects, not_shrinking, too_few_runs_text, unchanged_within_error
 
 if TYPE_CHECKING:
     from ...diagnosis import Diagnosis
@@ -46,13 +47,14 @@ def cause_rows(diagnosis: "Diagnosis") -> list[list]:
         before = gap_without(diagnosis, e)
         rows.append([e.name + (" (one of an indistinguishable pair)" if e.name in pairs else ""), _params(e),
                      gap_value(before, diagnosis.noise_floor), gap_value(e.gap_after, diagnosis.noise_floor),
-                     shrink_value(1 - e.gap_after / before if before else float("nan"), e.gap_after)])
+                     unchanged_within_error(diagnosis, e)
+                     or shrink_value(1 - e.gap_after / before if before else float("nan"), e.gap_after)])
     return rows
 
 
 def causes_text(diagnosis: "Diagnosis") -> str:
     """The answer's first sentences: too few runs (first, when so), the gap before, the named causes and the gap
-    after, and an effect that improved held-out runs without shrinking the gap."""
+    after, and an effect that improved held-out runs but raised the gap beyond its error."""
     floor = diagnosis.noise_floor
 
     def shown(g: float) -> str:
@@ -66,7 +68,8 @@ def causes_text(diagnosis: "Diagnosis") -> str:
     pairs = diagnosis.indistinguishable or []
     if named:
         text += " The causes, in the order added: " + "; ".join(
-            f"{e.name} ({_params(e)}; the gap {shown(gap_without(diagnosis, e))} -> {shown(e.gap_after)})"
+            f"{e.name} ({_params(e)}; " + (f"it {w})" if (w := unchanged_within_error(diagnosis, e)) else
+                                           f"the gap {shown(gap_without(diagnosis, e))} -> {shown(e.gap_after)})")
             for e in named) + "."
     for pr in pairs:
         a, b = pr["effects"]
@@ -156,7 +159,9 @@ def section(context: ReportContext) -> Section:
                                                            "in diagnosis.json)",
                      "gap without it": "the gap with the effects named before it (the calibrated simulation's for the "
                                        "first)", "gap with it": "the gap once it is added",
-                     "shrink": "1 - gap with it / gap without it"}),
+                     "shrink": "1 - gap with it / gap without it; where the gap with it is higher, but by less "
+                               "than 2 standard errors of the runs' paired changes, that it leaves the gap unchanged "
+                               "within its error, with the change +- its standard error"}),
               Table("Constants used", ["constant", "value", "unit", "standard error", "from"], constant_rows(diag),
                     {"from": "where the value came from: the data set's meta.json, a default, a command-line option of "
                              "the model, or the calibration on the runs"})]

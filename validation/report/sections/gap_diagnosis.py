@@ -56,7 +56,7 @@ def diagnosis_figures(diagnosis: "Diagnosis", out_dir: str | Path) -> list[Figur
     ax.set_xticks(range(len(vals)), names, fontsize=7)
     ax.set_ylabel("gap (unexplained fraction beyond noise)")
     ax.set_yscale("log")
-    ax.set_title("Gap before and after adding each effect (green: identified, shrinking the gap)")
+    ax.set_title("Gap before and after adding each effect (green: identified, not raising the gap beyond its error)")
     ax.legend(fontsize=7)
     figs.append(Figure(_save(fig, out / "gap_by_effect.png"),
                        "Gap of the calibrated simulation and after adding each candidate (identified ones cumulatively, "
@@ -113,22 +113,37 @@ def gap_without(diagnosis: "Diagnosis", effect: "EffectVerdict") -> float:
 
 
 def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
-    """For a model effect whose addition does not shrink the gap, what it is, with the two gaps; else ``""``.  A
-    diagnosis rejects such an effect (code ``not_shrinking_gap``); one written before that rule named it, and is read
-    the same way."""
+    """For a model effect whose addition raises the gap beyond its error, what it is, with the two gaps and the
+    change with its standard error; else ``""``.  A diagnosis rejects such an effect (code ``not_shrinking_gap``); one
+    written before that rule named it, and is read the same way (any rise, where the change carries no error)."""
+    from ...diagnosis.summarise.verdicts import gap_change_detail, gap_rises
     from ...diagnosis.summarise.verdicts import not_shrinking as rejected_for_it
 
     if not effect.significant or not (effect.named or rejected_for_it(effect)):
         return ""  # only a named effect (or one rejected for it): a pair's kept member is judged as a pair
     before = gap_without(diagnosis, effect)
-    if effect.gap_after < before:
+    if not rejected_for_it(effect) and not gap_rises(effect, before):
         return ""
-    return (f"not named: it improved held-out runs, but adding it does not shrink the gap ({before:.4g} -> "
-            f"{effect.gap_after:.4g})")
+    how = "does not shrink the gap" if effect.gap_change_std_error is None else "raises the gap beyond its error"
+    return f"not named: it improved held-out runs, but adding it {how} ({gap_change_detail(effect, before)})"
+
+
+def unchanged_within_error(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
+    """For a model effect whose addition leaves the gap higher, but by less than the rise's error allows to tell from
+    none (it stays named), what it does to the gap, with both gaps and the change with its standard error; else
+    ``""`` (the gap shrinks, or the effect is not named for the rise: :func:`not_shrinking`)."""
+    from ...diagnosis.summarise.verdicts import gap_change_detail
+
+    if not effect.significant or effect.rejected or not_shrinking(diagnosis, effect):
+        return ""
+    before = gap_without(diagnosis, effect)
+    if effect.gap_after < before or effect.gap_change_std_error is None:
+        return ""
+    return f"leaves the gap unchanged within its error ({gap_change_detail(effect, before)})"
 
 
 def named_effects(diagnosis: "Diagnosis") -> list:
-    """The effects named as causes: named, and shrinking the gap when added."""
+    """The effects named as causes: named, and not raising the gap beyond its error when added."""
     return [e for e in diagnosis.effects if e.significant and e.named and not not_shrinking(diagnosis, e)]
 
 
@@ -138,7 +153,8 @@ def _verdict(diagnosis: "Diagnosis", effect: "EffectVerdict", pairs: list[dict])
     if not_shrinking(diagnosis, effect):
         return "no: " + not_shrinking(diagnosis, effect).removeprefix("not named: ")
     if effect.significant and effect.named:
-        return "yes"
+        within = unchanged_within_error(diagnosis, effect)
+        return "yes: it " + within if within else "yes"
     return "no"
 
 
@@ -174,7 +190,8 @@ def _pressure_text(diagnosis: "Diagnosis") -> str:
 def _cause_text(diagnosis: "Diagnosis", pairs: list[dict]) -> str:
     """The verdict: the effects named alone (each needed given the others), and each indistinguishable pair as one
     verdict naming both, with the held-out evidence."""
-    parts = [f"{e.name} ({_params_text(e)})" for e in named_effects(diagnosis)]
+    parts = [f"{e.name} ({_params_text(e)})" + (f", which {w}" if (w := unchanged_within_error(diagnosis, e)) else "")
+             for e in named_effects(diagnosis)]
     text = f"The gap is caused by {', then '.join(parts)}" if parts else "The gap is caused by"
     for pr in pairs:
         a, b = pr["effects"]
@@ -328,9 +345,11 @@ def _diagnosis_tables(diagnosis: "Diagnosis", pairs: list[dict], drift: dict, te
     n_runs = len(diagnosis.gap_per_run["runs"])
     smallest = (diagnosis.settings or {}).get("smallest_attainable_p", 0.5 ** n_runs)
     columns = {
-        "identified": "yes: named as a cause, needed given all the others, and shrinking the gap; named by its held-out "
-                      "test but not shrinking the gap: significant on held-out runs, yet the gap with it is not smaller "
-                      "than without it (both gaps given); indistinguishable: one of a pair the data "
+        "identified": "yes: named as a cause, needed given all the others, and not raising the gap beyond its error "
+                      "(where the gap with it is higher, but by less than 2 standard errors of the runs' paired "
+                      "changes, that is said with both gaps and the change +- its standard error); no, named by its "
+                      "held-out test but raising the gap: significant on held-out runs, yet the gap with it is higher "
+                      "than without it beyond that error (both gaps given); indistinguishable: one of a pair the data "
                       "cannot tell apart (named together); no: not a significant held-out improvement",
         "parameters (SI)": "fitted with the named effects, +- the standard error over runs (delete-one-run jackknife) "
                            "with the parameter's systematic part added (docs/diagnosis.md; both, and the 95 % interval, "
