@@ -58,7 +58,8 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
                              replaced, joint_params, final, gap_before, with_effect_model_errors(errors.effects),
                              with_effect_model_errors(errors.derived))
-    # an effect whose addition does not shrink the gap is not named (its verdict says why, with both gaps)
+    # an effect whose addition raises the gap by more than two of its paired standard errors is not named (its
+    # verdict says why, with both gaps)
     named = [e.name for e in effects if e.status == "named"]
     loc_after = localize_residuals(runs, final.residuals)
     components = fit_components(final)
