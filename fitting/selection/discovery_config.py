@@ -135,9 +135,10 @@ class DiscoveryConfig:
         of 6 data sets (docs/fitting.md, "Few runs").  6: a standard error of 5 values or fewer;  0.1: above the 3-7 %
         excess of the held-out selections that kept every Taylor term.  None: never.
     estimate_choice : bool
-        Under model error, the coefficients of the output error's support are those of the estimate (output error,
-        integral form, least squares of accelerations) of least held-out long-time error from the runs' first states,
-        K-fold over runs (:mod:`fitting.selection.estimate_choice`).  False: the output error's.
+        Under model error, the coefficients of the output error's support are the least squares of short-window
+        accelerations (the weighting a prediction from a run's largest amplitude needs) unless the integral form's or
+        the output error's held-out long-time error from the runs' first states (K-fold over runs) is lower by more
+        than its fold standard error (:mod:`fitting.selection.estimate_choice`).  False: the output error's.
     acceleration_window_periods : float
         The Savitzky-Golay window of that least squares of accelerations, in periods of each run's faster dominant
         frequency (0.25: the window of the pysindy baselines in ``benchmarks/bench_model_error.py``).
