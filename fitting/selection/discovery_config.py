@@ -134,11 +134,15 @@ class DiscoveryConfig:
         100-280 % worse, the others 60-90 % better): at 12 % truncation it dropped 2-4 Taylor terms of an equation on 3
         of 6 data sets (docs/fitting.md, "Few runs").  6: a standard error of 5 values or fewer;  0.1: above the 3-7 %
         excess of the held-out selections that kept every Taylor term.  None: never.
-    estimate_choice : bool
+    estimate_choice : bool or None
         Under model error, the coefficients of the output error's support are the least squares of short-window
         accelerations (the weighting a prediction from a run's largest amplitude needs) unless the integral form's or
         the output error's held-out long-time error from the runs' first states (K-fold over runs) is lower by more
-        than its fold standard error (:mod:`fitting.selection.estimate_choice`).  False: the output error's.
+        than its fold standard error (:mod:`fitting.selection.estimate_choice`).  None (default): only with a cap
+        (``max_terms``), where a support of at most the cap's size carries the model error in few coefficients; the
+        selection's own larger supports, whose added odd terms carry the truth's fifth order, are predicted better by
+        the output error's coefficients (docs/fitting.md, "The estimate that predicts from the first state").  False:
+        the output error's; True: always.
     acceleration_window_periods : float
         The Savitzky-Golay window of that least squares of accelerations, in periods of each run's faster dominant
         frequency (0.25: the window of the pysindy baselines in ``benchmarks/bench_model_error.py``).
@@ -172,7 +176,7 @@ class DiscoveryConfig:
     output_error: OutputErrorConfig | None = field(default_factory=OutputErrorConfig)
     few_runs: int = 6
     few_runs_excess: float | None = 0.1
-    estimate_choice: bool = True
+    estimate_choice: bool | None = None
     acceleration_window_periods: float = 0.25
     max_terms: int | None = None
 

@@ -507,7 +507,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     refined = _refine_output_error(setup, oe_states, result, config)
     coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
     choice = None
-    if refined is not None and config.estimate_choice:  # the estimate that predicts best from the first state
+    if refined is not None and (config.estimate_choice or (config.estimate_choice is None and config.max_terms)):
         coef, se, choice = chosen_coefficients(result.designs, held_out, setup.dts, setup.ys, setup.ths, oe_states,
                                                setup.slow_freqs, setup.noise, config.output_error, coef, se,
                                                config.n_folds, config.acceleration_window_periods)
