@@ -49,7 +49,7 @@ from ..refinement.output_error import OutputErrorConfig, refine_output_error
 from .front import HeldOutRun, long_time_error
 
 __all__ = ["EstimateChoice", "OUTPUT_ERROR", "INTEGRAL_FORM", "ACCELERATIONS", "acceleration_fit", "choose_estimate",
-           "first_state_runs"]
+           "first_state_runs", "output_error_on_runs", "chosen_coefficients"]
 
 OUTPUT_ERROR, INTEGRAL_FORM, ACCELERATIONS = "output error", "integral form", "accelerations"
 
