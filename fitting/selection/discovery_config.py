@@ -134,6 +134,17 @@ class DiscoveryConfig:
         100-280 % worse, the others 60-90 % better): at 12 % truncation it dropped 2-4 Taylor terms of an equation on 3
         of 6 data sets (docs/fitting.md, "Few runs").  6: a standard error of 5 values or fewer;  0.1: above the 3-7 %
         excess of the held-out selections that kept every Taylor term.  None: never.
+    estimate_choice : bool or None
+        Under model error, the coefficients of the output error's support are the least squares of short-window
+        accelerations (the weighting a prediction from a run's largest amplitude needs) unless the integral form or the
+        output error predicts every run better from its first state (K-fold over runs) (:mod:`fitting.selection.estimate_choice`).  None (default): only with a cap
+        (``max_terms``), where a support of at most the cap's size carries the model error in few coefficients; the
+        selection's own larger supports, whose added odd terms carry the truth's fifth order, are predicted better by
+        the output error's coefficients (docs/fitting.md, "The estimate that predicts from the first state").  False:
+        the output error's; True: always.
+    acceleration_window_periods : float
+        The Savitzky-Golay window of that least squares of accelerations, in periods of each run's faster dominant
+        frequency (0.25: the window of the pysindy baselines in ``benchmarks/bench_model_error.py``).
     max_terms : int or None
         At most this many terms per equation (``fit --max-terms``): each equation whose selection is larger takes the
         largest support on its elimination path within the cap (the front's point at that cap,
@@ -164,6 +175,8 @@ class DiscoveryConfig:
     output_error: OutputErrorConfig | None = field(default_factory=OutputErrorConfig)
     few_runs: int = 6
     few_runs_excess: float | None = 0.1
+    estimate_choice: bool | None = None
+    acceleration_window_periods: float = 0.25
     max_terms: int | None = None
 
     def __post_init__(self) -> None:
@@ -174,6 +187,7 @@ class DiscoveryConfig:
         check_whole(self, "n_folds", minimum=2)
         check_whole(self, "selection_passes")
         check_positive(self, "tolerance")
+        check_positive(self, "acceleration_window_periods")
         check_positive(self, "heldout_convergence")
         check_whole(self, "few_runs", minimum=2)
         check_positive(self, "few_runs_excess", optional=True)

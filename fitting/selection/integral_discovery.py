@@ -59,6 +59,7 @@ from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
+from .estimate_choice import EstimateChoice, chosen_coefficients
 from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front
 from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
                              run_weights, select_heldout, select_support)
@@ -156,6 +157,8 @@ class DiscoveryResult:
         Model size against the held-out long-time error (:mod:`fitting.selection.front`); None with fewer than two runs.
     max_terms : int or None
         The cap on terms per equation that picked this model from the front (``DiscoveryConfig.max_terms``).
+    estimate : EstimateChoice or None
+        Under model error, which estimate gave the coefficients (:mod:`fitting.selection.estimate_choice`).
     """
 
     mask: NDArray[np.bool_]
@@ -172,6 +175,7 @@ class DiscoveryResult:
     output_error: OutputErrorFit | None = None
     front: Front | None = None
     max_terms: int | None = None
+    estimate: EstimateChoice | None = None
 
     @property
     def z(self) -> NDArray[np.float64]:
@@ -216,6 +220,7 @@ class DiscoveryResult:
                 "knee": {"tolerance": KNEE_TOLERANCE, **{eq: list(t) for eq, t in knee.items()}},
                 "iterations": [it.to_json() for it in self.iterations], "converged": self.converged,
                 "output_error": self.output_error.to_json() if self.output_error is not None else None,
+                "estimate": self.estimate.to_json() if self.estimate is not None else None,
                 "front": ({**self.front.to_json(), "max_terms": self.max_terms} if self.front is not None else None)}
 
 
@@ -499,8 +504,14 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     front = long_time_front(result.designs, result.fronts, held_out, config.n_folds)
     if config.max_terms is not None:
         result = _capped(result, config.max_terms)
-    refined = _refine_output_error(setup, model_based or [d.state for d in derivs], result, config)
+    oe_states = model_based or [d.state for d in derivs]
+    refined = _refine_output_error(setup, oe_states, result, config)
     coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
+    choice = None
+    if refined is not None and (config.estimate_choice or (config.estimate_choice is None and config.max_terms)):
+        coef, se, choice = chosen_coefficients(result.designs, held_out, setup.dts, setup.ys, setup.ths, oe_states,
+                                               setup.slow_freqs, setup.noise, config.output_error, coef, se,
+                                               config.n_folds, config.acceleration_window_periods)
     mask = coef != 0.0
     window_s = np.array([np.median([w * dt for w, dt in zip(windows[q], setup.dts)]) for q in range(2)])
     pareto = _pareto_fronts(result, config)
@@ -515,7 +526,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                            residual_std=result.res_std, window_s=window_s, pareto=pareto, iterations=tuple(history),
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined, front=front,
-                           max_terms=config.max_terms)
+                           max_terms=config.max_terms, estimate=choice)
 
 
 def _horizon_frames(slow_freq: float, dt: float) -> int:

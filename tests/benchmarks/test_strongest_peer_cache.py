@@ -37,3 +37,17 @@ def test_targets_compare_ours_at_the_taylor_size_with_pysindys_best_at_any_size(
     assert "| 0.60 |" in text and "| 1.50 |" in text and text.count("| 0.50 |") == 2
     assert "strongest (chosen by its cross-validation) on 2 of 2 cases (100 %" in text
     assert "held-out runs on 1 of 2 cases (50 %" in text and "worst 1.50" in text
+
+
+def test_the_default_runs_the_quick_subset_and_full_the_grid(monkeypatch):
+    import benchmarks.bench_strongest_peer as bench
+
+    seen = []
+    monkeypatch.setattr(bench, "run_case", lambda *case: seen.append(case[:4]) or [])
+    text = bench.main(["--no-cache"])  # what `make bench` runs
+    assert seen == [(n, v, bench.GRID_SEEDS[0], r) for n, v, r in bench.QUICK_CASES] and "--full" in text
+    seen.clear()
+    bench.main(["--full", "--no-cache"])
+    grid = len(bench.bme.TRUTHS)
+    assert len(seen) == grid * len(bench.GRID_LEVELS) * len(bench.GRID_RUNS) * len(bench.GRID_SEEDS)
+    assert [c[3] for c in seen] == sorted(c[3] for c in seen)  # the cheaper run counts first
