@@ -124,8 +124,10 @@ class PipelineCache:
 
     An entry is a folder below the digest of the suite's sources (``cubedimer.compile_cache.source_fingerprint``:
     any change to a module of the five packages makes every entry stale, and the session removes the stale ones)
-    named by a digest of the step's key (its settings, in a ``repr`` that names every one), made once by ``build(folder)`` into a temporary folder and renamed into place,
-    so that a parallel worker never sees half an entry (the first rename wins; the other's copy is dropped).  An
+    named by a digest of the step's key (its settings, in a ``repr`` that names every one), made once by
+    ``build(folder)`` into a temporary folder and renamed into place, so that a parallel worker never sees half an
+    entry.  A pytest-xdist worker that needs an entry another worker is making waits for it
+    (``cubedimer.cache_lock``, a lock file beside the entry) instead of making it too.  An
     entry that cannot be read is made again: the cache can make a test run faster, never different.  The key must
     name everything the build depends on outside the five packages (a test's own settings and data edits)."""
 
@@ -160,20 +162,30 @@ class PipelineCache:
         import shutil
         import tempfile
 
+        from cubedimer.cache_lock import cache_entry_lock
+
         path = self.entry(name, key)
         done = path / ".complete"
         if done.is_file():
             return path
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}-", dir=path.parent))
-        build(tmp)
-        (tmp / ".complete").write_text(key)
-        if path.exists() and not done.is_file():  # a broken entry: made again
-            shutil.rmtree(path, ignore_errors=True)
-        try:
-            tmp.rename(path)
-        except OSError:  # another worker's entry came first: use it
-            shutil.rmtree(tmp, ignore_errors=True)
+        # one builder per entry: a parallel worker that needs the same entry waits for it instead of making it too
+        with cache_entry_lock(path, f"the tests' {name}"):
+            if done.is_file():  # made by another worker while this one waited
+                return path
+            tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}-", dir=path.parent))
+            try:
+                build(tmp)
+                (tmp / ".complete").write_text(key)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)  # a build that failed leaves nothing behind
+                raise
+            if path.exists() and not done.is_file():  # a broken entry: made again
+                shutil.rmtree(path, ignore_errors=True)
+            try:
+                tmp.rename(path)
+            except OSError:  # another worker's entry came first (no lock on this file system): use it
+                shutil.rmtree(tmp, ignore_errors=True)
         return path
 
     def value(self, name: str, key: str, build):

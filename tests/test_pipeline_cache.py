@@ -43,3 +43,38 @@ def test_a_broken_entry_is_made_again(cache):
     assert cache.value("diagnosis", "k", lambda: {"a": 1.5}) == value == {"a": 1.5}
     (path / ".complete").unlink()  # an entry whose build did not finish
     assert cache.value("diagnosis", "k", lambda: {"a": 2.5}) == {"a": 2.5}
+
+
+def test_a_worker_that_needs_an_entry_being_made_waits_for_it(cache):
+    """Two workers (threads here; pytest-xdist's are processes, the lock is the same) ask for one entry at once: the
+    entry is made once, and both get the same folder."""
+    import threading
+
+    calls, started = [], threading.Event()
+
+    def build(folder):
+        calls.append(folder)
+        started.set()
+        threading.Event().wait(0.3)  # still making it when the second worker asks
+        (folder / "x.txt").write_text("made")
+
+    got = {}
+    first = threading.Thread(target=lambda: got.setdefault("first", cache.folder("twin", "k", build)))
+    first.start()
+    assert started.wait(60)
+    second = cache.folder("twin", "k", build)  # asked while the first worker holds the entry's lock
+    first.join(60)
+    assert len(calls) == 1 and second == got["first"] and (second / "x.txt").read_text() == "made"
+
+
+def test_a_build_that_fails_leaves_no_entry_and_is_tried_again(cache):
+    def broken(folder):
+        (folder / "half.txt").write_text("")
+        raise RuntimeError("interrupted")
+
+    with pytest.raises(RuntimeError):
+        cache.folder("fit", "k", broken)
+    assert not cache.entry("fit", "k").exists()
+    assert not [p for p in cache.entry("fit", "k").parent.iterdir() if p.name.startswith(".")]
+    made = cache.folder("fit", "k", lambda f: (f / "x.txt").write_text("ok"))
+    assert (made / "x.txt").read_text() == "ok"
