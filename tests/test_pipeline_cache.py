@@ -78,3 +78,25 @@ def test_a_build_that_fails_leaves_no_entry_and_is_tried_again(cache):
     assert not [p for p in cache.entry("fit", "k").parent.iterdir() if p.name.startswith(".")]
     made = cache.folder("fit", "k", lambda f: (f / "x.txt").write_text("ok"))
     assert (made / "x.txt").read_text() == "ok"
+
+
+def test_the_fingerprint_changes_with_the_code_and_the_data_that_make_the_results(tmp_path, cache):
+    """A change of any module or data file of the five packages gives another fingerprint (a new set of entries);
+    a file outside them does not."""
+    pipeline_fingerprint = cache.fingerprint_of
+    for package in ("cubedimer", "acousim", "fitting", "tracking", "validation"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("x = 1\n")
+    (tmp_path / "acousim" / "data").mkdir()
+    (tmp_path / "acousim" / "data" / "table.json").write_text("{}")
+    (tmp_path / "tests").mkdir()
+    first = pipeline_fingerprint(tmp_path)
+    assert pipeline_fingerprint(tmp_path) == first and len(first) == 16
+    (tmp_path / "tests" / "other.py").write_text("y = 2\n")
+    assert pipeline_fingerprint(tmp_path) == first
+    seen = {first}
+    for path, text in ((tmp_path / "fitting" / "__init__.py", "x = 2\n"),
+                       (tmp_path / "acousim" / "data" / "table.json", '{"a": 1}')):
+        path.write_text(text)
+        seen.add(pipeline_fingerprint(tmp_path))
+    assert len(seen) == 3
