@@ -119,13 +119,45 @@ def pytest_sessionfinish(session, exitstatus) -> None:
 PIPELINE_CACHE_ROOT = TEST_CACHE_ROOT / "pipeline"
 
 
+#: The installed distributions whose numbers the pipeline's results depend on (their versions are in the fingerprint).
+PIPELINE_DEPENDENCIES = ("numpy", "scipy", "numba", "nlopt", "pysindy", "scikit-learn", "bempp-cl", "trimesh")
+
+
+def pipeline_fingerprint(root: Path = Path(__file__).resolve().parents[1]) -> str:
+    """The version of everything that makes the pipeline's results: the suite's sources
+    (``cubedimer.compile_cache.source_fingerprint``), the packages' data files (the shipped full-wave tables) and the
+    versions of Python and of :data:`PIPELINE_DEPENDENCIES`; 16 hex digits.  ``root``: the checkout."""
+    import hashlib
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    from cubedimer.compile_cache import SUITE_PACKAGES, source_fingerprint
+
+    root = Path(root)
+    digest = hashlib.sha1(source_fingerprint(root).encode())
+    for package in SUITE_PACKAGES:
+        for path in sorted((root / package).rglob("*")):
+            if path.is_file() and path.suffix not in (".py", ".pyc") and "__pycache__" not in path.parts:
+                digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    digest.update(platform.python_version().encode())
+    for name in PIPELINE_DEPENDENCIES:
+        try:
+            digest.update(f"{name}={version(name)}".encode())
+        except PackageNotFoundError:
+            digest.update(f"{name}=absent".encode())
+    return digest.hexdigest()[:16]
+
+
 class PipelineCache:
     """Fingerprinted, disk-cached results of the pipeline for the tests (:func:`pipeline_cache`).
 
-    An entry is a folder below the digest of the suite's sources (``cubedimer.compile_cache.source_fingerprint``:
-    any change to a module of the five packages makes every entry stale, and the session removes the stale ones)
-    named by a digest of the step's key (its settings, in a ``repr`` that names every one), made once by ``build(folder)`` into a temporary folder and renamed into place,
-    so that a parallel worker never sees half an entry (the first rename wins; the other's copy is dropped).  An
+    An entry is a folder below the digest of the suite's sources, data files and dependencies
+    (:func:`pipeline_fingerprint`: any change to a module of the five packages, a shipped table or an installed
+    dependency's version makes every entry stale, and the session removes the stale ones)
+    named by a digest of the step's key (its settings, in a ``repr`` that names every one), made once by
+    ``build(folder)`` into a temporary folder and renamed into place, so that a parallel worker never sees half an
+    entry.  A pytest-xdist worker that needs an entry another worker is making waits for it
+    (``cubedimer.cache_lock``, a lock file beside the entry) instead of making it too.  An
     entry that cannot be read is made again: the cache can make a test run faster, never different.  The key must
     name everything the build depends on outside the five packages (a test's own settings and data edits)."""
 
@@ -133,12 +165,13 @@ class PipelineCache:
         self.root = Path(root)
         self._fingerprint: str | None = None
 
+    #: :func:`pipeline_fingerprint`, for the cache's own tests
+    fingerprint_of = staticmethod(pipeline_fingerprint)
+
     @property
     def fingerprint(self) -> str:
         if self._fingerprint is None:
-            from cubedimer.compile_cache import source_fingerprint
-
-            self._fingerprint = source_fingerprint()
+            self._fingerprint = pipeline_fingerprint()
         return self._fingerprint
 
     def entry(self, name: str, key: str) -> Path:
@@ -160,20 +193,30 @@ class PipelineCache:
         import shutil
         import tempfile
 
+        from cubedimer.cache_lock import cache_entry_lock
+
         path = self.entry(name, key)
         done = path / ".complete"
         if done.is_file():
             return path
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}-", dir=path.parent))
-        build(tmp)
-        (tmp / ".complete").write_text(key)
-        if path.exists() and not done.is_file():  # a broken entry: made again
-            shutil.rmtree(path, ignore_errors=True)
-        try:
-            tmp.rename(path)
-        except OSError:  # another worker's entry came first: use it
-            shutil.rmtree(tmp, ignore_errors=True)
+        # one builder per entry: a parallel worker that needs the same entry waits for it instead of making it too
+        with cache_entry_lock(path, f"the tests' {name}"):
+            if done.is_file():  # made by another worker while this one waited
+                return path
+            tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}-", dir=path.parent))
+            try:
+                build(tmp)
+                (tmp / ".complete").write_text(key)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)  # a build that failed leaves nothing behind
+                raise
+            if path.exists() and not done.is_file():  # a broken entry: made again
+                shutil.rmtree(path, ignore_errors=True)
+            try:
+                tmp.rename(path)
+            except OSError:  # another worker's entry came first (no lock on this file system): use it
+                shutil.rmtree(tmp, ignore_errors=True)
         return path
 
     def value(self, name: str, key: str, build):

@@ -51,9 +51,18 @@ def _long_time(model, exact, periods=5.0):
     return float(np.median(errs))
 
 
-def test_an_exact_model_is_recovered_at_the_noise_floor():
-    exact = _runs(lambda s: np.r_[s[1], CUBIC.predict(s[None])[0, 0], s[3], CUBIC.predict(s[None])[0, 1]],
-                  0.5, 4, seed=1)
+@pytest.fixture(scope="module")
+def cubic_runs():
+    """Four exact 12-s runs of :data:`CUBIC` (computed once for the module's tests)."""
+    def rhs(s):
+        acc = CUBIC.predict(s[None])[0]  # both accelerations from one evaluation of the library
+        return np.array([s[1], acc[0], s[3], acc[1]])
+
+    return _runs(rhs, 0.5, 4, seed=1)
+
+
+def test_an_exact_model_is_recovered_at_the_noise_floor(cubic_runs):
+    exact = cubic_runs
     start = PolynomialModel(CUBIC.coef * np.where(CUBIC.support, 1.02, 0.0))  # every coefficient 2 % off
     fit = _refine(start, exact, 1e-3, seed=2)
     # the 2 % error is visible in the misfit (a 1 % frequency error over 5 periods is a 0.3-rad phase), and the
@@ -73,11 +82,10 @@ def test_an_exact_model_is_recovered_at_the_noise_floor():
     np.testing.assert_allclose(fit.coef, from_truth.coef, rtol=1e-3)
 
 
-def test_noiseless_data_give_the_exact_model():
+def test_noiseless_data_give_the_exact_model(cubic_runs):
     """Without noise (a tracking noise of 0) the misfit is weighted by a floor of 1e-6 of the coordinates' RMS, and
     the refinement ends at the truth to the integrators' agreement."""
-    exact = _runs(lambda s: np.r_[s[1], CUBIC.predict(s[None])[0, 0], s[3], CUBIC.predict(s[None])[0, 1]],
-                  0.5, 4, seed=1)
+    exact = cubic_runs
     fit = _refine(PolynomialModel(CUBIC.coef * np.where(CUBIC.support, 1.02, 0.0)), exact, 0.0, seed=2)
     # RK4 at h omega <= 0.1 against DOP853 at rtol 1e-10: the coefficients agree to 3e-7 here
     np.testing.assert_allclose(fit.coef[CUBIC.support], CUBIC.coef[CUBIC.support], rtol=1e-5)
@@ -89,13 +97,13 @@ def _pendulums(s):
                      s[3], -W2**2 * np.sin(s[2]) - 0.1 * s[3] - 2.0 * (s[2] - s[0])])
 
 
-def test_on_a_non_polynomial_truth_the_refined_cubic_predicts_better_than_the_taylor_series():
+def test_on_a_non_polynomial_truth_the_refined_cubic_predicts_better_than_the_taylor_series(pendulum_runs):
     """At swings of up to 1.2 rad the pendulums' frequencies drop by up to 9 %; the cubic Taylor series gets
     the drop wrong by a fifth-order amount, the output-error cubic fits the amplitude range of the data."""
     taylor = PolynomialModel.from_equations({
         "yddot": {"y": -W1**2 - 2.0, "ydot": -0.1, "theta": 2.0, "y^3": W1**2 / 6},
         "thetaddot": {"y": 2.0, "theta": -W2**2 - 2.0, "thetadot": -0.1, "theta^3": W2**2 / 6}})
-    exact = _runs(_pendulums, 1.2, 8, seed=5)
+    exact = pendulum_runs
     fit = _refine(taylor, exact[:6], 1e-3, seed=6)
     assert fit.misfit < 0.5 * fit.misfit_start
     before, after = _long_time(taylor, exact[6:]), _long_time(PolynomialModel(fit.coef), exact[6:])
@@ -118,10 +126,17 @@ def pendulum_runs():
     return _runs(_pendulums, 1.2, 8, seed=5)
 
 
-def test_pruning_removes_the_terms_a_trajectory_does_not_need(pendulum_runs):
+@pytest.fixture(scope="module")
+def even_terms_fit(pendulum_runs):
+    """The default refinement of the Taylor support plus the two even terms on the first six pendulum runs (shared
+    by the tests that read it; the refinement is deterministic, so sharing it changes no number)."""
+    return _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6)
+
+
+def test_pruning_removes_the_terms_a_trajectory_does_not_need(pendulum_runs, even_terms_fit):
     """Under model error (swings of 1.2 rad) a support with two terms of the wrong symmetry: pruning removes both
     and keeps every term of the Taylor support, and the pruned cubic predicts held-out runs as well."""
-    fit = _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6)
+    fit = even_terms_fit
     taylor = PolynomialModel.from_equations(PENDULUM_TAYLOR).support
     assert sorted(fit.pruned) == ["thetaddot:y*theta", "yddot:y^2"]
     assert (fit.coef[taylor] != 0).all()
@@ -143,11 +158,11 @@ def test_pruning_removes_the_terms_a_trajectory_does_not_need(pendulum_runs):
     assert after < 1.1 * before, (before, after)
 
 
-def test_a_practical_threshold_makes_no_addition_worth_less_than_it(pendulum_runs):
+def test_a_practical_threshold_makes_no_addition_worth_less_than_it(pendulum_runs, even_terms_fit):
     """``misfit_tolerance`` (the discovery's ``--heldout-tolerance``): by default the two additions after the pruning
     lower the misfit from 1.427 to 1.344 noise units (6 %); a threshold of 10 % of the RMS misfit makes neither, and
     the pruning stays within it of the full support's misfit."""
-    default = _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6)
+    default = even_terms_fit
     wide = _refine(_with_even_terms(), pendulum_runs[:6], 1e-3, seed=6, config=OutputErrorConfig(misfit_tolerance=0.1))
     assert len(default.added) == 2 and default.misfit < 0.95 * default.misfit_support
     assert wide.added == () and sorted(wide.pruned) == ["thetaddot:y*theta", "yddot:y^2"]
@@ -210,12 +225,25 @@ def _taylor_refit(runs, y_unit=1.0):
     return fit, segs, sigma, config, evaluate_library(np.vstack(states)), power
 
 
-def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(pendulum_runs):
+@pytest.fixture(scope="module")
+def taylor_refit(pendulum_runs):
+    """:func:`_taylor_refit` of the first six pendulum runs in units of ``y_unit`` (each unit computed once)."""
+    done = {}
+
+    def refit(y_unit=1.0):
+        if y_unit not in done:
+            done[y_unit] = _taylor_refit(pendulum_runs[:6], y_unit)
+        return done[y_unit]
+
+    return refit
+
+
+def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(taylor_refit):
     """The additions' score test (one Jacobian of all 70 coefficients, segment states eliminated) against the refit
     with the term: the first-order drop of the squared misfit and the coefficient it predicts."""
     from fitting.refinement.output_error import _addition_gains, _refine as refine
 
-    fit, segs, sigma, config, library, _ = _taylor_refit(pendulum_runs[:6])
+    fit, segs, sigma, config, library, _ = taylor_refit()
     gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, library, config)
     assert np.isneginf(gain[fit.coef != 0]).all()
     # even terms cannot help odd forces: the few that pass the noise's chi-square floor (the residual is partly
@@ -233,7 +261,7 @@ def test_the_score_test_predicts_the_refitted_drop_of_the_misfit(pendulum_runs):
     np.testing.assert_allclose(delta[q, j], with_term.coef[q, j], rtol=0.05)
 
 
-def test_scores_and_standard_errors_do_not_depend_on_the_units(pendulum_runs):
+def test_scores_and_standard_errors_do_not_depend_on_the_units(taylor_refit):
     """y in micrometres instead of metres moves the coefficients over twelve decades (y^3 in yddot by 1e-12): the
     score test's gains and the standard errors' z must not move (an unequilibrated pseudo-inverse cuts the
     large-variance directions as round-off)."""
@@ -241,7 +269,7 @@ def test_scores_and_standard_errors_do_not_depend_on_the_units(pendulum_runs):
 
     out = []
     for unit in (1.0, 1e-6):
-        fit, segs, sigma, config, library, power = _taylor_refit(pendulum_runs[:6], unit)
+        fit, segs, sigma, config, library, power = taylor_refit(unit)
         gain, delta = _addition_gains(fit.coef, fit.x0, segs, sigma, library, config)
         se = _standard_errors(fit.coef, fit.x0, segs, sigma, config)
         on = fit.coef != 0

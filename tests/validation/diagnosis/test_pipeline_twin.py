@@ -117,7 +117,9 @@ def test_strong_velocity_coupling_identified(pipeline_cache):
     """Strong coupling (c5 = 3e4, c6 = 6e6, six times the single-effect case): identified alone, measured
     c5 +13 %, c6 -11 % (asserted at the acceptance level of 25 %).  The bias grows with the strength (+3 % / -5 % at
     5e3 / 1e6): the hinge columns are evaluated at theta smoothed over half a hinge period, which
-    leaves out the fast response the coupling itself drives (see the xfail below)."""
+    leaves out the fast response the coupling itself drives.  At 1.5e4 / 3e6 this bias makes the diagnosis name
+    pair_scattering after velocity_coupling (a known limitation, measured by ``make bench``:
+    benchmarks/bench_diagnosis.py)."""
     effects = {"velocity_coupling": {"c5": 3.0e4, "c6": 6.0e6}}
     data, _ = _twin(pipeline_cache, effects)
     diag = _diagnosis(pipeline_cache, data, FAST)
@@ -125,18 +127,6 @@ def test_strong_velocity_coupling_identified(pipeline_cache):
     fitted = diag.effects[0].params
     for p, v in effects["velocity_coupling"].items():
         assert abs(fitted[p] - v) <= 0.25 * abs(v), (p, fitted[p], v)
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "measured at c5 = 1.5e4, c6 = 3e6 (twin seed 3): velocity_coupling is identified (p = 0.003; c5 +8 %, c6 -9 %), "
-    "but pair_scattering is named after it with kappa = 0.49 1/s^2 (p = 0.005; 0.35 % of the hinge acceleration), "
-    "absorbing the bias of the smoothed hinge columns at strong coupling; at 5e3 / 1e6 and 3e4 / 6e6 the same seed "
-    "names velocity_coupling alone"))
-def test_velocity_coupling_names_only_itself_at_1p5e4(pipeline_cache):
-    data, _ = _twin(pipeline_cache, {"velocity_coupling": {"c5": 1.5e4, "c6": 3.0e6}})
-    diag = _diagnosis(pipeline_cache, data, FAST)
-    assert diag.identified == ("velocity_coupling",)
 
 
 @pytest.mark.slow

@@ -11,14 +11,6 @@ from validation.report.build import effect_static_coefficients
 SECTIONS = ["answer", "data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
 
 
-def _twin(path, effects, runs=8, duration=3.0, seed=4):
-    from acousim.twin import simulate_dataset
-
-    simulate_dataset(_twin_config(effects, runs, duration, seed), path, progress=False)
-    (path / "truth.json").rename(path.parent / f"{path.name}_truth.json")
-    return path
-
-
 def _twin_config(effects, runs=8, duration=3.0, seed=4):
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig
@@ -147,7 +139,7 @@ def test_report_renders_in_chromium(damping_report, tmp_path, chromium_required)
 
 
 @pytest.mark.slow
-def test_velocity_terms_are_dynamic_only(tmp_path):
+def test_velocity_terms_are_dynamic_only(tmp_path, pipeline_cache):
     """With velocity_coupling on, the fit finds velocity terms and the comparison lists them as dynamic only."""
     from acousim import GorkovDimer, fit_static_coefficients, static_sweep
     from cubedimer.executor import ExecutorConfig
@@ -157,11 +149,15 @@ def test_velocity_terms_are_dynamic_only(tmp_path):
     from dataclasses import replace
     from validation.coefficients import compare_coefficients
 
-    # seed 8: the first whose drops all stay within theta = +-1 with this coupling (6 and 7 do not)
-    data = _twin(tmp_path / "data", {"pair_scattering": {"kappa": 12000.0}, "velocity_coupling": {"c5": 1.5e4, "c6": 3e6}}, seed=8)
+    # seed 8: the first whose drops all stay within theta = +-1 with this coupling (6 and 7 do not); the data set
+    # and its fit from the pipeline cache (made once per version of the sources, tests/conftest.py)
+    data = pipeline_cache.twin_dataset(_twin_config(
+        {"pair_scattering": {"kappa": 12000.0}, "velocity_coupling": {"c5": 1.5e4, "c6": 3e6}}, seed=8))
     cfg = FitConfig()
     cfg = replace(cfg, method=cfg.method.with_joint_max_evals(150))
-    write_fit(fit_dataset(data, cfg, ExecutorConfig(workers=1), progress=False), tmp_path / "fit", plots=False)
+    fit = pipeline_cache.value("fit", f"{data.parent.name} {cfg!r}",
+                               lambda: fit_dataset(data, cfg, ExecutorConfig(workers=1), progress=False))
+    write_fit(fit, tmp_path / "fit", plots=False)
     model = json.loads((tmp_path / "fit" / "model.json").read_text())
     sw = static_sweep(GorkovDimer(), np.linspace(-0.4, 0.4, 21), np.linspace(-2e-4, 2e-4, 21))
     st = fit_static_coefficients(sw)
