@@ -94,6 +94,13 @@ def _symmetrize_nodes(x: NDArray[np.float64], w: NDArray[np.float64]) -> tuple[N
     return np.concatenate(images), np.tile(w, len(images)) / len(images)
 
 
+def _chebyshev_sums(t: NDArray[np.float64], coefs: tuple[NDArray, ...]) -> tuple[NDArray, ...]:
+    """The interpolated orientation sums at bends ``t`` (|t| <= 1 rad), each of shape ``t.shape + (2,)``: the
+    Chebyshev Vandermonde ``T_k(t) = cos(k arccos t)`` times the coefficients, one matrix product per sum."""
+    vander = np.cos(np.arccos(t.ravel())[:, None] * np.arange(coefs[0].shape[0])[None, :])
+    return tuple((vander @ c).reshape(t.shape + (2,)) for c in coefs)
+
+
 class GorkovDimer:
     """The Gor'kov volume-integral model of a hinged cube dimer in a standing wave.
 
@@ -252,11 +259,15 @@ class GorkovDimer:
         if coefs is None:
             return self._exact_orientation_sums(theta)
         t = np.asarray(theta, float)
-        if np.any(np.abs(t) > 1):
-            raise ValueError("the interpolated model covers theta in [-1, 1]")
-        # Chebyshev Vandermonde T_k(t) = cos(k arccos t): one matrix product instead of Clenshaw loops
-        vander = np.cos(np.arccos(t.ravel())[:, None] * np.arange(coefs[0].shape[0])[None, :])
-        return tuple((vander @ c).reshape(t.shape + (2,)) for c in coefs)
+        beyond = np.abs(t) > 1
+        if np.any(beyond):  # the interpolant covers |theta| <= 1 rad; a wider bend takes the exact sums there
+            sums = tuple(np.empty(t.shape + (2,), complex) for _ in coefs)
+            for whole, part in zip(sums, self._exact_orientation_sums(t[beyond])):
+                whole[beyond] = part
+            for whole, part in zip(sums, _chebyshev_sums(t[~beyond], coefs)):
+                whole[~beyond] = part
+            return sums
+        return _chebyshev_sums(t, coefs)
 
     def _exact_orientation_sums(self, theta: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
         """Per cube, the complex sums C = sum w e^{2ik zeta}, D = sum w dx e^{2ik zeta}, E = sum w dy e^{2ik zeta}.
