@@ -127,6 +127,16 @@ def _noise_level(x: NDArray) -> float:
 #: A peak at five or more cycles per run is the oscillation when it reaches this fraction of a slower peak.
 SLOW_PEAK_FRACTION = 0.1
 
+#: The fewest cycles per run of the y oscillation: a slower peak is a drift of the levitation height.
+Y_MIN_CYCLES = 5.0
+
+
+def oscillation_frequency(x: NDArray, dt: float, duration: float, min_cycles: float = Y_MIN_CYCLES) -> float:
+    """The oscillation frequency [Hz] of a coordinate sampled every ``dt`` [s] over ``duration`` [s]: the largest
+    spectral peak at ``min_cycles`` or more cycles per run (:func:`cubedimer.spectra.dominant_frequency`), unless
+    nothing there reaches :data:`SLOW_PEAK_FRACTION` of a slower peak (then the slower one)."""
+    return dominant_frequency(x, dt, fmin=min_cycles / duration, prefer_above=SLOW_PEAK_FRACTION)
+
 
 def run_features(name: str, t: NDArray, y: NDArray) -> RunFeatures:
     """:class:`RunFeatures` of one gap-filled run (t [s], y [m]).
@@ -138,8 +148,7 @@ def run_features(name: str, t: NDArray, y: NDArray) -> RunFeatures:
     dt = float((t[-1] - t[0]) / (t.size - 1))
     duration = float(t[-1] - t[0])
     q = np.quantile(y, [0.01, 0.99])
-    f_y = (dominant_frequency(y, dt, fmin=5.0 / duration, prefer_above=SLOW_PEAK_FRACTION)
-           if np.ptp(y) > 0 else 0.0)
+    f_y = oscillation_frequency(y, dt, duration) if np.ptp(y) > 0 else 0.0
     return RunFeatures(name=name, y_amplitude=0.5 * float(q[1] - q[0]), f_y=f_y,
                        duration=duration, noise_y=_noise_level(y), y_median=float(np.median(y)))
 

@@ -2,15 +2,11 @@
 (:func:`oscillation_frequencies`)."""
 from __future__ import annotations
 
-from cubedimer.consistency import SLOW_PEAK_FRACTION
+from cubedimer.consistency import Y_MIN_CYCLES, oscillation_frequency
 from cubedimer.dataset import Run
-from cubedimer.spectra import dominant_frequency
 
 __all__ = ["oscillation_frequencies", "Y_MIN_CYCLES", "THETA_MIN_CYCLES"]
 
-#: The fewest cycles per run of the y oscillation: a slower peak is a drift of the levitation height (as the
-#: loader's and the consistency check's f_y, :func:`cubedimer.consistency.run_features`).
-Y_MIN_CYCLES = 5.0
 #: The fewest cycles per run of the hinge's oscillation (a hinge may swing at a tenth of f_y: 2 cycles of a 1.7-Hz
 #: hinge fit in 1.2 s).
 THETA_MIN_CYCLES = 2.0
@@ -35,5 +31,5 @@ def oscillation_frequencies(run: Run) -> tuple[float, float]:
     * both are read from the whole run (as recorded, raw): the longest record, the finest bins.
     """
     duration = max(run.duration, 1e-9)
-    return tuple(dominant_frequency(x, run.dt, fmin=cycles / duration, prefer_above=SLOW_PEAK_FRACTION)
+    return tuple(oscillation_frequency(x, run.dt, duration, cycles)
                  for x, cycles in ((run.y, Y_MIN_CYCLES), (run.theta, THETA_MIN_CYCLES)))

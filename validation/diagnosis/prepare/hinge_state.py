@@ -100,7 +100,8 @@ def with_fast_hinge_response(runs: Sequence[RunAccelerations], force_model) -> l
     force_model : the diagnosis's force model at nominal pressure (:meth:`DiagnosisProblem.surrogate`)
     """
     from acousim.dynamics.integrator import DimerDynamics
-    from cubedimer.spectra import dominant_frequency
+    from cubedimer.consistency import oscillation_frequency
+    from fitting.derivatives.frequencies import THETA_MIN_CYCLES, Y_MIN_CYCLES
     from fitting.derivatives.integral_form import hinge_smoothing_window
 
     out = []
@@ -110,8 +111,9 @@ def with_fast_hinge_response(runs: Sequence[RunAccelerations], force_model) -> l
             out.append(run)
             continue
         n = pi.positions.shape[0]
-        f_y = dominant_frequency(pi.positions[:, 0] - pi.positions[:, 0].mean(), pi.dt, fmin=5.0 / (n * pi.dt))
-        f_theta = dominant_frequency(pi.positions[:, 1] - pi.positions[:, 1].mean(), pi.dt, fmin=2.0 / (n * pi.dt))
+        duration = (n - 1) * pi.dt  # the preparation's rule of the frequencies (fitting.derivatives.frequencies)
+        f_y, f_theta = (oscillation_frequency(pi.positions[:, i], pi.dt, duration, cycles)
+                        for i, cycles in ((0, Y_MIN_CYCLES), (1, THETA_MIN_CYCLES)))
         window = hinge_smoothing_window(pi.dt, f_y, f_theta, run.smoothing[1] if run.smoothing else 5)
         if window >= n:
             out.append(run)
