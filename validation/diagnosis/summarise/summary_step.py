@@ -56,7 +56,7 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
                               lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
     # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, gap_before, with_effect_model_errors(errors.effects),
+                             replaced, joint_params, final, per_before, with_effect_model_errors(errors.effects),
                              with_effect_model_errors(errors.derived))
     # an effect whose addition raises the gap by more than two of its paired standard errors is not named (its
     # verdict says why, with both gaps)

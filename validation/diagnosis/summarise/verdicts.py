@@ -43,7 +43,7 @@ def _rejection(code: str, detail: str = "") -> dict:
 
 def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, elim, identified: list[str],
                    named: list[str], in_pair: dict, replaced: dict, joint_params: dict, final: GapFit,
-                   gap_before: float, uncertainty: Mapping[str, Mapping[str, ParameterInterval]] | None = None,
+                   per_before: NDArray, uncertainty: Mapping[str, Mapping[str, ParameterInterval]] | None = None,
                    derived: Mapping[str, Mapping[str, ParameterInterval]] | None = None) -> tuple[EffectVerdict, ...]:
     """diagnosis.json's ``effects``.
 
@@ -57,7 +57,8 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     replaced : the p-value of every candidate the discovered terms replaced, by name
     joint_params : the model effects' parameters re-estimated with the discovered terms
     final : the fit of the final model's effects
-    gap_before : the calibrated simulation's gap alone
+    per_before : the calibrated simulation's gap per run and component (n_runs, 3), alone
+        (:attr:`~validation.diagnosis.identify.identification_step.Identified.per_before`)
     uncertainty : the model effects' parameter intervals (:func:`~validation.diagnosis.summarise.uncertainty.jackknife_errors`)
 
     Every candidate the model does not fit is ``rejected`` (one of an indistinguishable pair excepted), with its
@@ -65,10 +66,11 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     non-physical sign of its fit on top of the model.
     """
     runs = problem.runs
+    gap_before = scalar_gap(per_before)
     # the per-run gaps of the calibrated simulation and of each cumulative fit: the rise of the gap an effect causes
     # is paired run by run (the same runs without and with it)
-    per_run = [fit_gaps(runs, fit_gap_model(problem, identified[:i])) for i in range(len(identified) + 1)] \
-        if identified else []
+    per_run = [per_before] + [fit_gaps(runs, fit_gap_model(problem, identified[:i]))
+                              for i in range(1, len(identified) + 1)]
     model_effects = [_model_effect(problem, ident, elim, identified, i, named, in_pair, joint_params, gap_before,
                                    per_run[i], per_run[i + 1], final, (uncertainty or {}).get(identified[i]),
                                    (derived or {}).get(identified[i]))
