@@ -2,7 +2,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+from cubedimer.config_checks import (check_choice, check_in_range, check_positive, check_that, check_whole, named,
+                                    raising)
 
 from .recording import TrackingError
 
@@ -58,47 +61,40 @@ class TrackConfig:
         with t from its first frame, instead of as the field-on motion with t = 0 at the field's return.
     """
 
-    fps: float | None = None
-    pixel_size: float | None = None
-    origin_frames: int = 50
-    origin_row: float | None = None
-    polarity: str = "auto"
-    up: str = "top"
-    edge_window: int | None = None
-    area_tolerance: float = 0.06
-    max_motion_blur: float = 3.0
+    fps: float | None = field(default=None, metadata=named("--fps"))
+    pixel_size: float | None = field(default=None, metadata=named("--pixel-size"))
+    origin_frames: int = field(default=50, metadata=named("--origin-frames"))
+    origin_row: float | None = field(default=None, metadata=named("--origin-row"))
+    polarity: str = field(default="auto", metadata=named("--polarity"))
+    up: str = field(default="top", metadata=named("--up"))
+    edge_window: int | None = field(default=None, metadata=named("--edge-window"))
+    area_tolerance: float = field(default=0.06, metadata=named("--area-tolerance"))
+    max_motion_blur: float = field(default=3.0, metadata=named("--max-motion-blur"))
     max_edge_rms_factor: float = 4.0
-    max_squareness: float = 0.05
-    max_hinge_gap: float = 0.1
+    max_squareness: float = field(default=0.05, metadata=named("--max-squareness"))
+    max_hinge_gap: float = field(default=0.1, metadata=named("--max-hinge-gap"))
     calibration_frames: int = 100
     batch: int = 1024
-    roi: tuple[int, int, int, int] | None = None
+    roi: tuple[int, int, int, int] | None = field(default=None, metadata=named("--roi"))
     keep_drop: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("fps", "pixel_size"):
-            v = getattr(self, name)
-            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise TrackingError(f"{name.replace('_', ' ')} must be a positive number, got {v!r}")
-        if self.pixel_size is not None and not 1e-9 < self.pixel_size < 1e-2:
-            raise TrackingError(f"pixel size {self.pixel_size!r} m is implausible: give metres per pixel in the object "
-                                "plane, e.g. 1e-5 for 10 um")
-        if int(self.origin_frames) != self.origin_frames or self.origin_frames < 1:
-            raise TrackingError(f"origin frames must be a whole number >= 1, got {self.origin_frames!r}")
-        if self.origin_row is not None and not math.isfinite(self.origin_row):
-            raise TrackingError(f"origin row must be finite, got {self.origin_row!r}")
-        if self.polarity not in POLARITIES:
-            raise TrackingError(f"polarity must be one of {', '.join(POLARITIES)}, got {self.polarity!r}")
-        if self.up not in UP:
-            raise TrackingError(f"up must be one of {', '.join(UP)}, got {self.up!r}")
-        if self.edge_window is not None and not 2 <= int(self.edge_window) <= 50:
-            raise TrackingError(f"edge window must lie in [2, 50] px, got {self.edge_window!r}")
-        if self.roi is not None:
-            x0, x1, y0, y1 = self.roi
-            if any(int(v) != v for v in self.roi) or min(self.roi) < 0 or x1 <= x0 or y1 <= y0:
-                raise TrackingError(f"region of interest {x0}:{x1},{y0}:{y1} is empty or inverted: give "
-                                    "--roi x0:x1,y0:y1 with 0 <= x0 < x1 (columns) and 0 <= y0 < y1 (rows)")
-        for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise TrackingError(f"{name.replace('_', ' ')} must be positive, got {v!r}")
+        with raising(TrackingError):
+            check_positive(self, "fps", optional=True)
+            check_positive(self, "pixel_size", optional=True)
+            check_that(self, self.pixel_size is None or 1e-9 < self.pixel_size < 1e-2,
+                       f"pixel size {self.pixel_size!r} m is implausible: give metres per pixel in the object plane, "
+                       "e.g. 1e-5 for 10 um")
+            check_whole(self, "origin_frames")
+            check_that(self, self.origin_row is None or math.isfinite(self.origin_row),
+                       f"--origin-row must be finite, got {self.origin_row!r}")
+            check_choice(self, "polarity", POLARITIES)
+            check_choice(self, "up", UP)
+            check_in_range(self, "edge_window", 2, 50, unit="px", whole=True, optional=True)
+            if self.roi is not None:
+                x0, x1, y0, y1 = self.roi
+                check_that(self, all(int(v) == v for v in self.roi) and min(self.roi) >= 0 and x0 < x1 and y0 < y1,
+                           f"region of interest {x0}:{x1},{y0}:{y1} is empty or inverted: give --roi x0:x1,y0:y1 with "
+                           "0 <= x0 < x1 (columns) and 0 <= y0 < y1 (rows)")
+            for name in ("area_tolerance", "max_motion_blur", "max_edge_rms_factor", "max_squareness", "max_hinge_gap"):
+                check_positive(self, name)

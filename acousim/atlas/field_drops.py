@@ -25,7 +25,7 @@ import logging
 import math
 import os
 import shutil
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable
@@ -34,6 +34,7 @@ import numpy as np
 
 from cubedimer.atomic import atomic_write_text, json_text, write_json
 from cubedimer.attractors import ATTRACTOR_CLASSES, LOCKED_AT_FY, classify_trajectory
+from cubedimer.config_checks import check_given, check_in_range, named, raising
 from cubedimer.executor import ExecutorConfig, map_ordered
 from cubedimer.spectra import line_amplitude
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ
@@ -99,32 +100,25 @@ class AtlasConfig:
         The transducer's quality factor (the field's ring time Q / (pi f), :mod:`acousim.dynamics.switching`; 0: instant).
     """
 
-    dimers: tuple[AtlasDimer, ...]
-    t_off: tuple[float, ...]
-    theta_drop: tuple[float, ...]
-    pressure_amplitude_pa: float = 6000.0
-    frequency_hz: float = DEFAULT_FREQUENCY_HZ
-    duration: float = 8.0
-    sample_rate: float = 1000.0
-    transducer_q: float = 0.0
+    dimers: tuple[AtlasDimer, ...] = field(metadata=named("--dimers"))
+    t_off: tuple[float, ...] = field(metadata=named("--t-off"))
+    theta_drop: tuple[float, ...] = field(metadata=named("--theta-drop"))
+    pressure_amplitude_pa: float = field(default=6000.0, metadata=named("--pressure"))
+    frequency_hz: float = field(default=DEFAULT_FREQUENCY_HZ, metadata=named("--frequency"))
+    duration: float = field(default=8.0, metadata=named("--duration"))
+    sample_rate: float = field(default=1000.0, metadata=named("--sample-rate"))
+    transducer_q: float = field(default=0.0, metadata=named("--transducer-q"))
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.transducer_q) and 0 <= self.transducer_q <= 1e5):
-            raise AtlasError(f"--transducer-q: {self.transducer_q!r} must lie in [0, 1e5] (0: instant switching)")
-        if not self.dimers:
-            raise AtlasError("--dimers: give at least one SIDE:GAP_RATIO pair")
-        if not self.t_off or not all(math.isfinite(v) and 0 <= v <= 0.03 for v in self.t_off):
-            raise AtlasError(f"--t-off: drop durations must lie in [0, 0.03] s, got {list(self.t_off)}")
-        if not self.theta_drop or not all(math.isfinite(v) and abs(v) < 0.99 for v in self.theta_drop):
-            raise AtlasError(f"--theta-drop: hinge angles must lie in (-0.99, 0.99), got {list(self.theta_drop)}")
-        if not (math.isfinite(self.pressure_amplitude_pa) and 0 < self.pressure_amplitude_pa <= 1e5):
-            raise AtlasError(f"--pressure: {self.pressure_amplitude_pa!r} Pa must lie in (0, 1e5]")
-        if not (math.isfinite(self.frequency_hz) and 1e3 <= self.frequency_hz <= 1e6):
-            raise AtlasError(f"--frequency: {self.frequency_hz!r} Hz must lie in [1e3, 1e6]")
-        if not (math.isfinite(self.duration) and 1.0 <= self.duration <= 120.0):
-            raise AtlasError(f"--duration: {self.duration!r} s must lie in [1, 120]")
-        if not (math.isfinite(self.sample_rate) and 200.0 <= self.sample_rate <= 20_000.0):
-            raise AtlasError(f"--sample-rate: {self.sample_rate!r} 1/s must lie in [200, 20000]")
+        with raising(AtlasError):
+            check_in_range(self, "transducer_q", 0.0, 1e5)  # 0: instant switching
+            check_given(self, "dimers", "SIDE:GAP_RATIO pair")
+            check_in_range(self, "t_off", 0.0, 0.03, unit="s", each=True)
+            check_in_range(self, "theta_drop", -0.99, 0.99, low_open=True, high_open=True, each=True)
+            check_in_range(self, "pressure_amplitude_pa", 0.0, 1e5, low_open=True, unit="Pa")
+            check_in_range(self, "frequency_hz", 1e3, 1e6, unit="Hz")
+            check_in_range(self, "duration", 1.0, 120.0, unit="s")
+            check_in_range(self, "sample_rate", 200.0, 20_000.0, unit="1/s")
 
     def cells(self) -> list[tuple[int, int, int]]:
         """(dimer, t_off, theta_drop) indices of every cell, dimer by dimer."""

@@ -29,13 +29,14 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from cubedimer.atomic import atomic_write_text, write_json
 from cubedimer.attractors import classify_trajectory
+from cubedimer.config_checks import check_builds, check_given, check_in_range, named, raising
 from cubedimer.executor import ExecutorConfig
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
@@ -86,45 +87,36 @@ class FreeYConfig:
         Drive frequency [Hz].
     """
 
-    dimers: tuple[AtlasDimer, ...]
-    quality_factors: tuple[float, ...] = (200.0, 250.0, 300.0)
-    detunings: tuple[float, ...] = (-7.0, -6.0, -5.5, -5.0, -4.5, -4.0)
-    pressure_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA
-    area_m2: float = 3e-5
-    amplitudes_m: tuple[float, ...] = (50e-6, 150e-6)
-    theta_starts: tuple[float, ...] = (-0.3, 0.0, 0.3)
-    settle_time: float = 16.0
-    samples_per_period: int = 40
-    max_step: float = 1e-4
-    frequency_hz: float = DEFAULT_FREQUENCY_HZ
+    dimers: tuple[AtlasDimer, ...] = field(metadata=named("--dimers"))
+    quality_factors: tuple[float, ...] = field(default=(200.0, 250.0, 300.0), metadata=named("--qualities"))
+    detunings: tuple[float, ...] = field(default=(-7.0, -6.0, -5.5, -5.0, -4.5, -4.0), metadata=named("--detunings"))
+    pressure_pa: float = field(default=DEFAULT_PRESSURE_AMPLITUDE_PA, metadata=named("--pressure"))
+    area_m2: float = field(default=3e-5, metadata=named("--area"))
+    amplitudes_m: tuple[float, ...] = field(default=(50e-6, 150e-6), metadata=named("--amplitudes"))
+    theta_starts: tuple[float, ...] = field(default=(-0.3, 0.0, 0.3), metadata=named("--theta-starts"))
+    settle_time: float = field(default=16.0, metadata=named("--settle-time"))
+    samples_per_period: int = field(default=40, metadata=named("--samples-per-period"))
+    max_step: float = field(default=1e-4, metadata=named("--max-step"))
+    frequency_hz: float = field(default=DEFAULT_FREQUENCY_HZ, metadata=named("--frequency"))
 
     def __post_init__(self) -> None:
         from ..dynamics.resonator import CavityMode
 
-        if not self.dimers:
-            raise AtlasError("--dimers: give at least one SIDE:GAP_RATIO pair")
-        for q in self.quality_factors:
-            for x in self.detunings:
-                try:
-                    CavityMode(q, x, self.area_m2)
-                except ValueError as exc:
-                    raise AtlasError(f"--qualities/--detunings/--area: {exc}") from None
-        if not (self.quality_factors and self.detunings):
-            raise AtlasError("--qualities/--detunings: give at least one value each")
-        if not (math.isfinite(self.pressure_pa) and 0 < self.pressure_pa <= 1e5):
-            raise AtlasError(f"--pressure: {self.pressure_pa!r} Pa must lie in (0, 1e5]")
-        if not self.amplitudes_m or not all(math.isfinite(a) and 0 < a <= 1e-3 for a in self.amplitudes_m):
-            raise AtlasError(f"--amplitudes: start depths must lie in (0, 1e-3] m, got {list(self.amplitudes_m)}")
-        if not self.theta_starts or not all(math.isfinite(v) and abs(v) < 0.99 for v in self.theta_starts):
-            raise AtlasError(f"--theta-starts: hinge angles must lie in (-0.99, 0.99), got {list(self.theta_starts)}")
-        if not (math.isfinite(self.settle_time) and 1.0 <= self.settle_time <= 600.0):
-            raise AtlasError(f"--settle-time: {self.settle_time!r} s must lie in [1, 600]")
-        if int(self.samples_per_period) != self.samples_per_period or not 16 <= self.samples_per_period <= 1000:
-            raise AtlasError(f"--samples-per-period: {self.samples_per_period!r} must be an integer in [16, 1000]")
-        if not (math.isfinite(self.frequency_hz) and 1e3 <= self.frequency_hz <= 1e6):
-            raise AtlasError(f"--frequency: {self.frequency_hz!r} Hz must lie in [1e3, 1e6]")
-        if not (math.isfinite(self.max_step) and 0 < self.max_step <= 1e-3):
-            raise AtlasError(f"--max-step: {self.max_step!r} s must lie in (0, 1e-3]")
+        with raising(AtlasError):
+            check_given(self, "dimers", "SIDE:GAP_RATIO pair")
+            for q in self.quality_factors:
+                for x in self.detunings:
+                    check_builds(self, "--qualities/--detunings/--area",
+                                 lambda q=q, x=x: CavityMode(q, x, self.area_m2))
+            check_given(self, "quality_factors", "quality factor")
+            check_given(self, "detunings", "detuning")
+            check_in_range(self, "pressure_pa", 0.0, 1e5, low_open=True, unit="Pa")
+            check_in_range(self, "amplitudes_m", 0.0, 1e-3, low_open=True, unit="m", each=True)
+            check_in_range(self, "theta_starts", -0.99, 0.99, low_open=True, high_open=True, each=True)
+            check_in_range(self, "settle_time", 1.0, 600.0, unit="s")
+            check_in_range(self, "samples_per_period", 16, 1000, whole=True)
+            check_in_range(self, "frequency_hz", 1e3, 1e6, unit="Hz")
+            check_in_range(self, "max_step", 0.0, 1e-3, low_open=True, unit="s")
 
     def cells(self) -> list[tuple[int, int, int]]:
         """(dimer, Q, detuning) indices of every cell."""

@@ -24,7 +24,7 @@ from __future__ import annotations
 import logging
 import math
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numba as nb
@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from cubedimer.atomic import atomic_write_text, write_json
+from cubedimer.config_checks import check_given, check_in_range, named, raising
 from cubedimer.attractors import LOCKED_AT_FY
 from cubedimer.executor import ExecutorConfig
 from cubedimer.rk4 import rk4, rk4_batch
@@ -85,37 +86,28 @@ class HeldYConfig:
         Longest internal RK4 step [s].
     """
 
-    dimers: tuple[AtlasDimer, ...]
-    pressures_pa: tuple[float, ...]
-    amplitudes_m: tuple[float, ...]
-    theta_starts: tuple[float, ...] = (-0.4, -0.2, 0.0, 0.2, 0.4)
-    thetadot_starts: tuple[float, ...] = (-30.0, 0.0, 30.0)
-    frequency_hz: float = DEFAULT_FREQUENCY_HZ
-    settle_periods: int = 200
-    analysed_periods: int = 104
-    samples_per_period: int = 40
-    max_step: float = 1e-4
+    dimers: tuple[AtlasDimer, ...] = field(metadata=named("--dimers"))
+    pressures_pa: tuple[float, ...] = field(metadata=named("--pressures"))
+    amplitudes_m: tuple[float, ...] = field(metadata=named("--amplitudes"))
+    theta_starts: tuple[float, ...] = field(default=(-0.4, -0.2, 0.0, 0.2, 0.4), metadata=named("--theta-starts"))
+    thetadot_starts: tuple[float, ...] = field(default=(-30.0, 0.0, 30.0), metadata=named("--thetadot-starts"))
+    frequency_hz: float = field(default=DEFAULT_FREQUENCY_HZ, metadata=named("--frequency"))
+    settle_periods: int = field(default=200, metadata=named("--settle-periods"))
+    analysed_periods: int = field(default=104, metadata=named("--analysed-periods"))
+    samples_per_period: int = field(default=40, metadata=named("--samples-per-period"))
+    max_step: float = field(default=1e-4, metadata=named("--max-step"))
 
     def __post_init__(self) -> None:
-        if not self.dimers:
-            raise AtlasError("--dimers: give at least one SIDE:GAP_RATIO pair")
-        if not self.pressures_pa or not all(math.isfinite(p) and 0 < p <= 1e5 for p in self.pressures_pa):
-            raise AtlasError(f"--pressures: p0 must lie in (0, 1e5] Pa, got {list(self.pressures_pa)}")
-        if not self.amplitudes_m or not all(math.isfinite(a) and 0 < a <= 1e-3 for a in self.amplitudes_m):
-            raise AtlasError(f"--amplitudes: A must lie in (0, 1e-3] m, got {list(self.amplitudes_m)}")
-        if not self.theta_starts or not all(math.isfinite(v) and abs(v) < 0.99 for v in self.theta_starts):
-            raise AtlasError(f"--theta-starts: hinge angles must lie in (-0.99, 0.99), got {list(self.theta_starts)}")
-        if not self.thetadot_starts or not all(math.isfinite(v) and abs(v) <= 1e3 for v in self.thetadot_starts):
-            raise AtlasError(f"--thetadot-starts: hinge rates must lie in [-1000, 1000] 1/s, "
-                             f"got {list(self.thetadot_starts)}")
-        if not (math.isfinite(self.frequency_hz) and 1e3 <= self.frequency_hz <= 1e6):
-            raise AtlasError(f"--frequency: {self.frequency_hz!r} Hz must lie in [1e3, 1e6]")
-        for name, low in (("settle_periods", 0), ("analysed_periods", 8), ("samples_per_period", 16)):
-            v = getattr(self, name)
-            if int(v) != v or v < low or v > 100_000:
-                raise AtlasError(f"--{name.replace('_', '-')}: {v!r} must be an integer in [{low}, 100000]")
-        if not (math.isfinite(self.max_step) and 0 < self.max_step <= 1e-3):
-            raise AtlasError(f"--max-step: {self.max_step!r} s must lie in (0, 1e-3]")
+        with raising(AtlasError):
+            check_given(self, "dimers", "SIDE:GAP_RATIO pair")
+            check_in_range(self, "pressures_pa", 0.0, 1e5, low_open=True, unit="Pa", each=True)
+            check_in_range(self, "amplitudes_m", 0.0, 1e-3, low_open=True, unit="m", each=True)
+            check_in_range(self, "theta_starts", -0.99, 0.99, low_open=True, high_open=True, each=True)
+            check_in_range(self, "thetadot_starts", -1e3, 1e3, unit="1/s", each=True)
+            check_in_range(self, "frequency_hz", 1e3, 1e6, unit="Hz")
+            for name, low in (("settle_periods", 0), ("analysed_periods", 8), ("samples_per_period", 16)):
+                check_in_range(self, name, low, 100_000, whole=True)
+            check_in_range(self, "max_step", 0.0, 1e-3, low_open=True, unit="s")
 
     def cells(self) -> list[tuple[int, int, int]]:
         """(dimer, pressure, amplitude) indices of every cell."""

@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from cubedimer.atomic import atomic_write_text, save_figure, write_json
+from cubedimer.config_checks import check_builds, check_that, named, raising
 from cubedimer.executor import ExecutorConfig
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
@@ -49,34 +50,33 @@ MAP_COLUMNS = ("dimer", "quality_factor", "cavity_area_m2", "detuning", "f_y_hz"
 class ResonatorMapConfig:
     """Settings of the resonator map (module docstring); lengths in m, times in s."""
 
-    dimers: tuple[str, ...] = DEFAULT_DIMERS
-    quality_factors: tuple[float, ...] = (100.0, 250.0, 500.0)
-    areas_m2: tuple[float, ...] = (3.0e-5, 1.0e-4, math.pi * 0.010**2)
-    detunings: tuple[float, ...] = tuple(np.round(np.linspace(-4.0, 1.0, 11), 6))
+    dimers: tuple[str, ...] = field(default=DEFAULT_DIMERS, metadata=named("--dimers"))
+    quality_factors: tuple[float, ...] = field(default=(100.0, 250.0, 500.0), metadata=named("--qualities"))
+    areas_m2: tuple[float, ...] = field(default=(3.0e-5, 1.0e-4, math.pi * 0.010**2), metadata=named("--areas"))
+    detunings: tuple[float, ...] = field(default=tuple(np.round(np.linspace(-4.0, 1.0, 11), 6)),
+                                         metadata=named("--detunings"))
     small_amplitude: float = 1.0e-6
     settle_time: float = 0.05
     growth_time: float = 3.0
-    start_amplitude: float = 30.0e-6
-    duration: float = 40.0
+    start_amplitude: float = field(default=30.0e-6, metadata=named("--start-amplitude"))
+    duration: float = field(default=40.0, metadata=named("--duration"))
     window: float = 5.0
     frequency_hz: float = DEFAULT_FREQUENCY_HZ
 
     def __post_init__(self) -> None:
         from ..dynamics.resonator import CavityMode
 
-        for d in self.dimers:
-            _parse_dimer(d)
-        for q in self.quality_factors:
-            for a in self.areas_m2:
-                for x in self.detunings:
-                    try:
-                        CavityMode(q, x, a)
-                    except ValueError as exc:
-                        raise AtlasError(f"--qualities/--areas/--detunings: {exc}") from None
-        if not (0 < self.small_amplitude < self.start_amplitude <= 1e-3):
-            raise AtlasError("the amplitudes must satisfy 0 < small < start <= 1 mm")
-        if not (0 < self.settle_time < self.growth_time and 0 < 2 * self.window < self.duration):
-            raise AtlasError("the times must satisfy 0 < settle < growth and 0 < 2 window < duration")
+        with raising(AtlasError):
+            for d in self.dimers:
+                _parse_dimer(d)
+            for q in self.quality_factors:
+                for a in self.areas_m2:
+                    for x in self.detunings:
+                        check_builds(self, "--qualities/--areas/--detunings", lambda q=q, a=a, x=x: CavityMode(q, x, a))
+            check_that(self, 0 < self.small_amplitude < self.start_amplitude <= 1e-3,
+                       "the amplitudes must satisfy 0 < small < start <= 1 mm")
+            check_that(self, 0 < self.settle_time < self.growth_time and 0 < 2 * self.window < self.duration,
+                       "the times must satisfy 0 < settle < growth and 0 < 2 window < duration")
 
     def cells(self) -> list[tuple[int, int, int]]:
         return [(d, q, a) for d in range(len(self.dimers)) for q in range(len(self.quality_factors))

@@ -14,6 +14,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cubedimer.config_checks import check_in_range, check_positive, check_that, check_whole, named, raising
+
 from ..dynamics.integrator import DEFAULT_MAX_STEP
 from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
 from ..dynamics.effects import EffectSet, LinearDamping, MirrorAsymmetry, PairScattering
@@ -219,45 +221,36 @@ class TwinConfig:
     seed: int = 0
     experiment: ExperimentConditions = field(default_factory=ExperimentConditions)
     model_spec: ModelSpec = field(default_factory=ModelSpec)
-    pressure_error: float = 0.0
+    pressure_error: float = field(default=0.0, metadata=named("pressure error (--pressure-error)"))
     effects: EffectSet = field(default_factory=EffectSet)
     protocol: DropProtocol = field(default_factory=DropProtocol)
     camera: Camera = field(default_factory=Camera)
     max_step: float = DEFAULT_MAX_STEP
     preset: str | None = None
     air_damping: bool = True
-    transducer_q: float = 0.0
+    transducer_q: float = field(default=0.0, metadata=named("transducer quality factor (--transducer-q)"))
     cavity_detuning: float | None = None
     cavity_area: float = DEFAULT_CAVITY_AREA
 
     def __post_init__(self) -> None:
-        if not isinstance(self.transducer_q, (int, float)) or not np.isfinite(self.transducer_q) \
-                or not 0 <= self.transducer_q <= 1e5:
-            raise TwinError(f"transducer quality factor (--transducer-q) must lie in [0, 1e5] (0: instant "
-                            f"switching), got {self.transducer_q!r}")
-        self.cavity_mode  # noqa: B018 (checks the resonator's settings)
-        if int(self.runs) != self.runs or self.runs < 1:
-            raise TwinError(f"runs must be a positive integer, got {self.runs!r}")
-        if not np.isfinite(self.duration) or self.duration <= 0:
-            raise TwinError(f"duration must be positive, got {self.duration!r} s")
-        if int(self.seed) != self.seed or self.seed < 0:
-            raise TwinError(f"seed must be a non-negative integer, got {self.seed!r}")
-        if not isinstance(self.experiment, ExperimentConditions) or not isinstance(self.model_spec, ModelSpec):
-            raise TwinError(f"experiment and model_spec must be an ExperimentConditions and a ModelSpec, got "
-                            f"{type(self.experiment).__name__} and {type(self.model_spec).__name__}")
-        own = [name for name in model_options() if self.experiment.option(name) is not None]
-        if own:
-            raise TwinError(f"{', '.join(own)} is the model's own option: give it in model_spec, not in experiment")
-        if not np.isfinite(self.side) or not 50e-6 <= self.side <= 2e-3:
-            raise TwinError(f"side must lie in [50 um, 2 mm], got {self.side!r} m")
-        if not np.isfinite(self.pressure_error) or not 0 <= self.pressure_error < 0.5:
-            raise TwinError(f"pressure error must lie in [0, 0.5), got {self.pressure_error!r}")
-        if not np.isfinite(self.max_step) or self.max_step <= 0:
-            raise TwinError(f"max_step must be positive, got {self.max_step!r} s")
-        self.conditions  # noqa: B018 (checks the model's options at this experiment)
-        n = int(round(self.duration * self.camera.fps))
-        if n < 16:
-            raise TwinError(f"{self.duration:g} s at {self.camera.fps:g} fps gives only {n} frames")
+        with raising(TwinError):
+            check_in_range(self, "transducer_q", 0.0, 1e5)  # 0: instant switching
+            self.cavity_mode  # noqa: B018 (checks the resonator's settings)
+            check_whole(self, "runs")
+            check_positive(self, "duration")
+            check_whole(self, "seed", minimum=0)
+            check_that(self, isinstance(self.experiment, ExperimentConditions) and isinstance(self.model_spec, ModelSpec),
+                       f"experiment and model_spec must be an ExperimentConditions and a ModelSpec, got "
+                       f"{type(self.experiment).__name__} and {type(self.model_spec).__name__}")
+            own = [name for name in model_options() if self.experiment.option(name) is not None]
+            check_that(self, not own, f"{', '.join(own)} is the model's own option: give it in model_spec, not in "
+                                      "experiment")
+            check_in_range(self, "side", 50e-6, 2e-3, unit="m")
+            check_in_range(self, "pressure_error", 0.0, 0.5, high_open=True)
+            check_positive(self, "max_step")
+            self.conditions  # noqa: B018 (checks the model's options at this experiment)
+            check_that(self, self.n_frames >= 16,
+                       f"{self.duration:g} s at {self.camera.fps:g} fps gives only {self.n_frames} frames")
 
     @classmethod
     def from_preset(cls, preset: TwinPreset, **overrides) -> "TwinConfig":
