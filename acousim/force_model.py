@@ -17,7 +17,7 @@ model gives Q_y and Q_theta directly (they need not derive from a potential).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
@@ -169,18 +169,45 @@ class SinusoidalInertia:
         return q_y / self.mass, q_t / self.hinge_inertia(theta)
 
 
+@dataclass(frozen=True, kw_only=True)
 class ChebyshevSurrogate(SinusoidalInertia):
     """Base of the frozen-dataclass surrogates whose coefficient functions are Chebyshev series in theta and whose
     forces scale exactly as p0^2: the Gor'kov :class:`acousim.gorkov.surrogate.ForceSurrogate` and the full-wave
-    :class:`acousim.fullwave.surrogate.FullwaveSurrogate`.  The change of pressure (:meth:`with_pressure`) and the
-    escape height (:meth:`escape_height`) are written here once; a surrogate gives its vertical force at theta = 0
-    (:meth:`_theta0_vertical_force`) and the fields its coefficients scale (:meth:`_scaled_fields`)."""
+    :class:`acousim.fullwave.table.FullwaveSurrogate`.  It holds the fields they share (keyword-only, after each
+    surrogate's own coefficients); the change of pressure (:meth:`with_pressure`) and the escape height
+    (:meth:`escape_height`) are written here once; a surrogate gives its vertical force at theta = 0
+    (:meth:`_theta0_vertical_force`) and the fields its coefficients scale (:meth:`_scaled_fields`).
+
+    Attributes
+    ----------
+    two_k, wavenumber : float
+        2k and k [1/m] (k is used by ``pair_scattering``).
+    z_eq : float
+        Equilibrium height Z_eq [m] of the theta = 0 dimer, where its vertical force equals M g (below the node, < 0).
+    mass : float
+        Total mass M [kg].
+    gravity : float
+        g [m/s^2].
+    inertia_const, inertia_sin2 : float
+        ``I(theta) = inertia_const + inertia_sin2 sin^2(phi)`` [kg m^2], phi = pi theta / 4.
+    pressure_amplitude_pa : float
+        p0 [Pa] the forces belong to.
+    settings : dict
+        The model's settings (geometry, material, mesh, medium, build) for bookkeeping.
+    build_accuracy : dict
+        The build's record (errors against the direct model, timings, degrees of freedom).
+    """
 
     two_k: float
+    wavenumber: float
     z_eq: float
+    mass: float
     gravity: float
+    inertia_const: float
+    inertia_sin2: float
     pressure_amplitude_pa: float
-    settings: dict
+    settings: dict = field(default_factory=dict, compare=False, hash=False)
+    build_accuracy: dict = field(default_factory=dict, compare=False, hash=False)
 
     def _theta0_vertical_force(self, scale: float = 1.0) -> Callable[[float], float]:
         """F_Z(theta = 0, Z) [N] as a function of the absolute height Z [m], for the coefficients times ``scale``."""

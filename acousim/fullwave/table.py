@@ -43,38 +43,16 @@ class FullwaveSurrogate(ChebyshevSurrogate):
         of A, B, C of F_Z [N] and Q_theta [N m].
     theta_max : float
         Half-width of the interpolation interval in theta (dimensionless).
-    two_k, wavenumber : float
-        2k and k [1/m].
-    z_eq : float
-        Height Z_eq [m] where the theta = 0 dimer's F_Z equals M g (below the node, < 0).
-    mass : float
-        Total mass M [kg] (rounded-edge volume when r_e > 0).
-    gravity : float
-        g [m/s^2].
-    inertia_const, inertia_sin2 : float
-        ``I(theta) = inertia_const + inertia_sin2 sin^2(phi)`` [kg m^2], with the hinge arm d + g/2.
-    pressure_amplitude_pa : float
-        p0 [Pa].
-    settings : dict
-        Geometry, mesh, medium and build settings.
-    build_accuracy : dict
-        Build diagnostics (timings, degrees of freedom, residuals).
     nodes : dict
         The raw per-node data: ``theta`` (all Chebyshev nodes) and ``fz``/``qt`` values (n, 3) of (A, B, C).
+    two_k, wavenumber, z_eq, mass, gravity, inertia_const, inertia_sin2, pressure_amplitude_pa, settings, build_accuracy
+        The fields every surrogate has (:class:`acousim.force_model.ChebyshevSurrogate`): here the mass is the
+        rounded-edge volume's when r_e > 0, the hinge inertia's arm d + g/2, ``settings`` the geometry, mesh, medium
+        and build settings and ``build_accuracy`` the build's diagnostics (timings, degrees of freedom, residuals).
     """
 
     coefficients: dict
     theta_max: float
-    two_k: float
-    wavenumber: float
-    z_eq: float
-    mass: float
-    gravity: float
-    inertia_const: float
-    inertia_sin2: float
-    pressure_amplitude_pa: float
-    settings: dict = field(default_factory=dict, compare=False, hash=False)
-    build_accuracy: dict = field(default_factory=dict, compare=False, hash=False)
     nodes: dict = field(default_factory=dict, compare=False, hash=False)
 
     @property

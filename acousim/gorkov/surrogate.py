@@ -35,7 +35,7 @@ then keeps only the even Chebyshev terms so that theta = 0 is an exactly invaria
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -113,40 +113,15 @@ class ForceSurrogate(ChebyshevSurrogate):
     alpha, beta, gamma : tuple of float
         Chebyshev coefficients (argument theta on [-1, 1]) of the coefficient functions of
         ``U_ac = alpha + beta cos(2kZ) + gamma sin(2kZ)`` [J].
-    two_k : float
-        2k [1/m].
-    wavenumber : float
-        k [1/m] (used by ``pair_scattering``).
-    z_eq : float
-        Equilibrium height Z_eq [m] of the theta = 0 dimer (below the node, < 0).
-    mass : float
-        Total mass M [kg].
-    gravity : float
-        g [m/s^2].
-    inertia_const, inertia_sin2 : float
-        ``I(theta) = inertia_const + inertia_sin2 * sin^2(phi)`` [kg m^2], phi = pi theta / 4.
-    pressure_amplitude_pa : float
-        p0 [Pa] the potential belongs to.
-    settings : dict
-        Model settings (side, material, mesh size, ...) for bookkeeping.
-    build_accuracy : dict
-        Errors at build time (see module docstring).
     box : SurrogateBox
+    two_k, wavenumber, z_eq, mass, gravity, inertia_const, inertia_sin2, pressure_amplitude_pa, settings, build_accuracy
+        The fields every surrogate has (:class:`acousim.force_model.ChebyshevSurrogate`); ``settings`` are the mesh
+        model's (side, material, mesh size, ...), ``build_accuracy`` the errors at build time (module docstring).
     """
 
     alpha: tuple[float, ...]
     beta: tuple[float, ...]
     gamma: tuple[float, ...]
-    two_k: float
-    wavenumber: float
-    z_eq: float
-    mass: float
-    gravity: float
-    inertia_const: float
-    inertia_sin2: float
-    pressure_amplitude_pa: float
-    settings: dict = field(default_factory=dict, compare=False, hash=False)
-    build_accuracy: dict = field(default_factory=dict, compare=False, hash=False)
     box: SurrogateBox = DEFAULT_BOX
 
     # ------------------------------------------------------------------ coefficient arrays
