@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from cubedimer.meta import DEFAULT_SIDE_LENGTH_M
+
 from .medium import ParticleMaterial
 
 __all__ = ["CubeDimer", "bend_angle"]
@@ -44,7 +46,7 @@ class CubeDimer:
         Cube material (density enters the masses).
     """
 
-    side_a: float = 500e-6
+    side_a: float = DEFAULT_SIDE_LENGTH_M
     side_b: float | None = None
     material: ParticleMaterial = field(default_factory=ParticleMaterial)
 

@@ -8,7 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import (DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_BULK_MODULUS_PA, DEFAULT_FREQUENCY_HZ,
+                            DEFAULT_PARTICLE_DENSITY, DEFAULT_SOUND_SPEED_M_S)
 
 __all__ = ["Medium", "ParticleMaterial", "contrast_factors", "GRAVITY"]
 
@@ -31,8 +32,8 @@ class Medium:
     """
 
     frequency_hz: float = DEFAULT_FREQUENCY_HZ
-    sound_speed_m_s: float = 343.0
-    density_kg_m3: float = 1.204
+    sound_speed_m_s: float = DEFAULT_SOUND_SPEED_M_S
+    density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3
 
     def __post_init__(self) -> None:
         for name in ("frequency_hz", "sound_speed_m_s", "density_kg_m3"):
@@ -68,7 +69,7 @@ class ParticleMaterial:
     """
 
     density_kg_m3: float = DEFAULT_PARTICLE_DENSITY
-    bulk_modulus_pa: float = 24.9e9
+    bulk_modulus_pa: float = DEFAULT_BULK_MODULUS_PA
 
     def __post_init__(self) -> None:
         for name in ("density_kg_m3", "bulk_modulus_pa"):

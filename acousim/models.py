@@ -20,7 +20,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Callable, ClassVar, Mapping
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import (DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_BULK_MODULUS_PA, DEFAULT_FREQUENCY_HZ,
+                            DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_SIDE_LENGTH_M,
+                            DEFAULT_SOUND_SPEED_M_S)
 
 from .force_model import ForceModel
 from .medium import GRAVITY, Medium, ParticleMaterial
@@ -100,12 +102,12 @@ class ExperimentConditions:
     :meth:`option`).  A model refuses conditions it does not take (:attr:`ForceModelType.options`).
     """
 
-    side_length_m: float = 500e-6
+    side_length_m: float = DEFAULT_SIDE_LENGTH_M
     particle_density_kg_m3: float = DEFAULT_PARTICLE_DENSITY
-    bulk_modulus_pa: float = 24.9e9
+    bulk_modulus_pa: float = DEFAULT_BULK_MODULUS_PA
     frequency_hz: float = DEFAULT_FREQUENCY_HZ
-    sound_speed_m_s: float = 343.0
-    air_density_kg_m3: float = 1.204
+    sound_speed_m_s: float = DEFAULT_SOUND_SPEED_M_S
+    air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3
     pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA
     gravity_m_s2: float = GRAVITY
     gap_m: float | None = None

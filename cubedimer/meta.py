@@ -184,8 +184,14 @@ DEFAULT_TRACKING_NOISE: dict[str, float] = {"noise_y_m": 1e-6, "noise_theta": 0.
 __all__ += ["DEFAULT_TRACKING_NOISE"]
 
 #: The defaults that code outside meta.json reads (the drive's frequency [Hz], the cubes' density [kg/m^3] and the
-#: pressure amplitude of the standing wave [Pa]).
+#: pressure amplitude of the standing wave [Pa]; the cube side [m], the cubes' bulk modulus [Pa], the speed of sound
+#: [m/s] and the air's density [kg/m^3]): the library reads every one of them here, never a number of its own.
 DEFAULT_FREQUENCY_HZ: float = META_DEFAULTS["frequency_hz"]
 DEFAULT_PARTICLE_DENSITY: float = META_DEFAULTS["particle_density_kg_m3"]
 DEFAULT_PRESSURE_AMPLITUDE_PA: float = META_DEFAULTS["pressure_amplitude_pa"]
-__all__ += ["DEFAULT_FREQUENCY_HZ", "DEFAULT_PARTICLE_DENSITY", "DEFAULT_PRESSURE_AMPLITUDE_PA"]
+DEFAULT_SIDE_LENGTH_M: float = META_DEFAULTS["side_length_m"]
+DEFAULT_BULK_MODULUS_PA: float = META_DEFAULTS["bulk_modulus_pa"]
+DEFAULT_SOUND_SPEED_M_S: float = META_DEFAULTS["sound_speed_m_s"]
+DEFAULT_AIR_DENSITY_KG_M3: float = META_DEFAULTS["air_density_kg_m3"]
+__all__ += ["DEFAULT_FREQUENCY_HZ", "DEFAULT_PARTICLE_DENSITY", "DEFAULT_PRESSURE_AMPLITUDE_PA", "DEFAULT_SIDE_LENGTH_M",
+            "DEFAULT_BULK_MODULUS_PA", "DEFAULT_SOUND_SPEED_M_S", "DEFAULT_AIR_DENSITY_KG_M3"]

@@ -45,6 +45,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from cubedimer.meta import DEFAULT_AIR_DENSITY_KG_M3
 from cubedimer.rk4 import rk4
 
 from ..dynamics.air_damping import (AIR_DYNAMIC_VISCOSITY_PA_S, dimer_drag_radii, oscillating_rotation_drag,
@@ -111,7 +112,7 @@ class AntisymmetricInertia:
         return float(self.arm * np.sin(np.pi * float(theta) / 4))
 
 
-def rocking_damping_rate(inertia: AntisymmetricInertia, theta: float, frequency_hz: float, air_density: float = 1.204,
+def rocking_damping_rate(inertia: AntisymmetricInertia, theta: float, frequency_hz: float, air_density: float = DEFAULT_AIR_DENSITY_KG_M3,
                          viscosity: float = AIR_DYNAMIC_VISCOSITY_PA_S) -> float:
     """The air's damping rate gamma_psi [1/s] of rocking at bend ``theta`` and frequency ``frequency_hz`` [Hz].
 

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 from cubedimer.atomic import json_text, write_json
 from cubedimer.cli import UserInputError, prepare_output_file
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import (DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA,
+                            DEFAULT_SOUND_SPEED_M_S)
 
 __all__ = ["add_parser", "run_force", "force_on_mesh"]
 
@@ -31,8 +32,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--z", required=True, type=float, help="height [m] of the mesh origin above the pressure node")
     p.add_argument("--pressure", type=float, default=DEFAULT_PRESSURE_AMPLITUDE_PA, help="pressure amplitude p0 [Pa]")
     p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, help="drive frequency [Hz]")
-    p.add_argument("--sound-speed", type=float, default=343.0, help="speed of sound c0 [m/s]")
-    p.add_argument("--air-density", type=float, default=1.204, help="air density rho0 [kg/m^3]")
+    p.add_argument("--sound-speed", type=float, default=DEFAULT_SOUND_SPEED_M_S, help="speed of sound c0 [m/s]")
+    p.add_argument("--air-density", type=float, default=DEFAULT_AIR_DENSITY_KG_M3, help="air density rho0 [kg/m^3]")
     p.add_argument("--out", default=None, help="output JSON file (default: stdout)")
     p.set_defaults(func=run_force)
 

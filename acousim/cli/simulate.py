@@ -33,7 +33,7 @@ import sys
 
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, executor_config,
                            prepare_output_dir)
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_TRACKING_NOISE
 
 __all__ = ["add_parser", "run", "MAX_RUNS", "MAX_FRAMES_PER_RUN", "MAX_FRAMES", "MAX_VIDEO_FRAMES"]
 
@@ -141,10 +141,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "its effects. paper-like's tuned linear damping is its total damping: the air's computed drag is off there")
     p.add_argument("--duration", type=float, default=4.0, metavar="SEC", help="recorded time per run [s] (default 4)")
     p.add_argument("--fps", type=float, default=2000.0, help="camera frame rate [1/s] (default 2000)")
-    p.add_argument("--noise-y", type=float, default=1e-6, metavar="METRES",
-                   help="Gaussian tracking noise on y, standard deviation [m] (default 1e-6)")
-    p.add_argument("--noise-theta", type=float, default=0.005, metavar="VALUE",
-                   help="Gaussian tracking noise on theta, standard deviation (default 0.005)")
+    p.add_argument("--noise-y", type=float, default=DEFAULT_TRACKING_NOISE["noise_y_m"], metavar="METRES",
+                   help="Gaussian tracking noise on y, standard deviation [m] (default %(default)g)")
+    p.add_argument("--noise-theta", type=float, default=DEFAULT_TRACKING_NOISE["noise_theta"], metavar="VALUE",
+                   help="Gaussian tracking noise on theta, standard deviation (default %(default)g)")
     p.add_argument("--missing-frames", type=int, default=3, metavar="K", help="missing frames per run (default 3)")
     p.add_argument("--t-off", type=_range, default=None, metavar="MIN:MAX",
                    help="field-off time range [s] (default 0.002:0.004)")

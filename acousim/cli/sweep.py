@@ -7,7 +7,8 @@ import sys
 import numpy as np
 
 from cubedimer.cli import UserInputError, check_limit, prepare_output_dir, prepare_output_file
-from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA, check_meta_value
+from cubedimer.meta import (DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_SIDE_LENGTH_M,
+                            check_meta_value)
 
 from ..models import force_model_type
 from .models import add_model_arguments, conditions_from_args, static_model_from_args
@@ -70,7 +71,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--theta", default=DEFAULT_THETA, metavar="START:STOP:N", help="bend grid, inside (-1, 1)")
     p.add_argument("--y", default=DEFAULT_Y, metavar="START:STOP:N", help="height grid [m] relative to Z_eq")
     add_model_arguments(p)
-    p.add_argument("--side", type=float, default=500e-6, help="cube side [m]")
+    p.add_argument("--side", type=float, default=DEFAULT_SIDE_LENGTH_M, help="cube side [m]")
     p.add_argument("--side-b", type=float, default=None, help="side of the second cube [m] (default: equal)")
     p.add_argument("--pressure", type=float, default=DEFAULT_PRESSURE_AMPLITUDE_PA, help="pressure amplitude p0 [Pa]")
     p.add_argument("--frequency", type=float, default=DEFAULT_FREQUENCY_HZ, help="drive frequency [Hz]")

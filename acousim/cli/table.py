@@ -5,7 +5,7 @@ import argparse
 import logging
 
 from cubedimer.cli import positive_float, positive_int, prepare_output_file
-from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_SIDE_LENGTH_M
 
 from ..fullwave.surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, FORCE_METHODS, build_fullwave_surrogate
 
@@ -37,7 +37,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--n-half", type=positive_int, default=DEFAULT_BUILD["n_half"], help="solves (theta > 0)")
     p.add_argument("--theta-max", type=positive_float, default=DEFAULT_BUILD["theta_max"],
                    help="interpolation half-width")
-    p.add_argument("--side", type=positive_float, default=500e-6, help="cube side [m]")
+    p.add_argument("--side", type=positive_float, default=DEFAULT_SIDE_LENGTH_M, help="cube side [m]")
     p.add_argument("--gap", type=positive_float, default=None, help="hinge gap [m] (default 0.01 side)")
     p.add_argument("--edge-radius", type=float, default=0.0, help="edge radius [m]")
     p.add_argument("--pressure", type=positive_float, default=DEFAULT_PRESSURE_AMPLITUDE_PA,

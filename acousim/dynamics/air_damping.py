@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY
+from cubedimer.meta import DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_PARTICLE_DENSITY
 
 __all__ = [
     "AIR_DYNAMIC_VISCOSITY_PA_S",
@@ -304,7 +304,7 @@ class AirDampingRates:
 
 
 def air_damping_rates(side: float, gap: float, frequency_y: float, frequency_theta: float,
-                      particle_density: float = DEFAULT_PARTICLE_DENSITY, air_density: float = 1.204,
+                      particle_density: float = DEFAULT_PARTICLE_DENSITY, air_density: float = DEFAULT_AIR_DENSITY_KG_M3,
                       viscosity: float = AIR_DYNAMIC_VISCOSITY_PA_S) -> AirDampingRates:
     """The air's damping of a dimer, per mode, from its geometry and the air (no free parameter).
 

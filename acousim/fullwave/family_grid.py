@@ -15,7 +15,8 @@ from pathlib import Path
 from typing import Sequence
 
 import numpy as np
-from cubedimer.meta import DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import (DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_PARTICLE_DENSITY, DEFAULT_PRESSURE_AMPLITUDE_PA,
+                            DEFAULT_SIDE_LENGTH_M, DEFAULT_SOUND_SPEED_M_S)
 
 from ..medium import Medium
 from .geometry import DimerMeshSpec
@@ -55,7 +56,8 @@ FAMILY_DIR = Path(__file__).resolve().parent.parent / "data" / "fullwave_family"
 #: Theta series of every node: n_half solves on |theta| <= theta_max (2 n_half Chebyshev terms).
 FAMILY_BUILD = {"n_half": 6, "theta_max": 0.9, "flux_disc_points": FLUX_DISC_POINTS}
 #: The physical settings the nodes are built at (any others follow by the exact scaling).
-REFERENCE = {"side_m": 500e-6, "sound_speed_m_s": 343.0, "air_density_kg_m3": 1.204,
+REFERENCE = {"side_m": DEFAULT_SIDE_LENGTH_M, "sound_speed_m_s": DEFAULT_SOUND_SPEED_M_S,
+             "air_density_kg_m3": DEFAULT_AIR_DENSITY_KG_M3,
              "particle_density_kg_m3": DEFAULT_PARTICLE_DENSITY, "pressure_amplitude_pa": DEFAULT_PRESSURE_AMPLITUDE_PA}
 #: The command that builds tables (named in every out-of-range message).
 BUILD_HINT = "python -m acousim family build"

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
-from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA
+from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_SIDE_LENGTH_M
 
 from ..dimer import CubeDimer
 from ..field import StandingWave
@@ -299,7 +299,7 @@ def build_surrogate(model: GorkovDimer, box: SurrogateBox = DEFAULT_BOX, symmetr
 
 @lru_cache(maxsize=16)
 def cached_surrogate(
-    side: float = 500e-6,
+    side: float = DEFAULT_SIDE_LENGTH_M,
     pressure_amplitude_pa: float = DEFAULT_PRESSURE_AMPLITUDE_PA,
     mesh_size: float | None = None,
     quadrature_degree: int = 2,

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cubedimer.config_checks import check_in_range, check_positive, check_that, check_whole, named, raising
+from cubedimer.meta import DEFAULT_TRACKING_NOISE
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP
 from ..dynamics.resonator import DEFAULT_CAVITY_AREA, CavityMode
@@ -96,8 +97,8 @@ class Camera:
     """
 
     fps: float = 2000.0
-    noise_y: float = 1.0e-6
-    noise_theta: float = 0.005
+    noise_y: float = DEFAULT_TRACKING_NOISE["noise_y_m"]
+    noise_theta: float = DEFAULT_TRACKING_NOISE["noise_theta"]
     missing_frames: int = 3
 
     def __post_init__(self) -> None:
