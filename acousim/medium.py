@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from cubedimer.config_checks import check_positive
 from cubedimer.meta import (DEFAULT_AIR_DENSITY_KG_M3, DEFAULT_BULK_MODULUS_PA, DEFAULT_FREQUENCY_HZ,
                             DEFAULT_PARTICLE_DENSITY, DEFAULT_SOUND_SPEED_M_S)
 
@@ -37,8 +38,7 @@ class Medium:
 
     def __post_init__(self) -> None:
         for name in ("frequency_hz", "sound_speed_m_s", "density_kg_m3"):
-            if not np.isfinite(getattr(self, name)) or getattr(self, name) <= 0:
-                raise ValueError(f"Medium.{name} must be positive and finite, got {getattr(self, name)!r}")
+            check_positive(self, name)
 
     @property
     def wavelength(self) -> float:
@@ -73,10 +73,7 @@ class ParticleMaterial:
 
     def __post_init__(self) -> None:
         for name in ("density_kg_m3", "bulk_modulus_pa"):
-            if not np.isfinite(getattr(self, name)) or getattr(self, name) <= 0:
-                raise ValueError(
-                    f"ParticleMaterial.{name} must be positive and finite, got {getattr(self, name)!r}"
-                )
+            check_positive(self, name)
 
 
 def contrast_factors(medium: Medium, material: ParticleMaterial) -> tuple[float, float]:

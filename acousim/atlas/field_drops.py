@@ -63,14 +63,13 @@ class AtlasError(ValueError):
 class AtlasDimer:
     """A dimer of the atlas: cube side [m] and hinge gap over side [-] (inside the full-wave family)."""
 
-    side: float
-    gap_ratio: float
+    side: float = field(metadata=named("--dimers: the side"))
+    gap_ratio: float = field(metadata=named("--dimers: the gap ratio"))
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.side) and 50e-6 <= self.side <= 2e-3):
-            raise AtlasError(f"--dimers: side {self.side!r} m must lie in [50e-6, 2e-3]")
-        if not (math.isfinite(self.gap_ratio) and 0 < self.gap_ratio <= 0.5):
-            raise AtlasError(f"--dimers: gap ratio {self.gap_ratio!r} must lie in (0, 0.5]")
+        with raising(AtlasError):
+            check_in_range(self, "side", 50e-6, 2e-3, unit="m")
+            check_in_range(self, "gap_ratio", 0.0, 0.5, low_open=True)
 
     @property
     def label(self) -> str:

@@ -14,7 +14,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from cubedimer.config_checks import check_in_range, check_positive, check_that, check_whole, named, raising
+from cubedimer.config_checks import (check_in_range, check_non_negative, check_positive, check_that, check_whole, named,
+                                    raising)
 from cubedimer.meta import DEFAULT_TRACKING_NOISE
 
 from ..dynamics.integrator import DEFAULT_MAX_STEP
@@ -102,12 +103,11 @@ class Camera:
     missing_frames: int = 3
 
     def __post_init__(self) -> None:
-        for name in ("fps", "noise_y", "noise_theta"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not np.isfinite(v) or v < 0 or (name == "fps" and v <= 0):
-                raise TwinError(f"camera {name} must be {'positive' if name == 'fps' else '>= 0'} and finite, got {v!r}")
-        if int(self.missing_frames) != self.missing_frames or self.missing_frames < 0:
-            raise TwinError(f"missing_frames must be a non-negative integer, got {self.missing_frames!r}")
+        with raising(TwinError):
+            check_positive(self, "fps")
+            check_non_negative(self, "noise_y")
+            check_non_negative(self, "noise_theta")
+            check_whole(self, "missing_frames", minimum=0)
 
     def record(self, state: NDArray[np.float64], rng: np.random.Generator) -> tuple[NDArray, NDArray, NDArray]:
         """Observed (y [m], theta [-]) of exact states (n, 4), and the indices of the missing frames.
