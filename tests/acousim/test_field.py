@@ -39,3 +39,13 @@ def test_energy_density_scales_with_pressure_squared(default_wave):
 def test_bad_pressure_rejected(bad):
     with pytest.raises(ValueError):
         StandingWave(bad)
+
+
+@pytest.mark.parametrize("make, field", [
+    (Medium, "frequency_hz"), (Medium, "sound_speed_m_s"), (Medium, "density_kg_m3"),
+    (ParticleMaterial, "density_kg_m3"), (ParticleMaterial, "bulk_modulus_pa"),
+])
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf")])
+def test_the_medium_and_the_material_refuse_a_non_positive_value(make, field, value):
+    with pytest.raises(ValueError, match=rf"^{make.__name__}\.{field} must be a positive finite number, got "):
+        make(**{field: value})

@@ -63,3 +63,13 @@ def test_a_bad_value_names_the_option(config, field, value, fragment):
         config(**{**GOOD[config], field: value})
     message = str(info.value)
     assert isinstance(info.value, ValueError) and fragment in message and "\n" not in message
+
+
+@pytest.mark.parametrize("side, gap_ratio, fragment", [
+    (100e-6 / 4, 0.03, "--dimers: the side must lie in [5e-05, 0.002] m"),
+    (500e-6, 0.0, "--dimers: the gap ratio must lie in (0, 0.5]"), (500e-6, 0.9, "--dimers: the gap ratio"),
+])
+def test_a_bad_dimer_names_the_option(side, gap_ratio, fragment):
+    with pytest.raises(AtlasError, match="^--dimers: ") as info:
+        AtlasDimer(side, gap_ratio)
+    assert fragment in str(info.value)

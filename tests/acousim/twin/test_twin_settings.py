@@ -7,7 +7,7 @@ import math
 import pytest
 
 from acousim.models import ExperimentConditions
-from acousim.twin import TwinConfig, TwinError
+from acousim.twin import Camera, TwinConfig, TwinError
 
 
 @pytest.mark.parametrize("kwargs, fragment", [
@@ -33,3 +33,15 @@ def test_a_bad_setting_is_a_one_line_error_naming_it(kwargs, fragment):
 
 def test_the_defaults_are_accepted():
     assert TwinConfig().runs == 10 and TwinConfig(cavity_detuning=1.0, transducer_q=250.0).cavity_mode is not None
+
+
+@pytest.mark.parametrize("field, value, fragment", [
+    ("fps", 0.0, "Camera.fps must be a positive finite number"),
+    ("noise_y", -1e-6, "Camera.noise_y must be a finite number >= 0"),
+    ("noise_theta", math.nan, "Camera.noise_theta must be a finite number >= 0"),
+    ("missing_frames", -1, "Camera.missing_frames must be a whole number >= 0"),
+])
+def test_a_bad_camera_is_a_one_line_error_naming_it(field, value, fragment):
+    with pytest.raises(TwinError) as info:
+        Camera(**{field: value})
+    assert fragment in str(info.value) and "\n" not in str(info.value)
