@@ -24,9 +24,11 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 # grid helpers need them); test_fullwave_dimer.py compares the OpenCL backend with it on the same mesh.
 os.environ.setdefault("CUBEDIMER_BEM_DEVICE", "numba")
 
-#: Test modules that solve boundary-element problems.  bempp-cl compiles its assembly kernels at first use in
-#: every process (about 100 s on one core; they cannot be cached on disk), so ``make test`` (``--dist loadfile``)
-#: sends these modules to one pytest-xdist worker as one unit and the compilation happens once per session.
+#: Test modules that solve boundary-element problems.  bempp-cl compiles its grid and assembly kernels at first use
+#: in every process (about 37 s of CPU with one numba thread, 57 s with parallel kernels; they cannot be cached on
+#: disk), so ``make test`` (``--dist loadfile``) sends these modules to one pytest-xdist worker as one unit and the
+#: compilation happens once per session; solutions several modules check are session fixtures
+#: (tests/acousim/fullwave/conftest.py).
 BOUNDARY_ELEMENT_MODULES = frozenset({
     "tests/acousim/fullwave/test_fullwave_sphere.py", "tests/acousim/fullwave/test_fullwave_dimer.py",
     "tests/acousim/fullwave/test_fullwave_flux.py", "tests/acousim/cli/test_fullwave_cli.py",

@@ -357,7 +357,8 @@ def assembly_device() -> str:
 
 
 def import_bempp():
-    """``bempp_cl.api``, imported with its start-up notice (printed to stdout) sent to the log instead."""
+    """``bempp_cl.api``, imported with its start-up notice (printed to stdout) sent to the log instead, and with its
+    numba kernels compiled serially when numba has a single thread (:func:`serial_kernels_when_single_threaded`)."""
     import contextlib
     import io
 
@@ -366,7 +367,32 @@ def import_bempp():
         import bempp_cl.api as bempp
     if buf.getvalue().strip():
         log.debug("bempp-cl: %s", buf.getvalue().strip())
+    serial_kernels_when_single_threaded()
     return bempp
+
+
+@functools.lru_cache(maxsize=1)
+def serial_kernels_when_single_threaded() -> int:
+    """Compile bempp-cl's numba-parallel assembly kernels as plain loops when numba has one thread
+    (``NUMBA_NUM_THREADS=1``, as ``make test`` and side-by-side solves run); returns how many were switched.
+
+    With one thread the parallel loops run serially anyway, so the result is the same matrix (a test compares the
+    two bit for bit), but their parallel compilation costs about 20 s of the 57 s that bempp-cl's kernels take to
+    compile at the first assembly of every process (one core).  With several threads nothing changes.  Kernels
+    already compiled are left as they are."""
+    import numba
+
+    if numba.config.NUMBA_NUM_THREADS != 1:
+        return 0
+    from bempp_cl.core import numba_kernels
+
+    switched = 0
+    for value in vars(numba_kernels).values():
+        options = getattr(value, "targetoptions", None)
+        if isinstance(options, dict) and options.get("parallel") and not getattr(value, "overloads", True):
+            options["parallel"] = False
+            switched += 1
+    return switched
 
 
 def mirror_maps(vertices: NDArray, faces: NDArray, rtol: float = 1e-9) -> dict[str, NDArray[np.int64]]:

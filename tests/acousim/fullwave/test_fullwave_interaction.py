@@ -53,33 +53,23 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-trimesh = pytest.importorskip("trimesh")
+pytest.importorskip("trimesh")
 pytest.importorskip("bempp_cl")
 
-from acousim.fullwave.flux import ExteriorField, flux_height_structure, mirror_half_surface  # noqa: E402
-from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
+from acousim.fullwave.solver import solve_scattering  # noqa: E402
 from acousim.medium import Medium  # noqa: E402
 
-# two mirror-reduced solves of 1,284 DOFs, one unreduced solve of 324 and one flux evaluation: 34 s CPU after
-# bempp's compilation (57 s wall at load ~8 on 2 cores, NUMBA_NUM_THREADS=1)
+from .conftest import P0, SPHERE_PAIR_KA, SPHERE_PAIR_KD, sphere_pair  # noqa: E402
+
+# the mirror-reduced solve of 1,284 DOFs and its flux through the half sphere (shared with test_fullwave_flux.py,
+# conftest.py), and one unreduced solve of 324 DOFs: about 12 s CPU after bempp's compilation
 pytestmark = pytest.mark.slow
 
 MEDIUM = Medium()
-P0 = 3000.0
-#: (ka, kd) pairs: a = 60 um, d = 4a at the default 45.65 kHz, the closer of the two pairs measured (d = 5a:
-#: 0.9941, below); one solve of 1,284 DOFs keeps the boundary-element test unit short.
-CASES = ((0.05, 0.2),)
-#: 642 vertices per sphere; 162 vertices give BEM / formula = 0.962 and 0.951 (fails the 3 % target).
-SUBDIVISIONS = 3
-
-
-def sphere_pair(radius: float, distance: float, subdivisions: int) -> list[Body]:
-    """Icospheres at (-d/2, 0, 0) and (+d/2, 0, 0), exact mirror images of each other in X = 0."""
-    s = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-    cb = np.array([0.5 * distance, 0.0, 0.0])
-    vb = s.vertices + cb
-    mirror = np.array([-1.0, 1.0, 1.0])
-    return [Body(vb * mirror, s.faces[:, ::-1].copy(), cb * mirror), Body(vb, s.faces.copy(), cb)]
+#: (ka, kd): a = 60 um, d = 4a at the default 45.65 kHz (conftest.py's solved sphere pair, 642 vertices per sphere;
+#: 162 vertices give BEM / formula = 0.962 and 0.951, which fail the 3 % target), the closer of the two pairs
+#: measured (d = 5a: 0.9941, below).
+CASES = ((SPHERE_PAIR_KA, SPHERE_PAIR_KD),)
 
 
 def interaction_force(ka: float, kd: float) -> float:
@@ -93,9 +83,8 @@ def interaction_force(ka: float, kd: float) -> float:
 
 
 @pytest.fixture(scope="module")
-def pair_solutions():
-    k = MEDIUM.wavenumber
-    return {(ka, kd): solve_scattering(sphere_pair(ka / k, kd / k, SUBDIVISIONS), MEDIUM) for ka, kd in CASES}
+def pair_solutions(solved_sphere_pair):
+    return {CASES[0]: solved_sphere_pair.solution}
 
 
 def test_formula_limits():
@@ -139,27 +128,19 @@ def test_primary_force_is_there_and_vanishes_at_the_node(pair_solutions):
         assert np.max(np.abs(hs.force(0.0)[:, 2])) < 1e-6 * ref
 
 
-def test_momentum_flux_agrees_with_surface_tractions(pair_solutions):
-    """At kd = 0.25 (the interaction 1/17 of the primary force's amplitude) the interaction force on B from the
+def test_momentum_flux_agrees_with_surface_tractions(solved_sphere_pair):
+    """At kd = 0.2 (the interaction 1/7 of the primary force's amplitude) the interaction force on B from the
     momentum flux through the half sphere X > 0 (radius d/2 + 2a) closed by the mirror disc X = 0 equals the
-    surface-traction force within 1 % (measured -0.27 % on these meshes, -0.07 % on 2,562-vertex and -1.0 % on
-    162-vertex ones; -0.28 % at kd = 0.2): the small difference is integrated consistently by both methods."""
-    med = MEDIUM
-    k = med.wavenumber
-    ka, kd = CASES[-1]
-    sol = pair_solutions[ka, kd]
-    a, d = ka / k, kd / k
-    surface = mirror_half_surface(0.5 * d + 2 * a, hinge_height=0.0, half_length=a, h0=0.3 * (0.5 * d - a),
-                                  n_polar=20)
-    force, _ = flux_height_structure(ExteriorField(sol), surface, sol.bodies[1].centre, med.density_kg_m3,
-                                     med.sound_speed_m_s, 2 * np.pi * med.frequency_hz, P0)
+    surface-traction force within 1 % (measured -0.28 % on these meshes; -0.27 % at kd = 0.25, -0.07 % on 2,562-vertex
+    and -1.0 % on 162-vertex ones): the small difference is integrated consistently by both methods."""
+    force = solved_sphere_pair.half_force
     flux_x = force[0, 0] + force[1, 0]  # A + B cos(0): at the node
-    surf_x = sol.height_structure(P0).force(0.0)[1, 0]
+    surf_x = solved_sphere_pair.solution.height_structure(P0).force(0.0)[1, 0]
     assert abs(flux_x / surf_x - 1) < 0.01, (flux_x, surf_x)
 
 
 def test_unreduced_solve_is_mirror_symmetric():
-    """Without the mirror reduction (coarse 162-vertex spheres, ka = 0.05, kd = 0.25) F_A,X = -F_B,X to 1e-6 of
+    """Without the mirror reduction (coarse 162-vertex spheres, ka = 0.05, kd = 0.2) F_A,X = -F_B,X to 1e-6 of
     the interaction force (measured 1e-10), and the Y and Z components at the node vanish to 1e-6 of it (1e-8)."""
     k = MEDIUM.wavenumber
     ka, kd = CASES[-1]
