@@ -86,7 +86,13 @@ def trajectory_test(problem: DiagnosisProblem, ident: Identification, elim, iden
         return ident, identified, None
     log("velocity coupling: not chosen by the held-out rounds; judged on the whole trajectories (output error)")
     oe = velocity_coupling_output_error(problem, fit_gap_model(problem, identified), conditions, config.alpha)
-    if oe is None or not oe.significant:
+    if oe is None:
+        return ident, identified, oe
+    if not oe.significant:  # its record beside the held-out test it did not overturn
+        last = ident.rounds[-1]
+        if "velocity_coupling" in last.candidates:
+            tests = {**last.candidates, "velocity_coupling": replace(held_out, output_error=oe.to_dict())}
+            ident = replace(ident, rounds=ident.rounds[:-1] + [replace(last, candidates=tests)])
         return ident, identified, oe
     log("velocity coupling named by its output-error test (Delta chi2 = %.1f noise units, p = %.2g, sign-flip p = "
         "%.2g)", oe.statistic, oe.p_value, oe.sign_flip_p)

@@ -24,10 +24,14 @@ damping; the one with the smaller misfit is the null model.  The velocity coupli
 whole model refitted (Gauss-Newton, forward-difference sensitivities, all runs' simulations in one compiled batch).
 
 The candidate is judged in noise units: the drop of the misfit, ``Delta chi^2 = chi^2_null - chi^2_coupled`` (a
-likelihood ratio for white Gaussian noise), against the chi-square law with 2 degrees of freedom, and the drop must
-be shared by the runs: the sign-flip test of the per-run drops (the same test as the held-out identification) must
-give p < alpha too, so that one run a model cannot follow does not carry it.  The misfit per frame of the null model
-is reported beside it (1 when the model explains the data to its noise).
+likelihood ratio for white Gaussian noise; divided by the coupled model's misfit per frame where that exceeds 1, so
+that a model error the noise does not hold widens the unit alike), against the chi-square law with 2 degrees of
+freedom at ``alpha``.  The sign-flip test of the per-run drops is reported beside it but does not decide: the drops
+are in-sample, never negative in sum, so their signs are not symmetric under the null, and with 10 runs a weak
+coupling that half the runs barely excite (little hinge motion) failed it at chi-square p = 2e-4 and 2e-11 on the
+tuning sets.  The misfit per frame of the null model is reported too (1 when the model explains the data to its
+noise).  Where the test names the coupling, its c5 and c6 are the trajectories' estimates, with the Gauss-Newton
+standard errors (:meth:`OutputErrorTest.intervals`).
 """
 from __future__ import annotations
 
@@ -223,8 +227,17 @@ class OutputErrorTest:
         """The output-error estimates of c5 [1/m] and c6 [1/m^2]."""
         return {k: self.coupled.params[k] for k in ("c5", "c6")}
 
+    def intervals(self, runs: int) -> dict:
+        """c5 and c6 with their standard errors (the Gauss-Newton covariance, widened by the misfit per frame where it
+        exceeds 1) and 95 % intervals (Student t with ``runs - 1`` degrees of freedom, as the jackknife's):
+        :class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval` by name."""
+        from ..summarise.uncertainty import interval_from_error
+
+        widen = float(np.sqrt(max(self.coupled.chi2_per_frame, 1.0)))
+        return {k: interval_from_error(v, widen * self.coupled.std_errors[k], runs - 1) for k, v in self.params.items()}
+
     def to_dict(self) -> dict:
-        """The diagnosis.json form (``velocity_coupling_output_error``)."""
+        """The diagnosis.json form (``identification_rounds[i].candidates["velocity_coupling"].output_error``)."""
         return {"damping_law": self.null.damping_law, "statistic": self.statistic, "p_value": self.p_value,
                 "sign_flip_p": self.sign_flip_p, "alpha": self.alpha, "significant": self.significant,
                 "params": self.params, "std_errors": {k: self.coupled.std_errors[k] for k in ("c5", "c6")},
@@ -280,7 +293,7 @@ def velocity_coupling_output_error(problem, fit, conditions, alpha: float = 0.01
     stat = float(null.chi2 - coupled.chi2) / max(coupled.chi2_per_frame, 1.0)
     p = float(chi2_law.sf(max(stat, 0.0), 2))
     flip = sign_flip_pvalue(np.subtract(null.per_run_chi2, coupled.per_run_chi2))
-    significant = bool(np.isfinite(stat) and p < alpha and flip < alpha)
+    significant = bool(np.isfinite(stat) and p < alpha)
     logger.debug("velocity coupling, output error (%s): Delta chi2 = %.1f (p = %.3g), sign-flip p = %.3g, c5 = %.4g, "
                  "c6 = %.4g", law, stat, p, flip, coupled.params["c5"], coupled.params["c6"])
     return OutputErrorTest(null, coupled, other.chi2, stat, p, flip, alpha, significant)
