@@ -171,8 +171,11 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
     scale = data.noise_sd[:, None, :]
     steps = np.array([_step(nm, v) for nm, v in zip(names, p)])
     size = k + 1 + 4 * R
-    chi2, per_run, cov, used = np.inf, np.full(R, np.inf), None, 0
-    for it in range(iterations + 1):
+    frames = int(np.isfinite(target).sum())
+
+    def evaluate(p, offset, x0):
+        """Misfit (each frame's squared residual capped at OUTLIER_NOISE_UNITS^2, so that a trial that loses frames
+        is not rewarded for it), per run, and the normal equations at (p, offset, x0)."""
         trials = [x0] + [x0 + STATE_STEPS[j] * np.eye(4)[j] for j in range(4)]
         sims = [_simulate(surrogate, p[0], _effects(law, shape, others, names, p), np.concatenate(trials), data.dt, n)]
         for j in range(k):
@@ -181,9 +184,8 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         base = sims[0][:R]
         resid = (target - base - np.array([offset, 0.0])) / scale
         keep = np.isfinite(resid) & (np.abs(np.nan_to_num(resid, nan=np.inf)) < OUTLIER_NOISE_UNITS)
+        capped = np.where(keep, resid ** 2, np.where(np.isfinite(target), OUTLIER_NOISE_UNITS ** 2, 0.0))
         r = np.where(keep, resid, 0.0)
-        per_run = np.sum(r ** 2, axis=(1, 2))
-        chi2, used = float(per_run.sum()), int(keep.sum())
         jtj, jtr = np.zeros((size, size)), np.zeros(size)
         for i in range(R):
             cols = np.zeros((n, 2, size))
@@ -195,18 +197,35 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
             a = np.nan_to_num(cols[keep[i]])
             jtj += a.T @ a
             jtr += a.T @ r[i][keep[i]]
+        per_run = np.sum(capped, axis=(1, 2))
+        return float(per_run.sum()), per_run, jtj, jtr
+
+    def solve(jtj):
         try:
-            cov = np.linalg.inv(jtj + 1e-12 * np.diag(np.diag(jtj)))
+            return np.linalg.inv(jtj + 1e-12 * np.diag(np.diag(jtj)))
         except np.linalg.LinAlgError:
-            break
-        if it == iterations:
+            return None
+
+    chi2, per_run, jtj, jtr = evaluate(p, offset, x0)
+    cov = solve(jtj)
+    for _ in range(iterations):
+        if cov is None:
             break
         step = cov @ jtr
-        p, offset, x0 = p + step[:k], offset + step[k], x0 + step[k + 1:].reshape(R, 4)
+        for _halving in range(4):  # a step that raises the misfit is halved (the model is not linear in c5, c6)
+            trial = (p + step[:k], offset + step[k], x0 + step[k + 1:].reshape(R, 4))
+            got = evaluate(*trial)
+            if got[0] <= chi2:
+                break
+            step = 0.5 * step
+        else:
+            break
+        (p, offset, x0), (chi2, per_run, jtj, jtr) = trial, got
+        cov = solve(jtj)
     se = np.sqrt(np.abs(np.diag(cov))) if cov is not None else np.full(size, np.nan)
     params = {**dict(zip(names, map(float, p))), "y_offset": offset}
     errors = {**dict(zip(names, map(float, se[:k]))), "y_offset": float(se[k])}
-    return TrajectoryFit(law, params, errors, chi2, used, tuple(map(float, per_run)), x0)
+    return TrajectoryFit(law, params, errors, chi2, frames, tuple(map(float, per_run)), x0)
 
 
 @dataclass(frozen=True)
