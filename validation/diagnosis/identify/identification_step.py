@@ -72,7 +72,7 @@ def trajectory_test(problem: DiagnosisProblem, ident: Identification, elim, iden
     (:func:`~validation.diagnosis.identify.output_error.velocity_coupling_output_error`) beside linear damping, with
     ``config.trajectory_test`` and the experiment ``conditions``.  Where the greedy rounds did not choose it and the
     test is significant, it joins the model as a round of its own, whose test is the candidate's last held-out test
-    with the output-error test's p-value (the larger of its two) and record.  Where they chose it (and the backward
+    with the output-error test's p-value (its chi-square's) and record.  Where they chose it (and the backward
     check kept it), the test is made against the model without it, and when significant its record joins the
     coupling's round: its estimates and errors are then the trajectories' (the summary), whose c6 the windows got
     wrong in sign on 3 of 8 strong couplings of the tuning sets.
@@ -111,7 +111,7 @@ def trajectory_test(problem: DiagnosisProblem, ident: Identification, elim, iden
         return ident, identified, oe
     log("velocity coupling named by its output-error test (Delta chi2 = %.1f noise units, p = %.2g, sign-flip p = "
         "%.2g)", oe.statistic, oe.p_value, oe.sign_flip_p)
-    test = replace(held_out, p_value=max(oe.p_value, oe.sign_flip_p), significant=True, output_error=oe.to_dict())
+    test = replace(held_out, p_value=oe.p_value, significant=True, output_error=oe.to_dict())
     rounds = ident.rounds + [IdentificationRound(list(identified), ident.rounds[-1].base_held_out_gap,
                                                  {"velocity_coupling": test})]
     ident = replace(ident, identified=ident.identified + ["velocity_coupling"], rounds=rounds)
