@@ -126,11 +126,13 @@ def _simulate(surrogate, pressure: float, effects: dict, starts: NDArray, dt: fl
     stopped)."""
     from acousim import DimerDynamics, EffectSet
 
-    surrogate = surrogate.with_pressure(pressure)
     states = np.array(starts, float)
     states[:, 2] = np.clip(states[:, 2], -0.999, 0.999)
-    out, _, _ = DimerDynamics(surrogate, EffectSet.from_dict(effects)).integrate_batch(
-        states, dt * (frames - 1), dt, max_step=dt)
+    try:
+        dynamics = DimerDynamics(surrogate.with_pressure(pressure), EffectSet.from_dict(effects))
+    except ValueError:  # a trial outside the effects' physics (a negative rate) or a pressure that cannot levitate
+        return np.full((len(states), frames, 2), np.nan)
+    out, _, _ = dynamics.integrate_batch(states, dt * (frames - 1), dt, max_step=dt)
     return out[:, :frames][..., [0, 2]]
 
 
@@ -280,11 +282,12 @@ def velocity_coupling_output_error(problem, fit, conditions, alpha: float = 0.01
     Returns
     -------
     OutputErrorTest, or None when the test does not apply (no linear damping, a drifting pressure, the cavity's lag
-    in the model, runs without integral data, a pressure that cannot levitate the dimer)
+    in the model, runs without integral data, a pressure that cannot levitate the dimer, a named effect fitted
+    outside its physics: a negative damping rate or drag coefficient)
     """
     from scipy.stats import chi2 as chi2_law
 
-    from acousim.dynamics.effects import air_damping_for
+    from acousim.dynamics.effects import EffectSet, air_damping_for
 
     effects = dict(fit.effects)
     if "linear_damping" not in effects or problem.drift is not None or "cavity_lag" in effects:
@@ -300,6 +303,10 @@ def velocity_coupling_output_error(problem, fit, conditions, alpha: float = 0.01
         return None
     shape = {k: v for k, v in air.items() if k not in ("gamma_y", "gamma_theta")}
     others = {k: v for k, v in effects.items() if k not in ("linear_damping", "velocity_coupling")}
+    try:  # the named effects' fit must lie within their physics (no negative damping) to be simulated
+        EffectSet.from_dict({**others, "linear_damping": effects["linear_damping"]})
+    except ValueError:
+        return None
     start = {**effects["linear_damping"], "pressure_pa": cal.nominal_pressure_pa * np.sqrt(cal.pressure_scale)}
     nulls = {law: fit_trajectories(data, surrogate, law, shape, others, start, False, iterations)
              for law in ("air_damping", "linear_damping")}
