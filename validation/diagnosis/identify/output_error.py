@@ -26,7 +26,8 @@ whole model refitted (Gauss-Newton, forward-difference sensitivities, all runs' 
 The candidate is judged in noise units: the drop of the misfit, ``Delta chi^2 = chi^2_null - chi^2_coupled`` (a
 likelihood ratio for white Gaussian noise; divided by the coupled model's misfit per frame where that exceeds 1, so
 that a model error the noise does not hold widens the unit alike), against the chi-square law with 2 degrees of
-freedom at ``alpha``.  The sign-flip test of the per-run drops is reported beside it but does not decide: the drops
+freedom at ``alpha``, and only where the coupled model explains the data to their noise (misfit per frame at most
+:data:`MAX_MISFIT_PER_FRAME`): elsewhere the held-out rounds decide alone.  The sign-flip test of the per-run drops is reported beside it but does not decide: the drops
 are in-sample, never negative in sum, so their signs are not symmetric under the null, and with 10 runs a weak
 coupling that half the runs barely excite (little hinge motion) failed it at chi-square p = 2e-4 and 2e-11 on the
 tuning sets.  The misfit per frame of the null model is reported too (1 when the model explains the data to its
@@ -55,6 +56,10 @@ SHARED_STEPS = {"pressure_pa": 0.01, "gamma_y": 0.01, "gamma_theta": 0.01, "c5":
 STATE_STEPS = np.array([2e-7, 2e-5, 2e-4, 2e-3])
 #: A frame whose residual exceeds this many noise units is left out (a tracking glitch or a diverged trial).
 OUTLIER_NOISE_UNITS = 50.0
+#: The coupled model must explain the data to their noise: a misfit per frame above this leaves a model error whose
+#: structure the chi-square does not describe (tuning sets: 0.98-1.02 where the model is right; the paper-like preset,
+#: whose named effects the trajectories do not follow to the noise: 1.25, with Delta chi^2 = 1683 for c5 = -0.6 1/m).
+MAX_MISFIT_PER_FRAME = 1.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,6 +265,7 @@ class OutputErrorTest:
     def to_dict(self) -> dict:
         """The diagnosis.json form (``identification_rounds[i].candidates["velocity_coupling"].output_error``)."""
         return {"damping_law": self.null.damping_law, "statistic": self.statistic, "p_value": self.p_value,
+                "max_misfit_per_frame": MAX_MISFIT_PER_FRAME,
                 "sign_flip_p": self.sign_flip_p, "alpha": self.alpha, "significant": self.significant,
                 "params": self.params, "std_errors": {k: self.coupled.std_errors[k] for k in ("c5", "c6")},
                 "null_chi2_per_frame": self.null.chi2_per_frame,
@@ -319,7 +325,7 @@ def velocity_coupling_output_error(problem, fit, conditions, alpha: float = 0.01
     stat = float(null.chi2 - coupled.chi2) / max(coupled.chi2_per_frame, 1.0)
     p = float(chi2_law.sf(max(stat, 0.0), 2))
     flip = sign_flip_pvalue(np.subtract(null.per_run_chi2, coupled.per_run_chi2))
-    significant = bool(np.isfinite(stat) and p < alpha)
+    significant = bool(np.isfinite(stat) and p < alpha and coupled.chi2_per_frame <= MAX_MISFIT_PER_FRAME)
     logger.debug("velocity coupling, output error (%s): Delta chi2 = %.1f (p = %.3g), sign-flip p = %.3g, c5 = %.4g, "
                  "c6 = %.4g", law, stat, p, flip, coupled.params["c5"], coupled.params["c6"])
     return OutputErrorTest(null, coupled, other.chi2, stat, p, flip, alpha, significant)
