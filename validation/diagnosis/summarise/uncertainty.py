@@ -59,8 +59,8 @@ PRESSURE_MODEL_ERROR = 3.0e-4
 #: PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling or sharing pair scattering's y-theta
 #: coupling (3-29 %); the cavity's expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping:
 #: 7 cases only).  Velocity coupling beside a damping takes its estimates and Gauss-Newton errors from the whole
-#: trajectories (validation.diagnosis.identify.output_error): on 15 tuning twin data sets with the air's damping
-#: (docs/scripts/velocity_coupling_fixed_set.py, seeds 4242 and 9090) their intervals held c6 in 15 and c5 in 13
+#: trajectories (validation.diagnosis.identify.output_error): on 16 tuning twin data sets with the air's damping
+#: (docs/scripts/velocity_coupling_fixed_set.py, seeds 4242 and 9090) their intervals held c6 in 16 and c5 in 14
 #: (errors 2.6 and 2.9 of their standard errors, 5 % and 19 %): c5 carries 2 %, c6 none.  Checked on fresh seeds in
 #: docs/diagnosis.md "Coverage of the 95 % intervals".
 EFFECT_MODEL_ERROR: dict[str, dict[str, float]] = {
