@@ -32,7 +32,7 @@ are in-sample, never negative in sum, so their signs are not symmetric under the
 coupling that half the runs barely excite (little hinge motion) failed it at chi-square p = 2e-4 and 2e-11 on the
 tuning sets.  The misfit per frame of the null model is reported too (1 when the model explains the data to its
 noise).  Where the test names the coupling, its c5 and c6 are the trajectories' estimates, with the Gauss-Newton
-standard errors (:meth:`OutputErrorTest.intervals`).
+standard errors (:attr:`OutputErrorTest.std_errors`).
 """
 from __future__ import annotations
 
@@ -253,21 +253,20 @@ class OutputErrorTest:
         """The output-error estimates of c5 [1/m] and c6 [1/m^2]."""
         return {k: self.coupled.params[k] for k in ("c5", "c6")}
 
-    def intervals(self, runs: int) -> dict:
-        """c5 and c6 with their standard errors (the Gauss-Newton covariance, widened by the misfit per frame where it
-        exceeds 1) and 95 % intervals (Student t with ``runs - 1`` degrees of freedom, as the jackknife's):
-        :class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval` by name."""
-        from ..summarise.uncertainty import interval_from_error
-
+    @property
+    def std_errors(self) -> dict[str, float]:
+        """Standard errors of c5 and c6: the Gauss-Newton covariance in noise units, widened by the square root of
+        the coupled misfit per frame where it exceeds 1 (the summary's intervals, Student t with R - 1 degrees of
+        freedom as the jackknife's)."""
         widen = float(np.sqrt(max(self.coupled.chi2_per_frame, 1.0)))
-        return {k: interval_from_error(v, widen * self.coupled.std_errors[k], runs - 1) for k, v in self.params.items()}
+        return {k: widen * self.coupled.std_errors[k] for k in ("c5", "c6")}
 
     def to_dict(self) -> dict:
         """The diagnosis.json form (``identification_rounds[i].candidates["velocity_coupling"].output_error``)."""
         return {"damping_law": self.null.damping_law, "statistic": self.statistic, "p_value": self.p_value,
                 "max_misfit_per_frame": MAX_MISFIT_PER_FRAME,
                 "sign_flip_p": self.sign_flip_p, "alpha": self.alpha, "significant": self.significant,
-                "params": self.params, "std_errors": {k: self.coupled.std_errors[k] for k in ("c5", "c6")},
+                "params": self.params, "std_errors": self.std_errors,
                 "null_chi2_per_frame": self.null.chi2_per_frame,
                 "coupled_chi2_per_frame": self.coupled.chi2_per_frame,
                 "other_law_chi2_per_frame": self.other_law_chi2 / max(self.null.frames, 1),

@@ -59,7 +59,8 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
     if oe is not None and oe.significant and "velocity_coupling" in identified:
         # named on the whole trajectories: their estimates and errors (the windows' are 2-4 times wider)
         joint_params = {**joint_params, "velocity_coupling": oe.params}
-        errors = replace(errors, effects={**errors.effects, "velocity_coupling": oe.intervals(len(runs))})
+        trajectory = {k: interval_from_error(v, oe.std_errors[k], len(runs) - 1) for k, v in oe.params.items()}
+        errors = replace(errors, effects={**errors.effects, "velocity_coupling": trajectory})
     # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
                              replaced, joint_params, final, per_before, with_effect_model_errors(errors.effects),
