@@ -112,7 +112,10 @@ def trajectory_test(problem: DiagnosisProblem, ident: Identification, elim, iden
     log("velocity coupling named by its output-error test (Delta chi2 = %.1f noise units, p = %.2g, sign-flip p = "
         "%.2g)", oe.statistic, oe.p_value, oe.sign_flip_p)
     test = replace(held_out, p_value=oe.p_value, significant=True, output_error=oe.to_dict())
-    rounds = ident.rounds + [IdentificationRound(list(identified), ident.rounds[-1].base_held_out_gap,
-                                                 {"velocity_coupling": test})]
+    # round i added ident.identified[i]: the coupling's round goes before the greedy rounds' last (where nothing
+    # was significant)
+    added = IdentificationRound(list(identified), ident.rounds[-1].base_held_out_gap, {"velocity_coupling": test})
+    k = len(ident.identified)
+    rounds = ident.rounds[:k] + [added] + ident.rounds[k:]
     ident = replace(ident, identified=ident.identified + ["velocity_coupling"], rounds=rounds)
     return ident, identified + ["velocity_coupling"], oe
