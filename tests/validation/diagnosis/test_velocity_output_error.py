@@ -57,3 +57,43 @@ def test_velocity_coupling_recalled_beside_the_air(pipeline_cache, name):
     assert test["significant"]
     assert test["params"]["c5"] == pytest.approx(coupling["c5"], rel=0.30)
     assert np.sign(test["params"]["c5"]) == np.sign(coupling["c5"])
+
+
+class _Significant:
+    """A stand-in for a significant output-error test (only what the identification step reads)."""
+
+    significant, p_value, statistic, sign_flip_p = True, 1e-6, 30.0, 0.03
+
+    def to_dict(self):
+        return {"statistic": 30.0, "p_value": self.p_value}
+
+
+def _held_out(p):
+    from validation.diagnosis.identify.identification import CandidateTest
+
+    return CandidateTest(0.1, 0.0, 0.0, 5e-6, [1, 2], 0.0, 0.1, p, p, p < 0.01, [0.1] * 10)
+
+
+def test_a_coupling_named_on_the_trajectories_is_the_round_that_added_it(monkeypatch):
+    """Round i adds the i-th effect: the coupling named by the output-error test is inserted before the greedy rounds'
+    last (nothing significant there), with the test's chi-square p-value and record, so that its verdict reads them;
+    the model's effects gain it.  Switched off (``trajectory_test=False``) nothing changes."""
+    import validation.diagnosis.identify.identification_step as step
+    from validation.diagnosis import DiagnoseConfig
+    from validation.diagnosis.identify.identification import Identification, IdentificationRound
+
+    monkeypatch.setattr(step, "fit_gap_model", lambda problem, effects: None)
+    monkeypatch.setattr(step, "velocity_coupling_output_error", lambda *args: _Significant())
+    rounds = [IdentificationRound([], 1.0, {"linear_damping": _held_out(0.001), "velocity_coupling": _held_out(0.2)}),
+              IdentificationRound(["linear_damping"], 0.5, {"velocity_coupling": _held_out(0.03)})]
+    ident = Identification(["linear_damping"], rounds)
+    config = DiagnoseConfig(long_time=False)
+    got, model, oe = step.trajectory_test(None, ident, None, ["linear_damping"], config, object(), lambda *a: None)
+    assert model == ["linear_damping", "velocity_coupling"] and got.identified == model
+    test = got.rounds[got.identified.index("velocity_coupling")].candidates["velocity_coupling"]
+    assert test.p_value == 1e-6 and test.significant and test.output_error["statistic"] == 30.0
+    assert got.rounds[-1] is rounds[-1]  # the last greedy round keeps its held-out test
+    off = step.trajectory_test(None, ident, None, ["linear_damping"], DiagnoseConfig(long_time=False,
+                                                                                     trajectory_test=False),
+                               object(), lambda *a: None)
+    assert off == (ident, ["linear_damping"], None)
