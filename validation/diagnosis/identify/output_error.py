@@ -282,7 +282,7 @@ def velocity_coupling_output_error(problem, fit, conditions, alpha: float = 0.01
     problem : DiagnosisProblem (its recorded runs, force model and drift)
     fit : GapFit of the effects named so far (linear damping among them; its calibration gives the pressure)
     conditions : the experiment conditions (side, densities, hinge gap) of the air's damping law
-    alpha : significance level of both tests
+    alpha : significance level of the chi-square test (the sign-flip test of the per-run drops is reported only)
 
     Returns
     -------
