@@ -56,7 +56,10 @@ def run_case(folder: Path, case: dict, tag: str) -> dict | None:
     diag = diagnose_dataset(folder / "data", DiagnoseConfig(long_time=False), progress=False)
     out = {"identified": sorted(diag.identified), "true": candidate_truth(truth["effects"], truth.get("resonator")),
            "params": {e.name: dict(e.params) for e in diag.effects},
-           "p_value": {e.name: e.p_value for e in diag.effects}}
+           "p_value": {e.name: e.p_value for e in diag.effects},
+           "status": {e.name: e.status for e in diag.effects},
+           "output_error": next((c["output_error"] for r in diag.identification_rounds
+                                 for c in r["candidates"].values() if "output_error" in c), None)}
     result.write_text(json.dumps(out, indent=1))
     return out
 

@@ -70,6 +70,8 @@ class DiagnoseConfig:
     discovery_min_improvement : a discovered term's median held-out improvement, as a fraction of the variance
     check_orientation : test whether y points down (:mod:`validation.diagnosis.calibrate.orientation`); if so, warn
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
+    trajectory_test : judge the velocity coupling, where the held-out rounds did not choose it beside linear damping,
+        on the runs' whole trajectories (:mod:`validation.diagnosis.identify.output_error`)
     """
 
     candidates: tuple[str, ...] = field(default_factory=default_candidates)
@@ -84,6 +86,7 @@ class DiagnoseConfig:
     discover: bool = True
     discovery_min_improvement: float = 1e-3
     check_orientation: bool = True
+    trajectory_test: bool = True
 
     def __post_init__(self) -> None:
         check_choices(self, "candidates", CANDIDATE_EFFECTS, what="effect(s)")
@@ -230,6 +233,6 @@ def _diagnose(start: DiagnosisStart, config: DiagnoseConfig, progress: bool) -> 
     log = logger.info if progress else logger.debug
     spec = start.spec
     cal = calibration_step(start.prepared, start.conditions, start.model, spec, config, log)
-    found = identification_step(cal.problem, config, progress, log)
+    found = identification_step(cal.problem, config, progress, log, cal.conditions)
     discovery, replaced, identified, final = discovery_step(cal.problem, found, config, log)
     return summary_step(start.prepared.dataset, cal, found, discovery, replaced, identified, final, spec, config, log)

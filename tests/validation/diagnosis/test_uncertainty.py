@@ -199,11 +199,11 @@ def test_effect_model_errors_are_added_per_parameter_and_kept_apart():
     stat = interval_from_error(2.0, 0.01, 9)
     none = ParameterInterval(5.0, None, None, 9, "no spread over the runs")
     got = with_effect_model_errors({"linear_damping": {"gamma_theta": stat, "gamma_y": none},
-                                    "velocity_coupling": {"c5": stat}})
+                                    "velocity_coupling": {"c6": stat}})
     gt = got["linear_damping"]["gamma_theta"]
     rel = EFFECT_MODEL_ERROR["linear_damping"]["gamma_theta"]
     assert gt.std_error == pytest.approx(np.hypot(0.01, rel * 2.0)) and gt.model_std_error == pytest.approx(rel * 2.0)
-    assert got["linear_damping"]["gamma_y"] is none and got["velocity_coupling"]["c5"] is stat
+    assert got["linear_damping"]["gamma_y"] is none and got["velocity_coupling"]["c6"] is stat
     assert ParameterInterval.from_dict(gt.to_dict()) == gt
     assert set(stat.to_dict()) == {"value", "std_error", "interval_95", "dof", "determined", "reason"}
 

@@ -56,14 +56,19 @@ def discovery_step(problem: DiagnosisProblem, found: Identified, config: "Diagno
     # the candidates are judged against the terms found on top of them, and against the dissipative terms
     # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
     # describe, leaving nothing to discover on top of it
+    # a velocity coupling named on the whole trajectories (its output-error test) is not judged again by the windows'
+    # held-out test, which could not see it
+    oe = found.output_error
+    by_trajectory = ["velocity_coupling"] if oe is not None and oe.significant and "velocity_coupling" in identified else []
     for rivals in (discovery, _dissipation_rivals(problem, found.base, identified, discover) if identified
                    else Discovery()):
-        if rivals.empty or not identified:
+        judged = [e for e in identified if e not in by_trajectory]
+        if rivals.empty or not judged:
             continue
-        kept, pvals = judge_candidates(problem, identified, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
-        if kept != identified:
-            replaced.update({c: pvals[c] for c in identified if c not in kept})
-            identified = kept
+        kept, pvals = judge_candidates(problem, judged, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
+        if kept != judged:
+            replaced.update({c: pvals[c] for c in judged if c not in kept})
+            identified = [e for e in identified if e in kept or e in by_trajectory]
             final = fit_gap_model(problem, identified)
             discovery = discover(final)
     return discovery, replaced, identified, final

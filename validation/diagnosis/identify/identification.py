@@ -84,10 +84,14 @@ class CandidateTest:
     wilcoxon_p: float  #: one-sided Wilcoxon signed-rank test (reported only)
     significant: bool
     per_run_held_out: list[float]
+    #: the output-error test that named the candidate when the held-out test did not
+    #: (:func:`~validation.diagnosis.identify.output_error.velocity_coupling_output_error`); None: held-out only
+    output_error: dict | None = None
 
     def to_dict(self) -> dict:
         """The diagnosis.json form (``identification_rounds[i].candidates[name]``)."""
-        return {"held_out_gap": self.held_out_gap, "median_improvement": self.median_improvement,
+        extra = {} if self.output_error is None else {"output_error": self.output_error}
+        return {**extra, "held_out_gap": self.held_out_gap, "median_improvement": self.median_improvement,
                 "median_improvement_fraction": self.median_improvement_fraction, "threshold": self.threshold,
                 "components": self.components, "median_improvement_in_components": self.median_improvement_in_components,
                 "remaining_gap_in_components": self.remaining_gap_in_components,

@@ -3,6 +3,7 @@ after, where the rest lies, the long-time errors and the constants used, as one 
 :func:`summary_step`."""
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -54,6 +55,12 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
     log("standard errors: the final model refitted without each of the %d runs", len(runs))
     errors = jackknife_errors(problem, identified, joint_params, final.calibration,
                               lambda sub, fit: joint_estimates(sub, fit, found_terms)[0], derived=derived_quantities)
+    oe = found.output_error
+    if oe is not None and oe.significant and "velocity_coupling" in identified:
+        # named on the whole trajectories: their estimates and errors (the windows' are 2-4 times wider)
+        joint_params = {**joint_params, "velocity_coupling": oe.params}
+        trajectory = {k: interval_from_error(v, oe.std_errors[k], len(runs) - 1) for k, v in oe.params.items()}
+        errors = replace(errors, effects={**errors.effects, "velocity_coupling": trajectory})
     # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
                              replaced, joint_params, final, per_before, with_effect_model_errors(errors.effects),

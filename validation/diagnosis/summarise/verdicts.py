@@ -75,7 +75,12 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
                                    per_run[i], per_run[i + 1], final, (uncertainty or {}).get(identified[i]),
                                    (derived or {}).get(identified[i]))
                      for i in range(len(identified))]
-    model_effects = [_named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
+    # an effect named on the whole trajectories (the velocity coupling's output-error test) is judged there, not on
+    # the gap of the windows that could not see it
+    by_trajectory = {n for n in identified if n in ident.identified
+                     and ident.rounds[ident.identified.index(n)].candidates[n].output_error is not None}
+    model_effects = [e if e.name in by_trajectory else
+                     _named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
                      for i, e in enumerate(model_effects)]
     last_tests = ident.last_tests()
     others = []

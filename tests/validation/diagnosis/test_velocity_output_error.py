@@ -1,0 +1,99 @@
+"""The velocity coupling judged on the runs' whole trajectories beside the air's damping
+(validation.diagnosis.identify.output_error; docs/diagnosis.md, "The velocity coupling beside the air's damping"):
+on a small fixed set of twin data sets with the air's damping, the couplings are recalled and the coupling-free
+set is not named."""
+import numpy as np
+import pytest
+
+#: The fixed set: the twin's default physics (the air's computed damping) with a velocity coupling at the blind
+#: strengths (c5 [1/m], c6 [1/m^2]; the held-out rounds of the integral form missed both on runs of this length), or
+#: none; pressure 3 % above nominal.
+FIXED_SET = {
+    "coupling_a": ({"c5": 1860.0, "c6": 9.0e5}, 41),
+    "coupling_b": ({"c5": -1400.0, "c6": -1.9e6}, 42),
+    "none": (None, 43),
+}
+
+
+def _output_error_test(pipeline_cache, name):
+    from acousim.dynamics.effects import EffectSet
+    from acousim.models import ExperimentConditions
+    from acousim.twin import TwinConfig
+    from validation.diagnosis import DiagnoseConfig
+    from validation.diagnosis.calibrate.calibration_step import calibration_step
+    from validation.diagnosis.calibrate.gap_model import fit_gap_model
+    from validation.diagnosis.identify.output_error import velocity_coupling_output_error
+    from validation.diagnosis.steps import load_for_diagnosis, start_diagnosis
+
+    coupling, seed = FIXED_SET[name]
+    effects = EffectSet.from_dict({"velocity_coupling": coupling} if coupling else {})
+    cfg = TwinConfig(runs=8, duration=2.5, seed=seed, pressure_error=0.0, effects=effects, air_damping=True,
+                     experiment=ExperimentConditions(pressure_amplitude_pa=3090.0))
+    data = pipeline_cache.twin_dataset(cfg)
+
+    def build():
+        start = start_diagnosis(load_for_diagnosis(data, progress=False))
+        cal = calibration_step(start.prepared, start.conditions, start.model, start.spec,
+                               DiagnoseConfig(long_time=False), lambda *a: None)
+        test = velocity_coupling_output_error(cal.problem, fit_gap_model(cal.problem, ["linear_damping"]),
+                                              cal.conditions)
+        return test.to_dict()
+
+    return coupling, pipeline_cache.value("velocity output error", repr(cfg), build)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(FIXED_SET))
+def test_velocity_coupling_recalled_beside_the_air(pipeline_cache, name):
+    """Each coupling is significant (both the chi-square and the per-run sign-flip test at alpha 0.01) with c5 of
+    the true sign within 30 % (the output-error c5 was 5-26 % low on the tuning sets, several of its standard errors:
+    a bias this test bounds, not hides); the coupling-free set is not significant.  The null model explains the data
+    to its noise: misfit per frame within 3 % of 1 (the tracking noise is white and estimated per run)."""
+    coupling, test = _output_error_test(pipeline_cache, name)
+    assert test["null_chi2_per_frame"] == pytest.approx(1.0, abs=0.03)
+    if coupling is None:
+        assert not test["significant"] and test["p_value"] > 0.01
+        return
+    assert test["significant"]
+    assert test["params"]["c5"] == pytest.approx(coupling["c5"], rel=0.30)
+    assert np.sign(test["params"]["c5"]) == np.sign(coupling["c5"])
+
+
+class _Significant:
+    """A stand-in for a significant output-error test (only what the identification step reads)."""
+
+    significant, p_value, statistic, sign_flip_p = True, 1e-6, 30.0, 0.03
+
+    def to_dict(self):
+        return {"statistic": 30.0, "p_value": self.p_value}
+
+
+def _held_out(p):
+    from validation.diagnosis.identify.identification import CandidateTest
+
+    return CandidateTest(0.1, 0.0, 0.0, 5e-6, [1, 2], 0.0, 0.1, p, p, p < 0.01, [0.1] * 10)
+
+
+def test_a_coupling_named_on_the_trajectories_is_the_round_that_added_it(monkeypatch):
+    """Round i adds the i-th effect: the coupling named by the output-error test is inserted before the greedy rounds'
+    last (nothing significant there), with the test's chi-square p-value and record, so that its verdict reads them;
+    the model's effects gain it.  Switched off (``trajectory_test=False``) nothing changes."""
+    import validation.diagnosis.identify.identification_step as step
+    from validation.diagnosis import DiagnoseConfig
+    from validation.diagnosis.identify.identification import Identification, IdentificationRound
+
+    monkeypatch.setattr(step, "fit_gap_model", lambda problem, effects: None)
+    monkeypatch.setattr(step, "velocity_coupling_output_error", lambda *args: _Significant())
+    rounds = [IdentificationRound([], 1.0, {"linear_damping": _held_out(0.001), "velocity_coupling": _held_out(0.2)}),
+              IdentificationRound(["linear_damping"], 0.5, {"velocity_coupling": _held_out(0.03)})]
+    ident = Identification(["linear_damping"], rounds)
+    config = DiagnoseConfig(long_time=False)
+    got, model, oe = step.trajectory_test(None, ident, None, ["linear_damping"], config, object(), lambda *a: None)
+    assert model == ["linear_damping", "velocity_coupling"] and got.identified == model
+    test = got.rounds[got.identified.index("velocity_coupling")].candidates["velocity_coupling"]
+    assert test.p_value == 1e-6 and test.significant and test.output_error["statistic"] == 30.0
+    assert got.rounds[-1] is rounds[-1]  # the last greedy round keeps its held-out test
+    off = step.trajectory_test(None, ident, None, ["linear_damping"], DiagnoseConfig(long_time=False,
+                                                                                     trajectory_test=False),
+                               object(), lambda *a: None)
+    assert off == (ident, ["linear_damping"], None)
