@@ -1,5 +1,8 @@
-"""Shared fixtures for the fitting tests: the truth model and small synthetic data sets."""
+"""Shared fixtures for the fitting tests: the truth model, small synthetic data sets, and discoveries without their
+held-out front for the tests that do not read it."""
 from __future__ import annotations
+
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -24,3 +27,31 @@ def small_dataset(tmp_path_factory, truth):
 def clean_runs(truth):
     """Four noise-free 3-s runs (dicts with t, y, theta, exact state)."""
     return generate_runs(truth, SyntheticConfig(n_runs=4, noise_y=0.0, noise_theta=0.0, missing_frames=0, seed=3))
+
+
+@contextmanager
+def front_left_out():
+    """Within the block, :func:`fitting.selection.integral_discovery.discover_model` leaves out its held-out long-time
+    front (``DiscoveryResult.front`` is None): about half of a sparse discovery's time, for a record that no selection,
+    coefficient, standard error or refinement depends on (it goes only into model.json's ``discovery.front`` and its
+    figure; ``--max-terms`` reads the selection passes' own paths).  For the tests that assert on the selection and the
+    coefficients only; test_discovery.py shows that the results are identical without it, test_front.py and
+    test_scale_invariance.py test the front itself."""
+    from fitting.selection import integral_discovery
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(integral_discovery, "long_time_front", lambda *args, **kwargs: None)
+        yield
+
+
+@pytest.fixture
+def without_front():
+    """:func:`front_left_out` for one test."""
+    with front_left_out():
+        yield
+
+
+@pytest.fixture(scope="session")
+def leave_out_front():
+    """:func:`front_left_out` itself (a context manager), for module-scoped fixtures that discover."""
+    return front_left_out

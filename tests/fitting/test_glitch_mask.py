@@ -37,7 +37,7 @@ def test_false_positive_rate_on_clean_smooth_high_rate_data(fps, quantum):
     assert flagged == 0  # measured: none on every one of these sets
 
 
-def test_glitches_are_counted_per_run_and_the_switch_keeps_every_frame(tmp_path):
+def test_glitches_are_counted_per_run_and_the_switch_keeps_every_frame(tmp_path, without_front):
     # 6 glitches per run of 100 tracking-noise standard deviations (detected with certainty from ~14)
     raw = generate_runs(TRUTH, CFG)
     data = _write(tmp_path / "glitchy", raw, glitches_per_run=6, size=100 * CFG.noise_y, seed=3)

@@ -56,7 +56,8 @@ def sparse(tmp_path_factory):
     return _write(tmp_path_factory.mktemp("sparse") / "data", raw), raw
 
 
-def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp_path):
+def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp_path, without_front):
+    # the held-out front is left out (tests/fitting/conftest.py): test_front.py checks how model.json records it
     data, raw = sparse
     out = tmp_path / "out"
     # 40 evaluations of the polish (default 150) keep the test fast; the polish stays in its +-0.5 SE box anyway
@@ -79,7 +80,7 @@ def test_default_fit_is_discovery_records_it_and_meets_the_criterion(sparse, tmp
     _check(TRUTH, _Fitted(d), _oracle_se(TRUTH, runs, [r["state"] for r in raw], CFG))
 
 
-def test_default_fit_with_tracking_glitches_meets_the_criterion(tmp_path):
+def test_default_fit_with_tracking_glitches_meets_the_criterion(tmp_path, without_front):
     # 6 glitches per run with y off by 100 times the tracking noise: masked by the loader, and the discovered
     # model keeps its restoring term (the glitch-free support), integrates over every run and meets the criterion
     raw = generate_runs(TRUTH, CFG)
@@ -128,7 +129,7 @@ def test_output_error_modes_set_the_discovery_config(mode, refined, selected):
     assert FitConfig().with_output_error(None) == FitConfig()
 
 
-def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp_path):
+def test_heldout_tolerance_gives_a_smaller_model_on_the_pareto_front(sparse, tmp_path, without_front):
     """The practical threshold: the smallest support within 30 % of the best held-out error.  Every weak term of
     TRUTH improves the held-out error by far less than that, so the model shrinks, and the written support is one
     of the Pareto front's, with its held-out error within the tolerance of the front's best."""

@@ -17,7 +17,6 @@ from fitting.config import FitConfig
 from fitting.fit import fit_runs, prepare_runs
 from fitting.model import PolynomialModel, Scales
 from fitting.selection.front import HeldOutRun, long_time_error
-from fitting.selection.integral_discovery import discover_model
 from fitting.synthetic import SyntheticConfig, generate_runs
 
 TIME_FACTOR, Y_FACTOR = 30.0, 1000.0
@@ -33,24 +32,31 @@ def _runs(gen, time_factor: float, y_factor: float) -> list[Run]:
 
 
 @pytest.fixture(scope="module")
-def fitted_pair(truth):
-    """Six fitted runs and a seventh held out, discovered as recorded and as the scaled copy."""
+def default_fits(truth):
+    """Six fitted runs and a seventh held out, as recorded and as the scaled copy: the whole default fit (discovery and
+    long-time polish) of each, with the held-out run."""
     gen = generate_runs(truth, SyntheticConfig(n_runs=7, duration=2.0, seed=5))
     out = []
     for tf, yf in ((1.0, 1.0), (TIME_FACTOR, Y_FACTOR)):
         runs = _runs(gen, tf, yf)
         prep, scales = prepare_runs(runs[:6], FitConfig())
-        disc = discover_model([p.run for p in prep], [p.derivs for p in prep])
         x0 = gen[6]["x0"] * np.array([yf, yf * tf, 1.0, tf])
-        held = HeldOutRun(runs[6].dt, runs[6].y, runs[6].theta, x0)
-        out.append((disc, held, prep, scales))
+        out.append((fit_runs(prep, scales, FitConfig(), progress=False),
+                    HeldOutRun(runs[6].dt, runs[6].y, runs[6].theta, x0)))
     return out
 
 
 @pytest.fixture(scope="module")
-def full_fits(fitted_pair):
-    """The whole default fit (discovery and long-time polish) of both."""
-    return [fit_runs(prep, scales, FitConfig(), progress=False) for _, _, prep, scales in fitted_pair]
+def fitted_pair(default_fits):
+    """The discovery of each, as the default fit made it (``discover_model`` on the prepared runs: the fit's
+    preparation gives the same numbers as the discovery's own, to the bit)."""
+    return [(fit.extras.discovery, held) for fit, held in default_fits]
+
+
+@pytest.fixture(scope="module")
+def full_fits(default_fits):
+    """The whole default fit of both."""
+    return [fit for fit, _ in default_fits]
 
 
 def test_same_support_and_coefficients(fitted_pair):

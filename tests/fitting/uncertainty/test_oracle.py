@@ -132,17 +132,27 @@ def test_alias_z_predicts_how_often_least_squares_prefers_the_alias():
     support = [t for t, c in zip(TERMS, weak.coef[1]) if c != 0]
     rival = [term.alias if t == "y*thetadot^2" else t for t in support]
     windows = [integral_window(1.0 / FPS, dominant_frequency(r["state"][:, 2], 1.0 / FPS)) for r in gen]
-    rng = np.random.default_rng(7)
-    n_draws = 4000
-    pos = [r["state"][:, 2][:, None] + noise.sigma_theta * rng.standard_normal((r["t"].size, n_draws)) for r in gen]
-    b = _targets(pos, windows)  # the positions' alone: the same for both supports
-    rss = []
+    # the least-squares residual is the targets b minus their projection on the columns' span (Q of a thin QR of the
+    # design X): rss = |b|^2 - |Q^T b|^2, and b (the positions' alone) is the same for both supports, so the rival's
+    # excess is |Q_true^T b|^2 - |Q_rival^T b|^2.  Q^T b is a sum over the runs' rows, accumulated run by run and
+    # a few hundred draws at a time (the draws' 8 x 4500 x 4000 positions at once took gigabytes)
+    qs = []
     for names in (support, rival):
         columns = [evaluate_library(r["state"])[:, [TERMS.index(t) for t in names]] for r in gen]
-        # the least-squares residual is b minus its projection on the columns' span (Q of a thin QR of X)
-        q = np.linalg.qr(_design(columns, windows), mode="reduced")[0]
-        rss.append(np.sum((b - q @ (q.T @ b)) ** 2, axis=0) / noise.sigma_theta ** 2)
-    gain = rss[1] - rss[0]
+        design = [_design([c], [w]) for c, w in zip(columns, windows)]
+        q = np.linalg.qr(np.concatenate(design), mode="reduced")[0]
+        qs.append(np.split(q, np.cumsum([len(d) for d in design])[:-1]))
+    rng = np.random.default_rng(7)
+    n_draws, chunk = 4000, 500
+    projected = [np.zeros((q[0].shape[1], n_draws)) for q in qs]
+    for k, r in enumerate(gen):
+        draws = rng.standard_normal((r["t"].size, n_draws))  # the same draws, in the same order, as all at once
+        for c in range(0, n_draws, chunk):
+            pos = r["state"][:, 2][:, None] + noise.sigma_theta * draws[:, c:c + chunk]
+            b = _targets([pos], [windows[k]])
+            for q, acc in zip(qs, projected):
+                acc[:, c:c + chunk] += q[k].T @ b
+    gain = (np.sum(projected[0] ** 2, axis=0) - np.sum(projected[1] ** 2, axis=0)) / noise.sigma_theta ** 2
     # the mean of 4000 draws scatters by 2 alias_z / sqrt(4000) = 0.03 alias_z; allow 10 % of alias_z^2 + 0.3
     assert abs(np.mean(gain) - term.alias_z ** 2) < 0.1 * term.alias_z ** 2 + 0.3
     # a proportion near 0.1 from 4000 draws scatters by 0.005; the normal approximation of the difference of

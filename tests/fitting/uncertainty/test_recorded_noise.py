@@ -96,7 +96,7 @@ def mixed_noise_runs(truth):
 
 
 @pytest.mark.slow
-def test_the_discovery_weighs_each_run_by_its_recorded_noise(mixed_noise_runs, truth):
+def test_the_discovery_weighs_each_run_by_its_recorded_noise(mixed_noise_runs, truth, without_front):
     """Weighted by its own noise, each run's integral-form residual is that noise: the residual over the noise is 1
     (the efficient estimator).  Unweighted, the residual is the runs' RMS noise, sqrt(2.5) = 1.58 times the quiet
     runs', while the pooled robust estimate of the mixture's noise is 1.37 times it (the MAD of a 50/50 mixture of
