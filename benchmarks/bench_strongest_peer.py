@@ -327,8 +327,9 @@ def targets_front(rows: list[dict]) -> list[str]:
             ok = all(v <= 1 for v, _ in ratios)
             met[k].append(ok)
             worst = max(ratios, default=(float("nan"), 0))
-            cells.append(f"{'yes' if ok else 'no'} ({sum(v <= 1 for v, _ in ratios)} of {len(ratios)}) | "
-                         f"{worst[0]:.2f} ({worst[1]})")
+            lost = ", ".join(str(n) for v, n in ratios if not v <= 1)
+            cells.append(f"{'yes' if ok else 'no'} ({sum(v <= 1 for v, _ in ratios)} of {len(ratios)}"
+                         f"{'; lost at ' + lost if lost else ''}) | {worst[0]:.2f} ({worst[1]})")
         out.append(f"| {r['truth']} | {100 * r['level']:g} % | {r['seed']} | {r['fit_runs']} | {len(r['front'])} "
                    f"({len(pts)}) | {cells[0]} | {cells[1]} |")
     for k, what in (("cv", "the configuration pysindy's cross-validation picks"),

@@ -24,7 +24,7 @@ def test_second_target_needs_every_front_point_at_most_pysindys_best_at_that_siz
     text = "\n".join(bench.targets_front(rows))
     # seed 1: 4 points, 3 with a pysindy model; at most the CV pick at each (the tie at size 3 is the worst, 1.00),
     # but 1.50 times the held-out best at size 11
-    assert "| 4 (3) | yes (3 of 3) | 1.00 (3) | no (2 of 3) | 1.50 (11) |" in text
+    assert "| 4 (3) | yes (3 of 3) | 1.00 (3) | no (2 of 3; lost at 11) | 1.50 (11) |" in text
     assert "picks at that size or smaller: 2 of 2 cases (100 %" in text
     assert "held-out runs at that size or smaller: 1 of 2 cases (50 %" in text
     assert bench._ratio(np.inf, 0.1) == np.inf and np.isnan(bench._ratio(0.1, None))
