@@ -24,7 +24,11 @@ MIOSR is left out (its solver, gurobipy, is not installed).  Ours: ``discover_mo
 same capped at the Taylor support's size per equation (``DiscoveryConfig(max_terms=...)``, the front's point there).
 Per case the rows are ours (both), pysindy's strongest, its best at most the Taylor size, and the cross-validated best
 of each family (``FAMILIES``); above the rows, the issue's first target per case: ours at most the Taylor size
-against the best of pysindy's reported configurations at any size, from the first state.
+against the best of pysindy's reported configurations at any size, from the first state; and the issue's second
+target per case: every point of our default fit's front (``FrontPoint.coef``, its supports fitted on all runs by
+integral-form least squares; stored in the cache) scored like the rest on the held-out runs, against pysindy's best
+at that size or smaller (the larger equation's terms): the configuration its cross-validation picks among those, and
+the best of them on the held-out runs.
 
 The grid (``GRID_LEVELS`` x ``GRID_RUNS`` x ``GRID_SEEDS``, both truths; ``--full``) costs hours on one core:
 every case's results are written, atomically, to a cache folder (``--cache-dir``; default the suite's user cache,
@@ -33,7 +37,8 @@ seconds.  pysindy's results are kept per case; ours are recomputed when ``OURS_V
 entry is recomputed.
 
 Run ``python -m benchmarks.bench_strongest_peer [--full | --truths ... --levels 0.01 0.05 0.12 --runs 4 8 16]
-[--seeds 201] [--cache-dir DIR | --no-cache]``; without ``--full`` or a grid option only ``QUICK_CASES`` are run
+[--seeds 201] [--cache-dir DIR | --no-cache] [--cached-only]``; ``--cached-only`` tabulates the finished cases of an
+unfinished grid and lists the others; without ``--full`` or a grid option only ``QUICK_CASES`` are run
 (``make bench``: minutes on one core).
 """
 from __future__ import annotations
@@ -153,7 +158,7 @@ def loo_error(fit: Callable, derivs: Sequence, f_y: Sequence[float], f_slow: flo
 
 
 #: bump when ours changes: cached rows of ours from another version are recomputed (the peers' stay)
-OURS_VERSION = 6
+OURS_VERSION = 7
 #: the peer families whose cross-validated best is reported per case, by the prefix of their configurations' names
 FAMILIES = ("STLSQ", "SR3-L0", "SR3-L1", "E-STLSQ", "weak")
 
@@ -207,18 +212,29 @@ def peer_case(data, name: str, fit_runs: int) -> dict:
             "wall": time.perf_counter() - t0}
 
 
-def ours_case(data, cap: int) -> dict:
+def ours_case(data, cap: int, name: str) -> dict:
     """Ours with ``DiscoveryConfig()`` and capped at ``cap`` terms per equation (``max_terms``): coefficients,
-    selection modes and wall times."""
+    selection modes and wall times; and the default fit's front (``front``: per point its cap, terms per equation,
+    the discovery's own cross-validated error, whether selected, its coefficients and its long-time error from the
+    first state on the held-out runs, median)."""
     from fitting.selection.integral_discovery import DiscoveryConfig, discover_model
 
-    out = {}
+    out, f_slow = {}, bme.TRUTHS[name].f_slow
     for label, cfg in (("ours", DiscoveryConfig()), ("ours <= Taylor size", DiscoveryConfig(max_terms=cap))):
         t0 = time.perf_counter()
         res = discover_model(data.runs, data.derivs, cfg)
         out[label] = {"coef": res.coef.tolist(), "note": "; ".join(res.selection_modes),
                       "wall": time.perf_counter() - t0}
+        if label == "ours" and res.front is not None:
+            out["front"] = [{"max_terms": p.max_terms, "n_terms": list(p.n_terms), "cv_error": _finite(p.error),
+                             "selected": p.selected, "coef": p.coef.tolist(),
+                             "long_time": _finite(float(np.median(bme.long_time_errors(p.coef, data, f_slow))))}
+                            for p in res.front.points]
     return out
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
 
 
 def _row(name: str, level: float, seed: int, fit_runs: int, data, method: str, coef: NDArray, note: str,
@@ -241,7 +257,7 @@ def run_case(name: str, level: float, seed: int, fit_runs: int, cache: Path | No
     data = bme.make_data(name, level, seed, fit_runs)
     key = _case_key(name, level, seed, fit_runs)
     peer = _cached(cache / f"{key}_peer.json" if cache else None, lambda: peer_case(data, name, fit_runs))
-    ours = _cached(cache / f"{key}_ours_v{OURS_VERSION}.json" if cache else None, lambda: ours_case(data, cap))
+    ours = _cached(cache / f"{key}_ours_v{OURS_VERSION}.json" if cache else None, lambda: ours_case(data, cap, name))
     cv = {k: (np.inf if v is None else v) for k, v in peer["cv"].items()}
     coefs = {k: np.array(v) for k, v in peer["coef"].items()}
     picks = [("pysindy strongest (LOO CV)", min(coefs, key=cv.get))]
@@ -252,16 +268,76 @@ def run_case(name: str, level: float, seed: int, fit_runs: int, cache: Path | No
         members = [c for c in coefs if c.split()[0] == fam]
         if members:
             picks.append((f"pysindy {fam} (LOO CV)", min(members, key=cv.get)))
-    rows = [_row(name, level, seed, fit_runs, data, m, np.array(o["coef"]), o["note"], o["wall"])
-            for m, o in ours.items()]
+    rows = [_row(name, level, seed, fit_runs, data, m, np.array(ours[m]["coef"]), ours[m]["note"], ours[m]["wall"])
+            for m in ("ours", "ours <= Taylor size")]
     rows += [_row(name, level, seed, fit_runs, data, m, coefs[c], f"{c}; LOO error {100 * cv[c]:.2f} %",
                   peer["wall"]) for m, c in picks]
+    rows[0]["front"] = front_comparison(ours.get("front", []), coefs, cv, data, bme.TRUTHS[name].f_slow)
     for row in rows:
         print(f"[strongest-peer] {key} {row['method']}: {row['terms_per_eq']} terms, {row['outside']} outside, "
               f"{row['missed']} missed, coef err {100 * row['median_error']:.1f} %, long-time "
               f"{100 * row['long_time']:.2f} %, along {100 * row['long_time_along']:.2f} %; {row['note']}",
               file=sys.stderr, flush=True)
     return rows
+
+
+def front_comparison(front: list[dict], coefs: dict[str, NDArray], cv: dict[str, float], data,
+                     f_slow: float) -> list[dict]:
+    """The issue's second target per point of our front: its size (the larger equation's terms), our long-time error
+    from the first state on the held-out runs (median), and pysindy's at that size or smaller: the best of its
+    configurations on the held-out runs (``best``) and the one its cross-validation picks among them (``cv``)."""
+    size = {c: int((v != 0).sum(axis=1).max()) for c, v in coefs.items()}
+    held = {c: float(np.median(bme.long_time_errors(v, data, f_slow))) for c, v in coefs.items()}
+    out = []
+    for p in front:
+        n = max(p["n_terms"])
+        small = [c for c in coefs if size[c] <= n]
+        ours = np.inf if p["long_time"] is None else p["long_time"]
+        best = min(small, key=held.get) if small else None
+        pick = min(small, key=cv.get) if small else None
+        out.append({"size": n, "n_terms": p["n_terms"], "selected": p["selected"], "ours": ours,
+                    "best": held[best] if best else None, "best_cfg": best,
+                    "cv": held[pick] if pick else None, "cv_cfg": pick})
+    return out
+
+
+def _ratio(ours: float, peer: float | None) -> float:
+    """ours / peer; 1 where both blew up, NaN where pysindy has no configuration at that size (nothing to beat)."""
+    if peer is None:
+        return float("nan")
+    if not np.isfinite(ours) and not np.isfinite(peer):
+        return 1.0
+    return ours / peer if peer > 0 else float("inf")
+
+
+def targets_front(rows: list[dict]) -> list[str]:
+    """The issue's second target per case: at every size on our front (the default fit's path), our long-time error
+    from the first state at most pysindy's best at that size or smaller; against the configuration its
+    cross-validation picks among those and against the best of them on the held-out runs; the worst point's ratio."""
+    out = ["| truth | level | seed | runs | front points (sizes with a pysindy model) | met vs CV pick | worst ratio "
+           "(size) | met vs best | worst ratio (size) |", "|---|---|---|---|---|---|---|---|---|"]
+    met = {"cv": [], "best": []}
+    for r in rows:
+        if r["method"] != "ours" or not r.get("front"):
+            continue
+        pts = [p for p in r["front"] if p["best"] is not None]
+        cells = []
+        for k in ("cv", "best"):
+            ratios = [(_ratio(p["ours"], p[k]), p["size"]) for p in pts]
+            ok = all(v <= 1 for v, _ in ratios)
+            met[k].append(ok)
+            worst = max(ratios, default=(float("nan"), 0))
+            lost = ", ".join(str(n) for v, n in ratios if not v <= 1)
+            cells.append(f"{'yes' if ok else 'no'} ({sum(v <= 1 for v, _ in ratios)} of {len(ratios)}"
+                         f"{'; lost at ' + lost if lost else ''}) | {worst[0]:.2f} ({worst[1]})")
+        out.append(f"| {r['truth']} | {100 * r['level']:g} % | {r['seed']} | {r['fit_runs']} | {len(r['front'])} "
+                   f"({len(pts)}) | {cells[0]} | {cells[1]} |")
+    for k, what in (("cv", "the configuration pysindy's cross-validation picks"),
+                    ("best", "the best of pysindy's configurations on the held-out runs")):
+        if met[k]:
+            out += ["", f"At every size on our front at most {what} at that size or smaller: {sum(met[k])} of "
+                        f"{len(met[k])} cases ({100 * np.mean(met[k]):.0f} %; target 90 %)."]
+    return out
 
 
 def table(rows: list[dict]) -> list[str]:
@@ -320,6 +396,9 @@ def main(argv: list[str] | None = None) -> str:
     p.add_argument("--cache-dir", type=Path, default=None,
                    help="per-case results (default: the suite's user cache, bench/strongest_peer)")
     p.add_argument("--no-cache", action="store_true", help="compute every case afresh and write nothing")
+    p.add_argument("--cached-only", action="store_true",
+                   help="tabulate only the cases whose results are all in the cache (an unfinished grid's table, in "
+                        "seconds); the others are listed as not measured")
     args = p.parse_args(argv if argv is not None else [])  # run by benchmarks.__main__: its own argv is not ours
     quick = not args.full and args.truths is None and args.levels is None and args.runs is None
     args.truths = args.truths or list(bme.TRUTHS)
@@ -333,17 +412,25 @@ def main(argv: list[str] | None = None) -> str:
     else:  # the cheaper run counts first: an interrupted grid has every truth and level at them
         cases = [(name, level, seed, n) for seed in args.seeds for n in sorted(args.runs) for level in args.levels
                  for name in args.truths]
+    missing = []
+    if args.cached_only and cache is not None:
+        done = [c for c in cases if all((cache / f"{_case_key(*c[:3], c[3])}_{part}.json").exists()
+                                        for part in ("peer", f"ours_v{OURS_VERSION}"))]
+        missing = [c for c in cases if c not in done]
+        cases = done
     rows = [r for case in cases for r in run_case(*case, cache)]
+    note = ([f"Not measured (not in the cache): {', '.join(f'{n} {100 * v:g} % seed {s} {r} runs' for n, v, s, r in missing)}.",
+             ""] if missing else [])
     if quick:
         cmd = (f"`python -m benchmarks.bench_strongest_peer --seeds {' '.join(map(str, args.seeds))}` (the quick "
                f"subset {', '.join(f'{n} {100 * v:g} % {r} runs' for n, v, r in QUICK_CASES)}; `--full` for the grid)")
         return "\n".join(["## The discovery against pysindy's strongest configuration (leave-one-run-out CV)", "", cmd,
-                          "", *targets(rows), "", *table(rows), ""])
+                          "", *note, *targets(rows), "", *targets_front(rows), "", *table(rows), ""])
     cmd = (f"`python -m benchmarks.bench_strongest_peer --truths {' '.join(args.truths)} --levels "
            f"{' '.join(f'{v:g}' for v in args.levels)} --seeds {' '.join(map(str, args.seeds))} --runs "
-           f"{' '.join(map(str, args.runs))}`")
+           f"{' '.join(map(str, args.runs))}{' --cached-only' if args.cached_only else ''}`")
     return "\n".join(["## The discovery against pysindy's strongest configuration (leave-one-run-out CV)", "", cmd, "",
-                      *targets(rows), "", *table(rows), ""])
+                      *note, *targets(rows), "", *targets_front(rows), "", *table(rows), ""])
 
 
 if __name__ == "__main__":

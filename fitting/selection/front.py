@@ -21,7 +21,7 @@ significance and integral-form held-out pruning, :mod:`fitting.selection.integra
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -114,6 +114,9 @@ class FrontPoint:
         Held-out error along the runs (:func:`long_time_error_along`; mean over folds) and its standard error (NaN
         where the held-out runs carry no state estimates).
     fold_errors_along : tuple of float
+    coef : ndarray (2, 35) or None
+        The point's coefficients fitted on all runs (integral-form least squares on its supports; SI), the model a
+        user takes at this size without refitting (None where not computed).
     """
 
     max_terms: int
@@ -125,6 +128,7 @@ class FrontPoint:
     error_along: float = float("nan")
     error_along_se: float = float("nan")
     fold_errors_along: tuple[float, ...] = ()
+    coef: NDArray[np.float64] | None = field(default=None, compare=False, repr=False)
 
     @property
     def n_terms(self) -> tuple[int, int]:
@@ -135,7 +139,9 @@ class FrontPoint:
                 "terms": {eq: list(self.terms[eq]) for eq in EQUATION_NAMES}, "error": _num(self.error),
                 "error_se": _num(self.error_se), "fold_errors": [_num(e) for e in self.fold_errors],
                 "error_along": _num(self.error_along), "error_along_se": _num(self.error_along_se),
-                "fold_errors_along": [_num(e) for e in self.fold_errors_along], "selected": self.selected}
+                "fold_errors_along": [_num(e) for e in self.fold_errors_along], "selected": self.selected,
+                **({"coefficients": {eq: {TERMS[j]: float(self.coef[q, j]) for j in np.flatnonzero(self.coef[q])}
+                                     for q, eq in enumerate(EQUATION_NAMES)}} if self.coef is not None else {})}
 
 
 def _num(x: float) -> float | None:
@@ -236,10 +242,15 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
             fold_err.append(float(np.mean([long_time_error(model, held_out[r]) for r in test])))
             fold_along.append(float(np.mean([long_time_error_along(model, held_out[r]) for r in test])))
         (mean, se), (along, along_se) = _fold_mean(fold_err), _fold_mean(fold_along)
+        everything = range(R)
+        coef = np.zeros((2, len(TERMS)))
+        for q, cols in enumerate(supports):
+            coef[q, list(cols)] = fit_on_runs(designs[q], everything, cols)
         points.append(FrontPoint(int(cap), {eq: tuple(TERMS[j] for j in s) for eq, s in zip(EQUATION_NAMES, supports)},
                                  mean, se, tuple(fold_err),
                                  selected=all(tuple(sorted(f[2])) == s for f, s in zip(fronts, supports)),
-                                 error_along=along, error_along_se=along_se, fold_errors_along=tuple(fold_along)))
+                                 error_along=along, error_along_se=along_se, fold_errors_along=tuple(fold_along),
+                                 coef=coef))
     return Front(tuple(points), len(folds))
 
 
