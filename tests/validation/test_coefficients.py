@@ -130,10 +130,14 @@ def test_compare_cli(static, rng, tmp_path, default_model):
 
 @pytest.mark.parametrize("content,message", [("{", "not valid JSON"), ('{"a": 1}', "no 'equations'"),
                                              ('{"equations": {"yddot": {"zz": 1}}}', "bad term")])
-def test_compare_cli_bad_model(tmp_path, content, message):
+def test_compare_cli_bad_model(tmp_path, content, message, capsys):
+    """The command's entry point in this process (``python -m validation compare`` itself runs in test_compare_cli):
+    exit 2, one line naming model.json and the problem, nothing written."""
+    from validation.cli import main
+
     (tmp_path / "model.json").write_text(content)
-    r = subprocess.run([sys.executable, "-m", "validation", "compare", "--model", str(tmp_path / "model.json"),
-                        "--data", str(tmp_path), "--out", str(tmp_path / "out")], capture_output=True, text=True)
-    assert r.returncode == 2
-    assert len(r.stderr.strip().splitlines()) == 1 and message in r.stderr and "model.json" in r.stderr
+    assert main(["compare", "--model", str(tmp_path / "model.json"), "--data", str(tmp_path),
+                 "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err and "model.json" in err
     assert not (tmp_path / "out").exists()

@@ -76,6 +76,22 @@ def write_twin_like_dataset(path, **settings) -> dict:
     return write(path, TwinLikeConfig(**{"pressure_error": 0.03, **settings}))
 
 
+def cached_twin_like_dataset(cache, **settings):
+    """(data directory, truth) of :func:`write_twin_like_dataset` with ``settings``, made once per version of the
+    sources in the pipeline cache (tests/conftest.py), so that the files reading the same data set share one build:
+    read it, never write into it.  The truth is kept beside the data set (truth.json), out of the diagnosis's view."""
+    import json
+
+    from validation.blind.twin_like import TwinLikeConfig
+
+    def build(folder):
+        truth = write_twin_like_dataset(folder / "data", **settings)
+        (folder / "truth.json").write_text(json.dumps(truth))
+
+    folder = cache.folder("twin-like", repr(TwinLikeConfig(**{"pressure_error": 0.03, **settings})), build)
+    return folder / "data", json.loads((folder / "truth.json").read_text())
+
+
 #: the cubic hinge term of the discovery tests [1/s^2]: -CUBIC_HINGE theta^3 in thetaddot (on the soft hinge, 1.7 Hz,
 #: about 35 % of the Gor'kov restoring acceleration at theta = 0.3)
 CUBIC_HINGE = 2.4e4
@@ -87,40 +103,35 @@ Y_DAMPING = 6.0e8
 
 
 @pytest.fixture(scope="session")
-def drift_dataset(tmp_path_factory):
+def drift_dataset(pipeline_cache):
     """(data directory, truth): 8 runs of 3 s with the pressure drifting by DRIFT (periods 1.5-4 s)."""
-    path = tmp_path_factory.mktemp("twin_like") / "drift"
-    return path, write_twin_like_dataset(path, seed=2, drift=DRIFT)
+    return cached_twin_like_dataset(pipeline_cache, seed=2, drift=DRIFT)
 
 
 @pytest.fixture(scope="session")
-def cubic_dataset(tmp_path_factory):
+def cubic_dataset(pipeline_cache):
     """(data directory, truth): 8 runs of 3 s with -CUBIC_HINGE theta^3 added to thetaddot."""
-    path = tmp_path_factory.mktemp("twin_like") / "cubic"
-    return path, write_twin_like_dataset(path, seed=3, cubic_hinge=CUBIC_HINGE)
+    return cached_twin_like_dataset(pipeline_cache, seed=3, cubic_hinge=CUBIC_HINGE)
 
 
 @pytest.fixture(scope="session")
-def y_damping_dataset(tmp_path_factory):
+def y_damping_dataset(pipeline_cache):
     """(data directory, truth): 8 runs of 3 s with -Y_DAMPING y^2 ydot added to yddot, y from the true equilibrium,
     which lies 77 um above the nominal one (the data's y origin: a true pressure 7.5 % above nominal)."""
-    path = tmp_path_factory.mktemp("twin_like") / "y_damping"
-    return path, write_twin_like_dataset(path, seed=4, y_damping=Y_DAMPING, pressure_error=0.1)
+    return cached_twin_like_dataset(pipeline_cache, seed=4, y_damping=Y_DAMPING, pressure_error=0.1)
 
 
 @pytest.fixture(scope="session")
-def centred_y_damping_dataset(tmp_path_factory):
+def centred_y_damping_dataset(pipeline_cache):
     """(data directory, truth): as y_damping_dataset, with the true equilibrium near the data's origin (the true
     pressure within 3 % of nominal)."""
-    path = tmp_path_factory.mktemp("twin_like") / "centred_y_damping"
-    return path, write_twin_like_dataset(path, seed=4, y_damping=Y_DAMPING)
+    return cached_twin_like_dataset(pipeline_cache, seed=4, y_damping=Y_DAMPING)
 
 
 @pytest.fixture(scope="session")
-def clean_dataset(tmp_path_factory):
+def clean_dataset(pipeline_cache):
     """(data directory, truth): 8 runs of 3 s of the surrogate alone (a constant pressure off nominal)."""
-    path = tmp_path_factory.mktemp("twin_like") / "clean"
-    return path, write_twin_like_dataset(path, seed=1)
+    return cached_twin_like_dataset(pipeline_cache, seed=1)
 
 
 # ---- a dummy effect, registered for one test (the effect registry's promise) ----------------------------------

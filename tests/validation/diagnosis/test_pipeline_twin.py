@@ -80,7 +80,8 @@ def test_no_effect_names_nothing(pipeline_cache):
 
 @pytest.mark.slow
 def test_partly_corrupt_dataset(tmp_path, pipeline_cache):
-    cached, _ = _twin(pipeline_cache, {"pair_scattering": {"kappa": 15000.0}}, seed=11)
+    # the single-effect case's data set (one twin for both tests), two of its ten runs corrupted in a copy
+    cached, _ = _twin(pipeline_cache, {"pair_scattering": SINGLE["pair_scattering"]})
     data = Path(shutil.copytree(cached, tmp_path / "data"))  # corrupted below: a copy
     files = sorted(data.glob("run*.csv"))
     text = files[0].read_text().splitlines()
@@ -102,13 +103,14 @@ def test_partly_corrupt_dataset(tmp_path, pipeline_cache):
         diag.effect("not_a_candidate")
 
 
-def test_diagnose_cli_bad_directory(tmp_path):
-    import subprocess
-    import sys
+def test_diagnose_cli_bad_directory(tmp_path, capsys):
+    """The command's entry point in this process (``python -m validation`` itself runs in
+    test_diagnose_cli_writes_diagnosis_report_and_logs_progress): exit 2, one line naming the folder, nothing written."""
+    from validation.cli import main
 
-    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(tmp_path / "nope"), "--out", str(tmp_path / "o")],
-                       capture_output=True, text=True)
-    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "nope" in r.stderr
+    assert main(["diagnose", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "nope" in err
     assert not (tmp_path / "o").exists()
 
 
