@@ -51,21 +51,28 @@ PRESSURE_MODEL_ERROR = 3.0e-4
 #: Relative systematic standard errors of the named effects' parameters (and the cavity's derived mode), by effect and
 #: parameter: the model errors the jackknife does not see, added to its error in quadrature
 #: (:func:`with_effect_model_errors`).  Each is the smallest d for which at least 92 % of the named true parameters'
-#: intervals in the tuning blind studies (realistic seeds 9162 and 7301, inviscid 7302: 78 scored cases) hold the
-#: truth, a jackknife interval that missed counted as held once |estimate - truth| <= t(0.975, 9) d |truth| (the
-#: systematic part alone: a sufficient condition, the jackknife part widens it further).  Their causes: linear damping scored against the air's rates, whose hinge damping is not linear
-#: (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval missed); the stiffnesses' and
-#: asymmetries' small offsets of the calibrated simulation from the twin (kappa 0.15-0.21 %, as the pressure's
-#: PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling or sharing pair scattering's y-theta
-#: coupling (3-29 %); the cavity's expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping:
-#: 7 cases only).  Velocity coupling has one named case in the tuning studies: no systematic part (its column
-#: bias, docs/diagnosis.md Known limitations, is not in its intervals).  Checked on fresh seeds in
-#: docs/diagnosis.md "Coverage of the 95 % intervals".
+#: intervals in the tuning blind studies hold the truth.  The first tuning studies (realistic seeds 9162 and 7301,
+#: inviscid 7302: 78 scored cases) recorded whether the jackknife's interval held the truth and the error: there a
+#: jackknife interval that missed counts as held once |estimate - truth| <= t(0.975, 9) d |truth| (the systematic part
+#: alone: a sufficient condition, the jackknife part widens it further).  The realistic studies of seeds 9611-9613
+#: (163 scored cases, no resonator) record each estimate, its jackknife error and the truth, so that there the interval
+#: with d is checked as stated: c_theta's d (none before; 25 of 35 held) and beta1's (9 % before, whose intervals held
+#: 34 of 34 at a median half-width of 23 % against a median error of 4.5 %) are set on them, beta1's as the larger of
+#: what they and all six studies pooled ask (0.97 % and 1.6 %).  Their causes: linear damping scored against the air's
+#: rates, whose hinge damping is not linear (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval
+#: missed); the stiffnesses' and asymmetries' small offsets of the calibrated simulation from the twin (kappa
+#: 0.15-0.21 %, as the pressure's PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling or
+#: sharing pair scattering's y-theta coupling (3-29 % in the first studies, up to 6 % in 9611-9613); c_theta, the
+#: hinge's drag, 9.6 % off (median) with errors up to 5.7 of its jackknife errors (its cause not separated; the
+#: air's hinge damping, which linear damping beside it does not describe exactly, acts on the same rate); the cavity's expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping: 7 cases
+#: only).  Velocity coupling has one named case in the first tuning studies: no systematic part (its column bias,
+#: docs/diagnosis.md Known limitations, is not in its intervals).  Checked on fresh seeds in docs/diagnosis.md
+#: "Coverage of the 95 % intervals".
 EFFECT_MODEL_ERROR: dict[str, dict[str, float]] = {
     "linear_damping": {"gamma_y": 2.2e-3, "gamma_theta": 1.4e-2},
-    "quadratic_drag": {"c_y": 3.2e-3},
+    "quadratic_drag": {"c_y": 3.2e-3, "c_theta": 9.9e-2},
     "pair_scattering": {"kappa": 7.2e-4},
-    "mirror_asymmetry": {"beta0": 1.4e-3, "beta1": 9.0e-2},
+    "mirror_asymmetry": {"beta0": 1.4e-3, "beta1": 1.6e-2},
     "cavity_lag": {"quality_factor": 0.14, "detuning_half_widths": 0.38},
 }
 #: The method's name, as diagnosis.json records it.
