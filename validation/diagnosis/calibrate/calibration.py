@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..prepare.candidate_effects import effect_regressors, parameter_slots
+from ..prepare.candidate_effects import CANDIDATE_EFFECTS, effect_regressors, height_expansion, parameter_slots
 from ..prepare.runs import uses_integral_form
 from ..prepare.simulation_terms import SimulationTerms
 
@@ -93,30 +93,63 @@ def _depends_on_node_height(name: str) -> bool:
     return name not in EFFECT_TYPES or EFFECT_TYPES[name].depends_on_node_height
 
 
-def _height_search_rows(terms: SimulationTerms, effects: Sequence[str], y_effects_cols: Sequence[int]):
+def _height_search_rows(terms: SimulationTerms, effects: Sequence[str], y_effects_cols: Sequence[int],
+                        expansions: dict | None = None):
     """``z0 -> (x, b)``: the integral-form y system of :func:`vertical_system` reduced to its R factor.
 
-    The acoustic column is A + B cos(2k z0) + C sin(2k z0) (:meth:`SimulationTerms.integral_known_harmonics`)
-    and, for effects that do not depend on the height above the node, every other column and the target
-    are the same at every z0.  With R the triangular factor of M = [A B C E b] (all runs stacked),
+    The acoustic column is A + B cos(2k z0) + C sin(2k z0) (:meth:`SimulationTerms.integral_known_harmonics`);
+    for effects that do not depend on the height above the node every other column and the target are the same at
+    every z0, and an effect that does (the cavity's lag) is a fixed combination of a few blocks of columns with
+    weights that depend on z0 alone (``expansions``: name -> :class:`~validation.diagnosis.prepare.cavity_lag.
+    HeightExpansion`).  With R the triangular factor of M = [A B C E blocks b] (all runs stacked),
     ``||M v|| = ||R v||`` for every v, so the least squares at any z0 is solved on R's few rows: the same
     solution and residual to round-off, without touching the tens of thousands of rows again.
     """
+    expansions = expansions or {}
     harmonics = terms.integral_known_harmonics(0)
-    cols = terms.integral_effect_columns(0.0, effects, None, 0)  # the same at every z0 for these effects
+    fixed = [n for n in effects if n not in expansions]
+    cols = terms.integral_effect_columns(0.0, fixed, None, 0)  # the same at every z0 for these effects
+    # each effect's y-acting parameters (the calibration's columns, in the order of ``effects``)
+    y_params, first = {}, 1
+    for n in effects:
+        count = len(CANDIDATE_EFFECTS[n])
+        y_params[n] = [c - first for c in y_effects_cols if first <= c < first + count]
+        first += count
     blocks = []
-    for r, ((a, b_, c), rest), e in zip(terms.runs, harmonics, cols):
-        e = e[:, [j - 1 for j in y_effects_cols]]
-        blocks.append(np.column_stack([a, b_, c, e, r.integral.target(0) - rest]))
+    for i, (r, ((a, b_, c), rest), e) in enumerate(zip(terms.runs, harmonics, cols)):
+        parts, start = [a, b_, c], 0
+        for n in fixed:
+            count = len(CANDIDATE_EFFECTS[n])
+            parts.append(e[:, [start + j for j in y_params[n]]])
+            start += count
+        for n, ex in expansions.items():  # (n_blocks, rows, p) -> (rows, n_blocks * p), block-major
+            sel = ex.blocks[i][:, :, y_params[n]]
+            parts.append(np.transpose(sel, (1, 0, 2)).reshape(sel.shape[1], -1))
+        blocks.append(np.column_stack(parts + [r.integral.target(0) - rest]))
     m = np.vstack(blocks)
     r_factor = np.linalg.qr(m, mode="r")
-    n_eff = m.shape[1] - 4
     two_k = 2.0 * terms.k
+    # where each effect's y parameters sit among the solution's columns (after the pressure's)
+    out_col, k = {}, 1
+    for n in effects:
+        out_col[n] = list(range(k, k + len(y_params[n])))
+        k += len(y_params[n])
 
     def rows(z0: float):
-        combo = np.zeros((m.shape[1], 1 + n_eff))
+        combo = np.zeros((m.shape[1], k))
         combo[:3, 0] = (1.0, np.cos(two_k * z0), np.sin(two_k * z0))
-        combo[3:3 + n_eff, 1:] = np.eye(n_eff)
+        row = 3
+        for n in fixed:
+            for j in out_col[n]:
+                combo[row, j] = 1.0
+                row += 1
+        for n, ex in expansions.items():
+            w = ex.weights(z0)
+            p = len(out_col[n])
+            for b, wb in enumerate(w):
+                for j_i, j in enumerate(out_col[n]):
+                    combo[row + b * p + j_i, j] = wb
+            row += len(w) * p
         return r_factor @ combo, r_factor[:, -1]
 
     return rows
@@ -149,8 +182,10 @@ def calibrate(terms: SimulationTerms, effects: Sequence[str] = (), z0_window: fl
         x, b = vertical_system(terms, z0, effects)
         return x[:, [0] + y_effects_cols], b
 
-    if uses_integral_form(terms.runs) and not any(_depends_on_node_height(n) for n in effects):
-        solve_rows = _height_search_rows(terms, effects, y_effects_cols)
+    if uses_integral_form(terms.runs):
+        expansions = {n: height_expansion(n, terms.problem, terms.runs, 0) for n in effects if _depends_on_node_height(n)}
+        if all(ex is not None for ex in expansions.values()):
+            solve_rows = _height_search_rows(terms, effects, y_effects_cols, expansions)
 
     def solve_y(z0: float):
         x, b = solve_rows(z0)

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from acousim.dynamics.resonator import CavityMode
 from acousim.medium import Medium
 
-from ..prepare.candidate_effects import CANDIDATE_EFFECTS, effect_regressors, parameter_vector
+from ..prepare.candidate_effects import CANDIDATE_EFFECTS, parameter_vector
 from ..prepare.cavity_lag import CavityGains, mode_from_gains
 from ..prepare.problem import DiagnosisProblem
 from ..prepare.runs import uses_integral_form
@@ -138,9 +138,8 @@ def _fit_effect_parameters(terms: SimulationTerms, cal: Calibration, effects: Se
         known = terms.integral_known(z0, 1)
         cols = terms.integral_effect_columns(z0, effects, cal.equilibrium_height_m, 1)
         w_t = 1.0 / np.sqrt(max(sum(float(np.sum(r.integral.target(1) ** 2)) for r in runs), 1e-300))
-    for i, (r, (fz, qt)) in enumerate(zip(runs, forces)):
-        z = z0 + r.state[:, 0]
-        regs = r.smooth(np.concatenate([effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m, terms.problem) for n in effects], axis=2))
+    regressors = terms.effect_accelerations(z0, effects, cal.equilibrium_height_m)
+    for i, (r, (fz, qt), regs) in enumerate(zip(runs, forces, regressors)):
         rows.append(w_y * regs[:, 0, :])
         rhs.append(w_y * (r.accel[:, 0] - (s_cal * fz - terms.g)))
         if integral:
@@ -202,14 +201,16 @@ def _acceleration_residuals(terms: SimulationTerms, cal: Calibration, params: di
     """Per run: the acceleration residuals a_data - a_sim (n, 2) and the model's accelerations a_sim, the
     calibrated simulation plus the effects ``params`` filtered as the data."""
     forces = terms.forces(cal.z_origin_m)
+    names = list(params)
+    pv = parameter_vector(params, names)
+    regressors = terms.effect_accelerations(cal.z_origin_m, names, cal.equilibrium_height_m)
     res, pred = [], []
-    for r, (fz, qt) in zip(terms.runs, forces):
+    for r, (fz, qt), regs in zip(terms.runs, forces, regressors):
         a_y = cal.pressure_scale * fz - terms.g
         a_t = cal.pressure_scale * qt + terms.centrifugal(r)
         a = np.column_stack([a_y, a_t])
-        z = cal.z_origin_m + r.state[:, 0]
-        for n, pv in params.items():
-            a = a + r.smooth(effect_regressors(n, r.state, z, terms.k, cal.equilibrium_height_m, terms.problem)) @ np.array([pv[p] for p in CANDIDATE_EFFECTS[n]])
+        if pv.size:
+            a = a + regs @ pv
         pred.append(a)
         res.append(r.accel - a)
     return res, pred

@@ -53,6 +53,8 @@ def discovery_step(problem: DiagnosisProblem, found: Identified, config: "Diagno
                        min_absolute_improvement=config.discovery_min_improvement,
                        min_relative_improvement=config.min_relative_improvement)
     discovery = discover(final)
+    # the model's member of an indistinguishable pair stands for both: the other's library copy is no rival
+    partners = {p.kept_in_model: next(e for e in p.effects if e != p.kept_in_model) for p in found.pairs}
     # the candidates are judged against the terms found on top of them, and against the dissipative terms
     # found without them: a candidate damping can absorb the energy loss of a dissipation it does not
     # describe, leaving nothing to discover on top of it
@@ -65,7 +67,8 @@ def discovery_step(problem: DiagnosisProblem, found: Identified, config: "Diagno
         judged = [e for e in identified if e not in by_trajectory]
         if rivals.empty or not judged:
             continue
-        kept, pvals = judge_candidates(problem, judged, rivals, alpha=config.alpha, group=AIR_DAMPINGS)
+        kept, pvals = judge_candidates(problem, judged, rivals, alpha=config.alpha, group=AIR_DAMPINGS,
+                                       partners=partners)
         if kept != judged:
             replaced.update({c: pvals[c] for c in judged if c not in kept})
             identified = [e for e in identified if e in kept or e in by_trajectory]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -90,7 +90,8 @@ def _least_squares(cols: Sequence[NDArray], rhs: Sequence[NDArray]) -> NDArray[n
 
 
 def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], discovery: Discovery, alpha: float = 0.01,
-                     folds: int = 5, group: Sequence[str] = ()) -> tuple[list[str], dict[str, float]]:
+                     folds: int = 5, group: Sequence[str] = (), partners: Mapping[str, str] | None = None
+                     ) -> tuple[list[str], dict[str, float]]:
     """The identified candidates that still improve held-out runs once the discovered terms are fitted.
 
     Each candidate (last added first) is tested by the one-sided sign-flip test of the per-run held-out
@@ -101,7 +102,9 @@ def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], disco
     dampings can together mimic a dissipation that neither describes, and each then still improves on top of
     the other (the effects are fitted before the discovered terms).  A candidate is judged against the
     discovered terms without the library copies of its own columns (:data:`LIBRARY_EQUIVALENTS`): linear
-    damping is not replaced by the terms ``ydot`` and ``thetadot``.
+    damping is not replaced by the terms ``ydot`` and ``thetadot``.  ``partners`` maps the model's member of an
+    indistinguishable pair to the other member, which it stands for: the other's copies are not its rivals either
+    (the cavity's lag kept for the pair it makes with linear damping is not replaced by ``ydot``).
 
     Returns
     -------
@@ -110,9 +113,11 @@ def judge_candidates(problem: DiagnosisProblem, identified: Sequence[str], disco
     """
     from ..prepare.candidate_effects import LIBRARY_EQUIVALENTS
 
+    partners = partners or {}
+
     def rivals(tested: Sequence[str]) -> Discovery:  # the discovered terms, without the tested candidates' copies
         own: dict[str, list[str]] = {e: [] for e in EQUATIONS}
-        for c in tested:
+        for c in list(tested) + [partners[c] for c in tested if c in partners]:
             for e, names in LIBRARY_EQUIVALENTS.get(c, {}).items():
                 own[e] += names
         return discovery.without(own)

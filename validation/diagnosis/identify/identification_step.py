@@ -10,6 +10,7 @@ import numpy as np
 
 from ..calibrate.gap_model import GapFit, fit_gap_model
 from ..calibrate.metrics import fit_gaps, noise_floors, scalar_gap
+from ..prepare.candidate_effects import alias_partners, default_candidates
 from ..prepare.problem import DiagnosisProblem
 from .elimination import backward_check
 from .identification import Identification, IdentificationRound, identify_effects
@@ -58,8 +59,13 @@ def identification_step(problem: DiagnosisProblem, config: "DiagnoseConfig", pro
     held_out_cache: dict = {}
     ident = identify_effects(problem, config.candidates, alpha=config.alpha, thresholds=config.thresholds,
                              progress=progress, cache=held_out_cache)
-    elim = backward_check(problem, ident.identified, alpha=config.alpha, thresholds=config.thresholds, log=log,
-                          cache=held_out_cache)
+    # a candidate that can stand for a chosen one is checked beside it (the greedy rounds judged it only on top)
+    tried = default_candidates() if config.candidates is None else config.candidates
+    partners = alias_partners(ident.identified, tried) if ident.identified else []
+    if partners:
+        log("backward check: %s checked beside %s, which can stand for it", partners, ident.identified)
+    elim = backward_check(problem, list(ident.identified) + partners, alpha=config.alpha, thresholds=config.thresholds,
+                          log=log, cache=held_out_cache)
     identified = list(elim.model_effects)  # what the model fits; the named ones are decided in the summary
     ident, identified, oe = trajectory_test(problem, ident, elim, identified, config, conditions, log)
     return Identified(ident, elim, list(elim.indistinguishable), identified, base, fit_gap_model(problem, identified),

@@ -14,9 +14,9 @@ from numpy.typing import NDArray
 
 from acousim.dynamics.effects import EFFECT_TYPES
 
-from .cavity_lag import CAVITY_LAG_PARAMETERS, cavity_reference
+from .cavity_lag import CAVITY_LAG_PARAMETERS, height_expansion as _cavity_height_expansion, problem_columns
 
-__all__ = ["CANDIDATE_EFFECTS", "MODEL_CANDIDATES", "default_candidates", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "parameter_slots", "acting_components", "parameter_vector"]
+__all__ = ["CANDIDATE_EFFECTS", "MODEL_CANDIDATES", "default_candidates", "LIBRARY_EQUIVALENTS", "LEADING_LIBRARY_TERMS", "own_library_columns", "effect_regressors", "HEIGHT_EXPANSIONS", "height_expansion", "ALIAS_CANDIDATES", "alias_partners", "parameter_slots", "acting_components", "parameter_vector"]
 
 
 def _is_candidate(cls: type) -> bool:
@@ -31,6 +31,9 @@ def _is_candidate(cls: type) -> bool:
 MODEL_CANDIDATES: dict[str, tuple[tuple[str, ...], tuple[int, ...]]] = {
     "cavity_lag": (CAVITY_LAG_PARAMETERS, (0, 1)),
 }
+#: Candidates whose columns depend on the origin height through a few fixed blocks of columns
+#: (:func:`height_expansion`): name -> ``(problem, runs, q) -> HeightExpansion | None``.
+HEIGHT_EXPANSIONS = {"cavity_lag": _cavity_height_expansion}
 
 
 class _RegisteredEffects(Mapping[str, tuple[str, ...]]):
@@ -85,6 +88,23 @@ LEADING_LIBRARY_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
 }
 
 
+#: Candidates that can stand for one another on a data set, so that the one the greedy rounds did not choose is checked
+#: beside the chosen one (:func:`alias_partners`): the cavity's lag damps y with a rate that varies over a cycle as
+#: F_Z^2, which runs at one amplitude do not resolve from linear damping's constant rate (measured on twin data with
+#: linear damping of y alone at one drop amplitude: the greedy rounds chose the cavity, and nothing was named).
+ALIAS_CANDIDATES: dict[str, tuple[str, ...]] = {"cavity_lag": ("linear_damping",), "linear_damping": ("cavity_lag",)}
+
+
+def alias_partners(chosen: Sequence[str], candidates: Sequence[str]) -> list[str]:
+    """The candidates (among ``candidates``) that the greedy rounds did not choose but that can stand for a chosen
+    effect (:data:`ALIAS_CANDIDATES`): the backward check tests them beside it, so that the two are one
+    indistinguishable verdict where the data cannot tell them apart, and the better one is named where they can."""
+    out: list[str] = []
+    for name in chosen:
+        out += [c for c in ALIAS_CANDIDATES.get(name, ()) if c in candidates and c not in chosen and c not in out]
+    return out
+
+
 def own_library_columns(effects: Sequence[str]) -> dict[str, list[str]]:
     """Per equation, the library terms that stand for the columns of ``effects`` (:data:`LIBRARY_EQUIVALENTS` and
     :data:`LEADING_LIBRARY_TERMS`)."""
@@ -125,16 +145,9 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
     if name in MODEL_CANDIDATES:
         if problem is None:
             raise ValueError(f"the candidate {name} needs the diagnosis problem's force model")
-        from .cavity_lag import cavity_lag_columns
-
-        fm = problem.surrogate()
-        st = np.array(state, float, copy=True).reshape(-1, 4)
-        z_com = np.broadcast_to(np.asarray(z_com, float), st[:, 0].shape)
         # the cavity's detuning x is defined with the dimer at rest: at the calibrated equilibrium (the data's
         # origin when none is given)
-        rest = (float(np.mean(z_com - st[:, 0])) if z_eq is None else float(z_eq)) - fm.z_eq
-        st[:, 0] = z_com - fm.z_eq
-        return cavity_lag_columns(fm, st, rest_y=rest, reference=cavity_reference(problem))
+        return problem_columns(problem, state, z_com, z_eq)
     y, yd, th, thd = np.asarray(state, float).T
     z_com = np.broadcast_to(np.asarray(z_com, float), y.shape)
     if z_eq is None:
@@ -142,6 +155,15 @@ def effect_regressors(name: str, state: NDArray, z_com: NDArray, wavenumber: flo
     else:
         y_eff, z_ref = z_com - z_eq, z_eq
     return EFFECT_TYPES[name].regressors(y_eff, yd, th, thd, wavenumber, z_ref)
+
+
+def height_expansion(name: str, problem, runs, q: int):
+    """The integral-form columns of coordinate q of effect ``name`` on ``runs`` at every origin height z0, the
+    effects' y from the data's origin, as fixed blocks with weights in z0
+    (:class:`~validation.diagnosis.prepare.cavity_lag.HeightExpansion`); None when the effect has none (its columns
+    are then evaluated at each trial height)."""
+    build = HEIGHT_EXPANSIONS.get(name)
+    return None if build is None else build(problem, runs, q)
 
 
 def parameter_slots(effects: Sequence[str], eq: int) -> list[tuple[str, str, int]]:

@@ -44,8 +44,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable, Sequence
 
 import numpy as np
+from numpy.polynomial import chebyshev as cheb
 from numpy.typing import ArrayLike, NDArray
 
 from acousim.dynamics.resonator import (DEFAULT_CAVITY_AREA, CavityMode, mode_energy, potential_series,
@@ -53,7 +55,8 @@ from acousim.dynamics.resonator import (DEFAULT_CAVITY_AREA, CavityMode, mode_en
 from acousim.medium import Medium
 
 __all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns",
-           "second_order_ratios", "cavity_reference", "derived_quantities"]
+           "CavityColumns", "AngleFactors", "ANGLE_SERIES", "problem_columns", "HeightExpansion", "height_expansion",
+           "HEIGHT_DEGREE", "second_order_ratios", "cavity_reference", "derived_quantities"]
 
 #: The candidate's parameters: the quasi-static gain A [s/rad] and the lag gain B [s^2/rad] (module docstring).
 CAVITY_LAG_PARAMETERS = ("static_gain", "lag_gain")
@@ -120,7 +123,8 @@ def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVI
                        medium: Medium | None = None, rest_y: float = 0.0,
                        reference: CavityMode | None = None) -> NDArray[np.float64]:
     """d(accelerations)/d(A, B) of the cavity's slow lag at the states: array (n, 2, 2), rows (yddot, thetaddot),
-    columns (A, B), as :func:`~validation.diagnosis.prepare.candidate_effects.effect_regressors` gives them.
+    columns (A, B), as :func:`~validation.diagnosis.prepare.candidate_effects.effect_regressors` gives them
+    (:meth:`CavityColumns.columns`; build a :class:`CavityColumns` once to evaluate many sets of states).
 
     Parameters
     ----------
@@ -136,47 +140,121 @@ def cavity_lag_columns(force_model, state: ArrayLike, area: float = DEFAULT_CAVI
     reference : the mode whose second-order terms (:func:`second_order_ratios`) complete the two columns (None: the
         first-order expansion alone); the columns stay linear in (A, B)
     """
-    medium = Medium() if medium is None else medium
-    y, yd, th, thd = np.atleast_2d(np.asarray(state, float)).T
-    pot = potential_series(force_model)
-    w = 2.0 * math.pi * medium.frequency_hz
-    shift = w / mode_energy(force_model.pressure_amplitude_pa, area, medium)  # [rad/s per J]
-    q_y, q_t = force_model.generalized_forces(th, y)
-    f_z = q_y + force_model.mass * force_model.gravity  # the acoustic vertical force [N]
-    delta = shift * (pot(th, y) - pot(0.0, rest_y))
-    delta_rate = -shift * (f_z * yd + q_t * thd)
-    inertia = force_model.hinge_inertia(th)
-    accel = np.stack([f_z / force_model.mass, q_t / inertia], axis=1)  # (n, 2)
-    static, lag = delta, delta_rate
-    if reference is not None:
-        a2, r2, b2, r3 = second_order_ratios(reference, medium.frequency_hz)
-        curvature, omega2 = _detuning_curvature(force_model, y, yd, th, thd, f_z, q_t, inertia, shift, rest_y)
-        static = delta + a2 * delta**2 + r2 * curvature
-        # the third derivative as -w_y^2 delta' (the vertical oscillation's own frequency; the hinge barely moves delta)
-        lag = delta_rate * (1.0 + b2 * delta - r3 * omega2)
-    return np.stack([accel * static[:, None], accel * lag[:, None]], axis=2)
+    return CavityColumns(force_model, area, medium).columns(state, rest_y, reference)
 
 
-def _detuning_curvature(force_model, y, yd, th, thd, f_z, q_t, inertia, shift, rest_y):
-    """d^2(delta)/dt^2 [rad/s^3] along the simulation's own motion: ``-shift d(F_Z ydot + Q_theta thetadot)/dt`` with
-    the accelerations of the simulation at the pressure that holds the dimer at its rest height,
-    ``yddot = g (F_Z / F_Z(0, rest) - 1)`` and ``thetaddot = g M Q_theta / (F_Z(0, rest) I)`` (no measured
-    acceleration: their noise would enter), and the forces' gradients by central differences; with the vertical
-    trap's w_y^2 at rest [1/s^2]."""
-    h_y, h_t = 1e-7, 1e-4  # [m], [rad]: truncation (2k h_y)^2 ~ 1e-7 relative, round-off ~1e-8
-    fz_up, qt_up = force_model.generalized_forces(th, y + h_y)
-    fz_dn, qt_dn = force_model.generalized_forces(th, y - h_y)
-    fz_r, qt_r = force_model.generalized_forces(th + h_t, y)
-    fz_l, qt_l = force_model.generalized_forces(th - h_t, y)
-    m, g = force_model.mass, force_model.gravity
-    f_rest = float(np.asarray(force_model.generalized_forces(0.0, rest_y)[0])) + m * g
-    f_dot = (fz_up - fz_dn) / (2 * h_y) * yd + (fz_r - fz_l) / (2 * h_t) * thd
-    q_dot = (qt_up - qt_dn) / (2 * h_y) * yd + (qt_r - qt_l) / (2 * h_t) * thd
-    ydd, thdd = g * (f_z / f_rest - 1.0), g * m * q_t / (f_rest * inertia)
-    f_up = float(np.asarray(force_model.generalized_forces(0.0, rest_y + h_y)[0]))
-    f_dn = float(np.asarray(force_model.generalized_forces(0.0, rest_y - h_y)[0]))
-    omega2 = -g * (f_up - f_dn) / (2 * h_y) / f_rest  # w_y^2 at rest [1/s^2]
-    return -shift * (f_z * ydd + q_t * thdd + f_dot * yd + q_dot * thd), omega2
+#: The force model's series an :class:`AngleFactors` holds, in its order: the height structure of the acoustic
+#: forces (:class:`acousim.ForceCoefficients`), the potential's (:class:`acousim.dynamics.resonator.PotentialSeries`)
+#: and the forces' theta derivatives.
+ANGLE_SERIES = ("f_a", "f_b", "f_c", "q_a", "q_b", "q_c", "u_p", "u_r", "u_s", "u_l",
+                "f_a'", "f_b'", "f_c'", "q_a'", "q_b'", "q_c'")
+
+
+@dataclass(frozen=True, eq=False)
+class AngleFactors:
+    """What the cavity's columns need of the dimer's bend, at one set of angles (:meth:`CavityColumns.angle_factors`):
+    every series of :data:`ANGLE_SERIES` evaluated there, and the hinge inertia.  The columns at any heights are then
+    sums of these times the standing wave's cos(2kZ) and sin(2kZ): the angles of a run are evaluated once per data
+    set, whatever origin height or equilibrium a fit tries."""
+
+    theta: NDArray[np.float64]  #: (n,) [rad]
+    values: NDArray[np.float64]  #: (16, n): the series of :data:`ANGLE_SERIES` at theta (SI)
+    inertia: NDArray[np.float64]  #: (n,) I(theta) [kg m^2]
+
+
+class CavityColumns:
+    """The cavity's columns for one force model, cavity area and air (module docstring).
+
+    Every acoustic quantity the columns use has the force models' height structure (:mod:`acousim.force_model`):
+    ``F_Z,ac = A_y + B_y cos(2kZ) + C_y sin(2kZ)``, ``Q_theta`` likewise, and ``U_ac = P + R cos(2kZ) + S sin(2kZ) +
+    L Z`` (:func:`~acousim.dynamics.resonator.potential_series`), with Chebyshev series in theta.  The series and
+    their theta derivatives are built once here, evaluated once per set of angles (:meth:`angle_factors`), and the
+    height enters through the standing wave's phase alone; the forces' gradients (for the detuning's curvature) are
+    the series' exact derivatives.
+    """
+
+    def __init__(self, force_model, area: float = DEFAULT_CAVITY_AREA, medium: Medium | None = None):
+        medium = Medium() if medium is None else medium
+        self.force_model = force_model
+        self.frequency_hz = float(medium.frequency_hz)
+        # [rad/s per J]: the drive's angular frequency over the mode's stored energy
+        self.shift = 2.0 * math.pi * self.frequency_hz / mode_energy(force_model.pressure_amplitude_pa, area, medium)
+        forces = force_model.force_coefficients().as_tuple()
+        pot = potential_series(force_model)
+        der = lambda c: cheb.chebder(c) if c.size > 1 else np.zeros(1)  # noqa: E731
+        self._series = forces + (pot.p, pot.r, pot.s, pot.l) + tuple(der(c) for c in forces)
+        self._at_zero = self._evaluate(np.zeros(1))[:, 0]  # every series at theta = 0 (the dimer at rest)
+        #: whether every column is periodic in the height (U_ac has no ``L Z`` term): :func:`height_expansion`
+        self.height_periodic = not np.any(self._series[ANGLE_SERIES.index("u_l")])
+
+    def _evaluate(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.stack([cheb.chebval(theta, c) * np.ones_like(theta) for c in self._series])
+
+    def angle_factors(self, theta: ArrayLike) -> AngleFactors:
+        """The factors of the columns at the angles ``theta`` [rad] (:class:`AngleFactors`)."""
+        th = np.asarray(theta, float).ravel()
+        return AngleFactors(th, self._evaluate(th), np.asarray(self.force_model.hinge_inertia(th), float))
+
+    def _height_terms(self, values: NDArray, z: NDArray) -> dict[str, NDArray]:
+        """F_Z,ac, Q_theta, U_ac and their gradients in Z and theta at the absolute heights ``z`` [m] for series
+        values ``values`` (16, n)."""
+        tk = float(self.force_model.two_k)
+        c, s = np.cos(tk * z), np.sin(tk * z)
+        f_a, f_b, f_c, q_a, q_b, q_c, u_p, u_r, u_s, u_l, df_a, df_b, df_c, dq_a, dq_b, dq_c = values
+        return {"f": f_a + f_b * c + f_c * s, "q": q_a + q_b * c + q_c * s, "u": u_p + u_r * c + u_s * s + u_l * z,
+                "f_z": tk * (f_c * c - f_b * s), "q_z": tk * (q_c * c - q_b * s),
+                "f_t": df_a + df_b * c + df_c * s, "q_t": dq_a + dq_b * c + dq_c * s}
+
+    def rest_force(self, z: ArrayLike) -> NDArray[np.float64]:
+        """F_Z,ac(theta = 0, Z) [N] at the absolute heights ``z`` [m]: the F of :meth:`column_parts` at rest there."""
+        return self._height_terms(self._at_zero[:, None], np.atleast_1d(np.asarray(z, float)))["f"]
+
+    def columns(self, state: ArrayLike, rest_y: float = 0.0, reference: CavityMode | None = None,
+                angles: AngleFactors | None = None) -> NDArray[np.float64]:
+        """The columns (n, 2, 2) at the states (:func:`cavity_lag_columns` for the parameters); ``angles``: the
+        :meth:`angle_factors` of the states' theta, when already evaluated."""
+        regular, over_rest, rest_force = self.column_parts(state, rest_y, reference, angles)
+        return regular + over_rest / rest_force
+
+    def column_parts(self, state: ArrayLike, rest_y: float = 0.0, reference: CavityMode | None = None,
+                     angles: AngleFactors | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+        """``(C0, C1, F)``: the columns are ``C0 + C1 / F`` with F = F_Z,ac(theta = 0, rest) [N], the one division
+        of the second-order terms (the simulation's accelerations at the pressure that holds the dimer at rest).
+
+        C0 and C1 are sums of products of at most three factors with the height structure (the standing wave's
+        cos and sin of 2kZ at the dimer and at rest; U_ac's ``L Z`` aside, zero for a Gor'kov model): at fixed data
+        states they are trigonometric polynomials of degree 3 in 2k z0 when the data's origin moves to z0 with the
+        rest height (:func:`height_expansion`)."""
+        y, yd, th, thd = np.atleast_2d(np.asarray(state, float)).T
+        if angles is None:
+            angles = self.angle_factors(th)
+        fm = self.force_model
+        at = self._height_terms(angles.values, fm.z_eq + y)
+        rest = self._height_terms(self._at_zero[:, None], np.array([fm.z_eq + rest_y]))
+        delta = self.shift * (at["u"] - rest["u"])
+        delta_rate = -self.shift * (at["f"] * yd + at["q"] * thd)
+        accel = np.stack([at["f"] / fm.mass, at["q"] / angles.inertia], axis=1)[:, :, None]  # (n, 2, 1)
+        rest_force = float(rest["f"][0])
+        if reference is None:
+            return (np.stack([accel[:, :, 0] * delta[:, None], accel[:, :, 0] * delta_rate[:, None]], axis=2),
+                    np.zeros((len(y), 2, 2)), rest_force)
+        a2, r2, b2, r3 = second_order_ratios(reference, self.frequency_hz)
+        g = fm.gravity
+        # the detuning's curvature d^2(delta)/dt^2 along the simulation's own motion at the pressure that holds the
+        # dimer at its rest height (no measured acceleration: their noise would enter):
+        # yddot = g (F_Z / F_rest - 1), thetaddot = g M Q_theta / (F_rest I), so that
+        # curvature = -shift (g (F_Z^2 + M Q_theta^2 / I) / F_rest - g F_Z + dF_Z/dt ydot + dQ_theta/dt thetadot)
+        f_dot = at["f_z"] * yd + at["f_t"] * thd
+        q_dot = at["q_z"] * yd + at["q_t"] * thd
+        static = delta + a2 * delta**2 - r2 * self.shift * (f_dot * yd + q_dot * thd - g * at["f"])
+        static_over = -r2 * self.shift * g * (at["f"] ** 2 + fm.mass * at["q"] ** 2 / angles.inertia)
+        # the third derivative as -w_y^2 delta' (the vertical oscillation's own frequency; the hinge barely moves
+        # delta), w_y^2 = -g dF_Z/dZ(0, rest) / F_rest at rest
+        lag = delta_rate * (1.0 + b2 * delta)
+        lag_over = delta_rate * r3 * g * float(rest["f_z"][0])
+        regular = np.concatenate([accel * static[:, None, None], accel * lag[:, None, None]], axis=2)
+        over_rest = np.concatenate([accel * static_over[:, None, None], accel * lag_over[:, None, None]], axis=2)
+        return regular, over_rest, rest_force
 
 
 def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:
@@ -195,9 +273,110 @@ def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:
     return {"cavity_lag": {"quality_factor": mode.quality_factor, "detuning_half_widths": mode.detuning}}
 
 
-
 def cavity_reference(problem) -> CavityMode | None:
     """The reference mode of the cavity's second-order terms on ``problem``'s data set, once
     :func:`validation.diagnosis.calibrate.gap_model.fit_cavity_reference` has fitted it (None before, and on a data
     set without a cavity mode: the first-order columns)."""
     return problem._shared.get("cavity_reference")
+
+
+#: Sets of angles whose :class:`AngleFactors` a data set keeps (a run's states, its integral form's and its energy
+#: balance's: three per run); beyond it the store starts over.
+_ANGLE_STORE_SIZE = 256
+
+
+def problem_columns(problem, state: NDArray, z_com: NDArray, z_eq: float | None) -> NDArray[np.float64]:
+    """The cavity's columns (n, 2, 2) on ``problem``'s data set at ``state`` with the centre of mass at the absolute
+    heights ``z_com`` [m], the detuning defined at rest at ``z_eq`` (the calibrated equilibrium; None: the data's
+    origin), with the data set's reference mode (:func:`cavity_reference`).
+
+    The force model is the problem's surrogate at nominal pressure; its :class:`CavityColumns` is built once per data
+    set and the :class:`AngleFactors` once per states array (kept by identity with the array itself, so that an id
+    is never reused): every fold, jackknife refit and trial origin height of the data set shares them."""
+    cavity = _problem_cavity(problem)
+    fm = cavity.force_model
+    st = np.array(state, float, copy=True).reshape(-1, 4)
+    z_com = np.broadcast_to(np.asarray(z_com, float), st[:, 0].shape)
+    rest = (float(np.mean(z_com - st[:, 0])) if z_eq is None else float(z_eq)) - fm.z_eq
+    st[:, 0] = z_com - fm.z_eq
+    return cavity.columns(st, rest_y=rest, reference=cavity_reference(problem), angles=_angles(problem, cavity, state, st[:, 2]))
+
+
+def _problem_cavity(problem) -> CavityColumns:
+    """The data set's :class:`CavityColumns` (its surrogate at nominal pressure), built once."""
+    shared = problem._shared
+    if shared.get("cavity_columns") is None:
+        shared["cavity_columns"] = CavityColumns(problem.surrogate())
+    return shared["cavity_columns"]
+
+
+def _angles(problem, cavity: CavityColumns, state: NDArray, theta: NDArray) -> AngleFactors:
+    """The :class:`AngleFactors` of ``state``'s angles ``theta``, kept per states array for the data set."""
+    store = problem._shared.setdefault("cavity_angles", {})
+    held = store.get(id(state))
+    if held is None or held[0] is not state or not np.array_equal(held[1].theta, theta):
+        if len(store) >= _ANGLE_STORE_SIZE:
+            store.clear()
+        held = (state, cavity.angle_factors(theta))
+        store[id(state)] = held
+    return held[1]
+
+
+#: The degree of the cavity's columns (each part of :meth:`CavityColumns.column_parts`) as trigonometric
+#: polynomials in 2k z0 at fixed data states, the rest height at the origin z0: 2 HEIGHT_DEGREE + 1 heights give
+#: them exactly (:func:`height_expansion`).
+HEIGHT_DEGREE = 3
+
+
+@dataclass(frozen=True, eq=False)
+class HeightExpansion:
+    """An effect's integral-form columns of one coordinate on a data set's runs at every origin height z0 [m]:
+    ``columns(z0) = sum_b weights(z0)[b] blocks[run][b]``, exact."""
+
+    blocks: list[NDArray[np.float64]]  #: per run (n_blocks, rows, parameters)
+    weights: Callable[[float], NDArray[np.float64]]  #: z0 [m] -> (n_blocks,)
+
+
+def height_expansion(problem, runs: Sequence, q: int) -> HeightExpansion | None:
+    """The cavity's integral-form columns of coordinate q (0: y, 1: theta) on ``runs`` (with integral data) at every
+    origin height z0, the effects' y and the rest height at the data's origin (as the calibration's height search
+    asks for them: :func:`validation.diagnosis.calibrate.calibration.calibrate`).
+
+    Each part of :meth:`CavityColumns.column_parts` is a trigonometric polynomial of degree :data:`HEIGHT_DEGREE` in
+    phi = 2k z0, so its values at the 7 phases phi_j = 2 pi j / 7 give it at every phi through the Dirichlet kernel
+    ``D(phi - phi_j) = (1 + 2 sum_m cos(m (phi - phi_j))) / 7``, m = 1..3; the part over F_Z,ac(0, z0) takes that
+    factor at z0.  The integral form is linear, so the blocks are the parts' integral-form columns at the 7 heights,
+    computed once per run and reference mode and shared by every fold and jackknife refit.  None when the force
+    model's potential has a term linear in Z (its columns are not periodic in z0: evaluated at every trial height)."""
+    cavity = _problem_cavity(problem)
+    if not cavity.height_periodic:
+        return None
+    reference = cavity_reference(problem)
+    two_k = float(cavity.force_model.two_k)
+    n_nodes = 2 * HEIGHT_DEGREE + 1
+    phases = 2.0 * np.pi * np.arange(n_nodes) / n_nodes
+    store = problem._shared.setdefault("cavity_height_blocks", {})
+    blocks = []
+    for r in runs:
+        pi = r.integral
+        key = (id(pi), q, reference)
+        if key not in store:
+            st = pi.state
+            angles = _angles(problem, cavity, st, st[:, 2])
+            parts = []
+            for phi in phases:
+                z0 = phi / two_k
+                shifted = np.array(st, float, copy=True)
+                shifted[:, 0] = z0 + st[:, 0] - cavity.force_model.z_eq
+                regular, over, _ = cavity.column_parts(shifted, z0 - cavity.force_model.z_eq, reference, angles)
+                parts.append(pi.columns(q, np.concatenate([regular[:, q, :], over[:, q, :]], axis=1)))
+            p = len(CAVITY_LAG_PARAMETERS)
+            store[key] = (pi, np.stack([c[:, :p] for c in parts] + [c[:, p:] for c in parts]))
+        blocks.append(store[key][1])
+
+    def weights(z0: float) -> NDArray[np.float64]:
+        m = np.arange(1, HEIGHT_DEGREE + 1)
+        kernel = (1.0 + 2.0 * np.cos(np.outer(two_k * z0 - phases, m)).sum(axis=1)) / n_nodes
+        return np.concatenate([kernel, kernel / float(cavity.rest_force(z0)[0])])
+
+    return HeightExpansion(blocks, weights)

@@ -144,6 +144,10 @@ class SimulationTerms:
         term [J per unit parameter], ``e_osc`` (n_windows,) oscillation energy at the window start
         without the acoustic part, ``u_osc`` its acoustic part at nominal pressure [J].
         """
+        key = ("energy", round(z0, 12), tuple(effects), z_eq)  # the fit and its evaluation ask for the same ones
+        return self._memo(key, lambda: self._energy_terms(z0, effects, z_eq))
+
+    def _energy_terms(self, z0: float, effects: Sequence[str], z_eq: float | None) -> list[dict]:
         d = self.model.dimer
         rest_u = float(self.model.integrals_at_height(0.0, z0).potential)  # U_ac at the data's origin, theta = 0
         out = []
@@ -239,6 +243,10 @@ class SimulationTerms:
         With ``z_eq`` None the effects' y is the data's y, so an effect that does not depend on the height
         above the node (:attr:`acousim.dynamics.effects.Effect.depends_on_node_height`) has the same columns at every
         z0: they are computed once per run and shared by the problem's subsets."""
+        key = ("integral_effects", q, round(z0, 12), tuple(effects), z_eq)  # asked again by the fit's evaluation
+        return self._memo(key, lambda: self._integral_effect_columns(z0, effects, z_eq, q))
+
+    def _integral_effect_columns(self, z0: float, effects: Sequence[str], z_eq: float | None, q: int) -> list[NDArray]:
         from acousim.dynamics.effects import EFFECT_TYPES
 
         store = self.problem._shared.setdefault("effect_columns", {})
@@ -258,6 +266,18 @@ class SimulationTerms:
                 blocks.append(cols)
             out.append(np.concatenate(blocks, axis=1) if blocks else pi.columns(q, np.zeros((pi.state.shape[0], 0))))
         return out
+
+    def effect_accelerations(self, z0: float, effects: Sequence[str], z_eq: float | None) -> list[NDArray]:
+        """Per run: the effects' regressors (n, 2, n_params) at the run's states, smoothed as the data
+        (:meth:`RunAccelerations.smooth`), the effects' y from ``z_eq`` (None: the data's y)."""
+        def build():
+            out = []
+            for r in self.runs:
+                regs = [effect_regressors(n, r.state, z0 + r.state[:, 0], self.k, z_eq, self.problem) for n in effects]
+                out.append(r.smooth(np.concatenate(regs, axis=2)) if regs else np.zeros((len(r.t), 2, 0)))
+            return out
+
+        return self._memo(("effect_accelerations", round(z0, 12), tuple(effects), z_eq), build)
 
     def centrifugal(self, r: RunAccelerations) -> NDArray:
         """The velocity part of Lagrange's theta equation, -1/2 I' thetadot^2 / I [1/s^2] (smoothed as the data)."""

@@ -51,21 +51,30 @@ PRESSURE_MODEL_ERROR = 3.0e-4
 #: Relative systematic standard errors of the named effects' parameters (and the cavity's derived mode), by effect and
 #: parameter: the model errors the jackknife does not see, added to its error in quadrature
 #: (:func:`with_effect_model_errors`).  Each is the smallest d for which at least 92 % of the named true parameters'
-#: intervals in the tuning blind studies (realistic seeds 9162 and 7301, inviscid 7302: 78 scored cases) hold the
-#: truth, a jackknife interval that missed counted as held once |estimate - truth| <= t(0.975, 9) d |truth| (the
-#: systematic part alone: a sufficient condition, the jackknife part widens it further).  Their causes: linear damping scored against the air's rates, whose hinge damping is not linear
-#: (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval missed); the stiffnesses' and
-#: asymmetries' small offsets of the calibrated simulation from the twin (kappa 0.15-0.21 %, as the pressure's
-#: PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling or sharing pair scattering's y-theta
-#: coupling (3-29 %); the cavity's expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping:
-#: 7 cases only).  Velocity coupling beside a damping takes its estimates and Gauss-Newton errors from the whole
-#: trajectories (validation.diagnosis.identify.output_error): on 16 tuning twin data sets with the air's damping
+#: intervals in the tuning blind studies hold the truth.  The first tuning studies (realistic seeds 9162 and 7301,
+#: inviscid 7302: 78 scored cases) recorded whether the jackknife's interval held the truth and the error: there a
+#: jackknife interval that missed counts as held once |estimate - truth| <= t(0.975, 9) d |truth| (the systematic part
+#: alone: a sufficient condition, the jackknife part widens it further).  The realistic studies of seeds 9611-9613
+#: (163 scored cases, no resonator) record each estimate, its jackknife error and the truth, so that there the interval
+#: with d is checked as stated: c_theta's d (none before; 25 of 35 held) is set on them.  beta1 keeps the 9 % of the
+#: first studies: the 1.6 % that 9611-9613 and the six studies pooled ask held beta1 in only 15 of 22 named cases of
+#: the fresh resonator study (seed 9741; 4 of the 7 misses beside a named cavity), so its intervals stay wide (no miss
+#: in 65 without the resonator) rather than short.  Their causes: linear damping scored against the air's
+#: rates, whose hinge damping is not linear (S(theta) in docs/damping.md: gamma_theta 0.6-6.7 % off where its interval
+#: missed); the stiffnesses' and asymmetries' small offsets of the calibrated simulation from the twin (kappa
+#: 0.15-0.21 %, as the pressure's PRESSURE_MODEL_ERROR); beta1 absorbing part of an unnamed velocity coupling, sharing
+#: pair scattering's y-theta coupling (3-29 % in the first studies, up to 6 % in 9611-9613) or a cavity's; c_theta, the
+#: hinge's drag, 9.6 % off (median) with errors up to 5.7 of its jackknife errors (its cause not separated; the
+#: air's hinge damping, which linear damping beside it does not describe exactly, acts on the same rate); the cavity's
+#: expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping: 7 cases only).  Velocity coupling
+#: beside a damping takes its estimates and Gauss-Newton errors from the whole trajectories
+#: (validation.diagnosis.identify.output_error): on 16 tuning twin data sets with the air's damping
 #: (docs/scripts/velocity_coupling_fixed_set.py, seeds 4242 and 9090) their intervals held c6 in 16 and c5 in 14
 #: (errors 2.6 and 2.9 of their standard errors, 5 % and 19 %): c5 carries 2 %, c6 none.  Checked on fresh seeds in
 #: docs/diagnosis.md "Coverage of the 95 % intervals".
 EFFECT_MODEL_ERROR: dict[str, dict[str, float]] = {
     "linear_damping": {"gamma_y": 2.2e-3, "gamma_theta": 1.4e-2},
-    "quadratic_drag": {"c_y": 3.2e-3},
+    "quadratic_drag": {"c_y": 3.2e-3, "c_theta": 9.9e-2},
     "pair_scattering": {"kappa": 7.2e-4},
     "mirror_asymmetry": {"beta0": 1.4e-3, "beta1": 9.0e-2},
     "cavity_lag": {"quality_factor": 0.14, "detuning_half_widths": 0.38},

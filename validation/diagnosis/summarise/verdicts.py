@@ -198,11 +198,11 @@ def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str],
     name = identified[i]
     g = scalar_gap(per_with)
     change, change_error = gap_change(per_without, per_with)
-    test = ident.rounds[ident.identified.index(name)].candidates[name]
+    test, added = _greedy_test(ident, name)
     given = elim.tests.get(name)
     return EffectVerdict(
         name, joint_params[name], g, 1 - g / gap_before, True, test.p_value, test.wilcoxon_p,
-        test.median_improvement_fraction, added_in_round=ident.identified.index(name) + 1, named=name in named,
+        test.median_improvement_fraction, added_in_round=added, named=name in named,
         p_value_given_others=given.p_value if given else None,
         median_improvement_given_others=given.median_improvement if given else None,
         indistinguishable_from=tuple(e for e in in_pair[name].effects if e != name) if name in in_pair else None,
@@ -212,12 +212,24 @@ def _model_effect(problem: DiagnosisProblem, ident, elim, identified: list[str],
         uncertainty=None if uncertainty is None else dict(uncertainty), derived=None if derived is None else dict(derived))
 
 
+def _greedy_test(ident, name: str):
+    """(the greedy rounds' test of ``name`` when it was added, its round) for a chosen effect; for a candidate the
+    backward check tested beside a chosen one it can stand for (an alias partner), its test in the last round it was
+    tried in, and no round."""
+    if name in ident.identified:
+        i = ident.identified.index(name)
+        return ident.rounds[i].candidates[name], i + 1
+    return ident.last_tests()[name], None
+
+
 def _why_not_in_model(name: str, ident, elim, given, in_pair: dict, replaced: dict) -> str:
     """The note of a candidate the final model does not fit."""
     note = "fitted on top of the identified effects; not a significant held-out improvement"
     if name in elim.dropped:
-        t = ident.rounds[ident.identified.index(name)].candidates[name]
-        note = (f"improved held-out runs when added ({format_p(t.p_value)}), but not given the other effects "
+        t, added = _greedy_test(ident, name)
+        first = (f"improved held-out runs when added ({format_p(t.p_value)})" if added is not None else
+                 "checked beside the chosen effect it can stand for")
+        note = (f"{first}, but not given the other effects "
                 f"(backward check{', ' + format_p(given.p_value) if given else ''}): the others explain its share "
                 "of the gap")
     if name in in_pair:
