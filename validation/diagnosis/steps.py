@@ -233,6 +233,10 @@ def _diagnose(start: DiagnosisStart, config: DiagnoseConfig, progress: bool) -> 
     log = logger.info if progress else logger.debug
     spec = start.spec
     cal = calibration_step(start.prepared, start.conditions, start.model, spec, config, log)
-    found = identification_step(cal.problem, config, progress, log, cal.conditions)
+    # the trajectory test of the velocity coupling refits the pressure and the named effects, not a calibrated model
+    # parameter: a hinge gap known to its profile's resolution leaves a structured residual that a tiny coupling
+    # absorbs (synthetic full-wave twin, gap 0.3 % off: Delta chi2 = 204 for c5 = 3 1/m), so it is not made there
+    calibrated = any(getattr(pc, "calibrated", False) for pc in (cal.parameters or {}).values())
+    found = identification_step(cal.problem, config, progress, log, None if calibrated else cal.conditions)
     discovery, replaced, identified, final = discovery_step(cal.problem, found, config, log)
     return summary_step(start.prepared.dataset, cal, found, discovery, replaced, identified, final, spec, config, log)
