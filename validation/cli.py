@@ -287,6 +287,9 @@ def add_blind_parser(sub) -> None:
                    help="candidate cases never draw the levitator's resonator and the diagnosis does not try the cavity's "
                         "lag (cavity_lag); default: the resonator (Q 150-400, 0.5-3 half-widths above the drive) is one "
                         "of the effects a case can draw, and cavity_lag one of the candidates")
+    p.add_argument("--trajectory-test", action="store_true",
+                   help="the diagnosis also judges the velocity coupling on the runs' whole trajectories (an output-error "
+                        "fit beside the air's damping; docs/diagnosis.md); default: off, as in the diagnosis")
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
     add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "
@@ -310,7 +313,8 @@ def run_blind_cli(args: argparse.Namespace) -> int:
                 MAX_BLIND_FRAMES_PER_CASE)
     prepare_output_dir(args.out, "--out", create=False)
     config = BlindConfig(cases=args.cases, seed=args.seed, runs=args.runs, duration=args.duration, kinds=kinds,
-                         air_damping=not args.inviscid, resonator=not args.no_resonator)
+                         air_damping=not args.inviscid, resonator=not args.no_resonator,
+                         trajectory_test=args.trajectory_test)
     summary = run_blind(config, args.out, executor_config(args))
     print(blind_table(summary, config))
     return 0

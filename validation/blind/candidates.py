@@ -252,7 +252,8 @@ def diagnose_blind(data: Path, config: BlindConfig) -> tuple["Diagnosis | None",
 
     candidates = tuple(dict.fromkeys(default_candidates() + ((RESONATOR,) if config.resonator else ())))
     try:
-        diag = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time, candidates=candidates), progress=False)
+        diag = diagnose_dataset(data, DiagnoseConfig(long_time=config.long_time, candidates=candidates,
+                                                       trajectory_test=config.trajectory_test), progress=False)
         return diag, None
     except Exception as exc:  # a failed diagnosis is a result of the study, not a crash of it
         return None, f"{type(exc).__name__}: {exc}"

@@ -42,6 +42,9 @@ class BlindConfig:
         The levitator's resonator is one of the effects a candidate case can draw (its Q and detuning,
         :data:`validation.blind.candidates.RESONATOR_STRENGTHS`), and the diagnosis tries the cavity's lag
         (``cavity_lag``) among its candidates; False: neither (the study without the cavity).
+    trajectory_test : bool
+        The diagnosis judges the velocity coupling on the whole trajectories too
+        (``DiagnoseConfig(trajectory_test=True)``; off by default, as in the diagnosis).
     """
 
     cases: int = 50
@@ -53,6 +56,7 @@ class BlindConfig:
     kinds: tuple[str, ...] = ("candidates",)
     air_damping: bool = True
     resonator: bool = True
+    trajectory_test: bool = False
 
     def __post_init__(self) -> None:
         check_whole(self, "cases")

@@ -87,7 +87,7 @@ def test_a_coupling_named_on_the_trajectories_is_the_round_that_added_it(monkeyp
     rounds = [IdentificationRound([], 1.0, {"linear_damping": _held_out(0.001), "velocity_coupling": _held_out(0.2)}),
               IdentificationRound(["linear_damping"], 0.5, {"velocity_coupling": _held_out(0.03)})]
     ident = Identification(["linear_damping"], rounds)
-    config = DiagnoseConfig(long_time=False)
+    config = DiagnoseConfig(long_time=False, trajectory_test=True)
     got, model, oe = step.trajectory_test(None, ident, None, ["linear_damping"], config, object(), lambda *a: None)
     assert model == ["linear_damping", "velocity_coupling"] and got.identified == model
     test = got.rounds[got.identified.index("velocity_coupling")].candidates["velocity_coupling"]
