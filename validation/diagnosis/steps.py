@@ -239,7 +239,7 @@ def _diagnose(start: DiagnosisStart, config: DiagnoseConfig, progress: bool) -> 
     # the trajectory test of the velocity coupling refits the pressure and the named effects, not a calibrated model
     # parameter: a hinge gap known to its profile's resolution leaves a structured residual that a tiny coupling
     # absorbs (synthetic full-wave twin, gap 0.3 % off: Delta chi2 = 204 for c5 = 3 1/m), so it is not made there
-    calibrated = any(getattr(pc, "calibrated", False) for pc in (cal.parameters or {}).values())
+    calibrated = any(pc.calibrated for pc in cal.parameters.values())
     found = identification_step(cal.problem, config, progress, log, None if calibrated else cal.conditions)
     discovery, replaced, identified, final = discovery_step(cal.problem, found, config, log)
     return summary_step(start.prepared.dataset, cal, found, discovery, replaced, identified, final, spec, config, log)
