@@ -35,6 +35,25 @@ def _twin(cache, effects, seed=3, pressure_error=0.06, runs=10, duration=3.0):
     return data, json.loads((data.parent / "truth.json").read_text())
 
 
+#: the two corrupt files added to the pair-scattering data set (test_partly_corrupt_dataset): a copy of its first run
+#: whose time goes backwards (lines 20-49 again after line 50), and a file without a theta column
+CORRUPT_FILES = ("run11.csv", "run12.csv")
+
+
+def _partly_corrupt_twin(cache):
+    """The pair-scattering twin data set with :data:`CORRUPT_FILES` beside its ten runs (in the pipeline cache: read
+    it, never write into it), and its truth."""
+    clean, truth = _twin(cache, {"pair_scattering": SINGLE["pair_scattering"]})
+
+    def build(folder):
+        data = Path(shutil.copytree(clean, folder / "data"))
+        text = (data / "run01.csv").read_text().splitlines()
+        (data / CORRUPT_FILES[0]).write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
+        (data / CORRUPT_FILES[1]).write_text("t,y\n0,0\n")  # no theta column
+
+    return cache.folder("partly-corrupt-twin", f"{clean.parent.name} {CORRUPT_FILES}", build) / "data", truth
+
+
 def _diagnosis(cache, data, config):
     """The diagnosis of a cached twin data set (made once per version of the sources, tests/conftest.py)."""
     return cache.value("diagnosis", f"{data.parent.name} {config!r}",
@@ -47,7 +66,10 @@ FAST = DiagnoseConfig(long_time=False)
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SINGLE))
 def test_single_effect_identified_with_parameters(pipeline_cache, name):
-    data, truth = _twin(pipeline_cache, {name: SINGLE[name]})
+    # pair scattering's ten runs come with two corrupt files beside them, which the diagnosis skips: the one diagnosis
+    # of test_partly_corrupt_dataset
+    data, truth = (_partly_corrupt_twin(pipeline_cache) if name == "pair_scattering"
+                   else _twin(pipeline_cache, {name: SINGLE[name]}))
     diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == (name,)
     assert not diag.calibration["drift"]["detected"]  # no false alarm at a constant pressure with an effect
@@ -79,20 +101,17 @@ def test_no_effect_names_nothing(pipeline_cache):
 
 
 @pytest.mark.slow
-def test_partly_corrupt_dataset(tmp_path, pipeline_cache):
-    # the single-effect case's data set (one twin for both tests), two of its ten runs corrupted in a copy
-    cached, _ = _twin(pipeline_cache, {"pair_scattering": SINGLE["pair_scattering"]})
-    data = Path(shutil.copytree(cached, tmp_path / "data"))  # corrupted below: a copy
-    files = sorted(data.glob("run*.csv"))
-    text = files[0].read_text().splitlines()
-    files[0].write_text("\n".join([text[0]] + text[1:50] + text[20:]) + "\n")  # time goes backwards
-    files[1].write_text("t,y\n0,0\n")  # no theta column
-    diag = diagnose_dataset(data, FAST, progress=False)
+def test_partly_corrupt_dataset(pipeline_cache):
+    """The single-effect case's data set with two corrupt files beside its ten runs: the two are skipped, each with its
+    reason, and the ten runs diagnosed (pair scattering named with its parameter:
+    test_single_effect_identified_with_parameters reads the same diagnosis)."""
+    data, _ = _partly_corrupt_twin(pipeline_cache)
+    diag = _diagnosis(pipeline_cache, data, FAST)
     assert diag.identified == ("pair_scattering",)
     assert len(diag.skipped_files) == 2
-    assert {files[0].name, files[1].name} == {s["file"] for s in diag.skipped_files}  # docs/formats.md: {file, reason}
+    assert set(CORRUPT_FILES) == {s["file"] for s in diag.skipped_files}  # docs/formats.md: {file, reason}
     assert all(s["reason"] for s in diag.skipped_files)
-    assert len(diag.gap_per_run["runs"]) == 8
+    assert len(diag.gap_per_run["runs"]) == 10
     # diagnosis.json round trip: the typed result reads back its own document, key for key and value for value
     doc = json.loads(json.dumps(diag.to_json()))
     assert list(doc)[:3] == ["model", "simulation", "identified"]

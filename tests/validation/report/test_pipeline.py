@@ -13,23 +13,27 @@ MAX_EVALS = 60
 
 SECTIONS = ["answer", "data", "phase-space", "fit", "simulation", "model-vs-simulation", "diagnosis"]
 
+#: the stored case (tests/validation/report/conftest.py STORED_CASES) the report made end to end here is made of: 7 runs
+#: of 1 s with pair scattering, the fewest the held-out test can name an effect with, whose twin data set the sentence
+#: tests (test_true_sentences.py) read too (one cached data set for both)
+END_TO_END_CASE = "pair scattering"
+
 
 def _twin_config(effects, runs=8, duration=3.0, seed=4):
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig
 
-    # no air damping: the effects given are the only ones (the numbers of docs/fitting.md come from these data)
+    # no air damping: the effects given are the only ones
     return TwinConfig(runs=runs, duration=duration, seed=seed, effects=EffectSet.from_dict(effects), air_damping=False,
                       protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
 
 
 @pytest.fixture(scope="module")
-def damping_report(pipeline_cache):
-    """Twin data whose only effect is viscous damping (nothing acts on theta beyond the Gor'kov model): its report,
-    made once per version of the sources (tests/conftest.py PipelineCache), with what the report's steps received
-    (``seen.json``)."""
-    config = _twin_config({"linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}})
-    data = pipeline_cache.twin_dataset(config)
+def pipeline_report(pipeline_cache, stored_case_data):
+    """The whole report made end to end (load, fit, variant, diagnosis, simulations side by side, pages) on the twin
+    data set of :data:`END_TO_END_CASE`, made once per version of the sources (tests/conftest.py PipelineCache), with
+    what the report's steps received (``seen.json``)."""
+    data = stored_case_data(END_TO_END_CASE)
 
     def build(folder):
         from validation.report import build_report
@@ -51,37 +55,49 @@ def damping_report(pipeline_cache):
             for module, name in ((cubedimer.dataset, "load_dataset"), (fitting.fit, "fit_dataset"),
                                  (validation.diagnosis, "diagnose")):
                 mp.setattr(module, name, recorded(name, getattr(module, name)))
-            # 60 evaluations of the polish and of the variant's re-optimisation (as the stored results of
-            # test_true_sentences.py): what these tests read (the report's structure, the load and preparation made
-            # once, the stored results, the integral-form verdict of theta*y^2) does not depend on that budget
-            # (measured at 150 and at 60: the same minimal model, lead term, verdict and signs; final loss 0.0374 and
-            # 0.0375), and it costs a third of 150's
+            # 60 evaluations of the polish and of the variant's re-optimisation (as the stored results): what these
+            # tests read (the report's structure, the load and preparation made once, the stored results) does not
+            # depend on that budget
             build_report(data, folder / "report", workers=1, progress=False, max_evals=MAX_EVALS)
         (fitted,), (diagnosed,) = seen["fit_dataset"], seen["diagnose"]
         (folder / "seen.json").write_text(json.dumps({
             "loads": len(seen["load_dataset"]), "fitted_is_diagnosed": fitted is diagnosed.prepared,
             "fitted_runs": fitted.names}))
 
-    return pipeline_cache.folder("report", f"{config!r} max_evals={MAX_EVALS}", build) / "report" / "report.html"
+    return pipeline_cache.folder("report", f"{data.parent.name} max_evals={MAX_EVALS}", build) / "report" / "report.html"
+
+
+@pytest.fixture(scope="module")
+def damping_report(stored_report):
+    """The report of twin data whose only effect is viscous damping (8 runs of 3 s; nothing acts on theta beyond the
+    Gor'kov model), made from its stored results (stored/linear_damping: the whole pipeline's diagnosis.json,
+    fit/model.json and fit/variant.json at 60 evaluations, stored/make.py) with the regenerated data set."""
+    return stored_report("linear damping") / "report.html"
 
 
 @pytest.mark.slow
-def test_the_fit_and_the_diagnosis_of_a_report_see_one_loaded_data_set(damping_report):
+def test_the_fit_and_the_diagnosis_of_a_report_see_one_loaded_data_set(pipeline_report, stored_cases):
     """The data set is loaded once, with the diagnosis's checks, and prepared once: that one preparation is fitted and
     diagnosed, so the two can never work on different sets of runs (or derivatives: test_prepared_once.py)."""
-    seen = json.loads((damping_report.parent.parent / "seen.json").read_text())  # recorded while it was made
+    seen = json.loads((pipeline_report.parent.parent / "seen.json").read_text())  # recorded while it was made
     assert seen["loads"] == 1
     assert seen["fitted_is_diagnosed"]
-    assert seen["fitted_runs"] == [f"run{i:02d}.csv" for i in range(1, 9)]
+    runs = stored_cases[END_TO_END_CASE][0]
+    assert seen["fitted_runs"] == [f"run{i:02d}.csv" for i in range(1, runs + 1)]
 
 
 @pytest.mark.slow
-def test_report_has_every_section_image_and_finite_number(damping_report):
-    text = damping_report.read_text()
+@pytest.mark.parametrize("made", ["end to end", "from stored results"])
+def test_report_has_every_section_image_and_finite_number(made, request):
+    """The report made by the whole pipeline, and the one made again from the stored results of the 8-run data set
+    (whose fit/ folder holds the fit's files without the fit's own figures: its 10 figures are the report's)."""
+    report = request.getfixturevalue("pipeline_report" if made == "end to end" else "damping_report")
+    text = report.read_text()
     for sid in SECTIONS:
         assert f'<section id="{sid}">' in text
     srcs = re.findall(r'<img alt="[^"]*" src="([^"]+)"', text)
-    assert len(srcs) >= 14 and all(s.startswith("data:image/png;base64,") for s in srcs)
+    assert len(srcs) >= (14 if made == "end to end" else 10)
+    assert all(s.startswith("data:image/png;base64,") for s in srcs)
     assert "<script" not in text
     cells = re.findall(r"<td>([^<]*)</td>", text)
     assert cells
@@ -92,17 +108,17 @@ def test_report_has_every_section_image_and_finite_number(damping_report):
         except ValueError:
             continue
         assert np.isfinite(v), c
-    numbers = json.loads((damping_report.parent / "numbers.json").read_text())
+    numbers = json.loads((report.parent / "numbers.json").read_text())
     assert set(SECTIONS) <= set(numbers)
-    # the default fit (discovery): its Pareto front and the oracle and alias beside every term
+    # the default fit (discovery): its Pareto front (a figure of the fit's) and the oracle and alias beside every term
     fit = text[text.index('<section id="fit">'):text.index('<section id="simulation">')]
-    assert "Pareto front of the discovery" in fit
+    assert ("Pareto front of the discovery" in fit) == (made == "end to end")
     for col in ("oracle std error", "oracle z", "alias", "alias z"):
         assert f"<th>{col}</th>" in fit
 
 
 @pytest.mark.slow
-def test_the_report_is_a_view_of_its_stored_results(damping_report, tmp_path):
+def test_the_report_is_a_view_of_its_stored_results(pipeline_report, tmp_path):
     """``validation report --from`` makes the same report from diagnosis.json, fit/model.json and fit/variant.json
     alone: every number of numbers.json and comparison.json equal to the pipeline's, nothing fitted or simulated."""
     import shutil
@@ -110,12 +126,12 @@ def test_the_report_is_a_view_of_its_stored_results(damping_report, tmp_path):
     from validation.cli import main
 
     folder = tmp_path / "report"
-    shutil.copytree(damping_report.parent, folder)
+    shutil.copytree(pipeline_report.parent, folder)
     for name in ("report.html", "numbers.json", "comparison.json"):
         (folder / name).unlink()
     assert main(["report", "--from", str(folder)]) == 0
     for name in ("numbers.json", "comparison.json"):
-        assert json.loads((folder / name).read_text()) == json.loads((damping_report.parent / name).read_text()), name
+        assert json.loads((folder / name).read_text()) == json.loads((pipeline_report.parent / name).read_text()), name
     stored = json.loads((folder / "diagnosis.json").read_text())
     assert {"model_comparison", "overlay", "constants", "data_set"} <= set(stored)
     assert stored["model_comparison"]["rows"] == json.loads((folder / "numbers.json").read_text())["scattering"]["rows"]
@@ -134,10 +150,10 @@ def test_theta_y2_agrees_with_simulation_without_theta_effects(damping_report):
 
 
 @pytest.mark.slow
-def test_report_renders_in_chromium(damping_report, tmp_path, chromium_required):
+def test_report_renders_in_chromium(pipeline_report, tmp_path, chromium_required):
     from validation.report.browser_check import check_report_in_browser
 
-    check = check_report_in_browser(damping_report, tmp_path / "report.png", window=(1200, 3000))
+    check = check_report_in_browser(pipeline_report, tmp_path / "report.png", window=(1200, 3000))
     assert check.console == [], check.console
     assert check.images_total >= 14 and check.images_ok == check.images_total
     import matplotlib.image as mpimg

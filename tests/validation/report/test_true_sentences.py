@@ -1,12 +1,9 @@
 """Every sentence of the report true: frequencies with their resolution, statistics stated as bounds where they are
 bounds, no JSON keys in prose, no sentence about effects or an origin that are not there, agreement verdicts with
 the uncertainty behind them, and each numeric claim equal to numbers.json."""
-import hashlib
 import html
 import json
 import re
-import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -99,51 +96,23 @@ def test_a_significant_but_negligible_drift_is_not_called_no_drift():
 
 
 # ------------------------------------------------------------------------------- the report on small data sets
-def _twin_config(runs, duration, effects):
-    from acousim.dynamics.effects import EffectSet
-    from acousim.twin import DropProtocol, TwinConfig
-
-    # no air damping: the cases' effects are the only ones ("damping-free" is the inviscid dimer)
-    return TwinConfig(runs=runs, duration=duration, seed=4, effects=EffectSet.from_dict(effects), air_damping=False,
-                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
+#: The stored cases (tests/validation/report/conftest.py STORED_CASES) whose reports these tests read: nothing can be
+#: identified with the 4 runs of the first; the second must exercise the sentences about identified effects.
+CASES = ("damping-free", "pair scattering")
 
 
-CASES = {
-    # the suite's own 4 runs of 1.5 s without damping: nothing can be identified with 4 runs
-    "damping-free": (4, 1.5, {}),
-    # 7 runs (the fewest the held-out test can identify with at alpha 0.01) with pair scattering
-    "pair scattering": (7, 1.0, {"pair_scattering": {"kappa": 15000.0}}),
-}
-
-
-#: The cases' stored results (diagnosis.json, fit/model.json, fit/variant.json; made by stored/make.py).
-STORED = Path(__file__).resolve().parent / "stored"
-
-
-@pytest.fixture(scope="module", params=list(CASES))
-def report(request, pipeline_cache):
+@pytest.fixture(scope="module", params=CASES)
+def report(request, stored_report, stored_cases):
     """The case's report, made from its stored results with the case's twin data set (regenerated from the
     configuration), once per version of the sources (tests/conftest.py PipelineCache): a view of diagnosis.json and
     model.json, nothing fitted or diagnosed again."""
-    from validation.report import render_report
-
-    runs, duration, effects = CASES[request.param]
-    config = _twin_config(runs, duration, effects)
-    data = pipeline_cache.twin_dataset(config)
-    stored = STORED / request.param.replace(" ", "_")
-
-    def build(folder):
-        shutil.copytree(stored, folder / "report")
-        render_report(folder / "report", data_dir=data)
-
-    key = f"{config!r} " + " ".join(f"{p.name}={hashlib.sha1(p.read_bytes()).hexdigest()}"
-                                    for p in sorted(stored.rglob("*.json")))  # the stored files are part of the key
-    folder = pipeline_cache.folder("stored-report", key, build) / "report"
+    folder = stored_report(request.param)
     text = (folder / "report.html").read_text()
     readings = {sid: html.unescape(r) for sid, r in re.findall(
         r'<section id="([^"]+)">.*?<p class="reading">(.*?)</p>', text, re.S)}
     numbers = json.loads((folder / "numbers.json").read_text())
     # the second case must exercise the sentences about identified effects
+    effects = stored_cases[request.param][2]
     assert bool(numbers["diagnosis"]["identified"]) == bool(effects), numbers["diagnosis"]["identified"]
     return readings, numbers, text
 
@@ -357,26 +326,28 @@ DIAGNOSIS_CASES = {
 }
 
 
-@pytest.fixture(scope="module", params=list(DIAGNOSIS_CASES))
-def diagnosed(request, tmp_path_factory, pipeline_cache):
-    """The case's diagnosis (made once per version of the sources, tests/conftest.py PipelineCache)."""
+def make_diagnosis(case: str, folder):
+    """The diagnosis (``long_time=False``) of the twin data set of :data:`DIAGNOSIS_CASES` ``case``, simulated into
+    ``folder``: the stored diagnosis.json the sentence tests read (made by stored/make.py)."""
     from acousim.twin import PAPER_LIKE, TwinConfig, simulate_dataset
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
-    case = DIAGNOSIS_CASES[request.param]
-    cfg = (TwinConfig.from_preset(PAPER_LIKE, runs=case["runs"], duration=case["duration"], seed=31)
-           if case["preset"] else TwinConfig(runs=case["runs"], duration=case["duration"], seed=32))
-    config = DiagnoseConfig(long_time=False)
+    settings = DIAGNOSIS_CASES[case]
+    cfg = (TwinConfig.from_preset(PAPER_LIKE, runs=settings["runs"], duration=settings["duration"], seed=31)
+           if settings["preset"] else TwinConfig(runs=settings["runs"], duration=settings["duration"], seed=32))
+    data = folder / "data"
+    simulate_dataset(cfg, data, progress=False)
+    (data / "truth.json").unlink()
+    if "offsets" in settings:
+        _per_run_origin_error(data, settings["offsets"])
+    return diagnose_dataset(data, DiagnoseConfig(long_time=False), progress=False)
 
-    def diagnose():
-        data = tmp_path_factory.mktemp("diagnosed") / "data"
-        simulate_dataset(cfg, data, progress=False)
-        (data / "truth.json").unlink()
-        if "offsets" in case:
-            _per_run_origin_error(data, case["offsets"])
-        return diagnose_dataset(data, config, progress=False)
 
-    return pipeline_cache.value("diagnosis", f"{cfg!r} offsets={case.get('offsets')} {config!r}", diagnose)
+@pytest.fixture(scope="module", params=list(DIAGNOSIS_CASES))
+def diagnosed(request, stored_diagnosis):
+    """The case's diagnosis, read from its stored diagnosis.json (:func:`make_diagnosis`; the sentences are a view of
+    it, as in a report made ``--from`` its stored results)."""
+    return stored_diagnosis(request.param)
 
 
 @pytest.mark.slow
