@@ -1,4 +1,5 @@
-"""A small report with two figures and a table, written by the HTML writer."""
+"""A small report with two figures and a table, written by the HTML writer; the reports, data sets and diagnoses made
+again from the stored results (stored/, made by stored/make.py)."""
 from pathlib import Path
 
 import numpy as np
