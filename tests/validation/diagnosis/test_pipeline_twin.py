@@ -124,7 +124,7 @@ def test_partly_corrupt_dataset(pipeline_cache):
 
 def test_diagnose_cli_bad_directory(tmp_path, capsys):
     """The command's entry point in this process (``python -m validation`` itself runs in
-    test_diagnose_cli_writes_diagnosis_report_and_logs_progress): exit 2, one line naming the folder, nothing written."""
+    tests/validation/test_coefficients.py): exit 2, one line naming the folder, nothing written."""
     from validation.cli import main
 
     assert main(["diagnose", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 2
@@ -151,17 +151,17 @@ def test_strong_velocity_coupling_identified(pipeline_cache):
 
 
 @pytest.mark.slow
-def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path, pipeline_cache):
-    """The command end to end on a small twin data set: diagnosis.json with the docs/formats.md keys, the report
-    section with its figures, and the progress logged on stderr."""
-    import subprocess
-    import sys
+def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path, pipeline_cache, capsys):
+    """The command end to end on a small twin data set (its entry point in this process, which configures the logging
+    as ``python -m validation`` does: tests/validation/test_coefficients.py runs that): diagnosis.json with the
+    docs/formats.md keys, the report section with its figures, and the progress logged on stderr."""
+    from validation.cli import main
 
     data, _ = _twin(pipeline_cache, {"pair_scattering": {"kappa": 15000.0}}, runs=3, duration=2.0)
     out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "validation", "diagnose", str(data), "--out", str(out),
-                        "--candidates", "pair_scattering", "--no-long-time"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    code = main(["diagnose", str(data), "--out", str(out), "--candidates", "pair_scattering", "--no-long-time"])
+    r = capsys.readouterr()
+    assert code == 0, r.err
     doc = json.loads((out / "diagnosis.json").read_text())
     assert {"identified", "calibration", "gap_before", "gap_after", "effects", "localization", "skipped_files",
             "remaining_gap", "gap_definition", "gap_components"} <= set(doc)
@@ -169,14 +169,14 @@ def test_diagnose_cli_writes_diagnosis_report_and_logs_progress(tmp_path, pipeli
     assert [e.name for e in diag.effects] == ["pair_scattering"]
     assert (out / "report.html").exists()
     assert {p.name for p in (out / "figures").iterdir()} >= {"gap_by_effect.png", "residual_maps.png", "residual_terms.png"}
-    assert "[validation.diagnosis.steps] 3 runs; calibrating" in r.stderr
-    assert "[validation.diagnosis.identify.identification] testing pair_scattering on top of calibration" in r.stderr
+    assert "[validation.diagnosis.steps] 3 runs; calibrating" in r.err
+    assert "[validation.diagnosis.identify.identification] testing pair_scattering on top of calibration" in r.err
     # three runs cannot make any held-out test significant (smallest one-sided p 2^-3 = 0.125 > alpha 0.01):
     # the command says so, and the file records it, instead of a bare "identified: none"
     assert diag.identified == ()
     assert diag.settings["smallest_attainable_p"] == 0.125
     assert diag.settings["identification_possible"] is False and diag.settings["runs_needed"] == 7
-    assert "with 3 runs no effect can be identified at --alpha 0.01" in r.stderr
-    assert "record at least 7 runs" in r.stderr
+    assert "with 3 runs no effect can be identified at --alpha 0.01" in r.err
+    assert "record at least 7 runs" in r.err
     page = (out / "report.html").read_text()
     assert "With 3 runs no effect can be named" in page and "record at least 7 runs" in page
