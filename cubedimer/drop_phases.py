@@ -275,12 +275,13 @@ def _fixed_fall_rss(y: NDArray, t: NDArray, td: ArrayLike, ton: ArrayLike, tau: 
     return _linear_rss(y[None, :] + g_frames * X[..., 1], X[..., [0, 2, 3]], g_frames)
 
 
-def _linear_rss(rhs: NDArray, X: NDArray, g_frames: float) -> NDArray:
+def _linear_rss(rhs: NDArray, X: NDArray, g_frames: float, gram: NDArray | None = None) -> NDArray:
     """The residual sums of ``rhs`` (p, r: the heights with the fall at g taken out) over the least squares in the
     field-on columns ``X`` (p, r, 3: y_r, b, c; laid out as a transposed (3, p, r) array, as indexing the columns
     out of :func:`_columns` leaves them, which sets the sums' order), one per triple of times; inf where the
-    return is no return."""
-    gram = np.einsum("prk,prl->pkl", X, X) + _RIDGE
+    return is no return.  ``gram``: the columns' normal matrices, when known."""
+    if gram is None:
+        gram = _normal_matrices(X)
     beta = np.linalg.solve(gram, np.einsum("prk,pr->pk", X, rhs)[..., None])[..., 0]
     rss = np.sum((rhs - np.einsum("prk,pk->pr", X, beta)) ** 2, axis=1)
     # the field's return decelerates the fall by at least g (the trap holds the dimer against g at its equilibrium,
@@ -289,17 +290,24 @@ def _linear_rss(rhs: NDArray, X: NDArray, g_frames: float) -> NDArray:
     return np.where(-np.sign(g_frames) * beta[:, 1] >= 0.5 * abs(g_frames), rss, np.inf)
 
 
+def _normal_matrices(X: NDArray) -> NDArray:
+    """``X^T X`` (p, 3, 3) of the field-on columns ``X`` (p, r, 3), with the ridge that keeps them solvable."""
+    return np.einsum("prk,prl->pkl", X, X) + _RIDGE
+
+
 def _grid_rss(y: NDArray, t: NDArray, td: NDArray, ton: NDArray, tau: float, g_frames: float) -> NDArray:
     """:func:`_fixed_fall_rss` over pairs of times (``td``, ``ton``) of a grid at one ring time ``tau``: the fall's
-    column is computed once per distinct ``td`` and the return's once per distinct ``ton`` (the same numbers)."""
+    column is computed once per distinct ``td``, and the return's columns and their normal matrices once per
+    distinct ``ton`` (the same numbers)."""
     tds, at_d = np.unique(td, return_inverse=True)
     tons, at_on = np.unique(ton, return_inverse=True)
     tau_d = np.full((tds.size, 1), tau)
     tau_on = np.full((tons.size, 1), tau)
     fall = -fall_depth(t[None, :] - tds[:, None], tau_d)
     u = np.maximum(t[None, :] - tons[:, None], 0.0)
-    field_on = np.stack([np.ones_like(u), return_depth(u, tau_on), u ** 3 / 6.0])[:, at_on]
-    return _linear_rss(y[None, :] + g_frames * fall[at_d], field_on.transpose(1, 2, 0), g_frames)
+    field_on = np.stack([np.ones_like(u), return_depth(u, tau_on), u ** 3 / 6.0])
+    gram = _normal_matrices(field_on.transpose(1, 2, 0))[at_on]
+    return _linear_rss(y[None, :] + g_frames * fall[at_d], field_on[:, at_on].transpose(1, 2, 0), g_frames, gram)
 
 
 def _point_rss(y: NDArray, t: NDArray, td: float, ton: float, tau: float, g_frames: float) -> float:
