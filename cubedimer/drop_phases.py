@@ -346,8 +346,15 @@ def _switching_fit(y: NDArray, k: int, e: int, after: int, g_frames: float, taus
         """(t_d, t_on, tau, residual sum, grid index) of the best grid point among ``mask``, refined."""
         b = int(np.flatnonzero(mask)[np.argmin(rss[mask])])
         x0 = [pd[b], po[b], float(pt[b]) + 0.05] if free_tau else [pd[b], po[b]]
-        res = minimize(lambda p: _point_rss(yr, t, p[0], p[1], abs(p[2]) if free_tau else 0.0, g_frames),
-                       x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-30, "maxiter": 600})
+        known: dict[bytes, float] = {}  # the simplex revisits about half of its points once it has shrunk
+
+        def objective(p: NDArray) -> float:
+            key = p.tobytes()
+            if key not in known:
+                known[key] = _point_rss(yr, t, p[0], p[1], abs(p[2]) if free_tau else 0.0, g_frames)
+            return known[key]
+
+        res = minimize(objective, x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-30, "maxiter": 600})
         inside = pd.min() <= res.x[0] <= pd.max() and po.min() <= res.x[1] <= po.max() and res.x[1] > res.x[0]
         if inside and res.fun <= rss[b]:
             return float(res.x[0]), float(res.x[1]), abs(float(res.x[2])) if free_tau else 0.0, float(res.fun), b
