@@ -30,7 +30,7 @@ from .gorkov.forces import GorkovDimer
 from .medium import Medium, ParticleMaterial
 from .statics.sweep import fit_static_coefficients, read_sweep_csv, static_sweep
 from .force_model import ForceModel
-from .gorkov.surrogate import ForceSurrogate, build_surrogate, cached_surrogate
+from .gorkov.energy_surrogate import ForceSurrogate, build_surrogate, cached_surrogate
 from .dynamics.effects import EFFECT_TYPES, EffectSet, air_damping_for, parse_effect, register_effect
 from .dynamics.integrator import DimerDynamics
 from .dynamics.air_damping import air_damping_rates

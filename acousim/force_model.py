@@ -10,7 +10,7 @@ at ``Z = Z_eq + y`` is a combination of sin(kZ) and cos(kZ), forces are quadrati
 
 and a model hands the compiled equations of motion the six coefficient functions as Chebyshev
 series in theta on [-1, 1] (:class:`ForceCoefficients`; gravity is kept apart).  The Gor'kov
-surrogate (:class:`acousim.gorkov.surrogate.ForceSurrogate`) derives them from one potential; a full-wave
+surrogate (:class:`acousim.gorkov.energy_surrogate.ForceSurrogate`) derives them from one potential; a full-wave
 model gives Q_y and Q_theta directly (they need not derive from a potential).
 
 :class:`ForceModel` is the protocol (structural: any object with these members is one).
@@ -172,7 +172,7 @@ class SinusoidalInertia:
 @dataclass(frozen=True, kw_only=True)
 class ChebyshevSurrogate(SinusoidalInertia):
     """Base of the frozen-dataclass surrogates whose coefficient functions are Chebyshev series in theta and whose
-    forces scale exactly as p0^2: the Gor'kov :class:`acousim.gorkov.surrogate.ForceSurrogate` and the full-wave
+    forces scale exactly as p0^2: the Gor'kov :class:`acousim.gorkov.energy_surrogate.ForceSurrogate` and the full-wave
     :class:`acousim.fullwave.table.FullwaveSurrogate`.  It holds the fields they share (keyword-only, after each
     surrogate's own coefficients); the change of pressure (:meth:`with_pressure`) and the escape height
     (:meth:`escape_height`) are written here once; a surrogate gives its vertical force at theta = 0

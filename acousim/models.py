@@ -59,7 +59,7 @@ class ModelOption:
         :meth:`ExperimentConditions.option`, in a model type's ``options`` and in truth.json.
     flag : str
         Its command-line option (``"--gap"``), offered by every command with ``--model``
-        (:func:`acousim.cli.models.add_model_arguments`).
+        (:func:`acousim.cli.model_options.add_model_arguments`).
     help : str
         The option's help line (what it is, its unit, its default).
     metavar : str
@@ -354,7 +354,7 @@ def _gorkov_static(c: ExperimentConditions):
 
 
 def _gorkov_dynamic(c: ExperimentConditions):
-    from .gorkov.surrogate import build_surrogate, cached_surrogate
+    from .gorkov.energy_surrogate import build_surrogate, cached_surrogate
 
     if c.side_b_m is not None and c.side_b_m != c.side_length_m:
         raise ConditionError("--side-b: the equations of motion take equal cubes only")

@@ -41,7 +41,7 @@ def _best(fn, repeat: int = 5) -> float:
 
 def main() -> str:
     from acousim.fullwave.family import FAMILY_DIR, FullwaveFamily, _family
-    from acousim.fullwave.surrogate import DEFAULT_TABLE, FullwaveSurrogate
+    from acousim.fullwave.force_surrogate import DEFAULT_TABLE, FullwaveSurrogate
     from acousim.medium import Medium
 
     load_before = os.getloadavg()[0]

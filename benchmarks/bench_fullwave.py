@@ -70,7 +70,7 @@ def _numpy_double_layer(field, points):
 def _flux_rows(solution, theta: float, spec) -> list[str]:
     """Time the flux post-processing of one node, and the numpy sum on a subset of its field points."""
     from acousim.fullwave.flux import ExteriorField
-    from acousim.fullwave.surrogate import cube_b_flux_surface
+    from acousim.fullwave.force_surrogate import cube_b_flux_surface
 
     pts = cube_b_flux_surface(solution, theta, spec).points
     field = ExteriorField(solution)
@@ -92,8 +92,8 @@ def main() -> str:
     from acousim.fullwave.convergence import hinge_quantities, mesh_family
     from acousim.fullwave.geometry import dimer_bodies
     from acousim.fullwave.solver import solve_scattering
-    from acousim.fullwave.surrogate import COARSE_BUILD, build_fullwave_surrogate
-    from acousim.gorkov.surrogate import cached_surrogate
+    from acousim.fullwave.force_surrogate import COARSE_BUILD, build_fullwave_surrogate
+    from acousim.gorkov.energy_surrogate import cached_surrogate
 
     t0 = time.perf_counter()
     solve_scattering(dimer_bodies(0.1, mesh_family(1.0)))

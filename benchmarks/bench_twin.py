@@ -19,7 +19,7 @@ from benchmarks import best_time
 def main() -> str:
     from acousim.dynamics.integrator import DimerDynamics
     from acousim.gorkov.forces import GorkovDimer
-    from acousim.gorkov.surrogate import build_surrogate
+    from acousim.gorkov.energy_surrogate import build_surrogate
     from acousim.twin import PAPER_LIKE, Camera, TwinConfig, simulate_dataset, simulate_run
     from cubedimer.executor import ExecutorConfig
 

@@ -76,6 +76,7 @@ logger = logging.getLogger("cubedimer.dataset")
 _GRID = 0.1  # grid step of t_d and t_on [frames] (then refined)
 _RING_GRID = 0.5  # grid step of the ring time [frames] (then refined)
 _RETURN_BEFORE = 4.0  # the field's return searched from this many frames before the rough one (step 2)
+_RIDGE = 1e-12 * np.eye(3)  # keeps the field-on normal equations solvable where a column vanishes
 
 
 def fall_depth(s: ArrayLike, tau: ArrayLike) -> NDArray:
@@ -271,15 +272,57 @@ def _fixed_fall_rss(y: NDArray, t: NDArray, td: ArrayLike, ton: ArrayLike, tau: 
     """Residual sums of the model with the fall at ``g_frames`` (signed, per frame squared), over triples of times."""
     td, ton, tau = np.broadcast_arrays(np.atleast_1d(td), np.atleast_1d(ton), np.atleast_1d(tau))
     X = _columns(t[None, :], td[:, None], ton[:, None], tau[:, None])
-    rhs = y[None, :] + g_frames * X[..., 1]
-    X = X[..., [0, 2, 3]]
-    gram = np.einsum("prk,prl->pkl", X, X) + 1e-12 * np.eye(3)
+    return _linear_rss(y[None, :] + g_frames * X[..., 1], X[..., [0, 2, 3]], g_frames)
+
+
+def _linear_rss(rhs: NDArray, X: NDArray, g_frames: float, gram: NDArray | None = None) -> NDArray:
+    """The residual sums of ``rhs`` (p, r: the heights with the fall at g taken out) over the least squares in the
+    field-on columns ``X`` (p, r, 3: y_r, b, c; laid out as a transposed (3, p, r) array, as indexing the columns
+    out of :func:`_columns` leaves them, which sets the sums' order), one per triple of times; inf where the
+    return is no return.  ``gram``: the columns' normal matrices, when known."""
+    if gram is None:
+        gram = _normal_matrices(X)
     beta = np.linalg.solve(gram, np.einsum("prk,pr->pk", X, rhs)[..., None])[..., 0]
     rss = np.sum((rhs - np.einsum("prk,pk->pr", X, beta)) ** 2, axis=1)
     # the field's return decelerates the fall by at least g (the trap holds the dimer against g at its equilibrium,
     # and more below it; half of it here): a return that the field-on cubic fits without it (a return inside the
     # fall, b about 0, when few frames follow the true one) is no return
     return np.where(-np.sign(g_frames) * beta[:, 1] >= 0.5 * abs(g_frames), rss, np.inf)
+
+
+def _normal_matrices(X: NDArray) -> NDArray:
+    """``X^T X`` (p, 3, 3) of the field-on columns ``X`` (p, r, 3), with the ridge that keeps them solvable."""
+    return np.einsum("prk,prl->pkl", X, X) + _RIDGE
+
+
+def _grid_rss(y: NDArray, t: NDArray, td: NDArray, ton: NDArray, tau: float, g_frames: float) -> NDArray:
+    """:func:`_fixed_fall_rss` over pairs of times (``td``, ``ton``) of a grid at one ring time ``tau``: the fall's
+    column is computed once per distinct ``td``, and the return's columns and their normal matrices once per
+    distinct ``ton`` (the same numbers)."""
+    tds, at_d = np.unique(td, return_inverse=True)
+    tons, at_on = np.unique(ton, return_inverse=True)
+    tau_d = np.full((tds.size, 1), tau)
+    tau_on = np.full((tons.size, 1), tau)
+    fall = -fall_depth(t[None, :] - tds[:, None], tau_d)
+    u = np.maximum(t[None, :] - tons[:, None], 0.0)
+    field_on = np.stack([np.ones_like(u), return_depth(u, tau_on), u ** 3 / 6.0])
+    gram = _normal_matrices(field_on.transpose(1, 2, 0))[at_on]
+    return _linear_rss(y[None, :] + g_frames * fall[at_d], field_on[:, at_on].transpose(1, 2, 0), g_frames, gram)
+
+
+def _point_rss(y: NDArray, t: NDArray, td: float, ton: float, tau: float, g_frames: float) -> float:
+    """:func:`_fixed_fall_rss` at one triple of times (the refinement's objective): the same numbers, without the
+    broadcasting over triples."""
+    s = np.maximum(t - td, 0.0)
+    u = np.maximum(t - ton, 0.0)
+    if tau > 0:  # fall_depth and return_depth, term by term
+        fall = 0.5 * s ** 2 - 0.5 * tau * s - 0.25 * (tau * tau) * np.expm1(-2.0 * s / tau)
+        rise = (0.5 * u ** 2 - 1.5 * tau * u - 2.0 * (tau * tau) * np.expm1(-u / tau)
+                + 0.25 * (tau * tau) * np.expm1(-2.0 * u / tau))
+    else:
+        fall, rise = 0.5 * s ** 2, 0.5 * u ** 2
+    X = np.stack([np.ones_like(u), rise, u ** 3 / 6.0])[:, None, :].transpose(1, 2, 0)
+    return float(_linear_rss((y + g_frames * -fall)[None], X, g_frames)[0])
 
 
 def _switching_fit(y: NDArray, k: int, e: int, after: int, g_frames: float, taus: NDArray, sigma: float
@@ -296,16 +339,22 @@ def _switching_fit(y: NDArray, k: int, e: int, after: int, g_frames: float, taus
                              np.arange(e - _RETURN_BEFORE, e + 1.5 + _GRID / 2, _GRID), taus, indexing="ij")
     keep = po > pd + 0.5
     pd, po, pt = pd[keep], po[keep], pt[keep]
-    rss = np.concatenate([_fixed_fall_rss(yr, t, pd[pt == v], po[pt == v], v, g_frames) for v in taus])
+    rss = np.concatenate([_grid_rss(yr, t, pd[pt == v], po[pt == v], float(v), g_frames) for v in taus])
     pd, po, pt = (np.concatenate([x[pt == v] for v in taus]) for x in (pd, po, pt))
 
     def refined(mask: NDArray, free_tau: bool) -> tuple[float, float, float, float, int]:
         """(t_d, t_on, tau, residual sum, grid index) of the best grid point among ``mask``, refined."""
         b = int(np.flatnonzero(mask)[np.argmin(rss[mask])])
         x0 = [pd[b], po[b], float(pt[b]) + 0.05] if free_tau else [pd[b], po[b]]
-        res = minimize(lambda p: float(_fixed_fall_rss(yr, t, p[0], p[1], abs(p[2]) if free_tau else 0.0,
-                                                       g_frames)[0]),
-                       x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-30, "maxiter": 600})
+        known: dict[bytes, float] = {}  # the simplex revisits about half of its points once it has shrunk
+
+        def objective(p: NDArray) -> float:
+            key = p.tobytes()
+            if key not in known:
+                known[key] = _point_rss(yr, t, p[0], p[1], abs(p[2]) if free_tau else 0.0, g_frames)
+            return known[key]
+
+        res = minimize(objective, x0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-30, "maxiter": 600})
         inside = pd.min() <= res.x[0] <= pd.max() and po.min() <= res.x[1] <= po.max() and res.x[1] > res.x[0]
         if inside and res.fun <= rss[b]:
             return float(res.x[0]), float(res.x[1]), abs(float(res.x[2])) if free_tau else 0.0, float(res.fun), b

@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from acousim.cli.models import add_model_arguments, model_spec_from_args
+from acousim.cli.model_options import add_model_arguments, model_spec_from_args
 from cubedimer.cli import (UserInputError, add_executor_arguments, check_limit, command_parser, executor_config,
                            field_default, positive_float, positive_int, prepare_output_dir, run_cli)
 from cubedimer.load_config import LoadConfig

@@ -1,7 +1,7 @@
 """Command line of acousim: ``python -m acousim {sweep,simulate,force,family,table,convergence,atlas,held-y,resonator-map,free-y-map} ...``.
 
-Each subcommand lives in its own module of this package and registers itself through an ``add_parser(subparsers)``
-function; the runner is :func:`cubedimer.cli.run_cli`.
+Each subcommand lives in its own module of this package, ``<command>_command.py``, and registers itself through an
+``add_parser(subparsers)`` function; the runner is :func:`cubedimer.cli.run_cli`.
 """
 from __future__ import annotations
 
@@ -10,14 +10,16 @@ import argparse
 from cubedimer.cli import command_parser, run_cli
 
 from ..fullwave.solver import AssemblyBackendError
-from . import atlas, convergence, family, force, free_y, held_y, resonator_map, simulate, sweep, table
+from . import (atlas_command, convergence_command, family_command, force_command, free_y_command, held_y_command,
+               resonator_map_command, simulate_command, sweep_command, table_command)
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: The commands of ``python -m acousim``, in the order of the help.
-COMMANDS = (sweep.add_parser, simulate.add_parser, force.add_parser, family.add_parser, table.add_parser,
-            convergence.add_parser, atlas.add_parser, held_y.add_parser, resonator_map.add_parser,
-            free_y.add_parser)
+COMMANDS = (sweep_command.add_parser, simulate_command.add_parser, force_command.add_parser,
+            family_command.add_parser, table_command.add_parser, convergence_command.add_parser,
+            atlas_command.add_parser, held_y_command.add_parser, resonator_map_command.add_parser,
+            free_y_command.add_parser)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -108,7 +108,7 @@ class DimerDynamics:
     ----------
     force_model : ForceModel
         Generalised forces and their height structure (sets the pressure, side, Z_eq, masses and
-        inertia), e.g. :class:`~acousim.gorkov.surrogate.ForceSurrogate`.
+        inertia), e.g. :class:`~acousim.gorkov.energy_surrogate.ForceSurrogate`.
     effects : EffectSet
         The unmodelled effects switched on (default none).
 

@@ -5,8 +5,8 @@
 * :func:`dimer_bodies` and :class:`DimerMeshSpec`: the posed, gapped, hinge-graded cube meshes;
 * :class:`FullwaveSurrogate`, :func:`build_fullwave_surrogate`, :func:`cached_fullwave_surrogate`,
   :func:`default_fullwave_surrogate`: the Chebyshev-in-theta force surrogate (same interface as
-  :class:`acousim.gorkov.surrogate.ForceSurrogate`, without a potential);
-* ``python -m acousim force`` (:mod:`acousim.cli.force`) and the convergence study
+  :class:`acousim.gorkov.energy_surrogate.ForceSurrogate`, without a potential);
+* ``python -m acousim force`` (:mod:`acousim.cli.force_command`) and the convergence study
   (``python -m acousim convergence``).
 
 bempp-cl is imported lazily, at the first solve.
@@ -17,8 +17,8 @@ from .mesh_rules import TABLE_SPEC, edge_graded_mesh_spec
 from .flux import (ExteriorField, FluxSurface, double_layer_potential, enclosing_sphere_surface, flux_height_structure,
                    mirror_half_surface)
 from .solver import Body, HeightStructure, ScatteringSolution, solve_scattering
-from .surrogate import (FullwaveSurrogate, build_fullwave_surrogate, cached_fullwave_surrogate,
-                        coarse_fullwave_surrogate, default_fullwave_surrogate, dimer_generalized_coefficients)
+from .force_surrogate import (FullwaveSurrogate, build_fullwave_surrogate, cached_fullwave_surrogate,
+                              coarse_fullwave_surrogate, default_fullwave_surrogate, dimer_generalized_coefficients)
 
 __all__ = [
     "Body", "HeightStructure", "ScatteringSolution", "solve_scattering",

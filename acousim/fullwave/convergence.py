@@ -2,7 +2,7 @@
 
 For one geometry and mesh, two boundary-element solves (theta = 0 and theta = delta) give, through the
 exact height structure and the bend parity (A, B odd and C even in theta, see
-:mod:`acousim.fullwave.surrogate`):
+:mod:`acousim.fullwave.force_surrogate`):
 
 * the theta = 0 vertical force ``F_Z = C_F sin(2kZ)``, hence Z_eq (F_Z = M g) and f_y;
 * the hinge stiffness ``dQ_theta/dtheta = A_Q'(0) + B_Q'(0) cos(2kZ_eq)`` at (theta, y) = (0, 0)
@@ -27,7 +27,7 @@ from .mesh_record import CONVERGED_WITHIN, judge_convergence, richardson_limit, 
 from .mesh_rules import EDGE_GRADED_H_EDGE  # noqa: F401 (re-exported)
 from .flux import ExteriorField, enclosing_sphere_surface, flux_height_structure
 from .solver import solve_scattering
-from .surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
+from .force_surrogate import COARSE_BUILD, FullwaveSurrogate, build_fullwave_surrogate, dimer_coefficients
 
 __all__ = ["mesh_family", "hinge_quantities", "judge_convergence", "richardson_limit", "stated_mesh_error",
            "flux_balance", "surrogate_errors", "CONVERGED_WITHIN", "EDGE_GRADED_H_EDGE"]
@@ -45,7 +45,7 @@ def hinge_quantities(spec: DimerMeshSpec, medium: Medium = Medium(),
         ``dofs``, ``wall_s``, ``z_eq_m``, ``fz_amplitude_n`` (|C_F(0)|), ``f_y_hz``, ``stiffness_nm``
         (dQ_theta/dtheta at the equilibrium height), ``f_theta_hz`` (from the stiffness alone) and
         ``thetaddot`` (dict of Taylor coefficients, SI); ``forces`` is how forces and torques were integrated
-        (:data:`acousim.fullwave.surrogate.FORCE_METHODS`).
+        (:data:`acousim.fullwave.force_surrogate.FORCE_METHODS`).
     """
     t0 = time.perf_counter()
     two_k = 2 * medium.wavenumber

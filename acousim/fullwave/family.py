@@ -16,7 +16,7 @@ enter the scattering: they are applied afterwards (``M = 2 rho_p s^3``, the hing
 equilibrium height is solved anew.  :func:`dimensionless_coefficients` and :func:`scaled_surrogate` are this
 map and its inverse; a test checks it against direct solves at two different (s, f) with the same ks.
 
-Family.  Node tables (:class:`~acousim.fullwave.surrogate.FullwaveSurrogate`, Chebyshev in theta) are built
+Family.  Node tables (:class:`~acousim.fullwave.force_surrogate.FullwaveSurrogate`, Chebyshev in theta) are built
 on a tensor grid in ``ks`` and in ``log(g/s)`` (:data:`FAMILY_KS`, :data:`FAMILY_GAP_RATIOS`), all on one mesh
 rule of :mod:`acousim.fullwave.family_grid` (the hinge-graded :func:`family_mesh_spec`, or the edge-graded mesh at
 each gap's level).  Between nodes the dimensionless Chebyshev coefficients are
@@ -52,7 +52,7 @@ from .family_grid import (BUILD_HINT, FAMILY_BUILD, FAMILY_DIR, FAMILY_GAP_RATIO
                           MESH_CONVERGENCE_FILE, REFERENCE, FamilyNode, FamilyRangeError, FamilyTableError,
                           family_mesh_spec, family_nodes, node_path)
 from .geometry import DimerMeshSpec, hinge_arm, rounded_cube_volume
-from .surrogate import build_fullwave_surrogate, build_settings_of
+from .force_surrogate import build_fullwave_surrogate, build_settings_of
 from .table import _COMPONENTS, FullwaveSurrogate, _equilibrium_height, _tup
 
 __all__ = [
@@ -388,7 +388,7 @@ def shipped_family() -> FullwaveFamily:
 
 @lru_cache(maxsize=1)
 def _default_table_settings() -> dict:
-    from .surrogate import DEFAULT_TABLE
+    from .force_surrogate import DEFAULT_TABLE
 
     with open(DEFAULT_TABLE) as fh:
         return json.load(fh)["settings"]
@@ -414,7 +414,7 @@ def fullwave_surrogate(conditions) -> FullwaveSurrogate:
     FamilyRangeError
         Rounded edges (no tables), or (ks, g/s) outside the family: one line naming the range and the build command.
     """
-    from .surrogate import default_fullwave_surrogate
+    from .force_surrogate import default_fullwave_surrogate
 
     c = conditions
     side = float(c.side_length_m)

@@ -1,7 +1,7 @@
 """The family's grid: its nodes in (ks, g/s), the meshes they are built on, and the reference settings.
 
 A node is one (ks, g/s) with its build settings (:class:`FamilyNode`); its table is one
-:class:`~acousim.fullwave.surrogate.FullwaveSurrogate` built at the reference side and air (:data:`REFERENCE`),
+:class:`~acousim.fullwave.force_surrogate.FullwaveSurrogate` built at the reference side and air (:data:`REFERENCE`),
 from which every other dimer with the same ks and g/s follows by exact scaling (:mod:`acousim.fullwave.family`).
 
 Meshes.  A node is built on one of the two mesh rules of :mod:`acousim.fullwave.mesh_rules` (re-exported here):
@@ -22,7 +22,7 @@ from ..medium import Medium
 from .geometry import DimerMeshSpec
 from .mesh_rules import (EDGE_GRADED_H_EDGE, FAMILY_MESH_LEVELS, edge_graded_mesh_spec, family_mesh_level,
                          family_mesh_spec)
-from .surrogate import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE
+from .force_surrogate import FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE
 
 __all__ = [
     "FAMILY_KS", "FAMILY_GAP_RATIOS", "FAMILY_DIR", "FAMILY_BUILD", "REFERENCE", "BUILD_HINT", "MESH_CONVERGENCE_FILE",
@@ -123,7 +123,7 @@ class FamilyNode:
 
     def expected_settings(self) -> dict:
         """The keyed build settings a table of this node must carry."""
-        from .surrogate import build_settings
+        from .force_surrogate import build_settings
 
         return build_settings(self.spec, self.medium, REFERENCE["particle_density_kg_m3"], self.n_half,
                               self.theta_max, "flux", self.flux_disc_points)

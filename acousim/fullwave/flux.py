@@ -379,7 +379,7 @@ def dimer_flux_coefficients(solution: ScatteringSolution, theta: float, spec: Di
 
     Cube B's force and torque are the flux through the half sphere X > 0 closed by the mirror disc X = 0 (through
     the hinge gap); cube A's are their mirror images.  Q_theta as in
-    :func:`acousim.fullwave.surrogate.dimer_generalized_coefficients`.
+    :func:`acousim.fullwave.force_surrogate.dimer_generalized_coefficients`.
     The sphere's radius is 1.6 times the farthest vertex; the disc's first panels are 0.3 times the distance
     from the hinge edge to the disc.
     """

@@ -2,7 +2,7 @@
 
 The sim-to-real diagnosis evaluates its simulation model at the measured states of every frame, at lab
 heights ``Z = z0 + y`` of a calibrated origin ``z0`` and at a calibrated pressure.  :class:`FullwaveDimer`
-gives the full-wave surrogate (:class:`~acousim.fullwave.surrogate.FullwaveSurrogate`) the members the
+gives the full-wave surrogate (:class:`~acousim.fullwave.force_surrogate.FullwaveSurrogate`) the members the
 diagnosis reads from :class:`~acousim.gorkov.forces.GorkovDimer`: :meth:`~FullwaveDimer.integrals_at_height`,
 :meth:`~FullwaveDimer.orientation_sums`, :attr:`~FullwaveDimer.equilibrium_height`,
 :meth:`~FullwaveDimer.with_pressure`, ``dimer`` (mass and hinge inertia), ``wave`` and ``gravity``.
@@ -33,7 +33,7 @@ from ..field import StandingWave
 from ..force_model import SinusoidalInertia
 from ..static_model import StaticForces
 from ..medium import ParticleMaterial
-from .surrogate import FullwaveSurrogate, default_fullwave_surrogate
+from .force_surrogate import FullwaveSurrogate, default_fullwave_surrogate
 
 __all__ = ["FullwaveDimer", "FullwaveInertia", "default_fullwave_dimer", "TableMismatch"]
 

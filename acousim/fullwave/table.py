@@ -2,7 +2,7 @@
 structure of F_Z and Q_theta (docs/conventions.md section 7), with what a force model needs of it (forces,
 equilibrium, linear frequencies, pressure rescaling) and its JSON file.
 
-It is built by :func:`acousim.fullwave.surrogate.build_fullwave_surrogate` (one boundary-element solve per
+It is built by :func:`acousim.fullwave.force_surrogate.build_fullwave_surrogate` (one boundary-element solve per
 Chebyshev node; the series, its symmetry and its range are described there) and read from the shipped or cached
 files; this module holds only the table itself.
 """

@@ -426,9 +426,10 @@ class GorkovDimer:
         """
         weight = self.dimer.total_mass * self.gravity
         lam4 = np.pi / (2.0 * self.wave.wavenumber)  # quarter wavelength
+        flat = self.orientation_sums(0.0)  # the bend's sums, once: the root search varies the height only
 
         def net(z: float) -> float:
-            return float(self.integrals_at_height(0.0, z).force_z) - weight
+            return float(self.integrals_at_height(0.0, z, flat).force_z) - weight
 
         # the restoring force grows from 0 at the node to its maximum at -lambda/8
         z_max = -lam4 / 2.0

@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 
-from acousim.fullwave.surrogate import DEFAULT_TABLE, FullwaveSurrogate
+from acousim.fullwave.force_surrogate import DEFAULT_TABLE, FullwaveSurrogate
 
 sur = FullwaveSurrogate.load(sys.argv[1] if len(sys.argv) > 1 else DEFAULT_TABLE)
 ba, st = sur.build_accuracy, sur.settings

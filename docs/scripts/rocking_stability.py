@@ -6,10 +6,10 @@ held-y orbits (docs/twin.md, "Rocking and sideways").
 
 Every pose (dimer, mesh, theta, psi, x) is one solve (22-44 s on the standard mesh, 7.5 min on the default table's
 mesh, one core), cached as one JSON file in CACHE: the total force and torque about the centre of mass, (A, B, C) at
-3 kPa, by the momentum flux through a sphere and by the surface tractions (acousim.fullwave.rocking).  Then, for each
+3 kPa, by the momentum flux through a sphere and by the surface tractions (acousim.fullwave.antisymmetric_loads).  Then, for each
 dimer, the stiffness over the bend (K_psipsi, K_xpsi at theta = 0-0.8, mirrored to negative bends) and, along the
 locked held-y orbits of its cells (acousim.atlas.held_y), the rocking pair's Floquet multipliers
-(acousim.atlas.rocking).
+(acousim.atlas.rocking_stability).
 """
 import json
 import logging
@@ -56,7 +56,7 @@ def pose_path(cache: Path, pose) -> Path:
 
 
 def solve_pose(cache: Path, pose) -> None:
-    from acousim.fullwave.rocking import rocked_dimer_bodies, total_loads
+    from acousim.fullwave.antisymmetric_loads import rocked_dimer_bodies, total_loads
     from acousim.fullwave.solver import solve_scattering
 
     d, mesh, th, psi, x = pose
@@ -82,7 +82,7 @@ def load(cache: Path, pose) -> dict | None:
 
 
 def stiffness_table(cache: Path, dimer: str, mesh: str = "standard"):
-    from acousim.fullwave.rocking import RockingStiffness, pose_stiffness
+    from acousim.fullwave.antisymmetric_loads import RockingStiffness, pose_stiffness
 
     rows = [load(cache, (dimer, mesh, th, STEP, 0.0)) for th in THETAS]
     ks = [pose_stiffness(r["flux"]["force"], r["flux"]["torque"], STEP) for r in rows]
@@ -92,8 +92,8 @@ def stiffness_table(cache: Path, dimer: str, mesh: str = "standard"):
 
 def print_stiffness(cache: Path) -> None:
     from acousim.atlas.field_drops import atlas_dynamics
-    from acousim.atlas.rocking import AntisymmetricInertia
-    from acousim.fullwave.rocking import pose_stiffness
+    from acousim.atlas.rocking_stability import AntisymmetricInertia
+    from acousim.fullwave.antisymmetric_loads import pose_stiffness
 
     for dimer, (side, gs) in DIMERS.items():
         table, ks = stiffness_table(cache, dimer)
@@ -144,8 +144,8 @@ def print_stiffness(cache: Path) -> None:
 def print_floquet(cache: Path) -> None:
     from acousim.atlas.field_drops import atlas_dynamics, settled_outcome
     from acousim.atlas.held_y import HeldYConfig, held_y_orbits
-    from acousim.atlas.rocking import (AntisymmetricInertia, rocking_arguments, rocking_damping_rate,
-                                       rocking_multipliers, sample_orbit)
+    from acousim.atlas.rocking_stability import (AntisymmetricInertia, rocking_arguments, rocking_damping_rate,
+                                                 rocking_multipliers, sample_orbit)
     from acousim.atlas.field_drops import AtlasDimer
 
     print("\ncell | class | lock | hinge amplitude | theta range | max |mu| rocking pair, undamped | arg(mu)/2pi | "

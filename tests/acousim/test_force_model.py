@@ -8,7 +8,7 @@ import pytest
 
 from acousim.force_model import ChebyshevSurrogate
 from acousim.fullwave.table import FullwaveSurrogate
-from acousim.gorkov.surrogate import ForceSurrogate
+from acousim.gorkov.energy_surrogate import ForceSurrogate
 from acousim.models import ExperimentConditions, dynamic_model
 
 SHARED = ("two_k", "wavenumber", "z_eq", "mass", "gravity", "inertia_const", "inertia_sin2", "pressure_amplitude_pa",

@@ -60,7 +60,7 @@ def test_a_new_model_option_runs_from_the_command_line_to_the_diagnosis(pressure
     import json
 
     from acousim.cli import main as acousim_main
-    from acousim.cli.models import model_spec_from_args
+    from acousim.cli.model_options import model_spec_from_args
     from acousim.statics.sweep import read_sweep_csv
     from validation.cli import build_parser as validation_parser
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
@@ -196,7 +196,7 @@ def test_a_new_model_option_reaches_the_spec_from_the_command_line(dummy_model):
     """Every model option a command offers reaches the spec by its command-line name, with no per-model code."""
     import argparse
 
-    from acousim.cli.models import model_spec_from_args
+    from acousim.cli.model_options import model_spec_from_args
     from cubedimer.cli import UserInputError
 
     args = argparse.Namespace(model="stiff_gorkov", mesh_size=80e-6, gap=None, edge_radius=None)

@@ -1,4 +1,4 @@
-"""The rocking and sideways modes along the symmetric orbits (acousim.atlas.rocking): the kinetic energy against hand
+"""The rocking and sideways modes along the symmetric orbits (acousim.atlas.rocking_stability): the kinetic energy against hand
 computations and limits, the Floquet multipliers of the rocking pair against constant-stiffness oscillators, the
 Wronskian along a moving hinge, the air's rocking damping in its steady limit."""
 import math
@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from acousim.atlas.rocking import (AntisymmetricInertia, periodic_series, rocking_arguments, rocking_multipliers)
+from acousim.atlas.rocking_stability import (AntisymmetricInertia, periodic_series, rocking_arguments, rocking_multipliers)
 
 S, RHO, GAP = 500e-6, 2160.0, 5e-6
 M_CUBE = RHO * S**3
@@ -100,7 +100,7 @@ def test_a_negative_stiffness_is_unstable():
 def test_rocking_damping_has_the_steady_stokes_limit():
     """At a vanishing frequency the Stokes layer is unbounded: c_rot -> 8 pi mu a^3 (a = 0.620 s) and the centre's
     drag -> 6 pi mu a_S (a_S = 0.661 s), so gamma_psi -> 2 (8 pi mu a^3 + 6 pi mu a_S X^2) / I_r (to ~1e-6: a / delta)."""
-    from acousim.atlas.rocking import rocking_damping_rate
+    from acousim.atlas.rocking_stability import rocking_damping_rate
     from acousim.dynamics.air_damping import AIR_DYNAMIC_VISCOSITY_PA_S as MU
 
     inert = _inertia()

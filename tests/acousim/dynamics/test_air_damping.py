@@ -125,7 +125,7 @@ def test_the_twin_loses_energy_at_the_computed_rate():
     from acousim.dynamics.integrator import DimerDynamics
     from acousim.dynamics.effects import EffectSet
     from acousim.models import ExperimentConditions
-    from acousim.gorkov.surrogate import cached_surrogate
+    from acousim.gorkov.energy_surrogate import cached_surrogate
 
     sur = cached_surrogate()
     effect = air_damping_for(sur, ExperimentConditions())

@@ -7,7 +7,7 @@ from acousim.dynamics.integrator import DimerDynamics
 from acousim.dynamics.effects import EffectSet
 from acousim.dynamics.equations import accelerations
 from acousim.force_model import ForceCoefficients, ForceModel
-from acousim.gorkov.surrogate import build_surrogate
+from acousim.gorkov.energy_surrogate import build_surrogate
 from acousim.statics.sweep import taylor_coefficients
 
 G = 9.81
@@ -324,7 +324,7 @@ def test_compiled_entry_points_are_cached_on_disk(tmp_path):
         import numpy as np
         import acousim.dynamics.integrator as d
         from acousim.dynamics.effects import EffectSet
-        from acousim.gorkov.surrogate import cached_surrogate
+        from acousim.gorkov.energy_surrogate import cached_surrogate
         dyn = d.DimerDynamics(cached_surrogate(), EffectSet.parse(["linear_damping:gamma_y=0.3"]))
         dyn.integrate([1e-4, 0, 0.1, 0], 0.01, 1e-3)
         dyn.integrate([1e-4, 0, 0.1, 0], 0.01, 1e-3, field_on=False)

@@ -11,7 +11,7 @@ from acousim.dynamics.compiled_effects import packed_effect_accelerations, regis
 from acousim.dynamics.effects import (EFFECT_TYPES, PACKED_PARAMETERS, AirDamping, Effect, EffectError, EffectSet,
                              LinearDamping, MirrorAsymmetry, PairScattering, QuadraticDrag, VelocityCoupling,
                              packed_parameters, parse_effect, register_effect)
-from acousim.gorkov.surrogate import cached_surrogate
+from acousim.gorkov.energy_surrogate import cached_surrogate
 
 K = 836.2315139147175  # wavenumber at 45.65 kHz, 343 m/s [1/m]
 Z_EQ = -4.2888847763325813e-4  # default equilibrium height [m]

@@ -13,7 +13,7 @@ from acousim.dynamics.resonator import (CavityMode, CoupledCavity, coupled_field
                                         mode_energy, potential_series)
 from acousim.dynamics.switching import field_drop, ring_time
 from acousim.force_model import levitation_height
-from acousim.gorkov.surrogate import ForceSurrogate
+from acousim.gorkov.energy_surrogate import ForceSurrogate
 from acousim.atlas.resonator_map import growth_from_peaks
 from acousim.medium import Medium
 from acousim.twin import TwinConfig, twin_dynamics

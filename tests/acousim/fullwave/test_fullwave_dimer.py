@@ -14,7 +14,7 @@ from acousim.fullwave.geometry import (COARSE_SPEC, check_closed_oriented, cube_
                                        dimer_bodies, hinge_refined_spec, mesh_family)
 from acousim.fullwave.opencl_probe import OpenCLVerdict  # noqa: E402
 from acousim.fullwave.solver import Body, solve_scattering  # noqa: E402
-from acousim.fullwave.surrogate import dimer_generalized_coefficients  # noqa: E402
+from acousim.fullwave.force_surrogate import dimer_generalized_coefficients  # noqa: E402
 from acousim.medium import Medium  # noqa: E402
 
 THETA = 0.3

@@ -8,7 +8,7 @@ import pytest
 
 from acousim.dynamics.integrator import DimerDynamics
 from acousim.force_model import ForceModel
-from acousim.fullwave.surrogate import default_fullwave_surrogate
+from acousim.fullwave.force_surrogate import default_fullwave_surrogate
 
 
 @pytest.fixture(scope="module")

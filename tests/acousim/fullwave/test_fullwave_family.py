@@ -147,7 +147,7 @@ def test_flux_disc_quadrature_is_a_keyed_build_setting(tmp_path, synthetic_famil
     keep their keys (and cache names) and read as 6; new nodes default to the converged 12 and refuse a 6-point
     table by name (``build`` then rebuilds it), and a family mixing quadratures is refused."""
     from acousim.fullwave.flux import FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS
-    from acousim.fullwave.surrogate import build_settings, build_settings_of
+    from acousim.fullwave.force_surrogate import build_settings, build_settings_of
 
     assert (FLUX_DISC_POINTS, UNKEYED_FLUX_DISC_POINTS) == (12, 6)
     n_half = default_fullwave_surrogate().settings["n_half"]  # as the synthetic family's tables

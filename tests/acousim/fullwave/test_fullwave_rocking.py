@@ -1,4 +1,4 @@
-"""The rocked and translated full-wave dimer (acousim.fullwave.rocking): the posed geometry's mirror symmetry and
+"""The rocked and translated full-wave dimer (acousim.fullwave.antisymmetric_loads): the posed geometry's mirror symmetry and
 translation invariance (no boundary-element solve: the incident wave's surface tractions), the central difference
 of one solve's loads, and the stiffness table's theta-parity."""
 import math
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from acousim.fullwave.geometry import DimerMeshSpec, hinge_arm
-from acousim.fullwave.rocking import RockingStiffness, pose_stiffness, rocked_dimer_bodies, rocking_rotation
+from acousim.fullwave.antisymmetric_loads import RockingStiffness, pose_stiffness, rocked_dimer_bodies, rocking_rotation
 from acousim.fullwave.solver import surface_force_density
 from acousim.medium import Medium
 

@@ -13,9 +13,9 @@ import pytest
 pytest.importorskip("bempp_cl")
 
 from acousim.fullwave.geometry import COARSE_SPEC, mesh_family  # noqa: E402
-from acousim.fullwave.surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FLUX_DISC_POINTS, FullwaveSurrogate,  # noqa: E402
-                                        build_fullwave_surrogate, build_settings_of, build_settings,
-                                        cached_fullwave_surrogate, default_fullwave_surrogate)
+from acousim.fullwave.force_surrogate import (DEFAULT_BUILD, DEFAULT_TABLE, FLUX_DISC_POINTS, FullwaveSurrogate,  # noqa: E402
+                                              build_fullwave_surrogate, build_settings_of, build_settings,
+                                              cached_fullwave_surrogate, default_fullwave_surrogate)
 from acousim.medium import Medium  # noqa: E402
 
 #: Two solves (theta = 0.34 and 0.83) on the coarsest graded mesh (264 DOFs), forces from the momentum flux as in
@@ -53,7 +53,7 @@ def test_processes_that_miss_the_same_table_at_once_build_it_once(coarse_surroga
     import threading
     import time
 
-    from acousim.fullwave import surrogate as module
+    from acousim.fullwave import force_surrogate as module
 
     sur, _ = coarse_surrogate
     builds = []
@@ -129,7 +129,7 @@ def test_dimensionless_coefficients_depend_on_ks_only(coarse_surrogate):
     from acousim.fullwave.family import force_scale
     from acousim.fullwave.geometry import dimer_bodies
     from acousim.fullwave.solver import solve_scattering
-    from acousim.fullwave.surrogate import dimer_coefficients
+    from acousim.fullwave.force_surrogate import dimer_coefficients
 
     sur, _ = coarse_surrogate
     s0 = sur.settings["side_m"]

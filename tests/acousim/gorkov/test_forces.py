@@ -171,7 +171,7 @@ def test_default_sweep_agrees_with_independent_implementation(default_model):
     """Acceptance: the closed form of acousim.analytic (sinc-product Fourier transform of a cube) is an
     implementation of docs/conventions.md independent of meshes and quadrature."""
     from acousim.statics.sweep import static_sweep
-    from acousim.cli.sweep import DEFAULT_THETA, DEFAULT_Y, parse_range
+    from acousim.cli.sweep_command import DEFAULT_THETA, DEFAULT_Y, parse_range
 
     sw = static_sweep(default_model, parse_range(DEFAULT_THETA, "theta"), parse_range(DEFAULT_Y, "y"))
     f, qy, qt = analytic.dimer_generalized_forces(500e-6, sw["theta"], sw["z_com"], default_model.wave)

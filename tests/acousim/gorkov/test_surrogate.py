@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from acousim.gorkov.forces import GorkovDimer
-from acousim.gorkov.surrogate import DEFAULT_BOX, SurrogateBox, build_surrogate, cached_surrogate
+from acousim.gorkov.energy_surrogate import DEFAULT_BOX, SurrogateBox, build_surrogate, cached_surrogate
 from acousim.statics.sweep import taylor_coefficients
 
 # The requirement: surrogate within 0.5 % of direct evaluation over the swept box,

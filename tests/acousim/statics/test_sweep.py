@@ -83,7 +83,7 @@ def test_taylor_coefficients_match_closed_form(default_model):
 
 def test_theta_y2_coupling_at_defaults(default_model):
     """Acceptance: at the defaults the theta*y^2 term comes out with its sign, size and uncertainty."""
-    from acousim.cli.sweep import DEFAULT_THETA, DEFAULT_Y, parse_range
+    from acousim.cli.sweep_command import DEFAULT_THETA, DEFAULT_Y, parse_range
 
     sw = static_sweep(default_model, parse_range(DEFAULT_THETA, "theta"), parse_range(DEFAULT_Y, "y"))
     c = fit_static_coefficients(sw, theta_max=0.3, y_max=150e-6, taylor=taylor_coefficients(default_model))

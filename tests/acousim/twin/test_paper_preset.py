@@ -42,7 +42,7 @@ def test_the_preset_runs_and_is_reproducible(tmp_path):
 
 def test_the_command_takes_the_preset_dimer(tmp_path):
     from acousim.cli import build_parser
-    from acousim.cli.simulate import build_config
+    from acousim.cli.simulate_command import build_config
 
     args = build_parser().parse_args(["simulate", "--preset", "paper", "--out", str(tmp_path / "x")])
     cfg = build_config(args)
@@ -65,7 +65,7 @@ def test_the_command_takes_the_preset_dimer(tmp_path):
 ])
 def test_the_command_adds_the_air_damping_unless_switched_off_or_tuned(tmp_path, argv, air):
     from acousim.cli import build_parser
-    from acousim.cli.simulate import build_config
+    from acousim.cli.simulate_command import build_config
 
     cfg = build_config(build_parser().parse_args(["simulate", *argv, "--out", str(tmp_path / "x")]))
     assert cfg.air_damping is air and cfg.to_dict()["air_damping"] is air

@@ -77,10 +77,10 @@ class DiagnosisProblem:
 
     def surrogate(self):
         """The force model of the equations of motion at nominal pressure, built once: the twin's surrogate
-        (:func:`acousim.gorkov.surrogate.build_surrogate`) of a Gor'kov model, or the model's own table when it has one
+        (:func:`acousim.gorkov.energy_surrogate.build_surrogate`) of a Gor'kov model, or the model's own table when it has one
         (``as_force_model``, the full-wave model)."""
         if self._shared["surrogate"] is None:
-            from acousim.gorkov.surrogate import build_surrogate
+            from acousim.gorkov.energy_surrogate import build_surrogate
 
             own = getattr(self.model, "as_force_model", None)
             self._shared["surrogate"] = own() if own is not None else build_surrogate(self.model)

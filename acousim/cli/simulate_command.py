@@ -117,7 +117,7 @@ def _add_imperfection_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register the ``simulate`` subcommand."""
-    from .models import add_model_arguments
+    from .model_options import add_model_arguments
     from ..twin import PRESETS
 
     p = subparsers.add_parser(
@@ -218,11 +218,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def build_config(args: argparse.Namespace):
     """The :class:`~acousim.twin.TwinConfig` of parsed arguments (raises UserInputError): the experiment and the model
-    through the shared path of every command (:func:`acousim.cli.models.experiment_from_args`,
-    :func:`acousim.cli.models.model_spec_from_args`) over the preset's, the twin's own settings here."""
+    through the shared path of every command (:func:`acousim.cli.model_options.experiment_from_args`,
+    :func:`acousim.cli.model_options.model_spec_from_args`) over the preset's, the twin's own settings here."""
     from ..dynamics.effects import EffectError, EffectSet
     from ..twin import PRESETS, Camera, DropProtocol, TwinConfig, TwinError
-    from .models import experiment_from_args, model_spec_from_args
+    from .model_options import experiment_from_args, model_spec_from_args
 
     check_limit("--runs", args.runs, MAX_RUNS)
     if args.duration > 0 and args.fps > 0:

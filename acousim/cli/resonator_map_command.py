@@ -7,7 +7,7 @@ import sys
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ
 
-from .atlas import parse_grid
+from .atlas_command import parse_grid
 
 __all__ = ["add_parser"]
 

@@ -8,7 +8,7 @@ import sys
 from cubedimer.cli import UserInputError, add_executor_arguments, executor_config, prepare_output_dir
 from cubedimer.meta import DEFAULT_FREQUENCY_HZ, DEFAULT_PRESSURE_AMPLITUDE_PA
 
-from .atlas import parse_dimers, parse_grid
+from .atlas_command import parse_dimers, parse_grid
 
 __all__ = ["add_parser"]
 

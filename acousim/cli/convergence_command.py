@@ -15,7 +15,7 @@ from ..fullwave.convergence import flux_balance, hinge_quantities, surrogate_err
 from ..fullwave.geometry import mesh_family
 from ..fullwave.mesh_record import judge_convergence, mean_refinement_ratio, merge_edge_graded_study, richardson_limit
 from ..fullwave.mesh_rules import edge_graded_mesh_spec, family_mesh_spec
-from ..fullwave.surrogate import COARSE_BUILD, FullwaveSurrogate
+from ..fullwave.force_surrogate import COARSE_BUILD, FullwaveSurrogate
 
 __all__ = ["add_parser", "run_study", "load_table"]
 

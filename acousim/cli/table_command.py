@@ -7,7 +7,7 @@ import logging
 from cubedimer.cli import positive_float, positive_int, prepare_output_file
 from cubedimer.meta import DEFAULT_PRESSURE_AMPLITUDE_PA, DEFAULT_SIDE_LENGTH_M
 
-from ..fullwave.surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, FORCE_METHODS, build_fullwave_surrogate
+from ..fullwave.force_surrogate import DEFAULT_BUILD, FLUX_DISC_POINTS, FLUX_DISC_POINTS_RANGE, FORCE_METHODS, build_fullwave_surrogate
 
 __all__ = ["add_parser"]
 

@@ -118,7 +118,7 @@ def run_check(args: argparse.Namespace) -> int:
     from cubedimer.atomic import write_json
 
     from ..fullwave.family import family_accuracy, load_node
-    from ..fullwave.surrogate import DEFAULT_TABLE
+    from ..fullwave.force_surrogate import DEFAULT_TABLE
 
     try:
         fam = FullwaveFamily(args.family)

@@ -11,7 +11,7 @@ from cubedimer.meta import (DEFAULT_FREQUENCY_HZ, DEFAULT_PARTICLE_DENSITY, DEFA
                             check_meta_value)
 
 from ..models import force_model_type
-from .models import add_model_arguments, conditions_from_args, static_model_from_args
+from .model_options import add_model_arguments, conditions_from_args, static_model_from_args
 
 __all__ = ["add_parser", "parse_range", "run_sweep", "MAX_AXIS_POINTS", "MAX_GRID_POINTS"]
 

@@ -24,7 +24,7 @@ for theta > 0): its X is ``x_p = x + h sin(psi)``, so to second order::
 
 The linearised antisymmetric equations along a symmetric orbit (y(t), theta(t)).  By the mirror symmetry the
 antisymmetric loads are odd in (x, psi) and the symmetric ones even, so the two decouple at linear order; with the
-stiffnesses of :mod:`acousim.fullwave.rocking` (``K_xx = K_psix = 0``: a plane standing wave does not depend on X)::
+stiffnesses of :mod:`acousim.fullwave.antisymmetric_loads` (``K_xx = K_psix = 0``: a plane standing wave does not depend on X)::
 
     M xddot                       = -K_xpsi(theta, Z) psi
     d/dt [I_r(theta) psidot]      = -K_psipsi(theta, Z) psi - gamma_psi I_r psidot,    Z = Z_eq + y(t).
@@ -214,7 +214,7 @@ def rocking_arguments(orbit: NDArray, period: float, polynomials: dict, two_k: f
     """The ``args`` of :func:`rocking_acceleration` from ``orbit`` (n, 4) states at ``t_j = j period / n`` (y and
     theta are read; n even).
 
-    ``polynomials``: ``{"k_psipsi": (3, n), "k_xpsi": (3, n)}`` (:meth:`acousim.fullwave.rocking.RockingStiffness.
+    ``polynomials``: ``{"k_psipsi": (3, n), "k_xpsi": (3, n)}`` (:meth:`acousim.fullwave.antisymmetric_loads.RockingStiffness.
     polynomials`); ``load_scale`` multiplies both (``(p0 / p_table)^2``); ``gamma_psi`` [1/s] is a rocking damping."""
     orb = np.asarray(orbit, float)
     series = tuple(periodic_series(orb[:, j]) for j in (0, 2))
