@@ -4,7 +4,10 @@ A polynomial model is given by an exponent table ``exps`` (n_terms, 4) over the 
 [y, ydot, theta, thetadot] and a coefficient matrix ``coef`` (2, n_terms) for the accelerations
 [yddot, thetaddot].  The acceleration is evaluated with per-variable power tables (powers up
 to 3 for the cubic library), so one evaluation costs ~2 multiplications per term and allocates
-nothing.  The integrator is the suite's one compiled RK4, :func:`cubedimer.rk4.rk4`;
+nothing; only the monomials with a nonzero coefficient in either equation are evaluated (a sparse model costs its
+own terms, and its trajectory is the same bit for bit: a zero term adds exactly nothing while its monomial is
+finite).  The integrator is the
+suite's one compiled RK4, :func:`cubedimer.rk4.rk4`;
 :func:`integrate_batch` integrates many (model, initial state) pairs in one compiled call (no
 per-trajectory Python overhead).
 
