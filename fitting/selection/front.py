@@ -70,13 +70,10 @@ def long_time_error_along(model: PolynomialModel, run: HeldOutRun) -> float:
     estimate ``run.states`` at the start of every horizon (the last one ending at the run's end), RMS over the
     horizons and over the run's RMS motion about its mean, averaged over y and theta (dimensionless; inf when a
     trajectory blows up, NaN without states or horizon)."""
-    if run.states is None or run.horizon < 2:
+    starts, h = _starts_along(run)
+    if not starts:
         return float("nan")
     data = np.column_stack([run.y, run.theta])
-    n, h = data.shape[0], min(int(run.horizon), data.shape[0])
-    starts = list(range(0, n - h + 1, h))
-    if starts[-1] + h < n:
-        starts.append(n - h)
     reach = np.max(np.abs(data), axis=0)
     sq = np.array([_trajectory_error(model, run.states[i], data[i:i + h], run.dt, reach) ** 2 for i in starts])
     signal = np.std(data, axis=0)
