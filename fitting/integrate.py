@@ -88,6 +88,7 @@ def _integrate_many(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid
     # OpenMP threading layer is not fork-safe
     for b in range(coefs.shape[0]):
         n_valid[b] = _integrate_one(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps[b], bounds[b], out[b])
+        out[b, n_valid[b]:, :] = np.nan  # after a blow-up and the padding (``out`` is not initialised)
 
 
 def _as_bound(bound, n: int | None = None) -> NDArray[np.float64]:
@@ -134,9 +135,10 @@ def integrate(
     exps = kernel_array(exps, np.int64)
     if exps.max(initial=0) > _MAXPOW:
         raise ValueError(f"monomial powers above {_MAXPOW} are not supported")
-    out = np.full((int(n_out), 4), np.nan)
+    out = np.empty((int(n_out), 4))
     nv = _integrate_one(kernel_array(coef), exps, kernel_array(x0), float(dt), int(n_out), int(substeps),
                         _as_bound(bound), out)
+    out[nv:] = np.nan
     return out, int(nv)
 
 
@@ -178,7 +180,7 @@ def integrate_batch(
     coefs = kernel_array(coefs)
     dts = kernel_array(np.broadcast_to(np.asarray(dt, dtype=float), (B,)))
     n_outs = kernel_array(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)), np.int64)
-    out = np.full((B, int(n_outs.max()), 4), np.nan)
+    out = np.empty((B, int(n_outs.max()), 4))  # rows from each trajectory's n_valid on are set to NaN
     n_valid = np.zeros(B, dtype=np.int64)
     steps = kernel_array(np.broadcast_to(np.asarray(substeps, dtype=np.int64), (B,)), np.int64)
     _integrate_many(coefs, kernel_array(exps, np.int64), x0s, dts, n_outs, steps, _as_bound(bound, B), out, n_valid)

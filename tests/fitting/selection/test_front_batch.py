@@ -53,3 +53,10 @@ def test_a_batch_with_substeps_per_trajectory_is_each_trajectory_alone(truth):
         one, nv = integrate(coefs[b], EXPONENTS, x0s[b], dts[b], ns[b], steps[b])
         assert nv == n_valid[b] == ns[b]
         assert np.array_equal(traj[b, :ns[b]], one)  # bit for bit
+        assert np.isnan(traj[b, ns[b]:]).all()  # the padding to the longest trajectory
+    # a blow-up: the rows from n_valid on are NaN, in a batch and alone
+    wild = truth.coef.copy()
+    wild[1, TERMS.index("theta^3")] = 1e9
+    traj, n_valid = integrate_batch(wild, EXPONENTS, x0s[:1] * 10, 1e-3, 300, 2, bound=[1e-2, np.inf, 2.0, np.inf])
+    one, nv = integrate(wild, EXPONENTS, x0s[0] * 10, 1e-3, 300, 2, bound=[1e-2, np.inf, 2.0, np.inf])
+    assert nv == n_valid[0] < 300 and np.isnan(one[nv:]).all() and np.array_equal(traj[0], one, equal_nan=True)
