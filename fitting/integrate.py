@@ -4,7 +4,10 @@ A polynomial model is given by an exponent table ``exps`` (n_terms, 4) over the 
 [y, ydot, theta, thetadot] and a coefficient matrix ``coef`` (2, n_terms) for the accelerations
 [yddot, thetaddot].  The acceleration is evaluated with per-variable power tables (powers up
 to 3 for the cubic library), so one evaluation costs ~2 multiplications per term and allocates
-nothing.  The integrator is the suite's one compiled RK4, :func:`cubedimer.rk4.rk4`;
+nothing; only the monomials with a nonzero coefficient in either equation are evaluated (a sparse model costs its
+own terms, and its trajectory is the same bit for bit: a zero term adds exactly nothing while its monomial is
+finite).  The integrator is the
+suite's one compiled RK4, :func:`cubedimer.rk4.rk4`;
 :func:`integrate_batch` integrates many (model, initial state) pairs in one compiled call (no
 per-trajectory Python overhead).
 
@@ -52,14 +55,29 @@ def _polynomial_accel(t, x0, x1, x2, x3, args):
 @nb.njit(cache=True)
 def _integrate_one(coef, exps, x0, dt, n_out, substeps, bound, out):
     """Integrate one model with the core RK4 in the box |x_i| <= bound_i; fill ``out[:n_valid]``;
-    return n_valid."""
-    maxp = 1
+    return n_valid.  The acceleration runs over the monomials with a nonzero coefficient in either equation only
+    (in the library's order): a term whose coefficients are both zero adds exactly nothing, so a sparse model's
+    trajectory is the same, at the cost of its own terms."""
+    n_terms = 0
     for j in range(exps.shape[0]):
-        for i in range(4):
-            if exps[j, i] > maxp:
-                maxp = exps[j, i]
+        if coef[0, j] != 0.0 or coef[1, j] != 0.0:
+            n_terms += 1
+    used = np.empty((n_terms, 4), dtype=np.int64)
+    c0 = np.empty(n_terms)
+    c1 = np.empty(n_terms)
+    maxp = 1
+    k = 0
+    for j in range(exps.shape[0]):
+        if coef[0, j] != 0.0 or coef[1, j] != 0.0:
+            c0[k] = coef[0, j]
+            c1[k] = coef[1, j]
+            for i in range(4):
+                used[k, i] = exps[j, i]
+                if exps[j, i] > maxp:
+                    maxp = exps[j, i]
+            k += 1
     pw = np.ones((4, maxp + 1))
-    n_valid, _ = rk4(_polynomial_accel, (exps, coef[0], coef[1], pw), x0, dt / substeps, substeps, n_out,
+    n_valid, _ = rk4(_polynomial_accel, (used, c0, c1, pw), x0, dt / substeps, substeps, n_out,
                      -bound, bound, out)
     return n_valid
 
@@ -69,7 +87,8 @@ def _integrate_many(coefs, exps, x0s, dt, n_outs, substeps, bounds, out, n_valid
     # serial on purpose: parallelism comes from the process pool (cubedimer.executor), and numba's
     # OpenMP threading layer is not fork-safe
     for b in range(coefs.shape[0]):
-        n_valid[b] = _integrate_one(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps, bounds[b], out[b])
+        n_valid[b] = _integrate_one(coefs[b], exps, x0s[b], dt[b], n_outs[b], substeps[b], bounds[b], out[b])
+        out[b, n_valid[b]:, :] = np.nan  # after a blow-up and the padding (``out`` is not initialised)
 
 
 def _as_bound(bound, n: int | None = None) -> NDArray[np.float64]:
@@ -116,9 +135,10 @@ def integrate(
     exps = kernel_array(exps, np.int64)
     if exps.max(initial=0) > _MAXPOW:
         raise ValueError(f"monomial powers above {_MAXPOW} are not supported")
-    out = np.full((int(n_out), 4), np.nan)
+    out = np.empty((int(n_out), 4))
     nv = _integrate_one(kernel_array(coef), exps, kernel_array(x0), float(dt), int(n_out), int(substeps),
                         _as_bound(bound), out)
+    out[nv:] = np.nan
     return out, int(nv)
 
 
@@ -128,7 +148,7 @@ def integrate_batch(
     x0s: NDArray[np.float64],
     dt: NDArray[np.float64] | float,
     n_out: NDArray[np.int64] | int,
-    substeps: int = 1,
+    substeps: NDArray[np.int64] | int = 1,
     bound: NDArray[np.float64] | float | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Integrate B (model, initial state) pairs in one compiled call.
@@ -143,7 +163,8 @@ def integrate_batch(
         Output interval per trajectory.
     n_out : int or ndarray of int (B,)
         Output samples per trajectory; the result is padded with NaN to the longest.
-    substeps : int
+    substeps : int or ndarray of int (B,)
+        RK4 steps per output interval, shared or per trajectory.
     bound : float, ndarray (4,) or (B, 4), optional
 
     Returns
@@ -159,10 +180,10 @@ def integrate_batch(
     coefs = kernel_array(coefs)
     dts = kernel_array(np.broadcast_to(np.asarray(dt, dtype=float), (B,)))
     n_outs = kernel_array(np.broadcast_to(np.asarray(n_out, dtype=np.int64), (B,)), np.int64)
-    out = np.full((B, int(n_outs.max()), 4), np.nan)
+    out = np.empty((B, int(n_outs.max()), 4))  # rows from each trajectory's n_valid on are set to NaN
     n_valid = np.zeros(B, dtype=np.int64)
-    _integrate_many(coefs, kernel_array(exps, np.int64), x0s, dts, n_outs, int(substeps), _as_bound(bound, B), out,
-                    n_valid)
+    steps = kernel_array(np.broadcast_to(np.asarray(substeps, dtype=np.int64), (B,)), np.int64)
+    _integrate_many(coefs, kernel_array(exps, np.int64), x0s, dts, n_outs, steps, _as_bound(bound, B), out, n_valid)
     return out, n_valid
 
 

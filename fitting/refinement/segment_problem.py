@@ -92,9 +92,12 @@ class TrajectoryProblem:
         s = self.segs
         traj, nv = integrate_batch(np.ascontiguousarray(coefs), self.exps, x0s, s.dt[idx], s.length[idx],
                                    self.substeps, s.bound[idx])
-        res = (traj[..., [0, 2]] - s.data[idx, :traj.shape[1]]) * self.w
-        ok = nv >= s.length[idx]
-        return np.where(self.valid[idx, :traj.shape[1], None], np.nan_to_num(res), 0.0), ok
+        L = traj.shape[1]
+        res = np.subtract(traj[..., 0::2], s.data[idx, :L])  # the positions y, theta
+        res *= self.w
+        np.nan_to_num(res, copy=False)
+        res[~self.valid[idx, :L]] = 0.0  # padding and missing frames
+        return res, nv >= s.length[idx]
 
     def cost(self, p: NDArray, x0: NDArray) -> tuple[float, NDArray]:
         """Sum of squared weighted residuals over the segments that stayed in bounds, and which did."""

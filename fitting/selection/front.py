@@ -29,11 +29,12 @@ from numpy.typing import NDArray
 
 from cubedimer.folds import run_folds
 from cubedimer.terms import EQUATION_NAMES
-from ..model import TERMS, PolynomialModel
+from ..integrate import integrate_batch
+from ..model import EXPONENTS, TERMS, PolynomialModel
 from .support_search import ReducedDesign, fit_on_runs
 
 __all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "long_time_error_along", "capped_support",
-           "long_time_front", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
+           "long_time_front", "held_out_fold_errors", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
 
 #: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
 BLOW_UP_FACTOR = 10.0
@@ -69,13 +70,10 @@ def long_time_error_along(model: PolynomialModel, run: HeldOutRun) -> float:
     estimate ``run.states`` at the start of every horizon (the last one ending at the run's end), RMS over the
     horizons and over the run's RMS motion about its mean, averaged over y and theta (dimensionless; inf when a
     trajectory blows up, NaN without states or horizon)."""
-    if run.states is None or run.horizon < 2:
+    starts, h = _starts_along(run)
+    if not starts:
         return float("nan")
     data = np.column_stack([run.y, run.theta])
-    n, h = data.shape[0], min(int(run.horizon), data.shape[0])
-    starts = list(range(0, n - h + 1, h))
-    if starts[-1] + h < n:
-        starts.append(n - h)
     reach = np.max(np.abs(data), axis=0)
     sq = np.array([_trajectory_error(model, run.states[i], data[i:i + h], run.dt, reach) ** 2 for i in starts])
     signal = np.std(data, axis=0)
@@ -92,6 +90,80 @@ def _trajectory_error(model: PolynomialModel, x0: NDArray, data: NDArray, dt: fl
     if n_valid < n:
         return np.full(2, np.inf)
     return np.sqrt(np.mean((states[:, [0, 2]] - data) ** 2, axis=0))
+
+
+def _starts_along(run: HeldOutRun) -> tuple[list[int], int]:
+    """The first frames of the horizons of :func:`long_time_error_along` and the horizon [frames] (no horizons
+    without states or horizon)."""
+    if run.states is None or run.horizon < 2:
+        return [], 0
+    n = run.y.shape[0]
+    h = min(int(run.horizon), n)
+    starts = list(range(0, n - h + 1, h))
+    if starts[-1] + h < n:
+        starts.append(n - h)
+    return starts, h
+
+
+def held_out_fold_errors(models: Sequence[PolynomialModel], folds: Sequence[tuple], held_out: Sequence[HeldOutRun]
+                         ) -> tuple[list[float], list[float]]:
+    """Per fold, the mean over its held-out runs of :func:`long_time_error` and of :func:`long_time_error_along` of
+    the fold's model (``models[k]`` for ``folds[k] = (train, test)``): the same numbers, with every trajectory of all
+    folds integrated in two compiled calls (the runs from their first states, the horizons along the runs) instead
+    of one call each."""
+    runs = {r: _RunData(held_out[r]) for _, test in folds for r in test}
+    first, along = [], []  # (model, run, start frame, frames, start from the state estimate)
+    for k, (_, test) in enumerate(folds):
+        for r in test:
+            first.append((k, r, 0, runs[r].data.shape[0], False))
+            starts, h = _starts_along(held_out[r])
+            along.extend((k, r, i, h, True) for i in starts)
+    err_first = dict(zip([job[:2] for job in first], _batch_errors(models, runs, first)))
+    err_along: dict[tuple, list] = {}
+    for job, err in zip(along, _batch_errors(models, runs, along)):
+        err_along.setdefault(job[:2], []).append(err ** 2)
+    fold_err, fold_along = [], []
+    for k, (_, test) in enumerate(folds):
+        errs, errs_along = [], []
+        for r in test:
+            errs.append(float(np.mean(err_first[k, r] / runs[r].scale)))
+            sq = err_along.get((k, r))
+            errs_along.append(float(np.mean(np.sqrt(np.mean(np.array(sq), axis=0)) / runs[r].scale)) if sq
+                              else float("nan"))
+        fold_err.append(float(np.mean(errs)))
+        fold_along.append(float(np.mean(errs_along)))
+    return fold_err, fold_along
+
+
+class _RunData:
+    """A held-out run's measured positions (n, 2), their largest |value| and the RMS motion about the mean (zero
+    replaced by 1), as :func:`long_time_error` computes them."""
+
+    def __init__(self, run: HeldOutRun):
+        self.run = run
+        self.data = np.column_stack([run.y, run.theta])
+        self.reach = np.max(np.abs(self.data), axis=0)
+        signal = np.std(self.data, axis=0)
+        self.scale = np.where(signal > 0, signal, 1.0)
+
+
+def _batch_errors(models: Sequence[PolynomialModel], runs: dict, jobs: list[tuple]) -> list:
+    """:func:`_trajectory_error` of each job ``(model, run, start frame, frames, from the state estimate)`` (else
+    from the run's first state ``x0``), all integrated in one compiled call; ``runs``: each run's :class:`_RunData`."""
+    if not jobs:
+        return []
+    x0s = np.array([runs[r].run.states[i] if estimate else runs[r].run.x0 for _, r, i, _, estimate in jobs], float)
+    reach = np.maximum(np.array([runs[job[1]].reach for job in jobs]), np.abs(x0s[:, [0, 2]]))
+    bounds = BLOW_UP_FACTOR * np.column_stack([reach[:, 0], np.full(len(jobs), np.inf), reach[:, 1],
+                                               np.full(len(jobs), np.inf)])
+    ns = np.array([job[3] for job in jobs])
+    dts = np.array([float(runs[r].run.dt) if n > 1 else 1.0 for _, r, _, n, _ in jobs])  # as PolynomialModel.simulate
+    steps = np.array([models[k].default_substeps(dt) for (k, *_), dt in zip(jobs, dts)])
+    traj, n_valid = integrate_batch(np.array([models[job[0]].coef for job in jobs]), EXPONENTS, x0s, dts, ns, steps,
+                                    bounds)
+    return [np.full(2, np.inf) if n_valid[b] < n else
+            np.sqrt(np.mean((traj[b, :n][:, [0, 2]] - runs[r].data[i:i + n]) ** 2, axis=0))
+            for b, (_, r, i, n, _) in enumerate(jobs)]
 
 
 @dataclass(frozen=True)
@@ -233,14 +305,13 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
         if supports in seen:
             continue
         seen.add(supports)
-        fold_err, fold_along = [], []
-        for train, test in folds:
+        models = []
+        for train, _ in folds:
             coef = np.zeros((2, len(TERMS)))
             for q, cols in enumerate(supports):
                 coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
-            model = PolynomialModel(coef)
-            fold_err.append(float(np.mean([long_time_error(model, held_out[r]) for r in test])))
-            fold_along.append(float(np.mean([long_time_error_along(model, held_out[r]) for r in test])))
+            models.append(PolynomialModel(coef))
+        fold_err, fold_along = held_out_fold_errors(models, folds, held_out)
         (mean, se), (along, along_se) = _fold_mean(fold_err), _fold_mean(fold_along)
         everything = range(R)
         coef = np.zeros((2, len(TERMS)))
