@@ -71,10 +71,9 @@ class DiagnoseConfig:
     check_orientation : test whether y points down (:mod:`validation.diagnosis.calibrate.orientation`); if so, warn
         (``data_warnings``, code ``y_inverted``) and diagnose the data with y -> -y
     trajectory_test : judge the velocity coupling, where the held-out rounds did not choose it beside linear damping,
-        on the runs' whole trajectories (:mod:`validation.diagnosis.identify.output_error`).  Off by default: it
-        recalls the coupling beside the air's damping (18 of 18 on a fresh blind study) but names a negligible one
-        (c5 ~ 0.1 1/m, c6 ~ -1e3 1/m^2, thousands and hundreds of times below any coupling the blind study draws) on
-        4 of 11 paper-like data sets, where the simulation's small model error is what it absorbs (docs/diagnosis.md)
+        on the runs' whole trajectories (:mod:`validation.diagnosis.identify.output_error`; on by default).  False:
+        the held-out rounds alone, which miss about half the couplings drawn beside the air's damping
+        (docs/diagnosis.md)
     """
 
     candidates: tuple[str, ...] = field(default_factory=default_candidates)
@@ -89,7 +88,7 @@ class DiagnoseConfig:
     discover: bool = True
     discovery_min_improvement: float = 1e-3
     check_orientation: bool = True
-    trajectory_test: bool = False
+    trajectory_test: bool = True
 
     def __post_init__(self) -> None:
         check_choices(self, "candidates", CANDIDATE_EFFECTS, what="effect(s)")
