@@ -314,8 +314,10 @@ def _restart(fit: TrajectoryFit, others: dict, coupling: bool) -> tuple[dict, di
 def _converged_pair(data: RunTrajectories, surrogate, law: str, shape: dict, others: dict, null: TrajectoryFit,
                     iterations: int) -> tuple[TrajectoryFit, TrajectoryFit]:
     """The null and coupled fits, each converged from the other's optimum (:data:`ALTERNATIONS`): the likelihood
-    ratio compares the two maxima, so the coupled fit's head start (the null's point) must not count as its gain,
-    and the null is refitted from the coupled fit's point with the coupling removed."""
+    ratio compares the two maxima, so the coupled fit's head start (it begins where the null ended and takes further
+    steps) must not count as its gain.  The null is refitted from the coupled fit's point with the coupling removed;
+    where that lowers its misfit, the coupled fit is made again from the new null (c5 = c6 = 0, where it nests the
+    null, so that it cannot end above it) and the better of the two coupled fits kept."""
     start, own = _restart(null, others, True)
     coupled = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts)
     for _ in range(ALTERNATIONS):
@@ -324,12 +326,11 @@ def _converged_pair(data: RunTrajectories, surrogate, law: str, shape: dict, oth
         if again.chi2 >= null.chi2 - CONVERGED_CHI2:
             break
         null = again
-        if null.chi2 < coupled.chi2 - CONVERGED_CHI2:
-            break
-        # the coupled fit is behind the null's new optimum: refit it from there (c5 = c6 = 0, where it nests the
-        # null, so that it ends at or below the null's misfit)
         start, own = _restart(null, others, True)
-        coupled = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts)
+        refit = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts)
+        if refit.chi2 >= coupled.chi2 - CONVERGED_CHI2 and coupled.chi2 <= null.chi2:
+            break
+        coupled = refit if refit.chi2 < coupled.chi2 else coupled
     return null, coupled
 
 
