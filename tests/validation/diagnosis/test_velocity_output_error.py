@@ -97,3 +97,38 @@ def test_a_coupling_named_on_the_trajectories_is_the_round_that_added_it(monkeyp
                                                                                      trajectory_test=False),
                                object(), lambda *a: None)
     assert off == (ident, ["linear_damping"], None)
+
+
+class _HalfwayFits:
+    """Stand-in for ``fit_trajectories`` on a model whose misfit is ``frames + 100 (g - 1)^2`` whatever c5, c6 (no
+    coupling in the data): each fit moves g half-way to its optimum 1 (an unconverged Gauss-Newton fit) and the
+    coupled fit moves c5 to 0.1 (what it absorbs of that remainder)."""
+
+    frames = 1000
+
+    def __call__(self, data, surrogate, law, shape, others, start, with_coupling, iterations, starts=None):
+        from validation.diagnosis.identify.output_error import TrajectoryFit
+
+        g = start["gamma_y"] + 0.5 * (1.0 - start["gamma_y"])
+        params = {"gamma_y": g, "y_offset": 0.0, **({"c5": 0.1, "c6": 0.0} if with_coupling else {})}
+        chi2 = self.frames + 100.0 * (g - 1.0) ** 2
+        return TrajectoryFit(law, params, {k: 1.0 for k in params}, chi2, self.frames, (chi2,), np.zeros((1, 4)))
+
+
+def test_the_coupled_fits_head_start_is_not_its_gain(monkeypatch):
+    """The coupled fit starts where the null ended and takes further steps: without refitting the null from the
+    coupled point, their difference (18.75 noise units here, 100 ((1 - 0.5)^2 - (1 - 0.75)^2), p = 8e-5 against
+    chi-square(2)) would name a coupling the data do not hold.  Refitted in turn, the coupled model (which nests the
+    null) ends at the null's misfit or below, and the drop left is what the last half-steps leave, below a quarter of
+    chi-square(2)'s 9.21 at alpha 0.01 (0.07 noise units here)."""
+    import validation.diagnosis.identify.output_error as oe
+
+    fits = _HalfwayFits()
+    monkeypatch.setattr(oe, "fit_trajectories", fits)
+    null = fits(None, None, "linear_damping", {}, {}, {"gamma_y": 0.0}, False, 10)
+    head_start = null.chi2 - fits(None, None, "linear_damping", {}, {}, {**null.params, "c5": 0.0, "c6": 0.0},
+                                  True, 10).chi2
+    assert head_start == pytest.approx(18.75)
+    null2, coupled = oe._converged_pair(None, None, "linear_damping", {}, {}, null, 10)
+    assert coupled.chi2 <= null2.chi2  # nested: the coupled fit never ends above the null
+    assert null2.chi2 - coupled.chi2 < 9.21 / 4  # the drop left: a quarter of the test's threshold at most
