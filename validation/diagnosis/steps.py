@@ -237,7 +237,8 @@ def _diagnose(start: DiagnosisStart, config: DiagnoseConfig, progress: bool) -> 
     cal = calibration_step(start.prepared, start.conditions, start.model, spec, config, log)
     # the trajectory test of the velocity coupling refits the pressure and the named effects, not a calibrated model
     # parameter: a hinge gap known to its profile's resolution leaves a structured residual that a tiny coupling
-    # absorbs (synthetic full-wave twin, gap 0.3 % off: Delta chi2 = 204 for c5 = 3 1/m), so it is not made there
+    # absorbs (synthetic full-wave twin, gap 0.3 % off: Delta chi2 = 172 for c5 = 2.8 1/m with converged fits), so it
+    # is not made there
     calibrated = any(pc.calibrated for pc in cal.parameters.values())
     found = identification_step(cal.problem, config, progress, log, None if calibrated else cal.conditions)
     discovery, replaced, identified, final = discovery_step(cal.problem, found, config, log)
