@@ -132,3 +132,15 @@ def test_the_coupled_fits_head_start_is_not_its_gain(monkeypatch):
     null2, coupled = oe._converged_pair(None, None, "linear_damping", {}, {}, null, 10)
     assert coupled.chi2 <= null2.chi2  # nested: the coupled fit never ends above the null
     assert null2.chi2 - coupled.chi2 < 9.21 / 4  # the drop left: a quarter of the test's threshold at most
+
+
+@pytest.mark.parametrize("flags, expected", [([], True), (["--no-trajectory-test"], False),
+                                             (["--trajectory-test"], True)])
+def test_the_trajectory_test_is_on_by_default_with_an_off_switch(flags, expected):
+    """The diagnosis and the blind study make the trajectory test unless told not to (``--no-trajectory-test``)."""
+    from validation.blind import BlindConfig
+    from validation.cli import build_parser
+    from validation.diagnosis import DiagnoseConfig
+
+    assert DiagnoseConfig().trajectory_test and BlindConfig().trajectory_test
+    assert build_parser().parse_args(["blind", "--out", "OUT", *flags]).trajectory_test is expected
