@@ -144,3 +144,16 @@ def test_the_trajectory_test_is_on_by_default_with_an_off_switch(flags, expected
 
     assert DiagnoseConfig().trajectory_test and BlindConfig().trajectory_test
     assert build_parser().parse_args(["blind", "--out", "OUT", *flags]).trajectory_test is expected
+
+
+@pytest.mark.parametrize("c5, c6, rho, expected", [(3.0, 0.0, 0.0, 9.0), (3.0, 4.0, 0.0, 25.0),
+                                                    (1.0, 1.0, 0.5, 4.0 / 3.0)])
+def test_wald_statistic_of_the_coupling(c5, c6, rho, expected):
+    """c^T C^-1 c in units of the standard errors (both 1 here): (c5^2 + c6^2 - 2 rho c5 c6) / (1 - rho^2), e.g. a
+    coupling three standard errors from zero gives 9, the chi-square(2) threshold's size at alpha 0.01 (9.21)."""
+    from validation.diagnosis.identify.output_error import TrajectoryFit, _wald
+
+    fit = TrajectoryFit("linear_damping", {"c5": c5, "c6": c6}, {}, 0.0, 1, (0.0,), np.zeros((1, 4)),
+                        np.array([[1.0, rho], [rho, 1.0]]))
+    assert _wald(fit) == pytest.approx(expected, rel=1e-12)
+    assert np.isnan(_wald(TrajectoryFit("linear_damping", {"c5": c5, "c6": c6}, {}, 0.0, 1, (0.0,), np.zeros((1, 4)))))

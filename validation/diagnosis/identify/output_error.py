@@ -26,7 +26,10 @@ Both fits are converged maxima of the likelihood: each runs until a step lowers 
 :data:`CONVERGED_CHI2`, and the null is refitted from the coupled fit's point with the coupling removed (then the coupled
 fit from the null's new point) until neither improves (:func:`_converged_pair`).  Otherwise the coupled fit, which
 starts where the null stopped, completes the null's unfinished descent and the test counts it as the coupling's gain:
-on the paper-like preset (whose 12 runs of 4 s resolve c5 to 0.04 1/m) that named couplings of c5 = 0.1-3 1/m.
+on the paper-like preset (whose 12 runs of 4 s resolve c5 to 0.04 1/m) that named couplings of c5 = 0.1-3 1/m.  The
+statistic is the smaller of the likelihood ratio and the Wald statistic of (c5, c6) at the coupled fit: the two agree
+where both fits are converged in one basin, and a ratio the coupling's size in standard errors does not back is a null
+left in another basin (:func:`_wald`).
 
 The candidate is judged in noise units: the drop of the misfit, ``Delta chi^2 = chi^2_null - chi^2_coupled`` (a
 likelihood ratio for white Gaussian noise; divided by the coupled model's misfit per frame where that exceeds 1, so
