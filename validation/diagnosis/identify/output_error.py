@@ -169,6 +169,13 @@ def _step(name: str, value: float) -> float:
     return SHARED_STEPS[name] if name in SHARED_STEPS else max(1e-3 * abs(value), 1e-6)
 
 
+def _shrunk(steps: NDArray, cov: NDArray, p: NDArray) -> NDArray:
+    """Difference steps of the shared parameters no larger than their standard errors (the Jacobian of the quadratic
+    regime), never below 1e-9 of the value."""
+    k = len(steps)
+    return np.minimum(steps, np.maximum(np.sqrt(np.abs(np.diag(cov)[:k])), 1e-9 * np.abs(p) + 1e-12))
+
+
 def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, others: dict, start: dict,
                      with_coupling: bool, iterations: int = 10, starts: NDArray | None = None) -> TrajectoryFit:
     """Gauss-Newton output-error fit of the shared rates (and c5, c6 with ``with_coupling``), a y offset and each
@@ -236,10 +243,6 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         except np.linalg.LinAlgError:
             return None
 
-    def shrunk(steps, cov, p):
-        """Difference steps no larger than a standard error (the Jacobian of the quadratic regime)."""
-        return np.minimum(steps, np.maximum(np.sqrt(np.abs(np.diag(cov)[:k])), 1e-9 * np.abs(p) + 1e-12))
-
     chi2, per_run, jtj, jtr = evaluate(p, offset, x0)
     cov = solve(jtj)
     for _ in range(iterations):
@@ -253,7 +256,7 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
                 break
             step = 0.5 * step
         else:  # no descent along this Jacobian: once more with steps of a standard error, if that shrinks them
-            smaller = shrunk(steps, cov, p)
+            smaller = _shrunk(steps, cov, p)
             if np.all(smaller > 0.5 * steps):
                 break
             steps = smaller
@@ -264,16 +267,13 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         (p, offset, x0), (chi2, per_run, jtj, jtr) = trial, got
         cov = solve(jtj)
         if cov is not None:
-            steps = shrunk(steps, cov, p)
+            steps = _shrunk(steps, cov, p)
         if drop < CONVERGED_CHI2:  # converged: a further step would change the test's statistic by less
             break
     se = np.sqrt(np.abs(np.diag(cov))) if cov is not None else np.full(size, np.nan)
     params = {**dict(zip(names, map(float, p))), "y_offset": offset}
     errors = {**dict(zip(names, map(float, se[:k]))), "y_offset": float(se[k])}
-    cc = None
-    if with_coupling and cov is not None:
-        idx = [names.index("c5"), names.index("c6")]
-        cc = cov[np.ix_(idx, idx)]
+    cc = cov[k - 2:k, k - 2:k] if with_coupling and cov is not None else None  # c5, c6 are the last shared names
     return TrajectoryFit(law, params, errors, chi2, frames, tuple(map(float, per_run)), x0, cc)
 
 
