@@ -287,9 +287,12 @@ def add_blind_parser(sub) -> None:
                    help="candidate cases never draw the levitator's resonator and the diagnosis does not try the cavity's "
                         "lag (cavity_lag); default: the resonator (Q 150-400, 0.5-3 half-widths above the drive) is one "
                         "of the effects a case can draw, and cavity_lag one of the candidates")
-    p.add_argument("--trajectory-test", action="store_true",
-                   help="the diagnosis also judges the velocity coupling on the runs' whole trajectories (an output-error "
-                        "fit beside the air's damping; docs/diagnosis.md); default: off, as in the diagnosis")
+    p.add_argument("--no-trajectory-test", dest="trajectory_test", action="store_false",
+                   help="the diagnosis does not judge the velocity coupling on the runs' whole trajectories (the "
+                        "output-error fit beside the air's damping, docs/diagnosis.md); default: it does, as the "
+                        "diagnosis does (--trajectory-test, the default, is accepted)")
+    p.add_argument("--trajectory-test", dest="trajectory_test", action="store_true", help=argparse.SUPPRESS)
+    p.set_defaults(trajectory_test=True)
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
     add_executor_arguments(p, note="One task per case: each case's simulation and diagnosis run serially "

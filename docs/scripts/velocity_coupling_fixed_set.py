@@ -8,7 +8,8 @@ with the air's damping) writes the data set, whose truth is hidden, and the diag
 without the long-time errors.  ``none`` draws no effect.  Each case's result is kept in ``OUT/E_i/result_TAG.json``,
 so a rerun resumes and two versions of the code can be compared on the same data sets (``--tag``).
 ``--complete-hinge-rate`` diagnoses with the integral form's hinge rate completed by the simulation's fast response
-(validation.diagnosis.prepare.hinge_state, not the diagnosis's default).
+(validation.diagnosis.prepare.hinge_state, not the diagnosis's default).  The velocity coupling's trajectory test is on
+(the diagnosis's default); ``--no-trajectory-test`` diagnoses with the held-out rounds alone.
 
     python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set --effects velocity_coupling --cases 8
     python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/vc_set \
@@ -38,7 +39,7 @@ def draw(effect: str, index: int, seed: int) -> dict:
             "pressure_error": error, "twin_seed": int(rng.integers(2**31))}
 
 
-def run_case(folder: Path, case: dict, tag: str) -> dict | None:
+def run_case(folder: Path, case: dict, tag: str, trajectory_test: bool = True) -> dict | None:
     """The diagnosis of one case (generated once), or None when the twin could not generate it."""
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
@@ -53,7 +54,8 @@ def run_case(folder: Path, case: dict, tag: str) -> dict | None:
             return None
         hide_truth(folder / "data", folder / "truth.json")
     truth = json.loads((folder / "truth.json").read_text())
-    diag = diagnose_dataset(folder / "data", DiagnoseConfig(long_time=False), progress=False)
+    diag = diagnose_dataset(folder / "data", DiagnoseConfig(long_time=False, trajectory_test=trajectory_test),
+                            progress=False)
     out = {"identified": sorted(diag.identified), "true": candidate_truth(truth["effects"], truth.get("resonator")),
            "params": {e.name: dict(e.params) for e in diag.effects},
            "p_value": {e.name: e.p_value for e in diag.effects},
@@ -84,13 +86,15 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=4242)
     ap.add_argument("--tag", default="current")
     ap.add_argument("--complete-hinge-rate", action="store_true")
+    ap.add_argument("--no-trajectory-test", action="store_true",
+                    help="diagnose without the velocity coupling's trajectory test (the held-out rounds alone)")
     args = ap.parse_args()
     if args.complete_hinge_rate:
         complete_hinge_rate()
     for effect in args.effects.split(","):
         exact, c6_errors, scored = 0, [], 0
         for i in range(args.cases):
-            r = run_case(args.out / f"{effect}_{i}", draw(effect, i, args.seed), args.tag)
+            r = run_case(args.out / f"{effect}_{i}", draw(effect, i, args.seed), args.tag, not args.no_trajectory_test)
             if r is None:
                 print(effect, i, "not generated", flush=True)
                 continue

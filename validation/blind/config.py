@@ -44,7 +44,7 @@ class BlindConfig:
         (``cavity_lag``) among its candidates; False: neither (the study without the cavity).
     trajectory_test : bool
         The diagnosis judges the velocity coupling on the whole trajectories too
-        (``DiagnoseConfig(trajectory_test=True)``; off by default, as in the diagnosis).
+        (``DiagnoseConfig.trajectory_test``; on by default, as in the diagnosis; False: the held-out rounds alone).
     """
 
     cases: int = 50
@@ -56,7 +56,7 @@ class BlindConfig:
     kinds: tuple[str, ...] = ("candidates",)
     air_damping: bool = True
     resonator: bool = True
-    trajectory_test: bool = False
+    trajectory_test: bool = True
 
     def __post_init__(self) -> None:
         check_whole(self, "cases")

@@ -97,3 +97,63 @@ def test_a_coupling_named_on_the_trajectories_is_the_round_that_added_it(monkeyp
                                                                                      trajectory_test=False),
                                object(), lambda *a: None)
     assert off == (ident, ["linear_damping"], None)
+
+
+class _HalfwayFits:
+    """Stand-in for ``fit_trajectories`` on a model whose misfit is ``frames + 100 (g - 1)^2`` whatever c5, c6 (no
+    coupling in the data): each fit moves g half-way to its optimum 1 (an unconverged Gauss-Newton fit) and the
+    coupled fit moves c5 to 0.1 (what it absorbs of that remainder)."""
+
+    frames = 1000
+
+    def __call__(self, data, surrogate, law, shape, others, start, with_coupling, iterations, starts=None):
+        from validation.diagnosis.identify.output_error import TrajectoryFit
+
+        g = start["gamma_y"] + 0.5 * (1.0 - start["gamma_y"])
+        params = {"gamma_y": g, "y_offset": 0.0, **({"c5": 0.1, "c6": 0.0} if with_coupling else {})}
+        chi2 = self.frames + 100.0 * (g - 1.0) ** 2
+        return TrajectoryFit(law, params, {k: 1.0 for k in params}, chi2, self.frames, (chi2,), np.zeros((1, 4)))
+
+
+def test_the_coupled_fits_head_start_is_not_its_gain(monkeypatch):
+    """The coupled fit starts where the null ended and takes further steps: without refitting the null from the
+    coupled point, their difference (18.75 noise units here, 100 ((1 - 0.5)^2 - (1 - 0.75)^2), p = 8e-5 against
+    chi-square(2)) would name a coupling the data do not hold.  Refitted in turn, the coupled model (which nests the
+    null) ends at the null's misfit or below, and the drop left is what the last half-steps leave, below a quarter of
+    chi-square(2)'s 9.21 at alpha 0.01 (0.07 noise units here)."""
+    import validation.diagnosis.identify.output_error as oe
+
+    fits = _HalfwayFits()
+    monkeypatch.setattr(oe, "fit_trajectories", fits)
+    null = fits(None, None, "linear_damping", {}, {}, {"gamma_y": 0.0}, False, 10)
+    head_start = null.chi2 - fits(None, None, "linear_damping", {}, {}, {**null.params, "c5": 0.0, "c6": 0.0},
+                                  True, 10).chi2
+    assert head_start == pytest.approx(18.75)
+    null2, coupled = oe._converged_pair(None, None, "linear_damping", {}, {}, null, 10)
+    assert coupled.chi2 <= null2.chi2  # nested: the coupled fit never ends above the null
+    assert null2.chi2 - coupled.chi2 < 9.21 / 4  # the drop left: a quarter of the test's threshold at most
+
+
+@pytest.mark.parametrize("flags, expected", [([], True), (["--no-trajectory-test"], False),
+                                             (["--trajectory-test"], True)])
+def test_the_trajectory_test_is_on_by_default_with_an_off_switch(flags, expected):
+    """The diagnosis and the blind study make the trajectory test unless told not to (``--no-trajectory-test``)."""
+    from validation.blind import BlindConfig
+    from validation.cli import build_parser
+    from validation.diagnosis import DiagnoseConfig
+
+    assert DiagnoseConfig().trajectory_test and BlindConfig().trajectory_test
+    assert build_parser().parse_args(["blind", "--out", "OUT", *flags]).trajectory_test is expected
+
+
+@pytest.mark.parametrize("c5, c6, rho, expected", [(3.0, 0.0, 0.0, 9.0), (3.0, 4.0, 0.0, 25.0),
+                                                    (1.0, 1.0, 0.5, 4.0 / 3.0)])
+def test_wald_statistic_of_the_coupling(c5, c6, rho, expected):
+    """c^T C^-1 c in units of the standard errors (both 1 here): (c5^2 + c6^2 - 2 rho c5 c6) / (1 - rho^2), e.g. a
+    coupling three standard errors from zero gives 9, the chi-square(2) threshold's size at alpha 0.01 (9.21)."""
+    from validation.diagnosis.identify.output_error import TrajectoryFit, _wald
+
+    fit = TrajectoryFit("linear_damping", {"c5": c5, "c6": c6}, {}, 0.0, 1, (0.0,), np.zeros((1, 4)),
+                        np.array([[1.0, rho], [rho, 1.0]]))
+    assert _wald(fit) == pytest.approx(expected, rel=1e-12)
+    assert np.isnan(_wald(TrajectoryFit("linear_damping", {"c5": c5, "c6": c6}, {}, 0.0, 1, (0.0,), np.zeros((1, 4)))))
