@@ -11,6 +11,8 @@ from cubedimer.dataset import Dataset, Run
 
 from validation.diagnosis.prepare.cavity_lag import (RING_UP_S, CavityGains, cavity_lag_columns, gains_from_mode,
                                                     leave_out_ring_up, mode_from_gains)
+from validation.diagnosis.summarise.result import EffectVerdict
+from validation.diagnosis.summarise.verdicts import _named_only_with_a_mode
 
 FREQUENCY = Medium().frequency_hz
 
@@ -183,10 +185,27 @@ def test_the_ring_up_after_a_drop_is_what_is_left_out(surrogate, q):
 def test_leave_out_ring_up_keeps_the_run_after_it():
     """Every run starts RING_UP_S after its first frame; glitch frames and a split run's frames move with it."""
     t = np.arange(0.0, 0.1, 5e-4)
-    run = Run("run01.csv", t + 0.3, np.sin(t), np.cos(t), glitch_frames=(10, 60, 70), frames=(100, 300))
+    run = Run("run01.csv", t + 0.3, np.sin(t), np.cos(t), glitch_frames=(10, 90, 150), frames=(100, 300))
     out = leave_out_ring_up(Dataset("d", (run, replace(run, name="run02.csv", glitch_frames=()))))
     first = int(round(RING_UP_S / 5e-4))
     for new in out.runs:
         assert new.t[0] == pytest.approx(0.3 + RING_UP_S) and new.t.size == t.size - first
         np.testing.assert_array_equal(new.y, np.sin(t[first:]))
-    assert out.runs[0].glitch_frames == (60 - first, 70 - first) and out.runs[0].frames == (100 + first, 300)
+    assert out.runs[0].glitch_frames == (90 - first, 150 - first) and out.runs[0].frames == (100 + first, 300)
+
+
+@pytest.mark.parametrize("a, b", [(-1e-3, 2e-6), (2e-3, -5e-6), (8.3e-5, 3.5e-7), (-1e-3, -2e-6), (-1e-3, 0.0)])
+def test_a_cavity_is_named_only_with_gains_a_mode_has(a, b):
+    """A named cavity stays named exactly when a mode has its gains (opposite signs: mode_from_gains inverts them);
+    gains of one sign (both positive: the false cavity of blind cases without a resonator, 8.3e-5 s/rad and 3.5e-7
+    s^2/rad) or no lag are rejected with the code no_cavity_mode."""
+    verdict = EffectVerdict("cavity_lag", {"static_gain": a, "lag_gain": b}, 0.1, 0.5, True, 1e-3, 1e-3, 0.5,
+                            named=True)
+    out = _named_only_with_a_mode(verdict)
+    try:
+        mode_from_gains(CavityGains(a, b), FREQUENCY)
+        has_mode = True
+    except ValueError:
+        has_mode = False
+    assert (out.status == "named") == has_mode and out.named == has_mode
+    assert has_mode or [r["code"] for r in out.rejected_because] == ["no_cavity_mode"]

@@ -32,6 +32,8 @@ REJECTIONS = {
                          "named as a cause",
     "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
                          "coefficient or scattering stiffness)",
+    "no_cavity_mode": "the cavity's quasi-static and lag gains have one sign (or there is no lag): no cavity mode has "
+                      "them (a resonator's have opposite signs at every detuning), so it is not named as a cause",
 }
 
 
