@@ -12,6 +12,7 @@ from cubedimer.dataset import Dataset, Run
 from validation.diagnosis.prepare.cavity_lag import (RING_UP_S, CavityGains, cavity_lag_columns, gains_from_mode,
                                                     leave_out_ring_up, mode_from_gains)
 from validation.diagnosis.summarise.result import EffectVerdict
+from validation.diagnosis.summarise.uncertainty import _resolved, interval_from_error
 from validation.diagnosis.summarise.verdicts import _named_only_with_a_mode
 
 FREQUENCY = Medium().frequency_hz
@@ -209,3 +210,17 @@ def test_a_cavity_is_named_only_with_gains_a_mode_has(a, b):
         has_mode = False
     assert (out.status == "named") == has_mode and out.named == has_mode
     assert has_mode or [r["code"] for r in out.rejected_because] == ["no_cavity_mode"]
+
+
+@pytest.mark.parametrize("quantity, value, std_error, determined", [
+    ("quality_factor", 601.0, 439.0, False),  # the blind case of Q 309 beside linear damping and a drag
+    ("quality_factor", 301.0, 44.0, True),
+    ("detuning_half_widths", 4.24, 3.73, False),
+    ("detuning_half_widths", -1.38, 0.56, True),
+    ("kappa", 1.0, 5.0, True)])  # not a derived quantity of one sign: its interval is kept
+def test_a_mode_the_lag_does_not_resolve_is_not_determined(quantity, value, std_error, determined):
+    """The cavity's Q and detuning are "not determined" (with the reason) where their 95 % interval (Student t, 9
+    degrees of freedom: 2.26 standard errors) reaches zero, and kept as they are where it does not."""
+    out = _resolved(quantity, interval_from_error(value, std_error, 9))
+    assert out.determined == determined and out.value == value
+    assert determined or "not resolved" in out.reason
