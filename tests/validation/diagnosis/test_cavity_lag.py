@@ -12,7 +12,7 @@ from cubedimer.dataset import Dataset, Run
 from validation.diagnosis.prepare.cavity_lag import (RING_UP_S, CavityGains, cavity_lag_columns, gains_from_mode,
                                                     leave_out_ring_up, mode_from_gains)
 from validation.diagnosis.summarise.result import EffectVerdict
-from validation.diagnosis.summarise.uncertainty import _resolved, interval_from_error
+from validation.diagnosis.summarise.uncertainty import ParameterInterval, _resolved, interval_from_error
 from validation.diagnosis.summarise.verdicts import _named_only_with_a_mode
 
 FREQUENCY = Medium().frequency_hz
@@ -195,21 +195,25 @@ def test_leave_out_ring_up_keeps_the_run_after_it():
     assert out.runs[0].glitch_frames == (90 - first, 150 - first) and out.runs[0].frames == (100 + first, 300)
 
 
-@pytest.mark.parametrize("a, b", [(-1e-3, 2e-6), (2e-3, -5e-6), (8.3e-5, 3.5e-7), (-1e-3, -2e-6), (-1e-3, 0.0)])
-def test_a_cavity_is_named_only_with_gains_a_mode_has(a, b):
-    """A named cavity stays named exactly when a mode has its gains (opposite signs: mode_from_gains inverts them);
-    gains of one sign (both positive: the false cavity of blind cases without a resonator, 8.3e-5 s/rad and 3.5e-7
-    s^2/rad) or no lag are rejected with the code no_cavity_mode."""
+@pytest.mark.parametrize("a, b, b_error, named", [
+    (-1e-3, 2e-6, 1e-6, True), (2e-3, -5e-6, 1e-6, True),  # opposite signs: a mode has them
+    (8.3e-5, 3.5e-7, 1e-7, False), (-1e-3, -2e-6, 5e-7, False),  # one sign, beyond the lag's interval
+    (-8.8e-4, -4.6e-7, 5e-7, True),  # one sign within it (the lag not resolved): named, its mode not determined
+    (-1e-3, 2e-6, None, True), (8.3e-5, 3.5e-7, None, True)])  # no interval for the lag: no evidence either way
+def test_a_cavity_is_named_unless_its_lag_has_the_sign_no_mode_has(a, b, b_error, named):
+    """A named cavity stays named unless its lag gain has the sign of its static gain (no mode has such gains:
+    mode_from_gains refuses them) beyond its 95 % interval (Student t, 9 degrees of freedom); then it is rejected
+    with the code no_cavity_mode."""
+    lag = interval_from_error(b, b_error, 9) if b_error else ParameterInterval(b, None, None, 9, "no spread")
     verdict = EffectVerdict("cavity_lag", {"static_gain": a, "lag_gain": b}, 0.1, 0.5, True, 1e-3, 1e-3, 0.5,
-                            named=True)
+                            named=True, uncertainty={"static_gain": interval_from_error(a, abs(a) / 20, 9),
+                                                     "lag_gain": lag})
     out = _named_only_with_a_mode(verdict)
-    try:
-        mode_from_gains(CavityGains(a, b), FREQUENCY)
-        has_mode = True
-    except ValueError:
-        has_mode = False
-    assert (out.status == "named") == has_mode and out.named == has_mode
-    assert has_mode or [r["code"] for r in out.rejected_because] == ["no_cavity_mode"]
+    assert (out.status == "named") == named and out.named == named
+    assert named or [r["code"] for r in out.rejected_because] == ["no_cavity_mode"]
+    if not named:
+        with pytest.raises(ValueError):
+            mode_from_gains(CavityGains(a, b), FREQUENCY)
 
 
 @pytest.mark.parametrize("quantity, value, std_error, determined", [
