@@ -179,7 +179,10 @@ def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: Diagnos
     ----------
     data : the data set (:func:`load_for_diagnosis` loads it with the checks a diagnosis needs), its one preparation
         (:func:`fitting.derivatives.preparation.prepare_dataset`, the one the fit reads), or a
-        :class:`DiagnosisStart` (:func:`start_diagnosis`: checked and prepared already, with its spec)
+        :class:`DiagnosisStart` (:func:`start_diagnosis`: checked and prepared already, with its spec).  With
+        ``cavity_lag`` among the candidates the first 40 ms of every run (the cavity's ring-up after the field
+        drop, :func:`~validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`) are left out of a data set or
+        preparation (not of a start: it is taken as prepared)
     config : DiagnoseConfig
     progress : log the steps at INFO level (else DEBUG)
     spec : the simulation model and its own options (:class:`acousim.models.ModelSpec`; default: the Gor'kov
@@ -202,8 +205,22 @@ def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: Diagnos
         raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
     with single_blas_thread():
         start = data if isinstance(data, DiagnosisStart) else start_diagnosis(
-            data, spec if spec is not None else ModelSpec(), config.alpha)
+            _without_ring_up(data, config), spec if spec is not None else ModelSpec(), config.alpha)
         return _diagnose(start, config, progress)
+
+
+def _without_ring_up(data: "Dataset | PreparedDataset", config: DiagnoseConfig) -> "Dataset | PreparedDataset":
+    """``data`` without the cavity's ring-up at the start of every run when the cavity is a candidate
+    (:func:`validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`), else ``data`` itself."""
+    from fitting.derivatives.preparation import PreparedDataset, prepare_dataset
+
+    from .prepare.cavity_lag import leave_out_ring_up
+
+    if "cavity_lag" not in config.candidates:
+        return data
+    if isinstance(data, PreparedDataset):
+        return prepare_dataset(leave_out_ring_up(data.dataset), data.smoothing)
+    return leave_out_ring_up(data)
 
 
 #: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the

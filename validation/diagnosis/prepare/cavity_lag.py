@@ -27,6 +27,15 @@ of rate ``B w F_Z^2 / (M E_mode)``, which varies over a y cycle as F_Z^2 does (b
 100 um on the default dimer), unlike linear damping's constant rate, and it couples y and theta through
 ``F_Z Q_theta`` (the velocity couplings of :func:`acousim.dynamics.cavity_stability.lag_couplings`).
 
+**The ring-up.**  When the drive comes back on after a field drop, the mode rings up from what is left of it
+(``a = a_d + (a_start - a_d) exp(-(Gamma + i Delta) t)``): at Q 300-400 the acoustic forces start at a few per cent
+of their steady value and overshoot it by a third before they settle over a few ring times.  That transient is no
+response to the dimer's motion, and the slow expansion (a steady mode) does not hold it: on a blind twin case (Q 313,
+x 1.48) it left the steady expansion off by up to 0.96 of the force in the first 20 ms, against 1e-5 of the force
+(0.7 % of the lag's part) afterwards with the second-order columns, and the fit traded the lag for linear damping
+(Q 1878, x 13.1, gamma_y 2.5 1/s against 313, 1.48, 0.59).  A diagnosis with the cavity among its candidates
+therefore leaves the first :data:`RING_UP_S` (40 ms) of every run out (:func:`leave_out_ring_up`).
+
 **Second order.**  At the drops of a real levitator (150-200 um) the dimer's shift reaches d = delta / Gamma = 3.5 %,
 and the first-order expansion leaves errors the data resolve: the static curve's next term (``s - 1 = -d + d^2/2`` at
 x = 1), which changes the pressure shift averaged over a cycle (the static gain's main signature once the
@@ -56,7 +65,8 @@ from acousim.medium import Medium
 
 __all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns",
            "CavityColumns", "AngleFactors", "ANGLE_SERIES", "problem_columns", "HeightExpansion", "height_expansion",
-           "HEIGHT_DEGREE", "second_order_ratios", "cavity_reference", "derived_quantities"]
+           "HEIGHT_DEGREE", "second_order_ratios", "cavity_reference", "derived_quantities", "RING_UP_S",
+           "leave_out_ring_up"]
 
 #: The candidate's parameters: the quasi-static gain A [s/rad] and the lag gain B [s^2/rad] (module docstring).
 CAVITY_LAG_PARAMETERS = ("static_gain", "lag_gain")
@@ -255,6 +265,35 @@ class CavityColumns:
         regular = np.concatenate([accel * static[:, None, None], accel * lag[:, None, None]], axis=2)
         over_rest = np.concatenate([accel * static_over[:, None, None], accel * lag_over[:, None, None]], axis=2)
         return regular, over_rest, rest_force
+
+
+#: What a diagnosis with the cavity among its candidates leaves out of the start of every run [s]: about 10 ring
+#: times tau = Q / (pi f) at the largest Q the reference mode accepts (600 at 45.65 kHz: tau = 4.2 ms; the ring-up
+#: is then down to exp(-9.6) = 7e-5 of its start), 14 at Q 400.  On acousim's six-state system after a 3 ms drop
+#: (Q 600, x 1.5) the steady second-order expansion's misfit of the y acceleration is still 6 % of the cavity's part
+#: 25 ms after the drive's return, and from 30 ms on 2 %, the expansion's own error at that Q (0.5 % at Q 400,
+#: reached by 25 ms there; test_cavity_lag.py).  1.3 % of a 3 s run.
+RING_UP_S = 0.04
+
+
+def leave_out_ring_up(dataset, duration: float = RING_UP_S):
+    """``dataset`` (:class:`cubedimer.dataset.Dataset`) with the first ``duration`` [s] of every run left out (from
+    its first frame: the drive's return, t = 0 in a field-drop recording), where the cavity rings up (module
+    docstring).  Glitch frames keep their places; ``frames`` (a run split at a gap) moves with the start."""
+    from dataclasses import replace
+
+    runs = []
+    for run in dataset.runs:
+        first = int(np.searchsorted(run.t, run.t[0] + duration - 1e-9 * max(run.dt, 1e-12)))
+        if first == 0:
+            runs.append(run)
+            continue
+        vel = None if run.velocities is None else run.velocities[first:]
+        frames = None if run.frames is None else (run.frames[0] + first, run.frames[1])
+        glitches = tuple(i - first for i in run.glitch_frames if i >= first)
+        runs.append(replace(run, t=run.t[first:], y=run.y[first:], theta=run.theta[first:], velocities=vel,
+                            frames=frames, glitch_frames=glitches))
+    return replace(dataset, runs=tuple(runs))
 
 
 def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:

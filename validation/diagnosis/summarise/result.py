@@ -32,6 +32,9 @@ REJECTIONS = {
                          "named as a cause",
     "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
                          "coefficient or scattering stiffness)",
+    "no_cavity_mode": "the cavity's lag gain has the sign of its quasi-static gain, beyond its 95 % interval: no "
+                      "cavity mode has such gains (a resonator's have opposite signs at every detuning), so it is not "
+                      "named as a cause",
 }
 
 

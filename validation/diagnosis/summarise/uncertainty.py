@@ -243,9 +243,29 @@ def jackknife_errors(problem: DiagnosisProblem, effects: Sequence[str], params: 
     extra: dict[str, dict[str, ParameterInterval]] = {}
     for k, (e, q) in enumerate(dslots):
         value = float(centre[e][q])
-        extra.setdefault(e, {})[q] = (jackknife_interval(value, dloo[:, k]) if math.isfinite(value) else ParameterInterval(
-            value, None, None, None, f"the fitted parameters of {e} give no {q}"))
+        extra.setdefault(e, {})[q] = (_resolved(q, jackknife_interval(value, dloo[:, k])) if math.isfinite(value)
+                                      else ParameterInterval(value, None, None, None,
+                                                             f"the fitted parameters of {e} give no {q}"))
     return JackknifeErrors(out, cal, n, extra)
+
+
+#: Derived quantities whose 95 % interval must stay on one side of zero to be determined, with the reason when it
+#: does not: the cavity's Q (a mode has Q > 0) and its detuning (the side of the resonance the drive sits on).
+#: Both come from the lag gain B (x = A^2 / B, Gamma ~ A / B), which beside the air's linear damping (and a drag)
+#: shares the damping of y: where the jackknife's interval reaches zero the data do not resolve B, and Q and x are
+#: not numbers the data give (on the blind twin case of Q 309, x 1.48 beside linear damping and quadratic drag:
+#: Q 601 +- 439, x 4.2 +- 3.7).
+SIGNED_DERIVED = {
+    "quality_factor": "its 95 % interval reaches Q <= 0: the cavity's lag is not resolved from the damping beside it",
+    "detuning_half_widths": "its 95 % interval holds both signs: the side of the resonance the drive sits on is not "
+                            "resolved (the cavity's lag is not resolved from the damping beside it)"}
+
+
+def _resolved(quantity: str, interval: ParameterInterval) -> ParameterInterval:
+    """``interval``, or "not determined" where it crosses zero for a quantity of :data:`SIGNED_DERIVED`."""
+    if quantity not in SIGNED_DERIVED or not interval.determined or interval.interval_95[0] * interval.interval_95[1] > 0:
+        return interval
+    return ParameterInterval(interval.value, None, None, interval.dof, SIGNED_DERIVED[quantity])
 
 
 def with_model_error(interval: ParameterInterval, model_error: float) -> ParameterInterval:

@@ -82,6 +82,7 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     model_effects = [e if e.name in by_trajectory else
                      _named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
                      for i, e in enumerate(model_effects)]
+    model_effects = [_named_only_with_a_mode(e) for e in model_effects]
     last_tests = ident.last_tests()
     others = []
     for name in candidates:
@@ -159,6 +160,25 @@ def gap_change_detail(effect: EffectVerdict, before: float) -> str:
     # the error to two significant digits (at least one decimal), the change to the same decimals
     decimals = int(min(4, max(1, 1 - np.floor(np.log10(error))))) if error > 0 else 1
     return text + f", {change:+.{decimals}f} +- {error:.{decimals}f} %"
+
+
+def _named_only_with_a_mode(effect: EffectVerdict) -> EffectVerdict:
+    """A named cavity whose lag gain has, beyond its 95 % interval, the sign no cavity mode has (that of its
+    quasi-static gain: :func:`~validation.diagnosis.prepare.cavity_lag.mode_from_gains`) is not named.  A resonator's
+    quasi-static and lag gains have opposite signs at every detuning (the ring's decay rate
+    ``Gamma = -2 A / (B (1 + x^2))`` is positive), so such a fit stands for something else.  A lag gain whose interval
+    holds zero is no evidence against a cavity (beside the air's damping the lag is often not resolved, while the
+    quasi-static response is): the cavity stays named, its Q and detuning not determined.  A rejected one stays in the
+    fitted model, with the code ``no_cavity_mode``."""
+    if effect.name != "cavity_lag" or effect.status != "named":
+        return effect
+    a, b = float(effect.params["static_gain"]), float(effect.params["lag_gain"])
+    lag = (effect.uncertainty or {}).get("lag_gain")
+    if a * b < 0 or lag is None or not lag.determined or lag.interval_95[0] * lag.interval_95[1] <= 0:
+        return effect
+    return replace(effect, named=False, status="rejected", rejected_because=(_rejection(
+        "no_cavity_mode", f"static_gain = {a:.3g} s/rad, lag_gain = {b:.3g} s^2/rad, its 95 % interval "
+                          f"{lag.interval_95[0]:.3g} to {lag.interval_95[1]:.3g}"),))
 
 
 def _named_only_if_shrinking(effect: EffectVerdict, before: float) -> EffectVerdict:
