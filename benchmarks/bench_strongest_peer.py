@@ -158,7 +158,7 @@ def loo_error(fit: Callable, derivs: Sequence, f_y: Sequence[float], f_slow: flo
 
 
 #: bump when ours changes: cached rows of ours from another version are recomputed (the peers' stay)
-OURS_VERSION = 7
+OURS_VERSION = 8
 #: the peer families whose cross-validated best is reported per case, by the prefix of their configurations' names
 FAMILIES = ("STLSQ", "SR3-L0", "SR3-L1", "E-STLSQ", "weak")
 
@@ -222,12 +222,12 @@ def ours_case(data, cap: int, name: str) -> dict:
     out, f_slow = {}, bme.TRUTHS[name].f_slow
     for label, cfg in (("ours", DiscoveryConfig()), ("ours <= Taylor size", DiscoveryConfig(max_terms=cap))):
         t0 = time.perf_counter()
-        res = discover_model(data.runs, data.derivs, cfg)
+        res = discover_model(data.runs, data.derivs, cfg, refine_front=label == "ours")
         out[label] = {"coef": res.coef.tolist(), "note": "; ".join(res.selection_modes),
                       "wall": time.perf_counter() - t0}
         if label == "ours" and res.front is not None:
             out["front"] = [{"max_terms": p.max_terms, "n_terms": list(p.n_terms), "cv_error": _finite(p.error),
-                             "selected": p.selected, "coef": p.coef.tolist(),
+                             "selected": p.selected, "coef": p.coef.tolist(), "refined": p.refined,
                              "long_time": _finite(float(np.median(bme.long_time_errors(p.coef, data, f_slow))))}
                             for p in res.front.points]
     return out
@@ -399,6 +399,9 @@ def main(argv: list[str] | None = None) -> str:
     p.add_argument("--cached-only", action="store_true",
                    help="tabulate only the cases whose results are all in the cache (an unfinished grid's table, in "
                         "seconds); the others are listed as not measured")
+    p.add_argument("--only", choices=("peer", "ours"), default=None,
+                   help="compute and cache only pysindy's configurations (peer) or only ours (ours) of every case, "
+                        "no table (then --cached-only tabulates)")
     args = p.parse_args(argv if argv is not None else [])  # run by benchmarks.__main__: its own argv is not ours
     quick = not args.full and args.truths is None and args.levels is None and args.runs is None
     args.truths = args.truths or list(bme.TRUTHS)
@@ -412,6 +415,15 @@ def main(argv: list[str] | None = None) -> str:
     else:  # the cheaper run counts first: an interrupted grid has every truth and level at them
         cases = [(name, level, seed, n) for seed in args.seeds for n in sorted(args.runs) for level in args.levels
                  for name in args.truths]
+    if args.only:  # one side of every case into the cache (two processes fill a grid's two sides in parallel)
+        for name, level, seed, n in cases:
+            data, key = bme.make_data(name, level, seed, n), _case_key(name, level, seed, n)
+            cap = int((bme.compiled(name)[1] != 0).sum(axis=1).max())
+            part, compute = (("peer", lambda: peer_case(data, name, n)) if args.only == "peer" else
+                             (f"ours_v{OURS_VERSION}", lambda: ours_case(data, cap, name)))
+            _cached(cache / f"{key}_{part}.json" if cache else None, compute)
+            print(f"[strongest-peer] {key}: {part} cached", file=sys.stderr, flush=True)
+        return ""
     missing = []
     if args.cached_only and cache is not None:
         done = [c for c in cases if all((cache / f"{_case_key(*c[:3], c[3])}_{part}.json").exists()
