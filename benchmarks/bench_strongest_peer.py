@@ -26,9 +26,10 @@ Per case the rows are ours (both), pysindy's strongest, its best at most the Tay
 of each family (``FAMILIES``); above the rows, the issue's first target per case: ours at most the Taylor size
 against the best of pysindy's reported configurations at any size, from the first state; and the issue's second
 target per case: every point of our default fit's front (``FrontPoint.coef``, its supports fitted on all runs by
-integral-form least squares; stored in the cache) scored like the rest on the held-out runs, against pysindy's best
-at that size or smaller (the larger equation's terms): the configuration its cross-validation picks among those, and
-the best of them on the held-out runs.
+integral-form least squares and refined by the output error, ``discover_model(..., refine_front=True)``; stored in the
+cache) scored like the rest on the held-out runs, against pysindy's best at that size or smaller (the larger
+equation's terms): the configuration its cross-validation picks among those, and the best of them on the held-out
+runs.
 
 The grid (``GRID_LEVELS`` x ``GRID_RUNS`` x ``GRID_SEEDS``, both truths; ``--full``) costs hours on one core:
 every case's results are written, atomically, to a cache folder (``--cache-dir``; default the suite's user cache,
@@ -37,8 +38,9 @@ seconds.  pysindy's results are kept per case; ours are recomputed when ``OURS_V
 entry is recomputed.
 
 Run ``python -m benchmarks.bench_strongest_peer [--full | --truths ... --levels 0.01 0.05 0.12 --runs 4 8 16]
-[--seeds 201] [--cache-dir DIR | --no-cache] [--cached-only]``; ``--cached-only`` tabulates the finished cases of an
-unfinished grid and lists the others; without ``--full`` or a grid option only ``QUICK_CASES`` are run
+[--seeds 201] [--cache-dir DIR | --no-cache] [--cached-only] [--only peer|ours]``; ``--cached-only`` tabulates the
+finished cases of an unfinished grid and lists the others; ``--only peer`` (``ours``) fills only pysindy's (our) side
+of every case into the cache, so that two processes fill a grid's two sides in parallel; without ``--full`` or a grid option only ``QUICK_CASES`` are run
 (``make bench``: minutes on one core).
 """
 from __future__ import annotations

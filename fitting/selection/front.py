@@ -14,10 +14,22 @@ largest amplitudes of a decaying run, this one by the motion's whole range.  The
 over folds of each and its standard error (the spread of the fold means over sqrt(K)): under model error the error
 bars say which sizes the data can tell apart.
 
+**The order of the front.**  Below the selection's size each cap's model is the best, by the held-out error from
+the first state over the first ``ALONG_HORIZON_PERIODS`` slow periods (mean over folds and coordinates; over a whole
+decaying run a small model's phase error saturates near 100 % and ranks nothing), of: the selection's paths at that
+cap (which keep the forced damping terms), the backward elimination without forced terms, forward selection on the
+integral form (:func:`candidate_paths`), up to ``LONG_TIME_FORWARD_SIZE`` terms forward selection by that long-time
+error itself (:func:`long_time_forward`), their per-equation mix, and the smaller caps' models
+(:func:`ordered_supports`).  So the one- and two-term points are the restoring forces, not the damped oscillator.
+Above the selection's size an enlargement that a smaller model predicts better is left out: its cap maps to that
+model (``Front.cap_points``), and the front holds only the sizes that the held-out runs prefer.
+:func:`refined_front` (``discover_model(..., refine_front=True)``) refines every point's coefficients by the output
+error on its supports, as the selected model is under model error.
+
 The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
 standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
 significance and integral-form held-out pruning, :mod:`fitting.selection.integral_discovery`); ``fit --max-terms N``
-(``DiscoveryConfig.max_terms``) fits the point at cap N.
+(``DiscoveryConfig.max_terms``) fits the point at cap N (:meth:`Front.supports_at`).
 """
 from __future__ import annotations
 
