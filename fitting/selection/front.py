@@ -41,12 +41,13 @@ from numpy.typing import NDArray
 
 from cubedimer.folds import run_folds
 from cubedimer.terms import EQUATION_NAMES
-from ..model import TERMS, PolynomialModel
+from ..integrate import integrate_batch
+from ..model import EXPONENTS, TERMS, PolynomialModel
 from .support_search import ReducedDesign, _eliminate, fit_on_runs, heldout_rms
 
 __all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "long_time_error_along", "capped_support",
-           "long_time_front", "refined_front", "forward_path", "candidate_paths", "ordered_supports", "BLOW_UP_FACTOR",
-           "ALONG_HORIZON_PERIODS"]
+           "long_time_front", "held_out_fold_errors", "refined_front", "forward_path", "candidate_paths",
+           "ordered_supports", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
 
 #: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
 BLOW_UP_FACTOR = 10.0
@@ -109,6 +110,80 @@ def _trajectory_error(model: PolynomialModel, x0: NDArray, data: NDArray, dt: fl
     if n_valid < n:
         return np.full(2, np.inf)
     return np.sqrt(np.mean((states[:, [0, 2]] - data) ** 2, axis=0))
+
+
+def _starts_along(run: HeldOutRun) -> tuple[list[int], int]:
+    """The first frames of the horizons of :func:`long_time_error_along` and the horizon [frames] (no horizons
+    without states or horizon)."""
+    if run.states is None or run.horizon < 2:
+        return [], 0
+    n = run.y.shape[0]
+    h = min(int(run.horizon), n)
+    starts = list(range(0, n - h + 1, h))
+    if starts[-1] + h < n:
+        starts.append(n - h)
+    return starts, h
+
+
+def held_out_fold_errors(models: Sequence[PolynomialModel], folds: Sequence[tuple], held_out: Sequence[HeldOutRun]
+                         ) -> tuple[list[float], list[float]]:
+    """Per fold, the mean over its held-out runs of :func:`long_time_error` and of :func:`long_time_error_along` of
+    the fold's model (``models[k]`` for ``folds[k] = (train, test)``): the same numbers, with every trajectory of all
+    folds integrated in two compiled calls (the runs from their first states, the horizons along the runs) instead
+    of one call each."""
+    runs = {r: _RunData(held_out[r]) for _, test in folds for r in test}
+    first, along = [], []  # (model, run, start frame, frames, start from the state estimate)
+    for k, (_, test) in enumerate(folds):
+        for r in test:
+            first.append((k, r, 0, runs[r].data.shape[0], False))
+            starts, h = _starts_along(held_out[r])
+            along.extend((k, r, i, h, True) for i in starts)
+    err_first = dict(zip([job[:2] for job in first], _batch_errors(models, runs, first)))
+    err_along: dict[tuple, list] = {}
+    for job, err in zip(along, _batch_errors(models, runs, along)):
+        err_along.setdefault(job[:2], []).append(err ** 2)
+    fold_err, fold_along = [], []
+    for k, (_, test) in enumerate(folds):
+        errs, errs_along = [], []
+        for r in test:
+            errs.append(float(np.mean(err_first[k, r] / runs[r].scale)))
+            sq = err_along.get((k, r))
+            errs_along.append(float(np.mean(np.sqrt(np.mean(np.array(sq), axis=0)) / runs[r].scale)) if sq
+                              else float("nan"))
+        fold_err.append(float(np.mean(errs)))
+        fold_along.append(float(np.mean(errs_along)))
+    return fold_err, fold_along
+
+
+class _RunData:
+    """A held-out run's measured positions (n, 2), their largest |value| and the RMS motion about the mean (zero
+    replaced by 1), as :func:`long_time_error` computes them."""
+
+    def __init__(self, run: HeldOutRun):
+        self.run = run
+        self.data = np.column_stack([run.y, run.theta])
+        self.reach = np.max(np.abs(self.data), axis=0)
+        signal = np.std(self.data, axis=0)
+        self.scale = np.where(signal > 0, signal, 1.0)
+
+
+def _batch_errors(models: Sequence[PolynomialModel], runs: dict, jobs: list[tuple]) -> list:
+    """:func:`_trajectory_error` of each job ``(model, run, start frame, frames, from the state estimate)`` (else
+    from the run's first state ``x0``), all integrated in one compiled call; ``runs``: each run's :class:`_RunData`."""
+    if not jobs:
+        return []
+    x0s = np.array([runs[r].run.states[i] if estimate else runs[r].run.x0 for _, r, i, _, estimate in jobs], float)
+    reach = np.maximum(np.array([runs[job[1]].reach for job in jobs]), np.abs(x0s[:, [0, 2]]))
+    bounds = BLOW_UP_FACTOR * np.column_stack([reach[:, 0], np.full(len(jobs), np.inf), reach[:, 1],
+                                               np.full(len(jobs), np.inf)])
+    ns = np.array([job[3] for job in jobs])
+    dts = np.array([float(runs[r].run.dt) if n > 1 else 1.0 for _, r, _, n, _ in jobs])  # as PolynomialModel.simulate
+    steps = np.array([models[k].default_substeps(dt) for (k, *_), dt in zip(jobs, dts)])
+    traj, n_valid = integrate_batch(np.array([models[job[0]].coef for job in jobs]), EXPONENTS, x0s, dts, ns, steps,
+                                    bounds)
+    return [np.full(2, np.inf) if n_valid[b] < n else
+            np.sqrt(np.mean((traj[b, :n][:, [0, 2]] - runs[r].data[i:i + n]) ** 2, axis=0))
+            for b, (_, r, i, n, _) in enumerate(jobs)]
 
 
 @dataclass(frozen=True)
@@ -286,14 +361,13 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
             continue
         seen[supports] = len(points)
         cap_points.append((int(cap), len(points)))
-        fold_err, fold_along = [], []
-        for train, test in folds:
+        models = []
+        for train, _ in folds:
             coef = np.zeros((2, len(TERMS)))
             for q, cols in enumerate(supports):
                 coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
-            model = PolynomialModel(coef)
-            fold_err.append(float(np.mean([long_time_error(model, held_out[r]) for r in test])))
-            fold_along.append(float(np.mean([long_time_error_along(model, held_out[r]) for r in test])))
+            models.append(PolynomialModel(coef))
+        fold_err, fold_along = held_out_fold_errors(models, folds, held_out)
         (mean, se), (along, along_se) = _fold_mean(fold_err), _fold_mean(fold_along)
         everything = range(R)
         coef = np.zeros((2, len(TERMS)))
@@ -323,7 +397,8 @@ def refined_front(front: Front, refine: Callable[[NDArray], NDArray], held_out: 
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):  # a refinement that fails keeps the point
             points.append(p)
             continue
-        err = [float(np.mean(_model_first_state_errors(PolynomialModel(c), everything, held_out))) for c in (p.coef, new)]
+        err = [float(np.mean(_model_first_state_errors([PolynomialModel(c)], everything, held_out)))
+               for c in (p.coef, new)]
         points.append(replace(p, coef=new, refined=True) if err[1] < err[0] else p)
     return replace(front, points=tuple(points))
 
@@ -428,28 +503,30 @@ def _first_state_errors(supports: tuple[tuple[int, ...], ...], designs: Sequence
     on ``supports`` (fitted on each fold's training runs), over the RMS motion in that horizon, mean over the folds of
     the mean over their held-out runs (inf on a blow-up).  The ordering's score: over a whole decaying run a small
     model's phase error saturates the error near 100 %, and the ranking of small models is noise."""
-    out = []
-    for train, test in folds:
+    models = []
+    for train, _ in folds:
         coef = np.zeros((2, len(TERMS)))
         for q, cols in enumerate(supports):
             coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
-        out.append(_model_first_state_errors(PolynomialModel(coef), [(train, test)], held_out))
-    return np.mean(out, axis=0)
+        models.append(PolynomialModel(coef))
+    return _model_first_state_errors(models, folds, held_out)
 
 
-def _model_first_state_errors(model: PolynomialModel, folds: Sequence[tuple[list[int], list[int]]],
+def _model_first_state_errors(models: Sequence[PolynomialModel], folds: Sequence[tuple[list[int], list[int]]],
                               held_out: Sequence[HeldOutRun]) -> NDArray:
-    """Per coordinate the error of :func:`_first_state_errors` of one ``model`` on the held-out runs of ``folds``."""
+    """Per coordinate the error of :func:`_first_state_errors` of the fold models ``models[k]`` on the held-out runs
+    of ``folds[k]``, every trajectory integrated in one compiled call (:func:`_batch_errors`)."""
+    runs = {r: _RunData(held_out[r]) for _, test in folds for r in test}
+    size = {r: (held_out[r].horizon if held_out[r].horizon >= 2 else runs[r].data.shape[0]) for r in runs}
+    size = {r: min(n, runs[r].data.shape[0]) for r, n in size.items()}
+    jobs = [(k, r, 0, size[r], False) for k, (_, test) in enumerate(folds) for r in test]
+    errs = iter(_batch_errors(models, runs, jobs))
     out = []
     for _, test in folds:
         per_run = []
         for r in test:
-            run = held_out[r]
-            n = run.horizon if run.horizon >= 2 else len(run.y)
-            data = np.column_stack([run.y[:n], run.theta[:n]])
-            signal = np.std(data, axis=0)
-            err = _trajectory_error(model, run.x0, data, run.dt, np.max(np.abs(data), axis=0))
-            per_run.append(err / np.where(signal > 0, signal, 1.0))
+            signal = np.std(runs[r].data[:size[r]], axis=0)
+            per_run.append(next(errs) / np.where(signal > 0, signal, 1.0))
         out.append(np.mean(per_run, axis=0))
     return np.mean(out, axis=0)
 
