@@ -146,9 +146,10 @@ class DiscoveryConfig:
         The Savitzky-Golay window of that least squares of accelerations, in periods of each run's faster dominant
         frequency (0.25: the window of the pysindy baselines in ``benchmarks/bench_model_error.py``).
     max_terms : int or None
-        At most this many terms per equation (``fit --max-terms``): each equation whose selection is larger takes the
-        largest support on its elimination path within the cap (the front's point at that cap,
-        :func:`fitting.selection.front.capped_support`), refitted on all runs.  None: the selection itself.
+        At most this many terms per equation (``fit --max-terms``): below the selection's size the front's point at
+        that cap (ordered by the held-out long-time error, :meth:`fitting.selection.front.Front.supports_at`; without
+        a front each equation whose selection is larger takes the largest support on its elimination path within the
+        cap, :func:`fitting.selection.front.capped_support`), refitted on all runs.  None: the selection itself.
     """
 
     alpha: float = 0.01

@@ -14,15 +14,27 @@ largest amplitudes of a decaying run, this one by the motion's whole range.  The
 over folds of each and its standard error (the spread of the fold means over sqrt(K)): under model error the error
 bars say which sizes the data can tell apart.
 
+**The order of the front.**  Below the selection's size each cap's model is the best, by the held-out error from
+the first state over the first ``ALONG_HORIZON_PERIODS`` slow periods (mean over folds and coordinates; over a whole
+decaying run a small model's phase error saturates near 100 % and ranks nothing), of: the selection's paths at that
+cap (which keep the forced damping terms), the backward elimination without forced terms, forward selection on the
+integral form (:func:`candidate_paths`), up to ``LONG_TIME_FORWARD_SIZE`` terms forward selection by that long-time
+error itself (:func:`long_time_forward`), their per-equation mix, and the smaller caps' models
+(:func:`ordered_supports`).  So the one- and two-term points are the restoring forces, not the damped oscillator.
+Above the selection's size an enlargement that a smaller model predicts better is left out: its cap maps to that
+model (``Front.cap_points``), and the front holds only the sizes that the held-out runs prefer.
+:func:`refined_front` (``discover_model(..., refine_front=True)``) refines every point's coefficients by the output
+error on its supports, as the selected model is under model error.
+
 The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
 standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
 significance and integral-form held-out pruning, :mod:`fitting.selection.integral_discovery`); ``fit --max-terms N``
-(``DiscoveryConfig.max_terms``) fits the point at cap N.
+(``DiscoveryConfig.max_terms``) fits the point at cap N (:meth:`Front.supports_at`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,15 +43,20 @@ from cubedimer.folds import run_folds
 from cubedimer.terms import EQUATION_NAMES
 from ..integrate import integrate_batch
 from ..model import EXPONENTS, TERMS, PolynomialModel
-from .support_search import ReducedDesign, fit_on_runs
+from .support_search import ReducedDesign, _eliminate, fit_on_runs, heldout_rms
 
 __all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "long_time_error_along", "capped_support",
-           "long_time_front", "held_out_fold_errors", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
+           "long_time_front", "held_out_fold_errors", "refined_front", "forward_path", "candidate_paths",
+           "ordered_supports", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
 
 #: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
 BLOW_UP_FACTOR = 10.0
 #: The horizon of the error along the runs, in periods of the run's slower dominant frequency.
 ALONG_HORIZON_PERIODS = 5.0
+#: Up to this many terms per equation the front's ordering includes :func:`long_time_forward` (forward selection by
+#: the long-time error itself, over the ``LONG_TIME_SHORTLIST`` best additions by the integral form's held-out error)
+LONG_TIME_FORWARD_SIZE = 4
+LONG_TIME_SHORTLIST = 4
 
 
 @dataclass(frozen=True)
@@ -189,6 +206,8 @@ class FrontPoint:
     coef : ndarray (2, 35) or None
         The point's coefficients fitted on all runs (integral-form least squares on its supports; SI), the model a
         user takes at this size without refitting (None where not computed).
+    refined : bool
+        ``coef`` is the output error's refinement on the point's supports (:func:`refined_front`).
     """
 
     max_terms: int
@@ -201,6 +220,7 @@ class FrontPoint:
     error_along_se: float = float("nan")
     fold_errors_along: tuple[float, ...] = ()
     coef: NDArray[np.float64] | None = field(default=None, compare=False, repr=False)
+    refined: bool = False
 
     @property
     def n_terms(self) -> tuple[int, int]:
@@ -212,6 +232,7 @@ class FrontPoint:
                 "error_se": _num(self.error_se), "fold_errors": [_num(e) for e in self.fold_errors],
                 "error_along": _num(self.error_along), "error_along_se": _num(self.error_along_se),
                 "fold_errors_along": [_num(e) for e in self.fold_errors_along], "selected": self.selected,
+                "refined": self.refined,
                 **({"coefficients": {eq: {TERMS[j]: float(self.coef[q, j]) for j in np.flatnonzero(self.coef[q])}
                                      for q, eq in enumerate(EQUATION_NAMES)}} if self.coef is not None else {})}
 
@@ -226,6 +247,20 @@ class Front:
 
     points: tuple[FrontPoint, ...]
     n_folds: int
+    #: (cap, index into ``points``) for every cap evaluated; the caps below ``ordered_below`` were ordered by the
+    #: held-out long-time error (:func:`ordered_supports`), the others follow the selection's elimination paths
+    cap_points: tuple[tuple[int, int], ...] = ()
+    ordered_below: int = 0
+
+    def supports_at(self, cap: int) -> tuple[tuple[int, ...], ...] | None:
+        """Per equation the column indices of the front's model at ``cap`` terms per equation where the front
+        ordered that cap by the held-out long-time error (the point of the largest evaluated cap not above it); None
+        at and above ``ordered_below`` (there the selection's own paths decide, :func:`capped_support`)."""
+        if cap >= self.ordered_below or not self.cap_points:
+            return None
+        below = [i for c, i in self.cap_points if c <= cap] or [self.cap_points[0][1]]
+        terms = self.points[below[-1]].terms
+        return tuple(tuple(sorted(TERMS.index(t) for t in terms[eq])) for eq in EQUATION_NAMES)
 
     @property
     def knee(self) -> FrontPoint | None:
@@ -252,6 +287,10 @@ class Front:
                 "n_folds": self.n_folds, "knee_rule": "smallest model within one fold standard error of the best",
                 "knee_max_terms": knee.max_terms if knee is not None else None,
                 "default": "the discovery's own selection (selected: true)",
+                "ordering": f"below {self.ordered_below} terms per equation each cap's point is the best of "
+                            "several candidate paths (the selection's elimination, the elimination without forced "
+                            "terms, forward selection) by the held-out long-time error from the first state",
+                "cap_points": {str(c): i for c, i in self.cap_points},
                 "points": [p.to_json() for p in self.points]}
 
 
@@ -277,7 +316,8 @@ def capped_support(path: Sequence[Sequence[int]], held: Sequence[float], selecte
 
 
 def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], held_out: Sequence[HeldOutRun],
-                    n_folds: int, caps: Sequence[int] | None = None) -> Front | None:
+                    n_folds: int, caps: Sequence[int] | None = None, ordered: bool = True, alpha: float = 0.01,
+                    velocity_first: bool = True) -> Front | None:
     """The front (module docstring) of one discovery.
 
     Parameters
@@ -287,6 +327,9 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
     held_out : per run (the designs' order) what its long-time error needs
     n_folds : folds over runs
     caps : caps to evaluate (default every size on the paths)
+    ordered : below the selection's size, each cap's point is the best by the held-out long-time error of the
+        candidate supports of :func:`ordered_supports` (else the selection's elimination paths alone)
+    alpha, velocity_first : the elimination's settings (:func:`candidate_paths`)
 
     Returns
     -------
@@ -299,12 +342,22 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
     if caps is None:
         caps = sorted({len(c) for path, _, sel in fronts for c in [*path, sel]})
     largest = max(len(sel) for _, _, sel in fronts)  # up to the selection's size caps shrink, above it they enlarge
-    seen, points = set(), []
+    below = largest if ordered else 0
+    paths = [candidate_paths(d, n_folds, below - 1, alpha, velocity_first) for d in designs] if below > 1 else []
+    seen, points, cap_points, scored = {}, [], [], {}
+    joint = long_time_forward(designs, folds, held_out, n_folds, min(below - 1, LONG_TIME_FORWARD_SIZE), scored)
     for cap in caps:
         supports = tuple(capped_support(path, held, sel, cap, enlarge=cap > largest) for path, held, sel in fronts)
+        if cap < below:
+            supports = ordered_supports(supports, cap, paths, designs, folds, held_out,
+                                        (*seen, *(p for p in joint if max(map(len, p)) <= cap)), scored)
+        elif ordered and cap > largest:  # an enlargement that a smaller model predicts better is not on the front
+            supports = ordered_supports(supports, cap, [], designs, folds, held_out, tuple(seen), scored)
         if supports in seen:
+            cap_points.append((int(cap), seen[supports]))
             continue
-        seen.add(supports)
+        seen[supports] = len(points)
+        cap_points.append((int(cap), len(points)))
         models = []
         for train, _ in folds:
             coef = np.zeros((2, len(TERMS)))
@@ -322,7 +375,157 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
                                  selected=all(tuple(sorted(f[2])) == s for f, s in zip(fronts, supports)),
                                  error_along=along, error_along_se=along_se, fold_errors_along=tuple(fold_along),
                                  coef=coef))
-    return Front(tuple(points), len(folds))
+    return Front(tuple(points), len(folds), tuple(cap_points), below)
+
+
+def refined_front(front: Front, refine: Callable[[NDArray], NDArray], held_out: Sequence[HeldOutRun]) -> Front:
+    """The front with every point's coefficients refined by ``refine`` (coefficients (2, 35) -> coefficients on the
+    same support, e.g. the output error's refinement the selected model gets under model error), kept where the
+    refined model predicts the runs from their first states better (:func:`_first_state_errors` on all runs, mean of
+    the two coordinates; ``FrontPoint.refined``).  The points' held-out errors are those of the least squares."""
+    everything = [(list(range(len(held_out))), list(range(len(held_out))))]
+    points = []
+    for p in front.points:
+        if p.coef is None:
+            points.append(p)
+            continue
+        try:
+            new = np.where(p.coef != 0, refine(p.coef), 0.0)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):  # a refinement that fails keeps the point
+            points.append(p)
+            continue
+        err = [float(np.mean(_model_first_state_errors([PolynomialModel(c)], everything, held_out)))
+               for c in (p.coef, new)]
+        points.append(replace(p, coef=new, refined=True) if err[1] < err[0] else p)
+    return replace(front, points=tuple(points))
+
+
+def long_time_forward(designs: Sequence[ReducedDesign], folds: Sequence[tuple[list[int], list[int]]],
+                      held_out: Sequence[HeldOutRun], n_folds: int, max_size: int, scored: dict | None = None,
+                      shortlist: int = LONG_TIME_SHORTLIST) -> list[tuple[tuple[int, ...], ...]]:
+    """Forward selection of both equations by the held-out long-time error from the first state: at every size
+    (1 to ``max_size`` terms per equation), each equation in turn takes the one of its ``shortlist`` best additions
+    by the integral form's held-out error (or none) whose model has the smallest long-time error (mean over
+    ``folds`` and the two coordinates).  Returns the models (per equation the column indices), one per size."""
+    scored = {} if scored is None else scored
+    if max_size < 1:
+        return []
+    n_lib = designs[0].total.shape[1] - 1
+    supports = [(), ()]
+    out = []
+    for _ in range(min(max_size, n_lib)):
+        for q in range(2):
+            trial = [list(supports[q]) + [j] for j in range(n_lib) if j not in supports[q]]
+            held = np.nan_to_num(heldout_rms(designs[q], trial, n_folds), nan=np.inf)
+            cands = [tuple(sorted(trial[i])) for i in np.argsort(held, kind="stable")[:shortlist]]
+            other = supports[1 - q] or forward_path(designs[1 - q], n_folds, 1)[0]
+            pairs = [(c, other) if q == 0 else (other, c) for c in ([supports[q]] if supports[q] else []) + cands]
+            for p in pairs:
+                if p not in scored:
+                    scored[p] = _first_state_errors(p, designs, folds, held_out)
+            supports[q] = min(pairs, key=lambda p: float(np.mean(scored[p])))[q]
+        out.append(tuple(supports))
+    return out
+
+
+def forward_path(design: ReducedDesign, n_folds: int, max_size: int) -> list[tuple[int, ...]]:
+    """Forward selection on the integral form: from no term, add the term whose support has the smallest held-out
+    error (K-fold over runs, :func:`fitting.selection.support_search.heldout_rms`) until ``max_size`` terms; returns
+    the supports of sizes 1 to ``max_size``.  No term is forced: the restoring force comes before the damping."""
+    n_lib = design.total.shape[1] - 1
+    cols: list[int] = []
+    out = []
+    for _ in range(min(max_size, n_lib)):
+        trial = [cols + [j] for j in range(n_lib) if j not in cols]
+        held = np.nan_to_num(heldout_rms(design, trial, n_folds), nan=np.inf)
+        cols = trial[int(np.argmin(held))]
+        out.append(tuple(sorted(cols)))
+    return out
+
+
+def candidate_paths(design: ReducedDesign, n_folds: int, max_size: int, alpha: float = 0.01,
+                    velocity_first: bool = True) -> list[list[tuple[int, ...]]]:
+    """One equation's candidate supports of at most ``max_size`` terms beside the selection's own paths: the
+    backward elimination from the full library without forced terms (down to one term) and :func:`forward_path`."""
+    if max_size < 1:
+        return []
+    n_lib = design.total.shape[1] - 1
+    free = np.zeros(n_lib, bool)
+    elim = [tuple(sorted(k)) for k, _ in _eliminate(design, range(n_lib), free, alpha, velocity_first)
+            if 1 <= len(k) <= max_size]
+    return [elim, forward_path(design, n_folds, max_size)]
+
+
+def ordered_supports(supports: tuple[tuple[int, ...], ...], cap: int, paths: Sequence[list[list[tuple[int, ...]]]],
+                     designs: Sequence[ReducedDesign], folds: Sequence[tuple[list[int], list[int]]],
+                     held_out: Sequence[HeldOutRun], earlier: Sequence[tuple[tuple[int, ...], ...]] = (),
+                     scored: dict | None = None) -> tuple[tuple[int, ...], ...]:
+    """The model of at most ``cap`` terms per equation with the smallest held-out long-time error from the first
+    state (mean over ``folds``) among: ``supports`` (the selection's paths at this cap), every candidate path's
+    largest support within the cap (the same path for both equations, :func:`candidate_paths`), their mix that takes
+    for each equation the candidate best on its own coordinate, and the ``earlier`` (smaller caps') models.  Ties
+    keep the earlier entry, ``supports`` first.  ``scored`` (supports -> per-coordinate errors) keeps the scores
+    between calls."""
+    scored = {} if scored is None else scored
+
+    def score(c):
+        if c not in scored:
+            scored[c] = _first_state_errors(c, designs, folds, held_out)
+        return scored[c]
+
+    def within(path):
+        fit = [c for c in path if len(c) <= cap]
+        return max(fit, key=len) if fit else None
+
+    cands = [supports]
+    for k in range(min((len(p) for p in paths), default=0)):
+        pair = tuple(within(paths[q][k]) for q in range(len(designs)))
+        if all(c is not None for c in pair) and pair not in cands:
+            cands.append(pair)
+    scores = [score(c) for c in cands]
+    if len(cands) > 1:  # each equation's support from the candidate that predicts its own coordinate best
+        mix = tuple(cands[int(np.argmin([s[q] for s in scores]))][q] for q in range(len(designs)))
+        if mix not in cands:
+            cands.append(mix)
+            scores.append(score(mix))
+    cands += [e for e in earlier if e not in cands]
+    scores += [score(c) for c in cands[len(scores):]]
+    return cands[int(np.argmin([float(np.mean(s)) for s in scores]))]
+
+
+def _first_state_errors(supports: tuple[tuple[int, ...], ...], designs: Sequence[ReducedDesign],
+                        folds: Sequence[tuple[list[int], list[int]]], held_out: Sequence[HeldOutRun]) -> NDArray:
+    """Per coordinate (y, theta) the held-out error from the first state over the first horizon of the error along
+    the runs (``HeldOutRun.horizon``, ``ALONG_HORIZON_PERIODS`` slow periods; the whole run without one) of the model
+    on ``supports`` (fitted on each fold's training runs), over the RMS motion in that horizon, mean over the folds of
+    the mean over their held-out runs (inf on a blow-up).  The ordering's score: over a whole decaying run a small
+    model's phase error saturates the error near 100 %, and the ranking of small models is noise."""
+    models = []
+    for train, _ in folds:
+        coef = np.zeros((2, len(TERMS)))
+        for q, cols in enumerate(supports):
+            coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
+        models.append(PolynomialModel(coef))
+    return _model_first_state_errors(models, folds, held_out)
+
+
+def _model_first_state_errors(models: Sequence[PolynomialModel], folds: Sequence[tuple[list[int], list[int]]],
+                              held_out: Sequence[HeldOutRun]) -> NDArray:
+    """Per coordinate the error of :func:`_first_state_errors` of the fold models ``models[k]`` on the held-out runs
+    of ``folds[k]``, every trajectory integrated in one compiled call (:func:`_batch_errors`)."""
+    runs = {r: _RunData(held_out[r]) for _, test in folds for r in test}
+    size = {r: (held_out[r].horizon if held_out[r].horizon >= 2 else runs[r].data.shape[0]) for r in runs}
+    size = {r: min(n, runs[r].data.shape[0]) for r, n in size.items()}
+    jobs = [(k, r, 0, size[r], False) for k, (_, test) in enumerate(folds) for r in test]
+    errs = iter(_batch_errors(models, runs, jobs))
+    out = []
+    for _, test in folds:
+        per_run = []
+        for r in test:
+            signal = np.std(runs[r].data[:size[r]], axis=0)
+            per_run.append(next(errs) / np.where(signal > 0, signal, 1.0))
+        out.append(np.mean(per_run, axis=0))
+    return np.mean(out, axis=0)
 
 
 def _fold_mean(fold_err: Sequence[float]) -> tuple[float, float]:

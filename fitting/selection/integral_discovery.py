@@ -60,7 +60,7 @@ from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
 from .estimate_choice import EstimateChoice, chosen_coefficients
-from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front
+from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front, refined_front
 from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
                              run_weights, select_heldout, select_support)
 
@@ -227,7 +227,8 @@ class DiscoveryResult:
 # ---- the discovery loop ----------------------------------------------------------------------------------------
 def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
                    config: DiscoveryConfig = DiscoveryConfig(),
-                   prepared: Sequence["RunPreparation | None"] | None = None) -> DiscoveryResult:
+                   prepared: Sequence["RunPreparation | None"] | None = None,
+                   refine_front: bool = False) -> DiscoveryResult:
     """Select and fit both equations on the integral form with model-based column states (module docstring).
 
     Parameters
@@ -237,13 +238,16 @@ def discover_model(runs: Sequence["Run"], derivs: Sequence["Derivatives"],
     config : DiscoveryConfig
     prepared : per run its :class:`fitting.derivatives.preparation.RunPreparation` (the frequencies and column states
         prepared once), optional: otherwise made from ``runs`` and ``derivs`` by the same rules
+    refine_front : bool
+        Refine every front point's coefficients by the output error on its supports
+        (:func:`fitting.selection.front.refined_front`; one output-error fit per point: several times the fit's cost).
 
     Returns
     -------
     DiscoveryResult
     """
     with single_blas_thread():
-        return _discover(runs, derivs, config, prepared)
+        return _discover(runs, derivs, config, prepared, refine_front)
 
 
 @dataclass(frozen=True, eq=False)
@@ -493,7 +497,7 @@ def _pareto_fronts(result: _Pass, config: DiscoveryConfig) -> dict[str, tuple[Pa
 
 
 def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: DiscoveryConfig,
-              prepared: Sequence["RunPreparation | None"] | None = None) -> DiscoveryResult:
+              prepared: Sequence["RunPreparation | None"] | None = None, refine_front: bool = False) -> DiscoveryResult:
     """Steps 1-5: set up, iterate the passes, the output error under model error, the Pareto fronts, the result."""
     t_start = time.perf_counter()
     setup = _setup(runs, derivs, config, prepared)
@@ -501,10 +505,16 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
     held_out = [HeldOutRun(dt, y[d.trim:], th[d.trim:], np.asarray(d.state[d.trim], float),
                            np.asarray(d.state[d.trim:], float), _horizon_frames(f, dt))
                 for dt, y, th, d, f in zip(setup.dts, setup.ys, setup.ths, derivs, setup.slow_freqs)]
-    front = long_time_front(result.designs, result.fronts, held_out, config.n_folds)
+    front = long_time_front(result.designs, result.fronts, held_out, config.n_folds, alpha=config.alpha,
+                            velocity_first=config.velocity_first)
     if config.max_terms is not None:
-        result = _capped(result, config.max_terms)
+        result = _capped(result, config.max_terms, front)
     oe_states = model_based or [d.state for d in derivs]
+    if refine_front and front is not None and config.output_error is not None:
+        oe_fixed = replace(config.output_error, support_tolerance=None, additions=False)
+        front = refined_front(front, lambda c: refine_output_error(
+            PolynomialModel(c), setup.dts, setup.ys, setup.ths, oe_states, setup.slow_freqs, setup.noise,
+            oe_fixed).coef, held_out)
     refined = _refine_output_error(setup, oe_states, result, config)
     coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
     choice = None
@@ -534,12 +544,14 @@ def _horizon_frames(slow_freq: float, dt: float) -> int:
     return int(round(ALONG_HORIZON_PERIODS / (slow_freq * dt))) if np.isfinite(slow_freq) and slow_freq > 0 else 0
 
 
-def _capped(result: _Pass, cap: int) -> _Pass:
-    """The last pass with each equation's support replaced by the front's point at ``cap`` terms
-    (:func:`fitting.selection.front.capped_support`), refitted on all runs."""
+def _capped(result: _Pass, cap: int, front: Front | None = None) -> _Pass:
+    """The last pass with each equation's support replaced by the front's point at ``cap`` terms (where the front
+    ordered that cap by the held-out long-time error, :meth:`fitting.selection.front.Front.supports_at`; else
+    :func:`fitting.selection.front.capped_support`), refitted on all runs."""
     coef, se, res_std, fronts = np.zeros_like(result.coef), np.zeros_like(result.se), result.res_std.copy(), []
+    at_cap = front.supports_at(cap) if front is not None else None
     for q, (path, held, sel) in enumerate(result.fronts):
-        cols = list(capped_support(path, held, sel, cap))
+        cols = list(capped_support(path, held, sel, cap) if at_cap is None else at_cap[q])
         c, e, s = fit_support(result.designs[q], cols)
         coef[q, cols], se[q, cols], res_std[q] = c, e, s
         fronts.append((path, held, cols))

@@ -34,7 +34,8 @@ def front_left_out():
     """Within the block, :func:`fitting.selection.integral_discovery.discover_model` leaves out its held-out long-time
     front (``DiscoveryResult.front`` is None): about half of a sparse discovery's time, for a record that no selection,
     coefficient, standard error or refinement depends on (it goes only into model.json's ``discovery.front`` and its
-    figure; ``--max-terms`` reads the selection passes' own paths).  For the tests that assert on the selection and the
+    figure; ``--max-terms``, which below the selection's size takes the front's point, then reads the selection
+    passes' own paths).  For the tests that assert on the selection and the
     coefficients only; test_discovery.py shows that the results are identical without it, test_front.py and
     test_scale_invariance.py test the front itself."""
     from fitting.selection import integral_discovery

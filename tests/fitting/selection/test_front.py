@@ -9,8 +9,12 @@ import pytest
 
 from fitting.cli import main
 from fitting.model import PolynomialModel
-from fitting.selection.front import (Front, FrontPoint, HeldOutRun, capped_support, long_time_error,
-                                     long_time_error_along)
+from cubedimer.folds import run_folds
+from cubedimer.terms import evaluate_library
+from fitting.model import TERMS
+from fitting.selection.front import (Front, FrontPoint, HeldOutRun, capped_support, forward_path, long_time_error,
+                                     long_time_error_along, long_time_forward, long_time_front, refined_front)
+from fitting.selection.support_search import reduced_design
 from fitting.synthetic import SyntheticConfig, generate_runs, write_dataset
 
 FAST = ["--max-evals", "20", "--workers", "1", "--quiet"]
@@ -35,8 +39,11 @@ def test_model_json_records_the_front(default_fit, truth):
     front = doc["discovery"]["front"]
     assert front["n_folds"] == 5 and front["max_terms"] is None
     points = front["points"]
-    sizes = [sum(p["n_terms"].values()) for p in points]
-    assert sizes == sorted(sizes) and len(set(sizes)) == len(sizes)  # smallest first, one model per size
+    caps = [p["max_terms"] for p in points]
+    assert caps == sorted(set(caps))  # smallest cap first, one model per cap
+    assert all(max(p["n_terms"].values()) <= p["max_terms"] for p in points)
+    # every cap evaluated maps to the point that is its model (a cap whose best model is a smaller one's: that one)
+    assert {int(c): i for c, i in front["cap_points"].items()}[points[-1]["max_terms"]] == len(points) - 1
     selected = [p for p in points if p["selected"]]
     assert len(selected) == 1
     # the selected point is the model written (before the polish, which keeps the support)
@@ -66,7 +73,8 @@ def test_max_terms_picks_the_point_at_that_size(front_dataset, default_fit, tmp_
     assert main(["fit", str(front_dataset), "--out", str(tmp_path), "--max-terms", "3", "--no-plots", *FAST]) == 0
     capped = json.loads((tmp_path / "model.json").read_text())
     assert capped["discovery"]["front"]["max_terms"] == 3
-    point = next(p for p in doc["discovery"]["front"]["points"] if p["max_terms"] == 3)
+    front = doc["discovery"]["front"]
+    point = front["points"][front["cap_points"]["3"]]  # below the selection's size the front orders the caps
     assert all(len(t) <= 3 for t in capped["equations"].values())
     assert {eq: set(t) for eq, t in capped["equations"].items()} == {eq: set(t) for eq, t in point["terms"].items()}
     assert capped["settings"]["discovery"]["selection"]["max_terms"] == 3
@@ -135,3 +143,61 @@ def test_error_along_the_runs_restarts_from_the_states(truth):
     assert long_time_error_along(slower, whole) == pytest.approx(first, rel=1e-12)
     # without states there is no error along the run
     assert np.isnan(long_time_error_along(slower, HeldOutRun(dt, r["y"], r["theta"], r["x0"])))
+
+
+# two lightly damped, weakly coupled linear oscillators: the best one-term model of each equation is its restoring
+# force (the damping alone does not oscillate), which a path that keeps the damping terms cannot reach
+W_Y, W_T = 2 * np.pi * 22.0, 2 * np.pi * 9.0
+LINEAR = {"yddot": {"y": -W_Y ** 2, "ydot": -0.3, "theta": 1e-5 * W_Y ** 2},
+          "thetaddot": {"theta": -W_T ** 2, "thetadot": -0.8, "y": 20.0 * W_T ** 2}}
+
+
+@pytest.fixture(scope="module")
+def linear_front_inputs():
+    truth = PolynomialModel.from_equations(LINEAR)
+    runs = generate_runs(truth, SyntheticConfig(n_runs=4, duration=1.5, noise_y=1e-7, noise_theta=2e-4,
+                                                missing_frames=0, seed=5))
+    dts = [float(r["t"][1] - r["t"][0]) for r in runs]
+    lib = [evaluate_library(r["state"]) for r in runs]
+    win = int(round(0.75 / 9.0 / dts[0]))  # 0.75 periods of the slower mode
+    designs = [reduced_design([r[k] for r in runs], lib, dts, [win] * 4, [0] * 4) for k in ("y", "theta")]
+    horizon = int(round(5.0 / 9.0 / dts[0]))  # ALONG_HORIZON_PERIODS of the slower mode
+    held = [HeldOutRun(dt, r["y"], r["theta"], r["x0"], r["state"], horizon) for dt, r in zip(dts, runs)]
+    idx = {t: TERMS.index(t) for t in ("y", "ydot", "theta", "thetadot")}
+    sel = [tuple(sorted(TERMS.index(t) for t in LINEAR[eq])) for eq in ("yddot", "thetaddot")]
+    # the selection's paths as the discovery makes them: elimination down to the forced damping term
+    forced_paths = [[sel[0], tuple(sorted((idx["y"], idx["ydot"]))), (idx["ydot"],)],
+                    [sel[1], tuple(sorted((idx["theta"], idx["thetadot"]))), (idx["thetadot"],)]]
+    fronts = [(p, [np.nan] * len(p), list(s)) for p, s in zip(forced_paths, sel)]
+    return truth, designs, fronts, held, idx
+
+
+def test_the_front_orders_small_sizes_by_the_long_time_error(linear_front_inputs):
+    truth, designs, fronts, held, idx = linear_front_inputs
+    restoring = ((idx["y"],), (idx["theta"],))
+    assert forward_path(designs[0], 4, 1) == [restoring[0]]  # the restoring force explains the most acceleration
+    assert long_time_forward(designs, run_folds(4, 4), held, 4, 1) == [restoring]
+    plain = long_time_front(designs, fronts, held, 4, ordered=False)
+    ordered = long_time_front(designs, fronts, held, 4)
+    one_plain, one = (next(p for p in f.points if p.max_terms == 1) for f in (plain, ordered))
+    assert one_plain.terms == {"yddot": ("ydot",), "thetaddot": ("thetadot",)}  # the forced path's one term
+    assert one.terms == {"yddot": ("y",), "thetaddot": ("theta",)}
+    # the damping alone does not oscillate: its trajectory leaves the motion (measured: it blows up, inf); the
+    # undamped oscillators follow the runs with a phase error from the missing damping and coupling (measured 0.42)
+    assert one.error < 0.8 < one_plain.error
+    assert ordered.supports_at(1) == restoring
+    assert ordered.supports_at(2) == tuple(tuple(sorted(TERMS.index(t) for t in p)) for p in
+                                           next(p for p in ordered.points if p.max_terms == 2).terms.values())
+    assert ordered.supports_at(3) is None  # at the selection's size the selection itself (capped_support)
+    assert ordered.selected is not None and ordered.selected.max_terms == 3
+
+
+def test_refined_front_keeps_a_refinement_only_where_it_predicts_better(linear_front_inputs):
+    truth, designs, fronts, held, _ = linear_front_inputs
+    front = long_time_front(designs, fronts, held, 4, caps=[3])
+    (point,) = front.points
+    exact = refined_front(front, lambda c: truth.coef, held).points[0]
+    assert exact.refined and np.array_equal(exact.coef, truth.coef)  # the truth predicts the runs better
+    worse = refined_front(front, lambda c: 1.05 * c, held).points[0]  # 5 % off every coefficient: worse
+    assert not worse.refined and np.array_equal(worse.coef, point.coef)
+    assert exact.to_json()["refined"] is True and worse.to_json()["refined"] is False
