@@ -290,8 +290,10 @@ def add_blind_parser(sub) -> None:
     p.add_argument("--no-trajectory-test", dest="trajectory_test", action="store_false",
                    help="the diagnosis does not judge the velocity coupling on the runs' whole trajectories (the "
                         "output-error fit beside the air's damping, docs/diagnosis.md); default: it does, as the "
-                        "diagnosis does (--trajectory-test, the default, is accepted)")
-    p.add_argument("--trajectory-test", dest="trajectory_test", action="store_true", help=argparse.SUPPRESS)
+                        "diagnosis does")
+    p.add_argument("--trajectory-test", dest="trajectory_test", action="store_true",
+                   help="judge the velocity coupling on the runs' whole trajectories: the default, named for scripts "
+                        "that state it")
     p.set_defaults(trajectory_test=True)
     p.add_argument("--out", required=True, help="output directory (a rerun resumes the study in it, on any executor); "
                    "on a cluster of several machines it must be a folder every worker sees at the same path")
