@@ -358,12 +358,7 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
             continue
         seen[supports] = len(points)
         cap_points.append((int(cap), len(points)))
-        models = []
-        for train, _ in folds:
-            coef = np.zeros((2, len(TERMS)))
-            for q, cols in enumerate(supports):
-                coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
-            models.append(PolynomialModel(coef))
+        models = fold_models(supports, designs, folds)
         fold_err, fold_along = held_out_fold_errors(models, folds, held_out)
         (mean, se), (along, along_se) = _fold_mean(fold_err), _fold_mean(fold_along)
         everything = range(R)
@@ -493,6 +488,18 @@ def ordered_supports(supports: tuple[tuple[int, ...], ...], cap: int, paths: Seq
     return cands[int(np.argmin([float(np.mean(s)) for s in scores]))]
 
 
+
+def fold_models(supports, designs, folds) -> list:
+    """The model on ``supports`` (per equation, column indices) fitted on each fold's training runs by least squares on
+    the integral-form ``designs``, one :class:`PolynomialModel` per fold."""
+    models = []
+    for train, _ in folds:
+        coef = np.zeros((2, len(TERMS)))
+        for q, cols in enumerate(supports):
+            coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
+        models.append(PolynomialModel(coef))
+    return models
+
 def _first_state_errors(supports: tuple[tuple[int, ...], ...], designs: Sequence[ReducedDesign],
                         folds: Sequence[tuple[list[int], list[int]]], held_out: Sequence[HeldOutRun]) -> NDArray:
     """Per coordinate (y, theta) the held-out error from the first state over the first horizon of the error along
@@ -500,13 +507,7 @@ def _first_state_errors(supports: tuple[tuple[int, ...], ...], designs: Sequence
     on ``supports`` (fitted on each fold's training runs), over the RMS motion in that horizon, mean over the folds of
     the mean over their held-out runs (inf on a blow-up).  The ordering's score: over a whole decaying run a small
     model's phase error saturates the error near 100 %, and the ranking of small models is noise."""
-    models = []
-    for train, _ in folds:
-        coef = np.zeros((2, len(TERMS)))
-        for q, cols in enumerate(supports):
-            coef[q, list(cols)] = fit_on_runs(designs[q], train, cols)
-        models.append(PolynomialModel(coef))
-    return _model_first_state_errors(models, folds, held_out)
+    return _model_first_state_errors(fold_models(supports, designs, folds), folds, held_out)
 
 
 def _model_first_state_errors(models: Sequence[PolynomialModel], folds: Sequence[tuple[list[int], list[int]]],
