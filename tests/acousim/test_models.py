@@ -16,6 +16,10 @@ from acousim.models import (ConditionError, ExperimentConditions, ForceModelType
 ROOT = Path(__file__).resolve().parents[2]
 
 
+# the velocity coupling's trajectory test (on by default; trajectory_test=False below) is not what
+# this module checks: it is checked in test_velocity_output_error.py and, end to end, in
+# test_pipeline_twin.py, and costs 10-15 CPU-s per diagnosis
+
 @pytest.fixture
 def dummy_model():
     """A registered model "stiff_gorkov": the Gor'kov model at 1.2 times the pressure amplitude (a different trap,
@@ -83,7 +87,8 @@ def test_a_new_model_option_runs_from_the_command_line_to_the_diagnosis(pressure
                                            "--pressure-factor", "1.2"])
     spec = model_spec_from_args(args)
     assert spec == ModelSpec(model.name, {option.name: 1.2})
-    d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",)),
+    d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",),
+                                              trajectory_test=False),
                          progress=False, spec=spec)
     # the diagnosis's model carries the option: at the data's nominal 3000 Pa it is the 3600-Pa trap (3000 Pa without
     # the option), and the calibration needs no further factor (1.2 without it); 2e-3: the calibration's scatter on
@@ -140,7 +145,8 @@ def test_a_new_model_runs_through_sweep_twin_and_diagnosis(dummy_model, tmp_path
     truth = simulate_dataset(TwinConfig(runs=3, duration=1.5, seed=2, model_spec=ModelSpec("stiff_gorkov")), data,
                              progress=False)
     assert truth["force_model"] == "stiff_gorkov"
-    d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",)),
+    d = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, candidates=("linear_damping",),
+                                              trajectory_test=False),
                          progress=False, spec=ModelSpec("stiff_gorkov"))
     # the data come from the model itself: the calibration finds the model's own amplitude, 1.2 x 3000 Pa (a
     # mix-up with the Gor'kov model would give 3000 Pa)

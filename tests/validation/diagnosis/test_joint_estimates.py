@@ -6,6 +6,10 @@ import pytest
 from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
 
+# the velocity coupling's trajectory test (on by default; trajectory_test=False below) is not what
+# this module checks: it is checked in test_velocity_output_error.py and, end to end, in
+# test_pipeline_twin.py, and costs 10-15 CPU-s per diagnosis
+
 def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_path):
     """8 runs of 2 s with pair scattering (kappa 15,000 1/s^2) and a hinge hardening -5e4 theta^3 that is no
     candidate.  Pair scattering fitted alone absorbs part of the hardening (measured: kappa 17,720, 18 % high);
@@ -16,7 +20,7 @@ def test_pair_scattering_beside_a_discovered_hardening_keeps_its_stiffness(tmp_p
 
     truth = write_twin_like_dataset(tmp_path / "data", TwinLikeConfig(
         runs=8, duration=2.0, seed=5, cubic_hinge=5.0e4, effects={"pair_scattering": {"kappa": 15000.0}}))
-    diag = diagnose_dataset(tmp_path / "data", DiagnoseConfig(long_time=False), progress=False)
+    diag = diagnose_dataset(tmp_path / "data", DiagnoseConfig(long_time=False, trajectory_test=False), progress=False)
     assert diag.identified == ("pair_scattering",)
     effect = diag.effects[0]
     # within 3 % (the noise of 8 short runs: the theta^3 standard error is 0.5 % of the coefficient, kappa's similar)

@@ -23,11 +23,13 @@ def fullwave_twin(tmp_path_factory):
     return out, json.loads((out / "truth.json").read_text())
 
 
+# the velocity coupling's trajectory test (on by default) is not what this module checks: it is checked in
+# test_velocity_output_error.py and, end to end, in test_pipeline_twin.py, and costs 10-15 CPU-s per diagnosis
 @pytest.fixture(scope="module")
 def fullwave_diagnosis(fullwave_twin):
     data, _ = fullwave_twin
-    return diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False), progress=False,
-                            spec=ModelSpec("fullwave"))
+    return diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False, trajectory_test=False),
+                            progress=False, spec=ModelSpec("fullwave"))
 
 
 def test_fullwave_model_calibrates_its_own_twin(fullwave_twin, fullwave_diagnosis):

@@ -8,6 +8,10 @@ from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 from validation.diagnosis.calibrate.orientation import FAR_BETTER, judge_inverted
 
 
+# the velocity coupling's trajectory test (on by default; trajectory_test=False below) is not what
+# this module checks: it is checked in test_velocity_output_error.py and, end to end, in
+# test_pipeline_twin.py, and costs 10-15 CPU-s per diagnosis
+
 def _write_upside_down(up, down):
     down.mkdir()
     shutil.copy(up / "meta.json", down / "meta.json")
@@ -36,7 +40,7 @@ def test_y_positive_down_is_named_and_not_reported_as_new_physics(tmp_path):
     truth = write_twin_like_dataset(up, TwinLikeConfig(runs=5, duration=1.5, seed=3, pressure_error=0.05,
                                                        effects={"pair_scattering": {"kappa": 15000.0}}))
     _write_upside_down(up, down)
-    diag = diagnose_dataset(down, DiagnoseConfig(long_time=False, alpha=0.05), progress=False)
+    diag = diagnose_dataset(down, DiagnoseConfig(long_time=False, alpha=0.05, trajectory_test=False), progress=False)
     (w,) = diag.data_warnings
     assert w["code"] == "y_inverted" and "y -> -y" in w["message"] and "\n" not in w["message"]
     # the trap's asymmetry: the vertical equation of the recorded (inverted) data keeps a gap far above the flipped
