@@ -159,9 +159,10 @@ def _effects(law: str, shape: dict, others: dict, names: Sequence[str], p: NDArr
     return out
 
 
-def _simulate(surrogate, pressure: float, effects: dict, starts: NDArray, dt: float, frames: int) -> NDArray:
-    """(B, frames, 2) simulated [y, theta] at the pressure amplitude ``pressure`` [Pa] (NaN where a trajectory
-    stopped)."""
+def _simulate_states(surrogate, pressure: float, effects: dict, starts: NDArray, dt: float,
+                     frames: int) -> NDArray:
+    """(B, frames, 4) simulated states [y, ydot, theta, thetadot] at the pressure amplitude ``pressure`` [Pa] (NaN
+    where a trajectory stopped, or everywhere for a trial outside the effects' physics)."""
     from acousim import DimerDynamics, EffectSet
 
     states = np.array(starts, float)
@@ -169,9 +170,14 @@ def _simulate(surrogate, pressure: float, effects: dict, starts: NDArray, dt: fl
     try:
         dynamics = DimerDynamics(surrogate.with_pressure(pressure), EffectSet.from_dict(effects))
     except ValueError:  # a trial outside the effects' physics (a negative rate) or a pressure that cannot levitate
-        return np.full((len(states), frames, 2), np.nan)
+        return np.full((len(states), frames, 4), np.nan)
     out, _, _ = dynamics.integrate_batch(states, dt * (frames - 1), dt, max_step=dt)
-    return out[:, :frames][..., [0, 2]]
+    return out[:, :frames]
+
+
+def _simulate(surrogate, pressure: float, effects: dict, starts: NDArray, dt: float, frames: int) -> NDArray:
+    """(B, frames, 2) simulated [y, theta] (:func:`_simulate_states`)."""
+    return _simulate_states(surrogate, pressure, effects, starts, dt, frames)[..., [0, 2]]
 
 
 def _step(name: str, value: float) -> float:
@@ -440,23 +446,13 @@ def damping_modulation(data: RunTrajectories, surrogate, law: str, shape: dict, 
     """The rms over every recorded frame of the coupled fit's damping-rate modulation ``(c5 thetadot + c6 ydot) y``
     [1/s] (the coupling adds ``(c5 thetadot + c6 ydot) y thetadot`` to thetaddot: a damping rate that follows the
     state), along the fit's own simulated trajectories; NaN where they cannot be simulated."""
-    from acousim import DimerDynamics, EffectSet
-
     names = [k for k in coupled.params if k != "y_offset"]
     p = np.array([coupled.params[k] for k in names])
-    states = np.array(coupled.starts, float)
-    states[:, 2] = np.clip(states[:, 2], -0.999, 0.999)
-    try:
-        dynamics = DimerDynamics(surrogate.with_pressure(p[0]),
-                                 EffectSet.from_dict(_effects(law, shape, others, names, p)))
-    except ValueError:
-        return float("nan")
-    out, _, _ = dynamics.integrate_batch(states, data.dt * (data.frames - 1), data.dt, max_step=data.dt)
+    out = _simulate_states(surrogate, coupled.params["pressure_pa"], _effects(law, shape, others, names, p),
+                           coupled.starts, data.dt, data.frames)
     y, ydot, thetadot = out[..., 0], out[..., 1], out[..., 3]
     rate = (coupled.params["c5"] * thetadot + coupled.params["c6"] * ydot) * y
-    recorded = np.zeros(rate.shape, bool)
-    for i, pos in enumerate(data.positions):
-        recorded[i, :min(len(pos), rate.shape[1])] = True
+    recorded = np.arange(rate.shape[1]) < np.array([len(pos) for pos in data.positions])[:, None]
     rate = rate[recorded & np.isfinite(rate)]
     return float(np.sqrt(np.mean(rate ** 2))) if rate.size else float("nan")
 
