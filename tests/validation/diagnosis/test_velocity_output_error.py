@@ -111,7 +111,7 @@ class _HalfwayFits:
 
     frames = 1000
 
-    def __call__(self, data, surrogate, law, shape, others, start, with_coupling, iterations, starts=None):
+    def __call__(self, data, surrogate, law, shape, others, start, with_coupling, iterations, starts=None, scales=None):
         from validation.diagnosis.identify.output_error import TrajectoryFit
 
         g = start["gamma_y"] + 0.5 * (1.0 - start["gamma_y"])

@@ -142,6 +142,18 @@ class TrajectoryFit:
     starts: NDArray[np.float64] = field(repr=False)
     #: the Gauss-Newton covariance of (c5, c6) in noise units (None without the coupling)
     coupling_cov: NDArray[np.float64] | None = field(default=None, repr=False)
+    #: the Gauss-Newton covariance of the shared parameters, in the order of :attr:`shared_names` (the runs' initial
+    #: states and the y offset marginalised; None where the normal equations were singular)
+    shared_cov: NDArray[np.float64] | None = field(default=None, repr=False)
+    shared_names: tuple[str, ...] = ()
+
+    def correlation(self, a: str, b: str) -> float:
+        """The Gauss-Newton correlation of shared parameters ``a`` and ``b`` (NaN where not fitted)."""
+        if self.shared_cov is None or a not in self.shared_names or b not in self.shared_names:
+            return float("nan")
+        i, j = self.shared_names.index(a), self.shared_names.index(b)
+        c = self.shared_cov
+        return float(c[i, j] / np.sqrt(abs(c[i, i] * c[j, j]))) if c[i, i] * c[j, j] != 0 else float("nan")
 
     @property
     def chi2_per_frame(self) -> float:
@@ -186,6 +198,16 @@ def _step(name: str, value: float) -> float:
     return SHARED_STEPS[name] if name in SHARED_STEPS else max(1e-3 * abs(value), 1e-6)
 
 
+def _predicted_drop(jtr: NDArray, step: NDArray, steps: NDArray, cov: NDArray, p: NDArray) -> float:
+    """The misfit drop the Gauss-Newton step ``step`` predicts, ``jtr . step`` [noise units] (exact for a model linear
+    in its parameters), where the Jacobian is that of the quadratic regime: every shared difference step within two
+    standard errors (:func:`_shrunk`); infinite otherwise (a step larger than that can mis-state the gradient, so the
+    step is taken and its actual drop judged)."""
+    if np.any(steps > 2.0 * _shrunk(np.full_like(steps, np.inf), cov, p)):
+        return float("inf")
+    return float(jtr @ step)
+
+
 def _shrunk(steps: NDArray, cov: NDArray, p: NDArray) -> NDArray:
     """Difference steps of the shared parameters no larger than their standard errors (the Jacobian of the quadratic
     regime), never below 1e-9 of the value."""
@@ -194,7 +216,8 @@ def _shrunk(steps: NDArray, cov: NDArray, p: NDArray) -> NDArray:
 
 
 def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, others: dict, start: dict,
-                     with_coupling: bool, iterations: int = 10, starts: NDArray | None = None) -> TrajectoryFit:
+                     with_coupling: bool, iterations: int = 10, starts: NDArray | None = None,
+                     scales: dict[str, float] | None = None) -> TrajectoryFit:
     """Gauss-Newton output-error fit of the shared rates (and c5, c6 with ``with_coupling``), a y offset and each
     run's initial state (module docstring).
 
@@ -211,6 +234,9 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
     iterations : at most this many Gauss-Newton steps; the fit stops earlier where a step lowers the misfit by
         less than :data:`CONVERGED_CHI2`
     starts : starting initial states (R, 4); default the first smoothed states
+    scales : standard errors of shared parameters by name (a previous fit's, :attr:`TrajectoryFit.std_errors`): their
+        first difference steps are no larger (:func:`_shrunk`), so that a fit started at or near an optimum can stop
+        on its first Jacobian (:func:`_predicted_drop`)
     """
     own = [f"{k}.{q}" for k, v in others.items() for q in v]
     names = ["pressure_pa", "gamma_y", "gamma_theta"] + own + (["c5", "c6"] if with_coupling else [])
@@ -224,35 +250,49 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         target[i, :len(pos)] = pos
     scale = data.noise_sd[:, None, :]
     steps = np.array([_step(nm, v) for nm, v in zip(names, p)])
+    known = np.array([(scales or {}).get(nm, np.inf) for nm in names], float)
+    steps = np.where(np.isfinite(known) & (known > 0), np.minimum(steps, np.maximum(known, 1e-9 * np.abs(p) + 1e-12)),
+                     steps)
     size = k + 1 + 4 * R
     frames = int(np.isfinite(target).sum())
 
-    def evaluate(p, offset, x0):
+    def misfit(p, offset, x0):
         """Misfit (each frame's squared residual capped at OUTLIER_NOISE_UNITS^2, so that a trial that loses frames
-        is not rewarded for it), per run, and the normal equations at (p, offset, x0)."""
-        trials = [x0] + [x0 + STATE_STEPS[j] * np.eye(4)[j] for j in range(4)]
-        sims = [_simulate(surrogate, p[0], _effects(law, shape, others, names, p), np.concatenate(trials), data.dt, n)]
-        for j in range(k):
-            q = p + steps[j] * np.eye(k)[j]
-            sims.append(_simulate(surrogate, q[0], _effects(law, shape, others, names, q), x0, data.dt, n))
-        base = sims[0][:R]
+        is not rewarded for it), per run, and what the normal equations need (the simulated frames, the residuals
+        kept) at (p, offset, x0): one simulation of the runs, all a trial step needs until it is accepted."""
+        base = _simulate(surrogate, p[0], _effects(law, shape, others, names, p), x0, data.dt, n)
         resid = (target - base - np.array([offset, 0.0])) / scale
         keep = np.isfinite(resid) & (np.abs(np.nan_to_num(resid, nan=np.inf)) < OUTLIER_NOISE_UNITS)
         capped = np.where(keep, resid ** 2, np.where(np.isfinite(target), OUTLIER_NOISE_UNITS ** 2, 0.0))
-        r = np.where(keep, resid, 0.0)
+        per_run = np.sum(capped, axis=(1, 2))
+        return float(per_run.sum()), per_run, (base, keep, np.where(keep, resid, 0.0))
+
+    def normal_equations(p, x0, at):
+        """J^T J and J^T r at (p, x0) by forward differences from the simulated frames ``at`` (:func:`misfit`'s)."""
+        base, keep, r = at
+        trials = [x0 + STATE_STEPS[j] * np.eye(4)[j] for j in range(4)]
+        moved = _simulate(surrogate, p[0], _effects(law, shape, others, names, p), np.concatenate(trials), data.dt, n)
+        sims = []
+        for j in range(k):
+            q = p + steps[j] * np.eye(k)[j]
+            sims.append(_simulate(surrogate, q[0], _effects(law, shape, others, names, q), x0, data.dt, n))
         jtj, jtr = np.zeros((size, size)), np.zeros(size)
         for i in range(R):
             cols = np.zeros((n, 2, size))
             for j in range(k):
-                cols[:, :, j] = (sims[1 + j][i] - base[i]) / steps[j] / scale[i]
+                cols[:, :, j] = (sims[j][i] - base[i]) / steps[j] / scale[i]
             cols[:, 0, k] = 1.0 / scale[i, 0, 0]
             for j in range(4):
-                cols[:, :, k + 1 + 4 * i + j] = (sims[0][(1 + j) * R + i] - base[i]) / STATE_STEPS[j] / scale[i]
+                cols[:, :, k + 1 + 4 * i + j] = (moved[j * R + i] - base[i]) / STATE_STEPS[j] / scale[i]
             a = np.nan_to_num(cols[keep[i]])
             jtj += a.T @ a
             jtr += a.T @ r[i][keep[i]]
-        per_run = np.sum(capped, axis=(1, 2))
-        return float(per_run.sum()), per_run, jtj, jtr
+        return jtj, jtr
+
+    def evaluate(p, offset, x0):
+        """:func:`misfit`, per run, and the normal equations at (p, offset, x0)."""
+        chi2, per_run, at = misfit(p, offset, x0)
+        return (chi2, per_run, *normal_equations(p, x0, at))
 
     def solve(jtj):
         try:
@@ -266,10 +306,13 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         if cov is None:
             break
         step = cov @ jtr
+        if _predicted_drop(jtr, step, steps, cov, p) < CONVERGED_CHI2:  # converged: the step would lower it less
+            break
         for _halving in range(4):  # a step that raises the misfit is halved (the model is not linear in c5, c6)
             trial = (p + step[:k], offset + step[k], x0 + step[k + 1:].reshape(R, 4))
-            got = evaluate(*trial)
-            if got[0] <= chi2:
+            tried = misfit(*trial)  # the Jacobian only where the step is taken
+            if tried[0] <= chi2:
+                got = (tried[0], tried[1], *normal_equations(trial[0], trial[2], tried[2]))
                 break
             step = 0.5 * step
         else:  # no descent along this Jacobian: once more with steps of a standard error, if that shrinks them
@@ -291,7 +334,8 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
     params = {**dict(zip(names, map(float, p))), "y_offset": offset}
     errors = {**dict(zip(names, map(float, se[:k]))), "y_offset": float(se[k])}
     cc = cov[k - 2:k, k - 2:k] if with_coupling and cov is not None else None  # c5, c6 are the last shared names
-    return TrajectoryFit(law, params, errors, chi2, frames, tuple(map(float, per_run)), x0, cc)
+    shared = cov[:k, :k].copy() if cov is not None else None
+    return TrajectoryFit(law, params, errors, chi2, frames, tuple(map(float, per_run)), x0, cc, shared, tuple(names))
 
 
 @dataclass(frozen=True)
@@ -358,15 +402,18 @@ def _converged_pair(data: RunTrajectories, surrogate, law: str, shape: dict, oth
     where that lowers its misfit, the coupled fit is made again from the new null (c5 = c6 = 0, where it nests the
     null, so that it cannot end above it) and the better of the two coupled fits kept."""
     start, own = _restart(null, others, True)
-    coupled = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts)
+    coupled = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts,
+                               scales=null.std_errors)
     for _ in range(ALTERNATIONS):
         start, own = _restart(coupled, others, False)
-        again = fit_trajectories(data, surrogate, law, shape, own, start, False, iterations, starts=coupled.starts)
+        again = fit_trajectories(data, surrogate, law, shape, own, start, False, iterations, starts=coupled.starts,
+                                 scales=coupled.std_errors)
         if again.chi2 >= null.chi2 - CONVERGED_CHI2:
             break
         null = again
         start, own = _restart(null, others, True)
-        refit = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts)
+        refit = fit_trajectories(data, surrogate, law, shape, own, start, True, iterations, starts=null.starts,
+                                 scales=coupled.std_errors)
         if refit.chi2 >= coupled.chi2 - CONVERGED_CHI2 and coupled.chi2 <= null.chi2:
             break
         coupled = refit if refit.chi2 < coupled.chi2 else coupled
