@@ -162,3 +162,21 @@ def test_wald_statistic_of_the_coupling(c5, c6, rho, expected):
                         np.array([[1.0, rho], [rho, 1.0]]))
     assert _wald(fit) == pytest.approx(expected, rel=1e-12)
     assert np.isnan(_wald(TrajectoryFit("linear_damping", {"c5": c5, "c6": c6}, {}, 0.0, 1, (0.0,), np.zeros((1, 4)))))
+
+
+def test_the_predicted_drop_is_a_linear_models_actual_drop():
+    """A fit's last step (predicted and found to lower the misfit by less than the convergence threshold) is taken
+    without the Jacobian at its end: for a model linear in its parameters, the prediction ``jtr . step`` is exactly
+    the drop the step makes (|r|^2 - |r - J step|^2 at step = (J^T J)^-1 J^T r), to rounding (1e-9 relative).  A
+    difference step larger than two standard errors (the Jacobian outside the quadratic regime) predicts nothing."""
+    from validation.diagnosis.identify.output_error import _predicted_drop
+
+    rng = np.random.default_rng(16011)
+    jac, r = rng.normal(size=(400, 3)), rng.normal(size=400) + 0.3
+    cov = np.linalg.inv(jac.T @ jac)
+    jtr = jac.T @ r
+    step = cov @ jtr
+    se = np.sqrt(np.diag(cov))
+    actual = r @ r - (r - jac @ step) @ (r - jac @ step)
+    assert _predicted_drop(jtr, step, se, cov, np.ones(3)) == pytest.approx(actual, rel=1e-9)
+    assert _predicted_drop(jtr, step, 2.5 * se, cov, np.ones(3)) == np.inf

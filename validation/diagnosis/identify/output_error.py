@@ -23,13 +23,20 @@ dimer's own computed shape of the hinge damping, ``S(theta)``, the one implement
 damping; the one with the smaller misfit is the null model.  The velocity coupling's c5 and c6 are then added and the
 whole model refitted (Gauss-Newton, forward-difference sensitivities, all runs' simulations in one compiled batch).
 Both fits are converged maxima of the likelihood: each runs until a step lowers its misfit by less than
-:data:`CONVERGED_CHI2`, and the null is refitted from the coupled fit's point with the coupling removed (then the coupled
+:data:`CONVERGED_CHI2` (a step the linearised model predicts to lower it less, :func:`_predicted_drop`, is taken
+without the Jacobian at its end), and the null is refitted from the coupled fit's point with the coupling removed (then the coupled
 fit from the null's new point) until neither improves (:func:`_converged_pair`).  Otherwise the coupled fit, which
 starts where the null stopped, completes the null's unfinished descent and the test counts it as the coupling's gain:
 on the paper-like preset (whose 12 runs of 4 s resolve c5 to 0.04 1/m) that named couplings of c5 = 0.1-3 1/m.  The
 statistic is the smaller of the likelihood ratio and the Wald statistic of (c5, c6) at the coupled fit: the two agree
 where both fits are converged in one basin, and a ratio the coupling's size in standard errors does not back is a null
 left in another basin (:func:`_wald`).
+
+Cost: a Jacobian is ``k + 4`` simulations of every run (k shared parameters, 4 initial-state components) beside the
+run's own; a trial step simulates only the runs (its Jacobian is made where the step is taken), a refit's
+difference steps start at the previous fit's standard errors, and the last step (predicted and found to lower the
+misfit by less than the threshold) is taken without the Jacobian at its end: the fit's covariance is that of the
+point before, within a fraction of a standard error.
 
 The candidate is judged in noise units: the drop of the misfit, ``Delta chi^2 = chi^2_null - chi^2_coupled`` (a
 likelihood ratio for white Gaussian noise; divided by the coupled model's misfit per frame where that exceeds 1, so
@@ -201,8 +208,9 @@ def _step(name: str, value: float) -> float:
 def _predicted_drop(jtr: NDArray, step: NDArray, steps: NDArray, cov: NDArray, p: NDArray) -> float:
     """The misfit drop the Gauss-Newton step ``step`` predicts, ``jtr . step`` [noise units] (exact for a model linear
     in its parameters), where the Jacobian is that of the quadratic regime: every shared difference step within two
-    standard errors (:func:`_shrunk`); infinite otherwise (a step larger than that can mis-state the gradient, so the
-    step is taken and its actual drop judged)."""
+    standard errors (:func:`_shrunk`); infinite otherwise (a step larger than that can mis-state the gradient).  A step
+    predicted and found to lower the misfit by less than :data:`CONVERGED_CHI2` is the fit's last: it is taken, and
+    the Jacobian at its end (k + 4 simulations of every run) is not made."""
     if np.any(steps > 2.0 * _shrunk(np.full_like(steps, np.inf), cov, p)):
         return float("inf")
     return float(jtr @ step)
@@ -213,6 +221,76 @@ def _shrunk(steps: NDArray, cov: NDArray, p: NDArray) -> NDArray:
     regime), never below 1e-9 of the value."""
     k = len(steps)
     return np.minimum(steps, np.maximum(np.sqrt(np.abs(np.diag(cov)[:k])), 1e-9 * np.abs(p) + 1e-12))
+
+
+@dataclass(frozen=True, eq=False)
+class _Residuals:
+    """The runs' residuals in noise units at a point of the fit (shared parameters ``p`` in the order of ``names``,
+    the y offset, the initial states ``x0``), and their normal equations by forward differences."""
+
+    data: RunTrajectories
+    surrogate: object
+    law: str
+    shape: dict
+    others: dict
+    names: list[str]
+    target: NDArray[np.float64]  #: (R, frames, 2) recorded [y, theta], NaN past a run's end
+    scale: NDArray[np.float64]  #: (R, 1, 2) tracking noise
+
+    def simulate(self, p: NDArray, x0: NDArray) -> NDArray:
+        """(B, frames, 2) simulated [y, theta] from the initial states ``x0`` with shared parameters ``p``."""
+        effects = _effects(self.law, self.shape, self.others, self.names, p)
+        return _simulate(self.surrogate, p[0], effects, x0, self.data.dt, self.data.frames)
+
+    def misfit(self, p: NDArray, offset: float, x0: NDArray) -> tuple[float, NDArray, tuple]:
+        """Misfit (each frame's squared residual capped at OUTLIER_NOISE_UNITS^2, so that a trial that loses frames
+        is not rewarded for it), per run, and what the normal equations need (the simulated frames, the residuals
+        kept) at (p, offset, x0): one simulation of the runs, all a trial step needs until it is accepted."""
+        base = self.simulate(p, x0)
+        resid = (self.target - base - np.array([offset, 0.0])) / self.scale
+        keep = np.isfinite(resid) & (np.abs(np.nan_to_num(resid, nan=np.inf)) < OUTLIER_NOISE_UNITS)
+        capped = np.where(keep, resid ** 2, np.where(np.isfinite(self.target), OUTLIER_NOISE_UNITS ** 2, 0.0))
+        per_run = np.sum(capped, axis=(1, 2))
+        return float(per_run.sum()), per_run, (base, keep, np.where(keep, resid, 0.0))
+
+    def normal_equations(self, p: NDArray, x0: NDArray, at: tuple, steps: NDArray) -> tuple[NDArray, NDArray]:
+        """J^T J and J^T r at (p, x0) by forward differences (``steps`` of the shared parameters,
+        :data:`STATE_STEPS` of the initial states) from the simulated frames ``at`` (:meth:`misfit`'s)."""
+        base, keep, r = at
+        R, n, k = len(x0), self.data.frames, len(p)
+        size = k + 1 + 4 * R
+        moved = self.simulate(p, np.concatenate([x0 + STATE_STEPS[j] * np.eye(4)[j] for j in range(4)]))
+        sims = [self.simulate(p + steps[j] * np.eye(k)[j], x0) for j in range(k)]
+        jtj, jtr = np.zeros((size, size)), np.zeros(size)
+        scale = self.scale
+        for i in range(R):
+            cols = np.zeros((n, 2, size))
+            for j in range(k):
+                cols[:, :, j] = (sims[j][i] - base[i]) / steps[j] / scale[i]
+            cols[:, 0, k] = 1.0 / scale[i, 0, 0]
+            for j in range(4):
+                cols[:, :, k + 1 + 4 * i + j] = (moved[j * R + i] - base[i]) / STATE_STEPS[j] / scale[i]
+            a = np.nan_to_num(cols[keep[i]])
+            jtj += a.T @ a
+            jtr += a.T @ r[i][keep[i]]
+        return jtj, jtr
+
+
+def _inverse(jtj: NDArray) -> NDArray | None:
+    """The Gauss-Newton covariance (J^T J)^-1 in noise units; None where singular."""
+    try:
+        return np.linalg.inv(jtj + 1e-12 * np.diag(np.diag(jtj)))
+    except np.linalg.LinAlgError:
+        return None
+
+
+def _first_steps(names: Sequence[str], p: NDArray, scales: dict[str, float] | None) -> NDArray:
+    """The first difference steps of the shared parameters: :func:`_step`, no larger than ``scales`` (standard
+    errors by name) where given."""
+    steps = np.array([_step(nm, v) for nm, v in zip(names, p)])
+    known = np.array([(scales or {}).get(nm, np.inf) for nm in names], float)
+    return np.where(np.isfinite(known) & (known > 0), np.minimum(steps, np.maximum(known, 1e-9 * np.abs(p) + 1e-12)),
+                    steps)
 
 
 def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, others: dict, start: dict,
@@ -244,75 +322,33 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
     p = np.array([float(values.get(n, 0.0)) for n in names])
     offset = float(start.get("y_offset", 0.0))
     x0 = np.array(data.starts if starts is None else starts, float)
-    R, n, k = len(data.positions), data.frames, len(names)
-    target = np.full((R, n, 2), np.nan)
+    R, k = len(data.positions), len(names)
+    target = np.full((R, data.frames, 2), np.nan)
     for i, pos in enumerate(data.positions):
         target[i, :len(pos)] = pos
-    scale = data.noise_sd[:, None, :]
-    steps = np.array([_step(nm, v) for nm, v in zip(names, p)])
-    known = np.array([(scales or {}).get(nm, np.inf) for nm in names], float)
-    steps = np.where(np.isfinite(known) & (known > 0), np.minimum(steps, np.maximum(known, 1e-9 * np.abs(p) + 1e-12)),
-                     steps)
+    res = _Residuals(data, surrogate, law, shape, others, names, target, data.noise_sd[:, None, :])
+    steps = _first_steps(names, p, scales)
     size = k + 1 + 4 * R
     frames = int(np.isfinite(target).sum())
 
-    def misfit(p, offset, x0):
-        """Misfit (each frame's squared residual capped at OUTLIER_NOISE_UNITS^2, so that a trial that loses frames
-        is not rewarded for it), per run, and what the normal equations need (the simulated frames, the residuals
-        kept) at (p, offset, x0): one simulation of the runs, all a trial step needs until it is accepted."""
-        base = _simulate(surrogate, p[0], _effects(law, shape, others, names, p), x0, data.dt, n)
-        resid = (target - base - np.array([offset, 0.0])) / scale
-        keep = np.isfinite(resid) & (np.abs(np.nan_to_num(resid, nan=np.inf)) < OUTLIER_NOISE_UNITS)
-        capped = np.where(keep, resid ** 2, np.where(np.isfinite(target), OUTLIER_NOISE_UNITS ** 2, 0.0))
-        per_run = np.sum(capped, axis=(1, 2))
-        return float(per_run.sum()), per_run, (base, keep, np.where(keep, resid, 0.0))
-
-    def normal_equations(p, x0, at):
-        """J^T J and J^T r at (p, x0) by forward differences from the simulated frames ``at`` (:func:`misfit`'s)."""
-        base, keep, r = at
-        trials = [x0 + STATE_STEPS[j] * np.eye(4)[j] for j in range(4)]
-        moved = _simulate(surrogate, p[0], _effects(law, shape, others, names, p), np.concatenate(trials), data.dt, n)
-        sims = []
-        for j in range(k):
-            q = p + steps[j] * np.eye(k)[j]
-            sims.append(_simulate(surrogate, q[0], _effects(law, shape, others, names, q), x0, data.dt, n))
-        jtj, jtr = np.zeros((size, size)), np.zeros(size)
-        for i in range(R):
-            cols = np.zeros((n, 2, size))
-            for j in range(k):
-                cols[:, :, j] = (sims[j][i] - base[i]) / steps[j] / scale[i]
-            cols[:, 0, k] = 1.0 / scale[i, 0, 0]
-            for j in range(4):
-                cols[:, :, k + 1 + 4 * i + j] = (moved[j * R + i] - base[i]) / STATE_STEPS[j] / scale[i]
-            a = np.nan_to_num(cols[keep[i]])
-            jtj += a.T @ a
-            jtr += a.T @ r[i][keep[i]]
-        return jtj, jtr
-
     def evaluate(p, offset, x0):
-        """:func:`misfit`, per run, and the normal equations at (p, offset, x0)."""
-        chi2, per_run, at = misfit(p, offset, x0)
-        return (chi2, per_run, *normal_equations(p, x0, at))
-
-    def solve(jtj):
-        try:
-            return np.linalg.inv(jtj + 1e-12 * np.diag(np.diag(jtj)))
-        except np.linalg.LinAlgError:
-            return None
+        """:meth:`_Residuals.misfit`, per run, and the normal equations at (p, offset, x0)."""
+        chi2, per_run, at = res.misfit(p, offset, x0)
+        return (chi2, per_run, *res.normal_equations(p, x0, at, steps))
 
     chi2, per_run, jtj, jtr = evaluate(p, offset, x0)
-    cov = solve(jtj)
+    cov = _inverse(jtj)
     for _ in range(iterations):
         if cov is None:
             break
         step = cov @ jtr
-        if _predicted_drop(jtr, step, steps, cov, p) < CONVERGED_CHI2:  # converged: the step would lower it less
-            break
+        last = _predicted_drop(jtr, step, steps, cov, p) < CONVERGED_CHI2  # predicted to be the last step
         for _halving in range(4):  # a step that raises the misfit is halved (the model is not linear in c5, c6)
             trial = (p + step[:k], offset + step[k], x0 + step[k + 1:].reshape(R, 4))
-            tried = misfit(*trial)  # the Jacobian only where the step is taken
+            tried = res.misfit(*trial)  # the Jacobian only where the step is taken, and not after the last
             if tried[0] <= chi2:
-                got = (tried[0], tried[1], *normal_equations(trial[0], trial[2], tried[2]))
+                got = None if last and chi2 - tried[0] < CONVERGED_CHI2 else (
+                    tried[0], tried[1], *res.normal_equations(trial[0], trial[2], tried[2], steps))
                 break
             step = 0.5 * step
         else:  # no descent along this Jacobian: once more with steps of a standard error, if that shrinks them
@@ -321,11 +357,14 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
                 break
             steps = smaller
             chi2, per_run, jtj, jtr = evaluate(p, offset, x0)
-            cov = solve(jtj)
+            cov = _inverse(jtj)
             continue
+        if got is None:  # converged as predicted: the covariance of the point before, a fraction of an error away
+            (p, offset, x0), chi2, per_run = trial, tried[0], tried[1]
+            break
         drop = chi2 - got[0]
         (p, offset, x0), (chi2, per_run, jtj, jtr) = trial, got
-        cov = solve(jtj)
+        cov = _inverse(jtj)
         if cov is not None:
             steps = _shrunk(steps, cov, p)
         if drop < CONVERGED_CHI2:  # converged: a further step would change the test's statistic by less
