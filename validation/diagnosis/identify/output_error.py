@@ -313,8 +313,9 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         less than :data:`CONVERGED_CHI2`
     starts : starting initial states (R, 4); default the first smoothed states
     scales : standard errors of shared parameters by name (a previous fit's, :attr:`TrajectoryFit.std_errors`): their
-        first difference steps are no larger (:func:`_shrunk`), so that a fit started at or near an optimum can stop
-        on its first Jacobian (:func:`_predicted_drop`)
+        first difference steps are no larger (:func:`_first_steps`), so that the Jacobian of a fit started at or near
+        an optimum is that of the quadratic regime from the start and its last step is recognised
+        (:func:`_predicted_drop`)
     """
     own = [f"{k}.{q}" for k, v in others.items() for q in v]
     names = ["pressure_pa", "gamma_y", "gamma_theta"] + own + (["c5", "c6"] if with_coupling else [])
