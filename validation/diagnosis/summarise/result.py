@@ -27,9 +27,9 @@ REJECTIONS = {
     "removed_by_backward_check": "improved held-out runs when added, but not given the other effects",
     "replaced_by_discovered_terms": "not needed once the discovered library terms are fitted",
     "withheld": "the calibration equation stays unexplained, so no cause is named",
-    "not_shrinking_gap": "improved held-out runs, but adding it raises the gap beyond its error (the gaps without "
-                         "and with it are given, and the change with its standard error over runs), so it is not "
-                         "named as a cause",
+    "not_shrinking_gap": "improved held-out runs, but adding it to the model's other effects raises the gap beyond "
+                         "its error (the gaps without and with it are given, and the change with its standard error "
+                         "over runs), so it is not named as a cause",
     "non_physical_sign": "a parameter fitted with a sign its physics excludes (a negative damping rate, drag "
                          "coefficient or scattering stiffness)",
     "no_cavity_mode": "the cavity's lag gain has the sign of its quasi-static gain, beyond its 95 % interval: no "
@@ -79,6 +79,11 @@ class EffectVerdict:
     gap_change, gap_change_std_error : the change of the scalar gap its addition causes (``gap_after`` minus the gap
         with the model's effects before it; the model's effects only) and its standard error over runs, from the
         runs' paired changes (None with fewer than 3 runs, or in a diagnosis.json written before the key)
+    gap_without_given_others, gap_change_given_others, gap_change_given_others_std_error : the scalar gap of the
+        final model refitted without it (the model's other effects), the change its addition to them causes (the
+        final model's gap minus that) and the change's standard error over runs; the rule ``not_shrinking_gap`` and
+        the report judge this change (in the order added, an early effect is judged against a model that still
+        lacks the later ones); None in a diagnosis.json written before the keys
     """
 
     name: str
@@ -102,6 +107,9 @@ class EffectVerdict:
     derived: Mapping[str, ParameterInterval] | None = None
     gap_change: float | None = None
     gap_change_std_error: float | None = None
+    gap_without_given_others: float | None = None
+    gap_change_given_others: float | None = None
+    gap_change_given_others_std_error: float | None = None
 
     def __post_init__(self) -> None:
         if self.status is None:  # from the verdict's flags: a model effect is named or stands for a pair
@@ -163,6 +171,10 @@ class EffectVerdict:
                 out["params_without_discovered_terms"] = dict(self.params_without_discovered_terms)
             if self.gap_change is not None:
                 out.update({"gap_change": self.gap_change, "gap_change_std_error": self.gap_change_std_error})
+            if self.gap_change_given_others is not None:
+                out.update({"gap_without_given_others": self.gap_without_given_others,
+                            "gap_change_given_others": self.gap_change_given_others,
+                            "gap_change_given_others_std_error": self.gap_change_given_others_std_error})
         else:
             out["note"] = self.note
             if self.p_value_given_others is not None:
@@ -191,7 +203,10 @@ class EffectVerdict:
                    status=status, rejected_because=tuple(doc.get("rejected_because", ())),
                    uncertainty=None if unc is None else {p: ParameterInterval.from_dict(v) for p, v in unc.items()},
                    derived=None if der is None else {p: ParameterInterval.from_dict(v) for p, v in der.items()},
-                   gap_change=doc.get("gap_change"), gap_change_std_error=doc.get("gap_change_std_error"))
+                   gap_change=doc.get("gap_change"), gap_change_std_error=doc.get("gap_change_std_error"),
+                   gap_without_given_others=doc.get("gap_without_given_others"),
+                   gap_change_given_others=doc.get("gap_change_given_others"),
+                   gap_change_given_others_std_error=doc.get("gap_change_given_others_std_error"))
 
 
 @dataclass(frozen=True, eq=False)

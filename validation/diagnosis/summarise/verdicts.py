@@ -18,7 +18,7 @@ from .result import REJECTIONS, EffectVerdict
 from .uncertainty import ParameterInterval
 
 __all__ = ["ranked_effects", "non_physical_parameters", "gap_without", "not_shrinking", "gap_change",
-           "gap_rises", "gap_change_detail", "GAP_RISE_SIGMAS", "MIN_RUNS_FOR_GAP_ERROR"]
+           "gap_rise", "gap_rises", "gap_change_detail", "GAP_RISE_SIGMAS", "MIN_RUNS_FOR_GAP_ERROR"]
 
 #: A named effect whose addition raises the gap by more than this many standard errors of the rise is rejected
 #: (``not_shrinking_gap``): one-sided, about the 2.5 % level of a normal rise (3.5 % with Student's t on 11 degrees of
@@ -75,6 +75,8 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
                                    per_run[i], per_run[i + 1], final, (uncertainty or {}).get(identified[i]),
                                    (derived or {}).get(identified[i]))
                      for i in range(len(identified))]
+    model_effects = [replace(e, **_change_given_others(problem, identified, i, per_run))
+                     for i, e in enumerate(model_effects)]
     # an effect named on the whole trajectories (the velocity coupling's output-error test) is judged there, not on
     # the gap of the windows that could not see it
     by_trajectory = {n for n in identified if n in ident.identified
@@ -137,26 +139,55 @@ def gap_change(per_before: NDArray, per_after: NDArray) -> tuple[float, float | 
     return float(np.mean(d)), std_error
 
 
-def gap_rises(effect: EffectVerdict, before: float) -> bool:
-    """Whether adding ``effect`` to a model whose gap was ``before`` raises the gap: by more than
-    :data:`GAP_RISE_SIGMAS` standard errors of the rise where the verdict carries one, by anything at all where it
-    does not (too few runs, or a diagnosis.json written before the rise carried its error)."""
-    if effect.gap_after < before:
-        return False
-    if effect.gap_change_std_error is None:
-        return True
+def _change_given_others(problem: DiagnosisProblem, identified: list[str], i: int,
+                         per_run: Sequence[NDArray]) -> dict:
+    """The ``gap_*_given_others`` fields of the model's ``i``-th effect: the final model's per-run gaps
+    (``per_run[-1]``) against those of the model refitted without it (the calibrated simulation's for a model of one
+    effect; the cumulative fit before it for the last one added), paired run by run."""
+    if i == len(identified) - 1:
+        per_others = per_run[-2]
+    else:
+        per_others = fit_gaps(problem.runs, fit_gap_model(problem, identified[:i] + identified[i + 1:]))
+    change, std_error = gap_change(per_others, per_run[-1])
+    return {"gap_without_given_others": scalar_gap(per_others), "gap_change_given_others": change,
+            "gap_change_given_others_std_error": std_error}
+
+
+def gap_rise(effect: EffectVerdict, before: float) -> tuple[float, float, float, float | None]:
+    """(the gap without ``effect``, the gap with it, the change, its standard error or None) of the effect's addition,
+    as the rule ``not_shrinking_gap`` judges it: given the model's other effects where the verdict carries it (the
+    final model refitted without it), else in the order added, to a model whose gap was ``before`` (a diagnosis.json
+    written before the given-others keys)."""
+    if effect.gap_change_given_others is not None and effect.gap_without_given_others is not None:
+        without = effect.gap_without_given_others
+        return (without, without + effect.gap_change_given_others, effect.gap_change_given_others,
+                effect.gap_change_given_others_std_error)
     change = effect.gap_change if effect.gap_change is not None else effect.gap_after - before
-    return change > GAP_RISE_SIGMAS * effect.gap_change_std_error
+    return before, effect.gap_after, change, effect.gap_change_std_error
+
+
+def gap_rises(effect: EffectVerdict, before: float) -> bool:
+    """Whether adding ``effect`` raises the gap (:func:`gap_rise`: given the model's other effects, or to a model
+    whose gap was ``before``): by more than :data:`GAP_RISE_SIGMAS` standard errors of the rise where the verdict
+    carries one, by anything at all where it does not (too few runs, or a diagnosis.json written before the rise
+    carried its error)."""
+    without, with_it, change, error = gap_rise(effect, before)
+    if with_it < without:
+        return False
+    if error is None:
+        return True
+    return change > GAP_RISE_SIGMAS * error
 
 
 def gap_change_detail(effect: EffectVerdict, before: float) -> str:
-    """Both gaps and, where the verdict carries its error, the relative change with it:
-    ``"0.002293 -> 0.002329, +1.6 +- 2.0 %"``."""
-    text = f"{before:.4g} -> {effect.gap_after:.4g}"
-    if effect.gap_change_std_error is None or not before > 0:
+    """Both gaps and, where the verdict carries its error, the relative change with it (:func:`gap_rise`):
+    ``"given the other effects 0.002293 -> 0.002329, +1.6 +- 2.0 %"``."""
+    without, with_it, change, error = gap_rise(effect, before)
+    given = "given the other effects " if effect.gap_change_given_others is not None else ""
+    text = f"{given}{without:.4g} -> {with_it:.4g}"
+    if error is None or not without > 0:
         return text
-    change = effect.gap_change if effect.gap_change is not None else effect.gap_after - before
-    change, error = 100 * change / before, 100 * effect.gap_change_std_error / before
+    change, error = 100 * change / without, 100 * error / without
     # the error to two significant digits (at least one decimal), the change to the same decimals
     decimals = int(min(4, max(1, 1 - np.floor(np.log10(error))))) if error > 0 else 1
     return text + f", {change:+.{decimals}f} +- {error:.{decimals}f} %"

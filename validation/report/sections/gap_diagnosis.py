@@ -116,7 +116,7 @@ def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
     """For a model effect whose addition raises the gap beyond its error, what it is, with the two gaps and the
     change with its standard error; else ``""``.  A diagnosis rejects such an effect (code ``not_shrinking_gap``); one
     written before that rule named it, and is read the same way (any rise, where the change carries no error)."""
-    from ...diagnosis.summarise.verdicts import gap_change_detail, gap_rises
+    from ...diagnosis.summarise.verdicts import gap_change_detail, gap_rise, gap_rises
     from ...diagnosis.summarise.verdicts import not_shrinking as rejected_for_it
 
     if not effect.significant or not (effect.named or rejected_for_it(effect)):
@@ -124,7 +124,8 @@ def not_shrinking(diagnosis: "Diagnosis", effect: "EffectVerdict") -> str:
     before = gap_without(diagnosis, effect)
     if not rejected_for_it(effect) and not gap_rises(effect, before):
         return ""
-    how = "does not shrink the gap" if effect.gap_change_std_error is None else "raises the gap beyond its error"
+    how = ("does not shrink the gap" if gap_rise(effect, before)[3] is None
+           else "raises the gap beyond its error")
     return f"not named: it improved held-out runs, but adding it {how} ({gap_change_detail(effect, before)})"
 
 
@@ -132,12 +133,13 @@ def unchanged_within_error(diagnosis: "Diagnosis", effect: "EffectVerdict") -> s
     """For a model effect whose addition leaves the gap higher, but by less than the rise's error allows to tell from
     none (it stays named), what it does to the gap, with both gaps and the change with its standard error; else
     ``""`` (the gap shrinks, or the effect is not named for the rise: :func:`not_shrinking`)."""
-    from ...diagnosis.summarise.verdicts import gap_change_detail
+    from ...diagnosis.summarise.verdicts import gap_change_detail, gap_rise
 
     if not effect.significant or effect.rejected or not_shrinking(diagnosis, effect):
         return ""
     before = gap_without(diagnosis, effect)
-    if effect.gap_after < before or effect.gap_change_std_error is None:
+    without, with_it, _, error = gap_rise(effect, before)
+    if with_it < without or error is None:
         return ""
     return f"leaves the gap unchanged within its error ({gap_change_detail(effect, before)})"
 
