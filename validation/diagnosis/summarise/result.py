@@ -35,6 +35,10 @@ REJECTIONS = {
     "no_cavity_mode": "the cavity's lag gain has the sign of its quasi-static gain, beyond its 95 % interval: no "
                       "cavity mode has such gains (a resonator's have opposite signs at every detuning), so it is not "
                       "named as a cause",
+    "within_cavity_response": "pair scattering beside the named cavity, with a hinge stiffness within the cavity's own "
+                              "modulation of the hinge's acoustic stiffness over the data (max |s - 1| K): the data "
+                              "cannot tell it from what the cavity's columns leave of its response, so it is not "
+                              "named as a cause",
 }
 
 
