@@ -66,7 +66,11 @@ PRESSURE_MODEL_ERROR = 3.0e-4
 #: pair scattering's y-theta coupling (3-29 % in the first studies, up to 6 % in 9611-9613) or a cavity's; c_theta, the
 #: hinge's drag, 9.6 % off (median) with errors up to 5.7 of its jackknife errors (its cause not separated; the
 #: air's hinge damping, which linear damping beside it does not describe exactly, acts on the same rate); the cavity's
-#: expansion (Q and x 4-8 % low, and x weakly determined beside the air's damping: 7 cases only).  Velocity coupling
+#: split of the damping of y from the linear damping beside it (its Q and x, from the lag gain) and its static gain's
+#: offset (its quasi-static response, 0.1-11 % off): set with the rules that give Q and x only where the lag is
+#: resolved (:data:`MAX_MODE_HALF_WIDTH`, :mod:`~validation.diagnosis.summarise.cavity_verdicts`), on the 15 first
+#: cases of a blind study whose every case draws the resonator (seed 15001: Q 7 determined, x 4, the quasi-static
+#: response 14, this one from the gains' errors alone, a sufficient condition).  Velocity coupling
 #: beside a damping takes its estimates and Gauss-Newton errors from the whole trajectories
 #: (validation.diagnosis.identify.output_error): on 16 tuning twin data sets with the air's damping
 #: (docs/scripts/velocity_coupling_fixed_set.py, seeds 4242 and 9090) their intervals held c6 in 16 and c5 in 14
