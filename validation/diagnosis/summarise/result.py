@@ -78,8 +78,8 @@ class EffectVerdict:
     rejected_because : ``({"code", "reason"}, ...)``, the codes of :data:`REJECTIONS` (empty unless rejected)
     uncertainty : per parameter, the standard error and 95 % interval
         (:class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval`; the model's effects only)
-    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor`` and
-        ``detuning_half_widths`` from its gains)
+    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor``,
+        ``detuning_half_widths`` from its gains and ``quasi_static_response`` from its static gain)
     gap_change, gap_change_std_error : the change of the scalar gap its addition causes (``gap_after`` minus the gap
         with the model's effects before it; the model's effects only) and its standard error over runs, from the
         runs' paired changes (None with fewer than 3 runs, or in a diagnosis.json written before the key)
