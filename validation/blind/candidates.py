@@ -224,9 +224,13 @@ def candidate_truth(effects: dict, resonator: dict | None = None) -> dict:
     """The true effects as the candidates describe them: the twin's ``air_damping`` (its computed drag,
     ``-gamma_y ydot`` and ``-gamma_theta S(theta) thetadot`` with S(0) = 1) is ``linear_damping`` at its rates, added
     to a drawn linear damping's; the twin's ``resonator`` (truth.json) is ``cavity_lag`` with its Q and detuning."""
+    from ..diagnosis.prepare.cavity_lag import quasi_static_response
+
     out = {k: dict(v) for k, v in effects.items() if k != "air_damping"}
     if resonator:  # the twin's resonator (truth.json ``resonator``), as the candidate names its mode
         out[RESONATOR] = {p: float(resonator[p]) for p in RESONATOR_STRENGTHS}
+        # the combination of Q and x its quasi-static gain alone gives (the diagnosis's derived quantity)
+        out[RESONATOR]["quasi_static_response"] = quasi_static_response(*(out[RESONATOR][p] for p in RESONATOR_STRENGTHS))
     air = effects.get("air_damping")
     if air:
         lin = out.setdefault("linear_damping", {"gamma_y": 0.0, "gamma_theta": 0.0})

@@ -17,7 +17,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 from acousim.models import ModelSpec
 from cubedimer.config_checks import check_choices, check_fraction, check_positive, check_whole
@@ -141,23 +141,35 @@ class DiagnosisStart:
     spec: ModelSpec
     conditions: object  #: the experiment conditions of meta.json with the spec's options
     model: object  #: the spec's static model, parameters to be calibrated at their starting values
+    #: what was left out of the start of every run for the cavity's ring-up [s] (0: nothing; :func:`start_diagnosis`)
+    ring_up_left_out: float = 0.0
 
 
 def start_diagnosis(data: "Dataset | PreparedDataset", spec: ModelSpec = ModelSpec(), alpha: float = 0.01,
-                    smoothing: "SmoothingConfig | None" = None) -> DiagnosisStart:
+                    smoothing: "SmoothingConfig | None" = None, candidates: Sequence[str] = ()) -> DiagnosisStart:
     """Check a data set for a diagnosis, once, before anything long: refuse a model that does not fit the experiment
     (a generic two-coordinate set, a dimer outside the full-wave family) and too few runs (:func:`check_enough_runs`
     at ``alpha``); then the runs are prepared once (:func:`fitting.derivatives.preparation.prepare_dataset` with
-    ``smoothing``, default :class:`~fitting.derivatives.savitzky_golay.SmoothingConfig`'s), unless ``data`` is
-    prepared already.  Runs whose hinge ended folded are left out."""
+    ``smoothing``, default :class:`~fitting.derivatives.savitzky_golay.SmoothingConfig`'s, or a prepared ``data``'s
+    own), unless ``data`` is prepared already and nothing is left out of it.  Runs whose hinge ended folded are left
+    out; with ``cavity_lag`` among the ``candidates`` the diagnosis will try, so is the first
+    :data:`~validation.diagnosis.prepare.cavity_lag.RING_UP_S` of every run (the cavity's ring-up after the field drop,
+    :func:`~validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`), before the preparation: whatever reads the
+    start (the diagnosis, and the report's fit) sees the same runs."""
     from cubedimer.system import require_levitated_dimer
     from fitting.derivatives.preparation import PreparedDataset, prepare_dataset
     from fitting.derivatives.savitzky_golay import SmoothingConfig
 
     from ..simulation import conditions_from_meta
+    from .prepare.cavity_lag import RING_UP_S, leave_out_ring_up
 
     prepared = data if isinstance(data, PreparedDataset) else None
     dataset = leave_out_folded_runs(data.dataset if prepared is not None else data)  # a no-op after load_for_diagnosis
+    ring_up = RING_UP_S if "cavity_lag" in candidates else 0.0
+    if ring_up:
+        dataset = leave_out_ring_up(dataset, ring_up)
+        if prepared is not None:  # prepared again on the shortened runs, with its own smoothing
+            smoothing, prepared = (smoothing if smoothing is not None else prepared.smoothing), None
     require_levitated_dimer(dataset.meta, "validation")
     conditions = conditions_from_meta(dataset.meta, spec)
     # a parameter to be calibrated starts at the value the model takes by default
@@ -168,7 +180,7 @@ def start_diagnosis(data: "Dataset | PreparedDataset", spec: ModelSpec = ModelSp
         prepared = prepare_dataset(dataset, smoothing if smoothing is not None else SmoothingConfig())
     elif dataset is not prepared.dataset:
         prepared = prepared.restricted_to(dataset)
-    return DiagnosisStart(prepared, spec, conditions, model)
+    return DiagnosisStart(prepared, spec, conditions, model, ring_up)
 
 
 def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: DiagnoseConfig = DiagnoseConfig(),
@@ -181,8 +193,9 @@ def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: Diagnos
         (:func:`fitting.derivatives.preparation.prepare_dataset`, the one the fit reads), or a
         :class:`DiagnosisStart` (:func:`start_diagnosis`: checked and prepared already, with its spec).  With
         ``cavity_lag`` among the candidates the first 40 ms of every run (the cavity's ring-up after the field
-        drop, :func:`~validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`) are left out of a data set or
-        preparation (not of a start: it is taken as prepared)
+        drop, :func:`~validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`) are left out, where the start is
+        made (:func:`start_diagnosis` with the candidates): a start made without leaving them out is refused with
+        such candidates, so that every entry point diagnoses the same runs
     config : DiagnoseConfig
     progress : log the steps at INFO level (else DEBUG)
     spec : the simulation model and its own options (:class:`acousim.models.ModelSpec`; default: the Gor'kov
@@ -201,26 +214,16 @@ def diagnose(data: "Dataset | PreparedDataset | DiagnosisStart", config: Diagnos
     """
     from cubedimer.executor import single_blas_thread
 
-    if isinstance(data, DiagnosisStart) and spec is not None and spec != data.spec:
-        raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
+    if isinstance(data, DiagnosisStart):
+        if spec is not None and spec != data.spec:
+            raise ValueError(f"the diagnosis was started with {data.spec}, not {spec}")
+        if "cavity_lag" in config.candidates and not data.ring_up_left_out:
+            raise ValueError("the diagnosis tries cavity_lag, but its start kept the cavity's ring-up at the start of "
+                             "every run; make the start with start_diagnosis(..., candidates=config.candidates)")
     with single_blas_thread():
         start = data if isinstance(data, DiagnosisStart) else start_diagnosis(
-            _without_ring_up(data, config), spec if spec is not None else ModelSpec(), config.alpha)
+            data, spec if spec is not None else ModelSpec(), config.alpha, candidates=config.candidates)
         return _diagnose(start, config, progress)
-
-
-def _without_ring_up(data: "Dataset | PreparedDataset", config: DiagnoseConfig) -> "Dataset | PreparedDataset":
-    """``data`` without the cavity's ring-up at the start of every run when the cavity is a candidate
-    (:func:`validation.diagnosis.prepare.cavity_lag.leave_out_ring_up`), else ``data`` itself."""
-    from fitting.derivatives.preparation import PreparedDataset, prepare_dataset
-
-    from .prepare.cavity_lag import leave_out_ring_up
-
-    if "cavity_lag" not in config.candidates:
-        return data
-    if isinstance(data, PreparedDataset):
-        return prepare_dataset(leave_out_ring_up(data.dataset), data.smoothing)
-    return leave_out_ring_up(data)
 
 
 #: The fewest runs a diagnosis takes: every fit is scored on runs held out of it (K-fold over runs), and the

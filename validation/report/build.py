@@ -95,7 +95,8 @@ def build_report(data_dir: str | Path, out_dir: str | Path, workers: int | None 
     # a data set with too few runs for the diagnosis's held-out comparison, with how many it needs; then the runs are
     # prepared once (smoothing, derivatives, frequencies, column states, noise), and the fit and the diagnosis read
     # the one preparation
-    start = start_diagnosis(dataset, spec, diagnosis_config.alpha, smoothing=config.smoothing)
+    start = start_diagnosis(dataset, spec, diagnosis_config.alpha, smoothing=config.smoothing,
+                            candidates=diagnosis_config.candidates)
     out = Path(out_dir)
     fit_dir = out / "fit"
     # ---- the fit, the variant comparison and the diagnosis: the stored results the report is a view of -----------

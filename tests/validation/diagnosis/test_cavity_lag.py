@@ -218,13 +218,16 @@ def test_a_cavity_is_named_unless_its_lag_has_the_sign_no_mode_has(a, b, b_error
 
 @pytest.mark.parametrize("quantity, value, std_error, determined", [
     ("quality_factor", 601.0, 439.0, False),  # the blind case of Q 309 beside linear damping and a drag
-    ("quality_factor", 301.0, 44.0, True),
+    ("quality_factor", 301.0, 30.0, True),  # +-22.5 %
+    ("quality_factor", 301.0, 44.0, False),  # +-33 %: one side of zero, but wider than MAX_MODE_HALF_WIDTH
     ("detuning_half_widths", 4.24, 3.73, False),
-    ("detuning_half_widths", -1.38, 0.56, True),
+    ("detuning_half_widths", -1.38, 0.12, True),  # +-19.7 %
+    ("detuning_half_widths", -1.38, 0.56, False),  # +-92 %
     ("kappa", 1.0, 5.0, True)])  # not a derived quantity of one sign: its interval is kept
 def test_a_mode_the_lag_does_not_resolve_is_not_determined(quantity, value, std_error, determined):
     """The cavity's Q and detuning are "not determined" (with the reason) where their 95 % interval (Student t, 9
-    degrees of freedom: 2.26 standard errors) reaches zero, and kept as they are where it does not."""
+    degrees of freedom: 2.26 standard errors) reaches zero or is wider than +-25 % of the value
+    (MAX_MODE_HALF_WIDTH), and kept as they are where it is not."""
     out = _resolved(quantity, interval_from_error(value, std_error, 9))
     assert out.determined == determined and out.value == value
     assert determined or "not resolved" in out.reason

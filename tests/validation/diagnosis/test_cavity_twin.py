@@ -40,3 +40,6 @@ def test_the_cavity_is_named_alone_with_its_mode(resonator_diagnosis):
     assert derived["quality_factor"].value == pytest.approx(MODE["quality_factor"], rel=0.10)
     assert derived["detuning_half_widths"].value == pytest.approx(MODE["detuning_half_widths"], rel=0.15)
     assert derived["quality_factor"].determined and derived["detuning_half_widths"].determined
+    # the combination the static gain alone gives, Q x / (1 + x^2) = 115.4, within 10 % as Q (the static gain's bias)
+    assert derived["quasi_static_response"].value == pytest.approx(250.0 * 1.5 / (1 + 1.5**2), rel=0.10)
+    assert derived["quasi_static_response"].determined

@@ -41,3 +41,28 @@ def test_the_calibration_reads_the_one_preparation_with_y_flipped_from_it(small_
     for run, p in zip(cal.problem.recorded_runs, start.prepared.runs):
         d = p.derivs
         np.testing.assert_array_equal(run.state, d.state[d.trim:len(d.t) - d.trim])
+
+
+def test_every_entry_point_leaves_the_cavity_ring_up_out_where_the_start_is_made(small_oscillating_dataset):
+    """With the cavity among the candidates the first RING_UP_S of every run are left out by start_diagnosis itself,
+    from a data set and from a preparation alike (prepared again with its own smoothing), so that the report's start
+    and diagnose() read the same runs; a start made without it is refused for such a diagnosis."""
+    from validation.diagnosis import DiagnoseConfig, diagnose, load_for_diagnosis, start_diagnosis
+    from validation.diagnosis.prepare.cavity_lag import RING_UP_S
+    from fitting.derivatives.preparation import prepare_dataset
+
+    dataset = load_for_diagnosis(small_oscillating_dataset, progress=False)
+    cavity = ("linear_damping", "cavity_lag")
+    plain = start_diagnosis(dataset)
+    from_data = start_diagnosis(dataset, candidates=cavity)
+    from_prepared = start_diagnosis(prepare_dataset(dataset), candidates=cavity)
+    assert plain.ring_up_left_out == 0.0 and from_data.ring_up_left_out == RING_UP_S
+    for run, a, b in zip(dataset.runs, from_data.prepared.dataset.runs, from_prepared.prepared.dataset.runs):
+        dt = float(np.median(np.diff(run.t)))
+        # the first frame at or after RING_UP_S (one frame's tolerance: the cut is on the frame grid)
+        assert RING_UP_S <= a.t[0] - run.t[0] < RING_UP_S + dt
+        np.testing.assert_array_equal(a.t, b.t)
+        np.testing.assert_array_equal(a.y, run.y[run.t.size - a.t.size:])
+    assert [r.t.size for r in plain.prepared.dataset.runs] == [r.t.size for r in dataset.runs]
+    with pytest.raises(ValueError, match="ring-up"):
+        diagnose(plain, DiagnoseConfig(candidates=cavity), progress=False)

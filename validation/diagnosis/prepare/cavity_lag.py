@@ -65,7 +65,8 @@ from acousim.medium import Medium
 
 __all__ = ["CAVITY_LAG_PARAMETERS", "CavityGains", "gains_from_mode", "mode_from_gains", "cavity_lag_columns",
            "CavityColumns", "AngleFactors", "ANGLE_SERIES", "problem_columns", "HeightExpansion", "height_expansion",
-           "HEIGHT_DEGREE", "second_order_ratios", "cavity_reference", "derived_quantities", "RING_UP_S",
+           "HEIGHT_DEGREE", "second_order_ratios", "cavity_reference", "derived_quantities", "quasi_static_response",
+           "RING_UP_S",
            "leave_out_ring_up"]
 
 #: The candidate's parameters: the quasi-static gain A [s/rad] and the lag gain B [s^2/rad] (module docstring).
@@ -296,20 +297,32 @@ def leave_out_ring_up(dataset, duration: float = RING_UP_S):
     return replace(dataset, runs=tuple(runs))
 
 
+def quasi_static_response(quality_factor: float, detuning: float) -> float:
+    """``Q x / (1 + x^2)`` [-]: the mode's quasi-static response, ``-pi f A / 2`` (A = -2 x / (Gamma (1 + x^2)),
+    Gamma = pi f / Q), the combination of Q and the detuning x that the quasi-static gain alone gives."""
+    return float(quality_factor) * float(detuning) / (1.0 + float(detuning) ** 2)
+
+
 def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:
-    """``{"cavity_lag": {"quality_factor", "detuning_half_widths"}}`` of a fit whose effects hold the cavity's lag (else
-    ``{}``): its gains, fitted on the columns at the nominal pressure (the acoustic accelerations scale with the
-    pressure scale s, the dimer's shift does not), are divided by s and turned into the mode (:func:`mode_from_gains`,
-    at the default area and air); nan when no mode has them."""
+    """``{"cavity_lag": {"quality_factor", "detuning_half_widths", "quasi_static_response"}}`` of a fit whose effects
+    hold the cavity's lag (else ``{}``): its gains, fitted on the columns at the nominal pressure (the acoustic
+    accelerations scale with the pressure scale s, the dimer's shift does not), are divided by s and turned into the
+    mode (:func:`mode_from_gains`, at the default area and air; Q and x nan when no mode has them), and the static gain
+    alone into ``Q x / (1 + x^2) = -pi f A / 2`` (:func:`quasi_static_response`): the combination the data resolve
+    where the lag gain, and with it Q and x apart, is not (beside the air's damping of y, which shares the lag's)."""
     if "cavity_lag" not in params:
         return {}
     s = calibration.pressure_scale
     gains = CavityGains(params["cavity_lag"]["static_gain"] / s, params["cavity_lag"]["lag_gain"] / s)
+    frequency = Medium().frequency_hz
+    response = -math.pi * frequency * gains.static_gain / 2.0
     try:
-        mode = mode_from_gains(gains, Medium().frequency_hz)
+        mode = mode_from_gains(gains, frequency)
     except ValueError:
-        return {"cavity_lag": {"quality_factor": math.nan, "detuning_half_widths": math.nan}}
-    return {"cavity_lag": {"quality_factor": mode.quality_factor, "detuning_half_widths": mode.detuning}}
+        return {"cavity_lag": {"quality_factor": math.nan, "detuning_half_widths": math.nan,
+                               "quasi_static_response": response}}
+    return {"cavity_lag": {"quality_factor": mode.quality_factor, "detuning_half_widths": mode.detuning,
+                           "quasi_static_response": response}}
 
 
 def cavity_reference(problem) -> CavityMode | None:

@@ -35,6 +35,10 @@ REJECTIONS = {
     "no_cavity_mode": "the cavity's lag gain has the sign of its quasi-static gain, beyond its 95 % interval: no "
                       "cavity mode has such gains (a resonator's have opposite signs at every detuning), so it is not "
                       "named as a cause",
+    "within_cavity_response": "pair scattering beside the named cavity, with a hinge stiffness within the cavity's own "
+                              "modulation of the hinge's acoustic stiffness over the data (max |s - 1| K): the data "
+                              "cannot tell it from what the cavity's columns leave of its response, so it is not "
+                              "named as a cause",
 }
 
 
@@ -74,8 +78,8 @@ class EffectVerdict:
     rejected_because : ``({"code", "reason"}, ...)``, the codes of :data:`REJECTIONS` (empty unless rejected)
     uncertainty : per parameter, the standard error and 95 % interval
         (:class:`~validation.diagnosis.summarise.uncertainty.ParameterInterval`; the model's effects only)
-    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor`` and
-        ``detuning_half_widths`` from its gains)
+    derived : quantities computed from the parameters, with their intervals (the cavity's ``quality_factor``,
+        ``detuning_half_widths`` from its gains and ``quasi_static_response`` from its static gain)
     gap_change, gap_change_std_error : the change of the scalar gap its addition causes (``gap_after`` minus the gap
         with the model's effects before it; the model's effects only) and its standard error over runs, from the
         runs' paired changes (None with fewer than 3 runs, or in a diagnosis.json written before the key)

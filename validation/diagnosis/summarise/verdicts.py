@@ -14,6 +14,7 @@ from ..calibrate.gap_model import GapFit, fit_gap_model
 from ..calibrate.metrics import fit_gaps, scalar_gap
 from ..identify.statistics import format_p
 from ..prepare.problem import DiagnosisProblem
+from .cavity_verdicts import mode_only_with_a_positive_damping, named_only_beyond_cavity
 from .result import REJECTIONS, EffectVerdict
 from .uncertainty import ParameterInterval
 
@@ -85,6 +86,9 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
                      _named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
                      for i, e in enumerate(model_effects)]
     model_effects = [_named_only_with_a_mode(e) for e in model_effects]
+    # pair scattering within the cavity's own share of the hinge's stiffness is not told from the cavity
+    model_effects = named_only_beyond_cavity(model_effects, problem, final.calibration)
+    model_effects = mode_only_with_a_positive_damping(model_effects)
     last_tests = ident.last_tests()
     others = []
     for name in candidates:
