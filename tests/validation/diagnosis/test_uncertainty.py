@@ -208,6 +208,27 @@ def test_effect_model_errors_are_added_per_parameter_and_kept_apart():
     assert set(stat.to_dict()) == {"value", "std_error", "interval_95", "dof", "determined", "reason"}
 
 
+def test_beside_a_cavity_gamma_y_and_the_pressure_take_their_own_systematic_parts():
+    """With a cavity in the model, gamma_y's systematic part is the absolute BESIDE_CAVITY_GAMMA_Y_ERROR (1/s: an
+    estimate near zero, as beside a cavity's lag it often is, still gets it) and the pressure's the relative
+    BESIDE_CAVITY_PRESSURE_ERROR; without a cavity both keep their usual parts."""
+    from validation.diagnosis.summarise.uncertainty import (BESIDE_CAVITY_GAMMA_Y_ERROR, BESIDE_CAVITY_PRESSURE_ERROR,
+                                                             EFFECT_MODEL_ERROR, PRESSURE_MODEL_ERROR,
+                                                             pressure_model_error, with_effect_model_errors)
+
+    gamma_y = interval_from_error(-0.40, 0.32, 9)  # the air damps y at 0.57 1/s: outside the jackknife's interval
+    cavity = {"static_gain": interval_from_error(-1e-3, 1e-5, 9)}
+    beside = with_effect_model_errors({"linear_damping": {"gamma_y": gamma_y}, "cavity_lag": cavity})
+    got = beside["linear_damping"]["gamma_y"]
+    assert got.model_std_error == BESIDE_CAVITY_GAMMA_Y_ERROR
+    assert got.std_error == pytest.approx(np.hypot(0.32, BESIDE_CAVITY_GAMMA_Y_ERROR))
+    assert not gamma_y.covers(0.57) and got.covers(0.57)
+    alone = with_effect_model_errors({"linear_damping": {"gamma_y": gamma_y}})["linear_damping"]["gamma_y"]
+    assert alone.model_std_error == pytest.approx(EFFECT_MODEL_ERROR["linear_damping"]["gamma_y"] * 0.40)
+    assert pressure_model_error(["linear_damping", "cavity_lag"]) == BESIDE_CAVITY_PRESSURE_ERROR
+    assert pressure_model_error({"linear_damping": {}}) == PRESSURE_MODEL_ERROR
+
+
 def test_a_parameter_one_run_carries_is_not_determined():
     """A leave-one-run-out refit without a finite value (the cavity's mode when the only run with a large enough
     amplitude is left out) gives "not determined" with that reason, never a number without an error."""

@@ -22,7 +22,7 @@ from .constants import constants_used, data_set_warnings
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .result import Diagnosis, DiagnosisInternals
-from .uncertainty import (CONFIDENCE, METHOD, PRESSURE_MODEL_ERROR, interval_from_error, jackknife_errors,
+from .uncertainty import (CONFIDENCE, METHOD, interval_from_error, jackknife_errors, pressure_model_error,
                           with_effect_model_errors, with_model_error)
 from .verdicts import ranked_effects
 
@@ -181,11 +181,12 @@ def _calibration_record(problem: DiagnosisProblem, final: GapFit, cal: Calibrate
         calibration["drift"] = cal.drift.to_dict()
     uncertainty = {"method": METHOD, "confidence": CONFIDENCE, "runs": errors.runs,
                    **{k: iv.to_dict() for k, iv in errors.calibration.items()}}
-    # the pressure's interval also holds the calibration's systematic error (PRESSURE_MODEL_ERROR)
+    # the pressure's interval also holds the calibration's systematic error (PRESSURE_MODEL_ERROR, or its part beside
+    # a cavity in the model)
     stat = errors.calibration["pressure_amplitude_pa"]
-    uncertainty["pressure_amplitude_pa"] = {
-        **with_model_error(stat, PRESSURE_MODEL_ERROR * abs(stat.value)).to_dict(),
-        "statistical_std_error": stat.std_error, "model_std_error": PRESSURE_MODEL_ERROR * abs(stat.value)}
+    systematic = pressure_model_error(errors.effects) * abs(stat.value)
+    uncertainty["pressure_amplitude_pa"] = {**with_model_error(stat, systematic).to_dict(),
+                                            "statistical_std_error": stat.std_error, "model_std_error": systematic}
     for name, pc in cal.parameters.items():  # the model's own parameters: their profile's jackknife error
         if pc is not None and getattr(pc, "calibrated", False):
             uncertainty[name] = interval_from_error(pc.value, pc.std_error, errors.runs - 1).to_dict()
