@@ -62,7 +62,8 @@ demo-video: venv
 	@echo "written to $(OUT)/: open $(OUT)/report_video/report.html"
 
 # One pytest worker per core (pytest-xdist), each test file on one worker so that module fixtures are built
-# once, and the boundary-element files together (tests/conftest.py); one numba and one BLAS thread per worker
+# once, the boundary-element files together and the files that use a dask cluster together (tests/conftest.py);
+# one numba and one BLAS thread per worker
 # (the boundary-element assembly is numba-parallel; the workers already keep every core busy, and more threads
 # per worker only compete for them).
 PYTEST_WITH = NUMBA_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \

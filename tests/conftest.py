@@ -35,6 +35,18 @@ BOUNDARY_ELEMENT_MODULES = frozenset({
     "tests/acousim/fullwave/test_fullwave_surrogate.py", "tests/acousim/fullwave/test_fullwave_interaction.py",
 })
 
+#: Test modules that run work on a real dask cluster (:func:`process_cluster`).  Its scheduler and two worker
+#: processes take about 4 s of CPU to start and about 7 % of a core while they wait, so ``make test`` sends these modules
+#: to one worker as one unit, which starts the cluster once and shuts it down when the unit ends
+#: (:func:`pytest_runtest_teardown`) instead of leaving it idle beside the rest of the session.
+CLUSTER_MODULES = frozenset({
+    "tests/cubedimer/test_executor.py", "tests/acousim/cli/test_simulate_cli.py", "tests/fitting/test_cli.py",
+    "tests/validation/test_cli.py",
+})
+
+#: The units of several modules (:func:`scheduling_unit`), by name.
+GROUPED_UNITS = {"boundary-elements": BOUNDARY_ELEMENT_MODULES, "dask-cluster": CLUSTER_MODULES}
+
 
 #: Measured seconds of each scheduling unit (a module, or the boundary-element group), so that ``make test`` starts
 #: the longest units first; refreshed from the last full run by ``make test-durations``.
@@ -43,16 +55,24 @@ _CACHE_KEY = "cubedimer/unit_seconds"
 
 
 def scheduling_unit(module: str) -> str:
-    """The unit ``make test`` sends to one worker: the module, or ``"boundary-elements"`` for
-    :data:`BOUNDARY_ELEMENT_MODULES`."""
-    return "boundary-elements" if module in BOUNDARY_ELEMENT_MODULES else module
+    """The unit ``make test`` sends to one worker: the module, or the name of its group in :data:`GROUPED_UNITS`
+    (``"boundary-elements"`` for :data:`BOUNDARY_ELEMENT_MODULES`, ``"dask-cluster"`` for :data:`CLUSTER_MODULES`)."""
+    return next((name for name, modules in GROUPED_UNITS.items() if module in modules), module)
+
+
+def expected_seconds(unit: str, seconds: dict[str, float], counts: dict[str, int]) -> float:
+    """The expected duration of ``unit``: its measured seconds; for a group without a record of its own, the sum of
+    its modules' records; else 1 s per test (a module with no record is new or renamed, and usually small)."""
+    if unit in seconds:
+        return float(seconds[unit])
+    members = [seconds[m] for m in GROUPED_UNITS.get(unit, ()) if m in seconds]
+    return float(sum(members)) if members else float(counts.get(unit, 1))
 
 
 def longest_first(units: list[str], seconds: dict[str, float], counts: dict[str, int]) -> list[str]:
-    """``units`` by decreasing expected duration: the measured seconds where known, else 1 s per test (a module
-    with no record is new or renamed, and usually small).  Longest-first keeps a long module from starting last
-    while the other worker idles."""
-    return sorted(units, key=lambda u: -float(seconds.get(u, counts.get(u, 1))))
+    """``units`` by decreasing expected duration (:func:`expected_seconds`).  Longest-first keeps a long module
+    from starting last while the other worker idles."""
+    return sorted(units, key=lambda u: -expected_seconds(u, seconds, counts))
 
 
 def _recorded_seconds(config) -> dict[str, float]:
@@ -105,7 +125,9 @@ def pytest_runtest_logreport(report) -> None:
 
 
 def pytest_sessionfinish(session, exitstatus) -> None:
-    """Keep the units' seconds of a whole-suite run (not of a selection) in pytest's cache for the next schedule."""
+    """Shut down a cluster still running (an interrupted session); keep the units' seconds of a whole-suite run (not
+    of a selection) in pytest's cache for the next schedule."""
+    _close_cluster()
     config = session.config
     if getattr(config, "workerinput", None) is not None or getattr(config, "cache", None) is None:
         return
@@ -239,9 +261,12 @@ class PipelineCache:
         """The folder ``data/`` (the runs and meta.json) of the twin data set of ``config`` (an
         ``acousim.twin.TwinConfig``), with its ``truth.json`` beside it, out of the data set's folder."""
         from acousim.twin import simulate_dataset
+        from cubedimer.executor import ExecutorConfig
 
         def build(folder: Path) -> None:
-            simulate_dataset(config, folder / "data", progress=False)
+            # in this process: the runs' seeds make them the same on any executor (tests/acousim/twin/test_twin.py),
+            # and a pool of one process per core beside the pytest-xdist workers only competes with them for the cores
+            simulate_dataset(config, folder / "data", ExecutorConfig(workers=1), progress=False)
             (folder / "data" / "truth.json").rename(folder / "truth.json")
 
         return self.folder("twin", repr(config) + protocol_note, build) / "data"
@@ -341,15 +366,42 @@ def drop_heights():
     return field_drop_heights
 
 
-@pytest.fixture(scope="session")
-def process_cluster():
-    """A real dask cluster on the loopback for the whole session: a scheduler and two daemonic worker
-    processes (as every normal deployment has); yields its address and shuts it down at the end."""
-    pytest.importorskip("dask.distributed")
-    from cubedimer.executor import loopback_cluster
+#: The running cluster of :func:`process_cluster` in this process: {"address": str, "stack": ExitStack}, or empty.
+_CLUSTER: dict = {}
 
-    with loopback_cluster(2) as address:
-        yield address
+
+@pytest.fixture
+def process_cluster():
+    """The address of a real dask cluster on the loopback: a scheduler and two daemonic worker processes (as every
+    normal deployment has), started at the first test that asks for it and shared by the tests that follow in the
+    same scheduling unit (:data:`CLUSTER_MODULES`); shut down when the unit ends (:func:`pytest_runtest_teardown`)."""
+    pytest.importorskip("dask.distributed")
+    if "address" not in _CLUSTER:
+        from contextlib import ExitStack
+
+        from cubedimer.executor import loopback_cluster
+
+        stack = ExitStack()
+        _CLUSTER["address"] = stack.enter_context(loopback_cluster(2))
+        _CLUSTER["stack"] = stack
+    return _CLUSTER["address"]
+
+
+def _close_cluster() -> None:
+    stack = _CLUSTER.pop("stack", None)
+    _CLUSTER.pop("address", None)
+    if stack is not None:
+        stack.close()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    """After a test's own teardown: shut :func:`process_cluster`'s cluster down when the next test of this process
+    belongs to another scheduling unit, or there is none (an idle cluster costs a share of a core)."""
+    yield
+    if _CLUSTER and (nextitem is None or scheduling_unit(nextitem.nodeid.split("::", 1)[0])
+                     != scheduling_unit(item.nodeid.split("::", 1)[0])):
+        _close_cluster()
 
 
 #: The synthetic family's analytic dependence: the interpolated quantities (dimensionless coefficients, F_Z's over ks)

@@ -1,12 +1,31 @@
-"""``make test``'s schedule: the boundary-element modules travel as one unit, and units start longest first."""
+"""``make test``'s schedule: the boundary-element modules travel as one unit, so do the modules that use a dask
+cluster, and units start longest first."""
 import json
+import re
 
-from tests.conftest import BOUNDARY_ELEMENT_MODULES, UNIT_DURATIONS_FILE, longest_first, scheduling_unit
+from tests.conftest import (BOUNDARY_ELEMENT_MODULES, CLUSTER_MODULES, GROUPED_UNITS, UNIT_DURATIONS_FILE,
+                            longest_first, scheduling_unit)
 
 
 def test_boundary_element_modules_are_one_unit():
     assert {scheduling_unit(m) for m in BOUNDARY_ELEMENT_MODULES} == {"boundary-elements"}
     assert scheduling_unit("tests/fitting/test_recovery.py") == "tests/fitting/test_recovery.py"
+
+
+def test_cluster_modules_are_one_unit_and_every_user_of_the_cluster_is_in_it():
+    from pathlib import Path
+
+    assert {scheduling_unit(m) for m in CLUSTER_MODULES} == {"dask-cluster"}
+    root = Path(__file__).resolve().parents[1]
+    asks = re.compile(r"def \w+\([^)]*\bprocess_cluster\b")  # a test or fixture that takes the cluster
+    users = {p.relative_to(root).as_posix() for p in (root / "tests").rglob("test_*.py") if asks.search(p.read_text())}
+    assert users == CLUSTER_MODULES  # a module outside the unit would start a cluster of its own
+
+
+def test_a_group_without_a_record_is_expected_to_take_its_modules_seconds():
+    seconds = {"tests/cubedimer/test_executor.py": 5.0, "tests/fitting/test_cli.py": 13.0, "big.py": 15.0}
+    assert longest_first(["big.py", "dask-cluster"], seconds, {"big.py": 3, "dask-cluster": 40}) == ["dask-cluster",
+                                                                                                      "big.py"]
 
 
 def test_longest_first_uses_seconds_then_test_counts():
@@ -22,5 +41,5 @@ def test_committed_durations_name_existing_units():
     root = Path(__file__).resolve().parents[1]
     recorded = json.loads(UNIT_DURATIONS_FILE.read_text())
     assert recorded and all(v >= 0 for v in recorded.values())
-    stale = [u for u in recorded if u != "boundary-elements" and not (root / u).exists()]
+    stale = [u for u in recorded if u not in GROUPED_UNITS and not (root / u).exists()]
     assert not stale, f"{stale}: refresh with make test-durations"

@@ -8,6 +8,7 @@ import pytest
 def test_discovery_on_pair_scattering_twin_is_small_and_reproduces_the_attractor(tmp_path):
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import TwinConfig, simulate_dataset
+    from cubedimer.executor import ExecutorConfig
     from cubedimer.dataset import load_dataset
     from fitting.selection.integral_discovery import discover_model
     from fitting.model import TERMS
@@ -19,7 +20,7 @@ def test_discovery_on_pair_scattering_twin_is_small_and_reproduces_the_attractor
     # 8 runs of 3 s: the same 10 terms as on 10 runs of 4 s (damping rates 0.505 +- 0.007 and 0.496 +- 0.043 there;
     # shape error median 0.0008, at most 0.012) from 60 % of the data
     simulate_dataset(TwinConfig(runs=8, duration=3.0, seed=1, effects=EffectSet.from_dict(effects), air_damping=False),
-                     tmp_path / "data", progress=False)
+                     tmp_path / "data", ExecutorConfig(workers=1), progress=False)
     prepared, scales = prepare_runs(load_dataset(tmp_path / "data").runs)
     derivs = [p.derivs for p in prepared]
     res = discover_model([p.run for p in prepared], derivs)

@@ -43,6 +43,7 @@ def test_a_registered_effect_runs_through_the_twin_and_the_diagnosis(registered_
 
     from acousim.dynamics.effects import EffectSet
     from acousim.twin import DropProtocol, TwinConfig, simulate_dataset
+    from cubedimer.executor import ExecutorConfig
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
     push = 8.0  # [1/s^2]: shifts the rest angle of the soft Gor'kov hinge (omega_theta^2 about 110 1/s^2) by 0.07
@@ -50,7 +51,7 @@ def test_a_registered_effect_runs_through_the_twin_and_the_diagnosis(registered_
     # no air damping: the dummy is the only effect beside the inviscid model, so nothing else may be named
     cfg = TwinConfig(runs=8, duration=1.5, seed=5, effects=EffectSet((registered_push(push=push),)), air_damping=False,
                      protocol=DropProtocol(theta_drop=(-0.2, 0.2), thetadot_drop=(-2.0, 2.0)))
-    simulate_dataset(cfg, data, progress=False)
+    simulate_dataset(cfg, data, ExecutorConfig(workers=1), progress=False)
     assert json.loads((data / "truth.json").read_text())["effects"] == {"constant_push": {"push": push}}
     (data / "truth.json").unlink()  # the diagnosis is blind
     diag = diagnose_dataset(data, DiagnoseConfig(long_time=False, discover=False,

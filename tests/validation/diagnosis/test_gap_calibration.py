@@ -95,6 +95,7 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     from acousim.dynamics.effects import EffectSet
     from acousim.fullwave.family import FAMILY_ENV
     from acousim.twin import TwinConfig, simulate_dataset
+    from cubedimer.executor import ExecutorConfig
 
     mpatch = pytest.MonkeyPatch()
     mpatch.setenv(FAMILY_ENV, str(synthetic_family_dir))
@@ -102,7 +103,7 @@ def fullwave_twin(tmp_path_factory, synthetic_family_dir):
     # no air damping: the linear damping is the only effect, the one the diagnosis must name alone
     cfg = TwinConfig(runs=8, duration=2.0, seed=11, model_spec=ModelSpec("fullwave", {"gap_m": 10e-6}), pressure_error=0.05,
                      effects=EffectSet.parse(["linear_damping:gamma_y=0.5,gamma_theta=2.0"]), air_damping=False)
-    simulate_dataset(cfg, out, force=True, progress=False)
+    simulate_dataset(cfg, out, ExecutorConfig(workers=1), force=True, progress=False)
     yield out
     mpatch.undo()
 

@@ -330,13 +330,14 @@ def make_diagnosis(case: str, folder):
     """The diagnosis (``long_time=False``) of the twin data set of :data:`DIAGNOSIS_CASES` ``case``, simulated into
     ``folder``: the stored diagnosis.json the sentence tests read (made by stored/make.py)."""
     from acousim.twin import PAPER_LIKE, TwinConfig, simulate_dataset
+    from cubedimer.executor import ExecutorConfig
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
 
     settings = DIAGNOSIS_CASES[case]
     cfg = (TwinConfig.from_preset(PAPER_LIKE, runs=settings["runs"], duration=settings["duration"], seed=31)
            if settings["preset"] else TwinConfig(runs=settings["runs"], duration=settings["duration"], seed=32))
     data = folder / "data"
-    simulate_dataset(cfg, data, progress=False)
+    simulate_dataset(cfg, data, ExecutorConfig(workers=1), progress=False)
     (data / "truth.json").unlink()
     if "offsets" in settings:
         _per_run_origin_error(data, settings["offsets"])
