@@ -1,9 +1,9 @@
 """Known-truth recovery of the paper's method at the size of the issue's criterion: 20 noisy runs of 3 s of the paper's
 reduced model (1 um / 0.005 tracking noise, 1500 fps), fitted with ``--method paper`` at its default budgets.
 
-The check of the four criteria of the recovery (a minute of one core per seed, too long for ``make test``; no smaller
-data set meets them, see docs/fitting.md; with the joint re-optimisations at half their default budgets the largest
-coefficient error at seed 11 was 8.8 % against 6.8 % here, measured):
+The four criteria of the recovery, which tests/fitting/methods/test_recovery.py asserts on the same data set (seed 11)
+with the joint re-optimisations at half their default budgets (a third less time; the largest coefficient error 8.8 %
+there against 6.8 % here, measured):
 
 * the per-run long-time refinement beats the regression alone on the attractor shape (paired Wilcoxon, p < 0.01);
 * the true support: no true term missing, at most one spurious term;
