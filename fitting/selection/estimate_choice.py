@@ -48,12 +48,10 @@ from cubedimer.spectra import dominant_frequency
 from cubedimer.terms import evaluate_library
 from ..model import TERMS, PolynomialModel
 from ..refinement.output_error import OutputErrorConfig, refine_output_error
-from .front import HeldOutRun, long_time_error
+from .front import ACCELERATIONS, INTEGRAL_FORM, OUTPUT_ERROR, HeldOutRun, long_time_error
 
 __all__ = ["EstimateChoice", "OUTPUT_ERROR", "INTEGRAL_FORM", "ACCELERATIONS", "acceleration_fit", "choose_estimate",
-           "first_state_runs", "output_error_on_runs", "chosen_coefficients"]
-
-OUTPUT_ERROR, INTEGRAL_FORM, ACCELERATIONS = "output error", "integral form", "accelerations"
+           "first_state_runs", "output_error_on_runs", "chosen_coefficients", "state_estimate_starts"]
 
 
 @dataclass(frozen=True)
@@ -149,6 +147,15 @@ def choose_estimate(candidates: Mapping[str, Callable[[Sequence[int]], NDArray]]
     return EstimateChoice(chosen, errors, {k: v[1] for k, v in scores.items()})
 
 
+def state_estimate_starts(held_out: Sequence[HeldOutRun], states: Sequence[NDArray], ys: Sequence[NDArray]
+                          ) -> list[HeldOutRun]:
+    """The held-out runs with each first state taken from the state estimates ``states`` (per run (n, 4), SI, on
+    the frames of ``ys``): the smoothed state's filter bias would decide a comparison of estimates from the first
+    state.  A run whose estimates do not cover its frames keeps its first state."""
+    return [replace(h, x0=np.asarray(st[len(y) - len(h.y)], float)) if len(st) == len(y) else h
+            for h, st, y in zip(held_out, states, ys)]
+
+
 def output_error_on_runs(start: Callable[[Sequence[int]], NDArray], dts, ys, thetas, states, slow_freqs, noise,
                          config: OutputErrorConfig) -> Callable[[Sequence[int]], NDArray]:
     """The output error as a candidate: on the training runs, from ``start(train)``, its support fixed."""
@@ -184,10 +191,7 @@ def chosen_coefficients(designs: Sequence, held_out: Sequence[HeldOutRun], dts: 
     candidates = {OUTPUT_ERROR: output_error_on_runs(integral, dts, ys, thetas, states, slow_freqs, noise, oe_config),
                   INTEGRAL_FORM: integral,
                   ACCELERATIONS: lambda train: acceleration_fit(dts, ys, thetas, support, train, window_periods)[0]}
-    # each run's first state from the state estimates: the smoothed one's filter bias would decide the comparison
-    starts = [replace(h, x0=np.asarray(st[len(y) - len(h.y)], float)) if len(st) == len(y) else h
-              for h, st, y in zip(held_out, states, ys)]
-    choice = choose_estimate(candidates, starts, n_folds, default=ACCELERATIONS)
+    choice = choose_estimate(candidates, state_estimate_starts(held_out, states, ys), n_folds, default=ACCELERATIONS)
     everything = range(len(ys))
     if choice.chosen == INTEGRAL_FORM:
         coef, se = np.zeros((2, len(TERMS))), np.zeros((2, len(TERMS)))
