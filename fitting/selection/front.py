@@ -23,8 +23,9 @@ error itself (:func:`long_time_forward`), their per-equation mix, and the smalle
 (:func:`ordered_supports`).  So the one- and two-term points are the restoring forces, not the damped oscillator.
 Above the selection's size an enlargement that a smaller model predicts better is left out: its cap maps to that
 model (``Front.cap_points``), and the front holds only the sizes that the held-out runs prefer.
-:func:`refined_front` (``discover_model(..., refine_front=True)``) refines every point's coefficients by the output
-error on its supports, as the selected model is under model error.
+:func:`refined_front` (``discover_model(..., refine_front=True)``) gives every point the estimate on its supports
+that predicts the fitted runs from their first state estimates best: the integral form's least squares, the output
+error's refinement (as the selected model's under model error) or the least squares of short-window accelerations.
 
 The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
 standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
