@@ -161,7 +161,7 @@ def loo_error(fit: Callable, derivs: Sequence, f_y: Sequence[float], f_slow: flo
 
 
 #: bump when ours changes: cached rows of ours from another version are recomputed (the peers' stay)
-OURS_VERSION = 8
+OURS_VERSION = 9
 #: the row of the front's point of least held-out error within the Taylor size (the first target's second reading)
 FRONT_PICK = "ours front <= Taylor size"
 #: the peer families whose cross-validated best is reported per case, by the prefix of their configurations' names
@@ -233,6 +233,7 @@ def ours_case(data, cap: int, name: str) -> dict:
         if label == "ours" and res.front is not None:
             out["front"] = [{"max_terms": p.max_terms, "n_terms": list(p.n_terms), "cv_error": _finite(p.error),
                              "selected": p.selected, "coef": p.coef.tolist(), "refined": p.refined,
+                             "estimate": p.estimate,
                              "long_time": _finite(float(np.median(bme.long_time_errors(p.coef, data, f_slow))))}
                             for p in res.front.points]
     return out
@@ -279,7 +280,7 @@ def run_case(name: str, level: float, seed: int, fit_runs: int, cache: Path | No
     if within:  # the front's point of least held-out error within the Taylor size (our cross-validation, not the test)
         p = min(within, key=lambda p: (p["cv_error"], max(p["n_terms"])))
         rows.append(_row(name, level, seed, fit_runs, data, FRONT_PICK, np.array(p["coef"]),
-                         f"front point at cap {p['max_terms']}{', refined' if p.get('refined') else ''}; held-out "
+                         f"front point at cap {p['max_terms']}, {p.get('estimate', 'integral form')}; held-out "
                          f"error {100 * p['cv_error']:.2f} %", ours["ours"]["wall"]))
     rows += [_row(name, level, seed, fit_runs, data, m, coefs[c], f"{c}; LOO error {100 * cv[c]:.2f} %",
                   peer["wall"]) for m, c in picks]

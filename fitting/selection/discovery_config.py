@@ -137,7 +137,8 @@ class DiscoveryConfig:
     estimate_choice : bool or None
         Under model error, the coefficients of the output error's support are the least squares of short-window
         accelerations (the weighting a prediction from a run's largest amplitude needs) unless the integral form or the
-        output error predicts every run better from its first state (K-fold over runs) (:mod:`fitting.selection.estimate_choice`).  None (default): only with a cap
+        output error predicts the runs better from their first states (a lower median over the held-out runs, K-fold
+        over runs) (:mod:`fitting.selection.estimate_choice`).  None (default): only with a cap
         (``max_terms``), where a support of at most the cap's size carries the model error in few coefficients; the
         selection's own larger supports, whose added odd terms carry the truth's fifth order, are predicted better by
         the output error's coefficients (docs/fitting.md, "The estimate that predicts from the first state").  False:

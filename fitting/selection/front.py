@@ -23,8 +23,9 @@ error itself (:func:`long_time_forward`), their per-equation mix, and the smalle
 (:func:`ordered_supports`).  So the one- and two-term points are the restoring forces, not the damped oscillator.
 Above the selection's size an enlargement that a smaller model predicts better is left out: its cap maps to that
 model (``Front.cap_points``), and the front holds only the sizes that the held-out runs prefer.
-:func:`refined_front` (``discover_model(..., refine_front=True)``) refines every point's coefficients by the output
-error on its supports, as the selected model is under model error.
+:func:`refined_front` (``discover_model(..., refine_front=True)``) gives every point the estimate on its supports
+that predicts the fitted runs from their first state estimates best: the integral form's least squares, the output
+error's refinement (as the selected model's under model error) or the least squares of short-window accelerations.
 
 The **knee** is the one-standard-error rule: the smallest model whose held-out long-time error is within one fold
 standard error of the best point's.  It is recorded beside the discovery's own selection (which stays the default:
@@ -34,7 +35,7 @@ significance and integral-form held-out pruning, :mod:`fitting.selection.integra
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,7 +48,8 @@ from .support_search import ReducedDesign, _eliminate, fit_on_runs, heldout_rms
 
 __all__ = ["FrontPoint", "Front", "HeldOutRun", "long_time_error", "long_time_error_along", "capped_support",
            "long_time_front", "held_out_fold_errors", "refined_front", "forward_path", "candidate_paths",
-           "ordered_supports", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS"]
+           "ordered_supports", "BLOW_UP_FACTOR", "ALONG_HORIZON_PERIODS", "OUTPUT_ERROR", "INTEGRAL_FORM",
+           "ACCELERATIONS"]
 
 #: A trajectory leaving this many times the run's largest |state| has blown up (its long-time error is infinite).
 BLOW_UP_FACTOR = 10.0
@@ -57,6 +59,8 @@ ALONG_HORIZON_PERIODS = 5.0
 #: the long-time error itself, over the ``LONG_TIME_SHORTLIST`` best additions by the integral form's held-out error)
 LONG_TIME_FORWARD_SIZE = 4
 LONG_TIME_SHORTLIST = 4
+#: the names of the estimates of a support's coefficients (:func:`refined_front`, :mod:`fitting.selection.estimate_choice`)
+OUTPUT_ERROR, INTEGRAL_FORM, ACCELERATIONS = "output error", "integral form", "accelerations"
 
 
 @dataclass(frozen=True)
@@ -208,6 +212,8 @@ class FrontPoint:
         user takes at this size without refitting (None where not computed).
     refined : bool
         ``coef`` is the output error's refinement on the point's supports (:func:`refined_front`).
+    estimate : str
+        The estimate ``coef`` is: ``INTEGRAL_FORM`` (the least squares above), or the one :func:`refined_front` kept.
     """
 
     max_terms: int
@@ -221,6 +227,7 @@ class FrontPoint:
     fold_errors_along: tuple[float, ...] = ()
     coef: NDArray[np.float64] | None = field(default=None, compare=False, repr=False)
     refined: bool = False
+    estimate: str = INTEGRAL_FORM
 
     @property
     def n_terms(self) -> tuple[int, int]:
@@ -232,7 +239,7 @@ class FrontPoint:
                 "error_se": _num(self.error_se), "fold_errors": [_num(e) for e in self.fold_errors],
                 "error_along": _num(self.error_along), "error_along_se": _num(self.error_along_se),
                 "fold_errors_along": [_num(e) for e in self.fold_errors_along], "selected": self.selected,
-                "refined": self.refined,
+                "refined": self.refined, "estimate": self.estimate,
                 **({"coefficients": {eq: {TERMS[j]: float(self.coef[q, j]) for j in np.flatnonzero(self.coef[q])}
                                      for q, eq in enumerate(EQUATION_NAMES)}} if self.coef is not None else {})}
 
@@ -373,25 +380,37 @@ def long_time_front(designs: Sequence[ReducedDesign], fronts: Sequence[tuple], h
     return Front(tuple(points), len(folds), tuple(cap_points), below)
 
 
-def refined_front(front: Front, refine: Callable[[NDArray], NDArray], held_out: Sequence[HeldOutRun]) -> Front:
-    """The front with every point's coefficients refined by ``refine`` (coefficients (2, 35) -> coefficients on the
-    same support, e.g. the output error's refinement the selected model gets under model error), kept where the
-    refined model predicts the runs from their first states better (:func:`_first_state_errors` on all runs, mean of
-    the two coordinates; ``FrontPoint.refined``).  The points' held-out errors are those of the least squares."""
+def refined_front(front: Front, refine: Callable[[NDArray], NDArray], held_out: Sequence[HeldOutRun],
+                  estimates: Mapping[str, Callable[[NDArray], NDArray]] | None = None) -> Front:
+    """The front with every point's coefficients the estimate on its supports that predicts the fitted runs best.
+
+    The candidates: the integral form's least squares (``FrontPoint.coef``), ``refine`` (coefficients (2, 35) ->
+    coefficients on the same support, the output error's refinement the selected model gets under model error) and
+    every ``estimates`` entry (name -> the same kind of map, e.g. the least squares of short-window accelerations,
+    :func:`fitting.selection.estimate_choice.acceleration_fit`).  Each is scored by the error of its trajectories from
+    the runs' first states ``held_out[r].x0`` over their first horizon (:func:`_first_state_errors` on all runs, mean
+    of the two coordinates; give the state estimates' first states, not the smoothed ones, whose filter bias would
+    decide the comparison); ties keep the earlier candidate, the least squares first.  ``FrontPoint.estimate`` names
+    the one kept (``refined``: it is the output error's).  The points' held-out errors are those of the least squares.
+    """
     everything = [(list(range(len(held_out))), list(range(len(held_out))))]
+    named = {OUTPUT_ERROR: refine, **(estimates or {})}
     points = []
     for p in front.points:
         if p.coef is None:
             points.append(p)
             continue
-        try:
-            new = np.where(p.coef != 0, refine(p.coef), 0.0)
-        except (ValueError, FloatingPointError, np.linalg.LinAlgError):  # a refinement that fails keeps the point
-            points.append(p)
-            continue
-        err = [float(np.mean(_model_first_state_errors([PolynomialModel(c)], everything, held_out)))
-               for c in (p.coef, new)]
-        points.append(replace(p, coef=new, refined=True) if err[1] < err[0] else p)
+        cands = {INTEGRAL_FORM: p.coef}
+        for name, fit in named.items():
+            try:
+                cands[name] = np.where(p.coef != 0, fit(p.coef), 0.0)
+            except (ValueError, FloatingPointError, np.linalg.LinAlgError):  # a failed estimate is not a candidate
+                continue
+        err = {k: float(np.mean(_model_first_state_errors([PolynomialModel(c)], everything, held_out)))
+               for k, c in cands.items()}
+        best = min(cands, key=lambda k: err[k] if np.isfinite(err[k]) else np.inf)
+        points.append(p if best == INTEGRAL_FORM else
+                      replace(p, coef=cands[best], refined=best == OUTPUT_ERROR, estimate=best))
     return replace(front, points=tuple(points))
 
 

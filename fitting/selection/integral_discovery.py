@@ -59,8 +59,9 @@ from ..model import TERMS, PolynomialModel, damping_mask
 from ..refinement.model_states import model_states, segment_length
 from ..refinement.output_error import OutputErrorFit, refine_output_error
 from .discovery_config import FEW_RUNS_MODE, KNEE_TOLERANCE, METHOD, MODEL_ERROR_MODE, DiscoveryConfig
-from .estimate_choice import EstimateChoice, chosen_coefficients
-from .front import ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front, refined_front
+from .estimate_choice import EstimateChoice, acceleration_fit, chosen_coefficients, state_estimate_starts
+from .front import (ACCELERATIONS, ALONG_HORIZON_PERIODS, Front, HeldOutRun, capped_support, long_time_front,
+                    refined_front)
 from .support_search import (fit_support, heldout_inflation, heldout_per_run, heldout_rms, prune_heldout, reduced_design,
                              run_weights, select_heldout, select_support)
 
@@ -511,10 +512,7 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
         result = _capped(result, config.max_terms, front)
     oe_states = model_based or [d.state for d in derivs]
     if refine_front and front is not None and config.output_error is not None:
-        oe_fixed = replace(config.output_error, support_tolerance=None, additions=False)
-        front = refined_front(front, lambda c: refine_output_error(
-            PolynomialModel(c), setup.dts, setup.ys, setup.ths, oe_states, setup.slow_freqs, setup.noise,
-            oe_fixed).coef, held_out)
+        front = _refined_front(setup, front, held_out, oe_states, config)
     refined = _refine_output_error(setup, oe_states, result, config)
     coef, se = (result.coef, result.se) if refined is None else (refined.coef, refined.merged_std_errors(result.se))
     choice = None
@@ -537,6 +535,20 @@ def _discover(runs: Sequence["Run"], derivs: Sequence["Derivatives"], config: Di
                            converged=converged, selection_modes=result.modes, residual_to_noise=result.ratio,
                            heldout_inflation=result.inflation, output_error=refined, front=front,
                            max_terms=config.max_terms, estimate=choice)
+
+
+def _refined_front(setup: _Setup, front: Front, held_out: list[HeldOutRun], states: list[NDArray],
+                   config: DiscoveryConfig) -> Front:
+    """The front with every point's coefficients the best of the integral form, the output error (segment states
+    ``states``) and the least squares of short-window accelerations by the prediction from the fitted runs' first
+    state estimates (:func:`fitting.selection.front.refined_front`)."""
+    oe_fixed = replace(config.output_error, support_tolerance=None, additions=False)
+    everything = range(len(setup.ys))
+    return refined_front(front, lambda c: refine_output_error(
+        PolynomialModel(c), setup.dts, setup.ys, setup.ths, states, setup.slow_freqs, setup.noise, oe_fixed).coef,
+        state_estimate_starts(held_out, states, setup.ys),
+        {ACCELERATIONS: lambda c: acceleration_fit(setup.dts, setup.ys, setup.ths, c != 0, everything,
+                                                   config.acceleration_window_periods)[0]})
 
 
 def _horizon_frames(slow_freq: float, dt: float) -> int:

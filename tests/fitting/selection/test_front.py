@@ -201,3 +201,28 @@ def test_refined_front_keeps_a_refinement_only_where_it_predicts_better(linear_f
     worse = refined_front(front, lambda c: 1.05 * c, held).points[0]  # 5 % off every coefficient: worse
     assert not worse.refined and np.array_equal(worse.coef, point.coef)
     assert exact.to_json()["refined"] is True and worse.to_json()["refined"] is False
+
+
+def test_refined_front_keeps_the_estimate_that_predicts_the_runs_best(linear_front_inputs):
+    truth, designs, fronts, held, _ = linear_front_inputs
+    front = long_time_front(designs, fronts, held, 4, caps=[3])
+    (point,) = front.points
+    off = lambda c: 1.05 * c  # noqa: E731  5 % off every coefficient: a 2.5 % frequency error, worse than the fit's
+
+    # an estimate beside the output error (e.g. the accelerations' least squares) that is the truth is kept, and named
+    acc = refined_front(front, off, held, {"accelerations": lambda c: truth.coef}).points[0]
+    assert acc.estimate == "accelerations" and not acc.refined and np.array_equal(acc.coef, truth.coef)
+    assert acc.to_json()["estimate"] == "accelerations"
+    # where the output error's is the truth it is kept over a worse estimate; where both are worse the least squares
+    oe = refined_front(front, lambda c: truth.coef, held, {"accelerations": off}).points[0]
+    assert oe.estimate == "output error" and oe.refined
+    plain = refined_front(front, off, held, {"accelerations": off}).points[0]
+    assert plain.estimate == "integral form" and np.array_equal(plain.coef, point.coef)
+
+    # an estimate that fails (a singular fit) is no candidate, not the front's error
+    def singular(c):
+        raise np.linalg.LinAlgError("singular")
+    assert refined_front(front, off, held, {"accelerations": singular}).points[0].estimate == "integral form"
+    # an estimate's coefficients outside the point's supports are dropped: the support is the front's
+    wide = refined_front(front, off, held, {"accelerations": lambda c: truth.coef + 1e-9}).points[0]
+    assert np.array_equal(wide.coef != 0, point.coef != 0)
