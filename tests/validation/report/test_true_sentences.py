@@ -535,6 +535,8 @@ def test_the_rise_is_judged_given_the_other_effects():
     diag = _diagnosis_of([scattering, mirror], ("pair_scattering", "mirror_asymmetry"))
     answer = causes_text(diag)
     assert "is not named" not in answer and "unchanged within its error" not in answer
+    # the rise as added is said together with the fall given the others, on which it was judged
+    assert "as added, before the effects added after it; given the other effects" in answer
     doc = mirror.to_json()
     assert doc["gap_change_given_others"] == pytest.approx(-1.43e-5, rel=1e-12)
     assert EffectVerdict.from_json(doc) == mirror

@@ -21,7 +21,7 @@ from ..html import Figure, Section, Table
 from .gap_diagnosis import gap_without, named_effects, not_shrinking, too_few_runs_text, unchanged_within_error
 
 if TYPE_CHECKING:
-    from ...diagnosis import Diagnosis
+    from ...diagnosis import Diagnosis, EffectVerdict
 
 __all__ = ["section", "causes_text", "cause_rows", "constant_rows", "data_warnings", "model_sentences"]
 
@@ -52,6 +52,18 @@ def cause_rows(diagnosis: "Diagnosis") -> list[list]:
     return rows
 
 
+def _gap_moves(diagnosis: "Diagnosis", effect: "EffectVerdict", shown) -> str:
+    """What a named effect does to the gap: as added (from the gap of the effects added before it); where that rose,
+    also given the model's other effects (the final model refitted without it), on which it was judged."""
+    before = gap_without(diagnosis, effect)
+    text = f"the gap {shown(before)} -> {shown(effect.gap_after)}"
+    if effect.gap_after >= before and effect.gap_change_given_others is not None:
+        without = effect.gap_without_given_others
+        text += (f" as added, before the effects added after it; given the other effects "
+                 f"{shown(without)} -> {shown(without + effect.gap_change_given_others)}")
+    return text
+
+
 def causes_text(diagnosis: "Diagnosis") -> str:
     """The answer's first sentences: too few runs (first, when so), the gap before, the named causes and the gap
     after, and an effect that improved held-out runs but raised the gap beyond its error."""
@@ -69,7 +81,7 @@ def causes_text(diagnosis: "Diagnosis") -> str:
     if named:
         text += " The causes, in the order added: " + "; ".join(
             f"{e.name} ({_params(e)}; " + (f"it {w})" if (w := unchanged_within_error(diagnosis, e)) else
-                                           f"the gap {shown(gap_without(diagnosis, e))} -> {shown(e.gap_after)})")
+                                           f"{_gap_moves(diagnosis, e, shown)})")
             for e in named) + "."
     for pr in pairs:
         a, b = pr["effects"]
