@@ -39,6 +39,20 @@ def draw(effect: str, index: int, seed: int) -> dict:
             "pressure_error": error, "twin_seed": int(rng.integers(2**31))}
 
 
+def generate_once(folder: Path, case: dict) -> bool:
+    """The case's data set in ``folder / "data"`` and its hidden truth in ``folder / "truth.json"`` (10 runs of 3 s,
+    the air's damping), written unless already there; False when the twin could not generate it."""
+    if (folder / "truth.json").exists():
+        return True
+    folder.mkdir(parents=True, exist_ok=True)
+    error, _ = generate_twin_case(case, BlindConfig(runs=10, duration=3.0, resonator=False), folder / "data",
+                                  air_damping=True)
+    if error:
+        return False
+    hide_truth(folder / "data", folder / "truth.json")
+    return True
+
+
 def run_case(folder: Path, case: dict, tag: str, trajectory_test: bool = True) -> dict | None:
     """The diagnosis of one case (generated once), or None when the twin could not generate it."""
     from validation.diagnosis import DiagnoseConfig, diagnose_dataset
@@ -46,13 +60,8 @@ def run_case(folder: Path, case: dict, tag: str, trajectory_test: bool = True) -
     result = folder / f"result_{tag}.json"
     if result.exists():
         return json.loads(result.read_text())
-    if not (folder / "truth.json").exists():
-        folder.mkdir(parents=True, exist_ok=True)
-        error, _ = generate_twin_case(case, BlindConfig(runs=10, duration=3.0, resonator=False), folder / "data",
-                                      air_damping=True)
-        if error:
-            return None
-        hide_truth(folder / "data", folder / "truth.json")
+    if not generate_once(folder, case):
+        return None
     truth = json.loads((folder / "truth.json").read_text())
     diag = diagnose_dataset(folder / "data", DiagnoseConfig(long_time=False, trajectory_test=trajectory_test),
                             progress=False)

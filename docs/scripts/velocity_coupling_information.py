@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from velocity_coupling_fixed_set import draw  # noqa: E402
+from velocity_coupling_fixed_set import draw, generate_once  # noqa: E402
 
 import validation.diagnosis.identify.output_error as output_error  # noqa: E402
 
@@ -48,8 +48,6 @@ def _counted(counter: dict):
 
 def run_case(folder: Path, case: dict) -> dict | None:
     """The record of one case (generated and tested once), or None when the twin could not generate it."""
-    from validation.blind.candidates import generate_twin_case, hide_truth
-    from validation.blind.config import BlindConfig
     from validation.diagnosis import DiagnoseConfig
     from validation.diagnosis.calibrate.calibration_step import calibration_step
     from validation.diagnosis.calibrate.gap_model import fit_gap_model
@@ -58,13 +56,8 @@ def run_case(folder: Path, case: dict) -> dict | None:
     record = folder / "record.json"
     if record.exists():
         return json.loads(record.read_text())
-    if not (folder / "truth.json").exists():
-        folder.mkdir(parents=True, exist_ok=True)
-        error, _ = generate_twin_case(case, BlindConfig(runs=10, duration=3.0, resonator=False), folder / "data",
-                                      air_damping=True)
-        if error:
-            return None
-        hide_truth(folder / "data", folder / "truth.json")
+    if not generate_once(folder, case):
+        return None
     truth = json.loads((folder / "truth.json").read_text())["effects"]["velocity_coupling"]
     start = start_diagnosis(load_for_diagnosis(folder / "data", progress=False))
     cal = calibration_step(start.prepared, start.conditions, start.model, start.spec,
