@@ -13,7 +13,7 @@ from validation.diagnosis.prepare.cavity_lag import (RING_UP_S, CavityGains, cav
                                                     leave_out_ring_up, mode_from_gains)
 from validation.diagnosis.summarise.result import EffectVerdict
 from validation.diagnosis.summarise.uncertainty import ParameterInterval, _resolved, interval_from_error
-from validation.diagnosis.summarise.verdicts import _named_only_with_a_mode
+from validation.diagnosis.summarise.cavity_verdicts import named_only_with_a_mode
 
 FREQUENCY = Medium().frequency_hz
 
@@ -208,7 +208,7 @@ def test_a_cavity_is_named_unless_its_lag_has_the_sign_no_mode_has(a, b, b_error
     verdict = EffectVerdict("cavity_lag", {"static_gain": a, "lag_gain": b}, 0.1, 0.5, True, 1e-3, 1e-3, 0.5,
                             named=True, uncertainty={"static_gain": interval_from_error(a, abs(a) / 20, 9),
                                                      "lag_gain": lag})
-    out = _named_only_with_a_mode(verdict)
+    out = named_only_with_a_mode(verdict)
     assert (out.status == "named") == named and out.named == named
     assert named or [r["code"] for r in out.rejected_because] == ["no_cavity_mode"]
     if not named:

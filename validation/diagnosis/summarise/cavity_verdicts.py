@@ -1,6 +1,7 @@
-"""The verdicts beside the levitator's cavity: pair scattering named only where it is more than the cavity's own
-share of the hinge's stiffness (:func:`named_only_beyond_cavity`), and the cavity's mode given only where the damping
-of y beside it is positive (:func:`mode_only_with_a_positive_damping`).
+"""The verdicts beside the levitator's cavity: the cavity named only with gains a cavity mode can have
+(:func:`named_only_with_a_mode`), pair scattering named only where it is more than the cavity's own share of the
+hinge's stiffness (:func:`named_only_beyond_cavity`), and the cavity's mode given only where the damping of y beside
+it is positive (:func:`mode_only_with_a_positive_damping`).
 
 **Pair scattering.**
 
@@ -37,10 +38,11 @@ from typing import Sequence
 import numpy as np
 
 from ..prepare.cavity_lag import CAVITY_LAG_PARAMETERS, _problem_cavity, problem_columns
-from .result import REJECTIONS, EffectVerdict
+from .result import EffectVerdict, rejection
 from .uncertainty import ParameterInterval
 
-__all__ = ["cavity_modulation", "hinge_stiffness", "named_only_beyond_cavity", "mode_only_with_a_positive_damping",
+__all__ = ["cavity_modulation", "hinge_stiffness", "named_only_beyond_cavity", "named_only_with_a_mode",
+           "mode_only_with_a_positive_damping",
            "MODE_QUANTITIES"]
 
 #: The derived quantities of the cavity that rest on its lag gain (not determined beside a negative damping of y).
@@ -94,8 +96,8 @@ def named_only_beyond_cavity(effects: Sequence[EffectVerdict], problem, calibrat
         return effects
     detail = (f"kappa cos^2(k Z_eq) = {pair_stiffness:.3g} 1/s^2 against the cavity's max |s - 1| K = "
               f"{modulation:.3g} x {stiffness:.3g} = {modulation * stiffness:.3g} 1/s^2")
-    effects[names["pair_scattering"]] = replace(pair, named=False, status="rejected", rejected_because=(
-        {"code": "within_cavity_response", "reason": REJECTIONS["within_cavity_response"] + f" ({detail})"},))
+    effects[names["pair_scattering"]] = replace(pair, named=False, status="rejected",
+                                                rejected_because=(rejection("within_cavity_response", detail),))
     return effects
 
 
@@ -116,3 +118,22 @@ def mode_only_with_a_positive_damping(effects: Sequence[EffectVerdict]) -> list[
                for q, iv in cavity.derived.items()}
     effects[at["cavity_lag"]] = replace(cavity, derived=derived)
     return effects
+
+
+def named_only_with_a_mode(effect: EffectVerdict) -> EffectVerdict:
+    """A named cavity whose lag gain has, beyond its 95 % interval, the sign no cavity mode has (that of its
+    quasi-static gain: :func:`~validation.diagnosis.prepare.cavity_lag.mode_from_gains`) is not named.  A resonator's
+    quasi-static and lag gains have opposite signs at every detuning (the ring's decay rate
+    ``Gamma = -2 A / (B (1 + x^2))`` is positive), so such a fit stands for something else.  A lag gain whose interval
+    holds zero is no evidence against a cavity (beside the air's damping the lag is often not resolved, while the
+    quasi-static response is): the cavity stays named, its Q and detuning not determined.  A rejected one stays in the
+    fitted model, with the code ``no_cavity_mode``."""
+    if effect.name != "cavity_lag" or effect.status != "named":
+        return effect
+    a, b = float(effect.params["static_gain"]), float(effect.params["lag_gain"])
+    lag = (effect.uncertainty or {}).get("lag_gain")
+    if a * b < 0 or lag is None or not lag.determined or lag.interval_95[0] * lag.interval_95[1] <= 0:
+        return effect
+    return replace(effect, named=False, status="rejected", rejected_because=(rejection(
+        "no_cavity_mode", f"static_gain = {a:.3g} s/rad, lag_gain = {b:.3g} s^2/rad, its 95 % interval "
+                          f"{lag.interval_95[0]:.3g} to {lag.interval_95[1]:.3g}"),))

@@ -17,7 +17,7 @@ from ..prepare.problem import DiagnosisProblem
 from ..prepare.runs import RunAccelerations
 from .uncertainty import ParameterInterval
 
-__all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict", "RejectedCandidateError", "STATUSES", "REJECTIONS"]
+__all__ = ["Diagnosis", "DiagnosisInternals", "EffectVerdict", "RejectedCandidateError", "STATUSES", "REJECTIONS", "rejection"]
 
 #: An effect's status: named as a cause; one of a pair the data cannot tell apart (named together); rejected.
 STATUSES = ("named", "indistinguishable", "rejected")
@@ -40,6 +40,12 @@ REJECTIONS = {
                               "cannot tell it from what the cavity's columns leave of its response, so it is not "
                               "named as a cause",
 }
+
+
+def rejection(code: str, detail: str = "") -> dict:
+    """A rejected candidate's reason as diagnosis.json holds it: its code (a key of :data:`REJECTIONS`) and the
+    code's sentence with the numbers that decided it in parentheses."""
+    return {"code": code, "reason": REJECTIONS[code] + (f" ({detail})" if detail else "")}
 
 
 class RejectedCandidateError(ValueError):

@@ -14,8 +14,8 @@ from ..calibrate.gap_model import GapFit, fit_gap_model
 from ..calibrate.metrics import fit_gaps, scalar_gap
 from ..identify.statistics import format_p
 from ..prepare.problem import DiagnosisProblem
-from .cavity_verdicts import mode_only_with_a_positive_damping, named_only_beyond_cavity
-from .result import REJECTIONS, EffectVerdict
+from .cavity_verdicts import mode_only_with_a_positive_damping, named_only_beyond_cavity, named_only_with_a_mode
+from .result import EffectVerdict, rejection
 from .uncertainty import ParameterInterval
 
 __all__ = ["ranked_effects", "non_physical_parameters", "gap_without", "not_shrinking", "gap_change",
@@ -36,10 +36,6 @@ def non_physical_parameters(name: str, params: Mapping[str, float]) -> list[str]
     coefficient: the effect's own non-negative parameters, :mod:`acousim.dynamics.effects`)."""
     allowed = getattr(EFFECT_TYPES.get(name), "_non_negative", ())
     return [p for p in allowed if params.get(p, 0.0) < 0]
-
-
-def _rejection(code: str, detail: str = "") -> dict:
-    return {"code": code, "reason": REJECTIONS[code] + (f" ({detail})" if detail else "")}
 
 
 def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, elim, identified: list[str],
@@ -85,7 +81,7 @@ def ranked_effects(problem: DiagnosisProblem, candidates: Sequence[str], ident, 
     model_effects = [e if e.name in by_trajectory else
                      _named_only_if_shrinking(e, model_effects[i - 1].gap_after if i else gap_before)
                      for i, e in enumerate(model_effects)]
-    model_effects = [_named_only_with_a_mode(e) for e in model_effects]
+    model_effects = [named_only_with_a_mode(e) for e in model_effects]
     # pair scattering within the cavity's own share of the hinge's stiffness is not told from the cavity
     model_effects = named_only_beyond_cavity(model_effects, problem, final.calibration)
     model_effects = mode_only_with_a_positive_damping(model_effects)
@@ -197,25 +193,6 @@ def gap_change_detail(effect: EffectVerdict, before: float) -> str:
     return text + f", {change:+.{decimals}f} +- {error:.{decimals}f} %"
 
 
-def _named_only_with_a_mode(effect: EffectVerdict) -> EffectVerdict:
-    """A named cavity whose lag gain has, beyond its 95 % interval, the sign no cavity mode has (that of its
-    quasi-static gain: :func:`~validation.diagnosis.prepare.cavity_lag.mode_from_gains`) is not named.  A resonator's
-    quasi-static and lag gains have opposite signs at every detuning (the ring's decay rate
-    ``Gamma = -2 A / (B (1 + x^2))`` is positive), so such a fit stands for something else.  A lag gain whose interval
-    holds zero is no evidence against a cavity (beside the air's damping the lag is often not resolved, while the
-    quasi-static response is): the cavity stays named, its Q and detuning not determined.  A rejected one stays in the
-    fitted model, with the code ``no_cavity_mode``."""
-    if effect.name != "cavity_lag" or effect.status != "named":
-        return effect
-    a, b = float(effect.params["static_gain"]), float(effect.params["lag_gain"])
-    lag = (effect.uncertainty or {}).get("lag_gain")
-    if a * b < 0 or lag is None or not lag.determined or lag.interval_95[0] * lag.interval_95[1] <= 0:
-        return effect
-    return replace(effect, named=False, status="rejected", rejected_because=(_rejection(
-        "no_cavity_mode", f"static_gain = {a:.3g} s/rad, lag_gain = {b:.3g} s^2/rad, its 95 % interval "
-                          f"{lag.interval_95[0]:.3g} to {lag.interval_95[1]:.3g}"),))
-
-
 def _named_only_if_shrinking(effect: EffectVerdict, before: float) -> EffectVerdict:
     """A named model effect whose addition raises the gap significantly (:func:`gap_rises`) is not named: it is
     rejected with both gaps and the change with its error (it stays in the fitted model, whose gap it is part of). One
@@ -223,24 +200,24 @@ def _named_only_if_shrinking(effect: EffectVerdict, before: float) -> EffectVerd
     if effect.status != "named" or not gap_rises(effect, before):
         return effect
     return replace(effect, named=False, status="rejected",
-                   rejected_because=(_rejection("not_shrinking_gap", gap_change_detail(effect, before)),))
+                   rejected_because=(rejection("not_shrinking_gap", gap_change_detail(effect, before)),))
 
 
 def _rejections(name: str, params: Mapping[str, float], ident, elim, test, replaced: dict) -> tuple[dict, ...]:
     """Why a candidate the model does not fit is rejected (codes of :data:`~validation.diagnosis.summarise.result.REJECTIONS`)."""
     out = []
     if name in replaced:
-        out.append(_rejection("replaced_by_discovered_terms", format_p(replaced[name])))
+        out.append(rejection("replaced_by_discovered_terms", format_p(replaced[name])))
     elif name in elim.dropped:
         given = elim.dropped_tests.get(name)
-        out.append(_rejection("removed_by_backward_check", format_p(given.p_value) if given else ""))
+        out.append(rejection("removed_by_backward_check", format_p(given.p_value) if given else ""))
     elif name in ident.withheld:
-        out.append(_rejection("withheld", f"vertical gap {ident.vertical_gap:.2g}"))
+        out.append(rejection("withheld", f"vertical gap {ident.vertical_gap:.2g}"))
     else:
-        out.append(_rejection("not_significant", format_p(test.p_value) if test else "never tested"))
+        out.append(rejection("not_significant", format_p(test.p_value) if test else "never tested"))
     bad = non_physical_parameters(name, params)
     if bad:
-        out.append(_rejection("non_physical_sign", ", ".join(f"{p} = {params[p]:.3g} < 0" for p in bad)))
+        out.append(rejection("non_physical_sign", ", ".join(f"{p} = {params[p]:.3g} < 0" for p in bad)))
     return tuple(out)
 
 
