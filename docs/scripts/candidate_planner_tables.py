@@ -1,0 +1,135 @@
+"""The candidates' run planner's tables of docs/diagnosis.md ("Planning runs for the candidates").
+
+``c6``: for the velocity coupling's fixed-set draws (``velocity_coupling_fixed_set.draw``: the blind strengths, a
+pressure error within +-10 %, the twin's seed), the planner's oracle standard error of c6 on each case's own 10 runs
+of 3 s (the twin's exact states of the data set the diagnosis was given; the air's damping, linear damping fitted
+beside the coupling) and the runs for c6 within 20 % at 95 % (oracle z 9.8, 1/sqrt(n) from the case's runs).  With
+``--records DIR`` (the output folder of ``velocity_coupling_information.py`` for the same seed) it prints the
+trajectory test's measured c6, standard error and error beside it, and the ratio of the two standard errors.
+
+    python docs/scripts/candidate_planner_tables.py c6 --seed 16100 --cases 16
+    python docs/scripts/candidate_planner_tables.py c6 --seed 19301 --cases 2 --records /tmp/vc19301
+
+``heights``: the alias z of the cavity's lag against linear damping (and back) for runs dropped from one height or
+from several, on the twin with a resonator (Q 250, detuning 1.5 half-widths) and on one with linear damping of y
+alone (1 1/s), both without the air's damping (the pair's twin case of docs/diagnosis.md), and with the air's
+damping beside the resonator.
+
+    python docs/scripts/candidate_planner_tables.py heights --runs 8 --duration 2
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from velocity_coupling_fixed_set import draw  # noqa: E402
+
+from acousim.dynamics.effects import EffectSet  # noqa: E402
+from acousim.models import ExperimentConditions  # noqa: E402
+from acousim.twin import TwinConfig  # noqa: E402
+from fitting.uncertainty.oracle import NoiseLevels  # noqa: E402
+from validation.blind.candidates import NOMINAL_PRESSURE_PA  # noqa: E402
+from validation.planner import CandidatePlanConfig, RunDesign, plan_candidates, reference_runs  # noqa: E402
+from validation.planner.candidate_plan import target_z  # noqa: E402
+
+NOISE = NoiseLevels(1e-6, 0.005, source="the twin camera's default")
+
+
+def c6_table(seed: int, cases: int, records: Path | None) -> None:
+    """One line per case: c6, the planner's SE on the case's runs, the runs for 20 % (and the measured SE)."""
+    ratios, rel = [], []
+    for i in range(cases):
+        case = draw("velocity_coupling", i, seed)
+        truth = None
+        if records is not None and (records / f"vc_{i}" / "truth.json").exists():
+            truth = json.loads((records / f"vc_{i}" / "truth.json").read_text())
+        p = truth["pressure_amplitude_pa"] if truth else NOMINAL_PRESSURE_PA * (1 + case["pressure_error"])
+        twin_seed = truth["seed"] if truth else case["twin_seed"]
+        twin = TwinConfig(runs=10, duration=3.0, seed=twin_seed, experiment=ExperimentConditions(pressure_amplitude_pa=p),
+                          effects=EffectSet.from_dict(case["effects"]), air_damping=True)
+        cpu = time.process_time()
+        fitted = ("velocity_coupling", "linear_damping")
+        ref = reference_runs(twin, RunDesign(duration=3.0, n_reference=10, seed=twin_seed), fitted)
+        plan = plan_candidates(ref, NOISE, CandidatePlanConfig(fitted, run_counts=(10,), n_draws=1))
+        c6 = next(q for q in plan.parameters if q.label == "velocity_coupling.c6")
+        se = c6.std_error_reference
+        need = int(np.ceil(10 * (target_z(0.2, 0.95) * se / abs(c6.coefficient)) ** 2))
+        rel.append(se / abs(c6.coefficient))
+        line = (f"{i}: c5 {case['effects']['velocity_coupling']['c5']:.0f}, c6 {c6.coefficient:.3g}; planner SE "
+                f"{se:.3g} (relative {se / abs(c6.coefficient):.2f}); runs for c6 within 20 % at 95 %: {need}; "
+                f"{time.process_time() - cpu:.1f} CPU-s")
+        rec = records / f"vc_{i}" / "record.json" if records is not None else None
+        if rec is not None and rec.exists():
+            r = json.loads(rec.read_text())
+            m_se = r["std_errors"]["c6"]
+            err = r["params"]["c6"] / c6.coefficient - 1
+            ratios.append(se / m_se)
+            line += (f"; trajectory test: c6 error {err:+.0%}, SE {m_se:.3g} (relative {m_se / abs(c6.coefficient):.2f}), "
+                     f"planner / measured SE {se / m_se:.2f}")
+        print(line, flush=True)
+    print(f"median planner relative SE {np.median(rel):.2f} over {len(rel)} cases", flush=True)
+    if ratios:
+        print(f"planner / trajectory-test SE: median {np.median(ratios):.2f}, range {min(ratios):.2f}-{max(ratios):.2f}")
+
+
+def _designs() -> list[tuple[str, tuple[float, ...]]]:
+    return [("one amplitude, 20 um", (20e-6,)), ("one amplitude, 50 um", (50e-6,)), ("one amplitude, 100 um", (100e-6,)),
+            ("one amplitude, 150 um", (150e-6,)), ("four amplitudes, 20-150 um", (20e-6, 50e-6, 100e-6, 150e-6))]
+
+
+def heights_table(runs: int, duration: float, n_reference: int) -> None:
+    """Alias z of the cavity's lag and linear damping against each other, per design."""
+    twins = [("resonator Q 250, x 1.5, no air", TwinConfig(air_damping=False, transducer_q=250.0, cavity_detuning=1.5),
+              ("cavity_lag", "linear_damping")),
+             ("linear damping of y 1 1/s, no air", TwinConfig(
+                 air_damping=False, effects=EffectSet.from_dict({"linear_damping": {"gamma_y": 1.0, "gamma_theta": 0.0}})),
+              ("linear_damping", "cavity_lag")),
+             ("resonator Q 250, x 1.5, with the air", TwinConfig(transducer_q=250.0, cavity_detuning=1.5),
+              ("cavity_lag", "linear_damping"))]
+    fitted = ("cavity_lag", "linear_damping")
+    for label, twin, pair in twins:
+        for name, heights in _designs():
+            cpu = time.process_time()
+            ref = reference_runs(twin, RunDesign(duration=duration, n_reference=n_reference, amplitudes=heights,
+                                                 theta_drop=(-0.05, 0.05), seed=1), fitted)
+            plan = plan_candidates(ref, NOISE, CandidatePlanConfig(fitted, pairs=(pair,), run_counts=(runs,), n_draws=100))
+            a = plan.pairs[0]
+            amp = plan.amplitude_m
+            line = (f"{label} | {name}: |y| {amp[0] * 1e6:.0f}-{amp[2] * 1e6:.0f} um; {pair[0]} by {pair[1]}: alias z "
+                    f"{a.table[0][1]:.2f} at {runs} runs (10 %: {a.table[0][2]:.2f}), {a.alias_z_reference:.2f} on "
+                    f"{len(ref)}; runs for alias z 4: {a.runs_needed}")
+            if pair[0] == "cavity_lag":  # the lag's part alone: the static gain's contribution left out of the truth
+                lag = replace(ref, truth={**ref.truth, "cavity_lag.static_gain": 0.0})
+                alone = plan_candidates(lag, NOISE, CandidatePlanConfig(fitted, pairs=(pair,), run_counts=(runs,),
+                                                                        n_draws=100)).pairs[0]
+                line += f"; the lag alone: alias z {alone.table[0][1]:.2f}, runs for 4: {alone.runs_needed}"
+            print(line + f"; {time.process_time() - cpu:.1f} CPU-s", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    c = sub.add_parser("c6")
+    c.add_argument("--seed", type=int, default=16100)
+    c.add_argument("--cases", type=int, default=16)
+    c.add_argument("--records", type=Path, default=None)
+    h = sub.add_parser("heights")
+    h.add_argument("--runs", type=int, default=8)
+    h.add_argument("--duration", type=float, default=2.0)
+    h.add_argument("--reference-runs", type=int, default=16)
+    args = ap.parse_args()
+    if args.what == "c6":
+        c6_table(args.seed, args.cases, args.records)
+    else:
+        heights_table(args.runs, args.duration, args.reference_runs)
+
+
+if __name__ == "__main__":
+    main()
