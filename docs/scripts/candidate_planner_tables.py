@@ -4,11 +4,16 @@
 pressure error within +-10 %, the twin's seed), the planner's oracle standard error of c6 on each case's own 10 runs
 of 3 s (the twin's exact states of the data set the diagnosis was given; the air's damping, linear damping fitted
 beside the coupling) and the runs for c6 within 20 % at 95 % (oracle z 9.8, 1/sqrt(n) from the case's runs).  With
-``--records DIR`` (the output folder of ``velocity_coupling_information.py`` for the same seed) it prints the
-trajectory test's measured c6, standard error and error beside it, and the ratio of the two standard errors.
+``--records DIR`` (the output folder of ``velocity_coupling_information.py`` or of
+``velocity_coupling_fixed_set.py --effects velocity_coupling`` for the same seed) it prints the trajectory test's
+measured c6, standard error and error beside it, and the ratio of the two standard errors.
 
     python docs/scripts/candidate_planner_tables.py c6 --seed 16100 --cases 16
+    python docs/scripts/velocity_coupling_information.py --out /tmp/vc19301 --seed 19301 --cases 2
     python docs/scripts/candidate_planner_tables.py c6 --seed 19301 --cases 2 --records /tmp/vc19301
+    python docs/scripts/velocity_coupling_fixed_set.py --out /tmp/fs19302 --effects velocity_coupling --cases 2 \
+        --seed 19302
+    python docs/scripts/candidate_planner_tables.py c6 --seed 19302 --cases 2 --records /tmp/fs19302
 
 ``heights``: the alias z of the cavity's lag against linear damping (and back) for runs dropped from one height or
 from several, on the twin with a resonator (Q 250, detuning 1.5 half-widths) and on one with linear damping of y
@@ -42,14 +47,34 @@ from validation.planner.candidate_plan import target_z  # noqa: E402
 NOISE = NoiseLevels(1e-6, 0.005, source="the twin camera's default")
 
 
+def _case_folder(records: Path | None, i: int) -> Path | None:
+    """Case i's folder in ``records``: ``vc_i`` (velocity_coupling_information.py) or ``velocity_coupling_i``
+    (velocity_coupling_fixed_set.py, a whole diagnosis); None without one."""
+    for name in (f"vc_{i}", f"velocity_coupling_{i}"):
+        if records is not None and (records / name / "truth.json").exists():
+            return records / name
+    return None
+
+
+def _measured(folder: Path | None) -> dict | None:
+    """The trajectory test's c6 and standard errors of a case: ``record.json``, or a diagnosis's
+    ``result_current.json`` (its trajectory-test record)."""
+    if folder is None:
+        return None
+    if (folder / "record.json").exists():
+        return json.loads((folder / "record.json").read_text())
+    if (folder / "result_current.json").exists():
+        return json.loads((folder / "result_current.json").read_text()).get("output_error")
+    return None
+
+
 def c6_table(seed: int, cases: int, records: Path | None) -> None:
     """One line per case: c6, the planner's SE on the case's runs, the runs for 20 % (and the measured SE)."""
     ratios, rel = [], []
     for i in range(cases):
         case = draw("velocity_coupling", i, seed)
-        truth = None
-        if records is not None and (records / f"vc_{i}" / "truth.json").exists():
-            truth = json.loads((records / f"vc_{i}" / "truth.json").read_text())
+        folder = _case_folder(records, i)
+        truth = json.loads((folder / "truth.json").read_text()) if folder is not None else None
         p = truth["pressure_amplitude_pa"] if truth else NOMINAL_PRESSURE_PA * (1 + case["pressure_error"])
         twin_seed = truth["seed"] if truth else case["twin_seed"]
         twin = TwinConfig(runs=10, duration=3.0, seed=twin_seed, experiment=ExperimentConditions(pressure_amplitude_pa=p),
@@ -65,9 +90,8 @@ def c6_table(seed: int, cases: int, records: Path | None) -> None:
         line = (f"{i}: c5 {case['effects']['velocity_coupling']['c5']:.0f}, c6 {c6.coefficient:.3g}; planner SE "
                 f"{se:.3g} (relative {se / abs(c6.coefficient):.2f}); runs for c6 within 20 % at 95 %: {need}; "
                 f"{time.process_time() - cpu:.1f} CPU-s")
-        rec = records / f"vc_{i}" / "record.json" if records is not None else None
-        if rec is not None and rec.exists():
-            r = json.loads(rec.read_text())
+        r = _measured(folder)
+        if r is not None:
             m_se = r["std_errors"]["c6"]
             err = r["params"]["c6"] / c6.coefficient - 1
             ratios.append(se / m_se)
