@@ -123,6 +123,7 @@ def test_plan_command_prints_the_tables(capsys):
     out = capsys.readouterr().out
     assert "velocity_coupling.c6 = 1e+06" in out and "runs needed for z >= 9.80" in out
     assert "velocity_coupling replaced by linear_damping" in out and "alias z" in out
+    assert "c6 with the diagnosis's trajectory test" in out
 
 
 @pytest.mark.parametrize("extra, fragment", [

@@ -36,7 +36,12 @@ from fitting.uncertainty.oracle import NoiseLevels, alias_probability, covarianc
 from fitting.uncertainty.run_planning import draw_table, drawn_information, runs_needed
 from .reference_runs import EQUATIONS, ReferenceRuns, parameter_labels
 
-__all__ = ["CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
+#: The velocity coupling's trajectory test (:mod:`validation.diagnosis.identify.output_error`) fits c5 and c6 on every
+#: frame: its standard error of c6 was measured at 1/2.2 of this planner's (median; 1.8-2.9 on 20 twin data sets of
+#: 10 runs of 3 s, docs/diagnosis.md "Planning runs for the candidates"), so its runs for a target are 2.2^2 fewer.
+TRAJECTORY_TEST_GAIN = 2.2
+
+__all__ = ["TRAJECTORY_TEST_GAIN", "CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
            "target_z"]
 
 
@@ -263,5 +268,19 @@ def plan_candidates(ref: ReferenceRuns, noise: NoiseLevels, config: CandidatePla
                              "give its strengths")
     heights = sorted({float(h) for h in ref.heights if np.isfinite(h)})
     amps = np.percentile(ref.amplitudes, [0, 50, 100])
-    return CandidatePlan(_parameter_plans(ref, config, noise), _pair_plans(ref, config, noise), noise, len(ref),
-                         heights, tuple(float(a) for a in amps), ref.window_s)
+    parameters = _parameter_plans(ref, config, noise)
+    return CandidatePlan(parameters, _pair_plans(ref, config, noise), noise, len(ref), heights,
+                         tuple(float(a) for a in amps), ref.window_s, _trajectory_notes(parameters, len(ref)))
+
+
+def _trajectory_notes(parameters: Sequence[ParameterPlan], n_reference: int) -> list[str]:
+    """For c6: what the diagnosis's trajectory test needs, scaled by its measured gain (:data:`TRAJECTORY_TEST_GAIN`)."""
+    out = []
+    for p in parameters:
+        if p.label == "velocity_coupling.c6" and p.coefficient:
+            se = p.std_error_reference / TRAJECTORY_TEST_GAIN
+            need = int(np.ceil(n_reference * (p.target_z * se / abs(p.coefficient)) ** 2))
+            out += ["", f"velocity_coupling.c6 with the diagnosis's trajectory test (every frame; its standard error "
+                        f"measured at 1/{TRAJECTORY_TEST_GAIN:g} of the integral form's): SE about {se:.3g} on the "
+                        f"{n_reference} reference runs, runs needed for z >= {p.target_z:.2f} about {max(need, 1)}"]
+    return out
