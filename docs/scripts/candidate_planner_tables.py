@@ -82,13 +82,15 @@ def c6_table(seed: int, cases: int, records: Path | None) -> None:
         cpu = time.process_time()
         fitted = ("velocity_coupling", "linear_damping")
         ref = reference_runs(twin, RunDesign(duration=3.0, n_reference=10, seed=twin_seed), fitted)
-        plan = plan_candidates(ref, NOISE, CandidatePlanConfig(fitted, run_counts=(10,), n_draws=1))
+        plan = plan_candidates(ref, NOISE, CandidatePlanConfig(fitted, pairs=(("velocity_coupling", "linear_damping"),),
+                                                               run_counts=(10,), n_draws=1))
         c6 = next(q for q in plan.parameters if q.label == "velocity_coupling.c6")
         se = c6.std_error_reference
         need = int(np.ceil(10 * (target_z(0.2, 0.95) * se / abs(c6.coefficient)) ** 2))
         rel.append(se / abs(c6.coefficient))
         line = (f"{i}: c5 {case['effects']['velocity_coupling']['c5']:.0f}, c6 {c6.coefficient:.3g}; planner SE "
                 f"{se:.3g} (relative {se / abs(c6.coefficient):.2f}); runs for c6 within 20 % at 95 %: {need}; "
+                f"alias z of the coupling by linear damping {plan.pairs[0].alias_z_reference:.1f}; "
                 f"{time.process_time() - cpu:.1f} CPU-s")
         r = _measured(folder)
         if r is not None:
