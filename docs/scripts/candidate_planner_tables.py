@@ -70,7 +70,7 @@ def _measured(folder: Path | None) -> dict | None:
 
 def c6_table(seed: int, cases: int, records: Path | None) -> None:
     """One line per case: c6, the planner's SE on the case's runs, the runs for 20 % (and the measured SE)."""
-    ratios, rel = [], []
+    ratios, rel, ratios_t, rel_t, z_t = [], [], [], [], []
     for i in range(cases):
         case = draw("velocity_coupling", i, seed)
         folder = _case_folder(records, i)
@@ -81,28 +81,39 @@ def c6_table(seed: int, cases: int, records: Path | None) -> None:
                           effects=EffectSet.from_dict(case["effects"]), air_damping=True)
         cpu = time.process_time()
         fitted = ("velocity_coupling", "linear_damping")
-        ref = reference_runs(twin, RunDesign(duration=3.0, n_reference=10, seed=twin_seed), fitted)
+        ref = reference_runs(twin, RunDesign(duration=3.0, n_reference=10, seed=twin_seed), fitted, NOISE)
         plan = plan_candidates(ref, NOISE, CandidatePlanConfig(fitted, pairs=(("velocity_coupling", "linear_damping"),),
                                                                run_counts=(10,), n_draws=1))
         c6 = next(q for q in plan.parameters if q.label == "velocity_coupling.c6")
         se = c6.std_error_reference
+        tr = next(q for q in plan.parameters if q.label == "trajectory test: c6")
+        se_t = tr.std_error_reference
+        need_t = int(np.ceil(10 * (target_z(0.2, 0.95) * se_t / abs(c6.coefficient)) ** 2))
+        rel_t.append(se_t / abs(c6.coefficient))
         need = int(np.ceil(10 * (target_z(0.2, 0.95) * se / abs(c6.coefficient)) ** 2))
         rel.append(se / abs(c6.coefficient))
         line = (f"{i}: c5 {case['effects']['velocity_coupling']['c5']:.0f}, c6 {c6.coefficient:.3g}; planner SE "
                 f"{se:.3g} (relative {se / abs(c6.coefficient):.2f}); runs for c6 within 20 % at 95 %: {need}; "
-                f"alias z of the coupling by linear damping {plan.pairs[0].alias_z_reference:.1f}; "
+                f"alias z of the coupling by linear damping {plan.pairs[0].alias_z_reference:.1f}; trajectory test's "
+                f"oracle SE {se_t:.3g} (relative {se_t / abs(c6.coefficient):.2f}), runs for 20 %: {need_t}; "
                 f"{time.process_time() - cpu:.1f} CPU-s")
         r = _measured(folder)
         if r is not None:
             m_se = r["std_errors"]["c6"]
             err = r["params"]["c6"] / c6.coefficient - 1
             ratios.append(se / m_se)
+            ratios_t.append(se_t / m_se)
+            z_t.append((r["params"]["c6"] - c6.coefficient) / se_t)
             line += (f"; trajectory test: c6 error {err:+.0%}, SE {m_se:.3g} (relative {m_se / abs(c6.coefficient):.2f}), "
-                     f"planner / measured SE {se / m_se:.2f}")
+                     f"integral form / measured SE {se / m_se:.2f}, trajectory oracle / measured SE {se_t / m_se:.2f}, "
+                     f"error in oracle SEs {z_t[-1]:+.2f}")
         print(line, flush=True)
-    print(f"median planner relative SE {np.median(rel):.2f} over {len(rel)} cases", flush=True)
+    print(f"median relative SE of c6 over {len(rel)} cases: integral form {np.median(rel):.2f}, trajectory test's oracle "
+          f"{np.median(rel_t):.2f}", flush=True)
     if ratios:
-        print(f"planner / trajectory-test SE: median {np.median(ratios):.2f}, range {min(ratios):.2f}-{max(ratios):.2f}")
+        print(f"integral form / measured SE: median {np.median(ratios):.2f}, range {min(ratios):.2f}-{max(ratios):.2f}; "
+              f"trajectory oracle / measured SE: median {np.median(ratios_t):.2f}, range {min(ratios_t):.2f}-"
+              f"{max(ratios_t):.2f}; measured errors in oracle SEs: rms {np.sqrt(np.mean(np.square(z_t))):.2f}")
 
 
 def _designs() -> list[tuple[str, tuple[float, ...]]]:

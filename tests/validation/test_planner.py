@@ -123,7 +123,7 @@ def test_plan_command_prints_the_tables(capsys):
     out = capsys.readouterr().out
     assert "velocity_coupling.c6 = 1e+06" in out and "runs needed for z >= 9.80" in out
     assert "velocity_coupling replaced by linear_damping" in out and "alias z" in out
-    assert "c6 with the diagnosis's trajectory test" in out
+    assert "trajectory test: c6 = 1e+06" in out
 
 
 @pytest.mark.parametrize("extra, fragment", [
@@ -147,3 +147,33 @@ def test_a_pair_needs_the_colon(capsys):
         main(QUICK + ["--pair", "cavity_lag"])
     assert exc.value.code == 2
     assert "TRUE:RIVAL" in capsys.readouterr().err
+
+
+def test_trajectory_oracle_pools_runs_as_the_joint_fit(ref):
+    """The trajectory test's information per run, its initial state marginalised, summed over runs, is the joint
+    Gauss-Newton covariance of the trajectory test on all the runs at once (the same simulations and differences:
+    the sums of the normal equations are exact; 1e-6 for the inversions)."""
+    from acousim.twin import twin_dynamics
+    from validation.diagnosis.identify.output_error import RunTrajectories, fit_trajectories
+    from validation.planner.trajectory_oracle import _law, trajectory_information
+
+    runs, _, _ = simulate_field_drop_runs(replace(TWIN, runs=2, duration=0.5, seed=3,
+                                                  camera=replace(TWIN.camera, fps=1000.0, missing_frames=0)),
+                                          ExecutorConfig(workers=1), progress=False)
+    dynamics, pressure = twin_dynamics(TWIN)
+    states = [r.state for r in runs]
+    labels, info, truth = trajectory_information(TWIN, dynamics, states, 1e-3, NOISE)
+    assert truth["trajectory test: c6"] == 1.0e6 and labels[-1] == "trajectory test: y_offset"
+    pooled = np.sqrt(covariance_diagonal(info.sum(axis=0)))
+    law, shape, rates = _law(dynamics)
+    data = RunTrajectories(1e-3, [s[:, [0, 2]] for s in states], np.full((2, 2), [NOISE.sigma_y, NOISE.sigma_theta]),
+                           np.array([s[0] for s in states]))
+    joint = fit_trajectories(data, dynamics.force_model, law, shape, {}, {"pressure_pa": pressure, **rates,
+                                                                           "c5": 3000.0, "c6": 1.0e6}, True,
+                             iterations=0)
+    for k, name in enumerate(joint.shared_names + ("y_offset",)):
+        assert pooled[k] == pytest.approx(joint.std_errors[name], rel=1e-6), name
+    # the reference runs of a c6 plan carry it; a twin with a resonator has none (no trajectory test there)
+    assert ref.trajectory is None
+    assert trajectory_information(replace(TWIN, transducer_q=250.0, cavity_detuning=1.5), dynamics, states, 1e-3,
+                                  NOISE) is None

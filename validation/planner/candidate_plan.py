@@ -18,9 +18,11 @@ add information, so for n runs the pooled matrix of ``n_draws`` random draws of 
   Least squares then prefers R over T in about ``Phi(-alias_z / 2)`` of data sets (2.3 % at alias z 4).  A
   candidate against itself has alias z 0.
 
-What it leaves out: the noise of the columns (the diagnosis evaluates them at smoothed noisy states), the
-calibration's origin and a pressure drift, the held-out rounds' and the trajectory test's own statistics (the
-trajectory test of the velocity coupling uses every frame, not windows: docs/diagnosis.md compares the two).
+Where the velocity coupling is fitted, c5 and c6 also get the standard errors of the diagnosis's trajectory test, which
+fits every frame (:mod:`validation.planner.trajectory_oracle`; labelled ``"trajectory test: c6"``).
+
+What it leaves out: the noise of the columns (the diagnosis evaluates them at smoothed noisy states), a pressure
+drift, and the held-out rounds' own statistics.
 """
 from __future__ import annotations
 
@@ -36,12 +38,7 @@ from fitting.uncertainty.oracle import NoiseLevels, alias_probability, covarianc
 from fitting.uncertainty.run_planning import draw_table, drawn_information, runs_needed
 from .reference_runs import EQUATIONS, ReferenceRuns, parameter_labels
 
-#: The velocity coupling's trajectory test (:mod:`validation.diagnosis.identify.output_error`) fits c5 and c6 on every
-#: frame: its standard error of c6 was measured at 1/2.2 of this planner's (median; 1.8-2.9 on 20 twin data sets of
-#: 10 runs of 3 s, docs/diagnosis.md "Planning runs for the candidates"), so its runs for a target are 2.2^2 fewer.
-TRAJECTORY_TEST_GAIN = 2.2
-
-__all__ = ["TRAJECTORY_TEST_GAIN", "CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
+__all__ = ["CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
            "target_z"]
 
 
@@ -224,6 +221,25 @@ def _parameter_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseL
     return out
 
 
+def _trajectory_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig) -> list[ParameterPlan]:
+    """The tables of c5 and c6 by the velocity coupling's trajectory test (:mod:`validation.planner.trajectory_oracle`;
+    its information is in the parameters' units, the noise already in it)."""
+    if ref.trajectory is None or "velocity_coupling" not in cfg.fitted:
+        return []
+    labels, info, truth = ref.trajectory
+    tz = target_z(cfg.relative_error, cfg.confidence)
+    pooled_se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
+    out = []
+    for k, label in enumerate(labels):
+        if not label.endswith(("c5", "c6")):
+            continue
+        c = truth[label]
+        table = draw_table(info, k, 1.0, c, list(cfg.run_counts), cfg.n_draws, np.random.default_rng([cfg.seed, 9, k]))
+        slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
+        out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90), tz))
+    return out
+
+
 def _pair_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseLevels) -> list[PairPlan]:
     """The alias table of every (true, rival) pair."""
     out = []
@@ -268,19 +284,7 @@ def plan_candidates(ref: ReferenceRuns, noise: NoiseLevels, config: CandidatePla
                              "give its strengths")
     heights = sorted({float(h) for h in ref.heights if np.isfinite(h)})
     amps = np.percentile(ref.amplitudes, [0, 50, 100])
-    parameters = _parameter_plans(ref, config, noise)
+    parameters = _parameter_plans(ref, config, noise) + _trajectory_plans(ref, config)
     return CandidatePlan(parameters, _pair_plans(ref, config, noise), noise, len(ref), heights,
-                         tuple(float(a) for a in amps), ref.window_s, _trajectory_notes(parameters, len(ref)))
+                         tuple(float(a) for a in amps), ref.window_s)
 
-
-def _trajectory_notes(parameters: Sequence[ParameterPlan], n_reference: int) -> list[str]:
-    """For c6: what the diagnosis's trajectory test needs, scaled by its measured gain (:data:`TRAJECTORY_TEST_GAIN`)."""
-    out = []
-    for p in parameters:
-        if p.label == "velocity_coupling.c6" and p.coefficient:
-            se = p.std_error_reference / TRAJECTORY_TEST_GAIN
-            need = int(np.ceil(n_reference * (p.target_z * se / abs(p.coefficient)) ** 2))
-            out += ["", f"velocity_coupling.c6 with the diagnosis's trajectory test (every frame; its standard error "
-                        f"measured at 1/{TRAJECTORY_TEST_GAIN:g} of the integral form's): SE about {se:.3g} on the "
-                        f"{n_reference} reference runs, runs needed for z >= {p.target_z:.2f} about {max(need, 1)}"]
-    return out

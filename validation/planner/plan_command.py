@@ -202,7 +202,7 @@ def run_plan(a: argparse.Namespace) -> int:
         config = CandidatePlanConfig(fitted, tuple(a.pair), a.relative_error, a.confidence, a.target_alias_z,
                                      tuple(a.runs), a.draws, design.seed)
         names = tuple(dict.fromkeys(fitted + tuple(c for p in a.pair for c in p)))
-        plan = plan_candidates(reference_runs(twin, design, names), noise, config)
+        plan = plan_candidates(reference_runs(twin, design, names, noise), noise, config)
     except (TwinError, ValueError) as exc:
         raise UserInputError(str(exc)) from None
     print(plan.format_table())

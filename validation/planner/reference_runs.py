@@ -116,6 +116,7 @@ class ReferenceRuns:
     amplitudes : array (R,): each run's largest |y| [m]
     window_s : per equation, the median integral window [s]
     truth : ``{label: true coefficient}`` (:func:`true_parameters`)
+    trajectory : the trajectory test's oracle (labels, information, truth), or None
     """
 
     labels: tuple[tuple[str, ...], tuple[str, ...]]
@@ -124,6 +125,9 @@ class ReferenceRuns:
     amplitudes: NDArray[np.float64]
     window_s: tuple[float, float]
     truth: dict[str, float]
+    #: the velocity coupling's trajectory test on the same runs (:func:`validation.planner.trajectory_oracle.trajectory_information`:
+    #: labels, per-run information in the parameters' units, truth), None where not measured
+    trajectory: tuple[tuple[str, ...], NDArray[np.float64], dict[str, float]] | None = None
 
     def __len__(self) -> int:
         return int(self.heights.size)
@@ -248,7 +252,7 @@ def _simulated(twin, design: RunDesign, omega_y: float) -> list[tuple[float, NDA
     return out
 
 
-def reference_runs(twin, design: RunDesign, names: Sequence[str]) -> ReferenceRuns:
+def reference_runs(twin, design: RunDesign, names: Sequence[str], noise=None) -> ReferenceRuns:
     """Simulate the design's reference runs of the twin configuration and measure each one's information for the
     columns of the model's own terms and the candidates ``names`` (module docstring).
 
@@ -259,6 +263,9 @@ def reference_runs(twin, design: RunDesign, names: Sequence[str]) -> ReferenceRu
     design : RunDesign
     names : candidate effects whose columns are measured (keys of
         :data:`validation.diagnosis.prepare.candidate_effects.CANDIDATE_EFFECTS`)
+    noise : fitting.uncertainty.oracle.NoiseLevels, optional
+        With ``velocity_coupling`` among ``names``: the noise of the trajectory test's oracle on the same runs
+        (:mod:`validation.planner.trajectory_oracle`; not measured without it)
 
     Returns
     -------
@@ -276,7 +283,7 @@ def reference_runs(twin, design: RunDesign, names: Sequence[str]) -> ReferenceRu
     dt = 1.0 / float(design.fps)
     info: list[list[NDArray]] = [[], []]
     windows: list[list[float]] = [[], []]
-    kept_h, amps = [], []
+    kept_h, amps, kept = [], [], []
     omega_y = 2.0 * math.pi * float(fm.linear_frequencies()[0])
     for h, state in _simulated(twin, design, omega_y):
         cols = _columns(state, fm, cavity, mode, names)
@@ -287,10 +294,16 @@ def reference_runs(twin, design: RunDesign, names: Sequence[str]) -> ReferenceRu
             info[q].append(X.T @ X)
             windows[q].append(w * dt)
         kept_h.append(h)
+        kept.append(state)
         amps.append(float(np.max(np.abs(state[:, 0]))))
     if not kept_h:
         raise ValueError("no reference run is long enough for one integral window: use longer runs")
     logger.info("planner: %d reference runs of %.2f s at %g fps", len(kept_h), design.duration, design.fps)
+    trajectory = None
+    if noise is not None and "velocity_coupling" in names:
+        from .trajectory_oracle import trajectory_information
+
+        trajectory = trajectory_information(twin, dynamics, kept, dt, noise)
     return ReferenceRuns(labels, (np.array(info[0]), np.array(info[1])), np.array(kept_h), np.array(amps),
                          (float(np.median(windows[0])), float(np.median(windows[1]))),
-                         true_parameters(twin, dynamics))
+                         true_parameters(twin, dynamics), trajectory)
