@@ -12,7 +12,7 @@ from fitting.derivatives.integral_form import detrend_windows, window_starts
 from fitting.uncertainty.oracle import NoiseLevels, covariance_diagonal, integral_design
 from validation.cli import main
 from validation.planner import CandidatePlanConfig, RunDesign, pair_alias_z, plan_candidates, reference_runs
-from validation.planner.candidate_plan import target_z
+from validation.planner.candidate_plan import joint_information, target_z
 from validation.planner.reference_runs import EQUATIONS, _columns, drop_time, twin_from_truth
 
 NOISE = NoiseLevels(1e-6, 0.005)
@@ -76,11 +76,11 @@ def test_standard_errors_fall_as_one_over_sqrt_runs(ref):
 def test_alias_z_of_a_candidate_with_itself_is_zero(ref):
     """A candidate's own columns fit its contribution exactly; another candidate's leave a residual no larger than
     dropping the candidate altogether (the alias z against nothing)."""
-    pooled = [m.sum(axis=0) for m in ref.information]
-    args = (pooled, ref.labels, ref.truth)
-    self_z = pair_alias_z(*args, "velocity_coupling", "velocity_coupling", FITTED, NOISE)
-    drop_z = pair_alias_z(*args, "velocity_coupling", "no_such_candidate", (), NOISE)
-    rival_z = pair_alias_z(*args, "velocity_coupling", "linear_damping", FITTED, NOISE)
+    labels, joint = joint_information(ref, NOISE)
+    args = (joint.sum(axis=0), labels, ref.truth)
+    self_z = pair_alias_z(*args, "velocity_coupling", "velocity_coupling", FITTED)
+    drop_z = pair_alias_z(*args, "velocity_coupling", "no_such_candidate", ())
+    rival_z = pair_alias_z(*args, "velocity_coupling", "linear_damping", FITTED)
     # the Schur complement of scaled Gram matrices cancels to ~1e-12 of the signal's sum of squares
     assert self_z < 1e-5 * drop_z
     assert 0 < rival_z <= drop_z * (1 + 1e-9)
@@ -177,3 +177,20 @@ def test_trajectory_oracle_pools_runs_as_the_joint_fit(ref):
     assert ref.trajectory is None
     assert trajectory_information(replace(TWIN, transducer_q=250.0, cavity_detuning=1.5), dynamics, states, 1e-3,
                                   NOISE) is None
+
+
+def test_a_parameter_acting_in_both_equations_is_one_parameter():
+    """The cavity's gains act in y and theta: the joint information adds both equations' (each over its noise), so
+    its standard error is below either equation's alone; and the alias z of the cavity against itself is 0."""
+    twin = TwinConfig(air_damping=False, transducer_q=250.0, cavity_detuning=1.5)
+    ref = reference_runs(twin, RunDesign(duration=0.5, fps=1000.0, n_reference=2, amplitudes=(100e-6,)),
+                         ("cavity_lag", "linear_damping"))
+    labels, joint = joint_information(ref, NOISE)
+    assert labels.count("cavity_lag.lag_gain") == 1
+    k = labels.index("cavity_lag.lag_gain")
+    se_joint = np.sqrt(covariance_diagonal(joint.sum(axis=0))[k])
+    for q, eq in enumerate(EQUATIONS):
+        own = NOISE.of(eq) * np.sqrt(covariance_diagonal(ref.information[q].sum(axis=0))[list(ref.labels[q]).index(
+            "cavity_lag.lag_gain")])
+        assert se_joint < own
+    assert pair_alias_z(joint.sum(axis=0), labels, ref.truth, "cavity_lag", "cavity_lag", ("cavity_lag",)) < 1e-4

@@ -12,9 +12,10 @@ add information, so for n runs the pooled matrix of ``n_draws`` random draws of 
 * **A parameter within a relative error at a confidence**: a 95 % interval within +-20 % of the value needs a
   standard error of ``0.2 |c| / 1.96``, an oracle z of 9.8.
 * **Two candidates apart**: the alias z of a true candidate T against a rival R is
-  ``sqrt(sum_q dRSS_q / sigma_q^2)`` over the equations T acts in, with dRSS_q the noise-free residual sum of
-  squares left when T's contribution (its columns times its true parameters) is fitted by R's columns together
-  with the model's own terms and the other named candidates (:func:`fitting.uncertainty.oracle.replacement_rss`).
+  ``sqrt(sum_q dRSS_q / sigma_q^2)`` over the equations, with dRSS_q the noise-free residual sum of squares left
+  when T's contribution (its columns times its true parameters) is fitted by R's columns together with the model's
+  own terms and the other named candidates, jointly over both equations (a parameter acting in both is one, as the
+  diagnosis fits them: :func:`joint_information`; :func:`fitting.uncertainty.oracle.replacement_rss`).
   Least squares then prefers R over T in about ``Phi(-alias_z / 2)`` of data sets (2.3 % at alias z 4).  A
   candidate against itself has alias z 0.
 
@@ -39,6 +40,7 @@ from fitting.uncertainty.run_planning import draw_table, drawn_information, runs
 from .reference_runs import EQUATIONS, ReferenceRuns, parameter_labels
 
 __all__ = ["CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
+           "joint_information",
            "target_z"]
 
 
@@ -152,7 +154,8 @@ class CandidatePlan:
                       f"{'runs':>6} {'oracle SE':>12} {'rel. SE':>8} {'z':>8} {'z (10 %)':>9}"]
             lines += [f"{n:>6d} {se:>12.4g} {se / abs(p.coefficient) if p.coefficient else float('inf'):>8.3f} "
                       f"{z:>8.2f} {z10:>9.2f}" for n, se, z, z10 in p.table]
-            lines.append(f"runs needed for z >= {p.target_z:.2f}: {_fmt(p.runs_needed, p.table)} (median), "
+            lines.append("true value 0: no relative target" if not p.coefficient else
+                         f"runs needed for z >= {p.target_z:.2f}: {_fmt(p.runs_needed, p.table)} (median), "
                          f"{_fmt(p.runs_needed_90, p.table)} (90 % of draws)")
         for a in self.pairs:
             lines += ["", f"{a.true} replaced by {a.rival} (with the model's own terms and the other fitted "
@@ -170,54 +173,61 @@ def _fmt(n: int, table: Sequence) -> str:
     return "beyond the table" if n == 0 else f"{n} or fewer" if n == first else str(n)
 
 
-def pair_alias_z(information: Sequence[NDArray], labels: Sequence[Sequence[str]], truth: dict[str, float],
-                 true: str, rival: str, fitted: Sequence[str], noise: NoiseLevels) -> float:
-    """The alias z of candidate ``true`` against ``rival`` on pooled information matrices (module docstring).
+def joint_information(ref: ReferenceRuns, noise: NoiseLevels) -> tuple[list[str], NDArray[np.float64]]:
+    """The runs' information on every parameter of both equations at once, each equation's weighted by its noise
+    (``X_q^T X_q / sigma_q^2``): a parameter that acts in both (the cavity's gains) is one parameter, as the diagnosis
+    fits every effect parameter jointly over the equations.
+
+    Returns
+    -------
+    (labels, information (R, P, P)) in the parameters' SI units.
+    """
+    labels = list(dict.fromkeys(ref.labels[0] + ref.labels[1]))
+    out = np.zeros((len(ref), len(labels), len(labels)))
+    for q, eq in enumerate(EQUATIONS):
+        idx = np.array([labels.index(lab) for lab in ref.labels[q]], int)
+        if idx.size:
+            out[:, idx[:, None], idx[None, :]] += ref.information[q] / noise.of(eq) ** 2
+    return labels, out
+
+
+def pair_alias_z(information: NDArray, labels: Sequence[str], truth: dict[str, float], true: str, rival: str,
+                 fitted: Sequence[str]) -> float:
+    """The alias z of candidate ``true`` against ``rival`` on a pooled joint information matrix (module docstring).
 
     Parameters
     ----------
-    information : per equation, the pooled unit-noise matrix (P_q, P_q) over the columns ``labels[q]``
-    labels : per equation, the column labels (:func:`validation.planner.reference_runs.parameter_labels`)
+    information : the pooled noise-weighted matrix (P, P) over ``labels`` (:func:`joint_information` summed over runs)
+    labels : the parameters' labels (:func:`validation.planner.reference_runs.parameter_labels`, both equations)
     truth : true coefficients by label (a missing one is 0)
     true, rival : candidate names
     fitted : the other candidates fitted beside the rival (``true`` and ``rival`` themselves are skipped)
-    noise : the positions' white noise
     """
     kept = [n for n in fitted if n not in (true, rival)]
-    z2 = 0.0
-    for q, eq in enumerate(EQUATIONS):
-        lab = list(labels[q])
-        signal = [i for i, l in enumerate(lab) if l.split(".")[0] == true]
-        if not signal:
-            continue
-        basis = [i for i, l in enumerate(lab) if "." not in l or l.split(".")[0] in kept + [rival]]
-        coef = np.array([truth.get(lab[i], 0.0) for i in signal])
-        z2 += replacement_rss(information[q], signal, coef, basis) / noise.of(eq) ** 2
-    return float(np.sqrt(z2))
-
-
-def _sub(info: NDArray, labels: Sequence[str], keep: Sequence[str]) -> tuple[NDArray, list[str]]:
-    idx = [i for i, l in enumerate(labels) if l in keep]
-    return info[..., idx, :][..., :, idx], [labels[i] for i in idx]
+    signal = [i for i, lab in enumerate(labels) if lab.split(".")[0] == true]
+    if not signal:
+        return 0.0
+    basis = [i for i, lab in enumerate(labels) if "." not in lab or lab.split(".")[0] in kept + [rival]]
+    coef = np.array([truth.get(labels[i], 0.0) for i in signal])
+    return float(np.sqrt(replacement_rss(information, signal, coef, basis)))
 
 
 def _parameter_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseLevels) -> list[ParameterPlan]:
-    """The table of every fitted parameter (the model's own terms and the fitted candidates' columns)."""
-    fitted_labels = parameter_labels(cfg.fitted)
+    """The table of every fitted parameter (the model's own terms and the fitted candidates' columns, fitted jointly
+    over both equations)."""
+    fitted = parameter_labels(cfg.fitted)
+    keep = list(dict.fromkeys(fitted[0] + fitted[1]))
+    labels, joint = joint_information(ref, noise)
+    idx = [labels.index(lab) for lab in keep]
+    info = joint[:, idx][:, :, idx]
     tz = target_z(cfg.relative_error, cfg.confidence)
+    pooled_se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
     out = []
-    for q, eq in enumerate(EQUATIONS):
-        info, lab = _sub(ref.information[q], ref.labels[q], fitted_labels[q])
-        if not lab:
-            continue
-        pooled_se = noise.of(eq) * np.sqrt(covariance_diagonal(info.sum(axis=0)))
-        for k, label in enumerate(lab):
-            c = float(ref.truth.get(label, 0.0))
-            rng = np.random.default_rng([cfg.seed, q, k])
-            table = draw_table(info, k, noise.of(eq), c, list(cfg.run_counts), cfg.n_draws, rng)
-            slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
-            out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90),
-                                     tz))
+    for k, label in enumerate(keep):
+        c = float(ref.truth.get(label, 0.0))
+        table = draw_table(info, k, 1.0, c, list(cfg.run_counts), cfg.n_draws, np.random.default_rng([cfg.seed, k]))
+        slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
+        out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90), tz))
     return out
 
 
@@ -242,16 +252,15 @@ def _trajectory_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig) -> list[Para
 
 def _pair_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseLevels) -> list[PairPlan]:
     """The alias table of every (true, rival) pair."""
+    labels, joint = joint_information(ref, noise)
     out = []
     for i, (true, rival) in enumerate(cfg.pairs):
-        pooled = [m.sum(axis=0) for m in ref.information]
-        z_ref = pair_alias_z(pooled, ref.labels, ref.truth, true, rival, cfg.fitted, noise)
+        z_ref = pair_alias_z(joint.sum(axis=0), labels, ref.truth, true, rival, cfg.fitted)
         rng = np.random.default_rng([cfg.seed, 7, i])
         table = []
         for n in cfg.run_counts:
-            draws = [drawn_information(m, n, cfg.n_draws, rng) for m in ref.information]
-            zs = np.array([pair_alias_z([draws[0][d], draws[1][d]], ref.labels, ref.truth, true, rival, cfg.fitted,
-                                        noise) for d in range(cfg.n_draws)])
+            draws = drawn_information(joint, n, cfg.n_draws, rng)
+            zs = np.array([pair_alias_z(m, labels, ref.truth, true, rival, cfg.fitted) for m in draws])
             table.append((int(n), float(np.median(zs)), float(np.percentile(zs, 10))))
         needed = int(np.ceil(len(ref) * (cfg.target_alias_z / z_ref) ** 2)) if z_ref > 0 else 0
         out.append(PairPlan(true, rival, z_ref, table, needed, float(cfg.target_alias_z)))
