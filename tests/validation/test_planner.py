@@ -194,3 +194,20 @@ def test_a_parameter_acting_in_both_equations_is_one_parameter():
             "cavity_lag.lag_gain")])
         assert se_joint < own
     assert pair_alias_z(joint.sum(axis=0), labels, ref.truth, "cavity_lag", "cavity_lag", ("cavity_lag",)) < 1e-4
+
+
+def test_plan_takes_a_data_sets_experiment_and_recorded_noise(tmp_path, sine_run, write_csv, capsys):
+    """--data: the noise its meta.json records (the tracking's block); a meta.json the reader refuses is one line
+    naming it."""
+    import json
+
+    data = tmp_path / "data"
+    data.mkdir()
+    write_csv(data / "run01.csv", *sine_run)
+    (data / "meta.json").write_text(json.dumps({"tracking": {"noise_y_m": 2e-6, "noise_theta": 0.004}}))
+    assert main(QUICK + ["--data", str(data), "--runs", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "sigma_y = 2e-06 m, sigma_theta = 0.004" in out
+    (data / "meta.json").write_text(json.dumps({"pressure_amplitude_pa": -5.0}))
+    assert main(QUICK + ["--data", str(data)]) == 2
+    assert "meta.json" in _one_line_error(capsys)

@@ -76,8 +76,8 @@ def add_plan_parser(sub) -> None:
     p.add_argument("--draws", type=positive_int, default=field_default(CandidatePlanConfig, "n_draws"),
                    help="random draws of runs per row")
     p.add_argument("--data", default=None, metavar="DATA_DIR",
-                   help="a data set whose tracking noise the plan uses (recorded in its meta.json, else estimated "
-                        "from its runs)")
+                   help="a data set whose experiment (its meta.json: dimer, frequency, pressure) and tracking noise "
+                        "(recorded in its meta.json, else estimated from its runs) the plan uses")
     p.add_argument("--noise-y", type=positive_float, default=None,
                    help=f"tracking noise of y [m] (default: --data's, else {DEFAULT_TRACKING_NOISE['noise_y_m']:g})")
     p.add_argument("--noise-theta", type=positive_float, default=None,
@@ -105,6 +105,8 @@ def twin_from_args(a: argparse.Namespace):
             twin = TwinConfig.from_preset(PRESETS[a.preset])
         else:
             twin = TwinConfig()
+        if a.data is not None and a.truth is None:
+            twin = replace(twin, experiment=_experiment_of(a.data, twin))
         effects = twin.effects.merged(EffectSet.parse(a.effect)) if a.effect else twin.effects
         cavity = {} if a.cavity is None else {"transducer_q": a.cavity[0], "cavity_detuning": a.cavity[1]}
         twin = replace(twin, effects=effects, air_damping=twin.air_damping and not a.no_air_damping, **cavity)
@@ -112,6 +114,20 @@ def twin_from_args(a: argparse.Namespace):
     except (EffectError, TwinError) as exc:
         raise UserInputError(f"--effect/--cavity: {exc}") from None
     return twin
+
+
+def _experiment_of(data: str, twin):
+    """The experiment a data set's meta.json states (its dimer, frequency, pressure; the twin's where it states none)."""
+    from acousim.models import ExperimentConditions
+    from cubedimer.errors import DatasetError
+    from cubedimer.meta import read_meta
+
+    if not Path(data, "meta.json").is_file():
+        raise UserInputError(f"--data {data}: no meta.json there; give a data set's folder")
+    try:
+        return ExperimentConditions.from_meta(read_meta(data))
+    except (DatasetError, ValueError) as exc:
+        raise UserInputError(f"--data {data}: {exc}") from None
 
 
 def _read_truth(path: str) -> dict:
