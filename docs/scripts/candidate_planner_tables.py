@@ -21,6 +21,12 @@ alone (1 1/s), both without the air's damping (the pair's twin case of docs/diag
 damping beside the resonator.
 
     python docs/scripts/candidate_planner_tables.py heights --runs 8 --duration 2
+
+``integral-mc`` and ``trajectory-mc``: the two oracles against Monte-Carlos of their estimators (docs/diagnosis.md,
+"Validation").
+
+    python docs/scripts/candidate_planner_tables.py integral-mc --draws 2000
+    python docs/scripts/candidate_planner_tables.py trajectory-mc --draws 400
 """
 from __future__ import annotations
 
@@ -150,6 +156,72 @@ def heights_table(runs: int, duration: float, n_reference: int) -> None:
             print(line + f"; {time.process_time() - cpu:.1f} CPU-s", flush=True)
 
 
+def integral_mc(draws: int) -> None:
+    """The integral form's oracle against least squares on noisy copies of 10 twin runs of 3 s (c5 = -3028 1/m,
+    c6 = -9.04e5 1/m^2, the air's damping): Monte-Carlo spread over planned standard error per parameter."""
+    from acousim.twin import simulate_field_drop_runs, twin_dynamics
+    from cubedimer.executor import ExecutorConfig
+    from fitting.derivatives.integral_form import detrend_windows, window_starts
+    from fitting.uncertainty.oracle import covariance_diagonal, integral_design
+    from validation.planner.reference_runs import EQUATIONS, _columns
+
+    fitted = ("velocity_coupling", "linear_damping")
+    twin = TwinConfig(effects=EffectSet.from_dict({"velocity_coupling": {"c5": -3028.0, "c6": -9.04e5}}))
+    runs, _, _ = simulate_field_drop_runs(replace(twin, runs=10, duration=3.0, seed=5,
+                                                  camera=replace(twin.camera, missing_frames=0)),
+                                          ExecutorConfig(workers=1), progress=False)
+    ref = reference_runs(twin, RunDesign(duration=3.0, n_reference=10, seed=5), fitted)
+    fm = twin_dynamics(twin)[0].force_model
+    rng = np.random.default_rng(19303)
+    for q, eq in enumerate(EQUATIONS):
+        designs = [integral_design(_columns(r.state, fm, None, None, fitted)[q], r.state[:, 2 * q], 5e-4) for r in runs]
+        X = np.concatenate([d[0] for d in designs])
+        scale = np.linalg.norm(X, axis=0)
+        Q, R = np.linalg.qr(X / scale)
+        est = []
+        for _ in range(max(1, draws // 100)):
+            b = np.concatenate([detrend_windows(NOISE.of(eq) * rng.standard_normal((r.state.shape[0], 100)),
+                                                window_starts(r.state.shape[0], w), w) for r, (_, w) in zip(runs, designs)])
+            est.append(np.linalg.solve(R, Q.T @ b) / scale[:, None])
+        planned = NOISE.of(eq) * np.sqrt(covariance_diagonal(ref.information[q].sum(axis=0)))
+        ratio = np.concatenate(est, axis=1).std(axis=1, ddof=1) / planned
+        print(eq, ", ".join(f"{lab} {r:.3f}" for lab, r in zip(ref.labels[q], ratio)), flush=True)
+
+
+def trajectory_mc(draws: int) -> None:
+    """The trajectory test's oracle against its Gauss-Newton fit on noisy copies of 4 twin runs of 1.5 s (fresh seeds
+    19304 and 19305; c5 = -3000 1/m, c6 = 1e6 1/m^2, the air's damping)."""
+    from acousim.twin import simulate_field_drop_runs, twin_dynamics
+    from cubedimer.executor import ExecutorConfig
+    from fitting.uncertainty.oracle import covariance_diagonal
+    from validation.diagnosis.identify.output_error import RunTrajectories, fit_trajectories
+    from validation.planner.trajectory_oracle import _law, trajectory_information
+
+    twin = TwinConfig(runs=4, duration=1.5, seed=19304,
+                      effects=EffectSet.from_dict({"velocity_coupling": {"c5": -3000.0, "c6": 1.0e6}}))
+    dyn, p = twin_dynamics(twin)
+    runs, _, _ = simulate_field_drop_runs(replace(twin, camera=replace(twin.camera, missing_frames=0)),
+                                          ExecutorConfig(workers=1), progress=False)
+    states = [r.state for r in runs]
+    labels, info, truth = trajectory_information(twin, dyn, states, 5e-4, NOISE)
+    se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
+    law, shape, rates = _law(dyn)
+    start = {"pressure_pa": p, **rates, "c5": -3000.0, "c6": 1.0e6}
+    names = ("pressure_pa", "gamma_y", "gamma_theta", "c5", "c6", "y_offset")
+    rng = np.random.default_rng(19305)
+    sd = np.array([NOISE.sigma_y, NOISE.sigma_theta])
+    est = []
+    for _ in range(draws):
+        pos = [st[:, [0, 2]] + rng.standard_normal((len(st), 2)) * sd for st in states]
+        data = RunTrajectories(5e-4, pos, np.tile(sd, (len(states), 1)), np.array([st[0] for st in states]))
+        fit = fit_trajectories(data, dyn.force_model, law, shape, {}, start, True, iterations=4)
+        est.append([fit.params[n] for n in names])
+    est = np.array(est)
+    true = np.array([truth[lab] for lab in labels])
+    for lab, r, b in zip(labels, est.std(axis=0, ddof=1) / se, (est.mean(axis=0) - true) / se):
+        print(f"{lab}: Monte-Carlo spread / oracle SE {r:.3f}, mean error {b:+.2f} oracle SEs", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="what", required=True)
@@ -161,11 +233,17 @@ def main() -> None:
     h.add_argument("--runs", type=int, default=8)
     h.add_argument("--duration", type=float, default=2.0)
     h.add_argument("--reference-runs", type=int, default=16)
+    for name in ("integral-mc", "trajectory-mc"):
+        sub.add_parser(name).add_argument("--draws", type=int, default=400)
     args = ap.parse_args()
     if args.what == "c6":
         c6_table(args.seed, args.cases, args.records)
-    else:
+    elif args.what == "heights":
         heights_table(args.runs, args.duration, args.reference_runs)
+    elif args.what == "integral-mc":
+        integral_mc(args.draws)
+    else:
+        trajectory_mc(args.draws)
 
 
 if __name__ == "__main__":
