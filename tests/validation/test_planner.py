@@ -132,6 +132,7 @@ def test_plan_command_prints_the_tables(capsys):
     (["--amplitudes", "0.02"], "--amplitudes"),
     (["--fit", "bogus"], "--fit/--pair"),
     (["--relative-error", "2"], "--relative-error"),
+    (["--theta-drop", "1.2"], "--theta-drop"),
     (["--preset", "bogus"], "--preset"),
     (["--pair", "cavity_lag:linear_damping"], "no cavity_lag"),
     (["--data", "/no/such/dir"], "--data /no/such/dir"),

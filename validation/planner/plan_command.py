@@ -60,8 +60,8 @@ def add_plan_parser(sub) -> None:
     p.add_argument("--amplitudes", type=positive_float, nargs="+", default=None, metavar="A",
                    help="the y amplitudes the drops start [m] (each run's field-off time in the twin's linear trap); "
                         "the runs cycle through them (default: the twin's drop protocol)")
-    p.add_argument("--theta-drop", type=float, nargs=2, default=None, metavar=("LO", "HI"),
-                   help="range of the hinge angle at the drop [-] (default: the twin's)")
+    p.add_argument("--theta-drop", type=positive_float, default=None, metavar="MAX",
+                   help="the hinge angle at the drop within +-MAX [-] (default: the twin's range)")
     p.add_argument("--reference-runs", type=positive_int, default=None,
                    help="reference runs simulated (the pool of the draws; default: --truth's runs, else "
                         f"{field_default(RunDesign, 'n_reference')})")
@@ -152,7 +152,7 @@ def _design(a: argparse.Namespace, twin):
                      fps=a.fps or (twin.camera.fps if own else field_default(RunDesign, "fps")),
                      n_reference=a.reference_runs or (twin.runs if own else field_default(RunDesign, "n_reference")),
                      amplitudes=None if a.amplitudes is None else tuple(a.amplitudes),
-                     theta_drop=None if a.theta_drop is None else tuple(a.theta_drop),
+                     theta_drop=None if a.theta_drop is None else (-a.theta_drop, a.theta_drop),
                      seed=a.seed if a.seed is not None else (twin.seed if own else 0))
 
 
@@ -206,6 +206,9 @@ def run_plan(a: argparse.Namespace) -> int:
 
     if not 0 < a.relative_error < 1 or not 0 < a.confidence < 1:
         raise UserInputError("--relative-error and --confidence must lie in (0, 1), e.g. 0.2 and 0.95")
+    if a.theta_drop is not None and not a.theta_drop < 0.99:
+        raise UserInputError(f"--theta-drop {a.theta_drop:g}: the hinge angle at the drop must stay below 0.99 "
+                             "(face contact at 1), e.g. 0.3")
     if a.amplitudes is not None and not all(h < 1e-3 for h in a.amplitudes):
         raise UserInputError(f"--amplitudes {' '.join(map(str, a.amplitudes))}: amplitudes are in metres and must be "
                              "below 1 mm, e.g. 20e-6 150e-6")
