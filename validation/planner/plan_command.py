@@ -106,7 +106,7 @@ def twin_from_args(a: argparse.Namespace):
         else:
             twin = TwinConfig()
         if a.data is not None and a.truth is None:
-            twin = replace(twin, experiment=_experiment_of(a.data, twin))
+            twin = replace(twin, experiment=_experiment_of(a.data))
         effects = twin.effects.merged(EffectSet.parse(a.effect)) if a.effect else twin.effects
         cavity = {} if a.cavity is None else {"transducer_q": a.cavity[0], "cavity_detuning": a.cavity[1]}
         twin = replace(twin, effects=effects, air_damping=twin.air_damping and not a.no_air_damping, **cavity)
@@ -116,7 +116,7 @@ def twin_from_args(a: argparse.Namespace):
     return twin
 
 
-def _experiment_of(data: str, twin):
+def _experiment_of(data: str):
     """The experiment a data set's meta.json states (its dimer, frequency, pressure; the twin's where it states none)."""
     from acousim.models import ExperimentConditions
     from cubedimer.errors import DatasetError
