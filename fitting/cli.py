@@ -26,7 +26,7 @@ from .options import add_fit_options, fit_config_from_args
 from .uncertainty.final_checks import NoSaneModelError
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_fit_parser", "add_compare_parser", "add_synth_parser",
-           "add_plan_parser"]
+           "add_plan_parser", "plan_noise_from_args"]
 
 #: Most runs and frames per run of a synthetic data set (frames are held in memory before writing).
 MAX_SYNTH_RUNS = 10_000
@@ -123,7 +123,7 @@ def _cmd_plan(a: argparse.Namespace) -> int:
     from .uncertainty.run_planning import PlanConfig, plan_runs
 
     model = read_model_json(a.model).model
-    noise = _plan_noise(a)
+    noise = plan_noise_from_args(a)
     if a.data is not None:  # say which levels the data set gave
         _log(f"tracking noise: sigma_y = {noise.sigma_y:.3g} m, sigma_theta = {noise.sigma_theta:.3g} ({noise.source})")
     try:
@@ -136,9 +136,10 @@ def _cmd_plan(a: argparse.Namespace) -> int:
     return 0
 
 
-def _plan_noise(a: argparse.Namespace):
+def plan_noise_from_args(a: argparse.Namespace):
     """The planner's tracking noise: --noise-y/--noise-theta where given, else the noise the data set of --data
-    records in meta.json (:func:`fitting.uncertainty.oracle.recorded_tracking_noise`), else the noise estimated from its runs."""
+    records in meta.json (:func:`fitting.uncertainty.oracle.recorded_tracking_noise`), else the noise estimated from its runs.
+    (The options ``noise_y``, ``noise_theta`` and ``data`` of ``fitting plan``; ``validation plan`` shares it.)"""
     from .uncertainty.oracle import NoiseLevels, estimate_tracking_noise, recorded_tracking_noise
 
     if a.noise_y is not None and a.noise_theta is not None:

@@ -12,9 +12,10 @@ from cubedimer.load_config import LoadConfig
 from fitting.options import add_fit_options, add_load_options, fit_config_from_args, load_config_from_args
 from fitting.output.model_file import read_model_json
 from fitting.uncertainty.final_checks import NoSaneModelError
+from .planner.plan_command import add_plan_parser
 
 __all__ = ["main", "build_parser", "COMMANDS", "add_compare_parser", "add_diagnose_parser", "add_blind_parser",
-           "add_report_parser"]
+           "add_report_parser", "add_plan_parser"]
 
 #: Most cases of a blind study, and most simulated frames of one case (runs x duration x 2,000 fps).
 MAX_BLIND_CASES = 10_000
@@ -399,7 +400,7 @@ def run_report(args: argparse.Namespace) -> int:
 
 
 #: The commands of ``python -m validation``, in the order of the help.
-COMMANDS = (add_compare_parser, add_diagnose_parser, add_blind_parser, add_report_parser)
+COMMANDS = (add_compare_parser, add_diagnose_parser, add_blind_parser, add_report_parser, add_plan_parser)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -58,7 +58,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NoiseLevels", "OracleRun", "OracleTerm", "OracleResult", "estimate_tracking_noise",
            "recorded_tracking_noise", "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_aliases",
-           "oracle_standard_errors", "covariance_diagonal", "alias_probability", "canonical_term", "METHOD"]
+           "oracle_standard_errors", "covariance_diagonal", "integral_design", "replacement_rss", "alias_probability", "canonical_term", "METHOD"]
 
 #: The positions each equation is the second derivative of.
 _COORD = {"yddot": 0, "thetaddot": 2}
@@ -279,18 +279,47 @@ def _support(model: PolynomialModel, equation: str) -> list[int]:
     return [int(j) for j in np.flatnonzero(model.coef[EQUATION_NAMES.index(equation)])]
 
 
+def integral_design(columns: NDArray, coordinate: NDArray, dt: float, periods: float = 0.75
+                    ) -> tuple[NDArray[np.float64], int] | None:
+    """The integral-form design of any columns along one run's noise-free trajectory, and its window [frames].
+
+    Parameters
+    ----------
+    columns : array (n, P)
+        The columns (accelerations per unit parameter, SI) at the run's n frames: library monomials, or any
+        other linear regressors of an equation (a candidate effect's, a model's own terms).
+    coordinate : array (n,)
+        The coordinate the equation is the second derivative of (y [m] or theta [-]); its dominant frequency sets
+        the window (:func:`fitting.derivatives.integral_form.integral_window`).
+    dt : float
+        Frame interval [s].
+    periods : float
+        Window length in periods of that frequency.
+
+    Returns
+    -------
+    (X, window) with X (rows, P) the detrended double integrals per window [s^2 x column units], or None when the
+    run is too short for one window.  ``X.T @ X`` is the run's unit-noise information matrix.
+    """
+    columns = np.asarray(columns, float)
+    if columns.shape[0] < 16:
+        return None
+    w = integral_window(dt, dominant_frequency(np.asarray(coordinate, float), dt), periods)
+    starts = window_starts(columns.shape[0], w)
+    if starts.size == 0:
+        return None
+    return integral_columns(columns, dt, starts, w), w
+
+
 def _run_design(run: OracleRun, trajectory: NDArray, equation: str, periods: float,
                 cols: Sequence[int] | None = None) -> tuple[NDArray[np.float64], int] | None:
     """The integral-form design of one run's noise-free trajectory for ``equation`` (library columns ``cols``, all
     by default) and its window [frames]; None when the trajectory is too short for one window."""
     if trajectory.shape[0] < 16:
         return None
-    w = integral_window(run.dt, dominant_frequency(trajectory[:, _COORD[equation]], run.dt), periods)
-    starts = window_starts(trajectory.shape[0], w)
-    if starts.size == 0:
-        return None
     lib = evaluate_library(trajectory)
-    return integral_columns(lib if cols is None else lib[:, list(cols)], run.dt, starts, w), w
+    return integral_design(lib if cols is None else lib[:, list(cols)], trajectory[:, _COORD[equation]], run.dt,
+                           periods)
 
 
 def oracle_information(model: PolynomialModel, runs: Sequence[OracleRun], periods: float = 0.75,
@@ -384,6 +413,45 @@ def oracle_aliases(model: PolynomialModel, runs: Sequence[OracleRun], noise: Noi
                     best = (TERMS[j], z)
             out[eq][TERMS[i]] = best if best[0] is not None else (None, float("nan"))
     return out
+
+
+def replacement_rss(information: NDArray, signal: Sequence[int], coefficients: NDArray,
+                    basis: Sequence[int]) -> float:
+    """The noise-free residual sum of squares left when a contribution is replaced by other columns, from the
+    information (Gram) matrix alone.
+
+    With ``information = X^T X`` of stacked columns X (any columns: the library's, or a candidate effect's), the
+    contribution ``X[:, signal] @ coefficients`` projected on the span of ``X[:, basis]`` leaves
+    ``c^T (G_ss - G_sb G_bb^+ G_bs) c`` (a Schur complement, computed with the columns scaled to unit norm).  Divided by
+    the noise variance it is the square of the alias z (module docstring): the alias z of a whole set of columns
+    against another set, with the remaining terms refitted.  Gram matrices of runs add, so the alias z of any
+    selection of runs follows from their summed matrices.
+
+    Parameters
+    ----------
+    information : array (P, P)
+        ``X^T X`` [column units^2].
+    signal : indices of the replaced columns
+    coefficients : array (len(signal),)
+        Their true coefficients (SI).
+    basis : indices of the columns that stand in (may include none of ``signal``; including all of them gives 0)
+
+    Returns
+    -------
+    float
+        The residual sum of squares [target units^2], >= 0.
+    """
+    g = np.asarray(information, float)
+    d = np.sqrt(np.clip(np.diag(g), 1e-300, None))
+    gs = g / np.outer(d, d)
+    s, b = list(signal), list(basis)
+    c = np.asarray(coefficients, float) * d[s]
+    total = float(c @ gs[np.ix_(s, s)] @ c)
+    if not b:
+        return max(total, 0.0)
+    cross = gs[np.ix_(b, s)] @ c
+    explained = float(cross @ np.linalg.pinv(gs[np.ix_(b, b)], rcond=1e-13) @ cross)
+    return max(total - explained, 0.0)
 
 
 def covariance_diagonal(info: NDArray) -> NDArray[np.float64]:

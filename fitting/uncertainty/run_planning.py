@@ -20,7 +20,7 @@ from ..model import TERMS, PolynomialModel
 from .oracle import (NoiseLevels, OracleRun, alias_probability, canonical_term, covariance_diagonal, oracle_aliases,
                      oracle_information)
 
-__all__ = ["PlanConfig", "RunPlan", "plan_runs"]
+__all__ = ["PlanConfig", "RunPlan", "plan_runs", "drawn_information", "draw_table", "runs_needed"]
 
 
 @dataclass(frozen=True)
@@ -149,16 +149,34 @@ class RunPlan:
         return "\n".join(lines)
 
 
-def _drawn_std_errors(information: NDArray, k: int, sigma: float, n: int, n_draws: int,
-                      rng: np.random.Generator) -> NDArray[np.float64]:
-    """Oracle standard errors of term ``k`` for ``n_draws`` random draws of ``n`` runs (distinct runs when there
-    are enough, else with replacement)."""
+def drawn_information(information: NDArray, n: int, n_draws: int, rng: np.random.Generator) -> NDArray[np.float64]:
+    """The pooled information of ``n_draws`` random draws of ``n`` runs from per-run information matrices.
+
+    Parameters
+    ----------
+    information : array (R, P, P)
+        Each reference run's unit-noise information matrix ``X_r^T X_r`` (any columns).
+    n : int
+        Runs per draw: distinct runs when ``n <= R``, else drawn with replacement.
+    n_draws : int
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    array (n_draws, P, P): each draw's summed matrix.
+    """
     pool = information.shape[0]
     if n <= pool:
         idx = np.argsort(rng.random((n_draws, pool)), axis=1)[:, :n]
     else:
         idx = rng.integers(0, pool, size=(n_draws, n))
-    total = information[idx].sum(axis=1)  # (n_draws, P, P)
+    return information[idx].sum(axis=1)
+
+
+def _drawn_std_errors(information: NDArray, k: int, sigma: float, n: int, n_draws: int,
+                      rng: np.random.Generator) -> NDArray[np.float64]:
+    """Oracle standard errors of term ``k`` for ``n_draws`` random draws of ``n`` runs (:func:`drawn_information`)."""
+    total = drawn_information(information, n, n_draws, rng)
     return np.array([sigma * np.sqrt(covariance_diagonal(m)[k]) for m in total])
 
 
@@ -208,9 +226,9 @@ def plan_runs(model: PolynomialModel, noise: NoiseLevels, config: PlanConfig) ->
     d = oracle_information(model, runs, cfg.periods, states)[eq]
     info = d["information"][d["used"]]
     c = float(coef[q, j])
-    table = _draw_table(info, d["terms"].index(name), noise.of(eq), c, counts, cfg.n_draws,
+    table = draw_table(info, d["terms"].index(name), noise.of(eq), c, counts, cfg.n_draws,
                         np.random.default_rng(cfg.seed))
-    slope, se1, needed, needed90 = _runs_needed(table, c, cfg.target_z)
+    slope, se1, needed, needed90 = runs_needed(table, c, cfg.target_z)
     al = oracle_aliases(model, runs, noise, cfg.periods, states)[eq].get(name, (None, float("nan")))
     needed_alias = (int(np.ceil(len(runs) * (cfg.target_alias_z / al[1]) ** 2)) if al[0] is not None and al[1] > 0
                     else 0)
@@ -232,7 +250,7 @@ def _reference_runs(model: PolynomialModel, cfg: PlanConfig) -> tuple[list[Oracl
     return [OracleRun(g["x0"], g["t"].size, 1.0 / syn.fps) for g in gen], [g["state"] for g in gen]
 
 
-def _draw_table(info: NDArray, k: int, sigma: float, c: float, counts: list[int], n_draws: int,
+def draw_table(info: NDArray, k: int, sigma: float, c: float, counts: list[int], n_draws: int,
                 rng: np.random.Generator) -> list[tuple[int, float, float, float]]:
     """Per number of runs: the median oracle standard error of term ``k`` (coefficient ``c``) over random draws of
     the reference runs, and the median and 10th percentile of its oracle z."""
@@ -244,7 +262,7 @@ def _draw_table(info: NDArray, k: int, sigma: float, c: float, counts: list[int]
     return table
 
 
-def _runs_needed(table: list[tuple[int, float, float, float]], c: float, target_z: float
+def runs_needed(table: list[tuple[int, float, float, float]], c: float, target_z: float
                  ) -> tuple[float, float, int, int]:
     """From the table: the measured scaling exponent, the standard error of one run, the runs for a median z of
     ``target_z`` (beyond the table: extrapolated with 1/sqrt(n)) and for a 10th-percentile z of it (0 beyond)."""

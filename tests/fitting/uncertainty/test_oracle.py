@@ -269,3 +269,22 @@ def test_plan_reads_the_data_sets_recorded_tracking_noise(tmp_path, model, capsy
     # neither levels nor a data set: one line, exit 2
     assert main(common) == 2
     assert "give --noise-y and --noise-theta, or --data DATA_DIR" in capsys.readouterr().err
+
+
+def test_replacement_rss_is_the_least_squares_residual_of_the_replacement():
+    """From the Gram matrix alone, the residual of a contribution projected on other columns equals the direct least
+    squares residual (columns spanning six decades, as the SI columns do); with its own columns it is 0."""
+    from fitting.uncertainty.oracle import replacement_rss
+
+    rng = np.random.default_rng(4)
+    X = rng.standard_normal((400, 5)) * np.array([1e-6, 1.0, 1e3, 1.0, 1e-3])
+    X[:, 3] += 0.9 * X[:, 1]  # a correlated rival
+    c = np.array([2.0, -1e-3])
+    signal = X[:, [1, 2]] @ c
+    basis = [0, 3, 4]
+    direct = float(np.sum((signal - X[:, basis] @ np.linalg.lstsq(X[:, basis], signal, rcond=None)[0]) ** 2))
+    gram = X.T @ X
+    assert replacement_rss(gram, [1, 2], c, basis) == pytest.approx(direct, rel=1e-8)
+    assert replacement_rss(gram, [1, 2], c, []) == pytest.approx(float(signal @ signal), rel=1e-12)
+    # the Schur complement cancels to rounding: ~1e-16 of the signal's sum of squares times the conditioning
+    assert replacement_rss(gram, [1, 2], c, [0, 1, 2]) < 1e-10 * float(signal @ signal)
