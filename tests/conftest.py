@@ -47,6 +47,20 @@ CLUSTER_MODULES = frozenset({
 #: The units of several modules (:func:`scheduling_unit`), by name.
 GROUPED_UNITS = {"boundary-elements": BOUNDARY_ELEMENT_MODULES, "dask-cluster": CLUSTER_MODULES}
 
+#: The module bempp-cl's solver API is imported with (``acousim.fullwave.solver``, at the first solve): its kernels
+#: compile at the first assembly after it.
+BEMPP_SOLVER_MODULE = "bempp_cl.api"
+
+
+def boundary_elements_outside_their_unit(module: str, loaded, ran_boundary_elements: bool) -> str | None:
+    """The one-line complaint when a test of ``module`` (not one of :data:`BOUNDARY_ELEMENT_MODULES`) has left
+    bempp-cl's solver API in ``loaded`` (``sys.modules``) of a process that has run no boundary-element module: that
+    process would compile bempp-cl's kernels a second time in the session (about 37 CPU-s).  None when all is well."""
+    if ran_boundary_elements or module in BOUNDARY_ELEMENT_MODULES or BEMPP_SOLVER_MODULE not in loaded:
+        return None
+    return (f"{module} reaches bempp-cl's solver ({BEMPP_SOLVER_MODULE} imported) outside the boundary-element unit: "
+            f"add it to BOUNDARY_ELEMENT_MODULES in tests/conftest.py so that the kernels compile once per session")
+
 
 #: Measured seconds of each scheduling unit (a module, or the boundary-element group), so that ``make test`` starts
 #: the longest units first; refreshed from the last full run by ``make test-durations``.
@@ -394,14 +408,31 @@ def _close_cluster() -> None:
         stack.close()
 
 
-@pytest.hookimpl(hookwrapper=True)
+#: Whether this process has run a test of :data:`BOUNDARY_ELEMENT_MODULES` (bempp-cl's kernels compile there).
+_BOUNDARY_ELEMENTS_RAN: dict[str, bool] = {"ran": False}
+
+
+@pytest.hookimpl(wrapper=True)
 def pytest_runtest_teardown(item, nextitem):
     """After a test's own teardown: shut :func:`process_cluster`'s cluster down when the next test of this process
-    belongs to another scheduling unit, or there is none (an idle cluster costs a share of a core)."""
-    yield
-    if _CLUSTER and (nextitem is None or scheduling_unit(nextitem.nodeid.split("::", 1)[0])
-                     != scheduling_unit(item.nodeid.split("::", 1)[0])):
-        _close_cluster()
+    belongs to another scheduling unit, or there is none (an idle cluster costs a share of a core); and fail the
+    teardown of a test outside the boundary-element unit that reached bempp-cl's solver
+    (:func:`boundary_elements_outside_their_unit`)."""
+    import sys
+
+    module = item.nodeid.split("::", 1)[0]
+    try:
+        result = yield
+    finally:  # also after a teardown that failed
+        if _CLUSTER and (nextitem is None or scheduling_unit(nextitem.nodeid.split("::", 1)[0])
+                         != scheduling_unit(module)):
+            _close_cluster()
+    _BOUNDARY_ELEMENTS_RAN["ran"] |= module in BOUNDARY_ELEMENT_MODULES
+    complaint = boundary_elements_outside_their_unit(module, sys.modules, _BOUNDARY_ELEMENTS_RAN["ran"])
+    if complaint:
+        _BOUNDARY_ELEMENTS_RAN["ran"] = True  # said once per process
+        pytest.fail(complaint, pytrace=False)
+    return result
 
 
 #: The synthetic family's analytic dependence: the interpolated quantities (dimensionless coefficients, F_Z's over ks)

@@ -3,13 +3,26 @@ cluster, and units start longest first."""
 import json
 import re
 
-from tests.conftest import (BOUNDARY_ELEMENT_MODULES, CLUSTER_MODULES, GROUPED_UNITS, UNIT_DURATIONS_FILE,
-                            longest_first, scheduling_unit)
+from tests.conftest import (BEMPP_SOLVER_MODULE, BOUNDARY_ELEMENT_MODULES, CLUSTER_MODULES, GROUPED_UNITS,
+                            UNIT_DURATIONS_FILE, boundary_elements_outside_their_unit, longest_first, scheduling_unit)
 
 
 def test_boundary_element_modules_are_one_unit():
     assert {scheduling_unit(m) for m in BOUNDARY_ELEMENT_MODULES} == {"boundary-elements"}
     assert scheduling_unit("tests/fitting/test_recovery.py") == "tests/fitting/test_recovery.py"
+
+
+def test_a_module_outside_the_boundary_element_unit_that_reaches_bempp_is_named():
+    """bempp-cl's kernels compile once per session only if its solver is reached in the boundary-element unit alone:
+    a test of another module that leaves bempp-cl's solver API imported in a process that has run no boundary-element
+    module fails its teardown (tests/conftest.py ``pytest_runtest_teardown``), naming the module and the fix."""
+    fullwave = sorted(BOUNDARY_ELEMENT_MODULES)[0]
+    other = "tests/validation/diagnosis/test_pipeline_twin.py"
+    complaint = boundary_elements_outside_their_unit(other, {BEMPP_SOLVER_MODULE: None}, False)
+    assert other in complaint and "BOUNDARY_ELEMENT_MODULES" in complaint
+    assert boundary_elements_outside_their_unit(other, {"bempp_cl": None}, False) is None  # importorskip alone
+    assert boundary_elements_outside_their_unit(fullwave, {BEMPP_SOLVER_MODULE: None}, False) is None
+    assert boundary_elements_outside_their_unit(other, {BEMPP_SOLVER_MODULE: None}, True) is None  # compiled here
 
 
 def test_cluster_modules_are_one_unit_and_every_user_of_the_cluster_is_in_it():

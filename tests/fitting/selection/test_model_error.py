@@ -90,10 +90,41 @@ def non_sparse():
     return runs, derivs, exact[8:], residual
 
 
+def _integral_form_start(monkeypatch) -> list:
+    """The models the output error starts from in the discoveries that follow (recorded on the way): the integral
+    form's own coefficients, which ``DiscoveryConfig(output_error=None)`` returns (its selection passes do not read
+    the output error's settings, so they are the same passes)."""
+    from fitting.selection import integral_discovery
+
+    starts, refine = [], integral_discovery.refine_output_error
+
+    def recorded(model, *args, **kwargs):
+        starts.append(model)
+        return refine(model, *args, **kwargs)
+
+    monkeypatch.setattr(integral_discovery, "refine_output_error", recorded)
+    return starts
+
+
+def test_no_output_error_is_made_when_it_is_not_configured():
+    """``DiscoveryConfig(output_error=None)``: the integral form's coefficients stay as they are, under model error
+    too (test_model_error_is_detected_and_the_selection_is_compact compares them with the refined ones)."""
+    from types import SimpleNamespace
+
+    from fitting.selection import integral_discovery as discovery
+
+    result = SimpleNamespace(modes=(discovery.MODEL_ERROR_MODE, discovery.MODEL_ERROR_MODE),
+                             coef=np.zeros((2, len(TERMS))))
+    setup = SimpleNamespace(dts=[], ys=[], ths=[], slow_freqs=[], noise=(1.0, 1.0), forced=None)
+    assert discovery._refine_output_error(setup, [], result, DiscoveryConfig(output_error=None)) is None
+    assert DiscoveryConfig().output_error is not None
+
+
 @pytest.mark.slow
-def test_model_error_is_detected_and_the_selection_is_compact(non_sparse, without_front):
+def test_model_error_is_detected_and_the_selection_is_compact(non_sparse, without_front, monkeypatch):
     runs, derivs, heldout, residual = non_sparse
     assert 0.02 < residual < 0.05
+    starts = _integral_form_start(monkeypatch)
     new = discover_model(runs, derivs, DiscoveryConfig())
     old = discover_model(runs, derivs, DiscoveryConfig(model_error_factor=None, model_error_inflation=None))
     # the residual at the significance rule's support is above 1.1 times the tracking noise in both equations
@@ -104,8 +135,11 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse, withou
     n_taylor = int(TAYLOR.support.sum())
     # compact: at most 1.5 times the Taylor support's terms; the held-out selection itself keeps no more than the
     # significance rule, and the output error adds only what the trajectories need (below)
-    integral = discover_model(runs, derivs, DiscoveryConfig(output_error=None))
-    assert new.mask.sum() <= 1.5 * n_taylor and integral.mask.sum() <= old.mask.sum()
+    # the integral form's selection and coefficients without the output error
+    # (DiscoveryConfig(output_error=None), test_no_output_error_is_made_when_it_is_not_configured): where the output
+    # error of ``new`` started, so that the selection passes run once
+    (integral,) = starts
+    assert new.mask.sum() <= 1.5 * n_taylor and integral.support.sum() <= old.mask.sum()
     # the selected support is the smallest on the elimination path within one paired standard error or 3 % (of
     # the held-out sum of squares) of the best: its held-out RMS error is within a few per cent of the path's best
     for eq in ("yddot", "thetaddot"):
@@ -118,7 +152,7 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse, withou
     # (misfit 7.5 -> 5.1 refined -> 3.7 noise units), and the model predicts 8 held-out runs three times better
     # than the integral form's coefficients (long-time error 1.6 against 4.9 %, 2.9 % refined on the integral
     # form's support; against pysindy in benchmarks/bench_model_error.py)
-    assert new.output_error is not None and integral.output_error is None and old.output_error is None
+    assert new.output_error is not None and old.output_error is None
     # the support is the integral form's less the terms the pruning removed and plus those added; the added terms
     # carry the output error's standard errors
     pruned, added = (np.zeros_like(new.mask) for _ in range(2))
@@ -126,11 +160,11 @@ def test_model_error_is_detected_and_the_selection_is_compact(non_sparse, withou
         for name in names:
             eq, term = name.split(":")
             mask[EQUATION_NAMES.index(eq), TERMS.index(term)] = True
-    assert (new.mask == ((integral.mask & ~pruned) | added)).all() and (new.std_errors[~new.mask] == 0).all()
+    assert (new.mask == ((integral.support & ~pruned) | added)).all() and (new.std_errors[~new.mask] == 0).all()
     assert (new.std_errors[added] > 0).all() and np.isfinite(new.std_errors).all()
     assert new.output_error.misfit < 0.8 * new.output_error.misfit_start
     assert new.to_json()["output_error"]["segments"] == new.output_error.segments > 0
-    assert _long_time(new.model, heldout) < 0.5 * _long_time(integral.model, heldout)
+    assert _long_time(new.model, heldout) < 0.5 * _long_time(integral, heldout)
     # the truth's forces are odd under (y, theta) -> (-y, -theta) with the velocities, and so is every added term
     assert new.output_error.added and all(EXPONENTS[TERMS.index(name.split(":")[1])].sum() % 2 == 1
                                           for name in new.output_error.added)

@@ -162,20 +162,32 @@ def drift_basis(t: NDArray, nodes: NDArray) -> NDArray[np.float64]:
     return CubicSpline(nodes, np.eye(nodes.size), bc_type="not-a-knot", axis=0)(tc)
 
 
-def _designs(problem: DiagnosisProblem, z0: float, window_s: float,
-             max_nodes: int = 270) -> list[tuple[NDArray, NDArray, NDArray]]:
-    """Per run: (columns P K[phi_k F_Z/M] (rows, K), target P y - P K[-g] (rows,), node times)."""
-    model = problem.model
-    mass, g = model.dimer.total_mass, model.gravity
+def _fixed_parts(problem: DiagnosisProblem, window_s: float,
+                 max_nodes: int = 270) -> list[tuple[NDArray, NDArray, NDArray]]:
+    """Per run, what :func:`_designs` needs that does not depend on the origin z0: (the node times, the drift basis at
+    the integral form's times (rows, K), the target P y - P K[-g] (rows,)).  Made once per test, not once per z0 the
+    search tries."""
+    g = problem.model.gravity
     out = []
     for r in problem.runs:
         pi = r.integral
         t = pi.times
         nodes = _node_times(t[0], t[-1], window_s, max_nodes, r.name)
+        out.append((nodes, drift_basis(t, nodes), pi.target(0) - pi.columns(0, np.full(t.shape, -g))))
+    return out
+
+
+def _designs(problem: DiagnosisProblem, z0: float,
+             fixed: list[tuple[NDArray, NDArray, NDArray]]) -> list[tuple[NDArray, NDArray, NDArray]]:
+    """Per run: (columns P K[phi_k F_Z/M] (rows, K), target P y - P K[-g] (rows,), node times); ``fixed``: the
+    runs' :func:`_fixed_parts`."""
+    model = problem.model
+    mass = model.dimer.total_mass
+    out = []
+    for r, (nodes, basis, b) in zip(problem.runs, fixed):
+        pi = r.integral
         st = model.integrals_at_height(pi.state[:, 2], z0 + pi.state[:, 0], problem.orientation_sums(pi))
-        x = pi.columns(0, (st.force_z / mass)[:, None] * drift_basis(t, nodes))
-        b = pi.target(0) - pi.columns(0, np.full(t.shape, -g))
-        out.append((x, b, nodes))
+        out.append((pi.columns(0, (st.force_z / mass)[:, None] * basis), b, nodes))
     return out
 
 
@@ -232,15 +244,17 @@ def detect_pressure_drift(problem: DiagnosisProblem, settings: DriftSettings = D
     z_eq = problem.model.equilibrium_height
     bounds = (z_eq - settings.z0_window, min(z_eq + settings.z0_window, -1e-6))
 
+    fixed = _fixed_parts(problem, w, settings.max_nodes_per_run)
+
     def search(per_node: bool) -> float:
-        res = minimize_scalar(lambda z: _rss(_designs(problem, z, w, settings.max_nodes_per_run), per_node), bounds=bounds, method="bounded",
+        res = minimize_scalar(lambda z: _rss(_designs(problem, z, fixed), per_node), bounds=bounds, method="bounded",
                               options={"xatol": 1e-9, "maxiter": 200})
         return float(res.x)
 
     z1 = search(True)
-    designs = _designs(problem, z1, w, settings.max_nodes_per_run)
+    designs = _designs(problem, z1, fixed)
     rss1 = _rss(designs, True)
-    rss0 = _rss(_designs(problem, search(False), w, settings.max_nodes_per_run), False)
+    rss0 = _rss(_designs(problem, search(False), fixed), False)
     n_rows = sum(b.size for _, b, _ in designs)
     n_win = sum(r.integral.starts(0).size for r in runs)
     p1 = sum(x.shape[1] for x, _, _ in designs) + 1
