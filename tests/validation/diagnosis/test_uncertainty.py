@@ -266,7 +266,8 @@ def mirror_runs(fast_model):
     from .conftest import _synthetic_runs
 
     truth = Calibration.at(fast_model, 1.0, fast_model.equilibrium_height)
-    effects = {"mirror_asymmetry": {"beta0": 2.0, "beta1": 5.0e4}, "linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}}
+    effects = {"mirror_asymmetry": {"beta0": 2.0, "beta1": 5.0e4},
+               "linear_damping": {"gamma_y": 0.5, "gamma_theta": 0.5}}
     return _synthetic_runs(fast_model, truth, effects, n_runs=8, duration=1.6, seed=7, known_noise=True), list(effects)
 
 
@@ -308,7 +309,8 @@ def test_paper_like_beta0_interval_holds_its_true_zero(tmp_path):
                          "--no-progress", "--out", str(out)]) == 0
     start = start_diagnosis(load_for_diagnosis(out, progress=False))
     config = DiagnoseConfig(drift=None, check_orientation=False, long_time=False)
-    problem = calibration_step(start.prepared, start.conditions, start.model, start.spec, config, lambda *a: None).problem
+    calibrated = calibration_step(start.prepared, start.conditions, start.model, start.spec, config, lambda *a: None)
+    problem = calibrated.problem
     names = ["pair_scattering", "mirror_asymmetry", "linear_damping"]  # what the diagnosis names on it
     fit = fit_gap_model(problem, names)
     errors = jackknife_errors(problem, names, fit.effects, fit.calibration).effects

@@ -92,7 +92,8 @@ def fit_gap_model(problem: DiagnosisProblem, effects: Sequence[str] = (), z0_win
         Use this calibration instead of fitting one (effects are still fitted).
     energy_balance : bool
         Fit the effects to the energy balance's rows too (the default); False: to the y and theta equations alone
-        (what the summarise step compares with, :func:`~validation.diagnosis.summarise.uncertainty.energy_balance_pulls`).
+        (what the summarise step compares with,
+        :func:`~validation.diagnosis.summarise.uncertainty.energy_balance_pulls`).
     """
     if "cavity_lag" in effects and "cavity_reference" not in problem._shared:
         fit_cavity_reference(problem)
