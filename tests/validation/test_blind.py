@@ -218,3 +218,21 @@ def test_a_named_resonator_is_scored_on_its_derived_mode(make_diagnosis):
     assert s["per_effect"]["cavity_lag"]["median_parameter_error"] == pytest.approx(
         {"detuning_half_widths": 0.3, "quality_factor": 0.04})
     assert s["false_effect_sets"] == 0 and 0.0 < s["false_effect_rate_upper_95"] < 1.0
+
+
+def test_a_resumed_study_summarises_parameters_not_determined(make_diagnosis):
+    """A case read back from result.json (a resumed study) holds null, not nan, for a relative error of a parameter
+    that was not determined (the cavity's Q and x where the lag is not resolved): the summary leaves it out, as it
+    leaves out nan, instead of failing on the comparison."""
+    import json
+
+    diag = make_diagnosis(["pair_scattering"], params={"pair_scattering": {"kappa": 1.1e4}})
+    case = {"index": 0, "effects": {"pair_scattering": {"kappa": 1e4}}, "pressure_error": 0.0, "twin_seed": 1}
+    r = score_case(case, {"pressure_amplitude_pa": 3000.0}, diag, None)
+    r["parameter_relative_error"]["cavity_lag"] = {"quality_factor": float("nan"), "quasi_static_response": 0.02}
+    back = json.loads(json.dumps(r).replace("NaN", "null"))
+    assert back["parameter_relative_error"]["cavity_lag"]["quality_factor"] is None
+    for results in ([r], [back]):
+        per = summarize(results)["per_effect"]["cavity_lag"]
+        assert per["median_max_parameter_error"] == pytest.approx(0.02)
+        assert per["median_parameter_error"] == {"quality_factor": None, "quasi_static_response": pytest.approx(0.02)}

@@ -422,12 +422,18 @@ def _upper_95(k: int, n: int) -> float:
     return 1.0 if k >= n else float(stats.beta.ppf(0.975, k + 1, n - k))
 
 
+def _finite(x) -> bool:
+    """Whether a relative error is a finite number: a parameter not determined has nan in a study's memory and null
+    (None) in a result.json read back when a study resumes."""
+    return x is not None and bool(np.isfinite(x))
+
+
 def _median_per_parameter(records: list[dict]) -> dict | None:
-    """Per parameter, the median of the relative errors in ``records`` (nan entries left out)."""
+    """Per parameter, the median of the relative errors in ``records`` (nan and None entries left out)."""
     keys = sorted({p for r in records for p in r})
     out = {}
     for p in keys:
-        v = [r[p] for r in records if p in r and np.isfinite(r[p])]
+        v = [r[p] for r in records if _finite(r.get(p))]
         out[p] = float(np.median(v)) if v else None
     return out or None
 
@@ -449,7 +455,7 @@ def summarize(results: list[dict]) -> dict:
     greedy = [bool(r["false_effects_greedy"]) for r in results if r.get("false_effects_greedy") is not None]
     out["false_effect_rate_greedy_rounds_alone"] = float(np.mean(greedy)) if greedy else None
     out["cases_with_indistinguishable_pairs"] = int(sum(bool(r.get("indistinguishable")) for r in results))
-    within = [e <= 0.05 for r in results if len(r["true_set"]) == 1 and r["exact"]
+    within = [_finite(e) and e <= 0.05 for r in results if len(r["true_set"]) == 1 and r["exact"]
               for errs in r["parameter_relative_error"].values() for e in errs.values()]
     out["single_effect_parameters_within_5pct"] = float(np.mean(within)) if within else None
     none_sets = [r for r in results if r["n_true"] == 0]
@@ -460,7 +466,8 @@ def summarize(results: list[dict]) -> dict:
         tp = sum(n in r["identified"] and n in r["true_set"] for r in results)
         fp = sum(n in r["identified"] and n not in r["true_set"] for r in results)
         fn = sum(n not in r["identified"] and n in r["true_set"] for r in results)
-        errs = [max(r["parameter_relative_error"][n].values()) for r in results if n in r["parameter_relative_error"]]
+        errs = [max(v) for r in results if n in r["parameter_relative_error"]
+                for v in [[x for x in r["parameter_relative_error"][n].values() if _finite(x)]] if v]
         per[n] = {"tp": tp, "fp": fp, "fn": fn,
                   "precision": tp / (tp + fp) if tp + fp else None, "recall": tp / (tp + fn) if tp + fn else None,
                   "median_max_parameter_error": float(np.median(errs)) if errs else None,

@@ -73,7 +73,7 @@ class GapFit:
 
 
 def fit_gap_model(problem: DiagnosisProblem, effects: Sequence[str] = (), z0_window: float = 4e-4,
-                  fixed: Calibration | None = None) -> GapFit:
+                  fixed: Calibration | None = None, energy_balance: bool = True) -> GapFit:
     """Fit the calibration (s, z0) and the parameters of ``effects`` to the problem's runs.
 
     With integral data on every run (:class:`~validation.diagnosis.prepare.runs.PositionIntegrals`, what
@@ -90,6 +90,10 @@ def fit_gap_model(problem: DiagnosisProblem, effects: Sequence[str] = (), z0_win
         z0 is searched within +-z0_window [m] of the nominal Z_eq (kept below the node).
     fixed : Calibration, optional
         Use this calibration instead of fitting one (effects are still fitted).
+    energy_balance : bool
+        Fit the effects to the energy balance's rows too (the default); False: to the y and theta equations alone
+        (what the summarise step compares with,
+        :func:`~validation.diagnosis.summarise.uncertainty.energy_balance_pulls`).
     """
     if "cavity_lag" in effects and "cavity_reference" not in problem._shared:
         fit_cavity_reference(problem)
@@ -100,7 +104,7 @@ def fit_gap_model(problem: DiagnosisProblem, effects: Sequence[str] = (), z0_win
     params = {n: {p: 0.0 for p in CANDIDATE_EFFECTS[n]} for n in effects}
     n_par = sum(len(CANDIDATE_EFFECTS[n]) for n in effects)
     if n_par:
-        sol = _fit_effect_parameters(terms, cal, effects, integral)
+        sol = _fit_effect_parameters(terms, cal, effects, integral, energy_balance)
         i = 0
         for n in effects:
             for p in CANDIDATE_EFFECTS[n]:
@@ -122,9 +126,11 @@ def _evaluate(terms: SimulationTerms, cal: Calibration, params: dict) -> GapFit:
                   _integral_residuals(terms, cal, params))
 
 
-def _fit_effect_parameters(terms: SimulationTerms, cal: Calibration, effects: Sequence[str], integral: bool) -> NDArray:
+def _fit_effect_parameters(terms: SimulationTerms, cal: Calibration, effects: Sequence[str], integral: bool,
+                           energy_balance: bool = True) -> NDArray:
     """All effect parameters jointly at the calibrated (s, z0): y and theta equations and the energy
-    balance, each weighted by its normalisation so that the fit minimises R_y + R_theta + R_E."""
+    balance (unless ``energy_balance`` is False), each weighted by its normalisation so that the fit minimises
+    R_y + R_theta + R_E."""
     runs = terms.runs
     z0 = cal.z_origin_m
     s_cal = cal.pressure_scale
@@ -148,10 +154,11 @@ def _fit_effect_parameters(terms: SimulationTerms, cal: Calibration, effects: Se
         else:
             rows.append(w_t * regs[:, 1, :])
             rhs.append(w_t * (r.accel[:, 1] - (s_cal * qt + terms.centrifugal(r))))
-    en = terms.energy_terms(z0, effects, cal.equilibrium_height_m)
-    e_rest = terms.rest_energy(s_cal, z0)
-    e_scale = np.concatenate([e["k0"] + s_cal * e["u0"] - e_rest for e in en])
-    w_e = 1.0 / np.sqrt(max(np.sum(e_scale**2), 1e-300))
+    en = terms.energy_terms(z0, effects, cal.equilibrium_height_m) if energy_balance else []
+    if en:
+        e_rest = terms.rest_energy(s_cal, z0)
+        e_scale = np.concatenate([e["k0"] + s_cal * e["u0"] - e_rest for e in en])
+        w_e = 1.0 / np.sqrt(max(np.sum(e_scale**2), 1e-300))
     for e in en:
         rows.append(w_e * e["work"])
         rhs.append(w_e * (e["dk"] + s_cal * e["du"]))

@@ -22,8 +22,8 @@ from .constants import constants_used, data_set_warnings
 from .localization import localize_residuals
 from .long_time import long_time_gaps, mean_long_time_gap
 from .result import Diagnosis, DiagnosisInternals
-from .uncertainty import (CONFIDENCE, METHOD, interval_from_error, jackknife_errors, pressure_model_error,
-                          with_effect_model_errors, with_model_error)
+from .uncertainty import (CONFIDENCE, METHOD, energy_balance_pulls, interval_from_error, jackknife_errors,
+                          pressure_model_error, with_effect_model_errors, with_model_error)
 from .verdicts import ranked_effects
 
 if TYPE_CHECKING:
@@ -61,9 +61,12 @@ def summary_step(dataset, cal: Calibrated, found: Identified, discovery: Discove
         joint_params = {**joint_params, "velocity_coupling": oe.params}
         trajectory = {k: interval_from_error(v, oe.std_errors[k], len(runs) - 1) for k, v in oe.params.items()}
         errors = replace(errors, effects={**errors.effects, "velocity_coupling": trajectory})
-    # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR)
+    # every parameter's interval also holds its effect's systematic error (EFFECT_MODEL_ERROR), and beta0 the energy
+    # balance's pull on it (ENERGY_BALANCE_PULLED)
+    pulls = energy_balance_pulls(problem, identified, final.calibration)
     effects = ranked_effects(problem, config.candidates, found.ident, found.elim, identified, named, in_pair,
-                             replaced, joint_params, final, per_before, with_effect_model_errors(errors.effects),
+                             replaced, joint_params, final, per_before,
+                             with_effect_model_errors(errors.effects, absolute=pulls),
                              with_effect_model_errors(errors.derived))
     # an effect whose addition raises the gap by more than two of its paired standard errors is not named (its
     # verdict says why, with both gaps)
