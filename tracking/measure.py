@@ -313,8 +313,8 @@ def _centre_of_mass(mom, ua, ub, vo, u0, u1, v0, v1, sigma_pix, row):  # pragma:
 def _first_orientations(c, mom, ua, ub, vo, u_split, v0, v1, vcom, d, cen, gam):  # pragma: no cover - compiled
     """Step 4: each half's centroid (``cen``) and face direction (``gam``) from its moments, the bend of each cube
     put on the side the hinge's height says near face contact.  Returns the bends (phi_A, phi_B)."""
-    gam[0] = half_direction(mom, 0, ua, vo, cen[0])
-    gam[1] = half_direction(mom, 9, ub, vo, cen[1])
+    for k in range(2):  # the halves' moments from mom[0] and mom[9] (an offset known at run time: one compilation)
+        gam[k] = half_direction(mom, 9 * k, ua if k == 0 else ub, vo, cen[k])
     phiA = wrap_angle(gam[0] - 0.75 * math.pi, 0.5 * math.pi)
     phiB = wrap_angle(0.25 * math.pi - gam[1], 0.5 * math.pi)
     hz = 0.0
@@ -347,8 +347,11 @@ def _edge_fits(c, cen, gam, a_half, W, blur, u_split, h, w, resA, resB, prm):  #
     a_true = a_half / prm[14]
     sweep = a_true * prm[13]
     for it in range(2):
-        fit_square(c, cen[0, 0], cen[0, 1], gam[0], a_half, W, blur, u_split, -1, h, w, resA, prm[12], sweep, a_true)
-        fit_square(c, cen[1, 0], cen[1, 1], gam[1], a_half, W, blur, u_split, 1, h, w, resB, prm[12], sweep, a_true)
+        # cube A (side -1), then B (+1), the side an integer known at run time: a constant argument would compile
+        # the fit and everything it calls once per value
+        for k in range(2):
+            fit_square(c, cen[k, 0], cen[k, 1], gam[k], a_half, W, blur, u_split, 2 * k - 1, h, w,
+                       resA if k == 0 else resB, prm[12], sweep, a_true)
         if math.isnan(resA[0]) or math.isnan(resB[0]):
             return False
         gam[0] = resA[0]

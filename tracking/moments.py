@@ -57,8 +57,8 @@ def window_moments(c, u0, u1, v0, v1, u_split, ua, ub, vo, mom):  # pragma: no c
     coverage sum M0 and the complex moments M_k = sum c z^k, k = 1..4, with z = (u - u_o) + i (v_o - v).
     ``mom`` = (A: M0, Re M1, Im M1, ..., Re M4, Im M4, B: the same): 18 numbers."""
     us = int(math.ceil(u_split))
-    half_moments(c, u0, us - 1, v0, v1, ua, vo, mom, 0)
-    half_moments(c, us, u1, v0, v1, ub, vo, mom, 9)
+    for k in range(2):  # A, then B; the offset into mom known at run time (a constant compiles once per value)
+        half_moments(c, u0 if k == 0 else us, us - 1 if k == 0 else u1, v0, v1, ua if k == 0 else ub, vo, mom, 9 * k)
 
 
 @njit(cache=True)

@@ -1,6 +1,8 @@
 """numba's cache folder follows the suite's sources (cubedimer.compile_cache)."""
 import os
 import pickle
+import re
+import shutil
 import subprocess
 import sys
 import time
@@ -69,14 +71,45 @@ def test_folders_of_other_versions_unused_for_a_week_are_removed(tmp_path):
 
 
 # ------------------------------------------------------------------------------- a cache is never fatal
-def _simulate_outside_the_repository(workdir: Path, cache: Path, out: str) -> subprocess.CompletedProcess:
+SIMULATE_ARGS = ("simulate", "--runs", "1", "--duration", "0.3", "--seed", "1", "--no-progress")
+
+
+def _simulate_outside_the_repository(workdir: Path, cache: Path, out: str,
+                                     log_cache: bool = False) -> subprocess.CompletedProcess:
     """``python -m acousim simulate`` (one short run, which compiles the twin's kernels) run as a user would, from
-    ``workdir``, with the compiled-kernel cache in ``cache``."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    ``workdir``, with the compiled-kernel cache in ``cache``; ``log_cache``: numba prints every index it loads or
+    saves (``NUMBA_DEBUG_CACHE``)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), NUMBA_DEBUG_CACHE="1" if log_cache else "0")
     env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")])  # also without an install
-    return subprocess.run([sys.executable, "-m", "acousim", "simulate", "--runs", "1", "--duration", "0.3", "--seed",
-                           "1", "--out", out, "--no-progress"], cwd=workdir, env=env, capture_output=True, text=True,
-                          timeout=600)
+    return subprocess.run([sys.executable, "-m", "acousim", *SIMULATE_ARGS, "--out", out], cwd=workdir, env=env,
+                          capture_output=True, text=True, timeout=600)
+
+
+def _copy_of_the_warm_cache(cache: Path, tmp_path: Path) -> None:
+    """Fill ``cache`` with a copy of this test run's own kernel folder after making sure it holds the twin's kernels
+    (the same command run in this process: a worker of the test run compiles them for its other tests anyway), so
+    that the clean run loads its kernels instead of compiling them.  Files another process is replacing meanwhile
+    are skipped: a missing entry is only compiled."""
+    from numba.core import config
+
+    from acousim.cli import main
+
+    assert main([*SIMULATE_ARGS, "--out", str(tmp_path / "warm-up")]) == 0
+    own = Path(config.CACHE_DIR)
+    for source in own.rglob("*.nb[ic]"):
+        target = cache / own.name / source.relative_to(own)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            shutil.copyfile(source, target)
+        except FileNotFoundError:
+            pass
+
+
+def _indexes(log: str, *actions: str) -> set[Path]:
+    """The index files that numba's cache log ``log`` (``NUMBA_DEBUG_CACHE``) says were ``actions`` ("loaded from",
+    "saved to")."""
+    pattern = r"\[cache\] index (?:%s) '([^']+)'" % "|".join(map(re.escape, actions))
+    return {Path(p) for p in re.findall(pattern, log)}
 
 
 def _poison(cache: Path) -> int:
@@ -98,14 +131,23 @@ def test_a_poisoned_kernel_cache_is_recompiled_not_fatal(tmp_path):
     from a folder outside the repository, gives the same numbers, warns once, and rewrites the indexes."""
     cache, work = tmp_path / "cache", tmp_path / "work"
     work.mkdir()
-    first = _simulate_outside_the_repository(work, cache, "clean")
+    _copy_of_the_warm_cache(cache, tmp_path)
+    first = _simulate_outside_the_repository(work, cache, "clean", log_cache=True)
     assert first.returncode == 0, first.stderr[-2000:]
-    assert _poison(cache) >= 5  # the twin's kernels were cached, and are now all unloadable
-    again = _simulate_outside_the_repository(work, cache, "poisoned")
+    entry_points = _indexes(first.stdout + first.stderr, "loaded from", "saved to")
+    assert entry_points, "numba printed no cache index: is NUMBA_DEBUG_CACHE still honoured?"
+    poisoned = {index for index in cache.rglob("*.nbi")}
+    assert _poison(cache) == len(poisoned)
+    again = _simulate_outside_the_repository(work, cache, "poisoned", log_cache=True)
     assert again.returncode == 0, again.stderr[-2000:]
     assert "Traceback" not in again.stderr and again.stderr.count("compiled-kernel cache: an entry could not") == 1
     assert (work / "poisoned" / "run01.csv").read_bytes() == (work / "clean" / "run01.csv").read_bytes()
-    assert not any(b"no_such_module" in index.read_bytes() for index in cache.rglob("*.nbi"))  # rewritten
+    # the cache copied from the test run's own holds kernels of other commands too, which this one never reads: the
+    # indexes it needs are the ones it rewrote, among them every entry point it loaded from the clean cache, and the
+    # twin's kernels (the entry points and the functions they bind) were cached and are now all unloadable
+    rewritten = _indexes(again.stdout + again.stderr, "saved to")
+    assert entry_points <= rewritten and len(rewritten & poisoned) >= 5
+    assert not any(b"no_such_module" in index.read_bytes() for index in rewritten)  # rewritten
 
 
 def test_an_unwritable_cache_folder_falls_back_with_one_warning(monkeypatch, tmp_path, caplog):
