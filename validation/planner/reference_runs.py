@@ -146,9 +146,10 @@ def twin_from_truth(truth: dict):
     """
     from acousim.dynamics.effects import EffectSet
     from acousim.models import ExperimentConditions
+    from acousim.gorkov.forces import GORKOV
     from acousim.twin import Camera, DropProtocol, TwinConfig
 
-    if truth.get("force_model") not in (None, "gorkov"):
+    if truth.get("force_model") not in (None, GORKOV):
         raise ValueError(f"truth.json of the {truth['force_model']} model: the planner reads the Gor'kov twin's only")
     try:
         experiment = ExperimentConditions.from_meta({"side_length_m": truth.get("side_length_m")},
