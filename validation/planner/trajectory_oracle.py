@@ -72,14 +72,14 @@ def trajectory_information(twin, dynamics, states: Sequence[NDArray], dt: float,
     names = ["pressure_pa", "gamma_y", "gamma_theta"] + [f"{k}.{q}" for k, v in others.items() for q in v] + ["c5", "c6"]
     values = {**{f"{k}.{q}": v for k, p in others.items() for q, v in p.items()}, **start}
     p = np.array([float(values[n]) for n in names])
-    steps = oe._first_steps(names, p, None)
+    steps = oe.first_difference_steps(names, p, None)
     scale = np.array([[noise.sigma_y, noise.sigma_theta]])
     k = len(names)
     info = []
     for st in states:
         st = np.asarray(st, float)
         data = oe.RunTrajectories(float(dt), [st[:, [0, 2]]], scale, st[:1])
-        res = oe._Residuals(data, dynamics.force_model, law, shape, others, names, st[None, :, [0, 2]],
+        res = oe.TrajectoryResiduals(data, dynamics.force_model, law, shape, others, names, st[None, :, [0, 2]],
                             scale[:, None, :])
         _, _, at = res.misfit(p, 0.0, st[:1])
         jtj, _ = res.normal_equations(p, st[:1], at, steps)

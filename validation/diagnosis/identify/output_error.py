@@ -62,7 +62,8 @@ from numpy.typing import NDArray
 
 from .statistics import sign_flip_pvalue
 
-__all__ = ["TrajectoryFit", "OutputErrorTest", "RunTrajectories", "run_trajectories", "fit_trajectories",
+__all__ = ["TrajectoryFit", "OutputErrorTest", "RunTrajectories", "TrajectoryResiduals", "first_difference_steps",
+           "run_trajectories", "fit_trajectories",
            "velocity_coupling_output_error", "damping_modulation"]
 
 logger = logging.getLogger(__name__)
@@ -224,7 +225,7 @@ def _shrunk(steps: NDArray, cov: NDArray, p: NDArray) -> NDArray:
 
 
 @dataclass(frozen=True, eq=False)
-class _Residuals:
+class TrajectoryResiduals:
     """The runs' residuals in noise units at a point of the fit (shared parameters ``p`` in the order of ``names``,
     the y offset, the initial states ``x0``), and their normal equations by forward differences."""
 
@@ -284,7 +285,7 @@ def _inverse(jtj: NDArray) -> NDArray | None:
         return None
 
 
-def _first_steps(names: Sequence[str], p: NDArray, scales: dict[str, float] | None) -> NDArray:
+def first_difference_steps(names: Sequence[str], p: NDArray, scales: dict[str, float] | None) -> NDArray:
     """The first difference steps of the shared parameters: :func:`_step`, no larger than ``scales`` (standard
     errors by name) where given."""
     steps = np.array([_step(nm, v) for nm, v in zip(names, p)])
@@ -313,7 +314,7 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         less than :data:`CONVERGED_CHI2`
     starts : starting initial states (R, 4); default the first smoothed states
     scales : standard errors of shared parameters by name (a previous fit's, :attr:`TrajectoryFit.std_errors`): their
-        first difference steps are no larger (:func:`_first_steps`), so that the Jacobian of a fit started at or near
+        first difference steps are no larger (:func:`first_difference_steps`), so that the Jacobian of a fit started at or near
         an optimum is that of the quadratic regime from the start and its last step is recognised
         (:func:`_predicted_drop`)
     """
@@ -327,13 +328,13 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
     target = np.full((R, data.frames, 2), np.nan)
     for i, pos in enumerate(data.positions):
         target[i, :len(pos)] = pos
-    res = _Residuals(data, surrogate, law, shape, others, names, target, data.noise_sd[:, None, :])
-    steps = _first_steps(names, p, scales)
+    res = TrajectoryResiduals(data, surrogate, law, shape, others, names, target, data.noise_sd[:, None, :])
+    steps = first_difference_steps(names, p, scales)
     size = k + 1 + 4 * R
     frames = int(np.isfinite(target).sum())
 
     def evaluate(p, offset, x0):
-        """:meth:`_Residuals.misfit`, per run, and the normal equations at (p, offset, x0)."""
+        """:meth:`TrajectoryResiduals.misfit`, per run, and the normal equations at (p, offset, x0)."""
         chi2, per_run, at = res.misfit(p, offset, x0)
         return (chi2, per_run, *res.normal_equations(p, x0, at, steps))
 
