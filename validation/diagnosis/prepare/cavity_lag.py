@@ -318,10 +318,10 @@ def derived_quantities(params, calibration) -> dict[str, dict[str, float]]:
     response = -math.pi * frequency * gains.static_gain / 2.0
     try:
         mode = mode_from_gains(gains, frequency)
+        quality_factor, detuning = mode.quality_factor, mode.detuning
     except ValueError:
-        return {"cavity_lag": {"quality_factor": math.nan, "detuning_half_widths": math.nan,
-                               "quasi_static_response": response}}
-    return {"cavity_lag": {"quality_factor": mode.quality_factor, "detuning_half_widths": mode.detuning,
+        quality_factor = detuning = math.nan
+    return {"cavity_lag": {"quality_factor": quality_factor, "detuning_half_widths": detuning,
                            "quasi_static_response": response}}
 
 
