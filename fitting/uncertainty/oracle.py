@@ -58,7 +58,8 @@ if TYPE_CHECKING:
 
 __all__ = ["NoiseLevels", "OracleRun", "OracleTerm", "OracleResult", "estimate_tracking_noise",
            "recorded_tracking_noise", "runs_from_data", "oracle_trajectories", "oracle_information", "oracle_aliases",
-           "oracle_standard_errors", "covariance_diagonal", "integral_design", "replacement_rss", "alias_probability", "canonical_term", "METHOD"]
+           "oracle_standard_errors", "covariance_diagonal", "integral_design", "schur_complement", "replacement_rss",
+           "alias_probability", "canonical_term", "METHOD"]
 
 #: The positions each equation is the second derivative of.
 _COORD = {"yddot": 0, "thetaddot": 2}
@@ -415,6 +416,32 @@ def oracle_aliases(model: PolynomialModel, runs: Sequence[OracleRun], noise: Noi
     return out
 
 
+def schur_complement(information: NDArray, keep: Sequence[int], rest: Sequence[int]) -> NDArray[np.float64]:
+    """The information on the parameters ``keep`` with the parameters ``rest`` fitted beside them (projected out):
+    the Schur complement ``G_kk - G_kr G_rr^+ G_rk`` of an information (Gram) matrix, computed with the matrix scaled
+    to unit diagonal (SI columns span many decades).
+
+    Parameters
+    ----------
+    information : array (P, P)
+        ``X^T X`` (or a Gauss-Newton ``J^T J``).
+    keep : indices of the parameters kept
+    rest : indices of the parameters fitted beside them (none: ``G_kk`` itself)
+
+    Returns
+    -------
+    array (len(keep), len(keep)) in the units of ``information``.
+    """
+    g = np.asarray(information, float)
+    d = np.sqrt(np.clip(np.diag(g), 1e-300, None))
+    gs = g / np.outer(d, d)
+    k, r = list(keep), list(rest)
+    m = gs[np.ix_(k, k)]
+    if r:
+        m = m - gs[np.ix_(k, r)] @ np.linalg.pinv(gs[np.ix_(r, r)], rcond=1e-13) @ gs[np.ix_(r, k)]
+    return m * np.outer(d[k], d[k])
+
+
 def replacement_rss(information: NDArray, signal: Sequence[int], coefficients: NDArray,
                     basis: Sequence[int]) -> float:
     """The noise-free residual sum of squares left when a contribution is replaced by other columns, from the
@@ -422,7 +449,7 @@ def replacement_rss(information: NDArray, signal: Sequence[int], coefficients: N
 
     With ``information = X^T X`` of stacked columns X (any columns: the library's, or a candidate effect's), the
     contribution ``X[:, signal] @ coefficients`` projected on the span of ``X[:, basis]`` leaves
-    ``c^T (G_ss - G_sb G_bb^+ G_bs) c`` (a Schur complement, computed with the columns scaled to unit norm).  Divided by
+    ``c^T (G_ss - G_sb G_bb^+ G_bs) c`` (:func:`schur_complement`).  Divided by
     the noise variance it is the square of the alias z (module docstring): the alias z of a whole set of columns
     against another set, with the remaining terms refitted.  Gram matrices of runs add, so the alias z of any
     selection of runs follows from their summed matrices.
@@ -441,17 +468,8 @@ def replacement_rss(information: NDArray, signal: Sequence[int], coefficients: N
     float
         The residual sum of squares [target units^2], >= 0.
     """
-    g = np.asarray(information, float)
-    d = np.sqrt(np.clip(np.diag(g), 1e-300, None))
-    gs = g / np.outer(d, d)
-    s, b = list(signal), list(basis)
-    c = np.asarray(coefficients, float) * d[s]
-    total = float(c @ gs[np.ix_(s, s)] @ c)
-    if not b:
-        return max(total, 0.0)
-    cross = gs[np.ix_(b, s)] @ c
-    explained = float(cross @ np.linalg.pinv(gs[np.ix_(b, b)], rcond=1e-13) @ cross)
-    return max(total - explained, 0.0)
+    c = np.asarray(coefficients, float)
+    return max(float(c @ schur_complement(information, signal, basis) @ c), 0.0)
 
 
 def covariance_diagonal(info: NDArray) -> NDArray[np.float64]:

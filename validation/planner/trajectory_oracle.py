@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fitting.uncertainty.oracle import NoiseLevels
+from fitting.uncertainty.oracle import NoiseLevels, schur_complement
 
 __all__ = ["trajectory_information", "TRAJECTORY_PREFIX"]
 
@@ -80,19 +80,10 @@ def trajectory_information(twin, dynamics, states: Sequence[NDArray], dt: float,
         st = np.asarray(st, float)
         data = oe.RunTrajectories(float(dt), [st[:, [0, 2]]], scale, st[:1])
         res = oe.TrajectoryResiduals(data, dynamics.force_model, law, shape, others, names, st[None, :, [0, 2]],
-                            scale[:, None, :])
+                                     scale[:, None, :])
         _, _, at = res.misfit(p, 0.0, st[:1])
         jtj, _ = res.normal_equations(p, st[:1], at, steps)
-        info.append(_marginal(jtj, k + 1))
+        # the run's initial state marginalised (the shared parameters and the y offset kept)
+        info.append(schur_complement(jtj, range(k + 1), range(k + 1, jtj.shape[0])))
     labels = tuple(TRAJECTORY_PREFIX + n for n in names + ["y_offset"])
     return labels, np.array(info), dict(zip(labels, [*map(float, p), 0.0]))
-
-
-def _marginal(jtj: NDArray, shared: int) -> NDArray[np.float64]:
-    """The information of the first ``shared`` parameters with the rest (a run's initial state) marginalised: the
-    Schur complement, computed with the parameters scaled to unit diagonal."""
-    d = np.sqrt(np.clip(np.diag(jtj), 1e-300, None))
-    a = jtj / np.outer(d, d)
-    s, r = slice(0, shared), slice(shared, None)
-    m = a[s, s] - a[s, r] @ np.linalg.pinv(a[r, r], rcond=1e-13) @ a[r, s]
-    return m * np.outer(d[s], d[s])
