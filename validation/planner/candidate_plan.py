@@ -212,6 +212,24 @@ def pair_alias_z(information: NDArray, labels: Sequence[str], truth: dict[str, f
     return float(np.sqrt(replacement_rss(information, signal, coef, basis)))
 
 
+def _plans(labels: Sequence[str], info: NDArray, truth: dict[str, float], cfg: CandidatePlanConfig,
+           stream: tuple[int, ...], keep=lambda label: True) -> list[ParameterPlan]:
+    """The table of every parameter of ``labels`` that ``keep`` accepts, from the runs' information ``info`` (R, P,
+    P; the noise already in it); the draws of parameter k seeded with ``[cfg.seed, *stream, k]``."""
+    tz = target_z(cfg.relative_error, cfg.confidence)
+    pooled_se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
+    out = []
+    for k, label in enumerate(labels):
+        if not keep(label):
+            continue
+        c = float(truth.get(label, 0.0))
+        table = draw_table(info, k, 1.0, c, list(cfg.run_counts), cfg.n_draws,
+                           np.random.default_rng([cfg.seed, *stream, k]))
+        slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
+        out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90), tz))
+    return out
+
+
 def _parameter_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseLevels) -> list[ParameterPlan]:
     """The table of every fitted parameter (the model's own terms and the fitted candidates' columns, fitted jointly
     over both equations)."""
@@ -219,16 +237,7 @@ def _parameter_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseL
     keep = list(dict.fromkeys(fitted[0] + fitted[1]))
     labels, joint = joint_information(ref, noise)
     idx = [labels.index(lab) for lab in keep]
-    info = joint[:, idx][:, :, idx]
-    tz = target_z(cfg.relative_error, cfg.confidence)
-    pooled_se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
-    out = []
-    for k, label in enumerate(keep):
-        c = float(ref.truth.get(label, 0.0))
-        table = draw_table(info, k, 1.0, c, list(cfg.run_counts), cfg.n_draws, np.random.default_rng([cfg.seed, k]))
-        slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
-        out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90), tz))
-    return out
+    return _plans(keep, joint[:, idx][:, :, idx], ref.truth, cfg, ())
 
 
 def _trajectory_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig) -> list[ParameterPlan]:
@@ -237,17 +246,7 @@ def _trajectory_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig) -> list[Para
     if ref.trajectory is None or "velocity_coupling" not in cfg.fitted:
         return []
     labels, info, truth = ref.trajectory
-    tz = target_z(cfg.relative_error, cfg.confidence)
-    pooled_se = np.sqrt(covariance_diagonal(info.sum(axis=0)))
-    out = []
-    for k, label in enumerate(labels):
-        if not label.endswith(("c5", "c6")):
-            continue
-        c = truth[label]
-        table = draw_table(info, k, 1.0, c, list(cfg.run_counts), cfg.n_draws, np.random.default_rng([cfg.seed, 9, k]))
-        slope, _, needed, needed90 = runs_needed(table, c, tz) if c else (float("nan"), 0.0, 0, 0)
-        out.append(ParameterPlan(label, c, float(pooled_se[k]), table, float(slope), int(needed), int(needed90), tz))
-    return out
+    return _plans(labels, info, truth, cfg, (9,), keep=lambda label: label.endswith(("c5", "c6")))
 
 
 def _pair_plans(ref: ReferenceRuns, cfg: CandidatePlanConfig, noise: NoiseLevels) -> list[PairPlan]:

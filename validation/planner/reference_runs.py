@@ -32,7 +32,8 @@ from acousim.medium import GRAVITY, Medium
 from cubedimer.config_checks import check_positive, check_that, check_whole
 from cubedimer.executor import ExecutorConfig
 from fitting.uncertainty.oracle import integral_design
-from validation.diagnosis.prepare.candidate_effects import CANDIDATE_EFFECTS, MODEL_CANDIDATES, effect_regressors
+from validation.diagnosis.prepare.candidate_effects import (CANDIDATE_EFFECTS, MODEL_CANDIDATES, effect_regressors,
+                                                            parameter_slots)
 from validation.diagnosis.prepare.cavity_lag import CavityColumns, gains_from_mode
 
 __all__ = ["RunDesign", "ReferenceRuns", "drop_time", "twin_from_truth", "reference_runs", "parameter_labels", "true_parameters",
@@ -183,12 +184,9 @@ def parameter_labels(names: Sequence[str]) -> tuple[tuple[str, ...], tuple[str, 
 
 
 def _acting(name: str, parameter: str) -> tuple[int, ...]:
-    """The equations a candidate's parameter acts in."""
-    if name in MODEL_CANDIDATES:
-        return MODEL_CANDIDATES[name][1]
-    probe = effect_regressors(name, np.ones((1, 4)), np.zeros(1), 1.0)[0]
-    j = CANDIDATE_EFFECTS[name].index(parameter)
-    return tuple(q for q in (0, 1) if probe[q, j] != 0)
+    """The equations a candidate's parameter acts in
+    (:func:`~validation.diagnosis.prepare.candidate_effects.parameter_slots`)."""
+    return tuple(q for q in (0, 1) if any(p == parameter for _, p, _ in parameter_slots([name], q)))
 
 
 def true_parameters(twin, dynamics) -> dict[str, float]:
