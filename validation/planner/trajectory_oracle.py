@@ -69,7 +69,7 @@ def trajectory_information(twin, dynamics, states: Sequence[NDArray], dt: float,
                 else {"c5": 0.0, "c6": 0.0})
     start = {"pressure_pa": float(dynamics.force_model.pressure_amplitude_pa), **rates, **coupling}
     # the trajectory test's shared parameters, in its order (fit_trajectories), then the y offset
-    names = ["pressure_pa", "gamma_y", "gamma_theta"] + [f"{k}.{q}" for k, v in others.items() for q in v] + ["c5", "c6"]
+    names = oe.shared_parameter_names(others, with_coupling=True)
     values = {**{f"{k}.{q}": v for k, p in others.items() for q, v in p.items()}, **start}
     p = np.array([float(values[n]) for n in names])
     steps = oe.first_difference_steps(names, p, None)

@@ -63,6 +63,7 @@ from numpy.typing import NDArray
 from .statistics import sign_flip_pvalue
 
 __all__ = ["TrajectoryFit", "OutputErrorTest", "RunTrajectories", "TrajectoryResiduals", "first_difference_steps",
+           "shared_parameter_names",
            "run_trajectories", "fit_trajectories",
            "velocity_coupling_output_error", "damping_modulation"]
 
@@ -285,6 +286,13 @@ def _inverse(jtj: NDArray) -> NDArray | None:
         return None
 
 
+def shared_parameter_names(others: dict, with_coupling: bool) -> list[str]:
+    """The fit's shared parameters, in its order: the pressure, the damping's two rates, the other named effects'
+    parameters (``"effect.parameter"``, ``others``: effect -> parameters) and, ``with_coupling``, c5 and c6."""
+    own = [f"{k}.{q}" for k, v in others.items() for q in v]
+    return ["pressure_pa", "gamma_y", "gamma_theta"] + own + (["c5", "c6"] if with_coupling else [])
+
+
 def first_difference_steps(names: Sequence[str], p: NDArray, scales: dict[str, float] | None) -> NDArray:
     """The first difference steps of the shared parameters: :func:`_step`, no larger than ``scales`` (standard
     errors by name) where given."""
@@ -318,8 +326,7 @@ def fit_trajectories(data: RunTrajectories, surrogate, law: str, shape: dict, ot
         an optimum is that of the quadratic regime from the start and its last step is recognised
         (:func:`_predicted_drop`)
     """
-    own = [f"{k}.{q}" for k, v in others.items() for q in v]
-    names = ["pressure_pa", "gamma_y", "gamma_theta"] + own + (["c5", "c6"] if with_coupling else [])
+    names = shared_parameter_names(others, with_coupling)
     values = {**{f"{k}.{q}": x for k, v in others.items() for q, x in v.items()}, **start}
     p = np.array([float(values.get(n, 0.0)) for n in names])
     offset = float(start.get("y_offset", 0.0))
