@@ -37,7 +37,7 @@ from scipy.special import ndtri
 from cubedimer.config_checks import check_fraction, check_positive, check_that, check_whole
 from fitting.uncertainty.oracle import NoiseLevels, alias_probability, covariance_diagonal, replacement_rss
 from fitting.uncertainty.run_planning import draw_table, drawn_information, runs_needed
-from .reference_runs import EQUATIONS, ReferenceRuns, parameter_labels
+from .reference_runs import EQUATIONS, ReferenceRuns, has_contribution, parameter_labels
 
 __all__ = ["CandidatePlanConfig", "ParameterPlan", "PairPlan", "CandidatePlan", "plan_candidates", "pair_alias_z",
            "joint_information",
@@ -287,7 +287,7 @@ def plan_candidates(ref: ReferenceRuns, noise: NoiseLevels, config: CandidatePla
     if missing:
         raise ValueError(f"the reference runs hold no columns of {', '.join(missing)}: measure them with these names")
     for true, _ in config.pairs:
-        if not any(ref.truth.get(l, 0.0) for lab in ref.labels for l in lab if l.split(".")[0] == true):
+        if not has_contribution(ref.truth, true):
             raise ValueError(f"pair {true}: the twin configuration has no {true} (its true contribution is zero); "
                              "give its strengths")
     heights = sorted({float(h) for h in ref.heights if np.isfinite(h)})

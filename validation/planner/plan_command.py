@@ -188,11 +188,11 @@ def _check_pairs(twin, pairs) -> None:
     """Each pair's true candidate is in the truth (before any run is simulated)."""
     from acousim.twin import twin_dynamics
 
-    from .reference_runs import true_parameters
+    from .reference_runs import has_contribution, true_parameters
 
     truth = true_parameters(twin, twin_dynamics(twin)[0])
     for true, rival in pairs:
-        if not any(v for k, v in truth.items() if k.split(".")[0] == true):
+        if not has_contribution(truth, true):
             raise UserInputError(f"--pair {true}:{rival}: the twin configuration has no {true} (its contribution is "
                                  "zero); give its strengths with --effect or --cavity")
 

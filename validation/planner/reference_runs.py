@@ -36,8 +36,8 @@ from validation.diagnosis.prepare.candidate_effects import (CANDIDATE_EFFECTS, M
                                                             parameter_slots)
 from validation.diagnosis.prepare.cavity_lag import CavityColumns, gains_from_mode
 
-__all__ = ["RunDesign", "ReferenceRuns", "drop_time", "twin_from_truth", "reference_runs", "parameter_labels", "true_parameters",
-           "OWN_TERMS", "EQUATIONS"]
+__all__ = ["RunDesign", "ReferenceRuns", "drop_time", "twin_from_truth", "reference_runs", "parameter_labels",
+           "true_parameters", "has_contribution", "OWN_TERMS", "EQUATIONS"]
 
 logger = logging.getLogger(__name__)
 
@@ -210,6 +210,11 @@ def true_parameters(twin, dynamics) -> dict[str, float]:
         truth["cavity_lag.static_gain"] = gains.static_gain
         truth["cavity_lag.lag_gain"] = gains.lag_gain
     return truth
+
+
+def has_contribution(truth: dict[str, float], name: str) -> bool:
+    """Whether the truth (:func:`true_parameters`) holds candidate ``name`` with a parameter that is not zero."""
+    return any(v for k, v in truth.items() if k.split(".")[0] == name)
 
 
 def _columns(state: NDArray, fm, cavity: CavityColumns | None, mode, names: Sequence[str]) -> list[NDArray]:
